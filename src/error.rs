@@ -1,0 +1,167 @@
+//! Typed errors. The library never panics on bad input: every failure a user can cause
+//! (a malformed file, a non-conforming mesh, infeasible constraints, NaN data, a solver that
+//! does not converge) is one of these variants, with enough context to find the culprit.
+
+use std::path::PathBuf;
+use thiserror::Error;
+
+/// Result alias used throughout the crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Every error gradvi can report.
+#[derive(Debug, Error)]
+pub enum Error {
+    /// A mesh file could not be read or parsed; `line` is 1-based (0 when unknown).
+    #[error("{}:{line}: {msg}", path.display())]
+    MeshIo {
+        /// File being read.
+        path: PathBuf,
+        /// 1-based line number (0 if the error is not tied to a line).
+        line: usize,
+        /// What is wrong.
+        msg: String,
+    },
+    /// The mesh data is geometrically or topologically invalid.
+    #[error("invalid mesh: {0}")]
+    InvalidMesh(#[from] MeshError),
+    /// Problem data (diffusion tensor, source, boundary values, barriers) is invalid.
+    #[error("invalid data: {0}")]
+    InvalidData(String),
+    /// The discrete convex set is empty (e.g. Dirichlet data above an upper barrier).
+    #[error("infeasible constraints: {0}")]
+    Infeasible(String),
+    /// A linear solve failed (e.g. the matrix is not numerically positive definite).
+    #[error("linear solver: {0}")]
+    Linear(String),
+    /// The active-set iteration did not converge, cycled, or its certificate failed.
+    #[error("active-set solver: {0}")]
+    Solver(#[from] SolverError),
+    /// Plain I/O (writing outputs).
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// File being written or read.
+        path: PathBuf,
+        /// Underlying error.
+        source: std::io::Error,
+    },
+}
+
+/// Invalid mesh: each variant names the cell, edge or vertex at fault.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum MeshError {
+    /// The mesh has no cells.
+    #[error("the mesh has no cells")]
+    Empty,
+    /// A coordinate is NaN or infinite.
+    #[error("vertex {vertex} has a non-finite coordinate")]
+    NonFiniteVertex {
+        /// 0-based vertex index.
+        vertex: usize,
+    },
+    /// A cell refers to a vertex that does not exist.
+    #[error("cell {cell} refers to vertex {vertex}, but there are only {n_vertices} vertices")]
+    VertexOutOfRange {
+        /// 0-based cell index.
+        cell: usize,
+        /// Offending (0-based) vertex index.
+        vertex: usize,
+        /// Number of vertices.
+        n_vertices: usize,
+    },
+    /// A cell with fewer than three vertices, or listing a vertex twice.
+    #[error("cell {cell}: {msg}")]
+    BadCell {
+        /// 0-based cell index.
+        cell: usize,
+        /// What is wrong.
+        msg: String,
+    },
+    /// A cell with zero (or numerically negligible) area.
+    #[error("cell {cell} has zero area ({area:e})")]
+    DegenerateCell {
+        /// 0-based cell index.
+        cell: usize,
+        /// Its signed area.
+        area: f64,
+    },
+    /// Two vertices at the same place.
+    #[error("vertices {a} and {b} coincide at ({x}, {y})")]
+    DuplicateVertex {
+        /// First vertex.
+        a: usize,
+        /// Second vertex.
+        b: usize,
+        /// x coordinate.
+        x: f64,
+        /// y coordinate.
+        y: f64,
+    },
+    /// A vertex used by no cell.
+    #[error("vertex {vertex} is used by no cell")]
+    UnusedVertex {
+        /// 0-based vertex index.
+        vertex: usize,
+    },
+    /// An edge shared by more than two cells, or two cells that traverse an edge in the same
+    /// direction (overlapping cells).
+    #[error("edge ({a}, {b}): {msg}")]
+    BadEdge {
+        /// First vertex of the edge.
+        a: usize,
+        /// Second vertex of the edge.
+        b: usize,
+        /// What is wrong.
+        msg: String,
+    },
+    /// A cell that is not strictly star-shaped with respect to its centroid
+    /// (some d_{K,σ} ≤ 0), which HMM requires.
+    #[error(
+        "cell {cell} is not strictly star-shaped with respect to its centroid: d_(K,sigma) = {dist:e} on its local edge {local_edge}"
+    )]
+    NotStarShaped {
+        /// 0-based cell index.
+        cell: usize,
+        /// Local edge index in the cell.
+        local_edge: usize,
+        /// The signed distance from the centroid to the edge line.
+        dist: f64,
+    },
+    /// The boundary is not a union of simple closed polygons (hanging nodes, pinched vertices).
+    #[error("non-conforming mesh: {0}")]
+    NonConforming(String),
+}
+
+/// Failure of the active-set ("monotony") algorithm.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SolverError {
+    /// The iteration cap was reached.
+    #[error("no convergence after {iterations} linear solves; active-set sizes: {history:?}")]
+    MaxIterations {
+        /// Linear solves performed.
+        iterations: usize,
+        /// Size of the active set at each iterate.
+        history: Vec<usize>,
+    },
+    /// An active set already visited came back (and it was not the previous one).
+    #[error(
+        "active-set cycling: the active set of iterate {iteration} repeats iterate {repeats}; active-set sizes: {history:?}"
+    )]
+    Cycling {
+        /// Iterate at which the cycle was found.
+        iteration: usize,
+        /// Earlier iterate with the same active set.
+        repeats: usize,
+        /// Size of the active set at each iterate.
+        history: Vec<usize>,
+    },
+    /// The final iterate does not satisfy the discrete variational inequality.
+    #[error("certificate failed ({quantity} = {value:e} > tolerance {tol:e})")]
+    Certificate {
+        /// Which quantity failed.
+        quantity: String,
+        /// Its value.
+        value: f64,
+        /// The tolerance.
+        tol: f64,
+    },
+}

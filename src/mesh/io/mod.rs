@@ -1,0 +1,1 @@
+//! Mesh readers and writers.
