@@ -1,0 +1,1 @@
+//! Outputs: CSV, VTU, PNG plots, markdown.

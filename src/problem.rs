@@ -1,0 +1,357 @@
+//! Problem data: −div(A∇u) = f in Ω with a boundary partition Γ1 (Dirichlet), Γ2 (Neumann),
+//! Γ3 (Signorini), and optionally a barrier (obstacle or Signorini), upper or lower.
+//!
+//! - Obstacle (paper (1.5)–(1.8)): u ≤ g in Ω (upper) or u ≥ ψ (lower); ∂Ω = Γ1.
+//! - Signorini (paper (1.1)–(1.4)): on Γ3, u ≤ a, A∇u·n ≤ 0, (u − a) A∇u·n = 0 (upper), or
+//!   u ≥ a, A∇u·n ≥ 0, (u − a) A∇u·n = 0 (lower).
+//!
+//! Neumann data is the outward flux A∇u·n. Barriers are taken piecewise constant
+//! (the paper's Section 6): g_K = g(x_K) on cells, a_σ = a(x_σ) on faces (P1: nodal values).
+//! The paper's three tests are built by [`paper_test1`], [`paper_test2`], [`paper_test3`].
+
+use crate::mesh::Point;
+use crate::scheme::Tensor;
+use std::f64::consts::PI;
+
+/// A scalar field on Ω.
+pub type ScalarFn = Box<dyn Fn(Point) -> f64 + Send + Sync>;
+/// A tensor field on Ω.
+pub type TensorFn = Box<dyn Fn(Point) -> Tensor + Send + Sync>;
+/// A vector field on Ω.
+pub type VectorFn = Box<dyn Fn(Point) -> Point + Send + Sync>;
+
+/// The kind of boundary condition on an edge.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum BoundaryKind {
+    /// Γ1: u = u_D.
+    Dirichlet,
+    /// Γ2: A∇u·n = g_N.
+    Neumann,
+    /// Γ3: the Signorini condition.
+    Signorini,
+}
+
+/// Direction of a barrier.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Side {
+    /// u ≤ barrier (the paper's form).
+    Upper,
+    /// u ≥ barrier.
+    Lower,
+}
+
+impl Side {
+    /// +1 for an upper barrier, −1 for a lower one: the constraint is s·(u − barrier) ≤ 0.
+    pub fn sign(self) -> f64 {
+        match self {
+            Side::Upper => 1.0,
+            Side::Lower => -1.0,
+        }
+    }
+}
+
+/// Where a barrier acts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum ConstraintKind {
+    /// In Ω, on the scheme's obstacle unknowns.
+    Obstacle,
+    /// On Γ3, on the scheme's trace unknowns.
+    Signorini,
+}
+
+/// A barrier.
+pub struct Constraint {
+    /// Obstacle or Signorini.
+    pub kind: ConstraintKind,
+    /// Upper or lower.
+    pub side: Side,
+    /// The barrier function (g, ψ or a).
+    pub barrier: ScalarFn,
+}
+
+/// An exact solution, for error computations.
+pub struct Exact {
+    /// ū.
+    pub u: ScalarFn,
+    /// ∇ū.
+    pub grad: VectorFn,
+}
+
+/// Full problem data. Build with [`Problem::new`] and the `with_*` methods.
+pub struct Problem {
+    /// Name, used in outputs.
+    pub name: String,
+    /// A(x), symmetric positive definite.
+    pub diffusion: TensorFn,
+    /// f(x).
+    pub source: ScalarFn,
+    /// Boundary kind of an edge from its midpoint and its mesh tag.
+    pub boundary: Box<dyn Fn(Point, i32) -> BoundaryKind + Send + Sync>,
+    /// Dirichlet value u_D on Γ1.
+    pub dirichlet: ScalarFn,
+    /// Neumann flux g_N = A∇u·n on Γ2.
+    pub neumann: ScalarFn,
+    /// Optional barrier.
+    pub constraint: Option<Constraint>,
+    /// Optional exact solution.
+    pub exact: Option<Exact>,
+}
+
+impl Problem {
+    /// −Δu = f with homogeneous Dirichlet conditions on the whole boundary and no barrier.
+    pub fn new(name: &str, source: ScalarFn) -> Self {
+        Problem {
+            name: name.to_string(),
+            diffusion: Box::new(|_| [[1.0, 0.0], [0.0, 1.0]]),
+            source,
+            boundary: Box::new(|_, _| BoundaryKind::Dirichlet),
+            dirichlet: Box::new(|_| 0.0),
+            neumann: Box::new(|_| 0.0),
+            constraint: None,
+            exact: None,
+        }
+    }
+    /// Sets A(x).
+    pub fn with_diffusion(mut self, a: TensorFn) -> Self {
+        self.diffusion = a;
+        self
+    }
+    /// Sets the boundary partition.
+    pub fn with_boundary(
+        mut self,
+        b: impl Fn(Point, i32) -> BoundaryKind + Send + Sync + 'static,
+    ) -> Self {
+        self.boundary = Box::new(b);
+        self
+    }
+    /// Sets the Dirichlet data.
+    pub fn with_dirichlet(mut self, g: ScalarFn) -> Self {
+        self.dirichlet = g;
+        self
+    }
+    /// Sets the Neumann data (outward flux A∇u·n).
+    pub fn with_neumann(mut self, g: ScalarFn) -> Self {
+        self.neumann = g;
+        self
+    }
+    /// Sets the barrier.
+    pub fn with_constraint(mut self, kind: ConstraintKind, side: Side, barrier: ScalarFn) -> Self {
+        self.constraint = Some(Constraint {
+            kind,
+            side,
+            barrier,
+        });
+        self
+    }
+    /// Sets the exact solution.
+    pub fn with_exact(mut self, u: ScalarFn, grad: VectorFn) -> Self {
+        self.exact = Some(Exact { u, grad });
+        self
+    }
+}
+
+/// Checks that `a` is symmetric positive definite and finite; `what` names the place.
+pub fn check_tensor(a: &Tensor, what: &str) -> crate::Result<()> {
+    let finite = a.iter().flatten().all(|x| x.is_finite());
+    let scale = a.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    let sym = (a[0][1] - a[1][0]).abs() <= 1e-12 * scale;
+    let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+    if !finite || !sym || !(a[0][0] > 0.0) || !(det > 1e-14 * scale * scale) {
+        return Err(crate::Error::InvalidData(format!(
+            "diffusion tensor {a:?} at {what} is not symmetric positive definite and finite"
+        )));
+    }
+    Ok(())
+}
+
+/// Checks that a data value is finite; `what` names the datum and the place.
+pub fn check_finite(v: f64, what: &str) -> crate::Result<f64> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(crate::Error::InvalidData(format!("{what} is {v}")))
+    }
+}
+
+/// Geometric tolerance for "on the line x = c" tests of edge midpoints on the unit square.
+const ON: f64 = 1e-12;
+
+/// Test 1 of the paper (Signorini, from Yang & Chao): −Δu = 2π sin(2πx) in (0,1)²;
+/// Γ1 = [0,1]×{1} (u = 0); Γ2 = {0,1}×[0,1] (∇u·n = 0); Γ3 = [0,1]×{0} with
+/// u ≥ 0, ∇u·n ≥ 0, u∇u·n = 0 (a lower barrier 0).
+pub fn paper_test1() -> Problem {
+    Problem::new("test1", Box::new(|p| 2.0 * PI * (2.0 * PI * p[0]).sin()))
+        .with_boundary(|x, _| {
+            if x[1] > 1.0 - ON {
+                BoundaryKind::Dirichlet
+            } else if x[1] < ON {
+                BoundaryKind::Signorini
+            } else {
+                BoundaryKind::Neumann
+            }
+        })
+        .with_constraint(ConstraintKind::Signorini, Side::Lower, Box::new(|_| 0.0))
+}
+
+/// P(y) = −y(y − 1/2)² of Test 2.
+fn t2_p(y: f64) -> f64 {
+    -y * (y - 0.5) * (y - 0.5)
+}
+/// G(y) = (1 − y)(y − 1/2)² of Test 2.
+fn t2_g(y: f64) -> f64 {
+    (1.0 - y) * (y - 0.5) * (y - 0.5)
+}
+
+/// The exact solution ū of Test 2 (our reading; see [`paper_test2`]).
+pub fn test2_exact(p: Point) -> f64 {
+    let (x, y) = (p[0], p[1]);
+    if y < 0.5 {
+        t2_p(y) * (PI * x).cos()
+    } else {
+        (0.5 * PI * x).sin().powi(2) * t2_g(y)
+    }
+}
+
+/// ∇ū of Test 2.
+pub fn test2_exact_grad(p: Point) -> Point {
+    let (x, y) = (p[0], p[1]);
+    if y < 0.5 {
+        let dp = -(3.0 * y * y - 2.0 * y + 0.25);
+        [-PI * t2_p(y) * (PI * x).sin(), dp * (PI * x).cos()]
+    } else {
+        let dg = -3.0 * y * y + 4.0 * y - 1.25;
+        let s = (0.5 * PI * x).sin();
+        [0.5 * PI * (PI * x).sin() * t2_g(y), s * s * dg]
+    }
+}
+
+/// f = −div(A∇ū) of Test 2, derived exactly in each half.
+pub fn test2_source(p: Point) -> f64 {
+    let (x, y) = (p[0], p[1]);
+    if y < 0.5 {
+        // −100 (P h'' + P'' h) with h = cos(πx), P'' = 2 − 6y
+        100.0 * (PI * x).cos() * (PI * PI * t2_p(y) - (2.0 - 6.0 * y))
+    } else {
+        // −(g'' G + g G'') with g = sin²(πx/2), g'' = (π²/2) cos(πx), G'' = 4 − 6y
+        let s = (0.5 * PI * x).sin();
+        -(0.5 * PI * PI * (PI * x).cos() * t2_g(y) + s * s * (4.0 - 6.0 * y))
+    }
+}
+
+/// A(x) of Test 2: 100·I for y < 1/2, I for y > 1/2 (evaluated at x_K by the schemes).
+pub fn test2_diffusion(p: Point) -> Tensor {
+    let c = if p[1] < 0.5 { 100.0 } else { 1.0 };
+    [[c, 0.0], [0.0, c]]
+}
+
+/// Test 2 of the paper, in our reading (the extracted text is garbled):
+/// Ω = (0,1)²; A = 100·I for y < 1/2 and I for y > 1/2; Γ1 = {y = 0} ∪ {y = 1} (u = 0),
+/// Γ2 = {x = 1} (A∇u·n = 0), Γ3 = {x = 0} with u ≤ 0, A∇u·n ≤ 0, u A∇u·n = 0 (upper barrier 0);
+/// ū = P(y) cos(πx) for y < 1/2 with P(y) = −y(y − 1/2)², ū = sin²(πx/2)(1 − y)(y − 1/2)² for
+/// y > 1/2, and f = −div(A∇ū).
+pub fn paper_test2() -> Problem {
+    Problem::new("test2", Box::new(test2_source))
+        .with_diffusion(Box::new(test2_diffusion))
+        .with_boundary(|x, _| {
+            if x[1] < ON || x[1] > 1.0 - ON {
+                BoundaryKind::Dirichlet
+            } else if x[0] < ON {
+                BoundaryKind::Signorini
+            } else {
+                BoundaryKind::Neumann
+            }
+        })
+        .with_constraint(ConstraintKind::Signorini, Side::Upper, Box::new(|_| 0.0))
+        .with_exact(Box::new(test2_exact), Box::new(test2_exact_grad))
+}
+
+/// ψ(x, y) = −min(x, 1 − x, y, 1 − y) of Test 3.
+pub fn test3_obstacle(p: Point) -> f64 {
+    -(p[0].min(1.0 - p[0]).min(p[1]).min(1.0 - p[1]))
+}
+
+/// Test 3 of the paper (obstacle): −Δu ≥ C, u ≥ ψ, (Δu + C)(ψ − u) = 0, u = 0 on ∂Ω,
+/// ψ = −min(x, 1 − x, y, 1 − y); i.e. f = C with a lower barrier ψ.
+pub fn paper_test3(c: f64) -> Problem {
+    Problem::new(&format!("test3_C{}", c.abs()), Box::new(move |_| c)).with_constraint(
+        ConstraintKind::Obstacle,
+        Side::Lower,
+        Box::new(test3_obstacle),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// −div(A∇ū) by central finite differences of the flux.
+    fn fd_source(p: Point) -> f64 {
+        let h = 1e-4;
+        let flux = |q: Point, d: usize| {
+            let a = test2_diffusion(p)[d][d];
+            let mut qp = q;
+            let mut qm = q;
+            qp[d] += 0.5 * h;
+            qm[d] -= 0.5 * h;
+            a * (test2_exact(qp) - test2_exact(qm)) / h
+        };
+        let mut s = 0.0;
+        for d in 0..2 {
+            let mut pp = p;
+            let mut pm = p;
+            pp[d] += 0.5 * h;
+            pm[d] -= 0.5 * h;
+            s -= (flux(pp, d) - flux(pm, d)) / h;
+        }
+        s
+    }
+
+    #[test]
+    fn test2_source_matches_finite_differences() {
+        for &p in &[[0.3, 0.2], [0.7, 0.41], [0.1, 0.6], [0.85, 0.93], [0.5, 0.75]] {
+            let (a, b) = (test2_source(p), fd_source(p));
+            assert!((a - b).abs() < 1e-4 * (1.0 + a.abs()), "{p:?}: {a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn test2_exact_meets_every_condition() {
+        let n = 101;
+        for i in 0..n {
+            let t = i as f64 / (n - 1) as f64;
+            // Γ1: u = 0 on y = 0 and y = 1
+            assert!(test2_exact([t, 0.0]).abs() < 1e-15);
+            assert!(test2_exact([t, 1.0]).abs() < 1e-15);
+            // Γ2 (x = 1): A∇u·n = A ∂_x u = 0
+            assert!(test2_exact_grad([1.0, t])[0].abs() < 1e-14);
+            // Γ3 (x = 0): u ≤ 0, A∇u·n = −A ∂_x u ≤ 0, u·(A∇u·n) = 0
+            let u = test2_exact([0.0, t]);
+            let a = test2_diffusion([0.0, t])[0][0];
+            let flux = -a * test2_exact_grad([0.0, t])[0];
+            assert!(u <= 0.0 && flux <= 1e-14 && (u * flux).abs() < 1e-14);
+            // interface y = 1/2: continuity of ū and of A∇ū·n
+            let lo = [t, 0.5 - 1e-12];
+            let hi = [t, 0.5];
+            assert!((test2_exact(lo) - test2_exact(hi)).abs() < 1e-12);
+            let fl = 100.0 * test2_exact_grad(lo)[1];
+            let fh = test2_exact_grad(hi)[1];
+            assert!((fl - fh).abs() < 1e-9, "{fl} {fh}");
+        }
+        // gradients match finite differences of ū
+        for &p in &[[0.3, 0.2], [0.6, 0.8]] {
+            let h = 1e-6;
+            let g = test2_exact_grad(p);
+            let gx = (test2_exact([p[0] + h, p[1]]) - test2_exact([p[0] - h, p[1]])) / (2.0 * h);
+            let gy = (test2_exact([p[0], p[1] + h]) - test2_exact([p[0], p[1] - h])) / (2.0 * h);
+            assert!((g[0] - gx).abs() < 1e-7 && (g[1] - gy).abs() < 1e-7);
+        }
+    }
+
+    #[test]
+    fn tensor_check_rejects_bad_tensors() {
+        assert!(check_tensor(&[[1.0, 0.0], [0.0, 1.0]], "x").is_ok());
+        assert!(check_tensor(&[[1.0, 0.5], [0.0, 1.0]], "x").is_err());
+        assert!(check_tensor(&[[1.0, 2.0], [2.0, 1.0]], "x").is_err());
+        assert!(check_tensor(&[[f64::NAN, 0.0], [0.0, 1.0]], "x").is_err());
+    }
+}

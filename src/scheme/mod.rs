@@ -1,0 +1,132 @@
+//! Gradient discretisations D = (X_D, Π_D, T_D, ∇_D) (the paper's Definitions 2.3 and 2.5).
+//!
+//! A scheme is one file that emits *local* quantities for a cell K: which unknowns it couples,
+//! the local stiffness matrix ∫_K A_K ∇_D u·∇_D v (plus stabilisation), and the local load
+//! ∫_K f Π_D v. It knows nothing about global assembly, constraints or reports.
+//!
+//! Unknowns are split into two kinds:
+//! - *skeleton* unknowns, coupled between cells (HMM: face values u_σ; P1: vertex values),
+//!   numbered `0..n_skeleton()`;
+//! - *interior* unknowns, owned by one cell and eliminated by static condensation
+//!   (HMM: cell values u_K; P1: none), numbered `n_skeleton()..n_unknowns()`.
+//!
+//! `local_dofs(k)` lists the interior unknowns of K first, then its skeleton unknowns; the local
+//! matrix and load follow that order.
+
+pub mod hmm;
+pub mod p1;
+
+use crate::mesh::{Point, PolyMesh};
+use nalgebra::{DMatrix, DVector};
+
+pub use hmm::Hmm;
+pub use p1::P1;
+
+/// A 2×2 diffusion tensor (row-major), symmetric positive definite.
+pub type Tensor = [[f64; 2]; 2];
+
+/// An unknown on which a barrier acts or a boundary value is imposed: the unknown, the point
+/// where data is evaluated (x_K, x_σ or a vertex) and the measure it carries (|K|, |σ|, or the
+/// lumped measure of a vertex).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointDof {
+    /// Global unknown index.
+    pub dof: usize,
+    /// Where data (barrier, Dirichlet value) is evaluated.
+    pub point: Point,
+    /// Measure attached to the unknown (used to scale multipliers).
+    pub measure: f64,
+}
+
+/// The interface every gradient discretisation implements. See the module docs.
+pub trait GradientDiscretisation: Sync {
+    /// Short name ("hmm", "p1").
+    fn name(&self) -> &'static str;
+    /// The mesh.
+    fn mesh(&self) -> &PolyMesh;
+    /// Number of skeleton unknowns (numbered first).
+    fn n_skeleton(&self) -> usize;
+    /// Number of interior (statically condensed) unknowns.
+    fn n_interior(&self) -> usize;
+    /// Total number of unknowns, dim X_D.
+    fn n_unknowns(&self) -> usize {
+        self.n_skeleton() + self.n_interior()
+    }
+    /// Number of interior unknowns of cell `k` (they come first in [`Self::local_dofs`]).
+    fn n_local_interior(&self, k: usize) -> usize;
+    /// The unknowns of cell `k`: interior first, then skeleton. Clears and fills `dofs`.
+    fn local_dofs(&self, k: usize, dofs: &mut Vec<usize>);
+    /// Local matrix of cell `k` for the constant tensor `a` = A_K, in the order of `local_dofs`.
+    /// `m` is resized as needed.
+    fn local_matrix(&self, k: usize, a: &Tensor, m: &mut DMatrix<f64>);
+    /// Local load ∫_K f Π_D v (with the scheme's quadrature), in the order of `local_dofs`.
+    fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>);
+    /// The unknowns carrying the trace T_D on boundary edge `e`, with the point where boundary
+    /// data is evaluated and the weight of each in ∫_σ g T_D v (the scheme's quadrature on σ,
+    /// with g evaluated at x_σ). Clears and fills `out`.
+    fn edge_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>);
+    /// The unknowns on which an obstacle barrier acts (HMM: cells; P1: vertices), with their
+    /// points and measures. Unknowns that turn out to be Dirichlet are removed by the caller.
+    fn obstacle_dofs(&self) -> Vec<PointDof>;
+    /// Π_D u evaluated at the cell centroids x_K.
+    fn cell_values(&self, u: &[f64]) -> Vec<f64>;
+    /// A cell-wise gradient: HMM the consistent gradient ∇_K u, P1 the exact (constant) gradient.
+    fn cell_gradients(&self, u: &[f64]) -> Vec<Point>;
+    /// Values at the mesh vertices for plotting and VTU output (P1: the nodal values; HMM:
+    /// area-weighted averages of the adjacent cell values).
+    fn vertex_values(&self, u: &[f64]) -> Vec<f64> {
+        let mesh = self.mesh();
+        let cv = self.cell_values(u);
+        let (ptr, ids) = mesh.vertex_cells();
+        (0..mesh.n_vertices())
+            .map(|v| {
+                let cells = &ids[ptr[v]..ptr[v + 1]];
+                let w: f64 = cells.iter().map(|&k| mesh.measure(k)).sum();
+                cells.iter().map(|&k| mesh.measure(k) * cv[k]).sum::<f64>() / w
+            })
+            .collect()
+    }
+}
+
+/// The scheme names accepted on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SchemeKind {
+    /// Hybrid Mimetic Mixed (SUSHI stabilisation).
+    Hmm,
+    /// Conforming P1 finite elements on triangles.
+    P1,
+}
+
+impl std::str::FromStr for SchemeKind {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "hmm" => Ok(SchemeKind::Hmm),
+            "p1" => Ok(SchemeKind::P1),
+            _ => Err(crate::Error::InvalidData(format!(
+                "unknown scheme '{s}' (expected hmm or p1)"
+            ))),
+        }
+    }
+}
+
+impl std::fmt::Display for SchemeKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            SchemeKind::Hmm => "hmm",
+            SchemeKind::P1 => "p1",
+        })
+    }
+}
+
+/// Builds the scheme of kind `kind` on `mesh` (P1 requires a triangle mesh).
+pub fn build<'a>(
+    kind: SchemeKind,
+    mesh: &'a PolyMesh,
+) -> crate::Result<Box<dyn GradientDiscretisation + 'a>> {
+    Ok(match kind {
+        SchemeKind::Hmm => Box::new(Hmm::new(mesh)),
+        SchemeKind::P1 => Box::new(P1::new(mesh)?),
+    })
+}

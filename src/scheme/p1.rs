@@ -1,0 +1,167 @@
+//! Conforming P1 finite elements on triangles (paper Section 3.1).
+//!
+//! Unknowns: the values at the mesh vertices (all skeleton; nothing to condense).
+//! Π_D u is the continuous piecewise-affine interpolant, ∇_D u its gradient, T_D u its trace.
+//!
+//! Quadrature (stated because the cross-check against dolfinx depends on it):
+//! - load: ∫_Ω (I_h f) φ_i, with I_h f the P1 interpolant of f (nodal values f(x_v)), integrated
+//!   exactly with the element mass matrix |T|/12·(1 + δ_ij). This equals dolfinx's
+//!   `f_h * v * dx` with `f_h` interpolated in P1;
+//! - diffusion: A is taken constant per triangle, A_K = A(x_K) at the centroid (dolfinx: DG0);
+//! - boundary data: ∫_σ g φ_i ≈ |σ| g(x_σ)/2 at each end of σ (midpoint rule);
+//! - obstacle barriers are nodal: u(x_v) ≤ g(x_v) (or ≥); a vertex carries the lumped measure
+//!   Σ_{T∋v} |T|/3, a Signorini vertex the measure Σ_{σ∋v, σ⊂Γ3} |σ|/2.
+
+use super::{GradientDiscretisation, PointDof, Tensor};
+use crate::mesh::{Point, PolyMesh};
+use nalgebra::{DMatrix, DVector};
+
+/// P1 finite elements on a triangle mesh.
+#[derive(Debug, Clone)]
+pub struct P1<'a> {
+    mesh: &'a PolyMesh,
+}
+
+impl<'a> P1<'a> {
+    /// P1 on `mesh`; an error if some cell is not a triangle.
+    pub fn new(mesh: &'a PolyMesh) -> crate::Result<Self> {
+        if let Some(k) = (0..mesh.n_cells()).find(|&k| mesh.cell_vertices(k).len() != 3) {
+            return Err(crate::Error::InvalidData(format!(
+                "P1 needs a triangle mesh, but cell {k} has {} vertices",
+                mesh.cell_vertices(k).len()
+            )));
+        }
+        Ok(P1 { mesh })
+    }
+
+    /// Gradients of the three barycentric functions of triangle `k` (constant on K).
+    pub fn basis_gradients(&self, k: usize) -> [Point; 3] {
+        let v = self.mesh.cell_vertices(k);
+        let p: Vec<Point> = v.iter().map(|&i| self.mesh.vertex(i)).collect();
+        let twice_area = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
+            - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
+        let mut g = [[0.0; 2]; 3];
+        for i in 0..3 {
+            let a = p[(i + 1) % 3];
+            let b = p[(i + 2) % 3];
+            // ∇λ_i = rot(b − a)/(2|K|), with rot(x, y) = (y, −x) for counter-clockwise triangles
+            g[i] = [(a[1] - b[1]) / twice_area, (b[0] - a[0]) / twice_area];
+        }
+        g
+    }
+}
+
+impl GradientDiscretisation for P1<'_> {
+    fn name(&self) -> &'static str {
+        "p1"
+    }
+    fn mesh(&self) -> &PolyMesh {
+        self.mesh
+    }
+    fn n_skeleton(&self) -> usize {
+        self.mesh.n_vertices()
+    }
+    fn n_interior(&self) -> usize {
+        0
+    }
+    fn n_local_interior(&self, _k: usize) -> usize {
+        0
+    }
+    fn local_dofs(&self, k: usize, dofs: &mut Vec<usize>) {
+        dofs.clear();
+        dofs.extend_from_slice(self.mesh.cell_vertices(k));
+    }
+    fn local_matrix(&self, k: usize, a: &Tensor, m: &mut DMatrix<f64>) {
+        let g = self.basis_gradients(k);
+        let area = self.mesh.measure(k);
+        *m = DMatrix::zeros(3, 3);
+        for i in 0..3 {
+            let ag = [
+                a[0][0] * g[i][0] + a[0][1] * g[i][1],
+                a[1][0] * g[i][0] + a[1][1] * g[i][1],
+            ];
+            for j in 0..3 {
+                m[(j, i)] = area * (ag[0] * g[j][0] + ag[1] * g[j][1]);
+            }
+        }
+    }
+    fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>) {
+        let v = self.mesh.cell_vertices(k);
+        let fv: Vec<f64> = v.iter().map(|&i| f(self.mesh.vertex(i))).collect();
+        let s = fv[0] + fv[1] + fv[2];
+        let area = self.mesh.measure(k);
+        *b = DVector::from_fn(3, |i, _| area / 12.0 * (s + fv[i]));
+    }
+    fn edge_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
+        out.clear();
+        let half = 0.5 * self.mesh.edge_measure(e);
+        for v in self.mesh.edge_vertices(e) {
+            out.push(PointDof {
+                dof: v,
+                point: self.mesh.vertex(v),
+                measure: half,
+            });
+        }
+    }
+    fn obstacle_dofs(&self) -> Vec<PointDof> {
+        let mut meas = vec![0.0; self.mesh.n_vertices()];
+        for k in 0..self.mesh.n_cells() {
+            for &v in self.mesh.cell_vertices(k) {
+                meas[v] += self.mesh.measure(k) / 3.0;
+            }
+        }
+        meas.iter()
+            .enumerate()
+            .map(|(v, &m)| PointDof {
+                dof: v,
+                point: self.mesh.vertex(v),
+                measure: m,
+            })
+            .collect()
+    }
+    fn cell_values(&self, u: &[f64]) -> Vec<f64> {
+        (0..self.mesh.n_cells())
+            .map(|k| self.mesh.cell_vertices(k).iter().map(|&v| u[v]).sum::<f64>() / 3.0)
+            .collect()
+    }
+    fn cell_gradients(&self, u: &[f64]) -> Vec<Point> {
+        (0..self.mesh.n_cells())
+            .map(|k| {
+                let g = self.basis_gradients(k);
+                let v = self.mesh.cell_vertices(k);
+                let mut r = [0.0; 2];
+                for i in 0..3 {
+                    r[0] += u[v[i]] * g[i][0];
+                    r[1] += u[v[i]] * g[i][1];
+                }
+                r
+            })
+            .collect()
+    }
+    fn vertex_values(&self, u: &[f64]) -> Vec<f64> {
+        u[..self.mesh.n_vertices()].to_vec()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stiffness_of_reference_triangle() {
+        let m = PolyMesh::from_cells(vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], vec![vec![0, 1, 2]])
+            .unwrap();
+        let s = P1::new(&m).unwrap();
+        let mut k = DMatrix::zeros(0, 0);
+        s.local_matrix(0, &[[1.0, 0.0], [0.0, 1.0]], &mut k);
+        let expect = DMatrix::from_row_slice(3, 3, &[1.0, -0.5, -0.5, -0.5, 0.5, 0.0, -0.5, 0.0, 0.5]);
+        assert!((k - expect).amax() < 1e-15);
+        let mut b = DVector::zeros(0);
+        s.local_load(0, &|p| 1.0 + p[0], &mut b);
+        // ∫ (1 + x) λ_i over the reference triangle: exact since I_h f = f
+        let exact = [0.5 / 3.0 + 1.0 / 24.0, 0.5 / 3.0 + 1.0 / 12.0, 0.5 / 3.0 + 1.0 / 24.0];
+        for i in 0..3 {
+            assert!((b[i] - exact[i]).abs() < 1e-15, "{i}: {} vs {}", b[i], exact[i]);
+        }
+    }
+}

@@ -1,0 +1,210 @@
+//! Solvers: [`linear`] (sparse Cholesky with symbolic reuse), [`active_set`] (the monotony
+//! algorithm with its certificate), [`pgs`] (projected Gauss–Seidel fallback), and
+//! [`solve_problem`], the one entry point that turns a scheme and a problem into a certified
+//! [`Solution`].
+
+pub mod active_set;
+pub mod linear;
+pub mod pgs;
+
+use crate::assembly::DiscreteSystem;
+use crate::problem::{ConstraintKind, Problem, check_finite};
+use crate::scheme::GradientDiscretisation;
+pub use active_set::{
+    ActiveSetOptions, Certificate, Constraints, IterationLog, Method, VariationalSolution,
+};
+use std::time::Instant;
+
+/// Wall-clock timings of a solve, in seconds.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+pub struct Timings {
+    /// Data evaluation, local matrices, pattern and symbolic factorisation.
+    pub setup: f64,
+    /// Of which the symbolic factorisation.
+    pub symbolic: f64,
+    /// Condensation and scatter, all iterations.
+    pub assemble: f64,
+    /// Numeric factorisations, all iterations.
+    pub factor: f64,
+    /// Triangular solves and interior recovery, all iterations.
+    pub solve: f64,
+    /// Everything.
+    pub total: f64,
+}
+
+/// A certified discrete solution and what it took.
+pub struct Solution<'a> {
+    /// The assembled system (gives access to the scheme and the mesh).
+    pub system: DiscreteSystem<'a>,
+    /// The barrier, if any.
+    pub constraints: Option<Constraints>,
+    /// The solver outcome (u, multipliers, active set, NITER, log, certificate).
+    pub result: VariationalSolution,
+    /// Timings.
+    pub timings: Timings,
+}
+
+impl Solution<'_> {
+    /// The full unknown vector.
+    pub fn u(&self) -> &[f64] {
+        &self.result.u
+    }
+    /// Number of linear solves.
+    pub fn niter(&self) -> usize {
+        self.result.niter
+    }
+    /// The multiplier on every unknown (zero off the constrained unknowns).
+    pub fn multiplier_field(&self) -> Vec<f64> {
+        let mut l = vec![0.0; self.result.u.len()];
+        if let Some(c) = &self.constraints {
+            for (j, pd) in c.dofs.iter().enumerate() {
+                l[pd.dof] = self.result.multiplier[j];
+            }
+        }
+        l
+    }
+    /// 1 on active unknowns, 0 elsewhere.
+    pub fn active_field(&self) -> Vec<f64> {
+        let mut a = vec![0.0; self.result.u.len()];
+        if let Some(c) = &self.constraints {
+            for (j, pd) in c.dofs.iter().enumerate() {
+                if self.result.active[j] {
+                    a[pd.dof] = 1.0;
+                }
+            }
+        }
+        a
+    }
+}
+
+/// Builds the barrier of `problem` on the unknowns of the system, checking the data and the
+/// non-emptiness of the discrete convex set.
+pub fn build_constraints(
+    system: &DiscreteSystem,
+    problem: &Problem,
+) -> crate::Result<Option<Constraints>> {
+    let Some(c) = &problem.constraint else {
+        return Ok(None);
+    };
+    let scheme = system.scheme();
+    let mesh = scheme.mesh();
+    let s = c.side.sign();
+    let dir = system.dirichlet();
+    let candidates = match c.kind {
+        ConstraintKind::Obstacle => scheme.obstacle_dofs(),
+        ConstraintKind::Signorini => {
+            if system.signorini_dofs().is_empty() {
+                return Err(crate::Error::InvalidData(
+                    "a Signorini barrier is given but no boundary edge is of Signorini type".into(),
+                ));
+            }
+            system.signorini_dofs().to_vec()
+        }
+    };
+    // barrier versus Dirichlet data: the convex set must not be empty
+    let mut tr = Vec::new();
+    for &e in mesh.boundary_edges() {
+        scheme.edge_trace_dofs(e, &mut tr);
+        for t in &tr {
+            if let Some(v) = dir[t.dof] {
+                let relevant = match c.kind {
+                    ConstraintKind::Obstacle => true,
+                    ConstraintKind::Signorini => {
+                        // a Dirichlet unknown that also touches Γ3 (P1 corner vertices)
+                        system.signorini_dofs().is_empty()
+                            || mesh_vertex_on_signorini(system, t.point)
+                    }
+                };
+                if relevant {
+                    let g = check_finite((c.barrier)(t.point), &format!("the barrier at {:?}", t.point))?;
+                    if s * (v - g) > 1e-12 * (1.0 + g.abs()) {
+                        return Err(crate::Error::Infeasible(format!(
+                            "the Dirichlet value {v} at {:?} is {} the barrier {g}: the discrete convex set is empty",
+                            t.point,
+                            if s > 0.0 { "above" } else { "below" }
+                        )));
+                    }
+                }
+            }
+        }
+    }
+    let mut dofs = Vec::new();
+    let mut barrier = Vec::new();
+    for pd in candidates {
+        if dir[pd.dof].is_some() {
+            continue;
+        }
+        let g = check_finite((c.barrier)(pd.point), &format!("the barrier at {:?}", pd.point))?;
+        dofs.push(pd);
+        barrier.push(g);
+    }
+    Ok(Some(Constraints {
+        dofs,
+        barrier,
+        side: c.side,
+    }))
+}
+
+fn mesh_vertex_on_signorini(system: &DiscreteSystem, p: crate::mesh::Point) -> bool {
+    let mesh = system.scheme().mesh();
+    let _ = mesh;
+    system
+        .signorini_dofs()
+        .iter()
+        .any(|d| (d.point[0] - p[0]).abs() + (d.point[1] - p[1]).abs() < 1e-14)
+}
+
+/// Assembles and solves `problem` with `scheme`: a linear solve if there is no barrier, the
+/// active-set method otherwise. The result is certified (see [`Certificate`]).
+pub fn solve_problem<'a>(
+    scheme: &'a dyn GradientDiscretisation,
+    problem: &Problem,
+    opts: &ActiveSetOptions,
+) -> crate::Result<Solution<'a>> {
+    let t0 = Instant::now();
+    let system = DiscreteSystem::new(scheme, problem)?;
+    let constraints = build_constraints(&system, problem)?;
+    let result = match &constraints {
+        Some(c) => active_set::solve(&system, c, opts)?,
+        None => {
+            let fixed = vec![None; system.n_unknowns()];
+            let (u, t) = system.solve(&fixed)?;
+            let (cert, _) = active_set::certificate(&system, None, &u, &[]);
+            cert.check(opts.tol)?;
+            VariationalSolution {
+                u,
+                multiplier: vec![],
+                active: vec![],
+                niter: 1,
+                log: vec![IterationLog {
+                    solve: 1,
+                    active: 0,
+                    entered: 0,
+                    left: 0,
+                    violation: 0.0,
+                    residual: cert.balance_residual,
+                    timings: t,
+                }],
+                certificate: cert,
+                method: Method::Linear,
+            }
+        }
+    };
+    let mut timings = Timings {
+        setup: system.setup_seconds,
+        symbolic: system.symbolic_seconds,
+        ..Default::default()
+    };
+    for l in &result.log {
+        timings.assemble += l.timings.assemble;
+        timings.factor += l.timings.factor;
+        timings.solve += l.timings.solve;
+    }
+    timings.total = t0.elapsed().as_secs_f64();
+    Ok(Solution {
+        system,
+        constraints,
+        result,
+        timings,
+    })
+}

@@ -1,0 +1,7 @@
+//! Unit-tier tests (fast): exactness, readers, generators, solver certificates.
+//! One binary pulling in submodules, so linking stays fast.
+mod common;
+#[path = "unit/generators.rs"]
+mod generators;
+#[path = "unit/mesh_io.rs"]
+mod mesh_io;
