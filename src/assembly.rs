@@ -390,7 +390,7 @@ impl<'a> DiscreteSystem<'a> {
             - 0.5 * u.iter().zip(&self.load).map(|(a, b)| a * b).sum::<f64>()
     }
 
-    /// Applies the full matrix: y = M u (used by the projected Gauss–Seidel fallback).
+    /// The entries of the full (uncondensed) matrix, cell by cell (repeated entries sum).
     pub fn full_matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
         let mut t = Vec::new();
         for k in 0..self.scheme.mesh().n_cells() {
@@ -403,6 +403,27 @@ impl<'a> DiscreteSystem<'a> {
             }
         }
         t
+    }
+}
+
+impl crate::solver::active_set::LinearSystem for DiscreteSystem<'_> {
+    fn n_unknowns(&self) -> usize {
+        self.n
+    }
+    fn dirichlet(&self) -> &[Option<f64>] {
+        &self.dirichlet
+    }
+    fn load(&self) -> &[f64] {
+        &self.load
+    }
+    fn solve(&self, fixed: &[Option<f64>]) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        DiscreteSystem::solve(self, fixed)
+    }
+    fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        DiscreteSystem::residual(self, u)
+    }
+    fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
+        self.full_matrix_triplets()
     }
 }
 

@@ -1,1 +1,3 @@
 //! Outputs: CSV, VTU, PNG plots, markdown.
+
+pub mod plot;

@@ -26,10 +26,29 @@
 //! Every returned solution carries a [`Certificate`]; above tolerance the solve is an error.
 
 use super::pgs;
-use crate::assembly::{DiscreteSystem, SolveTimings};
+use crate::assembly::SolveTimings;
 use crate::error::SolverError;
 use crate::problem::Side;
 use crate::scheme::PointDof;
+
+/// What the active-set and projected Gauss–Seidel solvers need from a discrete problem: the
+/// quadratic energy ½uᵀMu − bᵀu with Dirichlet unknowns, a solve with extra fixed unknowns,
+/// and the residual. Implemented by [`crate::assembly::DiscreteSystem`] for every scheme, and by
+/// small dense systems in the tests.
+pub trait LinearSystem {
+    /// Number of unknowns.
+    fn n_unknowns(&self) -> usize;
+    /// Dirichlet unknowns and their values (`None`: free).
+    fn dirichlet(&self) -> &[Option<f64>];
+    /// The load vector b.
+    fn load(&self) -> &[f64];
+    /// Solves with the unknowns `fixed[d] = Some(v)` (and the Dirichlet ones) fixed.
+    fn solve(&self, fixed: &[Option<f64>]) -> crate::Result<(Vec<f64>, SolveTimings)>;
+    /// r = b − Mu and the scale |b_i| + Σ_j |M_ij u_j| of each entry.
+    fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>);
+    /// The entries (i, j, M_ij) of M, possibly with repeated (i, j) to be summed.
+    fn matrix_triplets(&self) -> Vec<(usize, usize, f64)>;
+}
 
 /// The barrier, on the unknowns it acts on.
 #[derive(Debug, Clone)]
@@ -157,7 +176,7 @@ pub struct VariationalSolution {
 
 /// Computes the certificate of `u` (the multipliers are returned too).
 pub fn certificate(
-    system: &DiscreteSystem,
+    system: &dyn LinearSystem,
     cons: Option<&Constraints>,
     u: &[f64],
     active: &[bool],
@@ -195,7 +214,7 @@ pub fn certificate(
     (c, lambda)
 }
 
-fn fixed_from(system: &DiscreteSystem, cons: &Constraints, active: &[bool]) -> Vec<Option<f64>> {
+fn fixed_from(system: &dyn LinearSystem, cons: &Constraints, active: &[bool]) -> Vec<Option<f64>> {
     let mut fixed = vec![None; system.n_unknowns()];
     for (j, pd) in cons.dofs.iter().enumerate() {
         if active[j] {
@@ -207,7 +226,7 @@ fn fixed_from(system: &DiscreteSystem, cons: &Constraints, active: &[bool]) -> V
 
 /// Solves the discrete variational inequality by the active-set method (see module docs).
 pub fn solve(
-    system: &DiscreteSystem,
+    system: &dyn LinearSystem,
     cons: &Constraints,
     opts: &ActiveSetOptions,
 ) -> crate::Result<VariationalSolution> {

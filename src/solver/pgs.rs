@@ -6,8 +6,10 @@
 //! coordinate descent on the energy over a box). Stops when the largest update is below
 //! `tol`·‖u‖∞.
 
-use super::active_set::{Constraints, IterationLog, Method, VariationalSolution, certificate};
-use crate::assembly::{DiscreteSystem, SolveTimings};
+use super::active_set::{
+    Constraints, IterationLog, LinearSystem, Method, VariationalSolution, certificate,
+};
+use crate::assembly::SolveTimings;
 use crate::error::SolverError;
 
 /// Options of projected Gauss–Seidel.
@@ -33,13 +35,13 @@ impl Default for PgsOptions {
 
 /// Solves the discrete VI by projected Gauss–Seidel. `niter` of the result counts sweeps.
 pub fn solve(
-    system: &DiscreteSystem,
+    system: &dyn LinearSystem,
     cons: &Constraints,
     opts: &PgsOptions,
 ) -> crate::Result<VariationalSolution> {
     let n = system.n_unknowns();
     // CSR of the full matrix, duplicates summed
-    let mut t = system.full_matrix_triplets();
+    let mut t = system.matrix_triplets();
     t.sort_unstable_by_key(|&(i, j, _)| (i, j));
     let mut row_ptr = vec![0usize; n + 1];
     let mut cols = Vec::new();

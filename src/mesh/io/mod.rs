@@ -1,1 +1,308 @@
 //! Mesh readers and writers.
+//!
+//! | format | read | write | notes |
+//! |---|---|---|---|
+//! | gmsh `.msh` (ASCII 4.1 and 2.2) | [`msh::read_msh`] | – | triangles and quadrangles; physical line tags become boundary tags |
+//! | FVCA5 `.typ1` | [`typ1::read_typ1`] | – | triangles and quadrangles; hanging nodes are inserted into the cells |
+//! | FVCA5 / HArDCore `.typ2` | [`typ2::read_typ2`] | [`typ2::write_typ2`] | polygons |
+//! | VTK `.vtu` (ASCII XML) | – | [`vtu::write_vtu`] | polygons with any number of point and cell data arrays |
+//!
+//! [`read_mesh`] picks the reader from the file extension. Every reader returns
+//! [`Error::MeshIo`](crate::Error::MeshIo) (with the file and the 1-based line) when the text
+//! cannot be parsed, and [`Error::InvalidMesh`](crate::Error::InvalidMesh) when it parses but
+//! the mesh is geometrically or topologically invalid (the checks of
+//! [`PolyMesh::from_cells`]). Readers never panic on bad input.
+
+pub mod msh;
+pub mod typ1;
+pub mod typ2;
+pub mod vtu;
+
+pub use msh::{MshMesh, read_msh};
+pub use typ1::read_typ1;
+pub use typ2::{read_typ2, write_typ2};
+pub use vtu::write_vtu;
+
+use crate::error::{Error, Result};
+use crate::mesh::PolyMesh;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+/// Reads a mesh, choosing the reader from the extension of `path` (case-insensitive):
+/// `.msh` (gmsh ASCII 4.1 or 2.2, see [`read_msh`]), `.typ1` ([`read_typ1`]) or `.typ2`
+/// ([`read_typ2`]). For gmsh files the physical-group names are dropped; call [`read_msh`] to
+/// keep them.
+pub fn read_mesh(path: impl AsRef<Path>) -> Result<PolyMesh> {
+    let path = path.as_ref();
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("msh") => read_msh(path).map(|m| m.mesh),
+        Some("typ1") => read_typ1(path),
+        Some("typ2") => read_typ2(path),
+        _ => Err(Error::MeshIo {
+            path: path.to_path_buf(),
+            line: 0,
+            msg: "unknown mesh format: expected the extension .msh, .typ1 or .typ2".into(),
+        }),
+    }
+}
+
+/// Reads a whole file, mapping failures to [`Error::Io`].
+pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Capacity to reserve for `count` records announced by a file of `len` bytes: never more than
+/// the file could hold, so that an absurd count cannot exhaust memory before it is checked.
+pub(crate) fn capacity(count: usize, len: usize) -> usize {
+    count.min(len / 2 + 1)
+}
+
+/// A whitespace tokenizer over the bytes of a text file that tracks 1-based line numbers.
+///
+/// Tokens are maximal runs of non-whitespace bytes; they are converted to `&str` on demand, so
+/// binary content that is never reached is never examined.
+pub(crate) struct Tokens<'a> {
+    path: &'a Path,
+    bytes: &'a [u8],
+    /// Byte offset of the next unread byte.
+    pos: usize,
+    /// Line number at `pos`.
+    line: usize,
+    /// Line of the last token returned (or of `pos` before any token).
+    tok_line: usize,
+}
+
+impl<'a> Tokens<'a> {
+    /// A tokenizer over `bytes`, reporting errors against `path`.
+    pub(crate) fn new(path: &'a Path, bytes: &'a [u8]) -> Self {
+        Tokens {
+            path,
+            bytes,
+            pos: 0,
+            line: 1,
+            tok_line: 1,
+        }
+    }
+
+    /// Number of bytes not yet read.
+    pub(crate) fn remaining(&self) -> usize {
+        self.bytes.len() - self.pos
+    }
+
+    /// Line of the last token returned.
+    pub(crate) fn line(&self) -> usize {
+        self.tok_line
+    }
+
+    /// A parse error at `line`.
+    pub(crate) fn err_at(&self, line: usize, msg: impl Into<String>) -> Error {
+        Error::MeshIo {
+            path: PathBuf::from(self.path),
+            line,
+            msg: msg.into(),
+        }
+    }
+
+    /// A parse error at the line of the last token.
+    pub(crate) fn err(&self, msg: impl Into<String>) -> Error {
+        self.err_at(self.tok_line, msg)
+    }
+
+    /// The number of the last line of the file (a final newline does not start a new line).
+    fn last_line(&self) -> usize {
+        if self.line > 1 && self.bytes.last() == Some(&b'\n') {
+            self.line - 1
+        } else {
+            self.line
+        }
+    }
+
+    fn skip_whitespace(&mut self) {
+        while let Some(&b) = self.bytes.get(self.pos) {
+            if !b.is_ascii_whitespace() {
+                break;
+            }
+            if b == b'\n' {
+                self.line += 1;
+            }
+            self.pos += 1;
+        }
+    }
+
+    /// The next token as raw bytes, or `None` at the end of the file.
+    fn next_raw(&mut self) -> Option<&'a [u8]> {
+        self.skip_whitespace();
+        if self.pos >= self.bytes.len() {
+            self.tok_line = self.last_line();
+            return None;
+        }
+        let start = self.pos;
+        while let Some(&b) = self.bytes.get(self.pos) {
+            if b.is_ascii_whitespace() {
+                break;
+            }
+            self.pos += 1;
+        }
+        self.tok_line = self.line;
+        self.bytes.get(start..self.pos)
+    }
+
+    /// The next token, or `None` at the end of the file.
+    pub(crate) fn next_opt(&mut self) -> Result<Option<&'a str>> {
+        match self.next_raw() {
+            None => Ok(None),
+            Some(raw) => std::str::from_utf8(raw)
+                .map(Some)
+                .map_err(|_| self.err("invalid text (not ASCII/UTF-8): is this a binary file?")),
+        }
+    }
+
+    /// The next token; the end of the file is an error mentioning `what` was expected.
+    pub(crate) fn next(&mut self, what: &str) -> Result<&'a str> {
+        match self.next_opt()? {
+            Some(t) => Ok(t),
+            None => Err(self.err(format!("unexpected end of file while reading {what}"))),
+        }
+    }
+
+    /// The rest of the line of the last token (trimmed); consumes the end of line.
+    pub(crate) fn rest_of_line(&mut self) -> Result<&'a str> {
+        let start = self.pos;
+        while let Some(&b) = self.bytes.get(self.pos) {
+            if b == b'\n' {
+                break;
+            }
+            self.pos += 1;
+        }
+        let raw = self.bytes.get(start..self.pos).unwrap_or_default();
+        std::str::from_utf8(raw)
+            .map(str::trim)
+            .map_err(|_| self.err("invalid text (not ASCII/UTF-8): is this a binary file?"))
+    }
+
+    /// The next non-blank line (trimmed), with its line number; `None` at the end of the file.
+    pub(crate) fn next_line(&mut self) -> Result<Option<(usize, &'a str)>> {
+        self.skip_whitespace();
+        if self.pos >= self.bytes.len() {
+            self.tok_line = self.last_line();
+            return Ok(None);
+        }
+        self.tok_line = self.line;
+        let line = self.line;
+        self.rest_of_line().map(|s| Some((line, s)))
+    }
+
+    /// Reads a header line and checks it against `accepted` (case-insensitive, runs of blanks
+    /// treated as one space). Returns the line number.
+    pub(crate) fn expect_header(&mut self, accepted: &[&str]) -> Result<usize> {
+        let list = accepted
+            .iter()
+            .map(|a| format!("\"{a}\""))
+            .collect::<Vec<_>>()
+            .join(" or ");
+        let Some((line, text)) = self.next_line()? else {
+            return Err(self.err(format!("unexpected end of file: expected the header {list}")));
+        };
+        let norm = normalize_header(text);
+        if accepted.iter().any(|a| norm == *a) {
+            Ok(line)
+        } else {
+            Err(self.err_at(line, format!("expected the header {list}, found \"{text}\"")))
+        }
+    }
+
+    /// The next token parsed as `T`; `what` names the value in error messages.
+    pub(crate) fn parse<T: FromStr>(&mut self, what: &str) -> Result<T> {
+        let tok = self.next(what)?;
+        tok.parse::<T>()
+            .map_err(|_| self.err(format!("cannot read {what} from \"{tok}\"")))
+    }
+
+    /// A record count: a non-negative integer (a negative one gets a specific message).
+    pub(crate) fn count(&mut self, what: &str) -> Result<usize> {
+        let tok = self.next(what)?;
+        match tok.parse::<i64>() {
+            Ok(n) if n < 0 => Err(self.err(format!("negative {what}: {n}"))),
+            Ok(n) => usize::try_from(n).map_err(|_| self.err(format!("{what} {n} is too large"))),
+            Err(_) => Err(self.err(format!(
+                "cannot read {what} from \"{tok}\" (expected a non-negative integer)"
+            ))),
+        }
+    }
+
+    /// A finite floating-point number.
+    pub(crate) fn coord(&mut self, what: &str) -> Result<f64> {
+        let tok = self.next(what)?;
+        match tok.parse::<f64>() {
+            Ok(x) if x.is_finite() => Ok(x),
+            Ok(_) => Err(self.err(format!("{what} is not finite: \"{tok}\""))),
+            Err(_) => Err(self.err(format!("cannot read {what} from \"{tok}\""))),
+        }
+    }
+
+    /// A 1-based index in `1..=n`, returned 0-based.
+    pub(crate) fn index1(&mut self, what: &str, n: usize) -> Result<usize> {
+        let tok = self.next(what)?;
+        match tok.parse::<u64>() {
+            Ok(i) if i >= 1 && i <= n as u64 => Ok(i as usize - 1),
+            Ok(i) => Err(self.err(format!("{what} {i} is out of range 1..={n}"))),
+            Err(_) => Err(self.err(format!(
+                "cannot read {what} from \"{tok}\" (expected a positive integer)"
+            ))),
+        }
+    }
+}
+
+/// Lower-cases a header and collapses runs of blanks into single spaces.
+pub(crate) fn normalize_header(text: &str) -> String {
+    text.split_ascii_whitespace()
+        .map(str::to_ascii_lowercase)
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tokenizer_tracks_lines() {
+        let p = Path::new("t.txt");
+        let mut t = Tokens::new(p, b"  a b\r\n\n c\n d e f \n");
+        assert_eq!(t.next("x").unwrap(), "a");
+        assert_eq!(t.line(), 1);
+        assert_eq!(t.rest_of_line().unwrap(), "b");
+        assert_eq!(t.next("x").unwrap(), "c");
+        assert_eq!(t.line(), 3);
+        assert_eq!(t.next_line().unwrap(), Some((4, "d e f")));
+        assert_eq!(t.next_opt().unwrap(), None);
+        let e = t.next("the answer").unwrap_err().to_string();
+        assert!(e.contains("t.txt:4:") && e.contains("end of file"), "{e}");
+    }
+
+    #[test]
+    fn numbers() {
+        let p = Path::new("t.txt");
+        let mut t = Tokens::new(p, b"-3 0. 7.8E-002 nan 0 5 x");
+        assert!(t.count("n").unwrap_err().to_string().contains("negative"));
+        assert_eq!(t.coord("x").unwrap(), 0.0);
+        assert_eq!(t.coord("x").unwrap(), 7.8e-2);
+        assert!(t.coord("x").is_err());
+        assert!(t.index1("id", 5).is_err());
+        assert_eq!(t.index1("id", 5).unwrap(), 4);
+        assert!(t.parse::<i32>("tag").is_err());
+    }
+
+    #[test]
+    fn unknown_extension() {
+        let e = read_mesh("foo.obj").unwrap_err();
+        assert!(matches!(e, Error::MeshIo { .. }), "{e}");
+    }
+}

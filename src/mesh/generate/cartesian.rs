@@ -1,0 +1,133 @@
+//! Uniform Cartesian meshes of rectangles.
+//!
+//! On \[x₀,x₁\] × \[y₀,y₁\] with nx × ny cells, vertex (i, j) (0 ≤ i ≤ nx, 0 ≤ j ≤ ny) is
+//!
+//! ```text
+//! v(i,j) = (x₀ + (x₁−x₀)·i/nx , y₀ + (y₁−y₀)·j/ny)      (x₁, y₁ exactly on the last line)
+//! ```
+//!
+//! with id `j·(nx+1) + i` (row-major, lower-left first). Cell (i, j) (0 ≤ i < nx, 0 ≤ j < ny)
+//! has id `j·nx + i` (row-major) and vertices `[v(i,j), v(i+1,j), v(i+1,j+1), v(i,j+1)]`:
+//! counter-clockwise, starting at its lower-left vertex. This is the layout of the FVCA5
+//! `mesh2_k` files (2^(k+1) × 2^(k+1) squares on \[0,1\]²).
+//!
+//! Counts: (nx+1)(ny+1) vertices, nx·ny cells, nx(ny+1) + ny(nx+1) edges, 2(nx+ny) boundary edges,
+//! h = √((x₁−x₀)²/nx² + (y₁−y₀)²/ny²).
+
+use super::check_cell_count;
+use crate::error::{Error, Result};
+use crate::mesh::{Point, PolyMesh};
+
+/// The nx × ny uniform mesh of \[0,1\]² (see the module docs for the numbering).
+pub fn cartesian(nx: usize, ny: usize) -> Result<PolyMesh> {
+    cartesian_rect(nx, ny, [0.0, 1.0], [0.0, 1.0])
+}
+
+/// The nx × ny uniform mesh of the rectangle `[x[0], x[1]] × [y[0], y[1]]` (for instance a strip
+/// `[0,1] × [0,0.1]`). Requires nx, ny ≥ 1, finite bounds with `x[0] < x[1]`, `y[0] < y[1]`,
+/// and at most [`MAX_CELLS`](super::MAX_CELLS) cells; otherwise [`Error::InvalidData`].
+pub fn cartesian_rect(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<PolyMesh> {
+    if nx == 0 || ny == 0 {
+        return Err(Error::InvalidData(format!(
+            "a Cartesian mesh needs at least one cell per direction (got {nx} × {ny})"
+        )));
+    }
+    for (name, r) in [("x", x), ("y", y)] {
+        if !(r[0].is_finite() && r[1].is_finite() && r[0] < r[1]) {
+            return Err(Error::InvalidData(format!(
+                "invalid {name} range [{}, {}] for a Cartesian mesh (need finite bounds, lower < upper)",
+                r[0], r[1]
+            )));
+        }
+    }
+    check_cell_count(&format!("a {nx} × {ny} Cartesian mesh"), nx.checked_mul(ny))?;
+    let (vertices, cells) = cartesian_data(nx, ny, x, y);
+    Ok(PolyMesh::from_cells(vertices, cells)?)
+}
+
+/// Coordinate `i` of `n` equal steps on `[a, b]`, exactly `b` for `i = n`.
+fn grid_coord(a: f64, b: f64, i: usize, n: usize) -> f64 {
+    if i == n {
+        b
+    } else {
+        a + (b - a) * (i as f64 / n as f64)
+    }
+}
+
+/// Vertices and cells of the nx × ny grid (arguments already validated).
+fn cartesian_data(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> (Vec<Point>, Vec<Vec<usize>>) {
+    let xs: Vec<f64> = (0..=nx).map(|i| grid_coord(x[0], x[1], i, nx)).collect();
+    let mut vertices = Vec::with_capacity((nx + 1) * (ny + 1));
+    for j in 0..=ny {
+        let yj = grid_coord(y[0], y[1], j, ny);
+        vertices.extend(xs.iter().map(|&xi| [xi, yj]));
+    }
+    let v = |i: usize, j: usize| j * (nx + 1) + i;
+    let mut cells = Vec::with_capacity(nx * ny);
+    for j in 0..ny {
+        for i in 0..nx {
+            cells.push(vec![v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)]);
+        }
+    }
+    (vertices, cells)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn total_area(m: &PolyMesh) -> f64 {
+        (0..m.n_cells()).map(|k| m.measure(k)).sum()
+    }
+
+    #[test]
+    fn unit_square_counts_area_and_h() {
+        for (nx, ny) in [(1, 1), (4, 4), (3, 5), (64, 64)] {
+            let m = cartesian(nx, ny).unwrap();
+            assert_eq!(m.n_cells(), nx * ny);
+            assert_eq!(m.n_vertices(), (nx + 1) * (ny + 1));
+            assert_eq!(m.n_edges(), nx * (ny + 1) + ny * (nx + 1));
+            assert_eq!(m.boundary_edges().len(), 2 * (nx + ny));
+            assert!((total_area(&m) - 1.0).abs() < 1e-12);
+            let h = ((1.0 / (nx * nx) as f64) + 1.0 / (ny * ny) as f64).sqrt();
+            assert!((m.h() - h).abs() < 1e-14, "{} vs {h}", m.h());
+            assert_eq!(m.bounding_box(), [0.0, 0.0, 1.0, 1.0]);
+        }
+    }
+
+    #[test]
+    fn row_major_counter_clockwise_from_lower_left() {
+        let m = cartesian(4, 4).unwrap();
+        assert_eq!(m.cell_vertices(0), &[0, 1, 6, 5]);
+        assert_eq!(m.cell_vertices(5), &[6, 7, 12, 11]);
+        assert_eq!(m.vertex(6), [0.25, 0.25]);
+        assert_eq!(m.vertex(24), [1.0, 1.0]);
+        assert_eq!(m.centroid(1), [0.375, 0.125]);
+    }
+
+    #[test]
+    fn strip() {
+        let m = cartesian_rect(20, 2, [0.0, 1.0], [0.0, 0.1]).unwrap();
+        assert_eq!(m.n_cells(), 40);
+        assert!((total_area(&m) - 0.1).abs() < 1e-14);
+        assert_eq!(m.bounding_box(), [0.0, 0.0, 1.0, 0.1]);
+        assert!((m.h() - (0.05f64.powi(2) * 2.0).sqrt()).abs() < 1e-14);
+        let m = cartesian_rect(3, 1, [-1.0, 2.0], [5.0, 6.0]).unwrap();
+        assert_eq!(m.vertex(7), [2.0, 6.0]);
+    }
+
+    #[test]
+    fn invalid_arguments_are_errors() {
+        for r in [
+            cartesian(0, 3),
+            cartesian(3, 0),
+            cartesian_rect(2, 2, [1.0, 0.0], [0.0, 1.0]),
+            cartesian_rect(2, 2, [0.0, 1.0], [0.0, f64::NAN]),
+            cartesian_rect(2, 2, [0.0, 0.0], [0.0, 1.0]),
+            cartesian(1 << 13, 1 << 12),
+            cartesian(usize::MAX, 2),
+        ] {
+            assert!(matches!(r, Err(Error::InvalidData(_))), "{r:?}");
+        }
+    }
+}

@@ -1,0 +1,534 @@
+//! gmsh `.msh` files, ASCII formats 4.1 and 2.2 (2.0 and 2.1 are read as 2.2).
+//!
+//! * Triangles (element type 2) and quadrangles (type 3) become the cells.
+//! * Line elements (type 1) carry boundary tags: in format 4.1 the first physical tag of the
+//!   curve entity the elements belong to (from the `$Entities` section), in format 2.2 the first
+//!   tag of the element (its physical tag). Lines without a physical tag, or with tag 0, leave
+//!   their edges untagged (0). Lines that are not boundary edges of the mesh (interior
+//!   interfaces, or lines whose nodes no cell uses) are ignored.
+//! * Points (type 15) and every other element type are ignored.
+//! * Nodes that no cell uses (gmsh also lists geometry nodes) are dropped; the remaining nodes
+//!   keep the order of the `$Nodes` section. The z coordinate is ignored.
+//! * The names of `$PhysicalNames` are returned in [`MshMesh::physical_names`]; other sections
+//!   (`$Periodic`, `$NodeData`, comments, …) are skipped.
+//!
+//! Binary files and the formats 4.0 and 3.0 are rejected with a clear message.
+
+use super::{Tokens, capacity, read_bytes};
+use crate::error::Result;
+use crate::mesh::{Point, PolyMesh, drop_unused_vertices};
+use std::collections::{BTreeSet, HashMap};
+use std::path::Path;
+
+/// A gmsh mesh together with its physical-group names.
+#[derive(Debug, Clone)]
+pub struct MshMesh {
+    /// The mesh; boundary edges carry the physical tags of the line elements on them.
+    pub mesh: PolyMesh,
+    /// `(dimension, physical tag, name)` from the `$PhysicalNames` section (empty if absent),
+    /// in file order.
+    pub physical_names: Vec<(i32, i32, String)>,
+}
+
+impl MshMesh {
+    /// The tag of the physical group of dimension `dim` called `name`, if any.
+    pub fn physical_tag(&self, dim: i32, name: &str) -> Option<i32> {
+        self.physical_names
+            .iter()
+            .find(|(d, _, n)| *d == dim && n == name)
+            .map(|&(_, tag, _)| tag)
+    }
+}
+
+/// Reads a gmsh ASCII mesh (format 4.1 or 2.2); see the module docs.
+pub fn read_msh(path: impl AsRef<Path>) -> Result<MshMesh> {
+    let path = path.as_ref();
+    let bytes = read_bytes(path)?;
+    parse_msh(path, &bytes)
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Version {
+    V22,
+    V41,
+}
+
+/// How a line element gets its boundary tag.
+#[derive(Clone, Copy)]
+enum LineTag {
+    /// Format 2.2: the element's own physical tag.
+    Physical(i32),
+    /// Format 4.1: the physical tag of this curve entity.
+    Curve(i32),
+}
+
+/// Everything read from the file, before node tags are resolved.
+#[derive(Default)]
+struct Raw {
+    nodes: Vec<Point>,
+    node_index: HashMap<u64, usize>,
+    /// Node tags of the cells, CSR by `cell_ptr`.
+    cell_nodes: Vec<u64>,
+    cell_ptr: Vec<usize>,
+    cell_line: Vec<usize>,
+    lines: Vec<([u64; 2], LineTag, usize)>,
+    curve_phys: HashMap<i32, i32>,
+    physical_names: Vec<(i32, i32, String)>,
+    ignored_types: BTreeSet<i32>,
+}
+
+/// Number of nodes of the gmsh element types (`None` for types not in this table).
+fn nodes_of_type(ty: i32) -> Option<usize> {
+    Some(match ty {
+        1 => 2,
+        2 => 3,
+        3 => 4,
+        4 => 4,
+        5 => 8,
+        6 => 6,
+        7 => 5,
+        8 => 3,
+        9 => 6,
+        10 => 9,
+        11 => 10,
+        12 => 27,
+        13 => 18,
+        14 => 14,
+        15 => 1,
+        16 => 8,
+        17 => 20,
+        18 => 15,
+        19 => 13,
+        20 => 9,
+        21 => 10,
+        22 => 12,
+        23 => 15,
+        24 => 15,
+        25 => 21,
+        26 => 4,
+        27 => 5,
+        28 => 6,
+        29 => 20,
+        30 => 35,
+        31 => 56,
+        92 => 64,
+        93 => 125,
+        _ => return None,
+    })
+}
+
+/// Parses the contents of a `.msh` file (`path` is only used in error messages).
+pub(crate) fn parse_msh(path: &Path, bytes: &[u8]) -> Result<MshMesh> {
+    let mut t = Tokens::new(path, bytes);
+    match t.next_opt()? {
+        Some("$MeshFormat") => {}
+        Some(tok) => {
+            return Err(t.err(format!(
+                "expected \"$MeshFormat\" (is this a gmsh file?), found \"{tok}\""
+            )));
+        }
+        None => return Err(t.err("empty file: expected \"$MeshFormat\"")),
+    }
+    let version_tok = t.next("the format version")?;
+    let version_line = t.line();
+    let file_type: i32 = t.parse("the file type (0 for ASCII)")?;
+    if file_type != 0 {
+        return Err(t.err(
+            "binary .msh files are not supported: save the mesh as ASCII \
+             (gmsh option -format msh41 or msh22, with Mesh.Binary = 0)",
+        ));
+    }
+    let _data_size: u32 = t.parse("the data size")?;
+    let version = match version_tok {
+        "4.1" => Version::V41,
+        v if v.starts_with("2.") && v.parse::<f64>().is_ok() => Version::V22,
+        v => {
+            return Err(t.err_at(
+                version_line,
+                format!("unsupported .msh format version {v}: only 4.1 and 2.2 are read"),
+            ));
+        }
+    };
+    expect(&mut t, "$EndMeshFormat")?;
+
+    let mut raw = Raw::default();
+    let mut seen: Vec<&str> = Vec::new();
+    while let Some(tok) = t.next_opt()? {
+        let section = tok;
+        let known = matches!(
+            section,
+            "$PhysicalNames" | "$Entities" | "$Nodes" | "$Elements"
+        );
+        if known {
+            if seen.contains(&section) {
+                return Err(t.err(format!("a second {section} section")));
+            }
+            seen.push(section);
+        }
+        match (section, version) {
+            ("$PhysicalNames", _) => read_physical_names(&mut t, &mut raw)?,
+            ("$Entities", Version::V41) => read_entities(&mut t, &mut raw)?,
+            ("$Nodes", Version::V41) => read_nodes41(&mut t, &mut raw)?,
+            ("$Nodes", Version::V22) => read_nodes22(&mut t, &mut raw)?,
+            ("$Elements", Version::V41) => read_elements41(&mut t, &mut raw)?,
+            ("$Elements", Version::V22) => read_elements22(&mut t, &mut raw)?,
+            (s, _) if s.starts_with('$') && !s.starts_with("$End") => skip_section(&mut t, s)?,
+            (s, _) => {
+                return Err(t.err(format!(
+                    "expected a section header such as \"$Nodes\", found \"{s}\""
+                )));
+            }
+        }
+    }
+    for needed in ["$Nodes", "$Elements"] {
+        if !seen.contains(&needed) {
+            return Err(t.err_at(0, format!("the file has no {needed} section")));
+        }
+    }
+    build(&t, raw)
+}
+
+/// Reads the next token and checks it is `what` (a section end marker).
+fn expect(t: &mut Tokens, what: &str) -> Result<()> {
+    let tok = t.next(&format!("\"{what}\""))?;
+    if tok == what {
+        Ok(())
+    } else {
+        Err(t.err(format!(
+            "expected \"{what}\", found \"{tok}\" (wrong count or truncated block?)"
+        )))
+    }
+}
+
+fn skip_section(t: &mut Tokens, section: &str) -> Result<()> {
+    let end = format!("$End{}", &section[1..]);
+    let start = t.line();
+    loop {
+        match t.next_opt()? {
+            Some(tok) if tok == end => return Ok(()),
+            Some(_) => {}
+            None => {
+                return Err(t.err(format!(
+                    "section {section} (line {start}) has no \"{end}\""
+                )));
+            }
+        }
+    }
+}
+
+fn read_physical_names(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+    let n = t.count("the number of physical names")?;
+    raw.physical_names.reserve(capacity(n, t.remaining()));
+    for i in 1..=n {
+        let dim: i32 = t.parse(&format!("the dimension of physical name {i}"))?;
+        let tag: i32 = t.parse(&format!("the tag of physical name {i}"))?;
+        let rest = t.rest_of_line()?;
+        let name = rest
+            .strip_prefix('"')
+            .and_then(|s| s.strip_suffix('"'))
+            .unwrap_or(rest);
+        if name.is_empty() {
+            return Err(t.err(format!("physical name {i} has no name")));
+        }
+        raw.physical_names.push((dim, tag, name.to_string()));
+    }
+    expect(t, "$EndPhysicalNames")
+}
+
+/// Skips a bounding box or coordinates, checking they are numbers.
+fn skip_floats(t: &mut Tokens, n: usize, what: &str) -> Result<()> {
+    for _ in 0..n {
+        t.parse::<f64>(what)?;
+    }
+    Ok(())
+}
+
+fn read_entities(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+    let mut counts = [0usize; 4];
+    for (d, c) in counts.iter_mut().enumerate() {
+        *c = t.count(&format!("the number of entities of dimension {d}"))?;
+    }
+    for (dim, &n) in counts.iter().enumerate() {
+        for i in 1..=n {
+            let what = format!("entity {i} of dimension {dim}");
+            let tag: i32 = t.parse(&format!("the tag of {what}"))?;
+            skip_floats(t, if dim == 0 { 3 } else { 6 }, &format!("the box of {what}"))?;
+            let nphys = t.count(&format!("the number of physical tags of {what}"))?;
+            for j in 0..nphys {
+                let p: i32 = t.parse(&format!("a physical tag of {what}"))?;
+                if dim == 1 && j == 0 {
+                    raw.curve_phys.insert(tag, p);
+                }
+            }
+            if dim > 0 {
+                let nb = t.count(&format!("the number of bounding entities of {what}"))?;
+                for _ in 0..nb {
+                    t.parse::<i32>(&format!("a bounding entity of {what}"))?;
+                }
+            }
+        }
+    }
+    expect(t, "$EndEntities")
+}
+
+fn add_node(t: &Tokens, raw: &mut Raw, tag: u64, p: Point) -> Result<()> {
+    if raw.node_index.insert(tag, raw.nodes.len()).is_some() {
+        return Err(t.err(format!("node {tag} is defined twice")));
+    }
+    raw.nodes.push(p);
+    Ok(())
+}
+
+fn read_nodes22(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+    let n = t.count("the number of nodes")?;
+    let cap = capacity(n, t.remaining());
+    raw.nodes.reserve(cap);
+    raw.node_index.reserve(cap);
+    for i in 1..=n {
+        let tag: u64 = t.parse(&format!("the tag of node {i}"))?;
+        let x = t.coord(&format!("x of node {tag}"))?;
+        let y = t.coord(&format!("y of node {tag}"))?;
+        t.coord(&format!("z of node {tag}"))?;
+        add_node(t, raw, tag, [x, y])?;
+    }
+    expect(t, "$EndNodes")
+}
+
+fn read_nodes41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+    let nblocks = t.count("the number of node blocks")?;
+    let n = t.count("the number of nodes")?;
+    let header_line = t.line();
+    t.parse::<u64>("the smallest node tag")?;
+    t.parse::<u64>("the largest node tag")?;
+    let cap = capacity(n, t.remaining());
+    raw.nodes.reserve(cap);
+    raw.node_index.reserve(cap);
+    let mut tags = Vec::new();
+    for b in 1..=nblocks {
+        let dim: i32 = t.parse(&format!("the entity dimension of node block {b}"))?;
+        t.parse::<i32>(&format!("the entity tag of node block {b}"))?;
+        let parametric: i32 = t.parse(&format!("the parametric flag of node block {b}"))?;
+        let m = t.count(&format!("the number of nodes of block {b}"))?;
+        let extra = match parametric {
+            0 => 0,
+            1 => usize::try_from(dim.clamp(0, 3)).unwrap_or(0),
+            p => return Err(t.err(format!("parametric flag {p} of node block {b} is not 0 or 1"))),
+        };
+        tags.clear();
+        tags.reserve(capacity(m, t.remaining()));
+        for _ in 0..m {
+            tags.push(t.parse::<u64>(&format!("a node tag of block {b}"))?);
+        }
+        for &tag in &tags {
+            let x = t.coord(&format!("x of node {tag}"))?;
+            let y = t.coord(&format!("y of node {tag}"))?;
+            t.coord(&format!("z of node {tag}"))?;
+            skip_floats(t, extra, &format!("a parametric coordinate of node {tag}"))?;
+            add_node(t, raw, tag, [x, y])?;
+        }
+    }
+    if raw.nodes.len() != n {
+        return Err(t.err_at(
+            header_line,
+            format!(
+                "the $Nodes header announces {n} nodes but the blocks hold {}",
+                raw.nodes.len()
+            ),
+        ));
+    }
+    expect(t, "$EndNodes")
+}
+
+/// Reads the node tags of one element of type `ty` and files it.
+fn read_element(t: &mut Tokens, raw: &mut Raw, ty: i32, tag: LineTag, what: &str) -> Result<()> {
+    match ty {
+        1 => {
+            let a: u64 = t.parse(&format!("a node of {what}"))?;
+            let b: u64 = t.parse(&format!("a node of {what}"))?;
+            raw.lines.push(([a, b], tag, t.line()));
+        }
+        2 | 3 => {
+            for _ in 0..ty + 1 {
+                raw.cell_nodes.push(t.parse(&format!("a node of {what}"))?);
+            }
+            raw.cell_ptr.push(raw.cell_nodes.len());
+            raw.cell_line.push(t.line());
+        }
+        _ => {
+            raw.ignored_types.insert(ty);
+            match nodes_of_type(ty) {
+                Some(n) => {
+                    for _ in 0..n {
+                        t.parse::<u64>(&format!("a node of {what}"))?;
+                    }
+                }
+                None => {
+                    t.rest_of_line()?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn read_elements22(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+    let n = t.count("the number of elements")?;
+    raw.cell_ptr.push(0);
+    for i in 1..=n {
+        let id: u64 = t.parse(&format!("the tag of element {i}"))?;
+        let what = format!("element {id}");
+        let ty: i32 = t.parse(&format!("the type of {what}"))?;
+        let ntags = t.count(&format!("the number of tags of {what}"))?;
+        let mut phys = 0;
+        for j in 0..ntags {
+            let tag: i32 = t.parse(&format!("a tag of {what}"))?;
+            if j == 0 {
+                phys = tag;
+            }
+        }
+        read_element(t, raw, ty, LineTag::Physical(phys), &what)?;
+    }
+    expect(t, "$EndElements")
+}
+
+fn read_elements41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+    let nblocks = t.count("the number of element blocks")?;
+    let n = t.count("the number of elements")?;
+    let header_line = t.line();
+    t.parse::<u64>("the smallest element tag")?;
+    t.parse::<u64>("the largest element tag")?;
+    raw.cell_ptr.push(0);
+    let mut total = 0usize;
+    for b in 1..=nblocks {
+        let dim: i32 = t.parse(&format!("the entity dimension of element block {b}"))?;
+        let entity: i32 = t.parse(&format!("the entity tag of element block {b}"))?;
+        let ty: i32 = t.parse(&format!("the element type of element block {b}"))?;
+        let m = t.count(&format!("the number of elements of block {b}"))?;
+        let tag = if dim == 1 {
+            LineTag::Curve(entity)
+        } else {
+            LineTag::Physical(0)
+        };
+        for _ in 0..m {
+            let id: u64 = t.parse(&format!("an element tag of block {b}"))?;
+            read_element(t, raw, ty, tag, &format!("element {id}"))?;
+        }
+        total = total.saturating_add(m);
+    }
+    if total != n {
+        return Err(t.err_at(
+            header_line,
+            format!("the $Elements header announces {n} elements but the blocks hold {total}"),
+        ));
+    }
+    expect(t, "$EndElements")
+}
+
+/// Resolves node tags, drops unused nodes, filters the tagged lines to boundary edges and
+/// builds the mesh.
+fn build(t: &Tokens, raw: Raw) -> Result<MshMesh> {
+    let node = |tag: u64, line: usize| {
+        raw.node_index.get(&tag).copied().ok_or_else(|| {
+            t.err_at(line, format!("element refers to node {tag}, which is not in $Nodes"))
+        })
+    };
+    let nc = raw.cell_line.len();
+    if nc == 0 {
+        let ignored = if raw.ignored_types.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " (ignored element types: {})",
+                raw.ignored_types
+                    .iter()
+                    .map(i32::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        };
+        return Err(t.err_at(
+            0,
+            format!("no triangles (type 2) or quadrangles (type 3) in the file{ignored}"),
+        ));
+    }
+    let mut cells = Vec::with_capacity(nc);
+    for (k, &line) in raw.cell_line.iter().enumerate() {
+        let tags = raw
+            .cell_ptr
+            .get(k)
+            .zip(raw.cell_ptr.get(k + 1))
+            .and_then(|(&s, &e)| raw.cell_nodes.get(s..e))
+            .unwrap_or_default();
+        cells.push(
+            tags.iter()
+                .map(|&tag| node(tag, line))
+                .collect::<Result<Vec<usize>>>()?,
+        );
+    }
+    let (vertices, cells, new_id) = drop_unused_vertices(&raw.nodes, &cells);
+
+    // boundary edges of the cells: sides used exactly once
+    let mut sides: Vec<(usize, usize)> = Vec::with_capacity(cells.iter().map(Vec::len).sum());
+    for c in &cells {
+        for (i, &a) in c.iter().enumerate() {
+            let b = c[(i + 1) % c.len()];
+            sides.push((a.min(b), a.max(b)));
+        }
+    }
+    sides.sort_unstable();
+    let is_boundary = |key: (usize, usize)| {
+        let lo = sides.partition_point(|s| *s < key);
+        let hi = sides.partition_point(|s| *s <= key);
+        hi - lo == 1
+    };
+    let mut tagged = Vec::new();
+    for &([a, b], tag, line) in &raw.lines {
+        let tag = match tag {
+            LineTag::Physical(p) => p,
+            LineTag::Curve(c) => raw.curve_phys.get(&c).copied().unwrap_or(0),
+        };
+        let (a, b) = (node(a, line)?, node(b, line)?);
+        if tag == 0 {
+            continue;
+        }
+        let (Some(Some(a)), Some(Some(b))) = (new_id.get(a), new_id.get(b)) else {
+            continue;
+        };
+        if a != b && is_boundary(((*a).min(*b), (*a).max(*b))) {
+            tagged.push((*a, *b, tag));
+        }
+    }
+    let mesh = PolyMesh::from_cells_tagged(vertices, cells, &tagged)?;
+    Ok(MshMesh {
+        mesh,
+        physical_names: raw.physical_names,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::Error;
+
+    const SQUARE22: &str = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n\
+1 0 0 0\n2 1 0 0\n3 1 1 0\n4 0 1 0\n9 5 5 0\n$EndNodes\n$Elements\n4\n\
+1 15 2 0 1 9\n2 1 2 7 1 1 2\n3 2 2 1 1 1 2 3\n4 2 2 1 1 1 3 4\n$EndElements\n";
+
+    #[test]
+    fn reads_22() {
+        let m = parse_msh(Path::new("s.msh"), SQUARE22.as_bytes()).unwrap();
+        assert_eq!((m.mesh.n_vertices(), m.mesh.n_cells(), m.mesh.n_edges()), (4, 2, 5));
+        let tags: Vec<i32> = m.mesh.boundary_edges().iter().map(|&e| m.mesh.edge_tag(e)).collect();
+        assert_eq!(tags.iter().filter(|&&t| t == 7).count(), 1);
+    }
+
+    #[test]
+    fn rejects_binary_and_unknown_nodes() {
+        let e = parse_msh(Path::new("b.msh"), b"$MeshFormat\n4.1 1 8\n\x01\x00\x00\x00\xff").unwrap_err();
+        assert!(e.to_string().starts_with("b.msh:2:") && e.to_string().contains("binary"), "{e}");
+        let bad = SQUARE22.replace("2 1 2 7 1 1 2", "2 1 2 7 1 1 8");
+        let e = parse_msh(Path::new("s.msh"), bad.as_bytes()).unwrap_err();
+        assert!(e.to_string().starts_with("s.msh:15:"), "{e}");
+        assert!(matches!(e, Error::MeshIo { .. }));
+    }
+}
