@@ -58,7 +58,7 @@ pub struct DiscreteSystem<'a> {
     neumann_load: Vec<f64>,
     /// Dirichlet unknowns and their values.
     dirichlet: Vec<Option<f64>>,
-    /// Unknowns carrying the trace on Γ3, with their points and measures.
+    /// Unknowns carrying the trace on Γ3, with their points and measures (Dirichlet ones too).
     signorini: Vec<PointDof>,
     /// Time to build (data, local matrices, pattern, symbolic factorisation), seconds.
     pub setup_seconds: f64,
@@ -160,7 +160,7 @@ impl<'a> DiscreteSystem<'a> {
         }
         // Γ3 carries natural (zero-flux) data where inactive: nothing to add to the load.
         let signorini: Vec<PointDof> = (0..n)
-            .filter(|&d| sig_point[d].is_some() && dirichlet[d].is_none())
+            .filter(|&d| sig_point[d].is_some())
             .map(|d| PointDof {
                 dof: d,
                 point: sig_point[d].unwrap_or([0.0, 0.0]),
@@ -265,7 +265,8 @@ impl<'a> DiscreteSystem<'a> {
     pub fn dirichlet(&self) -> &[Option<f64>] {
         &self.dirichlet
     }
-    /// The unknowns carrying the trace on Γ3 (excluding Dirichlet ones).
+    /// The unknowns carrying the trace on Γ3, including those that are also Dirichlet unknowns
+    /// (P1 vertices at Γ1 ∩ Γ3), which are never constrained but must satisfy the barrier.
     pub fn signorini_dofs(&self) -> &[PointDof] {
         &self.signorini
     }
@@ -288,6 +289,44 @@ impl<'a> DiscreteSystem<'a> {
     /// Dirichlet unknowns) are fixed. Returns the full unknown vector.
     pub fn solve(&self, fixed: &[Option<f64>]) -> crate::Result<(Vec<f64>, SolveTimings)> {
         let t0 = Instant::now();
+        let fx = |d: usize| -> Option<f64> { self.dirichlet[d].or(fixed[d]) };
+        let (values, mut rhs) = self.assemble_condensed(fixed);
+        let t1 = Instant::now();
+        let factor = self.pattern.factor(&values)?;
+        let t2 = Instant::now();
+        factor.solve_in_place(&mut rhs);
+        let mut u = vec![0.0; self.n];
+        u[..self.n_skel].copy_from_slice(&rhs);
+        for k in 0..self.scheme.mesh().n_cells() {
+            let (d, ni, m, b) = self.local(k);
+            if ni > 0 {
+                recover_interior(d, ni, m, b, &fx, &mut u);
+            }
+        }
+        if let Some(i) = u.iter().position(|x| !x.is_finite()) {
+            return Err(crate::Error::Linear(format!(
+                "the solution is not finite at unknown {i}"
+            )));
+        }
+        let t3 = Instant::now();
+        Ok((
+            u,
+            SolveTimings {
+                assemble: (t1 - t0).as_secs_f64(),
+                factor: (t2 - t1).as_secs_f64(),
+                solve: (t3 - t2).as_secs_f64(),
+            },
+        ))
+    }
+
+    /// The lower-triangular CSC pattern (column pointers, row indices) of the condensed matrix.
+    pub fn condensed_pattern(&self) -> (&[usize], &[usize]) {
+        (self.pattern.col_ptr(), self.pattern.row_idx())
+    }
+
+    /// Condensed matrix values (in the order of [`Self::condensed_pattern`]) and right-hand
+    /// side, with `fixed` and the Dirichlet unknowns fixed (unit rows).
+    pub fn assemble_condensed(&self, fixed: &[Option<f64>]) -> (Vec<f64>, Vec<f64>) {
         let fx = |d: usize| -> Option<f64> { self.dirichlet[d].or(fixed[d]) };
         let mut values = vec![0.0; self.pattern.nnz()];
         // boundary (Neumann) loads; the local loads are added by the condensation below
@@ -333,32 +372,7 @@ impl<'a> DiscreteSystem<'a> {
                 rhs[dd] = v;
             }
         }
-        let t1 = Instant::now();
-        let factor = self.pattern.factor(&values)?;
-        let t2 = Instant::now();
-        factor.solve_in_place(&mut rhs);
-        let mut u = vec![0.0; self.n];
-        u[..self.n_skel].copy_from_slice(&rhs);
-        for k in 0..self.scheme.mesh().n_cells() {
-            let (d, ni, m, b) = self.local(k);
-            if ni > 0 {
-                recover_interior(d, ni, m, b, &fx, &mut u);
-            }
-        }
-        if let Some(i) = u.iter().position(|x| !x.is_finite()) {
-            return Err(crate::Error::Linear(format!(
-                "the solution is not finite at unknown {i}"
-            )));
-        }
-        let t3 = Instant::now();
-        Ok((
-            u,
-            SolveTimings {
-                assemble: (t1 - t0).as_secs_f64(),
-                factor: (t2 - t1).as_secs_f64(),
-                solve: (t3 - t2).as_secs_f64(),
-            },
-        ))
+        (values, rhs)
     }
 
     /// The residual r = b − M u of the full (uncondensed) system, and for each unknown the
@@ -492,7 +506,9 @@ fn condense(
     let r = free.len();
     let mrr = DMatrix::from_fn(r, r, |a, c| m[free[a] + free[c] * nl]);
     let msr = DMatrix::from_fn(p, r, |a, c| m[(ni + a) + free[c] * nl]);
-    let chol = mrr.cholesky().expect("interior block of an SPD local matrix is SPD");
+    let chol = mrr
+        .cholesky()
+        .expect("interior block of an SPD local matrix is SPD");
     let x = chol.solve(&msr.transpose()); // M_RR⁻¹ M_RS
     let y = chol.solve(&DVector::from_vec(br)); // M_RR⁻¹ b_R
     for bcol in 0..p {

@@ -308,7 +308,13 @@ mod tests {
 
     #[test]
     fn test2_source_matches_finite_differences() {
-        for &p in &[[0.3, 0.2], [0.7, 0.41], [0.1, 0.6], [0.85, 0.93], [0.5, 0.75]] {
+        for &p in &[
+            [0.3, 0.2],
+            [0.7, 0.41],
+            [0.1, 0.6],
+            [0.85, 0.93],
+            [0.5, 0.75],
+        ] {
             let (a, b) = (test2_source(p), fd_source(p));
             assert!((a - b).abs() < 1e-4 * (1.0 + a.abs()), "{p:?}: {a} vs {b}");
         }

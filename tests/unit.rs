@@ -5,3 +5,5 @@ mod common;
 mod generators;
 #[path = "unit/mesh_io.rs"]
 mod mesh_io;
+#[path = "unit/solver.rs"]
+mod solver;

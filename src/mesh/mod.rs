@@ -290,7 +290,8 @@ impl PolyMesh {
                 // counter-clockwise cell: outward normal is the tangent rotated by −90°
                 let nrm = [t[1] / len, -t[0] / len];
                 let xs = edge_midpoint[cell_edges[s + i]];
-                let d = (xs[0] - cell_centroid[k][0]) * nrm[0] + (xs[1] - cell_centroid[k][1]) * nrm[1];
+                let d =
+                    (xs[0] - cell_centroid[k][0]) * nrm[0] + (xs[1] - cell_centroid[k][1]) * nrm[1];
                 if !(d > 1e-12 * cell_diameter[k]) {
                     return Err(MeshError::NotStarShaped {
                         cell: k,
@@ -304,13 +305,23 @@ impl PolyMesh {
         }
 
         let boundary_edges: Vec<usize> = (0..ne).filter(|&e| edge_cells[e][1] == NO_CELL).collect();
-        check_boundary_loops(&vertices, &edges, &edge_cells, &cell_ptr, &cell_verts, &cell_edges, &boundary_edges)?;
+        check_boundary_loops(
+            &vertices,
+            &edges,
+            &edge_cells,
+            &cell_ptr,
+            &cell_verts,
+            &cell_edges,
+            &boundary_edges,
+        )?;
 
         // --- tags
         let mut edge_tags = vec![0i32; ne];
         if !tagged_edges.is_empty() {
-            let mut lookup: Vec<((usize, usize), usize)> =
-                boundary_edges.iter().map(|&e| ((edges[e][0], edges[e][1]), e)).collect();
+            let mut lookup: Vec<((usize, usize), usize)> = boundary_edges
+                .iter()
+                .map(|&e| ((edges[e][0], edges[e][1]), e))
+                .collect();
             lookup.sort_unstable();
             for &(a, b, tag) in tagged_edges {
                 let key = (a.min(b), a.max(b));
@@ -438,7 +449,12 @@ impl PolyMesh {
     }
     /// Bounding box `[xmin, ymin, xmax, ymax]`.
     pub fn bounding_box(&self) -> [f64; 4] {
-        let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+        let mut b = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
         for p in &self.vertices {
             b[0] = b[0].min(p[0]);
             b[1] = b[1].min(p[1]);
@@ -523,7 +539,10 @@ fn check_boundary_loops(
         let k = edge_cells[e][0];
         let (s, t) = (cell_ptr[k], cell_ptr[k + 1]);
         let n = t - s;
-        let i = (s..t).find(|&i| cell_edges[i] == e).expect("edge belongs to its cell") - s;
+        let i = (s..t)
+            .find(|&i| cell_edges[i] == e)
+            .expect("edge belongs to its cell")
+            - s;
         let a = cell_verts[s + i];
         let b = cell_verts[s + (i + 1) % n];
         if next.insert(a, b).is_some() {
@@ -581,7 +600,14 @@ mod tests {
     use super::*;
 
     fn unit_square_2x1() -> PolyMesh {
-        let v = vec![[0.0, 0.0], [0.5, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 1.0], [1.0, 1.0]];
+        let v = vec![
+            [0.0, 0.0],
+            [0.5, 0.0],
+            [1.0, 0.0],
+            [0.0, 1.0],
+            [0.5, 1.0],
+            [1.0, 1.0],
+        ];
         // the second cell is clockwise on purpose
         PolyMesh::from_cells(v, vec![vec![0, 1, 4, 3], vec![1, 4, 5, 2]]).unwrap()
     }
@@ -646,7 +672,14 @@ mod tests {
     #[test]
     fn rejects_non_star_shaped_cell() {
         // an arrow-shaped (non-convex) hexagon whose centroid sees one edge from behind
-        let v = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.9, 0.1], [0.5, 0.05], [0.0, 1.0]];
+        let v = vec![
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [1.0, 1.0],
+            [0.9, 0.1],
+            [0.5, 0.05],
+            [0.0, 1.0],
+        ];
         let r = PolyMesh::from_cells(v, vec![vec![0, 1, 2, 3, 4, 5]]);
         assert!(matches!(r, Err(MeshError::NotStarShaped { .. })), "{r:?}");
     }
@@ -655,7 +688,14 @@ mod tests {
     fn rejects_hanging_node() {
         // left cell is one square with 4 corners; the right side is split into two cells
         let v = vec![
-            [0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [0.0, 2.0], [1.0, 2.0], [2.0, 2.0], [1.0, 1.0], [2.0, 1.0],
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [2.0, 0.0],
+            [0.0, 2.0],
+            [1.0, 2.0],
+            [2.0, 2.0],
+            [1.0, 1.0],
+            [2.0, 1.0],
         ];
         let cells = vec![vec![0, 1, 4, 3], vec![1, 2, 7, 6], vec![6, 7, 5, 4]];
         let r = PolyMesh::from_cells(v, cells);

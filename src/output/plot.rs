@@ -42,7 +42,8 @@ fn ensure_font() -> Result<()> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
         let a = plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES).is_ok();
-        let b = plotters::style::register_font("DejaVu Sans", FontStyle::Normal, FONT_BYTES).is_ok();
+        let b =
+            plotters::style::register_font("DejaVu Sans", FontStyle::Normal, FONT_BYTES).is_ok();
         a && b
     });
     if ok {
@@ -607,9 +608,7 @@ fn draw_labels(
         } else {
             font
         };
-        let style = TextStyle::from(font)
-            .color(&color)
-            .pos(Pos::new(l.h, l.v));
+        let style = TextStyle::from(font).color(&color).pos(Pos::new(l.h, l.v));
         area.draw(&Text::new(
             l.text.clone(),
             (l.pos[0].round() as i32, l.pos[1].round() as i32),
@@ -998,10 +997,7 @@ pub fn plot_surface(
     let ss = opts.supersample;
     prepare_output(path, opts.size, ss)?;
     let s = ss as f64;
-    let (w, h) = (
-        (opts.size.0 * ss) as usize,
-        (opts.size.1 * ss) as usize,
-    );
+    let (w, h) = ((opts.size.0 * ss) as usize, (opts.size.1 * ss) as usize);
 
     // ---- geometry and ranges
     let surf = build_surface(mesh, field, opts.cell_rendering);
@@ -1087,7 +1083,12 @@ pub fn plot_surface(
         2.4 * fs_title
     };
     let cb_w = if opts.colorbar { 105.0 * s } else { 0.0 };
-    let region = [8.0 * s, title_h, w as f64 - cb_w - 8.0 * s, h as f64 - 8.0 * s];
+    let region = [
+        8.0 * s,
+        title_h,
+        w as f64 - cb_w - 8.0 * s,
+        h as f64 - 8.0 * s,
+    ];
     let axis_defs = |view: &View| -> Vec<AxisDef> {
         vec![
             AxisDef {
@@ -1103,21 +1104,32 @@ pub fn plot_surface(
             AxisDef {
                 a: [x0, y_front, z_floor],
                 b: [x1, y_front, z_floor],
-                ticks: xt.iter().map(|&t| ([t, y_front, z_floor], fmt_tick(t, xstep))).collect(),
+                ticks: xt
+                    .iter()
+                    .map(|&t| ([t, y_front, z_floor], fmt_tick(t, xstep)))
+                    .collect(),
                 out: view.dir([0.0, y_front - y_back, 0.0]),
                 label: opts.x_label.clone(),
             },
             AxisDef {
                 a: [x_front, y0, z_floor],
                 b: [x_front, y1, z_floor],
-                ticks: yt.iter().map(|&t| ([x_front, t, z_floor], fmt_tick(t, ystep))).collect(),
+                ticks: yt
+                    .iter()
+                    .map(|&t| ([x_front, t, z_floor], fmt_tick(t, ystep)))
+                    .collect(),
                 out: view.dir([x_front - x_back, 0.0, 0.0]),
                 label: opts.y_label.clone(),
             },
         ]
     };
     // pass 1: fit the bare box, pass 2: fit box + labels
-    let (mut bx0, mut bx1, mut by0, mut by1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    let (mut bx0, mut bx1, mut by0, mut by1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
     for &c in &corners {
         let p = view.plane(view.norm(c));
         bx0 = bx0.min(p[0]);
@@ -1489,10 +1501,7 @@ pub fn plot_mesh(path: &Path, mesh: &PolyMesh, opts: &MeshPlotOptions) -> Result
     let ss = opts.supersample;
     prepare_output(path, opts.size, ss)?;
     let s = ss as f64;
-    let (w, h) = (
-        (opts.size.0 * ss) as usize,
-        (opts.size.1 * ss) as usize,
-    );
+    let (w, h) = ((opts.size.0 * ss) as usize, (opts.size.1 * ss) as usize);
     let fs_tick = 12.5 * s;
     let fs_axis = 15.0 * s;
     let fs_title = 17.0 * s;
@@ -1566,7 +1575,10 @@ pub fn plot_mesh(path: &Path, mesh: &PolyMesh, opts: &MeshPlotOptions) -> Result
 
     // cells
     if let Some(vals) = &opts.cell_values {
-        let (lo, hi) = widen(min_max(vals.iter().copied()).0, min_max(vals.iter().copied()).1);
+        let (lo, hi) = widen(
+            min_max(vals.iter().copied()).0,
+            min_max(vals.iter().copied()).1,
+        );
         for (kc, &v) in vals.iter().enumerate() {
             let c = opts.colormap.rgb((v - lo) / (hi - lo));
             let xc = map(mesh.centroid(kc));
@@ -1586,7 +1598,12 @@ pub fn plot_mesh(path: &Path, mesh: &PolyMesh, opts: &MeshPlotOptions) -> Result
         colorbar(
             &mut r,
             &mut labels,
-            [cbx0, top, cbx0 + 16.0 * s, region[3] - 0.1 * (region[3] - region[1])],
+            [
+                cbx0,
+                top,
+                cbx0 + 16.0 * s,
+                region[3] - 0.1 * (region[3] - region[1]),
+            ],
             (lo, hi),
             opts.colormap,
             s,
@@ -1625,12 +1642,26 @@ pub fn plot_mesh(path: &Path, mesh: &PolyMesh, opts: &MeshPlotOptions) -> Result
     // reference lines
     for &yv in &opts.hlines {
         if yv >= dy0 && yv <= dy1 {
-            r.dashed_line(map([dx0, yv]), map([dx1, yv]), 1.5 * s, 7.0 * s, 4.0 * s, [200, 30, 30]);
+            r.dashed_line(
+                map([dx0, yv]),
+                map([dx1, yv]),
+                1.5 * s,
+                7.0 * s,
+                4.0 * s,
+                [200, 30, 30],
+            );
         }
     }
     for &xv in &opts.vlines {
         if xv >= dx0 && xv <= dx1 {
-            r.dashed_line(map([xv, dy0]), map([xv, dy1]), 1.5 * s, 7.0 * s, 4.0 * s, [200, 30, 30]);
+            r.dashed_line(
+                map([xv, dy0]),
+                map([xv, dy1]),
+                1.5 * s,
+                7.0 * s,
+                4.0 * s,
+                [200, 30, 30],
+            );
         }
     }
 
@@ -1643,7 +1674,14 @@ pub fn plot_mesh(path: &Path, mesh: &PolyMesh, opts: &MeshPlotOptions) -> Result
         let (tw, th) = text_size(text, fs_legend);
         let (hx, hy) = (0.5 * tw + 5.0 * s, 0.5 * th + 4.0 * s);
         r.rect(q[0] - hx, q[1] - hy, q[0] + hx, q[1] + hy, [255, 255, 255]);
-        r.rect_outline(q[0] - hx, q[1] - hy, q[0] + hx, q[1] + hy, 0.8 * s, [90, 90, 90]);
+        r.rect_outline(
+            q[0] - hx,
+            q[1] - hy,
+            q[0] + hx,
+            q[1] + hy,
+            0.8 * s,
+            [90, 90, 90],
+        );
         labels.push(Label::centered(q, text.clone(), fs_legend));
     }
 
@@ -1697,7 +1735,13 @@ pub fn plot_mesh(path: &Path, mesh: &PolyMesh, opts: &MeshPlotOptions) -> Result
         let mut y = region[1] + 1.0 * fs_legend;
         let lh = 1.6 * fs_legend;
         let lw = legend_w - 10.0 * s;
-        r.rect(lx, y - 0.8 * fs_legend, lx + lw, y + (tags.len() as f64 - 0.2) * lh, [255, 255, 255]);
+        r.rect(
+            lx,
+            y - 0.8 * fs_legend,
+            lx + lw,
+            y + (tags.len() as f64 - 0.2) * lh,
+            [255, 255, 255],
+        );
         r.rect_outline(
             lx,
             y - 0.8 * fs_legend,
@@ -1772,10 +1816,7 @@ pub fn plot_lines(path: &Path, series: &[LineSeries], opts: &LineOptions) -> Res
     let ss = opts.supersample;
     prepare_output(path, opts.size, ss)?;
     let s = ss as f64;
-    let (w, h) = (
-        (opts.size.0 * ss) as usize,
-        (opts.size.1 * ss) as usize,
-    );
+    let (w, h) = ((opts.size.0 * ss) as usize, (opts.size.1 * ss) as usize);
     let fs_tick = 13.0 * s;
     let fs_axis = 15.0 * s;
     let fs_title = 17.0 * s;
@@ -1807,17 +1848,18 @@ pub fn plot_lines(path: &Path, series: &[LineSeries], opts: &LineOptions) -> Res
         .fold(0.0, f64::max);
     let has_ylabel = !opts.y_label.is_empty();
     let left = 12.0 * s + ytw + 10.0 * s + if has_ylabel { 1.6 * fs_axis } else { 0.0 };
-    let bottom = 14.0 * s + fs_tick + if opts.x_label.is_empty() { 6.0 * s } else { 2.2 * fs_axis };
+    let bottom = 14.0 * s
+        + fs_tick
+        + if opts.x_label.is_empty() {
+            6.0 * s
+        } else {
+            2.2 * fs_axis
+        };
     let (fx0, fy0) = (left, title_h);
     let (fx1, fy1) = (w as f64 - 24.0 * s, h as f64 - bottom);
     let (fw, fh) = (fx1 - fx0, fy1 - fy0);
     let xticks = xaxis.ticks(target_x);
-    let map = |p: [f64; 2]| -> P2 {
-        [
-            fx0 + xaxis.frac(p[0]) * fw,
-            fy1 - yaxis.frac(p[1]) * fh,
-        ]
-    };
+    let map = |p: [f64; 2]| -> P2 { [fx0 + xaxis.frac(p[0]) * fw, fy1 - yaxis.frac(p[1]) * fh] };
 
     let mut r = Raster::new(w, h);
     let mut labels = Vec::new();
@@ -1827,12 +1869,20 @@ pub fn plot_lines(path: &Path, series: &[LineSeries], opts: &LineOptions) -> Res
     if opts.grid {
         for (v, _, major) in &xticks {
             let x = fx0 + xaxis.frac_t(*v) * fw;
-            let c = if *major { [222, 222, 222] } else { [240, 240, 240] };
+            let c = if *major {
+                [222, 222, 222]
+            } else {
+                [240, 240, 240]
+            };
             r.line([x, fy0], [x, fy1], 1.0 * s, c);
         }
         for (v, _, major) in &yticks {
             let y = fy1 - yaxis.frac_t(*v) * fh;
-            let c = if *major { [222, 222, 222] } else { [240, 240, 240] };
+            let c = if *major {
+                [222, 222, 222]
+            } else {
+                [240, 240, 240]
+            };
             r.line([fx0, y], [fx1, y], 1.0 * s, c);
         }
     }
@@ -2055,8 +2105,7 @@ impl LineAxis {
                     continue;
                 }
                 let major = m == 1 && k.rem_euclid(every) == 0;
-                let text = if (major || (m > 1 && labelled.contains(&m)))
-                    && (m == 1 || every == 1)
+                let text = if (major || (m > 1 && labelled.contains(&m))) && (m == 1 || every == 1)
                 {
                     fmt_log_value(m, k)
                 } else {
@@ -2173,5 +2222,328 @@ fn draw_marker(raster: &mut Raster, q: P2, marker: Marker, r: f64, c: Rgb, s: f6
                 .collect();
             raster.fill_convex(&pts, c);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn grid(n: usize) -> PolyMesh {
+        let mut v = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                v.push([i as f64 / n as f64, j as f64 / n as f64]);
+            }
+        }
+        let mut c = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let a = j * (n + 1) + i;
+                c.push(vec![a, a + 1, a + n + 2, a + n + 1]);
+            }
+        }
+        PolyMesh::from_cells(v, c).expect("valid grid")
+    }
+
+    fn tri_grid(n: usize) -> PolyMesh {
+        let mut v = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                v.push([i as f64 / n as f64, j as f64 / n as f64]);
+            }
+        }
+        let mut c = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let a = j * (n + 1) + i;
+                c.push(vec![a, a + 1, a + n + 2]);
+                c.push(vec![a, a + n + 2, a + n + 1]);
+            }
+        }
+        PolyMesh::from_cells(v, c).expect("valid grid")
+    }
+
+    fn tmp(name: &str) -> PathBuf {
+        std::env::temp_dir()
+            .join(format!("gradvi-plot-test-{}", std::process::id()))
+            .join(name)
+    }
+
+    /// Width and height from the PNG signature and IHDR chunk.
+    fn png_size(path: &Path) -> (u32, u32) {
+        let b = std::fs::read(path).expect("png written");
+        assert!(b.len() > 24, "png too short");
+        assert_eq!(&b[..8], &[137, 80, 78, 71, 13, 10, 26, 10], "png signature");
+        assert_eq!(&b[12..16], b"IHDR");
+        let w = u32::from_be_bytes([b[16], b[17], b[18], b[19]]);
+        let h = u32::from_be_bytes([b[20], b[21], b[22], b[23]]);
+        (w, h)
+    }
+
+    fn bump(p: [f64; 2]) -> f64 {
+        (std::f64::consts::PI * p[0]).sin() * (std::f64::consts::PI * p[1]).sin() - 0.5
+    }
+
+    fn small_surface() -> SurfaceOptions {
+        SurfaceOptions {
+            title: "test".into(),
+            size: (160, 120),
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn surface_cell_field_writes_png_of_requested_size() {
+        let m = grid(6);
+        let u: Vec<f64> = (0..m.n_cells()).map(|k| bump(m.centroid(k))).collect();
+        let path = tmp("nested/dir/surface_cell.png");
+        let opts = SurfaceOptions {
+            markers: vec![([0.5, 0.0, -0.5], "switch".into())],
+            lines: vec![vec![[0.5, 0.0, -0.5], [0.5, 0.0, 0.5]]],
+            ..small_surface()
+        };
+        plot_surface(&path, &m, Field::Cell(&u), &opts).expect("plot");
+        assert_eq!(png_size(&path), (160, 120));
+        let flat = tmp("surface_flat.png");
+        let opts = SurfaceOptions {
+            cell_rendering: CellRendering::Flat,
+            colorbar: false,
+            supersample: 1,
+            ..small_surface()
+        };
+        plot_surface(&flat, &m, Field::Cell(&u), &opts).expect("plot");
+        assert_eq!(png_size(&flat), (160, 120));
+    }
+
+    #[test]
+    fn surface_vertex_field_and_polygons() {
+        let m = tri_grid(5);
+        let u: Vec<f64> = m.vertices().iter().map(|&p| bump(p)).collect();
+        let path = tmp("surface_vertex.png");
+        plot_surface(&path, &m, Field::Vertex(&u), &small_surface()).expect("plot");
+        assert_eq!(png_size(&path), (160, 120));
+        // quadrilaterals with a vertex field, constant data, unusual view
+        let q = grid(3);
+        let c = vec![1.0; q.n_vertices()];
+        let opts = SurfaceOptions {
+            azimuth: 120.0,
+            elevation: -20.0,
+            edges: Some(true),
+            colormap: Colormap::Parula,
+            ..small_surface()
+        };
+        plot_surface(&path, &q, Field::Vertex(&c), &opts).expect("plot");
+        assert_eq!(png_size(&path), (160, 120));
+    }
+
+    #[test]
+    fn surface_rejects_bad_input() {
+        let m = grid(3);
+        let path = tmp("surface_bad.png");
+        let short = vec![0.0; m.n_cells() - 1];
+        let e = plot_surface(&path, &m, Field::Cell(&short), &small_surface());
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+        let e = plot_surface(&path, &m, Field::Vertex(&short), &small_surface());
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+        let mut u = vec![0.0; m.n_cells()];
+        u[4] = f64::NAN;
+        let e = plot_surface(&path, &m, Field::Cell(&u), &small_surface());
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+        let u = vec![0.0; m.n_cells()];
+        let opts = SurfaceOptions {
+            markers: vec![([0.0, f64::INFINITY, 0.0], "m".into())],
+            ..small_surface()
+        };
+        let e = plot_surface(&path, &m, Field::Cell(&u), &opts);
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+        let opts = SurfaceOptions {
+            z_range: Some((1.0, 0.0)),
+            ..small_surface()
+        };
+        let e = plot_surface(&path, &m, Field::Cell(&u), &opts);
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+        let e = plot_surface(&tmp("surface.jpg"), &m, Field::Cell(&u), &small_surface());
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+        let opts = SurfaceOptions {
+            size: (0, 10),
+            ..small_surface()
+        };
+        let e = plot_surface(&path, &m, Field::Cell(&u), &opts);
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn unwritable_path_is_an_io_error() {
+        let m = grid(2);
+        let u = vec![0.0; m.n_cells()];
+        let file = tmp("not_a_dir.png");
+        plot_surface(&file, &m, Field::Cell(&u), &small_surface()).expect("plot");
+        // a path "below" a regular file cannot be created
+        let e = plot_surface(&file.join("x.png"), &m, Field::Cell(&u), &small_surface());
+        assert!(matches!(e, Err(Error::Io { .. })), "{e:?}");
+    }
+
+    #[test]
+    fn output_is_deterministic() {
+        let m = grid(4);
+        let u: Vec<f64> = (0..m.n_cells()).map(|k| bump(m.centroid(k))).collect();
+        let (a, b) = (tmp("det_a.png"), tmp("det_b.png"));
+        plot_surface(&a, &m, Field::Cell(&u), &small_surface()).expect("plot");
+        plot_surface(&b, &m, Field::Cell(&u), &small_surface()).expect("plot");
+        assert_eq!(std::fs::read(&a).ok(), std::fs::read(&b).ok());
+    }
+
+    #[test]
+    fn mesh_plot_with_tags_values_and_annotations() {
+        let m = grid(5).with_boundary_tags(|p| {
+            if p[1] > 1.0 - 1e-12 {
+                1
+            } else if p[1] < 1e-12 {
+                3
+            } else {
+                2
+            }
+        });
+        let path = tmp("mesh.png");
+        let opts = MeshPlotOptions {
+            title: "mesh".into(),
+            size: (200, 150),
+            boundary_labels: vec![(1, "Γ1".into()), (2, "Γ2".into()), (3, "Γ3".into())],
+            annotations: vec![
+                ([0.5, 0.25], "A = 100 I".into()),
+                ([0.5, 0.75], "A = I".into()),
+            ],
+            hlines: vec![0.5],
+            vlines: vec![0.25],
+            cell_values: Some((0..m.n_cells()).map(|k| m.centroid(k)[0]).collect()),
+            ..Default::default()
+        };
+        plot_mesh(&path, &m, &opts).expect("plot");
+        assert_eq!(png_size(&path), (200, 150));
+        let bare = MeshPlotOptions {
+            size: (120, 100),
+            axes: false,
+            supersample: 1,
+            ..Default::default()
+        };
+        plot_mesh(&path, &tri_grid(3), &bare).expect("plot");
+        assert_eq!(png_size(&path), (120, 100));
+    }
+
+    #[test]
+    fn mesh_plot_rejects_bad_input() {
+        let m = grid(3);
+        let path = tmp("mesh_bad.png");
+        let opts = MeshPlotOptions {
+            cell_values: Some(vec![1.0; m.n_cells() + 1]),
+            ..Default::default()
+        };
+        let e = plot_mesh(&path, &m, &opts);
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+        let mut v = vec![1.0; m.n_cells()];
+        v[0] = f64::NAN;
+        let opts = MeshPlotOptions {
+            cell_values: Some(v),
+            ..Default::default()
+        };
+        let e = plot_mesh(&path, &m, &opts);
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+        let opts = MeshPlotOptions {
+            hlines: vec![f64::NAN],
+            ..Default::default()
+        };
+        let e = plot_mesh(&path, &m, &opts);
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+    }
+
+    #[test]
+    fn line_plots_linear_and_loglog() {
+        let h = [0.24, 0.13, 0.07, 0.03];
+        let e1: Vec<[f64; 2]> = h.iter().map(|&h| [h, 2.0 * h * h]).collect();
+        let e2: Vec<[f64; 2]> = h.iter().map(|&h| [h, 0.8 * h]).collect();
+        let mut slope = LineSeries::new("O(h)", h.iter().map(|&h| [h, h]).collect());
+        slope.dashed = true;
+        slope.marker = Marker::None;
+        let series = [LineSeries::new("L2", e1), LineSeries::new("H1", e2), slope];
+        let path = tmp("lines_log.png");
+        let opts = LineOptions {
+            title: "convergence".into(),
+            x_label: "h".into(),
+            y_label: "error".into(),
+            size: (220, 160),
+            log_x: true,
+            log_y: true,
+            ..Default::default()
+        };
+        plot_lines(&path, &series, &opts).expect("plot");
+        assert_eq!(png_size(&path), (220, 160));
+        let lin = LineOptions {
+            size: (200, 150),
+            legend: LegendPosition::LowerLeft,
+            ..Default::default()
+        };
+        let one = [LineSeries::new("single point", vec![[1.0, 1.0]])];
+        plot_lines(&path, &one, &lin).expect("plot");
+        assert_eq!(png_size(&path), (200, 150));
+    }
+
+    #[test]
+    fn line_plot_rejects_bad_input() {
+        let path = tmp("lines_bad.png");
+        let opts = LineOptions::default();
+        let e = plot_lines(&path, &[], &opts);
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+        let e = plot_lines(&path, &[LineSeries::new("empty", vec![])], &opts);
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+        let nan = [LineSeries::new("nan", vec![[0.0, 1.0], [1.0, f64::NAN]])];
+        let e = plot_lines(&path, &nan, &opts);
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+        let neg = [LineSeries::new("neg", vec![[1.0, 1.0], [2.0, -1.0]])];
+        let log = LineOptions {
+            log_y: true,
+            ..Default::default()
+        };
+        let e = plot_lines(&path, &neg, &log);
+        assert!(matches!(e, Err(Error::InvalidData(_))), "{e:?}");
+    }
+
+    #[test]
+    fn raster_shared_edges_leave_no_gap_and_no_overlap() {
+        let mut r = Raster::new(40, 40);
+        // a square split along a sloped diagonal, vertices off the pixel grid
+        let (a, b, c, d) = ([3.3, 4.1], [35.7, 5.2], [33.9, 36.6], [2.2, 34.8]);
+        r.fill_convex(&[a, b, c], [255, 0, 0]);
+        r.fill_convex(&[a, c, d], [0, 0, 255]);
+        let mut r2 = Raster::new(40, 40);
+        r2.fill_convex(&[a, b, c, d], [0, 0, 0]);
+        for i in 0..40 * 40 {
+            let covered_by_quad = r2.buf[3 * i] == 0;
+            let px = &r.buf[3 * i..3 * i + 3];
+            let covered = px != [255, 255, 255];
+            assert_eq!(covered, covered_by_quad, "pixel {i}");
+        }
+        // overlap would need a third colour; there are only red, blue and white pixels
+        assert!(
+            r.buf
+                .chunks(3)
+                .all(|p| p == [255, 0, 0] || p == [0, 0, 255] || p == [255, 255, 255])
+        );
+    }
+
+    #[test]
+    fn tick_helpers() {
+        assert_eq!(nice_step(0.0, 1.0, 5.0), 0.2);
+        assert_eq!(ticks_in(0.0, 1.0, 0.25).len(), 5);
+        assert_eq!(fmt_tick(0.5, 0.1), "0.5");
+        assert_eq!(fmt_tick(-0.25, 0.25), "\u{2212}0.25");
+        assert_eq!(fmt_tick(1e-17, 0.2), "0.0");
+        assert_eq!(fmt_log_value(1, -5), "10\u{207B}\u{2075}");
+        assert_eq!(fmt_log_value(2, -2), "0.02");
+        assert_eq!(Colormap::Viridis.rgb(0.0), [68, 1, 84]);
+        assert_eq!(Colormap::Viridis.rgb(1.0), [253, 231, 37]);
+        assert_eq!(Colormap::Viridis.rgb(f64::NAN), [68, 1, 84]);
     }
 }

@@ -161,7 +161,9 @@ impl GradientDiscretisation for Hmm<'_> {
             .collect()
     }
     fn cell_values(&self, u: &[f64]) -> Vec<f64> {
-        (0..self.mesh.n_cells()).map(|k| u[self.cell_dof(k)]).collect()
+        (0..self.mesh.n_cells())
+            .map(|k| u[self.cell_dof(k)])
+            .collect()
     }
     fn cell_gradients(&self, u: &[f64]) -> Vec<Point> {
         let m = self.mesh;

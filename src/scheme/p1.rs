@@ -41,8 +41,8 @@ impl<'a> P1<'a> {
     pub fn basis_gradients(&self, k: usize) -> [Point; 3] {
         let v = self.mesh.cell_vertices(k);
         let p: Vec<Point> = v.iter().map(|&i| self.mesh.vertex(i)).collect();
-        let twice_area = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
-            - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
+        let twice_area =
+            (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
         let mut g = [[0.0; 2]; 3];
         for i in 0..3 {
             let a = p[(i + 1) % 3];
@@ -126,7 +126,14 @@ impl GradientDiscretisation for P1<'_> {
     }
     fn cell_values(&self, u: &[f64]) -> Vec<f64> {
         (0..self.mesh.n_cells())
-            .map(|k| self.mesh.cell_vertices(k).iter().map(|&v| u[v]).sum::<f64>() / 3.0)
+            .map(|k| {
+                self.mesh
+                    .cell_vertices(k)
+                    .iter()
+                    .map(|&v| u[v])
+                    .sum::<f64>()
+                    / 3.0
+            })
             .collect()
     }
     fn cell_gradients(&self, u: &[f64]) -> Vec<Point> {
@@ -154,19 +161,32 @@ mod tests {
 
     #[test]
     fn stiffness_of_reference_triangle() {
-        let m = PolyMesh::from_cells(vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], vec![vec![0, 1, 2]])
-            .unwrap();
+        let m = PolyMesh::from_cells(
+            vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            vec![vec![0, 1, 2]],
+        )
+        .unwrap();
         let s = P1::new(&m).unwrap();
         let mut k = DMatrix::zeros(0, 0);
         s.local_matrix(0, &[[1.0, 0.0], [0.0, 1.0]], &mut k);
-        let expect = DMatrix::from_row_slice(3, 3, &[1.0, -0.5, -0.5, -0.5, 0.5, 0.0, -0.5, 0.0, 0.5]);
+        let expect =
+            DMatrix::from_row_slice(3, 3, &[1.0, -0.5, -0.5, -0.5, 0.5, 0.0, -0.5, 0.0, 0.5]);
         assert!((k - expect).amax() < 1e-15);
         let mut b = DVector::zeros(0);
         s.local_load(0, &|p| 1.0 + p[0], &mut b);
         // ∫ (1 + x) λ_i over the reference triangle: exact since I_h f = f
-        let exact = [0.5 / 3.0 + 1.0 / 24.0, 0.5 / 3.0 + 1.0 / 12.0, 0.5 / 3.0 + 1.0 / 24.0];
+        let exact = [
+            0.5 / 3.0 + 1.0 / 24.0,
+            0.5 / 3.0 + 1.0 / 12.0,
+            0.5 / 3.0 + 1.0 / 24.0,
+        ];
         for i in 0..3 {
-            assert!((b[i] - exact[i]).abs() < 1e-15, "{i}: {} vs {}", b[i], exact[i]);
+            assert!(
+                (b[i] - exact[i]).abs() < 1e-15,
+                "{i}: {} vs {}",
+                b[i],
+                exact[i]
+            );
         }
     }
 }

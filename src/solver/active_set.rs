@@ -75,6 +75,9 @@ pub struct ActiveSetOptions {
     pub fallback: bool,
     /// Initial active set (warm start), indexed like [`Constraints::dofs`].
     pub initial_active: Option<Vec<bool>>,
+    /// Keep every iterate u^k in [`VariationalSolution::iterates`] (for studies of the
+    /// iteration; costs one vector per solve).
+    pub keep_iterates: bool,
 }
 
 impl Default for ActiveSetOptions {
@@ -85,6 +88,7 @@ impl Default for ActiveSetOptions {
             tol: 1e-10,
             fallback: false,
             initial_active: None,
+            keep_iterates: false,
         }
     }
 }
@@ -172,6 +176,8 @@ pub struct VariationalSolution {
     pub certificate: Certificate,
     /// How u was obtained.
     pub method: Method,
+    /// The iterates u^1, u^2, … if [`ActiveSetOptions::keep_iterates`] was set.
+    pub iterates: Vec<Vec<f64>>,
 }
 
 /// Computes the certificate of `u` (the multipliers are returned too).
@@ -182,7 +188,11 @@ pub fn certificate(
     active: &[bool],
 ) -> (Certificate, Vec<f64>) {
     let (r, scale) = system.residual(u);
-    let scale_r = scale.iter().cloned().fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+    let scale_r = scale
+        .iter()
+        .cloned()
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
     let mut scale_u = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let mut is_active = vec![false; u.len()];
     let mut c = Certificate::default();
@@ -249,6 +259,7 @@ pub fn solve(
         None => vec![false; m],
     };
     let mut history: Vec<Vec<bool>> = vec![active.clone()];
+    let mut iterates = Vec::new();
     let mut log = Vec::new();
     let mut entered = active.iter().filter(|&&a| a).count();
     let mut left = 0;
@@ -267,6 +278,9 @@ pub fn solve(
     loop {
         let fixed = fixed_from(system, cons, &active);
         let (u, timings) = system.solve(&fixed)?;
+        if opts.keep_iterates {
+            iterates.push(u.clone());
+        }
         let (cert, lambda) = certificate(system, Some(cons), &u, &active);
         let n_active = active.iter().filter(|&&a| a).count();
         log.push(IterationLog {
@@ -280,17 +294,27 @@ pub fn solve(
         });
         // thresholds for round-off
         let (_, scale) = system.residual(&u);
-        let scale_r = scale.iter().cloned().fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        let scale_r = scale
+            .iter()
+            .cloned()
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
         let scale_u = cons
             .barrier
             .iter()
-            .fold(u.iter().fold(0.0f64, |a, x| a.max(x.abs())), |a, x| a.max(x.abs()))
+            .fold(u.iter().fold(0.0f64, |a, x| a.max(x.abs())), |a, x| {
+                a.max(x.abs())
+            })
             .max(f64::MIN_POSITIVE);
         let mut next = vec![false; m];
         for j in 0..m {
             let pd = &cons.dofs[j];
             let l = if active[j] { lambda[j] } else { 0.0 };
-            let gap = if active[j] { 0.0 } else { s * (u[pd.dof] - cons.barrier[j]) };
+            let gap = if active[j] {
+                0.0
+            } else {
+                s * (u[pd.dof] - cons.barrier[j])
+            };
             let score = l / pd.measure + opts.c * gap;
             let thr = 1e-13 * (scale_r / pd.measure + opts.c * scale_u);
             next[j] = score > thr;
@@ -305,10 +329,14 @@ pub fn solve(
                 log,
                 certificate: cert,
                 method: Method::ActiveSet,
+                iterates,
             });
         }
         if let Some(rep) = history.iter().position(|h| *h == next) {
-            let hist = history.iter().map(|h| h.iter().filter(|&&a| a).count()).collect();
+            let hist = history
+                .iter()
+                .map(|h| h.iter().filter(|&&a| a).count())
+                .collect();
             return fail(
                 SolverError::Cycling {
                     iteration: log.len(),
@@ -319,7 +347,10 @@ pub fn solve(
             );
         }
         if log.len() >= opts.max_solves {
-            let hist = history.iter().map(|h| h.iter().filter(|&&a| a).count()).collect();
+            let hist = history
+                .iter()
+                .map(|h| h.iter().filter(|&&a| a).count())
+                .collect();
             return fail(
                 SolverError::MaxIterations {
                     iterations: log.len(),

@@ -84,11 +84,20 @@ mod tests {
         }
         let p = SpdPattern::new(n, col_ptr, row_idx).unwrap();
         for scale in [1.0, 3.0] {
-            let vals: Vec<f64> = p.row_idx().iter().enumerate().map(|(i, _)| i).collect::<Vec<_>>()
+            let vals: Vec<f64> = p
+                .row_idx()
+                .iter()
+                .enumerate()
+                .map(|(i, _)| i)
+                .collect::<Vec<_>>()
                 .iter()
                 .map(|&i| {
                     let j = p.col_ptr().iter().rposition(|&c| c <= i).unwrap();
-                    if p.row_idx()[i] == j { 2.0 * scale } else { -scale }
+                    if p.row_idx()[i] == j {
+                        2.0 * scale
+                    } else {
+                        -scale
+                    }
                 })
                 .collect();
             let f = p.factor(&vals).unwrap();
@@ -97,8 +106,12 @@ mod tests {
             // residual of A x = 1
             for i in 0..n {
                 let mut ax = 2.0 * scale * x[i];
-                if i > 0 { ax -= scale * x[i - 1]; }
-                if i + 1 < n { ax -= scale * x[i + 1]; }
+                if i > 0 {
+                    ax -= scale * x[i - 1];
+                }
+                if i + 1 < n {
+                    ax -= scale * x[i + 1];
+                }
                 assert!((ax - 1.0).abs() < 1e-13);
             }
         }

@@ -9,7 +9,7 @@ pub mod pgs;
 
 use crate::assembly::DiscreteSystem;
 use crate::problem::{ConstraintKind, Problem, check_finite};
-use crate::scheme::GradientDiscretisation;
+use crate::scheme::{GradientDiscretisation, PointDof};
 pub use active_set::{
     ActiveSetOptions, Certificate, Constraints, IterationLog, Method, VariationalSolution,
 };
@@ -101,31 +101,34 @@ pub fn build_constraints(
             system.signorini_dofs().to_vec()
         }
     };
-    // barrier versus Dirichlet data: the convex set must not be empty
+    // barrier versus Dirichlet data: the convex set must not be empty. Obstacle: every
+    // Dirichlet trace unknown (u_D must satisfy the barrier on ∂Ω); Signorini: the Dirichlet
+    // unknowns that also carry the trace on Γ3.
     let mut tr = Vec::new();
-    for &e in mesh.boundary_edges() {
-        scheme.edge_trace_dofs(e, &mut tr);
-        for t in &tr {
-            if let Some(v) = dir[t.dof] {
-                let relevant = match c.kind {
-                    ConstraintKind::Obstacle => true,
-                    ConstraintKind::Signorini => {
-                        // a Dirichlet unknown that also touches Γ3 (P1 corner vertices)
-                        system.signorini_dofs().is_empty()
-                            || mesh_vertex_on_signorini(system, t.point)
-                    }
-                };
-                if relevant {
-                    let g = check_finite((c.barrier)(t.point), &format!("the barrier at {:?}", t.point))?;
-                    if s * (v - g) > 1e-12 * (1.0 + g.abs()) {
-                        return Err(crate::Error::Infeasible(format!(
-                            "the Dirichlet value {v} at {:?} is {} the barrier {g}: the discrete convex set is empty",
-                            t.point,
-                            if s > 0.0 { "above" } else { "below" }
-                        )));
-                    }
-                }
+    let mut checks: Vec<PointDof> = Vec::new();
+    match c.kind {
+        ConstraintKind::Obstacle => {
+            for &e in mesh.boundary_edges() {
+                scheme.edge_trace_dofs(e, &mut tr);
+                checks.extend(tr.iter().filter(|t| dir[t.dof].is_some()));
             }
+        }
+        ConstraintKind::Signorini => {
+            checks.extend(candidates.iter().filter(|t| dir[t.dof].is_some()));
+        }
+    }
+    for t in &checks {
+        let v = dir[t.dof].unwrap_or(0.0);
+        let g = check_finite(
+            (c.barrier)(t.point),
+            &format!("the barrier at {:?}", t.point),
+        )?;
+        if s * (v - g) > 1e-12 * (1.0 + g.abs()) {
+            return Err(crate::Error::Infeasible(format!(
+                "the Dirichlet value {v} at {:?} is {} the barrier {g}: the discrete convex set is empty",
+                t.point,
+                if s > 0.0 { "above" } else { "below" }
+            )));
         }
     }
     let mut dofs = Vec::new();
@@ -134,7 +137,10 @@ pub fn build_constraints(
         if dir[pd.dof].is_some() {
             continue;
         }
-        let g = check_finite((c.barrier)(pd.point), &format!("the barrier at {:?}", pd.point))?;
+        let g = check_finite(
+            (c.barrier)(pd.point),
+            &format!("the barrier at {:?}", pd.point),
+        )?;
         dofs.push(pd);
         barrier.push(g);
     }
@@ -143,15 +149,6 @@ pub fn build_constraints(
         barrier,
         side: c.side,
     }))
-}
-
-fn mesh_vertex_on_signorini(system: &DiscreteSystem, p: crate::mesh::Point) -> bool {
-    let mesh = system.scheme().mesh();
-    let _ = mesh;
-    system
-        .signorini_dofs()
-        .iter()
-        .any(|d| (d.point[0] - p[0]).abs() + (d.point[1] - p[1]).abs() < 1e-14)
 }
 
 /// Assembles and solves `problem` with `scheme`: a linear solve if there is no barrier, the
@@ -187,6 +184,7 @@ pub fn solve_problem<'a>(
                 }],
                 certificate: cert,
                 method: Method::Linear,
+                iterates: vec![],
             }
         }
     };

@@ -67,9 +67,7 @@ pub fn solve(
     for (j, pd) in cons.dofs.iter().enumerate() {
         bound[pd.dof] = Some(cons.barrier[j]);
     }
-    let mut u: Vec<f64> = (0..n)
-        .map(|i| dir[i].unwrap_or(0.0))
-        .collect();
+    let mut u: Vec<f64> = (0..n).map(|i| dir[i].unwrap_or(0.0)).collect();
     for i in 0..n {
         if let Some(g) = bound[i] {
             if s * (u[i] - g) > 0.0 {
@@ -104,7 +102,10 @@ pub fn solve(
             change = change.max((v - u[i]).abs());
             u[i] = v;
         }
-        let norm = u.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(f64::MIN_POSITIVE);
+        let norm = u
+            .iter()
+            .fold(0.0f64, |m, x| m.max(x.abs()))
+            .max(f64::MIN_POSITIVE);
         if change <= opts.tol * norm {
             break;
         }
@@ -140,5 +141,6 @@ pub fn solve(
         }],
         certificate: cert,
         method: Method::ProjectedGaussSeidel,
+        iterates: vec![],
     })
 }

@@ -208,13 +208,18 @@ impl<'a> Tokens<'a> {
             .collect::<Vec<_>>()
             .join(" or ");
         let Some((line, text)) = self.next_line()? else {
-            return Err(self.err(format!("unexpected end of file: expected the header {list}")));
+            return Err(self.err(format!(
+                "unexpected end of file: expected the header {list}"
+            )));
         };
         let norm = normalize_header(text);
         if accepted.iter().any(|a| norm == *a) {
             Ok(line)
         } else {
-            Err(self.err_at(line, format!("expected the header {list}, found \"{text}\"")))
+            Err(self.err_at(
+                line,
+                format!("expected the header {list}, found \"{text}\""),
+            ))
         }
     }
 

@@ -208,9 +208,7 @@ fn skip_section(t: &mut Tokens, section: &str) -> Result<()> {
             Some(tok) if tok == end => return Ok(()),
             Some(_) => {}
             None => {
-                return Err(t.err(format!(
-                    "section {section} (line {start}) has no \"{end}\""
-                )));
+                return Err(t.err(format!("section {section} (line {start}) has no \"{end}\"")));
             }
         }
     }
@@ -252,7 +250,11 @@ fn read_entities(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
         for i in 1..=n {
             let what = format!("entity {i} of dimension {dim}");
             let tag: i32 = t.parse(&format!("the tag of {what}"))?;
-            skip_floats(t, if dim == 0 { 3 } else { 6 }, &format!("the box of {what}"))?;
+            skip_floats(
+                t,
+                if dim == 0 { 3 } else { 6 },
+                &format!("the box of {what}"),
+            )?;
             let nphys = t.count(&format!("the number of physical tags of {what}"))?;
             for j in 0..nphys {
                 let p: i32 = t.parse(&format!("a physical tag of {what}"))?;
@@ -312,7 +314,11 @@ fn read_nodes41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
         let extra = match parametric {
             0 => 0,
             1 => usize::try_from(dim.clamp(0, 3)).unwrap_or(0),
-            p => return Err(t.err(format!("parametric flag {p} of node block {b} is not 0 or 1"))),
+            p => {
+                return Err(t.err(format!(
+                    "parametric flag {p} of node block {b} is not 0 or 1"
+                )));
+            }
         };
         tags.clear();
         tags.reserve(capacity(m, t.remaining()));
@@ -429,7 +435,10 @@ fn read_elements41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
 fn build(t: &Tokens, raw: Raw) -> Result<MshMesh> {
     let node = |tag: u64, line: usize| {
         raw.node_index.get(&tag).copied().ok_or_else(|| {
-            t.err_at(line, format!("element refers to node {tag}, which is not in $Nodes"))
+            t.err_at(
+                line,
+                format!("element refers to node {tag}, which is not in $Nodes"),
+            )
         })
     };
     let nc = raw.cell_line.len();
@@ -517,15 +526,30 @@ mod tests {
     #[test]
     fn reads_22() {
         let m = parse_msh(Path::new("s.msh"), SQUARE22.as_bytes()).unwrap();
-        assert_eq!((m.mesh.n_vertices(), m.mesh.n_cells(), m.mesh.n_edges()), (4, 2, 5));
-        let tags: Vec<i32> = m.mesh.boundary_edges().iter().map(|&e| m.mesh.edge_tag(e)).collect();
+        assert_eq!(
+            (m.mesh.n_vertices(), m.mesh.n_cells(), m.mesh.n_edges()),
+            (4, 2, 5)
+        );
+        let tags: Vec<i32> = m
+            .mesh
+            .boundary_edges()
+            .iter()
+            .map(|&e| m.mesh.edge_tag(e))
+            .collect();
         assert_eq!(tags.iter().filter(|&&t| t == 7).count(), 1);
     }
 
     #[test]
     fn rejects_binary_and_unknown_nodes() {
-        let e = parse_msh(Path::new("b.msh"), b"$MeshFormat\n4.1 1 8\n\x01\x00\x00\x00\xff").unwrap_err();
-        assert!(e.to_string().starts_with("b.msh:2:") && e.to_string().contains("binary"), "{e}");
+        let e = parse_msh(
+            Path::new("b.msh"),
+            b"$MeshFormat\n4.1 1 8\n\x01\x00\x00\x00\xff",
+        )
+        .unwrap_err();
+        assert!(
+            e.to_string().starts_with("b.msh:2:") && e.to_string().contains("binary"),
+            "{e}"
+        );
         let bad = SQUARE22.replace("2 1 2 7 1 1 2", "2 1 2 7 1 1 8");
         let e = parse_msh(Path::new("s.msh"), bad.as_bytes()).unwrap_err();
         assert!(e.to_string().starts_with("s.msh:15:"), "{e}");

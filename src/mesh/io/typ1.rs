@@ -60,8 +60,10 @@ pub(crate) fn parse_typ1(path: &Path, bytes: &[u8]) -> Result<PolyMesh> {
 
     let mut corners: Vec<Vec<usize>> = Vec::new();
     let mut cell_line: Vec<usize> = Vec::new();
-    for (header, name, n_corners) in [("triangles", "triangle", 3), ("quadrangles", "quadrangle", 4)]
-    {
+    for (header, name, n_corners) in [
+        ("triangles", "triangle", 3),
+        ("quadrangles", "quadrangle", 4),
+    ] {
         t.expect_header(&[header])?;
         let n = t.count(&format!("the number of {header}"))?;
         let cap = capacity(n, t.remaining());
@@ -287,15 +289,14 @@ fn check_edge_lists(
         let Some(e) = find(r.a, r.b) else {
             return Err(t.err_at(
                 r.line,
-                format!(
-                    "edge {}-{} is not a side of any cell",
-                    r.a + 1,
-                    r.b + 1
-                ),
+                format!("edge {}-{} is not a side of any cell", r.a + 1, r.b + 1),
             ));
         };
         if std::mem::replace(&mut seen[e], true) {
-            return Err(t.err_at(r.line, format!("edge {}-{} is listed twice", r.a + 1, r.b + 1)));
+            return Err(t.err_at(
+                r.line,
+                format!("edge {}-{} is listed twice", r.a + 1, r.b + 1),
+            ));
         }
         let mut file_cells = [r.k, r.l];
         let mut mesh_cells = mesh.edge_cells(e);
@@ -396,7 +397,10 @@ mod tests {
             .replace("2 7 1 2\n7 5 3 1\n", "2 7 2 0\n7 5 3 0\n2 5 1 0\n")
             .replace(" all edges\n 10\n", " all edges\n 11\n");
         let e = parse_typ1(Path::new("h.typ1"), bad.as_bytes()).unwrap_err();
-        assert!(matches!(e, Error::InvalidMesh(MeshError::NonConforming(_))), "{e}");
+        assert!(
+            matches!(e, Error::InvalidMesh(MeshError::NonConforming(_))),
+            "{e}"
+        );
     }
 
     #[test]

@@ -136,7 +136,10 @@ mod tests {
         assert!(e.to_string().starts_with("sq.typ2:9:"), "{e}");
         let bad = SQUARE.replace("4 1 2 3 4", "4 1 2 3 3");
         let e = parse_typ2(Path::new("sq.typ2"), bad.as_bytes()).unwrap_err();
-        assert!(matches!(e, Error::InvalidMesh(MeshError::BadCell { .. })), "{e}");
+        assert!(
+            matches!(e, Error::InvalidMesh(MeshError::BadCell { .. })),
+            "{e}"
+        );
         let bad = SQUARE.replace("centers", "more");
         let e = parse_typ2(Path::new("sq.typ2"), bad.as_bytes()).unwrap_err();
         assert!(e.to_string().starts_with("sq.typ2:10:"), "{e}");

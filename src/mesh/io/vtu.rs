@@ -40,7 +40,9 @@ pub fn write_vtu(
 fn check_arrays(kind: &str, arrays: &[(&str, &[f64])], n: usize, what: &str) -> Result<()> {
     for (i, (name, values)) in arrays.iter().enumerate() {
         if name.is_empty() {
-            return Err(Error::InvalidData(format!("{kind}-data array {i} has an empty name")));
+            return Err(Error::InvalidData(format!(
+                "{kind}-data array {i} has an empty name"
+            )));
         }
         if values.len() != n {
             return Err(Error::InvalidData(format!(

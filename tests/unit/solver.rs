@@ -1,0 +1,464 @@
+//! The active-set solver: certificates, exhaustive enumeration on small problems, monotonicity
+//! on M-matrices, a closed-form 1D obstacle problem, cycling, infeasibility and bad data.
+
+use crate::common::*;
+use gradvi::assembly::{DiscreteSystem, SolveTimings};
+use gradvi::mesh::PolyMesh;
+use gradvi::problem::*;
+use gradvi::scheme::*;
+use gradvi::solver::active_set::{self, LinearSystem};
+use gradvi::solver::*;
+use gradvi::{Error, SolverError};
+use nalgebra::{DMatrix, DVector};
+
+/// Solves the VI by trying every active set: the one whose solution is feasible with
+/// non-negative multipliers is the discrete solution. Returns it (ties: the first found).
+fn enumerate(sys: &dyn LinearSystem, cons: &Constraints) -> Vec<f64> {
+    let m = cons.dofs.len();
+    assert!(
+        m <= 12,
+        "enumeration is for small problems ({m} constrained unknowns)"
+    );
+    let s = cons.side.sign();
+    let mut best: Option<Vec<f64>> = None;
+    for mask in 0u32..(1 << m) {
+        let mut fixed = vec![None; sys.n_unknowns()];
+        for j in 0..m {
+            if mask & (1 << j) != 0 {
+                fixed[cons.dofs[j].dof] = Some(cons.barrier[j]);
+            }
+        }
+        let (u, _) = sys.solve(&fixed).unwrap();
+        let (r, sc) = sys.residual(&u);
+        let scale = sc.iter().cloned().fold(0.0, f64::max);
+        let umax = u.iter().fold(1e-300f64, |a, x| a.max(x.abs()));
+        let ok = (0..m).all(|j| {
+            let d = cons.dofs[j].dof;
+            let feasible = s * (u[d] - cons.barrier[j]) <= 1e-12 * umax;
+            let mult = mask & (1 << j) == 0 || s * r[d] >= -1e-12 * scale;
+            feasible && mult
+        });
+        if ok {
+            best = Some(u);
+            break;
+        }
+    }
+    best.expect("some active set satisfies the KKT conditions")
+}
+
+fn check_against_enumeration(scheme: &dyn GradientDiscretisation, p: &Problem, min_active: usize) {
+    let sys = DiscreteSystem::new(scheme, p).unwrap();
+    let cons = build_constraints(&sys, p).unwrap().unwrap();
+    let sol = active_set::solve(&sys, &cons, &ActiveSetOptions::default()).unwrap();
+    let n_act = sol.active.iter().filter(|&&a| a).count();
+    assert!(
+        n_act >= min_active && n_act < cons.dofs.len(),
+        "{}: the test should have a non-trivial contact set ({n_act} of {})",
+        p.name,
+        cons.dofs.len()
+    );
+    sol.certificate.check(1e-12).unwrap();
+    let reference = enumerate(&sys, &cons);
+    let umax = reference.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    for (a, b) in sol.u.iter().zip(&reference) {
+        assert!((a - b).abs() <= 1e-10 * umax, "{}: {a} vs {b}", p.name);
+    }
+    // and against projected Gauss–Seidel run to 1e-13
+    let pg = gradvi::solver::pgs::solve(
+        &sys,
+        &cons,
+        &gradvi::solver::pgs::PgsOptions {
+            tol: 1e-15,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    for (a, b) in sol.u.iter().zip(&pg.u) {
+        assert!((a - b).abs() <= 1e-9 * umax, "{} (PGS): {a} vs {b}", p.name);
+    }
+}
+
+fn upper_obstacle() -> Problem {
+    Problem::new("upper obstacle", Box::new(|_| 4.0)).with_constraint(
+        ConstraintKind::Obstacle,
+        Side::Upper,
+        Box::new(|x| 0.25 - 0.2 * x[0]),
+    )
+}
+
+/// Test 1 data with an upper barrier on the other side (u ≤ −0.01 + 0.05 x on Γ3).
+fn upper_signorini() -> Problem {
+    let mut p = paper_test1();
+    p.constraint = Some(Constraint {
+        kind: ConstraintKind::Signorini,
+        side: Side::Upper,
+        barrier: Box::new(|x| -0.01 + 0.05 * x[0]),
+    });
+    p
+}
+
+#[test]
+fn small_problems_match_enumeration_and_pgs() {
+    let grid3 = square_grid(3);
+    let tri = triangle_grid(4, 0.2);
+    let grid4 = rect_grid(4, 3, 1.0, 1.0);
+    // HMM obstacle on cells (9 cells), lower and upper
+    check_against_enumeration(&Hmm::new(&grid3), &paper_test3(-9.0), 1);
+    check_against_enumeration(&Hmm::new(&grid3), &upper_obstacle(), 1);
+    // P1 obstacle on interior vertices (9 of them)
+    check_against_enumeration(&P1::new(&tri).unwrap(), &paper_test3(-9.0), 1);
+    check_against_enumeration(&P1::new(&tri).unwrap(), &upper_obstacle(), 1);
+    // Signorini: HMM faces on Γ3 and P1 vertices on Γ3, lower (Test 1) and upper
+    check_against_enumeration(&Hmm::new(&grid4), &paper_test1(), 1);
+    check_against_enumeration(&Hmm::new(&tri), &upper_signorini(), 1);
+    check_against_enumeration(&P1::new(&tri).unwrap(), &paper_test1(), 1);
+    check_against_enumeration(&P1::new(&tri).unwrap(), &upper_signorini(), 1);
+    // Test 2 (upper barrier, heterogeneous) on a 4×6 grid: 6 faces on Γ3
+    check_against_enumeration(&Hmm::new(&rect_grid(4, 6, 1.0, 1.0)), &paper_test2(), 1);
+}
+
+#[test]
+fn m_matrix_iterates_are_monotone_and_niter_is_bounded() {
+    // HMM on a Cartesian mesh with A = I is the two-point scheme: an M-matrix
+    let mesh = square_grid(16);
+    let s = Hmm::new(&mesh);
+    for c in [-5.0, -20.0] {
+        let p = paper_test3(c);
+        let sys = DiscreteSystem::new(&s, &p).unwrap();
+        let cons = build_constraints(&sys, &p).unwrap().unwrap();
+        let opts = ActiveSetOptions {
+            keep_iterates: true,
+            ..Default::default()
+        };
+        let sol = active_set::solve(&sys, &cons, &opts).unwrap();
+        assert!(sol.niter <= cons.dofs.len() + 2);
+        // lower barrier: every violator enters at the second solve; from then on the iterates
+        // are feasible, the active set only shrinks, and u^k increases to the solution
+        for w in sol.iterates.windows(2) {
+            for (a, b) in w[0].iter().zip(&w[1]) {
+                assert!(b - a >= -1e-13, "C = {c}: not monotone ({a} -> {b})");
+            }
+        }
+        for l in &sol.log[1..] {
+            assert!(l.violation == 0.0, "{:?}", sol.log);
+        }
+        for l in &sol.log[2..] {
+            assert!(l.entered == 0, "{:?}", sol.log);
+        }
+        assert!(
+            sol.niter >= 3,
+            "the test should exercise several iterations"
+        );
+    }
+}
+
+#[test]
+fn one_dimensional_obstacle_converges_to_the_closed_form() {
+    // −u'' = −8 on (0,1), u(0) = u(1) = 0, u ≥ −1/2: contact on [a, 1−a] with a = 1/√8,
+    // u = 4x² − 8ax on [0, a]. Solved on a strip of n×1 cells with Neumann top and bottom.
+    let a = (1.0f64 / 8.0).sqrt();
+    let exact = move |x: f64| {
+        let x = x.min(1.0 - x);
+        if x < a {
+            4.0 * x * x - 8.0 * a * x
+        } else {
+            -0.5
+        }
+    };
+    let mut hs = vec![];
+    let mut errs = vec![];
+    for n in [16, 32, 64, 128] {
+        let mesh = rect_grid(n, 1, 1.0, 1.0 / n as f64);
+        let s = Hmm::new(&mesh);
+        let p = Problem::new("1d", Box::new(|_| -8.0))
+            .with_boundary(|x, _| {
+                if x[0] < 1e-12 || x[0] > 1.0 - 1e-12 {
+                    BoundaryKind::Dirichlet
+                } else {
+                    BoundaryKind::Neumann
+                }
+            })
+            .with_constraint(ConstraintKind::Obstacle, Side::Lower, Box::new(|_| -0.5));
+        let sol = solve_problem(&s, &p, &ActiveSetOptions::default()).unwrap();
+        let cv = s.cell_values(sol.u());
+        let e = (0..mesh.n_cells())
+            .map(|k| (cv[k] - exact(mesh.centroid(k)[0])).abs())
+            .fold(0.0, f64::max);
+        hs.push(1.0 / n as f64);
+        errs.push(e);
+    }
+    let slope = gradvi::post::fitted_slope(&hs, &errs);
+    assert!(slope >= 1.0, "max-norm error slope {slope} ({errs:?})");
+}
+
+#[test]
+fn no_contact_gives_the_linear_solution() {
+    let mesh = triangle_grid(8, 0.1);
+    for kind in [SchemeKind::Hmm, SchemeKind::P1] {
+        let s = gradvi::scheme::build(kind, &mesh).unwrap();
+        let p = Problem::new("free", Box::new(|_| -5.0)).with_constraint(
+            ConstraintKind::Obstacle,
+            Side::Lower,
+            Box::new(|_| -10.0),
+        );
+        let vi = solve_problem(s.as_ref(), &p, &ActiveSetOptions::default()).unwrap();
+        let lin = solve_problem(
+            s.as_ref(),
+            &Problem::new("lin", Box::new(|_| -5.0)),
+            &ActiveSetOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(vi.niter(), 1);
+        assert_eq!(vi.u(), lin.u(), "{kind}");
+    }
+}
+
+/// A dense SPD system with Dirichlet-free unknowns, to drive the solver with crafted matrices.
+struct Dense {
+    m: DMatrix<f64>,
+    b: Vec<f64>,
+    dir: Vec<Option<f64>>,
+}
+
+impl LinearSystem for Dense {
+    fn n_unknowns(&self) -> usize {
+        self.b.len()
+    }
+    fn dirichlet(&self) -> &[Option<f64>] {
+        &self.dir
+    }
+    fn load(&self) -> &[f64] {
+        &self.b
+    }
+    fn solve(&self, fixed: &[Option<f64>]) -> gradvi::Result<(Vec<f64>, SolveTimings)> {
+        let n = self.b.len();
+        let free: Vec<usize> = (0..n).filter(|&i| fixed[i].is_none()).collect();
+        let mut u: Vec<f64> = (0..n).map(|i| fixed[i].unwrap_or(0.0)).collect();
+        let a = DMatrix::from_fn(free.len(), free.len(), |i, j| self.m[(free[i], free[j])]);
+        let r = DVector::from_fn(free.len(), |i, _| {
+            let fi = free[i];
+            self.b[fi]
+                - (0..n)
+                    .filter(|j| fixed[*j].is_some())
+                    .map(|j| self.m[(fi, j)] * u[j])
+                    .sum::<f64>()
+        });
+        let x = a.cholesky().unwrap().solve(&r);
+        for (i, &fi) in free.iter().enumerate() {
+            u[fi] = x[i];
+        }
+        Ok((u, SolveTimings::default()))
+    }
+    fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let n = self.b.len();
+        let mut r = self.b.clone();
+        let mut s: Vec<f64> = self.b.iter().map(|x| x.abs()).collect();
+        for i in 0..n {
+            for j in 0..n {
+                r[i] -= self.m[(i, j)] * u[j];
+                s[i] += (self.m[(i, j)] * u[j]).abs();
+            }
+        }
+        (r, s)
+    }
+    fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
+        let n = self.b.len();
+        (0..n)
+            .flat_map(|i| (0..n).map(move |j| (i, j)))
+            .map(|(i, j)| (i, j, self.m[(i, j)]))
+            .collect()
+    }
+}
+
+fn cycling_system() -> (Dense, Constraints) {
+    // found by a random search: SPD (not an M-matrix), the plain active-set method cycles
+    let m = DMatrix::from_row_slice(3, 3, &[2.25, -2.5, 4.0, -2.5, 4.75, -5.5, 4.0, -5.5, 8.0]);
+    let sys = Dense {
+        m,
+        b: vec![0.0, 0.75, -0.75],
+        dir: vec![None; 3],
+    };
+    let cons = Constraints {
+        dofs: (0..3)
+            .map(|i| PointDof {
+                dof: i,
+                point: [0.0, 0.0],
+                measure: 1.0,
+            })
+            .collect(),
+        barrier: vec![0.0; 3],
+        side: Side::Upper,
+    };
+    (sys, cons)
+}
+
+#[test]
+fn cycling_is_detected_and_the_fallback_solves() {
+    let (sys, cons) = cycling_system();
+    let err = active_set::solve(&sys, &cons, &ActiveSetOptions::default()).unwrap_err();
+    assert!(
+        matches!(err, Error::Solver(SolverError::Cycling { .. })),
+        "{err}"
+    );
+    let opts = ActiveSetOptions {
+        fallback: true,
+        ..Default::default()
+    };
+    let sol = active_set::solve(&sys, &cons, &opts).unwrap();
+    assert_eq!(sol.method, Method::ProjectedGaussSeidel);
+    sol.certificate.check(1e-10).unwrap();
+    let reference = enumerate(&sys, &cons);
+    for (a, b) in sol.u.iter().zip(&reference) {
+        assert!((a - b).abs() < 1e-10, "{a} vs {b}");
+    }
+}
+
+#[test]
+fn iteration_cap_is_a_typed_error() {
+    let mesh = square_grid(8);
+    let s = Hmm::new(&mesh);
+    let opts = ActiveSetOptions {
+        max_solves: 1,
+        ..Default::default()
+    };
+    let err = solve_problem(&s, &paper_test3(-5.0), &opts).err().unwrap();
+    assert!(
+        matches!(
+            err,
+            Error::Solver(SolverError::MaxIterations { iterations: 1, .. })
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn infeasible_and_invalid_data_are_rejected() {
+    let tri = triangle_grid(4, 0.0);
+    let p1 = P1::new(&tri).unwrap();
+    // an upper obstacle below the Dirichlet data u = 0 on ∂Ω
+    let p = Problem::new("infeasible", Box::new(|_| 1.0)).with_constraint(
+        ConstraintKind::Obstacle,
+        Side::Upper,
+        Box::new(|_| -1.0),
+    );
+    let e = solve_problem(&p1, &p, &ActiveSetOptions::default())
+        .err()
+        .expect("P1 obstacle below the Dirichlet data");
+    assert!(matches!(e, Error::Infeasible(_)), "{e}");
+    let hmm = Hmm::new(&tri);
+    let e = solve_problem(&hmm, &p, &ActiveSetOptions::default())
+        .err()
+        .expect("HMM obstacle below the Dirichlet data");
+    assert!(matches!(e, Error::Infeasible(_)), "{e}");
+    // Signorini (Test 2 geometry) with a barrier below the Dirichlet value at the Γ1 ∩ Γ3
+    // corners, for P1 whose corner vertices carry both
+    let mut p = paper_test2();
+    p.constraint.as_mut().unwrap().barrier = Box::new(|_| -0.1);
+    let e = solve_problem(&p1, &p, &ActiveSetOptions::default())
+        .err()
+        .expect("P1 Signorini corner");
+    assert!(matches!(e, Error::Infeasible(_)), "{e}");
+    // NaN data
+    let nan_f = Problem::new("nan", Box::new(|x| if x[0] > 0.5 { f64::NAN } else { 0.0 }));
+    assert!(matches!(
+        solve_problem(&hmm, &nan_f, &ActiveSetOptions::default())
+            .err()
+            .unwrap(),
+        Error::InvalidData(_)
+    ));
+    let nan_g = paper_test3(-5.0);
+    let nan_g = Problem {
+        constraint: Some(Constraint {
+            barrier: Box::new(|_| f64::NAN),
+            ..nan_g.constraint.unwrap()
+        }),
+        ..nan_g
+    };
+    assert!(matches!(
+        solve_problem(&hmm, &nan_g, &ActiveSetOptions::default())
+            .err()
+            .unwrap(),
+        Error::InvalidData(_)
+    ));
+    let bad_a = Problem::new("bad A", Box::new(|_| 1.0))
+        .with_diffusion(Box::new(|_| [[1.0, 2.0], [2.0, 1.0]]));
+    assert!(matches!(
+        solve_problem(&hmm, &bad_a, &ActiveSetOptions::default())
+            .err()
+            .unwrap(),
+        Error::InvalidData(_)
+    ));
+    let inf_dir =
+        Problem::new("inf", Box::new(|_| 1.0)).with_dirichlet(Box::new(|_| f64::INFINITY));
+    assert!(matches!(
+        solve_problem(&hmm, &inf_dir, &ActiveSetOptions::default())
+            .err()
+            .unwrap(),
+        Error::InvalidData(_)
+    ));
+    // P1 on a polygonal mesh
+    let quads = square_grid(2);
+    assert!(matches!(
+        P1::new(&quads).err().unwrap(),
+        Error::InvalidData(_)
+    ));
+}
+
+#[test]
+fn hmm_on_cartesian_with_identity_is_the_two_point_scheme() {
+    // TPFA: Σ_σ τ_σ (u_K − u_L) = |K| f(x_K), τ = |σ|/(d_K,σ + d_L,σ), boundary τ = |σ|/d_K,σ
+    let n = 6;
+    let mesh = square_grid(n);
+    let f = |x: [f64; 2]| (3.0 * x[0]).sin() + x[1] * x[1];
+    let p = Problem::new("tpfa", Box::new(f));
+    let s = Hmm::new(&mesh);
+    let sol = solve_problem(&s, &p, &ActiveSetOptions::default()).unwrap();
+    let nc = mesh.n_cells();
+    let mut a = DMatrix::<f64>::zeros(nc, nc);
+    let mut b = DVector::<f64>::zeros(nc);
+    for k in 0..nc {
+        b[k] = mesh.measure(k) * f(mesh.centroid(k));
+        for (i, &e) in mesh.cell_edges(k).iter().enumerate() {
+            let [c0, c1] = mesh.edge_cells(e);
+            let dk = mesh.cell_dists(k)[i];
+            if mesh.is_boundary_edge(e) {
+                a[(k, k)] += mesh.edge_measure(e) / dk;
+            } else {
+                let l = if c0 == k { c1 } else { c0 };
+                let tau = mesh.edge_measure(e) / (dk + dk);
+                a[(k, k)] += tau;
+                a[(k, l)] -= tau;
+            }
+        }
+    }
+    let tpfa = a.clone().cholesky().unwrap().solve(&b);
+    let cv = s.cell_values(sol.u());
+    for k in 0..nc {
+        assert!(
+            (cv[k] - tpfa[k]).abs() < 1e-12,
+            "cell {k}: {} vs {}",
+            cv[k],
+            tpfa[k]
+        );
+    }
+    // and the local HMM matrix on faces is diag(|σ|/d_K,σ): the condensed system is TPFA's
+    for k in [0, 7] {
+        let w = s.w_matrix(k, &[[1.0, 0.0], [0.0, 1.0]]);
+        for i in 0..4 {
+            for j in 0..4 {
+                let e = mesh.cell_edges(k)[i];
+                let expect = if i == j {
+                    mesh.edge_measure(e) / mesh.cell_dists(k)[i]
+                } else {
+                    0.0
+                };
+                assert!(
+                    (w[(i, j)] - expect).abs() < 1e-12,
+                    "W[{i},{j}] = {}",
+                    w[(i, j)]
+                );
+            }
+        }
+    }
+    let _: &PolyMesh = &mesh;
+}
