@@ -88,13 +88,18 @@ impl<'a> DiscreteSystem<'a> {
         let mut m = DMatrix::zeros(0, 0);
         let mut b = DVector::zeros(0);
         let mut bad_source: Option<crate::Error> = None;
-        let f = |p: Point| -> f64 { (problem.source)(p) };
         for k in 0..nc {
             let xk = mesh.centroid(k);
             let a = (problem.diffusion)(xk);
             check_tensor(&a, &format!("x_K = {xk:?} (cell {k})"))?;
             scheme.local_dofs(k, &mut ld);
             scheme.local_matrix(k, &a, &mut m);
+            let f = |p: Point| -> f64 {
+                match &problem.source_in_cell {
+                    Some(g) => g(p, xk),
+                    None => (problem.source)(p),
+                }
+            };
             scheme.local_load(k, &f, &mut b);
             if bad_source.is_none() && b.iter().any(|x| !x.is_finite()) {
                 bad_source = Some(crate::Error::InvalidData(format!(

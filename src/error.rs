@@ -24,6 +24,14 @@ pub enum Error {
     /// The mesh data is geometrically or topologically invalid.
     #[error("invalid mesh: {0}")]
     InvalidMesh(#[from] MeshError),
+    /// A mesh file whose data is geometrically or topologically invalid.
+    #[error("{}: invalid mesh: {source}", path.display())]
+    InvalidMeshFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        source: MeshError,
+    },
     /// Problem data (diffusion tensor, source, boundary values, barriers) is invalid.
     #[error("invalid data: {0}")]
     InvalidData(String),

@@ -85,6 +85,11 @@ pub struct Problem {
     pub diffusion: TensorFn,
     /// f(x).
     pub source: ScalarFn,
+    /// For data that are smooth by pieces (Test 2): f(x) on the piece of the cell whose
+    /// centroid is x_K, called as `f(x, x_K)`. The schemes evaluate the source of cell K with
+    /// it, so that a vertex on a discontinuity takes the value of the cell being assembled.
+    /// `None`: `source` is used everywhere.
+    pub source_in_cell: Option<Box<dyn Fn(Point, Point) -> f64 + Send + Sync>>,
     /// Boundary kind of an edge from its midpoint and its mesh tag.
     pub boundary: Box<dyn Fn(Point, i32) -> BoundaryKind + Send + Sync>,
     /// Dirichlet value u_D on Γ1.
@@ -104,12 +109,21 @@ impl Problem {
             name: name.to_string(),
             diffusion: Box::new(|_| [[1.0, 0.0], [0.0, 1.0]]),
             source,
+            source_in_cell: None,
             boundary: Box::new(|_, _| BoundaryKind::Dirichlet),
             dirichlet: Box::new(|_| 0.0),
             neumann: Box::new(|_| 0.0),
             constraint: None,
             exact: None,
         }
+    }
+    /// Sets the cell-wise source f(x, x_K) (see [`Problem::source_in_cell`]).
+    pub fn with_source_in_cell(
+        mut self,
+        f: Box<dyn Fn(Point, Point) -> f64 + Send + Sync>,
+    ) -> Self {
+        self.source_in_cell = Some(f);
+        self
     }
     /// Sets A(x).
     pub fn with_diffusion(mut self, a: TensorFn) -> Self {
@@ -225,10 +239,35 @@ pub fn test2_exact_grad(p: Point) -> Point {
     }
 }
 
-/// f = −div(A∇ū) of Test 2, derived exactly in each half.
+/// Distance to y = 1/2 below which a point counts as *on* the interface of Test 2. Some
+/// hexagonal cells (the half cells at x = 0 and x = 1) have their centroid on y = 1/2, where A
+/// and f jump; without this snapping, round-off in x_K (1e-16) would decide their A_K.
+pub const TEST2_INTERFACE_TOL: f64 = 1e-10;
+
+/// Which side of y = 1/2 the data of Test 2 takes at a point; points on the interface (within
+/// [`TEST2_INTERFACE_TOL`]) go to the upper side unless `tie_lower`.
+fn test2_lower(y: f64, tie_lower: bool) -> bool {
+    if (y - 0.5).abs() <= TEST2_INTERFACE_TOL {
+        tie_lower
+    } else {
+        y < 0.5
+    }
+}
+
+/// f = −div(A∇ū) of Test 2, derived exactly in each half (interface points: upper side).
 pub fn test2_source(p: Point) -> f64 {
+    test2_source_tie(p, false)
+}
+
+/// f of Test 2 with the interface convention `tie_lower`.
+pub fn test2_source_tie(p: Point, tie_lower: bool) -> f64 {
+    test2_source_piece(p, test2_lower(p[1], tie_lower))
+}
+
+/// f of Test 2 at `p`, from the formula of the lower (y < 1/2) or upper piece.
+pub fn test2_source_piece(p: Point, lower: bool) -> f64 {
     let (x, y) = (p[0], p[1]);
-    if y < 0.5 {
+    if lower {
         // −100 (P h'' + P'' h) with h = cos(πx), P'' = 2 − 6y
         100.0 * (PI * x).cos() * (PI * PI * t2_p(y) - (2.0 - 6.0 * y))
     } else {
@@ -238,9 +277,19 @@ pub fn test2_source(p: Point) -> f64 {
     }
 }
 
-/// A(x) of Test 2: 100·I for y < 1/2, I for y > 1/2 (evaluated at x_K by the schemes).
+/// A(x) of Test 2: 100·I for y < 1/2, I for y ≥ 1/2 (evaluated at x_K by the schemes; points
+/// within [`TEST2_INTERFACE_TOL`] of y = 1/2 take the upper value).
 pub fn test2_diffusion(p: Point) -> Tensor {
-    let c = if p[1] < 0.5 { 100.0 } else { 1.0 };
+    test2_diffusion_tie(p, false)
+}
+
+/// A of Test 2 with the interface convention `tie_lower`.
+pub fn test2_diffusion_tie(p: Point, tie_lower: bool) -> Tensor {
+    let c = if test2_lower(p[1], tie_lower) {
+        100.0
+    } else {
+        1.0
+    };
     [[c, 0.0], [0.0, c]]
 }
 
@@ -250,19 +299,35 @@ pub fn test2_diffusion(p: Point) -> Tensor {
 /// ū = P(y) cos(πx) for y < 1/2 with P(y) = −y(y − 1/2)², ū = sin²(πx/2)(1 − y)(y − 1/2)² for
 /// y > 1/2, and f = −div(A∇ū).
 pub fn paper_test2() -> Problem {
-    Problem::new("test2", Box::new(test2_source))
-        .with_diffusion(Box::new(test2_diffusion))
-        .with_boundary(|x, _| {
-            if x[1] < ON || x[1] > 1.0 - ON {
-                BoundaryKind::Dirichlet
-            } else if x[0] < ON {
-                BoundaryKind::Signorini
-            } else {
-                BoundaryKind::Neumann
-            }
-        })
-        .with_constraint(ConstraintKind::Signorini, Side::Upper, Box::new(|_| 0.0))
-        .with_exact(Box::new(test2_exact), Box::new(test2_exact_grad))
+    paper_test2_tie(false)
+}
+
+/// Test 2 where data at points on the interface y = 1/2 (cell centroids of the half cells of
+/// the hexagonal meshes) takes the lower values (A = 100 I) if `tie_lower`, else the upper ones.
+pub fn paper_test2_tie(tie_lower: bool) -> Problem {
+    Problem::new(
+        if tie_lower {
+            "test2-interface-lower"
+        } else {
+            "test2"
+        },
+        Box::new(move |p| test2_source_tie(p, tie_lower)),
+    )
+    .with_source_in_cell(Box::new(move |p, xk| {
+        test2_source_piece(p, test2_lower(xk[1], tie_lower))
+    }))
+    .with_diffusion(Box::new(move |p| test2_diffusion_tie(p, tie_lower)))
+    .with_boundary(|x, _| {
+        if x[1] < ON || x[1] > 1.0 - ON {
+            BoundaryKind::Dirichlet
+        } else if x[0] < ON {
+            BoundaryKind::Signorini
+        } else {
+            BoundaryKind::Neumann
+        }
+    })
+    .with_constraint(ConstraintKind::Signorini, Side::Upper, Box::new(|_| 0.0))
+    .with_exact(Box::new(test2_exact), Box::new(test2_exact_grad))
 }
 
 /// ψ(x, y) = −min(x, 1 − x, y, 1 − y) of Test 3.
@@ -279,6 +344,63 @@ pub fn paper_test3(c: f64) -> Problem {
         Box::new(test3_obstacle),
     )
 }
+
+/// FVCA5 benchmark test 1.1: A = [[1.5, 0.5], [0.5, 1.5]], ū = 16x(1−x)y(1−y), Dirichlet
+/// conditions on ∂Ω, f = −div(A∇ū); no barrier.
+pub fn fvca5_test11() -> Problem {
+    const A: Tensor = [[1.5, 0.5], [0.5, 1.5]];
+    Problem::new(
+        "fvca5-1.1",
+        Box::new(|p| {
+            let (x, y) = (p[0], p[1]);
+            let uxx = -32.0 * y * (1.0 - y);
+            let uyy = -32.0 * x * (1.0 - x);
+            let uxy = 16.0 * (1.0 - 2.0 * x) * (1.0 - 2.0 * y);
+            -(A[0][0] * uxx + 2.0 * A[0][1] * uxy + A[1][1] * uyy)
+        }),
+    )
+    .with_diffusion(Box::new(|_| A))
+    .with_exact(
+        Box::new(|p| 16.0 * p[0] * (1.0 - p[0]) * p[1] * (1.0 - p[1])),
+        Box::new(|p| {
+            [
+                16.0 * (1.0 - 2.0 * p[0]) * p[1] * (1.0 - p[1]),
+                16.0 * p[0] * (1.0 - p[0]) * (1.0 - 2.0 * p[1]),
+            ]
+        }),
+    )
+}
+
+/// The problems known by name on the command line, with their parameters (`C` for test3).
+pub fn by_name(name: &str, params: &[(String, f64)]) -> crate::Result<Problem> {
+    let param = |key: &str, default: f64| {
+        params
+            .iter()
+            .find(|(k, _)| k.eq_ignore_ascii_case(key))
+            .map_or(default, |(_, v)| *v)
+    };
+    for (k, _) in params {
+        let known = matches!((name, k.to_ascii_lowercase().as_str()), ("test3", "c"));
+        if !known {
+            return Err(crate::Error::InvalidData(format!(
+                "problem '{name}' has no parameter '{k}'"
+            )));
+        }
+    }
+    match name {
+        "test1" => Ok(paper_test1()),
+        "test2" => Ok(paper_test2()),
+        "test3" => Ok(paper_test3(param("C", -5.0))),
+        "fvca5-1.1" => Ok(fvca5_test11()),
+        _ => Err(crate::Error::InvalidData(format!(
+            "unknown problem '{name}' (expected one of: {})",
+            PROBLEM_NAMES.join(", ")
+        ))),
+    }
+}
+
+/// Names accepted by [`by_name`].
+pub const PROBLEM_NAMES: [&str; 4] = ["test1", "test2", "test3", "fvca5-1.1"];
 
 #[cfg(test)]
 mod tests {

@@ -921,9 +921,8 @@ fn build_surface(mesh: &PolyMesh, field: Field, rendering: CellRendering) -> Sur
             }
         }
         (Field::Vertex(u), _) => {
-            for v in 0..nv {
-                let p = mesh.vertex(v);
-                pts.push([p[0], p[1], u[v]]);
+            for (p, &uv) in mesh.vertices().iter().zip(u) {
+                pts.push([p[0], p[1], uv]);
             }
             for k in 0..nc {
                 let cv = mesh.cell_vertices(k);
@@ -1648,7 +1647,7 @@ pub fn plot_mesh(path: &Path, mesh: &PolyMesh, opts: &MeshPlotOptions) -> Result
                 1.5 * s,
                 7.0 * s,
                 4.0 * s,
-                [200, 30, 30],
+                [80, 80, 80],
             );
         }
     }
@@ -1660,7 +1659,7 @@ pub fn plot_mesh(path: &Path, mesh: &PolyMesh, opts: &MeshPlotOptions) -> Result
                 1.5 * s,
                 7.0 * s,
                 4.0 * s,
-                [200, 30, 30],
+                [80, 80, 80],
             );
         }
     }

@@ -1,6 +1,8 @@
 //! Post-processing: discrete errors against an exact solution, convergence orders, fitted
 //! slopes, and contact-zone metrics.
 
+pub mod contact;
+
 use crate::mesh::Point;
 use crate::scheme::GradientDiscretisation;
 

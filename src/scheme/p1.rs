@@ -5,11 +5,12 @@
 //!
 //! Quadrature (stated because the cross-check against dolfinx depends on it):
 //! - load: ∫_Ω (I_T f) φ_i, with I_T f the affine interpolant of f on each triangle T, from the
-//!   values of f at the vertices *seen from inside T* (evaluated at x_v + 10⁻¹²(x_T − x_v), so that
-//!   a source discontinuous across a mesh line, as in the paper's Test 2, takes each triangle's
-//!   own side), integrated exactly with the element mass matrix |T|/12·(1 + δ_ij). For a
-//!   continuous f this is dolfinx's `f_h * v * dx` with `f_h` interpolated in P1 (the reference
-//!   scripts build the same one-sided interpolant for Test 2);
+//!   values of f at the vertices of T, integrated exactly with the element mass matrix
+//!   |T|/12·(1 + δ_ij). The assembler passes the source *of the cell*
+//!   ([`crate::problem::Problem::source_in_cell`]), so a source discontinuous across a mesh line,
+//!   as in the paper's Test 2, takes each triangle's own piece at the vertices on that line.
+//!   For a continuous f this is dolfinx's `f_h * v * dx` with `f_h` interpolated in P1 (the
+//!   reference scripts build the same one-sided interpolant for Test 2);
 //! - diffusion: A is taken constant per triangle, A_K = A(x_K) at the centroid (dolfinx: DG0);
 //! - boundary data: ∫_σ g φ_i ≈ |σ| g(x_σ)/2 at each end of σ (midpoint rule);
 //! - obstacle barriers are nodal: u(x_v) ≤ g(x_v) (or ≥); a vertex carries the lumped measure
@@ -90,9 +91,7 @@ impl GradientDiscretisation for P1<'_> {
     }
     fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>) {
         let v = self.mesh.cell_vertices(k);
-        let xk = self.mesh.centroid(k);
-        let inside = |p: Point| [p[0] + 1e-12 * (xk[0] - p[0]), p[1] + 1e-12 * (xk[1] - p[1])];
-        let fv: Vec<f64> = v.iter().map(|&i| f(inside(self.mesh.vertex(i)))).collect();
+        let fv: Vec<f64> = v.iter().map(|&i| f(self.mesh.vertex(i))).collect();
         let s = fv[0] + fv[1] + fv[2];
         let area = self.mesh.measure(k);
         *b = DVector::from_fn(3, |i, _| area / 12.0 * (s + fv[i]));

@@ -1,1 +1,247 @@
-//! Deterministic mesh generators.
+//! Deterministic mesh generators: no file is ever needed.
+//!
+//! | generator | cells | reproduces |
+//! |---|---|---|
+//! | [`cartesian()`], [`cartesian_rect`] | nx × ny rectangles | FVCA5 `mesh2_k` (level k = 2^(k+1) squares per side), `cartNxN` |
+//! | [`hexagonal()`] (level ≥ 1), [`hexagonal_grid`] (any n) | (n+1)² mostly hexagonal cells, n = 10·2^(level−1) | HArDCore2D / FVCA5 `hexa1_1` … `hexa1_5` exactly (same vertices in the same order, same cells) |
+//! | [`kershaw()`] (level ≥ 1) | (17·level)² quadrangles | FVCA5 `mesh4_1_1` … `mesh4_1_6` (Kershaw meshes), vertices in the same order to 6e-11 |
+//!
+//! The maths of each construction is documented in its module ([`cartesian`](mod@cartesian),
+//! [`hexagonal`](mod@hexagonal), [`kershaw`](mod@kershaw)). All generators return a validated
+//! [`PolyMesh`] (counter-clockwise cells) and never panic: invalid arguments, and meshes larger
+//! than [`MAX_CELLS`], are reported as [`Error::InvalidData`].
+//!
+//! [`Family`] names the three families for the command line (`"cartesian"`, `"hexagonal"`,
+//! `"kershaw"`), generates a level ([`Family::generate`]) and predicts its size without building
+//! it ([`Family::cells_at_level`]). Levels per family:
+//!
+//! | family | level k | cells | largest level |
+//! |---|---|---|---|
+//! | Cartesian | n = 2^(k+1) squares per side (like FVCA5 `mesh2_k`: level 1 = 4×4, level 5 = 64×64) | 4^(k+1) | 11 (4096²) |
+//! | Hexagonal | `hexa1_k`: n = 10·2^(k−1) lattice steps per side, 20·2^(k−1) edges on x=0 | (n+1)² (121, 441, 1681, …) | 9 (6.6 M cells) |
+//! | Kershaw | `mesh4_1_k`: 17k × 17k quadrangles, 17k edges on x=0 | 289 k² | 240 (16.6 M cells) |
+//!
+//! The largest levels come from the cap [`MAX_CELLS`] = 2^24 cells (a mesh of that size already
+//! takes several gigabytes).
+
+pub mod cartesian;
+pub mod hexagonal;
+pub mod kershaw;
+
+pub use cartesian::{cartesian, cartesian_rect};
+pub use hexagonal::{hexagonal, hexagonal_grid};
+pub use kershaw::kershaw;
+
+use crate::error::{Error, Result};
+use crate::mesh::PolyMesh;
+use std::fmt;
+use std::str::FromStr;
+
+/// Largest number of cells any generator builds (2^24 ≈ 16.8 million); beyond this the
+/// generators return [`Error::InvalidData`] instead of exhausting memory.
+pub const MAX_CELLS: usize = 1 << 24;
+
+/// Checks a requested cell count against [`MAX_CELLS`] (`None` means the count overflowed).
+pub(crate) fn check_cell_count(what: &str, cells: Option<usize>) -> Result<()> {
+    match cells {
+        Some(c) if c <= MAX_CELLS => Ok(()),
+        Some(c) => Err(Error::InvalidData(format!(
+            "{what} would have {c} cells, more than the limit of {MAX_CELLS}"
+        ))),
+        None => Err(Error::InvalidData(format!(
+            "{what} would have more cells than can be counted (limit {MAX_CELLS})"
+        ))),
+    }
+}
+
+/// A family of generated meshes, indexed by a refinement level ≥ 1 (see the module docs for
+/// what a level means in each family).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Family {
+    /// Uniform squares on \[0,1\]²; level k has 2^(k+1) × 2^(k+1) cells (FVCA5 `mesh2_k`).
+    Cartesian,
+    /// Smoothly distorted hexagons on \[0,1\]²; level k reproduces `hexa1_k`.
+    Hexagonal,
+    /// Kershaw quadrangles on \[0,1\]²; level k reproduces `mesh4_1_k` (17k × 17k cells).
+    Kershaw,
+}
+
+impl Family {
+    /// The three families, in this order: Cartesian, Hexagonal, Kershaw.
+    pub const ALL: [Family; 3] = [Family::Cartesian, Family::Hexagonal, Family::Kershaw];
+
+    /// The lowercase name accepted by [`Family::from_str`].
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Cartesian => "cartesian",
+            Family::Hexagonal => "hexagonal",
+            Family::Kershaw => "kershaw",
+        }
+    }
+
+    /// Number of cells of the mesh at `level`, computed without building it; saturates at
+    /// `usize::MAX` for absurd levels, and is 0 for level 0 (which [`Family::generate`] rejects).
+    pub fn cells_at_level(self, level: usize) -> usize {
+        if level == 0 {
+            return 0;
+        }
+        self.checked_cells(level).unwrap_or(usize::MAX)
+    }
+
+    fn checked_cells(self, level: usize) -> Option<usize> {
+        match self {
+            Family::Cartesian => {
+                let n = cartesian_level_n(level)?;
+                n.checked_mul(n)
+            }
+            Family::Hexagonal => {
+                let n = hexagonal::level_n(level)?.checked_add(1)?;
+                n.checked_mul(n)
+            }
+            Family::Kershaw => {
+                let n = level.checked_mul(kershaw::COARSE_N)?;
+                n.checked_mul(n)
+            }
+        }
+    }
+
+    /// The largest level whose mesh has at most [`MAX_CELLS`] cells
+    /// (Cartesian 11, Hexagonal 9, Kershaw 240).
+    pub fn max_level(self) -> usize {
+        let mut level = 1;
+        while self
+            .checked_cells(level + 1)
+            .is_some_and(|c| c <= MAX_CELLS)
+        {
+            level += 1;
+        }
+        level
+    }
+
+    /// `Ok` if `level` is between 1 and [`Family::max_level`], else [`Error::InvalidData`]
+    /// saying which levels are valid.
+    pub fn check_level(self, level: usize) -> Result<()> {
+        let max = self.max_level();
+        if level == 0 || level > max {
+            let cells = match self.checked_cells(level) {
+                Some(c) if level > 0 => format!(" ({c} cells)"),
+                _ if level > 0 => " (too many cells to count)".to_string(),
+                _ => String::new(),
+            };
+            return Err(Error::InvalidData(format!(
+                "{} mesh level {level}{cells} is invalid: levels go from 1 to {max} \
+                 (at most {MAX_CELLS} cells)",
+                self.name()
+            )));
+        }
+        Ok(())
+    }
+
+    /// Builds the mesh of this family at `level` (see the table in the module docs).
+    /// Level 0 and levels above [`Family::max_level`] give [`Error::InvalidData`].
+    pub fn generate(self, level: usize) -> Result<PolyMesh> {
+        self.check_level(level)?;
+        match self {
+            Family::Cartesian => {
+                let n = cartesian_level_n(level).expect("checked by check_level");
+                cartesian(n, n)
+            }
+            Family::Hexagonal => hexagonal(level),
+            Family::Kershaw => kershaw(level),
+        }
+    }
+}
+
+/// n = 2^(level+1), or `None` on overflow.
+fn cartesian_level_n(level: usize) -> Option<usize> {
+    let shift = u32::try_from(level.checked_add(1)?).ok()?;
+    1usize.checked_shl(shift)
+}
+
+impl fmt::Display for Family {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Family {
+    type Err = Error;
+
+    /// Parses `"cartesian"`, `"hexagonal"` or `"kershaw"` (case-insensitive, surrounding
+    /// blanks ignored).
+    fn from_str(s: &str) -> Result<Self> {
+        let t = s.trim();
+        Family::ALL
+            .into_iter()
+            .find(|f| f.name().eq_ignore_ascii_case(t))
+            .ok_or_else(|| {
+                Error::InvalidData(format!(
+                    "unknown mesh family {s:?}: expected \"cartesian\", \"hexagonal\" or \"kershaw\""
+                ))
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn family_names_round_trip() {
+        for f in Family::ALL {
+            assert_eq!(f.name().parse::<Family>().unwrap(), f);
+            assert_eq!(f.to_string(), f.name());
+        }
+        assert_eq!(" Kershaw ".parse::<Family>().unwrap(), Family::Kershaw);
+        let e = "hexa".parse::<Family>().unwrap_err();
+        assert!(
+            matches!(e, Error::InvalidData(ref m) if m.contains("hexagonal")),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn cells_at_level_matches_the_generated_meshes() {
+        for f in Family::ALL {
+            for level in 1..=2 {
+                let m = f.generate(level).unwrap();
+                assert_eq!(m.n_cells(), f.cells_at_level(level), "{f} level {level}");
+            }
+        }
+        assert_eq!(Family::Cartesian.cells_at_level(1), 16);
+        assert_eq!(Family::Cartesian.cells_at_level(5), 64 * 64);
+        assert_eq!(Family::Hexagonal.cells_at_level(4), 6561);
+        assert_eq!(Family::Hexagonal.cells_at_level(5), 25921);
+        assert_eq!(Family::Hexagonal.cells_at_level(7), 641 * 641);
+        assert_eq!(Family::Kershaw.cells_at_level(6), 10404);
+    }
+
+    #[test]
+    fn levels_are_validated_without_panicking() {
+        assert_eq!(Family::Cartesian.max_level(), 11);
+        assert_eq!(Family::Hexagonal.max_level(), 9);
+        assert_eq!(Family::Kershaw.max_level(), 240);
+        for f in Family::ALL {
+            let max = f.max_level();
+            for level in [0, max + 1, max + 2, 64, 65, 1000, usize::MAX] {
+                if level > 0 && level <= max {
+                    continue;
+                }
+                match f.generate(level) {
+                    Err(Error::InvalidData(msg)) => assert!(msg.contains(f.name()), "{msg}"),
+                    Err(e) => panic!("{f} level {level}: unexpected error {e}"),
+                    Ok(_) => panic!("{f} level {level} was accepted"),
+                }
+                let _ = f.cells_at_level(level);
+            }
+            assert_eq!(f.cells_at_level(0), 0);
+            assert!(f.cells_at_level(max) <= MAX_CELLS);
+            assert!(f.cells_at_level(max + 1) > MAX_CELLS);
+        }
+        assert_eq!(Family::Cartesian.cells_at_level(usize::MAX), usize::MAX);
+        assert_eq!(Family::Hexagonal.cells_at_level(200), usize::MAX);
+        assert!(Family::Cartesian.check_level(12).is_err());
+        assert!(Family::Hexagonal.check_level(12).is_err());
+        assert!(Family::Kershaw.check_level(13).is_ok());
+    }
+}

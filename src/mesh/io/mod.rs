@@ -8,8 +8,8 @@
 //! | VTK `.vtu` (ASCII XML) | – | [`vtu::write_vtu`] | polygons with any number of point and cell data arrays |
 //!
 //! [`read_mesh`] picks the reader from the file extension. Every reader returns
-//! [`Error::MeshIo`](crate::Error::MeshIo) (with the file and the 1-based line) when the text
-//! cannot be parsed, and [`Error::InvalidMesh`](crate::Error::InvalidMesh) when it parses but
+//! [`Error::MeshIo`] (with the file and the 1-based line) when the text
+//! cannot be parsed, and [`Error::InvalidMesh`] when it parses but
 //! the mesh is geometrically or topologically invalid (the checks of
 //! [`PolyMesh::from_cells`]). Readers never panic on bad input.
 
@@ -97,7 +97,7 @@ impl<'a> Tokens<'a> {
     }
 
     /// Line of the last token returned.
-    pub(crate) fn line(&self) -> usize {
+    pub(crate) fn token_line(&self) -> usize {
         self.tok_line
     }
 
@@ -282,10 +282,10 @@ mod tests {
         let p = Path::new("t.txt");
         let mut t = Tokens::new(p, b"  a b\r\n\n c\n d e f \n");
         assert_eq!(t.next("x").unwrap(), "a");
-        assert_eq!(t.line(), 1);
+        assert_eq!(t.token_line(), 1);
         assert_eq!(t.rest_of_line().unwrap(), "b");
         assert_eq!(t.next("x").unwrap(), "c");
-        assert_eq!(t.line(), 3);
+        assert_eq!(t.token_line(), 3);
         assert_eq!(t.next_line().unwrap(), Some((4, "d e f")));
         assert_eq!(t.next_opt().unwrap(), None);
         let e = t.next("the answer").unwrap_err().to_string();
@@ -303,6 +303,71 @@ mod tests {
         assert!(t.index1("id", 5).is_err());
         assert_eq!(t.index1("id", 5).unwrap(), 4);
         assert!(t.parse::<i32>("tag").is_err());
+    }
+
+    /// Every prefix and many random byte corruptions of the valid test files: errors, never
+    /// panics (in memory, so that it is fast; tests/unit/mesh_io.rs does a sample via files).
+    #[test]
+    fn fuzz_truncations_and_corruptions() {
+        type Parser = fn(&Path, &[u8]) -> Result<()>;
+        let cases: [(&str, &[u8], Parser); 5] = [
+            (
+                "a.msh",
+                include_bytes!("../../../tests/data/good/square_41.msh"),
+                |p, b| msh::parse_msh(p, b).map(|_| ()),
+            ),
+            (
+                "b.msh",
+                include_bytes!("../../../tests/data/good/square_22.msh"),
+                |p, b| msh::parse_msh(p, b).map(|_| ()),
+            ),
+            (
+                "c.msh",
+                include_bytes!("../../../tests/data/good/square_41_gmsh22.msh"),
+                |p, b| msh::parse_msh(p, b).map(|_| ()),
+            ),
+            (
+                "d.typ1",
+                include_bytes!("../../../tests/data/good/hanging.typ1"),
+                |p, b| typ1::parse_typ1(p, b).map(|_| ()),
+            ),
+            (
+                "e.typ2",
+                include_bytes!("../../../tests/data/good/hanging.typ2"),
+                |p, b| typ2::parse_typ2(p, b).map(|_| ()),
+            ),
+        ];
+        let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut rand = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        const NOISE: &[u8] = b"0123456789-.eE+ \n$\"x\xff";
+        for (name, bytes, parse) in cases {
+            let path = Path::new(name);
+            assert!(parse(path, bytes).is_ok(), "{name}");
+            let run = |b: &[u8]| {
+                let r = std::panic::catch_unwind(|| parse(path, b));
+                assert!(
+                    r.is_ok(),
+                    "{name}: panic on {:?}",
+                    String::from_utf8_lossy(b)
+                );
+            };
+            for len in 0..bytes.len() {
+                run(&bytes[..len]);
+            }
+            for _ in 0..3000 {
+                let mut b = bytes.to_vec();
+                for _ in 0..1 + rand() % 3 {
+                    let i = (rand() % b.len() as u64) as usize;
+                    b[i] = NOISE[(rand() % NOISE.len() as u64) as usize];
+                }
+                run(&b);
+            }
+        }
     }
 
     #[test]

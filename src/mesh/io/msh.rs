@@ -130,7 +130,7 @@ pub(crate) fn parse_msh(path: &Path, bytes: &[u8]) -> Result<MshMesh> {
         None => return Err(t.err("empty file: expected \"$MeshFormat\"")),
     }
     let version_tok = t.next("the format version")?;
-    let version_line = t.line();
+    let version_line = t.token_line();
     let file_type: i32 = t.parse("the file type (0 for ASCII)")?;
     if file_type != 0 {
         return Err(t.err(
@@ -202,7 +202,7 @@ fn expect(t: &mut Tokens, what: &str) -> Result<()> {
 
 fn skip_section(t: &mut Tokens, section: &str) -> Result<()> {
     let end = format!("$End{}", &section[1..]);
-    let start = t.line();
+    let start = t.token_line();
     loop {
         match t.next_opt()? {
             Some(tok) if tok == end => return Ok(()),
@@ -299,7 +299,7 @@ fn read_nodes22(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
 fn read_nodes41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     let nblocks = t.count("the number of node blocks")?;
     let n = t.count("the number of nodes")?;
-    let header_line = t.line();
+    let header_line = t.token_line();
     t.parse::<u64>("the smallest node tag")?;
     t.parse::<u64>("the largest node tag")?;
     let cap = capacity(n, t.remaining());
@@ -351,14 +351,14 @@ fn read_element(t: &mut Tokens, raw: &mut Raw, ty: i32, tag: LineTag, what: &str
         1 => {
             let a: u64 = t.parse(&format!("a node of {what}"))?;
             let b: u64 = t.parse(&format!("a node of {what}"))?;
-            raw.lines.push(([a, b], tag, t.line()));
+            raw.lines.push(([a, b], tag, t.token_line()));
         }
         2 | 3 => {
             for _ in 0..ty + 1 {
                 raw.cell_nodes.push(t.parse(&format!("a node of {what}"))?);
             }
             raw.cell_ptr.push(raw.cell_nodes.len());
-            raw.cell_line.push(t.line());
+            raw.cell_line.push(t.token_line());
         }
         _ => {
             raw.ignored_types.insert(ty);
@@ -400,7 +400,7 @@ fn read_elements22(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
 fn read_elements41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     let nblocks = t.count("the number of element blocks")?;
     let n = t.count("the number of elements")?;
-    let header_line = t.line();
+    let header_line = t.token_line();
     t.parse::<u64>("the smallest element tag")?;
     t.parse::<u64>("the largest element tag")?;
     raw.cell_ptr.push(0);
@@ -507,7 +507,12 @@ fn build(t: &Tokens, raw: Raw) -> Result<MshMesh> {
             tagged.push((*a, *b, tag));
         }
     }
-    let mesh = PolyMesh::from_cells_tagged(vertices, cells, &tagged)?;
+    let mesh = PolyMesh::from_cells_tagged(vertices, cells, &tagged).map_err(|source| {
+        crate::Error::InvalidMeshFile {
+            path: t.path.to_path_buf(),
+            source,
+        }
+    })?;
     Ok(MshMesh {
         mesh,
         physical_names: raw.physical_names,

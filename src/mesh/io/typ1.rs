@@ -75,7 +75,7 @@ pub(crate) fn parse_typ1(path: &Path, bytes: &[u8]) -> Result<PolyMesh> {
                 c.push(t.index1(&format!("a vertex id of {name} {i}"), nv)?);
             }
             corners.push(c);
-            cell_line.push(t.line());
+            cell_line.push(t.token_line());
         }
     }
     let nc = corners.len();
@@ -86,7 +86,7 @@ pub(crate) fn parse_typ1(path: &Path, bytes: &[u8]) -> Result<PolyMesh> {
     for i in 1..=nb {
         let a = t.index1(&format!("a vertex id of boundary edge {i}"), nv)?;
         let b = t.index1(&format!("a vertex id of boundary edge {i}"), nv)?;
-        boundary.push((a, b, t.line()));
+        boundary.push((a, b, t.token_line()));
     }
 
     t.expect_header(&["all edges"])?;
@@ -118,7 +118,7 @@ pub(crate) fn parse_typ1(path: &Path, bytes: &[u8]) -> Result<PolyMesh> {
             b,
             k,
             l,
-            line: t.line(),
+            line: t.token_line(),
         });
     }
     if let Some((line, text)) = t.next_line()? {
@@ -129,7 +129,11 @@ pub(crate) fn parse_typ1(path: &Path, bytes: &[u8]) -> Result<PolyMesh> {
     }
 
     let cells = insert_hanging_nodes(&t, &vertices, &corners, &cell_line, &all)?;
-    let mesh = PolyMesh::from_cells(vertices, cells)?;
+    let mesh =
+        PolyMesh::from_cells(vertices, cells).map_err(|source| crate::Error::InvalidMeshFile {
+            path: path.to_path_buf(),
+            source,
+        })?;
     check_edge_lists(&t, &mesh, &boundary, &all)?;
     Ok(mesh)
 }
@@ -398,7 +402,7 @@ mod tests {
             .replace(" all edges\n 10\n", " all edges\n 11\n");
         let e = parse_typ1(Path::new("h.typ1"), bad.as_bytes()).unwrap_err();
         assert!(
-            matches!(e, Error::InvalidMesh(MeshError::NonConforming(_))),
+            matches!(e, Error::InvalidMeshFile { source: MeshError::NonConforming(_), .. }),
             "{e}"
         );
     }

@@ -48,7 +48,10 @@ pub(crate) fn parse_typ2(path: &Path, bytes: &[u8]) -> Result<PolyMesh> {
             ));
         }
     }
-    Ok(PolyMesh::from_cells(vertices, cells)?)
+    PolyMesh::from_cells(vertices, cells).map_err(|source| crate::Error::InvalidMeshFile {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Parses the `Vertices` and `cells` blocks (0-based cells).
@@ -137,7 +140,7 @@ mod tests {
         let bad = SQUARE.replace("4 1 2 3 4", "4 1 2 3 3");
         let e = parse_typ2(Path::new("sq.typ2"), bad.as_bytes()).unwrap_err();
         assert!(
-            matches!(e, Error::InvalidMesh(MeshError::BadCell { .. })),
+            matches!(e, Error::InvalidMeshFile { source: MeshError::BadCell { .. }, .. }),
             "{e}"
         );
         let bad = SQUARE.replace("centers", "more");

@@ -1,0 +1,300 @@
+//! The experiments of the paper's Section 4, each solved with HMM (the paper's scheme) and P1
+//! (the extension the paper invites in its Section 3.1). Results go to `results/*.csv`.
+
+use super::records::*;
+use super::{Config, create_dir};
+use crate::mesh::PolyMesh;
+use crate::mesh::generate::{hexagonal::hexagonal, kershaw::kershaw};
+use crate::mesh::io::read_mesh;
+use crate::post::contact::{contact_measure, switch_point};
+use crate::post::relative_errors;
+use crate::problem::{Problem, paper_test1, paper_test2, paper_test2_tie, paper_test3};
+use crate::scheme::{SchemeKind, build};
+use crate::solver::{ActiveSetOptions, Solution, solve_problem};
+use std::time::Instant;
+
+/// The constants C of Test 3.
+pub const TEST3_C: [f64; 4] = [-5.0, -10.0, -15.0, -20.0];
+
+/// A named mesh and where it came from.
+pub struct NamedMesh {
+    /// Name used in the CSV files.
+    pub name: String,
+    /// Provenance.
+    pub source: String,
+    /// The mesh.
+    pub mesh: PolyMesh,
+}
+
+fn load(cfg: &Config, file: &str) -> crate::Result<NamedMesh> {
+    let path = cfg.meshes.join(file);
+    Ok(NamedMesh {
+        name: file.trim_end_matches(".msh").to_string(),
+        source: format!("gmsh file meshes/{file}"),
+        mesh: read_mesh(&path)?,
+    })
+}
+
+/// The gmsh meshes of a test (`test1`, `test2tri`, `test3`), coarsest first.
+pub fn gmsh_family(cfg: &Config, prefix: &str) -> crate::Result<Vec<NamedMesh>> {
+    let levels = if cfg.quick { 1 } else { 4 };
+    (1..=levels)
+        .map(|l| load(cfg, &format!("{prefix}_{l}.msh")))
+        .collect()
+}
+
+/// The Test 2 polygonal meshes: hexagonal levels 1–4 and Kershaw level 2 from the generators,
+/// and the original FVCA5 files when available.
+pub fn test2_polygonal(cfg: &Config) -> crate::Result<Vec<(String, NamedMesh)>> {
+    let levels = if cfg.quick { 2 } else { 4 };
+    let mut v = Vec::new();
+    for l in 1..=levels {
+        v.push((
+            "hexagonal".to_string(),
+            NamedMesh {
+                name: format!("hexagonal_{l}"),
+                source: format!("generator hexagonal level {l}"),
+                mesh: hexagonal(l)?,
+            },
+        ));
+    }
+    v.push((
+        "kershaw".to_string(),
+        NamedMesh {
+            name: "kershaw_2".into(),
+            source: "generator kershaw level 2".into(),
+            mesh: kershaw(2)?,
+        },
+    ));
+    if let Some(dir) = &cfg.fvca5 {
+        let mut files: Vec<String> = (1..=levels).map(|l| format!("hexa1_{l}.typ2")).collect();
+        files.push("mesh4_1_2.typ2".into());
+        for f in files {
+            let path = dir.join(&f);
+            v.push((
+                "fvca5-file".to_string(),
+                NamedMesh {
+                    name: f.trim_end_matches(".typ2").to_string(),
+                    source: format!("FVCA5 file {}", path.display()),
+                    mesh: read_mesh(&path)?,
+                },
+            ));
+        }
+    }
+    Ok(v)
+}
+
+/// Boundary edges whose midpoint has coordinate `axis` equal to `value`.
+pub fn edges_on(mesh: &PolyMesh, axis: usize, value: f64) -> usize {
+    mesh.boundary_edges()
+        .iter()
+        .filter(|&&e| (mesh.edge_midpoint(e)[axis] - value).abs() < 1e-12)
+        .count()
+}
+
+/// Statistics of a mesh, as a CSV row.
+pub fn mesh_row(m: &NamedMesh) -> MeshRow {
+    MeshRow {
+        mesh: m.name.clone(),
+        source: m.source.clone(),
+        n_cells: m.mesh.n_cells(),
+        n_vertices: m.mesh.n_vertices(),
+        n_edges: m.mesh.n_edges(),
+        h: m.mesh.h(),
+        edges_x0: edges_on(&m.mesh, 0, 0.0),
+        edges_y0: edges_on(&m.mesh, 1, 0.0),
+    }
+}
+
+/// Solves `problem` with scheme `kind` on `mesh` and hands the certified solution to `f`.
+pub fn with_solution<R>(
+    mesh: &PolyMesh,
+    kind: SchemeKind,
+    problem: &Problem,
+    f: impl FnOnce(&Solution) -> crate::Result<R>,
+) -> crate::Result<R> {
+    let scheme = build(kind, mesh)?;
+    let sol = solve_problem(scheme.as_ref(), problem, &ActiveSetOptions::default())?;
+    f(&sol)
+}
+
+fn worst(sol: &Solution) -> f64 {
+    let c = sol.result.certificate;
+    c.max_violation
+        .max(-c.min_multiplier)
+        .max(c.complementarity)
+        .max(c.balance_residual)
+}
+
+fn log_rows(case: &str, kind: SchemeKind, mesh: &str, sol: &Solution) -> Vec<IterationRow> {
+    sol.result
+        .log
+        .iter()
+        .map(|l| IterationRow {
+            case: case.into(),
+            scheme: kind.to_string(),
+            mesh: mesh.into(),
+            solve: l.solve,
+            active: l.active,
+            entered: l.entered,
+            left: l.left,
+            violation: l.violation,
+            residual: l.residual,
+        })
+        .collect()
+}
+
+/// Runs every experiment and writes `results/{meshes,test1,test2,test3,iterations}.csv`.
+/// `progress` receives one line per solve.
+pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> crate::Result<Vec<TimingRow>> {
+    create_dir(&cfg.results())?;
+    let mut meshes = Vec::new();
+    let mut iterations = Vec::new();
+    let mut timings = Vec::new();
+    let schemes = [SchemeKind::Hmm, SchemeKind::P1];
+
+    // ---- Test 1
+    let t = Instant::now();
+    let mut rows1 = Vec::new();
+    for m in gmsh_family(cfg, "test1")? {
+        meshes.push(mesh_row(&m));
+        for kind in schemes {
+            let p = paper_test1();
+            let row = with_solution(&m.mesh, kind, &p, |sol| {
+                let cons = sol.constraints.as_ref().expect("Test 1 has a barrier");
+                let sw = switch_point(cons, &sol.result.active, 0);
+                iterations.extend(log_rows("test1", kind, &m.name, sol));
+                Ok(Test1Row {
+                    scheme: kind.to_string(),
+                    mesh: m.name.clone(),
+                    h: m.mesh.h(),
+                    n_cells: m.mesh.n_cells(),
+                    n_gamma3: edges_on(&m.mesh, 1, 0.0),
+                    niter: sol.niter(),
+                    switch_x: sw.map_or(f64::NAN, |s| s.at),
+                    switch_half_gap: sw.map_or(f64::NAN, |s| s.half_gap),
+                    switch_count: sw.map_or(0, |s| s.count),
+                    certificate: worst(sol),
+                    time_s: sol.timings.total,
+                })
+            })?;
+            progress(&format!(
+                "test1 {:<4} {:<10} NITER {:>3}  switch x = {:.4}",
+                row.scheme, row.mesh, row.niter, row.switch_x
+            ));
+            rows1.push(row);
+        }
+    }
+    write_csv(&cfg.results().join("test1.csv"), &rows1)?;
+    timings.push(TimingRow {
+        stage: "test1".into(),
+        seconds: t.elapsed().as_secs_f64(),
+    });
+
+    // ---- Test 2
+    let t = Instant::now();
+    let mut rows2 = Vec::new();
+    let mut cases: Vec<(String, NamedMesh, SchemeKind)> = Vec::new();
+    for (fam, m) in test2_polygonal(cfg)? {
+        cases.push((fam, m, SchemeKind::Hmm));
+    }
+    for m in gmsh_family(cfg, "test2tri")? {
+        cases.push(("triangles".into(), m, SchemeKind::Hmm));
+    }
+    let p = paper_test2();
+    let p_low = paper_test2_tie(true);
+    let exact = p.exact.as_ref().expect("Test 2 has an exact solution");
+    for (fam, m, _) in &cases {
+        meshes.push(mesh_row(m));
+        let kinds: &[SchemeKind] = if fam == "triangles" {
+            &schemes
+        } else {
+            &schemes[..1]
+        };
+        // the interface convention matters where some x_K lies on y = 1/2 (hexagonal meshes):
+        // run the other convention too, as family "<family>-interface-lower"
+        let on_interface = (0..m.mesh.n_cells())
+            .any(|k| (m.mesh.centroid(k)[1] - 0.5).abs() <= crate::problem::TEST2_INTERFACE_TOL);
+        let mut variants = vec![(fam.clone(), &p)];
+        if on_interface {
+            variants.push((format!("{fam}-interface-lower"), &p_low));
+        }
+        for (fam, p) in variants {
+            for &kind in kinds {
+                let row = with_solution(&m.mesh, kind, p, |sol| {
+                    let cons = sol.constraints.as_ref().expect("Test 2 has a barrier");
+                    let sw = switch_point(cons, &sol.result.active, 1);
+                    let scheme = sol.system.scheme();
+                    let e = relative_errors(scheme, sol.u(), &exact.u, &exact.grad);
+                    iterations.extend(log_rows("test2", kind, &m.name, sol));
+                    Ok(Test2Row {
+                        scheme: kind.to_string(),
+                        family: fam.clone(),
+                        mesh: m.name.clone(),
+                        h: m.mesh.h(),
+                        n_cells: m.mesh.n_cells(),
+                        n_gamma3: edges_on(&m.mesh, 0, 0.0),
+                        err_u: e.l2_u,
+                        err_grad: e.l2_grad,
+                        niter: sol.niter(),
+                        switch_y: sw.map_or(f64::NAN, |s| s.at),
+                        switch_count: sw.map_or(0, |s| s.count),
+                        certificate: worst(sol),
+                        time_s: sol.timings.total,
+                    })
+                })?;
+                progress(&format!(
+                    "test2 {:<4} {:<14} {:<28} NITER {:>3}  e_u = {:.4}  e_grad = {:.4}",
+                    row.scheme, row.mesh, row.family, row.niter, row.err_u, row.err_grad
+                ));
+                rows2.push(row);
+            }
+        }
+    }
+    write_csv(&cfg.results().join("test2.csv"), &rows2)?;
+    timings.push(TimingRow {
+        stage: "test2".into(),
+        seconds: t.elapsed().as_secs_f64(),
+    });
+
+    // ---- Test 3
+    let t = Instant::now();
+    let mut rows3 = Vec::new();
+    for m in gmsh_family(cfg, "test3")? {
+        meshes.push(mesh_row(&m));
+        for kind in schemes {
+            for c in TEST3_C {
+                let p = paper_test3(c);
+                let row = with_solution(&m.mesh, kind, &p, |sol| {
+                    let cons = sol.constraints.as_ref().expect("Test 3 has a barrier");
+                    iterations.extend(log_rows(&p.name, kind, &m.name, sol));
+                    Ok(Test3Row {
+                        scheme: kind.to_string(),
+                        mesh: m.name.clone(),
+                        h: m.mesh.h(),
+                        n_cells: m.mesh.n_cells(),
+                        c,
+                        niter: sol.niter(),
+                        n_active: sol.result.active.iter().filter(|&&a| a).count(),
+                        contact_area: contact_measure(cons, &sol.result.active),
+                        certificate: worst(sol),
+                        time_s: sol.timings.total,
+                    })
+                })?;
+                progress(&format!(
+                    "test3 {:<4} {:<8} C = {:>4}  NITER {:>3}  contact area {:.4}",
+                    row.scheme, row.mesh, c, row.niter, row.contact_area
+                ));
+                rows3.push(row);
+            }
+        }
+    }
+    write_csv(&cfg.results().join("test3.csv"), &rows3)?;
+    timings.push(TimingRow {
+        stage: "test3".into(),
+        seconds: t.elapsed().as_secs_f64(),
+    });
+    write_csv(&cfg.results().join("meshes.csv"), &meshes)?;
+    write_csv(&cfg.results().join("iterations.csv"), &iterations)?;
+    Ok(timings)
+}
