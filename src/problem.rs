@@ -191,7 +191,7 @@ pub fn check_finite(v: f64, what: &str) -> crate::Result<f64> {
 const ON: f64 = 1e-12;
 
 /// Test 1 of the paper (Signorini, from Yang & Chao): −Δu = 2π sin(2πx) in (0,1)²;
-/// Γ1 = [0,1]×{1} (u = 0); Γ2 = {0,1}×[0,1] (∇u·n = 0); Γ3 = [0,1]×{0} with
+/// Γ1 = \[0,1\]×{1} (u = 0); Γ2 = {0,1}×\[0,1\] (∇u·n = 0); Γ3 = \[0,1\]×{0} with
 /// u ≥ 0, ∇u·n ≥ 0, u∇u·n = 0 (a lower barrier 0).
 pub fn paper_test1() -> Problem {
     Problem::new("test1", Box::new(|p| 2.0 * PI * (2.0 * PI * p[0]).sin()))

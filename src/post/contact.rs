@@ -1,7 +1,7 @@
 //! Contact-zone metrics.
 //!
-//! - [`switch_point`]: on a boundary part parametrised by one coordinate s (x on Γ3 = [0,1]×{0}
-//!   for Test 1, y on Γ3 = {0}×[0,1] for Test 2), the place where the active constraint
+//! - [`switch_point`]: on a boundary part parametrised by one coordinate s (x on Γ3 = \[0,1\]×{0}
+//!   for Test 1, y on Γ3 = {0}×\[0,1\] for Test 2), the place where the active constraint
 //!   switches. The constrained unknowns are sorted by s; the switch is the midpoint between the
 //!   last unknown of the first run and the first of the next run (so it is known to ±h/2).
 //! - [`contact_measure`]: the measure of the contact set, Σ_j m_j over active unknowns

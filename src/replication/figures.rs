@@ -49,23 +49,20 @@ fn surface(
         let scheme = sol.system.scheme();
         let cells = scheme.cell_values(sol.u());
         let mut at = None;
-        if let (Some(axis), Some(cons)) = (switch_axis, sol.constraints.as_ref()) {
-            if let Some(sw) = switch_point(cons, &sol.result.active, axis) {
-                let p = if axis == 0 {
-                    [sw.at, 0.0]
-                } else {
-                    [0.0, sw.at]
-                };
-                opts.markers.push((
-                    [p[0], p[1], 0.0],
-                    format!(
-                        "switch at {} = {:.3}",
-                        if axis == 0 { "x" } else { "y" },
-                        sw.at
-                    ),
-                ));
-                at = Some(sw.at);
-            }
+        if let (Some(axis), Some(cons)) = (switch_axis, sol.constraints.as_ref())
+            && let Some(sw) = switch_point(cons, &sol.result.active, axis)
+        {
+            let p = if axis == 0 {
+                [sw.at, 0.0]
+            } else {
+                [0.0, sw.at]
+            };
+            let name = if axis == 0 { "x" } else { "y" };
+            opts.markers.push((
+                [p[0], p[1], 0.0],
+                format!("switch at {name} = {:.3}", sw.at),
+            ));
+            at = Some(sw.at);
         }
         plot_surface(
             &cfg.figures().join(format!("{name}.png")),

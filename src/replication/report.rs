@@ -34,10 +34,10 @@ fn crate_versions(root: &Path) -> String {
     for line in lock.lines() {
         if let Some(n) = line.strip_prefix("name = ") {
             name = n.trim_matches('"').to_string();
-        } else if let Some(ver) = line.strip_prefix("version = ") {
-            if ["faer", "nalgebra", "plotters", "csv", "serde", "clap"].contains(&name.as_str()) {
-                v.push(format!("{name} {}", ver.trim_matches('"')));
-            }
+        } else if let Some(ver) = line.strip_prefix("version = ")
+            && ["faer", "nalgebra", "plotters", "csv", "serde", "clap"].contains(&name.as_str())
+        {
+            v.push(format!("{name} {}", ver.trim_matches('"')));
         }
     }
     v.sort();

@@ -217,8 +217,8 @@ mod tests {
         let grad = [0.7, -1.9];
         let ua = |p: Point| 0.4 + grad[0] * p[0] + grad[1] * p[1];
         let mut u = vec![0.0; s.n_unknowns()];
-        for e in 0..m.n_edges() {
-            u[e] = ua(m.edge_midpoint(e));
+        for (e, ue) in u.iter_mut().enumerate().take(m.n_edges()) {
+            *ue = ua(m.edge_midpoint(e));
         }
         u[s.cell_dof(0)] = ua(m.centroid(0));
         let g = s.cell_gradients(&u)[0];

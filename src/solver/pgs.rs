@@ -69,10 +69,10 @@ pub fn solve(
     }
     let mut u: Vec<f64> = (0..n).map(|i| dir[i].unwrap_or(0.0)).collect();
     for i in 0..n {
-        if let Some(g) = bound[i] {
-            if s * (u[i] - g) > 0.0 {
-                u[i] = g;
-            }
+        if let Some(g) = bound[i]
+            && s * (u[i] - g) > 0.0
+        {
+            u[i] = g;
         }
     }
     let mut sweeps = 0;
@@ -94,10 +94,10 @@ pub fn solve(
                 }
             }
             let mut v = r / d;
-            if let Some(g) = bound[i] {
-                if s * (v - g) > 0.0 {
-                    v = g;
-                }
+            if let Some(g) = bound[i]
+                && s * (v - g) > 0.0
+            {
+                v = g;
             }
             change = change.max((v - u[i]).abs());
             u[i] = v;

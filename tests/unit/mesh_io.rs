@@ -147,7 +147,10 @@ fn malformed_files_are_rejected_with_context() {
             }
             (Expect::Mesh(pred), Error::InvalidMeshFile { path: p, source: e }) => {
                 assert_eq!(p, &path, "{name}: the error must name the file");
-                assert!(msg.starts_with(&format!("{}:", path.display())), "{name}: {msg}");
+                assert!(
+                    msg.starts_with(&format!("{}:", path.display())),
+                    "{name}: {msg}"
+                );
                 assert!(pred(e), "{name}: unexpected mesh error {e:?}");
             }
             _ => panic!("{name}: unexpected error variant: {err:?}"),

@@ -254,9 +254,9 @@ impl LinearSystem for Dense {
         let mut r = self.b.clone();
         let mut s: Vec<f64> = self.b.iter().map(|x| x.abs()).collect();
         for i in 0..n {
-            for j in 0..n {
-                r[i] -= self.m[(i, j)] * u[j];
-                s[i] += (self.m[(i, j)] * u[j]).abs();
+            for (j, uj) in u.iter().enumerate() {
+                r[i] -= self.m[(i, j)] * uj;
+                s[i] += (self.m[(i, j)] * uj).abs();
             }
         }
         (r, s)

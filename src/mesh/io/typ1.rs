@@ -402,7 +402,13 @@ mod tests {
             .replace(" all edges\n 10\n", " all edges\n 11\n");
         let e = parse_typ1(Path::new("h.typ1"), bad.as_bytes()).unwrap_err();
         assert!(
-            matches!(e, Error::InvalidMeshFile { source: MeshError::NonConforming(_), .. }),
+            matches!(
+                e,
+                Error::InvalidMeshFile {
+                    source: MeshError::NonConforming(_),
+                    ..
+                }
+            ),
             "{e}"
         );
     }

@@ -140,7 +140,13 @@ mod tests {
         let bad = SQUARE.replace("4 1 2 3 4", "4 1 2 3 3");
         let e = parse_typ2(Path::new("sq.typ2"), bad.as_bytes()).unwrap_err();
         assert!(
-            matches!(e, Error::InvalidMeshFile { source: MeshError::BadCell { .. }, .. }),
+            matches!(
+                e,
+                Error::InvalidMeshFile {
+                    source: MeshError::BadCell { .. },
+                    ..
+                }
+            ),
             "{e}"
         );
         let bad = SQUARE.replace("centers", "more");

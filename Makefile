@@ -1,0 +1,64 @@
+# gradvi — make targets. Everything needs only Rust (cargo) except `crosscheck` (installs
+# python3-dolfinx and gmsh from Debian) and `meshes` (installs gmsh from Debian).
+
+CARGO ?= cargo
+BIN := target/release/gradvi
+FVCA5_MESHES ?=
+PYTHON := /usr/bin/python3
+REFDIR := replication/results/reference
+
+.PHONY: all build test lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench clean
+
+all: build
+
+build:
+	$(CARGO) build --release
+
+## test: the test suite (unit, convergence and regression tiers), a few minutes at most
+test:
+	$(CARGO) test --all-targets
+
+## lint: formatting, clippy with warnings as errors, and documentation
+lint:
+	$(CARGO) fmt --all -- --check
+	$(CARGO) clippy --all-targets -- -D warnings
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps
+
+fmt:
+	$(CARGO) fmt --all
+
+doc:
+	$(CARGO) doc --no-deps
+
+## replicate: every table and figure of the paper -> replication/REPORT.md
+## (add FVCA5_MESHES=../shared/meshes/fvca5 to run Test 2 on the original files too)
+replicate: build
+	$(BIN) replicate $(if $(FVCA5_MESHES),--fvca5 $(FVCA5_MESHES),)
+
+## replicate-quick: the same on the coarsest meshes only, into /tmp
+replicate-quick: build
+	$(BIN) replicate --quick --out /tmp/gradvi-replicate-quick
+
+## report: rewrite REPORT.md and the CSV-based plots from the existing CSV files
+report: build
+	$(BIN) replicate --report-only
+
+## meshes: regenerate meshes/*.msh from meshes/*.geo (installs gmsh if missing)
+meshes:
+	bash meshes/generate.sh
+
+reference-deps:
+	bash reference/install.sh
+
+## crosscheck: dolfinx P1 reference solves on the same meshes, diffed -> replication/CROSSCHECK.md
+crosscheck: build reference-deps
+	$(PYTHON) reference/solve.py --all --outdir $(REFDIR)
+	$(BIN) crosscheck --reference $(REFDIR)
+
+## crosscheck-coarse: the same on the coarsest meshes (run by CI)
+crosscheck-coarse: build reference-deps
+	$(PYTHON) reference/solve.py --coarse --outdir /tmp/gradvi-reference-coarse
+	$(BIN) crosscheck --coarse --reference /tmp/gradvi-reference-coarse --out /tmp/gradvi-crosscheck-coarse
+
+clean:
+	$(CARGO) clean
