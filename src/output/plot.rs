@@ -144,6 +144,14 @@ pub enum Field<'a> {
     Cell(&'a [f64]),
     /// One value per vertex (nodal, e.g. P1 finite elements).
     Vertex(&'a [f64]),
+    /// Cell values drawn as a fan from (x_K, u_K) to given vertex heights (e.g. HMM: cell
+    /// unknowns, with vertex values that use the face unknowns on the boundary).
+    CellWithVertex {
+        /// One value per cell.
+        cell: &'a [f64],
+        /// One value per vertex.
+        vertex: &'a [f64],
+    },
 }
 
 /// How a [`Field::Cell`] is drawn by [`plot_surface`].
@@ -903,6 +911,22 @@ fn build_surface(mesh: &PolyMesh, field: Field, rendering: CellRendering) -> Sur
                 }
             }
         }
+        (Field::CellWithVertex { cell, vertex }, _) => {
+            pts.reserve(nv + nc);
+            for (v, &z) in vertex.iter().enumerate() {
+                let p = mesh.vertex(v);
+                pts.push([p[0], p[1], z]);
+            }
+            for (k, &uk) in cell.iter().enumerate() {
+                let c = mesh.centroid(k);
+                pts.push([c[0], c[1], uk]);
+                let cv = mesh.cell_vertices(k);
+                for i in 0..cv.len() {
+                    let (a, b) = (cv[i], cv[(i + 1) % cv.len()]);
+                    tris.push(([a as u32, b as u32, (nv + k) as u32], 1));
+                }
+            }
+        }
         (Field::Cell(u), CellRendering::Flat) => {
             for (k, &uk) in u.iter().enumerate() {
                 let base = pts.len();
@@ -966,6 +990,17 @@ pub fn plot_surface(
     let (values, expected, what) = match field {
         Field::Cell(u) => (u, mesh.n_cells(), "cells"),
         Field::Vertex(u) => (u, mesh.n_vertices(), "vertices"),
+        Field::CellWithVertex { cell, vertex } => {
+            if vertex.len() != mesh.n_vertices() {
+                return Err(Error::InvalidData(format!(
+                    "surface field has {} vertex values but the mesh has {} vertices",
+                    vertex.len(),
+                    mesh.n_vertices()
+                )));
+            }
+            check_finite("surface field", vertex)?;
+            (cell, mesh.n_cells(), "cells")
+        }
     };
     if mesh.n_cells() == 0 {
         return Err(Error::InvalidData("cannot plot on an empty mesh".into()));

@@ -66,6 +66,21 @@ pub fn test2_polygonal(cfg: &Config) -> crate::Result<Vec<(String, NamedMesh)>> 
             mesh: kershaw(2)?,
         },
     ));
+    // the same mesh with x and y exchanged: its straight middle line becomes y = 1/2, the
+    // discontinuity of A (the paper's remark that its Kershaw mesh is aligned with it)
+    let k2 = kershaw(2)?;
+    let swapped: Vec<[f64; 2]> = k2.vertices().iter().map(|p| [p[1], p[0]]).collect();
+    let cells: Vec<Vec<usize>> = (0..k2.n_cells())
+        .map(|k| k2.cell_vertices(k).to_vec())
+        .collect();
+    v.push((
+        "kershaw-transposed".to_string(),
+        NamedMesh {
+            name: "kershaw_2_transposed".into(),
+            source: "generator kershaw level 2, x and y exchanged".into(),
+            mesh: PolyMesh::from_cells(swapped, cells)?,
+        },
+    ));
     if let Some(dir) = &cfg.fvca5 {
         let mut files: Vec<String> = (1..=levels).map(|l| format!("hexa1_{l}.typ2")).collect();
         files.push("mesh4_1_2.typ2".into());

@@ -64,10 +64,11 @@ fn surface(
             ));
             at = Some(sw.at);
         }
+        let verts = scheme.vertex_values(sol.u());
         plot_surface(
             &cfg.figures().join(format!("{name}.png")),
             &m.mesh,
-            Field::Cell(&cells),
+            Field::Vertex(&verts),
             &opts,
         )?;
         let active: Vec<f64> = {
@@ -78,11 +79,10 @@ fn surface(
                 .map(|k| a.get(n_skel + k).copied().unwrap_or(0.0))
                 .collect()
         };
-        let verts = scheme.vertex_values(sol.u());
         write_vtu(
             cfg.vtu().join(format!("{name}.vtu")),
             &m.mesh,
-            &[("u_vertex_average", &verts)],
+            &[("u_vertex", &verts)],
             &[("u_K", &cells), ("active_cell", &active)],
         )?;
         Ok(at)
@@ -170,9 +170,12 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> crate::Result<()> {
         progress("figures 4.2, 4.3 done");
     }
     // Figure 4.4: Kershaw
-    if let Some((_, m)) = polys.iter().find(|(f, _)| f == "kershaw") {
+    if let Some((_, m)) = polys.iter().find(|(f, _)| f == "kershaw-transposed") {
         let opts = SurfaceOptions {
-            title: format!("Test 2, HMM, Kershaw mesh (h = {:.3})", m.mesh.h()),
+            title: format!(
+                "Test 2, HMM, Kershaw mesh, x and y exchanged (h = {:.3})",
+                m.mesh.h()
+            ),
             azimuth: 50.0,
             elevation: 25.0,
             ..Default::default()
@@ -189,7 +192,11 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> crate::Result<()> {
             &cfg.figures().join("fig4_4_kershaw_mesh.png"),
             &tags_test2(&m.mesh),
             &MeshPlotOptions {
-                title: format!("Kershaw mesh (h = {:.3})", m.mesh.h()),
+                title: format!(
+                    "Kershaw mesh mesh4_1_2, x and y exchanged (h = {:.3})",
+                    m.mesh.h()
+                ),
+                hlines: vec![0.5],
                 boundary_labels: labels(),
                 ..Default::default()
             },
