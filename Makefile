@@ -60,5 +60,10 @@ crosscheck-coarse: build reference-deps
 	$(PYTHON) reference/solve.py --coarse --outdir /tmp/gradvi-reference-coarse
 	$(BIN) crosscheck --coarse --reference /tmp/gradvi-reference-coarse --out /tmp/gradvi-crosscheck-coarse
 
+## bench: scaling benchmark (HMM and P1, Test 3, 1e3 to 1e6 cells; dolfinx up to ~150k cells)
+##        -> replication/results/bench.csv and replication/BENCHMARKS.md
+bench: build reference-deps
+	$(CARGO) bench --bench scale
+
 clean:
 	$(CARGO) clean
