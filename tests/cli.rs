@@ -1,0 +1,178 @@
+//! The command line: exit codes, error messages, outputs.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn gradvi(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_gradvi"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .expect("run gradvi");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn tmp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("gradvi-cli-{}-{name}", std::process::id()))
+}
+
+#[test]
+fn help_everywhere() {
+    for args in [
+        vec!["--help"],
+        vec!["mesh", "--help"],
+        vec!["mesh", "info", "--help"],
+        vec!["mesh", "generate", "--help"],
+        vec!["solve", "--help"],
+        vec!["replicate", "--help"],
+    ] {
+        let (ok, out, _) = gradvi(&args);
+        assert!(ok && out.contains("Usage"), "{args:?}");
+    }
+}
+
+#[test]
+fn bad_meshes_give_a_nonzero_exit_naming_the_file() {
+    for f in [
+        "typ2_not_star_shaped.typ2",
+        "msh41_truncated_nodes.msh",
+        "typ1_hanging_unlisted.typ1",
+    ] {
+        let path = format!("tests/data/malformed/{f}");
+        let (ok, _, err) = gradvi(&["mesh", "info", &path]);
+        assert!(!ok, "{f} accepted");
+        assert!(err.contains(f), "{f}: {err}");
+        assert!(!err.contains("panicked"), "{f}: {err}");
+    }
+}
+
+#[test]
+fn bad_arguments_give_a_nonzero_exit() {
+    let out = tmp("x.typ2");
+    let out = out.to_str().unwrap();
+    for args in [
+        vec!["mesh", "generate", "hexagonal", "--level", "0", "-o", out],
+        vec!["mesh", "generate", "octagonal", "--level", "1", "-o", out],
+        vec![
+            "solve",
+            "--problem",
+            "nope",
+            "--generate",
+            "cartesian",
+            "--level",
+            "1",
+        ],
+        vec![
+            "solve",
+            "--problem",
+            "test3",
+            "--param",
+            "D=1",
+            "--generate",
+            "cartesian",
+            "--level",
+            "1",
+        ],
+        vec![
+            "solve",
+            "--problem",
+            "test3",
+            "--generate",
+            "hexagonal",
+            "--level",
+            "1",
+            "--scheme",
+            "p1",
+        ],
+        vec![
+            "solve",
+            "--problem",
+            "test3",
+            "--generate",
+            "cartesian",
+            "--level",
+            "2",
+            "--max-solves",
+            "1",
+        ],
+        vec![
+            "solve",
+            "--problem",
+            "test3",
+            "--generate",
+            "cartesian",
+            "--level",
+            "1",
+            "--c",
+            "-1",
+        ],
+    ] {
+        let (ok, _, err) = gradvi(&args);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(
+            err.contains("Error") || err.contains("error"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn solve_prints_niter_and_writes_vtu_and_json() {
+    let (vtu, json) = (tmp("u.vtu"), tmp("u.json"));
+    let (ok, out, err) = gradvi(&[
+        "solve",
+        "--problem",
+        "test3",
+        "--param",
+        "C=-20",
+        "--mesh",
+        "meshes/test3_1.msh",
+        "--scheme",
+        "hmm",
+        "--vtu",
+        vtu.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("NITER           5"), "{out}");
+    assert!(out.contains("certificate"));
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(j["niter"], 5);
+    assert!(j["certificate"]["max_violation"].as_f64().unwrap() <= 1e-10);
+    let v = std::fs::read_to_string(&vtu).unwrap();
+    for name in ["u_K", "active_cell", "multiplier_cell", "u_vertex"] {
+        assert!(v.contains(&format!("Name=\"{name}\"")), "VTU lacks {name}");
+    }
+    // a problem with an exact solution prints its errors
+    let (ok, out, _) = gradvi(&[
+        "solve",
+        "--problem",
+        "fvca5-1.1",
+        "--generate",
+        "kershaw",
+        "--level",
+        "1",
+    ]);
+    assert!(ok && out.contains("errors"), "{out}");
+    std::fs::remove_file(vtu).ok();
+    std::fs::remove_file(json).ok();
+}
+
+#[test]
+fn generate_then_read_back() {
+    let path = tmp("h.typ2");
+    let p = path.to_str().unwrap();
+    let (ok, _, err) = gradvi(&["mesh", "generate", "hexagonal", "--level", "2", "-o", p]);
+    assert!(ok, "{err}");
+    let (ok, out, _) = gradvi(&["mesh", "info", p]);
+    assert!(ok && out.contains("441"), "{out}");
+    std::fs::remove_file(path).ok();
+}
