@@ -16,7 +16,7 @@ build:
 
 ## test: the test suite (unit, convergence and regression tiers), a few minutes at most
 test:
-	$(CARGO) test --all-targets
+	$(CARGO) test
 
 ## lint: formatting, clippy with warnings as errors, and documentation
 lint:
