@@ -16,8 +16,8 @@
 //! load = exact integral of the one-sided affine interpolant of f, nodal barriers, Dirichlet
 //! vertices excluded), so their solutions must agree to round-off: [`SAME_PROBLEM_TOL`].
 
-use crate::mesh::{NO_CELL, Point, PolyMesh};
 use crate::mesh::io::read_mesh;
+use crate::mesh::{NO_CELL, Point, PolyMesh};
 use crate::post::contact::{contact_measure, free_boundary, hausdorff, switch_point};
 use crate::post::{fitted_slope, order, relative_errors};
 use crate::problem::{Problem, paper_test1, paper_test2, paper_test3};
@@ -52,13 +52,16 @@ pub const MATCH_TOL: f64 = 1e-12;
 /// Arguments of `gradvi crosscheck`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct CrosscheckArgs {
-    /// Directory of the dolfinx outputs (reference_summary.csv, nodal_<case>.csv).
+    /// Directory of the dolfinx outputs (reference_summary.csv, nodal_CASE.csv).
     #[arg(long, default_value = "replication/results/reference")]
     pub reference: PathBuf,
-    /// The replication directory: results/crosscheck.csv and CROSSCHECK.md go there, the
-    /// paper's tables are read from its paper/ folder.
+    /// The replication directory: results/crosscheck.csv and CROSSCHECK.md go there.
     #[arg(long, default_value = "replication")]
     pub out: PathBuf,
+    /// Directory of the paper's tables as data (table1.csv, table2.csv, table3.csv), for the
+    /// paper's NITER.
+    #[arg(long, default_value = "replication/paper")]
+    pub paper: PathBuf,
     /// Directory of the gmsh meshes.
     #[arg(long, default_value = "meshes")]
     pub meshes: PathBuf,
@@ -171,6 +174,20 @@ pub struct CrosscheckRow {
     pub switch_p1: Option<f64>,
     /// Tests 1/2: switch coordinate, dolfinx-P1.
     pub switch_dolfinx: Option<f64>,
+    /// Tests 1/2: number of active/inactive switches along Γ3, HMM.
+    pub switch_count_hmm: Option<usize>,
+    /// Tests 1/2: number of switches along Γ3, gradvi-P1.
+    pub switch_count_p1: Option<usize>,
+    /// Tests 1/2: number of switches along Γ3, dolfinx-P1.
+    pub switch_count_dolfinx: Option<usize>,
+    /// Test 2: max |u| over the Γ3 unknowns in the exact contact zone (y > 1/2) divided by
+    /// max |u| over all Γ3 unknowns, HMM (0 when the discrete solution touches the barrier
+    /// there; small when it is close to it).
+    pub trace_zone_hmm: Option<f64>,
+    /// Test 2: the same for gradvi-P1.
+    pub trace_zone_p1: Option<f64>,
+    /// Test 2: the same for dolfinx-P1.
+    pub trace_zone_dolfinx: Option<f64>,
     /// Test 3: contact area, HMM (Σ |K| over active cells).
     pub contact_hmm: Option<f64>,
     /// Test 3: contact area, gradvi-P1 (lumped vertex measures).
@@ -212,7 +229,11 @@ fn need(path: &Path) -> Result<()> {
 
 /// The mesh index k of `test1_k.msh`, `test2tri_k.msh`, `test3_k.msh`.
 fn mesh_index(mesh: &str) -> Option<usize> {
-    mesh.trim_end_matches(".msh").rsplit('_').next()?.parse().ok()
+    mesh.trim_end_matches(".msh")
+        .rsplit('_')
+        .next()?
+        .parse()
+        .ok()
 }
 
 /// Reads `reference_summary.csv` and the nodal files of its cases, ordered by test, mesh size
@@ -220,8 +241,8 @@ fn mesh_index(mesh: &str) -> Option<usize> {
 pub fn read_reference(dir: &Path, coarse: bool) -> Result<Vec<ReferenceCase>> {
     let summary_path = dir.join("reference_summary.csv");
     need(&summary_path)?;
-    let mut rows: Vec<ReferenceRow> = read_csv(&summary_path)
-        .with_context(|| format!("reading {}", summary_path.display()))?;
+    let mut rows: Vec<ReferenceRow> =
+        read_csv(&summary_path).with_context(|| format!("reading {}", summary_path.display()))?;
     if rows.is_empty() {
         bail!(
             "{} has no case: run `make crosscheck` or reference/solve.py first",
@@ -352,12 +373,23 @@ fn problem_of(r: &ReferenceRow) -> Result<Problem> {
     Ok(match r.test.as_str() {
         "test1" => paper_test1(),
         "test2" => paper_test2(),
-        "test3" => paper_test3(
-            r.c
-                .with_context(|| format!("case {}: test3 without C", r.case))?,
-        ),
+        "test3" => paper_test3(r.c.with_context(|| format!("case {}: test3 without C", r.case))?),
         t => bail!("case {}: unknown test '{t}'", r.case),
     })
+}
+
+/// Test 2: max |u| over the constrained (Γ3) unknowns with y > 1/2, the exact contact zone,
+/// divided by max |u| over all of them.
+fn trace_zone(cons: &Constraints, u: &[f64]) -> f64 {
+    let (mut zone, mut all) = (0.0f64, 0.0f64);
+    for d in &cons.dofs {
+        let v = u[d.dof].abs();
+        all = all.max(v);
+        if d.point[1] > 0.5 {
+            zone = zone.max(v);
+        }
+    }
+    zone / all.max(f64::MIN_POSITIVE)
 }
 
 fn finite(x: f64) -> Option<f64> {
@@ -371,6 +403,8 @@ struct HmmOutcome {
     n_active: usize,
     err: Option<(f64, f64)>,
     switch: Option<f64>,
+    switch_count: Option<usize>,
+    trace_zone: Option<f64>,
     contact: Option<f64>,
     free: Vec<Point>,
 }
@@ -408,19 +442,18 @@ fn paper_niter(p: &PaperTables, r: &ReferenceRow, n_gamma3: usize) -> Option<usi
             t.sort_by(|a, b| b.h.total_cmp(&a.h));
             t.get(k).map(|x| x.niter)
         }
-        "test2" => p
-            .t2
-            .iter()
-            .find(|x| x.family == "hexagonal" && x.n_gamma3 == n_gamma3)
-            .map(|x| x.niter),
+        "test2" => {
+            p.t2.iter()
+                .find(|x| x.family == "hexagonal" && x.n_gamma3 == n_gamma3)
+                .map(|x| x.niter)
+        }
         "test3" => {
             let mut cells: Vec<usize> = p.t3.iter().map(|x| x.n_cells).collect();
             cells.sort_unstable();
             cells.dedup();
             let nc = *cells.get(k)?;
             let c = r.c?;
-            p.t3
-                .iter()
+            p.t3.iter()
                 .find(|x| x.n_cells == nc && x.c == c)
                 .map(|x| x.niter)
         }
@@ -435,7 +468,7 @@ pub fn solve_cases(
     cases: &[ReferenceCase],
     progress: &mut dyn FnMut(&str),
 ) -> Result<Vec<CrosscheckRow>> {
-    let paper = read_paper(&args.out.join("paper"))?;
+    let paper = read_paper(&args.paper)?;
     let mut meshes: HashMap<String, PolyMesh> = HashMap::new();
     let mut rows = Vec::new();
     for case in cases {
@@ -461,7 +494,13 @@ pub fn solve_cases(
         let problem = problem_of(r)?;
         let is2 = r.test == "test2";
         let is3 = r.test == "test3";
-        let axis = if r.test == "test1" { Some(0) } else if is2 { Some(1) } else { None };
+        let axis = if r.test == "test1" {
+            Some(0)
+        } else if is2 {
+            Some(1)
+        } else {
+            None
+        };
         let exact = problem.exact.as_ref();
 
         let hmm = with_solution(mesh, SchemeKind::Hmm, &problem, |sol| {
@@ -477,6 +516,8 @@ pub fn solve_cases(
                     (e.l2_u, e.l2_grad)
                 }),
                 switch: axis.and_then(|a| switch_point(cons, active, a).map(|s| s.at)),
+                switch_count: axis.map(|a| switch_point(cons, active, a).map_or(0, |s| s.count)),
+                trace_zone: is2.then(|| trace_zone(cons, sol.u())),
                 contact: is3.then(|| contact_measure(cons, active)),
                 free: if is3 {
                     free_boundary(cons, active, &neighbours(scheme, cons))
@@ -514,6 +555,8 @@ pub fn solve_cases(
             };
             let (eg, ed) = (errs(u), errs(&ud));
             let sw = |act: &[bool]| axis.and_then(|a| switch_point(cons, act, a).map(|s| s.at));
+            let swc =
+                |act: &[bool]| axis.map(|a| switch_point(cons, act, a).map_or(0, |s| s.count));
             let (fb_p1, fb_d) = if is3 {
                 let nb = neighbours(scheme, cons);
                 (
@@ -553,11 +596,25 @@ pub fn solve_cases(
                 switch_hmm: hmm.switch,
                 switch_p1: sw(active),
                 switch_dolfinx: sw(&dact),
+                switch_count_hmm: hmm.switch_count,
+                switch_count_p1: swc(active),
+                switch_count_dolfinx: swc(&dact),
+                trace_zone_hmm: hmm.trace_zone,
+                trace_zone_p1: is2.then(|| trace_zone(cons, u)),
+                trace_zone_dolfinx: is2.then(|| trace_zone(cons, &ud)),
                 contact_hmm: hmm.contact,
                 contact_p1: is3.then(|| contact_measure(cons, active)),
                 contact_dolfinx: is3.then(|| contact_measure(cons, &dact)),
-                hausdorff_hmm_p1: if is3 { finite(hausdorff(&hmm.free, &fb_p1)) } else { None },
-                hausdorff_p1_dolfinx: if is3 { finite(hausdorff(&fb_p1, &fb_d)) } else { None },
+                hausdorff_hmm_p1: if is3 {
+                    finite(hausdorff(&hmm.free, &fb_p1))
+                } else {
+                    None
+                },
+                hausdorff_p1_dolfinx: if is3 {
+                    finite(hausdorff(&fb_p1, &fb_d))
+                } else {
+                    None
+                },
                 time_hmm_s: hmm.time,
                 time_p1_s: sol.timings.total,
                 time_dolfinx_setup_s: r.time_setup_s,
@@ -570,7 +627,11 @@ pub fn solve_cases(
             row.case,
             row.n_cells,
             row.p1_max_rel_diff,
-            if row.active_identical { "identical" } else { "DIFFER" },
+            if row.active_identical {
+                "identical"
+            } else {
+                "DIFFER"
+            },
             row.niter_hmm,
             row.niter_p1,
             row.snes_iterations
@@ -588,7 +649,11 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     eprintln!(
         "cross-check: reading the dolfinx reference from {}{}",
         args.reference.display(),
-        if args.coarse { " (coarsest meshes)" } else { "" }
+        if args.coarse {
+            " (coarsest meshes)"
+        } else {
+            ""
+        }
     );
     let cases = read_reference(&args.reference, args.coarse)?;
     let t_read = t0.elapsed().as_secs_f64();
@@ -660,6 +725,8 @@ fn ratio(a: usize, p: Option<usize>) -> Option<f64> {
 fn trend(v: &[usize]) -> &'static str {
     if v.len() < 2 {
         "a single mesh"
+    } else if v.iter().all(|&x| x == v[0]) {
+        "constant"
     } else if v.windows(2).all(|w| w[1] >= w[0]) {
         "non-decreasing"
     } else if v.windows(2).all(|w| w[1] <= w[0]) {
@@ -706,7 +773,11 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
         .find(|t| t.stage == "total")
         .map_or(f64::NAN, |t| t.seconds);
 
-    writeln!(w, "# Cross-check: gradvi (HMM, P1) against FEniCSx/dolfinx P1\n").ok();
+    writeln!(
+        w,
+        "# Cross-check: gradvi (HMM, P1) against FEniCSx/dolfinx P1\n"
+    )
+    .ok();
     writeln!(
         w,
         "Generated by `gradvi crosscheck` (`make crosscheck`){} from `results/crosscheck.csv` only; the dolfinx side is `reference/solve.py` (dolfinx 0.5.2, PETSc SNES `vinewtonrsls`) on the committed gmsh meshes. {} cases. The replication of the paper itself is in [REPORT.md](REPORT.md).\n",
@@ -735,7 +806,8 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
     let bad1: Vec<&CrosscheckRow> = rows
         .iter()
         .filter(|x| {
-            !(x.p1_max_rel_diff <= SAME_PROBLEM_TOL)
+            x.p1_max_rel_diff.is_nan()
+                || x.p1_max_rel_diff > SAME_PROBLEM_TOL
                 || !x.active_identical
                 || x.n_constrained_gradvi != x.n_constrained_dolfinx
         })
@@ -837,8 +909,8 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
         match (sh, sp) {
             (Some(sh), Some(sp)) => {
                 let ok = sh >= MIN_ORDER_U && sp >= MIN_ORDER_U;
-                writeln!(w, "\n*Verdict (convergence): {}.* Fitted order on u: HMM {sh:.2}, P1 {sp:.2} (expected ≥ {MIN_ORDER_U}); on ∇u: HMM {}, P1 {} (for information). Both schemes converge on the aligned meshes; the P1 error on u is {} the HMM one on the finest mesh.\n", verdict(ok), fo(shg, 2), fo(spg, 2),
-                    match (t2.last().and_then(|x| x.err_u_p1), t2.last().and_then(|x| x.err_u_hmm)) { (Some(p), Some(h)) => if p < h { format!("smaller than (ratio P1/HMM {:.2})", p / h) } else { format!("larger than (ratio P1/HMM {:.2})", p / h) }, _ => "not comparable to".into() }).ok();
+                writeln!(w, "\n*Verdict (convergence): {}.* Fitted order on u: HMM {sh:.2}, P1 {sp:.2} (expected ≥ {MIN_ORDER_U}); on ∇u: HMM {}, P1 {} (for information). Both schemes converge on the aligned meshes; on the finest mesh the P1 error on u is {} the HMM one.\n", verdict(ok), fo(shg, 2), fo(spg, 2),
+                    match (t2.last().and_then(|x| x.err_u_p1), t2.last().and_then(|x| x.err_u_hmm)) { (Some(p), Some(h)) => format!("{:.2} times", p / h), _ => "not comparable to".into() }).ok();
                 if !ok {
                     failed.push(format!(
                         "Test 2: fitted order on u below {MIN_ORDER_U} (HMM {sh:.2}, P1 {sp:.2})"
@@ -854,6 +926,11 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
     // ---------------- 3. contact zones
     writeln!(w, "## 3. Contact zones under refinement\n").ok();
     // Test 1
+    let fsw = |s: Option<f64>, n: Option<usize>| match (s, n) {
+        (Some(s), Some(n)) if n > 1 => format!("{s:.4} ({n} switches)"),
+        (Some(s), _) => format!("{s:.4}"),
+        (None, _) => "none".into(),
+    };
     writeln!(w, "### Test 1: switch abscissa on Γ3 (y = 0)\n").ok();
     if t1.is_empty() {
         writeln!(w, "No Test 1 case in the reference.\n").ok();
@@ -875,9 +952,9 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
                 "| {} | {:.4} | {} | {} | {} | {} | {:.4} | {} |",
                 x.mesh,
                 x.h,
-                fo(x.switch_hmm, 4),
-                fo(x.switch_p1, 4),
-                fo(x.switch_dolfinx, 4),
+                fsw(x.switch_hmm, x.switch_count_hmm),
+                fsw(x.switch_p1, x.switch_count_p1),
+                fsw(x.switch_dolfinx, x.switch_count_dolfinx),
                 fo(Some(d), 4),
                 SWITCH_TOL_H * x.h,
                 if good { "ok" } else { "**FAIL**" }
@@ -887,12 +964,35 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
         let shrink = if diffs.len() < 2 {
             "with a single mesh, no trend can be seen".to_string()
         } else if diffs.windows(2).all(|p| p[1] <= p[0]) {
-            format!("the difference shrinks monotonically from {:.4} to {:.4}", diffs[0], diffs[diffs.len() - 1])
+            format!(
+                "the difference shrinks monotonically, from {:.4} to {:.4}",
+                diffs[0],
+                diffs[diffs.len() - 1]
+            )
         } else {
-            format!("the difference goes from {:.4} on the coarsest to {:.4} on the finest mesh, not monotonically (it is a difference of two quantities each known to ± half a mesh spacing)", diffs[0], diffs[diffs.len() - 1])
+            format!(
+                "the difference goes from {:.4} on the coarsest to {:.4} on the finest mesh, not monotonically (each switch is only known to ± half a mesh spacing)",
+                diffs[0],
+                diffs[diffs.len() - 1]
+            )
         };
         let same_d = t1.iter().all(|x| x.switch_p1 == x.switch_dolfinx);
-        writeln!(w, "\n*Verdict: {}.* The HMM and P1 switch points are {} within {SWITCH_TOL_H}h on every mesh; {shrink}. gradvi-P1 and dolfinx-P1 switch at {} point.\n", verdict(ok), if ok { "" } else { "**not**" }, if same_d { "the same" } else { "a **different**" }).ok();
+        let single = t1
+            .iter()
+            .all(|x| x.switch_count_hmm == Some(1) && x.switch_count_p1 == Some(1));
+        writeln!(
+            w,
+            "\n*Verdict: {}.* The HMM and P1 switch points are {}within {SWITCH_TOL_H}h of each other on every mesh; {shrink}. {} gradvi-P1 and dolfinx-P1 switch at {} point.\n",
+            verdict(ok),
+            if ok { "" } else { "**not** " },
+            if single {
+                "Each contact zone is a single interval (one switch)."
+            } else {
+                "Some contact zone is not a single interval (the first switch is reported)."
+            },
+            if same_d { "the same" } else { "a **different**" }
+        )
+        .ok();
         if !ok {
             failed.push(format!(
                 "Test 1: HMM and P1 switch abscissas differ by {SWITCH_TOL_H}h or more on some mesh"
@@ -904,38 +1004,107 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
     if t2.is_empty() {
         writeln!(w, "No Test 2 case in the reference.\n").ok();
     } else {
-        writeln!(w, "Tolerance: |switch − 0.5| ≤ {SWITCH_TOL_H}h for each scheme on each mesh.\n").ok();
-        writeln!(w, "| mesh | h | switch HMM | switch gradvi-P1 | switch dolfinx-P1 | max abs(switch − 0.5) | {SWITCH_TOL_H}h | |\n|---|---:|---:|---:|---:|---:|---:|---|").ok();
-        let mut ok = true;
-        let mut devs = Vec::new();
+        writeln!(w, "Tolerance: for each scheme in contact somewhere on Γ3, |switch − 0.5| ≤ {SWITCH_TOL_H}h on each mesh. In the exact solution the contact on y > 1/2 is *degenerate*: ū = 0 **and** A∇ū·n = 0 there (no strict complementarity), so a discrete solution may stay strictly below the barrier and have no active unknown at all, hence no switch. For such a scheme the check is instead that its trace in the exact contact zone tends to 0: *zone trace* = max |u| over the Γ3 unknowns with y > 1/2 divided by max |u| over all Γ3 unknowns (0 when every such unknown is in contact), which must decrease from the coarsest to the finest mesh (checked when there are at least 2 meshes).\n").ok();
+        writeln!(w, "| mesh | h | switch HMM | switch gradvi-P1 | switch dolfinx-P1 | max abs(switch − 0.5) | {SWITCH_TOL_H}h | zone trace HMM | zone trace gradvi-P1 | zone trace dolfinx-P1 | |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|").ok();
+        let mut switch_ok = true;
         for x in &t2 {
             let dev = [x.switch_hmm, x.switch_p1, x.switch_dolfinx]
                 .iter()
-                .map(|s| s.map_or(f64::INFINITY, |s| (s - 0.5).abs()))
-                .fold(0.0f64, f64::max);
-            let good = dev <= SWITCH_TOL_H * x.h;
-            ok &= good;
-            devs.push(dev);
+                .flatten()
+                .map(|s| (s - 0.5).abs())
+                .fold(f64::NAN, f64::max);
+            let good = dev.is_nan() || dev <= SWITCH_TOL_H * x.h;
+            switch_ok &= good;
             writeln!(
                 w,
-                "| {} | {:.4} | {} | {} | {} | {} | {:.4} | {} |",
+                "| {} | {:.4} | {} | {} | {} | {} | {:.4} | {} | {} | {} | {} |",
                 x.mesh,
                 x.h,
-                fo(x.switch_hmm, 4),
-                fo(x.switch_p1, 4),
-                fo(x.switch_dolfinx, 4),
+                fsw(x.switch_hmm, x.switch_count_hmm),
+                fsw(x.switch_p1, x.switch_count_p1),
+                fsw(x.switch_dolfinx, x.switch_count_dolfinx),
                 fo(Some(dev), 4),
                 SWITCH_TOL_H * x.h,
+                fe(x.trace_zone_hmm),
+                fe(x.trace_zone_p1),
+                fe(x.trace_zone_dolfinx),
                 if good { "ok" } else { "**FAIL**" }
             )
             .ok();
         }
-        writeln!(w, "\n*Verdict: {}.* The three switch points are {} within {SWITCH_TOL_H}h of the exact 0.5 on every mesh; the largest deviation goes from {:.4} (coarsest) to {:.4} (finest).\n", verdict(ok), if ok { "" } else { "**not**" }, devs[0], devs[devs.len() - 1]).ok();
-        if !ok {
+        let mut ok = switch_ok;
+        if !switch_ok {
             failed.push(format!(
                 "Test 2: a switch ordinate is farther than {SWITCH_TOL_H}h from 0.5"
             ));
         }
+        let mut text = Vec::new();
+        type Pick = fn(&CrosscheckRow) -> (Option<f64>, Option<f64>, usize);
+        let schemes: [(&str, Pick); 3] = [
+            ("HMM", |x| (x.switch_hmm, x.trace_zone_hmm, x.n_active_hmm)),
+            ("gradvi-P1", |x| {
+                (x.switch_p1, x.trace_zone_p1, x.n_active_p1)
+            }),
+            ("dolfinx-P1", |x| {
+                (x.switch_dolfinx, x.trace_zone_dolfinx, x.n_active_dolfinx)
+            }),
+        ];
+        for (name, pick) in schemes {
+            let with: Vec<&&CrosscheckRow> = t2.iter().filter(|x| pick(x).0.is_some()).collect();
+            let zt: Vec<f64> = t2.iter().map(|x| pick(x).1.unwrap_or(f64::NAN)).collect();
+            let zt_s = format!("{:.2e} → {:.2e}", zt[0], zt[zt.len() - 1]);
+            if with.len() == t2.len() {
+                let d: Vec<f64> = t2
+                    .iter()
+                    .map(|x| (pick(x).0.unwrap_or(f64::NAN) - 0.5).abs())
+                    .collect();
+                text.push(format!(
+                    "{name} is in contact on every mesh; its switch is {:.4} → {:.4} away from 0.5 (coarsest → finest), zone trace {zt_s}",
+                    d[0],
+                    d[d.len() - 1]
+                ));
+            } else {
+                let none: Vec<&str> = t2
+                    .iter()
+                    .filter(|x| pick(x).0.is_none())
+                    .map(|x| x.mesh.as_str())
+                    .collect();
+                let no_active = t2
+                    .iter()
+                    .filter(|x| pick(x).0.is_none())
+                    .all(|x| pick(x).2 == 0);
+                let dec = zt.len() >= 2 && zt[zt.len() - 1] < zt[0];
+                if zt.len() >= 2 && !dec {
+                    ok = false;
+                    failed.push(format!(
+                        "Test 2: {name} has no switch on some mesh and its zone trace does not decrease ({zt_s})"
+                    ));
+                }
+                text.push(format!(
+                    "{name} has no switch on {} of {} meshes ({}){}; its zone trace goes {zt_s} (coarsest → finest){}",
+                    none.len(),
+                    t2.len(),
+                    none.join(", "),
+                    if no_active { ", where it has no active unknown at all: its unconstrained solution is admissible and stays strictly below the barrier" } else { "" },
+                    if zt.len() < 2 { ", trend not checked (single mesh)".to_string() } else if dec { ", decreasing as required".to_string() } else { ", **not decreasing**".to_string() }
+                ));
+            }
+        }
+        let multi = t2
+            .iter()
+            .any(|x| x.switch_count_hmm.unwrap_or(0) > 1 || x.switch_count_p1.unwrap_or(0) > 1);
+        writeln!(
+            w,
+            "\n*Verdict: {}.* {}.{}\n",
+            verdict(ok),
+            text.join("; "),
+            if multi {
+                " Where a contact set on Γ3 is not a single interval (several switches, listed in brackets), the first switch from y = 0 is reported: with degenerate contact, vertices of the exact contact zone can be inactive while their value is within the zone trace of the barrier."
+            } else {
+                ""
+            }
+        )
+        .ok();
     }
     // Test 3
     writeln!(w, "### Test 3: contact area and free boundary\n").ok();
@@ -984,8 +1153,16 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
                     "C = {c}: from {:.4} to {:.4}, {}{}",
                     hs[0],
                     hs[hs.len() - 1],
-                    if d { "decreasing" } else { "**not decreasing**" },
-                    if d && !mono { " (not monotonically)" } else { "" }
+                    if d {
+                        "decreasing"
+                    } else {
+                        "**not decreasing**"
+                    },
+                    if d && !mono {
+                        " (not monotonically)"
+                    } else {
+                        ""
+                    }
                 )
             } else {
                 format!("C = {c}: {:.4} (single mesh, trend not checked)", hs[0])
@@ -993,9 +1170,9 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
             notes.push(dec);
             ok_all &= ok_c;
         }
-        let same_d = t3
-            .iter()
-            .all(|x| x.hausdorff_p1_dolfinx.is_none_or(|d| d == 0.0) && x.contact_p1 == x.contact_dolfinx);
+        let same_d = t3.iter().all(|x| {
+            x.hausdorff_p1_dolfinx.is_none_or(|d| d == 0.0) && x.contact_p1 == x.contact_dolfinx
+        });
         writeln!(w, "\n*Verdict: {}.* Hausdorff distance HMM–P1 (coarsest → finest): {}. gradvi-P1 and dolfinx-P1 have {} contact sets and free boundaries.\n", verdict(ok_all), notes.join("; "), if same_d { "identical" } else { "**different**" }).ok();
         if !ok_all {
             failed.push(format!(
@@ -1039,9 +1216,18 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
     let mut lines = Vec::new();
     for (key, g) in &groups {
         let seq = |f: &dyn Fn(&CrosscheckRow) -> usize| g.iter().map(|x| f(x)).collect::<Vec<_>>();
-        let (h, p, s) = (seq(&|x| x.niter_hmm), seq(&|x| x.niter_p1), seq(&|x| x.snes_iterations));
+        let (h, p, s) = (
+            seq(&|x| x.niter_hmm),
+            seq(&|x| x.niter_p1),
+            seq(&|x| x.snes_iterations),
+        );
         let pap: Vec<usize> = g.iter().filter_map(|x| x.paper_niter).collect();
-        let show = |v: &[usize]| v.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", ");
+        let show = |v: &[usize]| {
+            v.iter()
+                .map(|n| n.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
         lines.push(format!(
             "- {key}: HMM {} ({}), gradvi-P1 {} ({}), SNES {} ({}){}",
             show(&h),
@@ -1050,17 +1236,71 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
             trend(&p),
             show(&s),
             trend(&s),
-            if pap.len() == g.len() { format!(", paper {} ({})", show(&pap), trend(&pap)) } else { String::new() }
+            if pap.len() == g.len() {
+                format!(", paper {} ({})", show(&pap), trend(&pap))
+            } else {
+                String::new()
+            }
         ));
     }
-    let mean = |f: &dyn Fn(&CrosscheckRow) -> Option<f64>| {
-        let v: Vec<f64> = rows.iter().filter_map(f).collect();
+    let mean = |t: &str, f: &dyn Fn(&CrosscheckRow) -> Option<f64>| {
+        let v: Vec<f64> = rows.iter().filter(|x| x.test == t).filter_map(f).collect();
         (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
     };
-    let mh = mean(&|x| ratio(x.niter_hmm, x.paper_niter));
-    let mp = mean(&|x| ratio(x.niter_p1, x.paper_niter));
-    let ms = mean(&|x| ratio(x.snes_iterations, x.paper_niter));
+    let mut tests: Vec<&str> = rows.iter().map(|x| x.test.as_str()).collect();
+    tests.dedup();
+    let mean_ratios: Vec<String> = tests
+        .iter()
+        .filter(|t| mean(t, &|x| x.paper_niter.map(|p| p as f64)).is_some())
+        .map(|t| {
+            format!(
+                "{t}: HMM {}, gradvi-P1 {}, SNES {}",
+                fo(mean(t, &|x| ratio(x.niter_hmm, x.paper_niter)), 2),
+                fo(mean(t, &|x| ratio(x.niter_p1, x.paper_niter)), 2),
+                fo(mean(t, &|x| ratio(x.snes_iterations, x.paper_niter)), 2)
+            )
+        })
+        .collect();
     writeln!(w, "\n*Trend* (coarse → fine):\n\n{}\n", lines.join("\n")).ok();
+    let growing = |v: &[usize]| v.windows(2).all(|p| p[1] >= p[0]);
+    let mut exceptions = Vec::new();
+    let mut paper_exceptions = Vec::new();
+    for (key, g) in &groups {
+        for (name, f) in [
+            (
+                "HMM",
+                (|x: &CrosscheckRow| x.niter_hmm) as fn(&CrosscheckRow) -> usize,
+            ),
+            ("gradvi-P1", |x| x.niter_p1),
+            ("SNES", |x| x.snes_iterations),
+        ] {
+            let v: Vec<usize> = g.iter().map(|x| f(x)).collect();
+            if !growing(&v) {
+                exceptions.push(format!("{name} on {key}"));
+            }
+        }
+        let pap: Vec<usize> = g.iter().filter_map(|x| x.paper_niter).collect();
+        if pap.len() == g.len() && !growing(&pap) {
+            paper_exceptions.push(key.clone());
+        }
+    }
+    if groups.iter().any(|g| g.1.len() >= 2) {
+        writeln!(
+            w,
+            "{} {}\n",
+            if exceptions.is_empty() {
+                "Every count (HMM, gradvi-P1, SNES) is non-decreasing under refinement for every test and C.".to_string()
+            } else {
+                format!("The counts are non-decreasing under refinement except for {}.", exceptions.join(", "))
+            },
+            if paper_exceptions.is_empty() {
+                "So are the paper's.".to_string()
+            } else {
+                format!("The paper's are too, except on {}.", paper_exceptions.join(", "))
+            }
+        )
+        .ok();
+    }
     // Test 3: does NITER fall as |C| grows, on each mesh?
     let mut t3_meshes: Vec<&str> = t3.iter().map(|x| x.mesh.as_str()).collect();
     t3_meshes.dedup();
@@ -1071,11 +1311,20 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
         })
     };
     let yesno = |b: bool| if b { "yes" } else { "no" };
-    writeln!(w, "Mean ratio to the paper's NITER: HMM {}, gradvi-P1 {}, SNES {}.{}\n",
-        fo(mh, 2), fo(mp, 2), fo(ms, 2),
+    writeln!(w, "Mean ratio to the paper's NITER ({}).{}\n",
+        if mean_ratios.is_empty() { "no paper value".to_string() } else { mean_ratios.join("; ") },
         if t3.is_empty() { String::new() } else {
-            format!(" Test 3: NITER non-increasing as |C| grows on every mesh (the paper's trend): HMM {}, gradvi-P1 {}, SNES {}.", yesno(c_trend(&|x| x.niter_hmm)), yesno(c_trend(&|x| x.niter_p1)), yesno(c_trend(&|x| x.snes_iterations)))
+            format!(" Test 3: NITER non-increasing as |C| grows, on every mesh: HMM {}, gradvi-P1 {}, SNES {}, paper {}.", yesno(c_trend(&|x| x.niter_hmm)), yesno(c_trend(&|x| x.niter_p1)), yesno(c_trend(&|x| x.snes_iterations)), if t3.iter().all(|x| x.paper_niter.is_some()) { yesno(c_trend(&|x| x.paper_niter.unwrap_or(0))) } else { "–" })
         }).ok();
+
+    let trivial: Vec<&str> = rows
+        .iter()
+        .filter(|x| x.niter_hmm == 1 && x.n_active_hmm == 0)
+        .map(|x| x.case.as_str())
+        .collect();
+    if !trivial.is_empty() {
+        writeln!(w, "HMM needs a single solve on {} ({}): its first (unconstrained) solution is already admissible and nothing is active, so these counts are not comparable with the paper's (see the Test 2 contact section: the exact contact is degenerate).\n", if trivial.len() == 1 { "one case" } else { "these cases" }, trivial.join(", ")).ok();
+    }
 
     // ---------------- timings
     writeln!(w, "## Timings\n").ok();

@@ -29,8 +29,8 @@ enum Command {
     Solve(SolveArgs),
     /// Reproduce the paper's tables and figures (results/*.csv, figures/*.png, REPORT.md).
     Replicate(ReplicateArgs),
-    // CROSSCHECK-ENABLE: /// Compare gradvi's P1 and HMM with the dolfinx reference solves (CROSSCHECK.md).
-    // CROSSCHECK-ENABLE: Crosscheck(gradvi::crosscheck::CrosscheckArgs),
+    /// Compare gradvi's P1 and HMM with the dolfinx reference solves (CROSSCHECK.md).
+    Crosscheck(gradvi::crosscheck::CrosscheckArgs),
 }
 
 #[derive(Subcommand)]
@@ -350,6 +350,6 @@ fn main() -> Result<()> {
         }
         Command::Solve(a) => solve(a),
         Command::Replicate(a) => replicate(a),
-        // CROSSCHECK-ENABLE: Command::Crosscheck(a) => gradvi::crosscheck::run(a),
+        Command::Crosscheck(a) => gradvi::crosscheck::run(a),
     }
 }
