@@ -117,6 +117,41 @@ fn small_problems_match_enumeration_and_pgs() {
     check_against_enumeration(&Hmm::new(&rect_grid(4, 6, 1.0, 1.0)), &paper_test2(), 1);
 }
 
+/// For problems with too many constrained unknowns to enumerate: the active-set solution
+/// against projected Gauss–Seidel run to 1e-15.
+fn check_against_pgs(scheme: &dyn GradientDiscretisation, p: &Problem) {
+    let sys = DiscreteSystem::new(scheme, p).unwrap();
+    let cons = build_constraints(&sys, p).unwrap().unwrap();
+    let sol = active_set::solve(&sys, &cons, &ActiveSetOptions::default()).unwrap();
+    let n_act = sol.active.iter().filter(|&&a| a).count();
+    assert!(n_act > 0 && n_act < cons.dofs.len(), "{}: trivial contact set", p.name);
+    sol.certificate.check(1e-12).unwrap();
+    let pg = gradvi::solver::pgs::solve(
+        &sys,
+        &cons,
+        &gradvi::solver::pgs::PgsOptions { tol: 1e-15, ..Default::default() },
+    )
+    .unwrap();
+    let umax = pg.u.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    for (a, b) in sol.u.iter().zip(&pg.u) {
+        assert!((a - b).abs() <= 1e-9 * umax, "{} (PGS): {a} vs {b}", p.name);
+    }
+}
+
+#[test]
+fn hexagonal_and_kershaw_problems_match_pgs() {
+    use gradvi::mesh::generate::{hexagonal, kershaw};
+    let hex = hexagonal(1).unwrap();
+    let ker = kershaw(1).unwrap();
+    // obstacle on cells, lower and upper; Signorini on faces, upper (Test 2) and lower (Test 1)
+    check_against_pgs(&Hmm::new(&hex), &paper_test3(-10.0));
+    check_against_pgs(&Hmm::new(&ker), &paper_test3(-10.0));
+    check_against_pgs(&Hmm::new(&hex), &upper_obstacle());
+    check_against_pgs(&Hmm::new(&ker), &upper_signorini());
+    check_against_pgs(&Hmm::new(&hex), &paper_test1());
+    check_against_pgs(&Hmm::new(&hex), &paper_test2());
+}
+
 #[test]
 fn m_matrix_iterates_are_monotone_and_niter_is_bounded() {
     // HMM on a Cartesian mesh with A = I is the two-point scheme: an M-matrix
