@@ -124,12 +124,19 @@ fn check_against_pgs(scheme: &dyn GradientDiscretisation, p: &Problem) {
     let cons = build_constraints(&sys, p).unwrap().unwrap();
     let sol = active_set::solve(&sys, &cons, &ActiveSetOptions::default()).unwrap();
     let n_act = sol.active.iter().filter(|&&a| a).count();
-    assert!(n_act > 0 && n_act < cons.dofs.len(), "{}: trivial contact set", p.name);
+    assert!(
+        n_act > 0 && n_act < cons.dofs.len(),
+        "{}: trivial contact set",
+        p.name
+    );
     sol.certificate.check(1e-12).unwrap();
     let pg = gradvi::solver::pgs::solve(
         &sys,
         &cons,
-        &gradvi::solver::pgs::PgsOptions { tol: 1e-15, ..Default::default() },
+        &gradvi::solver::pgs::PgsOptions {
+            tol: 1e-15,
+            ..Default::default()
+        },
     )
     .unwrap();
     let umax = pg.u.iter().fold(0.0f64, |a, x| a.max(x.abs()));
