@@ -21,7 +21,7 @@ use crate::mesh::{NO_CELL, Point, PolyMesh};
 use crate::post::contact::{contact_measure, free_boundary, hausdorff, switch_point};
 use crate::post::{fitted_slope, order, relative_errors};
 use crate::problem::{Problem, paper_test1, paper_test2, paper_test3};
-use crate::replication::experiments::{edges_on, with_solution};
+use crate::replication::experiments::with_solution;
 use crate::replication::records::{
     PaperTable1, PaperTable2, PaperTable3, TimingRow, read_csv, write_csv,
 };
@@ -528,7 +528,7 @@ pub fn solve_cases(
         })
         .with_context(|| format!("case {}: gradvi HMM", r.case))?;
 
-        let paper_n = paper_niter(&paper, r, edges_on(mesh, 0, 0.0));
+        let paper_n = paper_niter(&paper, r, mesh.boundary_edges_on(0, 0.0));
         let row = with_solution(mesh, SchemeKind::P1, &problem, |sol| {
             let cons = sol.constraints.as_ref().expect("every test has a barrier");
             let active = &sol.result.active;

@@ -447,6 +447,17 @@ impl PolyMesh {
     pub fn h(&self) -> f64 {
         self.h
     }
+    /// Number of boundary edges lying on the line {x_axis = value} (both end points exactly on
+    /// it), e.g. `boundary_edges_on(0, 0.0)` counts the edges on x = 0.
+    pub fn boundary_edges_on(&self, axis: usize, value: f64) -> usize {
+        self.boundary_edges
+            .iter()
+            .filter(|&&e| {
+                let [a, b] = self.edges[e];
+                self.vertices[a][axis] == value && self.vertices[b][axis] == value
+            })
+            .count()
+    }
     /// Bounding box `[xmin, ymin, xmax, ymax]`.
     pub fn bounding_box(&self) -> [f64; 4] {
         let mut b = [

@@ -99,14 +99,6 @@ pub fn test2_polygonal(cfg: &Config) -> crate::Result<Vec<(String, NamedMesh)>> 
     Ok(v)
 }
 
-/// Boundary edges whose midpoint has coordinate `axis` equal to `value`.
-pub fn edges_on(mesh: &PolyMesh, axis: usize, value: f64) -> usize {
-    mesh.boundary_edges()
-        .iter()
-        .filter(|&&e| (mesh.edge_midpoint(e)[axis] - value).abs() < 1e-12)
-        .count()
-}
-
 /// Statistics of a mesh, as a CSV row.
 pub fn mesh_row(m: &NamedMesh) -> MeshRow {
     MeshRow {
@@ -116,8 +108,8 @@ pub fn mesh_row(m: &NamedMesh) -> MeshRow {
         n_vertices: m.mesh.n_vertices(),
         n_edges: m.mesh.n_edges(),
         h: m.mesh.h(),
-        edges_x0: edges_on(&m.mesh, 0, 0.0),
-        edges_y0: edges_on(&m.mesh, 1, 0.0),
+        edges_x0: m.mesh.boundary_edges_on(0, 0.0),
+        edges_y0: m.mesh.boundary_edges_on(1, 0.0),
     }
 }
 
@@ -184,7 +176,7 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> crate::Result<Vec<Ti
                     mesh: m.name.clone(),
                     h: m.mesh.h(),
                     n_cells: m.mesh.n_cells(),
-                    n_gamma3: edges_on(&m.mesh, 1, 0.0),
+                    n_gamma3: m.mesh.boundary_edges_on(1, 0.0),
                     niter: sol.niter(),
                     switch_x: sw.map_or(f64::NAN, |s| s.at),
                     switch_half_gap: sw.map_or(f64::NAN, |s| s.half_gap),
@@ -248,7 +240,7 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> crate::Result<Vec<Ti
                         mesh: m.name.clone(),
                         h: m.mesh.h(),
                         n_cells: m.mesh.n_cells(),
-                        n_gamma3: edges_on(&m.mesh, 0, 0.0),
+                        n_gamma3: m.mesh.boundary_edges_on(0, 0.0),
                         err_u: e.l2_u,
                         err_grad: e.l2_grad,
                         niter: sol.niter(),

@@ -50,16 +50,6 @@ fn read_typ2(path: &Path) -> (Vec<[f64; 2]>, Vec<Vec<usize>>) {
     (vertices, cells)
 }
 
-fn edges_on_x0(m: &PolyMesh) -> usize {
-    m.boundary_edges()
-        .iter()
-        .filter(|&&e| {
-            let [a, b] = m.edge_vertices(e);
-            m.vertex(a)[0] == 0.0 && m.vertex(b)[0] == 0.0
-        })
-        .count()
-}
-
 /// For every vertex of `a`, the vertex of `b` within `tol` (max norm); panics unless this is a
 /// bijection. Spatial hashing on a 1e-6 grid: O(n).
 fn match_vertices(a: &[[f64; 2]], b: &[[f64; 2]], tol: f64) -> Vec<usize> {
@@ -140,7 +130,11 @@ fn compare(mesh: &PolyMesh, file: &Path, tol: f64, order: Order) {
         mesh.h(),
         fm.h()
     );
-    assert_eq!(edges_on_x0(mesh), edges_on_x0(&fm), "{name}: edges on x=0");
+    assert_eq!(
+        mesh.boundary_edges_on(0, 0.0),
+        fm.boundary_edges_on(0, 0.0),
+        "{name}: edges on x=0"
+    );
 
     // vertices as sets
     let to_file = match_vertices(mesh.vertices(), &fv, tol);
@@ -237,7 +231,7 @@ fn counts_and_h_without_the_files() {
             "{what}"
         );
         assert!((m.h() - h).abs() < 1e-4, "{what}: h = {}", m.h());
-        assert_eq!(edges_on_x0(&m), x0, "{what}");
+        assert_eq!(m.boundary_edges_on(0, 0.0), x0, "{what}");
         let area: f64 = (0..m.n_cells()).map(|k| m.measure(k)).sum();
         assert!((area - 1.0).abs() < 1e-12, "{what}: area {area}");
     }

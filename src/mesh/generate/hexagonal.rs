@@ -301,21 +301,11 @@ mod tests {
         (0..m.n_cells()).map(|k| m.measure(k)).sum()
     }
 
-    fn edges_on_x0(m: &PolyMesh) -> usize {
-        m.boundary_edges()
-            .iter()
-            .filter(|&&e| {
-                let [a, b] = m.edge_vertices(e);
-                m.vertex(a)[0] == 0.0 && m.vertex(b)[0] == 0.0
-            })
-            .count()
-    }
-
     #[test]
     fn level_1_is_hexa1_1() {
         let m = hexagonal(1).unwrap();
         assert_eq!((m.n_cells(), m.n_vertices(), m.n_edges()), (121, 280, 400));
-        assert_eq!(edges_on_x0(&m), 20);
+        assert_eq!(m.boundary_edges_on(0, 0.0), 20);
         assert!((total_area(&m) - 1.0).abs() < 1e-13);
         assert!((m.h() - 0.2414).abs() < 1e-4, "h = {}", m.h());
         let mut sides = [0usize; 7];
@@ -343,7 +333,7 @@ mod tests {
             assert_eq!(m.n_cells(), cells);
             assert_eq!(m.n_vertices(), 2 * n * n + 8 * n);
             assert_eq!(m.n_edges(), 3 * n * n + 10 * n);
-            assert_eq!(edges_on_x0(&m), 2 * n);
+            assert_eq!(m.boundary_edges_on(0, 0.0), 2 * n);
             assert!((total_area(&m) - 1.0).abs() < 1e-12);
             assert!((m.h() - h).abs() < 1e-4, "level {level}: h = {}", m.h());
         }

@@ -180,16 +180,6 @@ mod tests {
         (0..m.n_cells()).map(|k| m.measure(k)).sum()
     }
 
-    fn edges_on_x0(m: &PolyMesh) -> usize {
-        m.boundary_edges()
-            .iter()
-            .filter(|&&e| {
-                let [a, b] = m.edge_vertices(e);
-                m.vertex(a)[0] == 0.0 && m.vertex(b)[0] == 0.0
-            })
-            .count()
-    }
-
     #[test]
     fn counts_area_and_h() {
         let hs = [0.3288, 0.1666, 0.1116, 0.0839, 0.0672, 0.0560];
@@ -199,7 +189,7 @@ mod tests {
             assert_eq!(m.n_cells(), n * n);
             assert_eq!(m.n_vertices(), (n + 1) * (n + 1));
             assert_eq!(m.n_edges(), 2 * n * (n + 1));
-            assert_eq!(edges_on_x0(&m), n);
+            assert_eq!(m.boundary_edges_on(0, 0.0), n);
             assert!((total_area(&m) - 1.0).abs() < 1e-12);
             assert!((m.h() - h).abs() < 1e-4, "level {k}: h = {}", m.h());
             assert_eq!(m.bounding_box(), [0.0, 0.0, 1.0, 1.0]);
