@@ -72,6 +72,7 @@
 // validation rejects NaN data.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 pub mod assembly;
+pub mod bench;
 pub mod crosscheck;
 pub mod error;
 pub mod mesh;
