@@ -316,7 +316,15 @@ pub fn solve(
                 s * (u[pd.dof] - cons.barrier[j])
             };
             let score = l / pd.measure + opts.c * gap;
-            let thr = 1e-13 * (scale_r / pd.measure + opts.c * scale_u);
+            // round-off thresholds, one per term: an active unknown stays if its multiplier
+            // exceeds round-off of the residual, an inactive one enters if its violation exceeds
+            // round-off of u (a single threshold mixing both would grow like 1/m_j on fine
+            // meshes and let violations through)
+            let thr = if active[j] {
+                1e-13 * scale_r / pd.measure
+            } else {
+                opts.c * 1e-13 * scale_u
+            };
             next[j] = score > thr;
         }
         if next == active {
