@@ -1103,8 +1103,9 @@ pub fn write_report(cfg: &Config) -> crate::Result<()> {
     let _ = writeln!(md, "## Growth exponents\n");
     let _ = writeln!(
         md,
-        "Least-squares slopes of ln(total time) and ln(NITER) against ln(cells) \
-         (`post::fitted_slope`), over the cases with {} to {} cells.\n",
+        "Least-squares slopes against ln(cells) (`post::fitted_slope`) of ln(total time), \
+         ln(NITER), ln(numeric factorisation time per iteration) and ln(peak memory), over the \
+         cases with {} to {} cells.\n",
         FIT_RANGE.0, FIT_RANGE.1
     );
     let _ = writeln!(
