@@ -613,8 +613,6 @@ impl<'a> DiscreteSystem<'a> {
                 tasks.push((c0, c1, s_here, g_here));
             }
             tasks.into_par_iter().for_each(|(c0, c1, s_out, g_out)| {
-                let mut s = Vec::new();
-                let mut gvec = Vec::new();
                 for k in c0..c1 {
                     let (d, ni, m, b) = self.local(k);
                     let nl = d.len();
@@ -623,41 +621,7 @@ impl<'a> DiscreteSystem<'a> {
                     let go = self.dof_ptr[k] - self.dof_ptr[c0] + ni;
                     let sk = &mut s_out[so..so + p * p];
                     let gk = &mut g_out[go..go + p];
-                    if ni <= 1 {
-                        // no or one interior unknown (P1, HMM): condensed in place, with the
-                        // operations of `condense`
-                        for bcol in 0..p {
-                            for arow in 0..p {
-                                sk[arow + bcol * p] = m[(ni + arow) + (ni + bcol) * nl];
-                            }
-                        }
-                        gk.copy_from_slice(&b[ni..]);
-                        if ni == 1 {
-                            match fx(d[0]) {
-                                Some(v) => {
-                                    for arow in 0..p {
-                                        gk[arow] -= m[ni + arow] * v;
-                                    }
-                                }
-                                None => {
-                                    let mkk = m[0];
-                                    for bcol in 0..p {
-                                        let mkb = m[(ni + bcol) * nl];
-                                        for arow in 0..p {
-                                            sk[arow + bcol * p] -= m[ni + arow] * mkb / mkk;
-                                        }
-                                    }
-                                    for arow in 0..p {
-                                        gk[arow] -= m[ni + arow] * b[0] / mkk;
-                                    }
-                                }
-                            }
-                        }
-                    } else {
-                        condense(d, ni, m, b, &fx, &mut s, &mut gvec);
-                        sk.copy_from_slice(&s);
-                        gk.copy_from_slice(&gvec);
-                    }
+                    condense(d, ni, m, b, &fx, sk, gk);
                     // the cell's right-hand side: its condensed load minus the columns of the
                     // fixed skeleton unknowns
                     for bcol in 0..p {
@@ -853,27 +817,25 @@ impl crate::solver::active_set::LinearSystem for DiscreteSystem<'_> {
     }
 }
 
-/// Condensation of one cell (see the module docs). `s` receives the p×p skeleton matrix
-/// (column-major) and `g` the p skeleton loads.
+/// Condensation of one cell (see the module docs). `s` (length p²) receives the p×p skeleton
+/// matrix (column-major) and `g` (length p) the p skeleton loads.
 fn condense(
     d: &[usize],
     ni: usize,
     m: &[f64],
     b: &[f64],
     fx: &dyn Fn(usize) -> Option<f64>,
-    s: &mut Vec<f64>,
-    g: &mut Vec<f64>,
+    s: &mut [f64],
+    g: &mut [f64],
 ) {
     let nl = d.len();
     let p = nl - ni;
-    s.clear();
-    g.clear();
     for bcol in 0..p {
         for arow in 0..p {
-            s.push(m[(ni + arow) + (ni + bcol) * nl]);
+            s[arow + bcol * p] = m[(ni + arow) + (ni + bcol) * nl];
         }
     }
-    g.extend_from_slice(&b[ni..]);
+    g.copy_from_slice(&b[ni..]);
     if ni == 0 {
         return;
     }
