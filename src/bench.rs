@@ -20,31 +20,28 @@
 //! - `cold`: the default options (the paper's monotony algorithm from A₀ = ∅, as in
 //!   [`crate::solver::solve_problem`]);
 //! - `nested`: the same algorithm with an initial active set predicted by a chain of coarse
-//!   Cartesian HMM solves ([`CoarsePredictor`]): the coarse solves cost a fraction of the fine
-//!   one, and the fine iteration starts next to its solution. The certificate is the same.
-//!
-//! Both use the active-set parameter c = 1/mean(m_j) ([`pdas_c`]) instead of the default 1,
-//! which changes only round-off thresholds (same NITER) but keeps the iteration from stopping
-//! on an iterate that fails the certificate on 10⁶-cell meshes.
+//!   Cartesian HMM solves ([`crate::solver::warm_start`], `--warm-start nested` of
+//!   `gradvi solve`): the coarse solves cost a fraction of the fine one, and the fine
+//!   iteration starts next to its solution. The certificate is the same.
 //!
 //! Environment: `GRADVI_BENCH_MAX_CELLS` caps the mesh sizes (default [`DEFAULT_MAX_CELLS`]),
 //! `GRADVI_BENCH_DOLFINX_MAX_CELLS` those of the dolfinx runs, `GRADVI_BENCH_VARIANTS`
 //! (comma-separated, default `cold,nested`) the gradvi variants. Progress goes to stderr;
 //! `GRADVI_BENCH_LOG=1` adds each case's active-set log and factor size. Levers measured by
 //! hand: `GRADVI_BENCH_ORDERING=nd` (nested dissection instead of AMD), `GRADVI_BENCH_SEQ=1`
-//! (sequential faer), `GRADVI_BENCH_C1=1` (c = 1).
+//! (sequential faer).
 //! Arguments: `--report-only` rewrites the report from the existing CSV; `--child FAMILY
 //! SCHEME VARIANT SIZE [FILE]` runs one case and prints its row as JSON.
 
 use crate::assembly::DiscreteSystem;
-use crate::mesh::generate::{cartesian, cartesian_rect, hexagonal};
+use crate::mesh::generate::{cartesian, hexagonal};
 use crate::mesh::io::read_mesh;
 use crate::mesh::{Point, PolyMesh};
 use crate::output::plot::{LegendPosition, LineOptions, LineSeries, plot_lines};
 use crate::problem::paper_test3;
 use crate::replication::records::{read_csv, write_csv};
-use crate::scheme::{Hmm, SchemeKind};
-use crate::solver::{ActiveSetOptions, active_set, build_constraints};
+use crate::scheme::SchemeKind;
+use crate::solver::{ActiveSetOptions, active_set, build_constraints, warm_start};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -272,101 +269,6 @@ pub fn peak_memory_mib() -> f64 {
         .map_or(f64::NAN, |kb| kb / 1024.0)
 }
 
-/// An active-set prediction on a rectangle from a coarse n × n Cartesian HMM solve of Test 3:
-/// a point is predicted active when its coarse cell and the three cells next to the quarter
-/// of the cell that holds it are active (half a coarse cell of erosion, so that the fine
-/// iteration mostly *adds* unknowns, which it does in one step, rather than removing them,
-/// which it does one layer per step; a full cell of erosion costs more steps).
-pub struct CoarsePredictor {
-    n: usize,
-    bbox: [f64; 4],
-    active: Vec<bool>,
-    /// Linear solves of all coarse levels.
-    pub niter: usize,
-}
-
-impl CoarsePredictor {
-    /// Solves Test 3 (constant `c`) with HMM on the n × n Cartesian mesh of `bbox`
-    /// (`[xmin, ymin, xmax, ymax]`), itself warm-started from the (n/4) × (n/4) mesh when
-    /// n/4 ≥ 16.
-    pub fn new(n: usize, bbox: [f64; 4], c: f64) -> crate::Result<Self> {
-        let coarser = if n / 4 >= 16 {
-            Some(CoarsePredictor::new(n / 4, bbox, c)?)
-        } else {
-            None
-        };
-        let mesh = cartesian_rect(n, n, [bbox[0], bbox[2]], [bbox[1], bbox[3]])?;
-        let scheme = Hmm::new(&mesh);
-        let problem = paper_test3(c);
-        let system = DiscreteSystem::new(&scheme, &problem)?;
-        let cons = build_constraints(&system, &problem)?
-            .ok_or_else(|| bad("Test 3 has a barrier".into()))?;
-        let initial_active = coarser
-            .as_ref()
-            .map(|p| cons.dofs.iter().map(|d| p.predict(d.point)).collect());
-        let opts = ActiveSetOptions {
-            c: pdas_c(&cons),
-            initial_active,
-            ..Default::default()
-        };
-        let sol = active_set::solve(&system, &cons, &opts)?;
-        // HMM obstacle unknowns are the cells, in order
-        let mut active = vec![false; n * n];
-        for (j, d) in cons.dofs.iter().enumerate() {
-            active[d.dof - mesh.n_edges()] = sol.active[j];
-        }
-        Ok(CoarsePredictor {
-            n,
-            bbox,
-            active,
-            niter: sol.niter + coarser.map_or(0, |p| p.niter),
-        })
-    }
-    /// The predicted state of the unknown at `p`.
-    pub fn predict(&self, p: Point) -> bool {
-        let n = self.n as isize;
-        let fx = (p[0] - self.bbox[0]) / (self.bbox[2] - self.bbox[0]);
-        let fy = (p[1] - self.bbox[1]) / (self.bbox[3] - self.bbox[1]);
-        let (gx, gy) = (fx * n as f64, fy * n as f64);
-        let i = (gx.floor() as isize).clamp(0, n - 1);
-        let j = (gy.floor() as isize).clamp(0, n - 1);
-        // the neighbours on the side of the cell's half that holds p
-        let si = if gx - (i as f64) < 0.5 { -1 } else { 1 };
-        let sj = if gy - (j as f64) < 0.5 { -1 } else { 1 };
-        for dj in [0, sj] {
-            for di in [0, si] {
-                let (a, b) = (i + di, j + dj);
-                if a < 0 || b < 0 || a >= n || b >= n {
-                    return false;
-                }
-                if !self.active[(b * n + a) as usize] {
-                    return false;
-                }
-            }
-        }
-        true
-    }
-}
-
-/// The active-set parameter c used by the benchmark: 1 / (mean measure of the constrained
-/// unknowns), or 1 with `GRADVI_BENCH_C1` set. The iteration does not depend on c (see
-/// [`crate::solver::active_set`]) except through its round-off thresholds
-/// 10⁻¹³·(scale_r/m_j + c·scale_u): with c = 1 the violation threshold grows like 1/|K| and
-/// exceeds the certificate's tolerance on meshes of about 10⁶ cells, so that the iteration can
-/// stop on an iterate whose certificate then fails; with c = 1/mean(m_j) both terms are of the
-/// same size.
-pub fn pdas_c(cons: &crate::solver::Constraints) -> f64 {
-    if std::env::var_os("GRADVI_BENCH_C1").is_some() || cons.dofs.is_empty() {
-        return 1.0;
-    }
-    let mean = cons.dofs.iter().map(|d| d.measure).sum::<f64>() / cons.dofs.len() as f64;
-    if mean > 0.0 && mean.is_finite() {
-        1.0 / mean
-    } else {
-        1.0
-    }
-}
-
 /// Runs one case in this process and returns its row (the body of a `--child` process).
 pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
     if std::env::var_os("GRADVI_BENCH_SEQ").is_some() {
@@ -393,15 +295,6 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
     let mesh_s = t0.elapsed().as_secs_f64();
     let scheme = crate::scheme::build(case.scheme, &mesh)?;
     let problem = paper_test3(C);
-    let t1 = Instant::now();
-    let predictor = match case.variant {
-        Variant::Cold => None,
-        Variant::Nested => {
-            let n = ((mesh.n_cells() as f64).sqrt() / 4.0).round().max(8.0) as usize;
-            Some(CoarsePredictor::new(n, mesh.bounding_box(), C)?)
-        }
-    };
-    let coarse_s = t1.elapsed().as_secs_f64();
     let ordering = match std::env::var("GRADVI_BENCH_ORDERING").as_deref() {
         Ok("nd") => crate::solver::linear::Ordering::NestedDissection,
         _ => crate::solver::linear::Ordering::Amd,
@@ -421,11 +314,18 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
     }
     let cons =
         build_constraints(&system, &problem)?.ok_or_else(|| bad("Test 3 has a barrier".into()))?;
+    // the nested prediction, as `solve_problem` makes it with `WarmStart::Nested`, timed apart
+    let t1 = Instant::now();
+    let predicted = match case.variant {
+        Variant::Cold => None,
+        Variant::Nested => {
+            let points: Vec<Point> = cons.dofs.iter().map(|d| d.point).collect();
+            Some(warm_start::predict(&mesh, &problem, &points).map_err(bad)?)
+        }
+    };
+    let coarse_s = t1.elapsed().as_secs_f64();
     let opts = ActiveSetOptions {
-        c: pdas_c(&cons),
-        initial_active: predictor
-            .as_ref()
-            .map(|p| cons.dofs.iter().map(|d| p.predict(d.point)).collect()),
+        initial_active: predicted.as_ref().map(|(a, _)| a.clone()),
         ..Default::default()
     };
     let sol = active_set::solve(&system, &cons, &opts)?;
@@ -458,7 +358,7 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
         condensed: system.n_condensed(),
         nnz: system.nnz(),
         niter: sol.niter,
-        coarse_niter: predictor.map_or(0, |p| p.niter),
+        coarse_niter: predicted.map_or(0, |(_, r)| r.coarse_solves),
         mesh_s,
         coarse_s,
         setup_s,
@@ -1004,13 +904,11 @@ pub fn write_report(cfg: &Config) -> crate::Result<()> {
     let _ = writeln!(
         md,
         "Variants: **cold** is the monotony algorithm of `gradvi solve` and `solve_problem` \
-         from A₀ = ∅ (sparse Cholesky, AMD ordering, the symbolic factorisation built once), \
-         with the active-set parameter c = 1/mean(m_j) instead of 1 (`bench::pdas_c`: the \
-         iterates are the same, but with c = 1 the round-off threshold on violations exceeds \
-         the certificate's tolerance on 10⁶-cell meshes and a solve can stop on an iterate \
-         whose certificate fails); **nested** starts the same algorithm from an \
-         active set predicted by coarse Cartesian HMM solves (`bench::CoarsePredictor`: n×n with \
-         n ≈ √cells/4, itself warm-started from n/4, …), whose cost is included in the total. \
+         from A₀ = ∅ (sparse Cholesky, AMD ordering, the symbolic factorisation built once); \
+         **nested** (`gradvi solve --warm-start nested`, `solver::warm_start`) starts the same \
+         algorithm from an active set predicted by coarse Cartesian HMM solves of the same \
+         problem (about cells/16 coarse cells, themselves warm-started from a mesh 4 times \
+         coarser per direction, …), whose cost is included in the total. \
          dolfinx is P1 with PETSc SNES `vinewtonrsls` and LU (`reference/solve.py`); its time is \
          its own `setup + solve` (mesh reading, assembly and the SNES loop; the Python start-up \
          and JIT are excluded). gradvi's total includes mesh reading or generation.\n"
@@ -1375,18 +1273,5 @@ mod tests {
         assert!(md.contains("## Targets") && md.contains("## All cases"));
         assert!(std::fs::read(cfg.figure()).unwrap().starts_with(b"\x89PNG"));
         std::fs::remove_dir_all(&dir).ok();
-    }
-
-    #[test]
-    fn the_coarse_prediction_is_inside_the_coarse_contact_zone() {
-        let p = CoarsePredictor::new(16, [0.0, 0.0, 1.0, 1.0], -5.0).unwrap();
-        assert!(p.niter >= 1);
-        // for C = −5 the contact zone is a band along ∂Ω and the centre is free
-        let inside = (1..20)
-            .flat_map(|i| (1..20).map(move |j| [i as f64 / 20.0, j as f64 / 20.0]))
-            .filter(|&x| p.predict(x))
-            .count();
-        assert!(inside > 0);
-        assert!(!p.predict([0.5, 0.5]));
     }
 }

@@ -89,6 +89,11 @@ struct SolveArgs {
     /// On cycling or non-convergence, fall back to projected Gauss–Seidel.
     #[arg(long)]
     fallback: bool,
+    /// Start of the active-set iteration: cold (A₀ = ∅, the paper's algorithm and NITER) or
+    /// nested (an active set predicted by coarse Cartesian HMM solves of the same problem;
+    /// same solution, far fewer solves on fine meshes; rectangular domains).
+    #[arg(long, default_value = "cold")]
+    warm_start: String,
     /// Write the solution (u, active set, multiplier) to this VTU file.
     #[arg(long)]
     vtu: Option<PathBuf>,
@@ -186,6 +191,7 @@ fn solve(a: &SolveArgs) -> Result<()> {
         max_solves: a.max_solves,
         tol: a.tol,
         fallback: a.fallback,
+        warm_start: a.warm_start.parse()?,
         ..Default::default()
     };
     eprintln!(
@@ -209,6 +215,21 @@ fn solve(a: &SolveArgs) -> Result<()> {
         sol.system.n_condensed()
     );
     println!("method          {:?}", sol.result.method);
+    if let Some(w) = &sol.warm_start {
+        match &w.skipped {
+            Some(why) => println!("warm start      skipped, cold start: {why}"),
+            None => {
+                let lv: Vec<String> = w.levels.iter().map(|(x, y)| format!("{x}x{y}")).collect();
+                println!(
+                    "warm start      nested: {} coarse solves on {}, {} unknowns predicted active, {:.3} s",
+                    w.coarse_solves,
+                    lv.join(", "),
+                    w.predicted_active,
+                    w.seconds
+                );
+            }
+        }
+    }
     println!("NITER           {} (linear solves)", sol.niter());
     println!("  solve  active  entered  left  violation  residual");
     for l in &sol.result.log {
@@ -234,8 +255,8 @@ fn solve(a: &SolveArgs) -> Result<()> {
     }
     let t = sol.timings;
     println!(
-        "timings [s]     setup {:.3} (symbolic {:.3}), assembly {:.3}, factorisation {:.3}, solves {:.3}, total {:.3}",
-        t.setup, t.symbolic, t.assemble, t.factor, t.solve, t.total
+        "timings [s]     setup {:.3} (symbolic {:.3}), warm start {:.3}, assembly {:.3}, factorisation {:.3}, solves {:.3}, total {:.3}",
+        t.setup, t.symbolic, t.warm_start, t.assemble, t.factor, t.solve, t.total
     );
     if let Some(path) = &a.vtu {
         let u = sol.u();
@@ -275,6 +296,7 @@ fn solve(a: &SolveArgs) -> Result<()> {
             "n_constrained": sol.constraints.as_ref().map_or(0, |c| c.dofs.len()),
             "n_active": sol.result.active.iter().filter(|&&x| x).count(),
             "niter": sol.niter(),
+            "warm_start": sol.warm_start,
             "method": format!("{:?}", sol.result.method),
             "certificate": c,
             "errors": errors,

@@ -71,6 +71,17 @@ fn bad_arguments_give_a_nonzero_exit() {
             "solve",
             "--problem",
             "test3",
+            "--generate",
+            "cartesian",
+            "--level",
+            "1",
+            "--warm-start",
+            "lukewarm",
+        ],
+        vec![
+            "solve",
+            "--problem",
+            "test3",
             "--param",
             "D=1",
             "--generate",
@@ -163,6 +174,32 @@ fn solve_prints_niter_and_writes_vtu_and_json() {
     ]);
     assert!(ok && out.contains("errors"), "{out}");
     std::fs::remove_file(vtu).ok();
+    std::fs::remove_file(json).ok();
+}
+
+#[test]
+fn solve_with_a_nested_warm_start_reports_it() {
+    let json = tmp("nested.json");
+    let (ok, out, err) = gradvi(&[
+        "solve",
+        "--problem",
+        "test3",
+        "--param",
+        "C=-20",
+        "--mesh",
+        "meshes/test3_4.msh",
+        "--warm-start",
+        "nested",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("warm start      nested"), "{out}");
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(j["warm_start"]["coarse_solves"].as_u64().unwrap() >= 1);
+    assert!(j["warm_start"]["skipped"].is_null());
+    assert!(j["certificate"]["max_violation"].as_f64().unwrap() <= 1e-10);
     std::fs::remove_file(json).ok();
 }
 

@@ -7,3 +7,5 @@ mod generators;
 mod mesh_io;
 #[path = "unit/solver.rs"]
 mod solver;
+#[path = "unit/warm_start.rs"]
+mod warm_start;

@@ -73,8 +73,14 @@ pub struct ActiveSetOptions {
     pub tol: f64,
     /// On cycling or the iteration cap, fall back to projected Gauss–Seidel instead of failing.
     pub fallback: bool,
-    /// Initial active set (warm start), indexed like [`Constraints::dofs`].
+    /// Initial active set (warm start), indexed like [`Constraints::dofs`]. Takes precedence
+    /// over [`ActiveSetOptions::warm_start`].
     pub initial_active: Option<Vec<bool>>,
+    /// How [`crate::solver::solve_problem`] starts the iteration when no `initial_active` is
+    /// given: cold (A₀ = ∅, the default) or from a nested coarse prediction (see
+    /// [`crate::solver::warm_start`]). The algebraic [`solve`] has no mesh to predict on and
+    /// rejects `Nested` without an `initial_active`.
+    pub warm_start: super::warm_start::WarmStart,
     /// Keep every iterate u^k in [`VariationalSolution::iterates`] (for studies of the
     /// iteration; costs one vector per solve).
     pub keep_iterates: bool,
@@ -88,6 +94,7 @@ impl Default for ActiveSetOptions {
             tol: 1e-10,
             fallback: false,
             initial_active: None,
+            warm_start: super::warm_start::WarmStart::Cold,
             keep_iterates: false,
         }
     }
@@ -255,6 +262,11 @@ pub fn solve(
                 "initial active set has {} entries for {m} constrained unknowns",
                 a.len()
             )));
+        }
+        None if opts.warm_start == super::warm_start::WarmStart::Nested => {
+            return Err(crate::Error::InvalidData(
+                "the nested warm start needs the mesh: use solver::solve_problem, or give initial_active".into(),
+            ));
         }
         None => vec![false; m],
     };

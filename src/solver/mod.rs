@@ -6,6 +6,7 @@
 pub mod active_set;
 pub mod linear;
 pub mod pgs;
+pub mod warm_start;
 
 use crate::assembly::DiscreteSystem;
 use crate::problem::{ConstraintKind, Problem, check_finite};
@@ -14,6 +15,7 @@ pub use active_set::{
     ActiveSetOptions, Certificate, Constraints, IterationLog, Method, VariationalSolution,
 };
 use std::time::Instant;
+pub use warm_start::{WarmStart, WarmStartReport};
 
 /// Wall-clock timings of a solve, in seconds.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
@@ -22,6 +24,8 @@ pub struct Timings {
     pub setup: f64,
     /// Of which the symbolic factorisation.
     pub symbolic: f64,
+    /// The coarse solves of a warm start (0 for a cold start).
+    pub warm_start: f64,
     /// Condensation and scatter, all iterations.
     pub assemble: f64,
     /// Numeric factorisations, all iterations.
@@ -42,6 +46,8 @@ pub struct Solution<'a> {
     pub result: VariationalSolution,
     /// Timings.
     pub timings: Timings,
+    /// What the warm start did (`None`: cold start, or no barrier).
+    pub warm_start: Option<WarmStartReport>,
 }
 
 impl Solution<'_> {
@@ -152,7 +158,8 @@ pub fn build_constraints(
 }
 
 /// Assembles and solves `problem` with `scheme`: a linear solve if there is no barrier, the
-/// active-set method otherwise. The result is certified (see [`Certificate`]).
+/// active-set method otherwise, started as `opts.warm_start` says. The result is certified
+/// (see [`Certificate`]).
 pub fn solve_problem<'a>(
     scheme: &'a dyn GradientDiscretisation,
     problem: &Problem,
@@ -161,7 +168,29 @@ pub fn solve_problem<'a>(
     let t0 = Instant::now();
     let system = DiscreteSystem::new(scheme, problem)?;
     let constraints = build_constraints(&system, problem)?;
+    let mut warm = None;
     let result = match &constraints {
+        Some(c) if opts.warm_start == WarmStart::Nested && opts.initial_active.is_none() => {
+            let points: Vec<_> = c.dofs.iter().map(|d| d.point).collect();
+            let t = Instant::now();
+            let (initial, report) = match warm_start::predict(scheme.mesh(), problem, &points) {
+                Ok((a, r)) => (Some(a), r),
+                Err(reason) => (
+                    None,
+                    WarmStartReport {
+                        seconds: t.elapsed().as_secs_f64(),
+                        skipped: Some(reason),
+                        ..Default::default()
+                    },
+                ),
+            };
+            warm = Some(report);
+            let o = ActiveSetOptions {
+                initial_active: Some(initial.unwrap_or_else(|| vec![false; points.len()])),
+                ..opts.clone()
+            };
+            active_set::solve(&system, c, &o)?
+        }
         Some(c) => active_set::solve(&system, c, opts)?,
         None => {
             let fixed = vec![None; system.n_unknowns()];
@@ -191,6 +220,7 @@ pub fn solve_problem<'a>(
     let mut timings = Timings {
         setup: system.setup_seconds,
         symbolic: system.symbolic_seconds,
+        warm_start: warm.as_ref().map_or(0.0, |w| w.seconds),
         ..Default::default()
     };
     for l in &result.log {
@@ -204,5 +234,6 @@ pub fn solve_problem<'a>(
         constraints,
         result,
         timings,
+        warm_start: warm,
     })
 }
