@@ -53,7 +53,7 @@ pub const C: f64 = -5.0;
 /// Default cap on the number of cells of a case.
 pub const DEFAULT_MAX_CELLS: usize = 1_100_000;
 /// Default cap on the number of cells of a dolfinx run.
-pub const DOLFINX_MAX_CELLS: usize = 160_000;
+pub const DOLFINX_MAX_CELLS: usize = 310_000;
 /// Target cell counts of the gmsh triangle meshes.
 pub const GMSH_TARGETS: [usize; 8] = [
     1_000, 3_000, 10_000, 30_000, 100_000, 150_000, 300_000, 1_000_000,
