@@ -28,7 +28,7 @@
 use crate::mesh::Point;
 use crate::problem::{BoundaryKind, Problem, check_finite, check_tensor};
 use crate::scheme::{GradientDiscretisation, PointDof};
-use crate::solver::linear::{Ordering, SpdPattern};
+use crate::solver::linear::{FactorThreads, Ordering, SpdPattern};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use std::sync::Mutex;
@@ -88,6 +88,8 @@ struct Rest {
 pub struct SystemOptions {
     /// Fill-reducing ordering of the symbolic factorisation (default: AMD).
     pub ordering: Ordering,
+    /// Threads of the numeric factorisations (default: one; see [`FactorThreads`]).
+    pub factor_threads: FactorThreads,
 }
 
 /// u, r = b − Mu and the scale of [`DiscreteSystem::residual`].
@@ -231,7 +233,12 @@ impl<'a> DiscreteSystem<'a> {
                     row_idx.clone(),
                     options.ordering,
                 )
-                .map(|p| (p, t_sym.elapsed().as_secs_f64()))
+                .map(|p| {
+                    (
+                        p.with_threads(options.factor_threads),
+                        t_sym.elapsed().as_secs_f64(),
+                    )
+                })
             },
             || -> crate::Result<Rest> {
                 // --- local matrices and loads, in parallel over chunks of cells, concatenated in order

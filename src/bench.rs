@@ -16,20 +16,21 @@
 //! `replication/BENCHMARKS.md` and `replication/figures/bench.png` from that CSV only
 //! ([`write_report`]).
 //!
-//! Two variants of gradvi's solver are timed:
+//! Three variants of gradvi's solver are timed:
 //! - `cold`: the default options (the paper's monotony algorithm from A₀ = ∅, as in
 //!   [`crate::solver::solve_problem`]);
 //! - `nested`: the same algorithm with an initial active set predicted by a chain of coarse
 //!   Cartesian HMM solves ([`crate::solver::warm_start`], `--warm-start nested` of
 //!   `gradvi solve`): the coarse solves cost a fraction of the fine one, and the fine
-//!   iteration starts next to its solution. The certificate is the same.
+//!   iteration starts next to its solution. The certificate is the same;
+//! - `nested-par`: `nested` with faer's parallel numeric factorisation instead of the
+//!   sequential default ([`crate::solver::linear::FactorThreads`]), to measure that lever.
 //!
 //! Environment: `GRADVI_BENCH_MAX_CELLS` caps the mesh sizes (default [`DEFAULT_MAX_CELLS`]),
 //! `GRADVI_BENCH_DOLFINX_MAX_CELLS` those of the dolfinx runs, `GRADVI_BENCH_VARIANTS`
-//! (comma-separated, default `cold,nested`) the gradvi variants. Progress goes to stderr;
-//! `GRADVI_BENCH_LOG=1` adds each case's active-set log and factor size. Levers measured by
-//! hand: `GRADVI_BENCH_ORDERING=nd` (nested dissection instead of AMD), `GRADVI_BENCH_SEQ=1`
-//! (sequential faer).
+//! (comma-separated, default `cold,nested,nested-par`) the gradvi variants. Progress goes to stderr;
+//! `GRADVI_BENCH_LOG=1` adds each case's active-set log and factor size. Lever measured by
+//! hand: `GRADVI_BENCH_ORDERING=nd` (nested dissection instead of AMD).
 //! Arguments: `--report-only` rewrites the report from the existing CSV; `--child FAMILY
 //! SCHEME VARIANT SIZE [FILE]` runs one case and prints its row as JSON.
 
@@ -110,6 +111,9 @@ pub enum Variant {
     Cold,
     /// Initial active set from coarse Cartesian HMM solves.
     Nested,
+    /// As `Nested`, with faer's parallel numeric factorisation
+    /// ([`crate::solver::linear::FactorThreads::Global`]) instead of the sequential default.
+    NestedParallel,
 }
 
 impl Variant {
@@ -118,13 +122,17 @@ impl Variant {
         match self {
             Variant::Cold => "cold",
             Variant::Nested => "nested",
+            Variant::NestedParallel => "nested-par",
         }
     }
     fn parse(s: &str) -> crate::Result<Self> {
         match s {
             "cold" => Ok(Variant::Cold),
             "nested" => Ok(Variant::Nested),
-            _ => Err(bad(format!("unknown variant '{s}' (cold, nested)"))),
+            "nested-par" => Ok(Variant::NestedParallel),
+            _ => Err(bad(format!(
+                "unknown variant '{s}' (cold, nested, nested-par)"
+            ))),
         }
     }
 }
@@ -271,9 +279,6 @@ pub fn peak_memory_mib() -> f64 {
 
 /// Runs one case in this process and returns its row (the body of a `--child` process).
 pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
-    if std::env::var_os("GRADVI_BENCH_SEQ").is_some() {
-        faer::set_global_parallelism(faer::Par::Seq);
-    }
     let t0 = Instant::now();
     let (mesh, name): (PolyMesh, String) = match case.family {
         BenchFamily::Gmsh => {
@@ -302,7 +307,13 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
     let system = DiscreteSystem::with_options(
         scheme.as_ref(),
         &problem,
-        crate::assembly::SystemOptions { ordering },
+        crate::assembly::SystemOptions {
+            ordering,
+            factor_threads: match case.variant {
+                Variant::NestedParallel => crate::solver::linear::FactorThreads::Global,
+                _ => crate::solver::linear::FactorThreads::Sequential,
+            },
+        },
     )?;
     if std::env::var_os("GRADVI_BENCH_LOG").is_some() {
         eprintln!(
@@ -318,7 +329,7 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
     let t1 = Instant::now();
     let predicted = match case.variant {
         Variant::Cold => None,
-        Variant::Nested => {
+        Variant::Nested | Variant::NestedParallel => {
             let points: Vec<Point> = cons.dofs.iter().map(|d| d.point).collect();
             Some(warm_start::predict(&mesh, &problem, &points).map_err(bad)?)
         }
@@ -418,7 +429,7 @@ impl Config {
                 .split(',')
                 .map(|s| Variant::parse(s.trim()))
                 .collect::<crate::Result<Vec<_>>>()?,
-            Err(_) => vec![Variant::Cold, Variant::Nested],
+            Err(_) => vec![Variant::Cold, Variant::Nested, Variant::NestedParallel],
         };
         Ok(Config {
             root: root.to_path_buf(),
@@ -1071,6 +1082,60 @@ pub fn write_report(cfg: &Config) -> crate::Result<()> {
         let _ = writeln!(md);
     }
 
+    // lever: threads of the factorisation
+    let pairs: Vec<(&BenchRow, &BenchRow)> = rows
+        .iter()
+        .filter(|r| r.code == "gradvi" && r.variant == "nested")
+        .filter_map(|s| {
+            rows.iter()
+                .find(|p| {
+                    p.variant == "nested-par"
+                        && p.family == s.family
+                        && p.scheme == s.scheme
+                        && p.cells == s.cells
+                })
+                .map(|p| (s, p))
+        })
+        .collect();
+    if !pairs.is_empty() {
+        let _ = writeln!(md, "## Lever: threads of the numeric factorisation\n");
+        let _ = writeln!(
+            md,
+            "The nested variant with the default sequential factorisation \
+             (`FactorThreads::Sequential`) against the same run with faer's parallel one \
+             (`nested-par`, `FactorThreads::Global`); the assembly is parallel (rayon) in both. \
+             Ratio > 1: the sequential factorisation is faster.\n"
+        );
+        let _ = writeln!(
+            md,
+            "| family | scheme | cells | factor/it sequential [s] | factor/it parallel [s] | ratio | total sequential [s] | total parallel [s] |\n|---|---|---|---|---|---|---|---|"
+        );
+        let per_it = |r: &BenchRow| r.factor_s / r.niter.max(1) as f64;
+        for (sq, par) in &pairs {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} | {:.2} | {} | {} |",
+                sq.family,
+                sq.scheme,
+                sq.cells,
+                fmt_s(per_it(sq)),
+                fmt_s(per_it(par)),
+                per_it(par) / per_it(sq),
+                fmt_s(sq.total_s),
+                fmt_s(par.total_s)
+            );
+        }
+        let faster = pairs
+            .iter()
+            .filter(|(sq, par)| per_it(sq) < per_it(par))
+            .count();
+        let _ = writeln!(
+            md,
+            "\nThe sequential factorisation is the faster one on {faster} of the {} cases.\n",
+            pairs.len()
+        );
+    }
+
     // profile of the largest cases
     let _ = writeln!(md, "## Where the time goes\n");
     let _ = writeln!(
@@ -1234,6 +1299,7 @@ mod tests {
             (SchemeKind::Hmm, Variant::Cold),
             (SchemeKind::Hmm, Variant::Nested),
             (SchemeKind::P1, Variant::Nested),
+            (SchemeKind::Hmm, Variant::NestedParallel),
         ] {
             let family = if scheme == SchemeKind::P1 {
                 BenchFamily::Hexagonal
@@ -1251,7 +1317,7 @@ mod tests {
                 Ok(r) => {
                     assert!(r.certificate <= 1e-10, "{r:?}");
                     assert!(r.niter >= 1);
-                    assert_eq!(r.coarse_niter > 0, variant == Variant::Nested);
+                    assert_eq!(r.coarse_niter > 0, variant != Variant::Cold);
                     rows.push(r);
                 }
                 // P1 needs triangles: the hexagonal mesh is an error, not a panic

@@ -28,12 +28,35 @@ pub enum Ordering {
     NestedDissection,
 }
 
+/// Threads of the numeric factorisation and the triangular solves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FactorThreads {
+    /// One thread (the default). On the 2-core machines of the benchmark the sequential
+    /// supernodal factorisation was faster than faer's parallel one at every size measured
+    /// (`replication/BENCHMARKS.md`, variant `nested-par`), while the assembly still runs on
+    /// every core (rayon).
+    #[default]
+    Sequential,
+    /// faer's global parallelism (`faer::get_global_parallelism()`, rayon by default).
+    Global,
+}
+
+impl FactorThreads {
+    fn par(self) -> faer::Par {
+        match self {
+            FactorThreads::Sequential => faer::Par::Seq,
+            FactorThreads::Global => faer::get_global_parallelism(),
+        }
+    }
+}
+
 /// A lower-triangular CSC sparsity pattern and its symbolic Cholesky factorisation.
 #[derive(Clone)]
 pub struct SpdPattern {
     pattern: SymbolicSparseColMat<usize>,
     symbolic: Arc<SymbolicCholesky<usize>>,
     pool: Pool,
+    threads: FactorThreads,
 }
 
 impl std::fmt::Debug for SpdPattern {
@@ -91,7 +114,13 @@ impl SpdPattern {
             pattern,
             symbolic: Arc::new(symbolic),
             pool: Pool::default(),
+            threads: FactorThreads::default(),
         })
+    }
+    /// Sets the threads of the numeric factorisations and solves.
+    pub fn with_threads(mut self, threads: FactorThreads) -> Self {
+        self.threads = threads;
+        self
     }
     /// Matrix dimension.
     pub fn n(&self) -> usize {
@@ -117,7 +146,7 @@ impl SpdPattern {
     /// reusing the symbolic analysis.
     pub fn factor(&self, values: &[f64]) -> crate::Result<SpdFactor> {
         let a = SparseColMatRef::new(self.pattern.as_ref(), values);
-        let par = faer::get_global_parallelism();
+        let par = self.threads.par();
         let len = self.symbolic.len_val();
         let (mut l_values, mem) = match self.pool.lock() {
             Ok(mut p) => (std::mem::take(&mut p.0), p.1.take()),
@@ -163,6 +192,7 @@ impl SpdPattern {
             symbolic: self.symbolic.clone(),
             values: l_values,
             pool: self.pool.clone(),
+            par,
         })
     }
 }
@@ -172,6 +202,7 @@ pub struct SpdFactor {
     symbolic: Arc<SymbolicCholesky<usize>>,
     values: Vec<f64>,
     pool: Pool,
+    par: faer::Par,
 }
 
 impl Drop for SpdFactor {
@@ -185,7 +216,7 @@ impl Drop for SpdFactor {
 impl SpdFactor {
     /// Solves A x = b in place.
     pub fn solve_in_place(&self, b: &mut [f64]) {
-        let par = faer::get_global_parallelism();
+        let par = self.par;
         let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(1, par));
         let col = faer::ColMut::from_slice_mut(b);
         LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
