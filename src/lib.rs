@@ -64,7 +64,8 @@
 //! - [`assembly`]: local matrices stored once, condensed-system pattern and symbolic Cholesky
 //!   built once, values refilled for each active set (static condensation of HMM cell unknowns).
 //! - [`solver`]: sparse Cholesky ([`solver::linear`]), the monotony algorithm with certificate
-//!   and cycle detection ([`solver::active_set`]), projected Gauss–Seidel ([`solver::pgs`]).
+//!   and cycle detection ([`solver::active_set`]), its nested warm start for fine meshes
+//!   ([`solver::warm_start`]), projected Gauss–Seidel ([`solver::pgs`]).
 //! - [`post`]: errors, orders, fitted slopes, contact-zone metrics.
 //! - [`output`]: PNG plots. [`replication`]: the paper's experiments, figures and report.
 #![warn(missing_docs)]

@@ -192,6 +192,17 @@ fn solve(a: &SolveArgs) -> Result<()> {
         tol: a.tol,
         fallback: a.fallback,
         warm_start: a.warm_start.parse()?,
+        progress: Some(|l| {
+            eprintln!(
+                "  solve {:>3}: active {} (+{}, -{}), violation {:.2e}, {:.2} s",
+                l.solve,
+                l.active,
+                l.entered,
+                l.left,
+                l.violation,
+                l.timings.assemble + l.timings.factor + l.timings.solve
+            )
+        }),
         ..Default::default()
     };
     eprintln!(

@@ -153,6 +153,8 @@ fn solve_prints_niter_and_writes_vtu_and_json() {
     ]);
     assert!(ok, "{err}");
     assert!(out.contains("NITER           5"), "{out}");
+    // progress: one stderr line per solve, as it happens
+    assert_eq!(err.matches("  solve ").count(), 5, "{err}");
     assert!(out.contains("certificate"));
     let j: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();

@@ -84,6 +84,9 @@ pub struct ActiveSetOptions {
     /// Keep every iterate u^k in [`VariationalSolution::iterates`] (for studies of the
     /// iteration; costs one vector per solve).
     pub keep_iterates: bool,
+    /// Called with each line of the iteration log as soon as it is known (progress of long
+    /// runs; `gradvi solve` prints it to stderr).
+    pub progress: Option<fn(&IterationLog)>,
 }
 
 impl Default for ActiveSetOptions {
@@ -96,6 +99,7 @@ impl Default for ActiveSetOptions {
             initial_active: None,
             warm_start: super::warm_start::WarmStart::Cold,
             keep_iterates: false,
+            progress: None,
         }
     }
 }
@@ -304,6 +308,9 @@ pub fn solve(
             residual: cert.balance_residual,
             timings,
         });
+        if let (Some(report), Some(line)) = (opts.progress, log.last()) {
+            report(line);
+        }
         // thresholds for round-off
         let (_, scale) = system.residual(&u);
         let scale_r = scale
