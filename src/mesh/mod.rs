@@ -118,6 +118,15 @@ pub fn drop_unused_vertices(
     (new_vertices, new_cells, new_id)
 }
 
+/// How [`PolyMesh::set_boundary_tags`] treats an entry that names no boundary edge of the mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum NonBoundaryTag {
+    /// Report it as [`MeshError::BadEdge`] (the contract of [`PolyMesh::from_cells_tagged`]).
+    Reject,
+    /// Skip it silently (gmsh line elements may be interior interfaces).
+    Ignore,
+}
+
 impl PolyMesh {
     /// Builds and validates a mesh from vertex coordinates and cell vertex lists (0-based ids,
     /// either orientation: clockwise cells are reversed). No boundary tags.
@@ -133,8 +142,38 @@ impl PolyMesh {
         cells: Vec<Vec<usize>>,
         tagged_edges: &[(usize, usize, i32)],
     ) -> Result<Self, MeshError> {
+        let mut cell_ptr = Vec::with_capacity(cells.len() + 1);
+        cell_ptr.push(0);
+        let mut cell_verts = Vec::with_capacity(cells.iter().map(Vec::len).sum());
+        for c in &cells {
+            cell_verts.extend_from_slice(c);
+            cell_ptr.push(cell_verts.len());
+        }
+        drop(cells);
+        let mut mesh = Self::from_flat_cells(vertices, cell_ptr, cell_verts)?;
+        mesh.set_boundary_tags(tagged_edges, NonBoundaryTag::Reject)?;
+        Ok(mesh)
+    }
+
+    /// As [`PolyMesh::from_cells`] (no tags), with the cells stored flat: cell `k` lists the
+    /// vertices `cell_verts[cell_ptr[k]..cell_ptr[k + 1]]`. `cell_ptr` must start at 0, be
+    /// non-decreasing and end at `cell_verts.len()` (the caller builds it; the cell contents are
+    /// validated exactly as by [`PolyMesh::from_cells`], in the same order, with the same errors).
+    /// `cell_verts` becomes the mesh's own storage (clockwise cells are reversed in place), so
+    /// readers avoid one small allocation per cell.
+    pub(crate) fn from_flat_cells(
+        vertices: Vec<Point>,
+        cell_ptr: Vec<usize>,
+        mut cell_verts: Vec<usize>,
+    ) -> Result<Self, MeshError> {
+        debug_assert!(
+            cell_ptr.first() == Some(&0)
+                && cell_ptr.last() == Some(&cell_verts.len())
+                && cell_ptr.windows(2).all(|w| w[0] <= w[1]),
+            "malformed cell_ptr"
+        );
         let nv = vertices.len();
-        let nc = cells.len();
+        let nc = cell_ptr.len().saturating_sub(1);
         if nc == 0 {
             return Err(MeshError::Empty);
         }
@@ -144,15 +183,17 @@ impl PolyMesh {
             }
         }
         // --- cells: range, size, repeated vertices, orientation, area, centroid, diameter
-        let mut cell_ptr = Vec::with_capacity(nc + 1);
-        cell_ptr.push(0);
-        let mut cell_verts = Vec::with_capacity(cells.iter().map(Vec::len).sum());
         let mut cell_area = Vec::with_capacity(nc);
         let mut cell_centroid = Vec::with_capacity(nc);
         let mut cell_diameter = Vec::with_capacity(nc);
+        let mut cell_normals = Vec::with_capacity(cell_verts.len());
+        let mut cell_dists = Vec::with_capacity(cell_verts.len());
+        let mut not_star_shaped = None;
         let mut used = vec![false; nv];
         let mut pts: Vec<Point> = Vec::new();
-        for (k, c) in cells.iter().enumerate() {
+        for k in 0..nc {
+            let (s, e) = (cell_ptr[k], cell_ptr[k + 1]);
+            let c = &cell_verts[s..e];
             if c.len() < 3 {
                 return Err(MeshError::BadCell {
                     cell: k,
@@ -189,12 +230,33 @@ impl PolyMesh {
             if !(area.abs() > 1e-14 * diam * diam) {
                 return Err(MeshError::DegenerateCell { cell: k, area });
             }
-            if area > 0.0 {
-                cell_verts.extend_from_slice(c);
-            } else {
-                cell_verts.extend(c.iter().rev());
+            // `area` is now non-zero and not NaN: negative means clockwise
+            if area < 0.0 {
+                cell_verts[s..e].reverse();
+                pts.reverse();
             }
-            cell_ptr.push(cell_verts.len());
+            // normals and d_{K,σ}, from the counter-clockwise corners at hand; a cell that is not
+            // star-shaped is reported only after the vertex and edge checks, as it always was
+            let n = pts.len();
+            for i in 0..n {
+                let (p, q) = (pts[i], pts[(i + 1) % n]);
+                let t = sub(q, p);
+                let len = (t[0] * t[0] + t[1] * t[1]).sqrt();
+                // counter-clockwise cell: outward normal is the tangent rotated by −90°
+                let nrm = [t[1] / len, -t[0] / len];
+                // x_σ, the same bits as edge_midpoint[e] (floating-point addition commutes)
+                let xs = [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
+                let d = (xs[0] - centroid[0]) * nrm[0] + (xs[1] - centroid[1]) * nrm[1];
+                if !(d > 1e-12 * diam) && not_star_shaped.is_none() {
+                    not_star_shaped = Some(MeshError::NotStarShaped {
+                        cell: k,
+                        local_edge: i,
+                        dist: d,
+                    });
+                }
+                cell_normals.push(nrm);
+                cell_dists.push(d);
+            }
             cell_area.push(area.abs());
             cell_centroid.push(centroid);
             cell_diameter.push(diam);
@@ -202,65 +264,15 @@ impl PolyMesh {
         if let Some(v) = used.iter().position(|u| !u) {
             return Err(MeshError::UnusedVertex { vertex: v });
         }
+        drop(used);
         check_duplicate_vertices(&vertices)?;
 
-        // --- edges: sort the (min, max, cell, local index, forward?) records
-        let n_half = cell_verts.len();
-        let mut half: Vec<(usize, usize, usize, usize)> = Vec::with_capacity(n_half); // (a, b, k, slot)
-        for k in 0..nc {
-            let (s, e) = (cell_ptr[k], cell_ptr[k + 1]);
-            let n = e - s;
-            for i in 0..n {
-                let a = cell_verts[s + i];
-                let b = cell_verts[s + (i + 1) % n];
-                half.push((a, b, k, s + i));
-            }
-        }
-        let mut order: Vec<usize> = (0..n_half).collect();
-        order.sort_unstable_by_key(|&i| {
-            let (a, b, _, _) = half[i];
-            (a.min(b), a.max(b))
-        });
-        let mut edges = Vec::new();
-        let mut edge_cells = Vec::new();
-        let mut cell_edges = vec![0usize; n_half];
-        let mut i = 0;
-        while i < n_half {
-            let (a, b, k, slot) = half[order[i]];
-            let key = (a.min(b), a.max(b));
-            let e = edges.len();
-            edges.push([key.0, key.1]);
-            cell_edges[slot] = e;
-            let mut cells_of_edge = [k, NO_CELL];
-            let mut j = i + 1;
-            while j < n_half {
-                let (a2, b2, k2, slot2) = half[order[j]];
-                if (a2.min(b2), a2.max(b2)) != key {
-                    break;
-                }
-                if j > i + 1 {
-                    return Err(MeshError::BadEdge {
-                        a: key.0,
-                        b: key.1,
-                        msg: "shared by more than two cells".into(),
-                    });
-                }
-                if (a2, b2) == (a, b) {
-                    return Err(MeshError::BadEdge {
-                        a: key.0,
-                        b: key.1,
-                        msg: format!(
-                            "cells {k} and {k2} traverse it in the same direction (overlapping cells)"
-                        ),
-                    });
-                }
-                cells_of_edge[1] = k2;
-                cell_edges[slot2] = e;
-                j += 1;
-            }
-            edge_cells.push(cells_of_edge);
-            i = j;
-        }
+        // --- edges, numbered in (min, max) vertex order
+        let Edges {
+            edges,
+            edge_cells,
+            cell_edges,
+        } = build_edges(nv, &cell_ptr, &cell_verts)?;
         let ne = edges.len();
         let edge_length: Vec<f64> = edges
             .iter()
@@ -276,32 +288,9 @@ impl PolyMesh {
             })
             .collect();
 
-        // --- normals and d_{K,σ}; star-shapedness with respect to the centroid
-        let mut cell_normals = vec![[0.0; 2]; n_half];
-        let mut cell_dists = vec![0.0; n_half];
-        for k in 0..nc {
-            let (s, e) = (cell_ptr[k], cell_ptr[k + 1]);
-            let n = e - s;
-            for i in 0..n {
-                let p = vertices[cell_verts[s + i]];
-                let q = vertices[cell_verts[s + (i + 1) % n]];
-                let t = sub(q, p);
-                let len = (t[0] * t[0] + t[1] * t[1]).sqrt();
-                // counter-clockwise cell: outward normal is the tangent rotated by −90°
-                let nrm = [t[1] / len, -t[0] / len];
-                let xs = edge_midpoint[cell_edges[s + i]];
-                let d =
-                    (xs[0] - cell_centroid[k][0]) * nrm[0] + (xs[1] - cell_centroid[k][1]) * nrm[1];
-                if !(d > 1e-12 * cell_diameter[k]) {
-                    return Err(MeshError::NotStarShaped {
-                        cell: k,
-                        local_edge: i,
-                        dist: d,
-                    });
-                }
-                cell_normals[s + i] = nrm;
-                cell_dists[s + i] = d;
-            }
+        // --- star-shapedness with respect to the centroid (d_{K,σ} > 0, computed above)
+        if let Some(err) = not_star_shaped {
+            return Err(err);
         }
 
         let boundary_edges: Vec<usize> = (0..ne).filter(|&e| edge_cells[e][1] == NO_CELL).collect();
@@ -315,28 +304,7 @@ impl PolyMesh {
             &boundary_edges,
         )?;
 
-        // --- tags
-        let mut edge_tags = vec![0i32; ne];
-        if !tagged_edges.is_empty() {
-            let mut lookup: Vec<((usize, usize), usize)> = boundary_edges
-                .iter()
-                .map(|&e| ((edges[e][0], edges[e][1]), e))
-                .collect();
-            lookup.sort_unstable();
-            for &(a, b, tag) in tagged_edges {
-                let key = (a.min(b), a.max(b));
-                match lookup.binary_search_by(|probe| probe.0.cmp(&key)) {
-                    Ok(pos) => edge_tags[lookup[pos].1] = tag,
-                    Err(_) => {
-                        return Err(MeshError::BadEdge {
-                            a: key.0,
-                            b: key.1,
-                            msg: format!("tagged {tag} but it is not a boundary edge of the mesh"),
-                        });
-                    }
-                }
-            }
-        }
+        let edge_tags = vec![0i32; ne];
         let h = cell_diameter.iter().cloned().fold(0.0, f64::max);
         Ok(PolyMesh {
             vertices,
@@ -356,6 +324,38 @@ impl PolyMesh {
             boundary_edges,
             h,
         })
+    }
+
+    /// Tags boundary edges from `(vertex a, vertex b, tag)` entries (either vertex order), in
+    /// order: a later entry for the same edge overrides an earlier one. An entry that names no
+    /// boundary edge is an error ([`MeshError::BadEdge`]) or skipped, as `non_boundary` says.
+    ///
+    /// Each entry is found by binary search in [`PolyMesh::boundary_edges`]: edges are numbered
+    /// in increasing (smaller vertex, larger vertex) order and the boundary edges are listed in
+    /// increasing edge number, so that list is sorted by vertex pair already.
+    pub(crate) fn set_boundary_tags(
+        &mut self,
+        tagged_edges: &[(usize, usize, i32)],
+        non_boundary: NonBoundaryTag,
+    ) -> Result<(), MeshError> {
+        for &(a, b, tag) in tagged_edges {
+            let key = [a.min(b), a.max(b)];
+            let found = self
+                .boundary_edges
+                .binary_search_by(|&e| self.edges[e].cmp(&key));
+            match (found, non_boundary) {
+                (Ok(pos), _) => self.edge_tags[self.boundary_edges[pos]] = tag,
+                (Err(_), NonBoundaryTag::Ignore) => {}
+                (Err(_), NonBoundaryTag::Reject) => {
+                    return Err(MeshError::BadEdge {
+                        a: key[0],
+                        b: key[1],
+                        msg: format!("tagged {tag} but it is not a boundary edge of the mesh"),
+                    });
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Returns a copy whose boundary edges are tagged by `tag(x_σ)` (interior edges keep tag 0).
@@ -407,7 +407,8 @@ impl PolyMesh {
     pub fn edge_vertices(&self, e: usize) -> [usize; 2] {
         self.edges[e]
     }
-    /// The cells on either side of edge `e`; the second is [`NO_CELL`] on the boundary.
+    /// The cells on either side of edge `e`: the lower-numbered cell first for an interior edge,
+    /// `[K, NO_CELL]` on the boundary.
     pub fn edge_cells(&self, e: usize) -> [usize; 2] {
         self.edge_cells[e]
     }
@@ -500,13 +501,233 @@ impl PolyMesh {
     }
 }
 
+/// The edges of a mesh whose cells are stored flat (`cell_ptr`, `cell_verts`, as in
+/// [`PolyMesh`]; every cell has at least 3 vertices, all below `nv`), numbered in increasing
+/// order of their (smaller vertex, larger vertex) pair, or the first [`MeshError::BadEdge`] in
+/// that order: an edge shared by more than two cells, or two cells that traverse an edge in the
+/// same direction.
+///
+/// Algorithm, linear apart from sorting a handful of items per vertex:
+/// 1. every cell side (half-edge, identified by its slot in `cell_verts`) is put into the bucket
+///    of its smaller end point by a counting sort (CSR by smaller vertex); the sides are visited
+///    in slot order, so every bucket lists its sides in (cell, local edge) order;
+/// 2. each bucket is sorted by (larger vertex, slot): buckets are small (about six sides per
+///    vertex on a triangle mesh), which `sort_unstable` handles by insertion sort;
+/// 3. scanning the buckets in vertex order visits the sides sorted by their (smaller, larger)
+///    vertex pair, ties in slot order; every run of equal pairs is one edge. The first side of a
+///    run gives `edge_cells[e][0]`, so an interior edge lists its lower-numbered cell first, and
+///    of three or more cells on one edge the two lowest-numbered ones are compared first (the
+///    global sort of all sides this replaces left both to the tie order of `sort_unstable`).
+///
+/// The result is the same as sorting all sides by (smaller vertex, larger vertex, slot), without
+/// the O(n log n) sort of scattered records. The scatter of step 1 is a random access per side,
+/// so the bucket arrays use `u32` indices whenever the mesh allows it (fewer than 2³¹ cell
+/// sides): half the memory traffic of `usize` records.
+fn build_edges(nv: usize, cell_ptr: &[usize], cell_verts: &[usize]) -> Result<Edges, MeshError> {
+    // the largest value stored is 2·slot + 1 < 2·cell_verts.len() (cells and vertices are fewer)
+    let small = u32::try_from(cell_verts.len().saturating_mul(2))
+        .ok()
+        .zip(u32::try_from(nv).ok())
+        .is_some();
+    if small {
+        build_edges_with::<u32>(nv, cell_ptr, cell_verts)
+    } else {
+        build_edges_with::<usize>(nv, cell_ptr, cell_verts)
+    }
+}
+
+/// The edge arrays of a [`PolyMesh`], as [`build_edges`] makes them.
+#[derive(Debug, PartialEq)]
+struct Edges {
+    /// End points of each edge, smaller vertex first.
+    edges: Vec<[usize; 2]>,
+    /// The cells on either side of each edge (`[K, NO_CELL]` on the boundary).
+    edge_cells: Vec<[usize; 2]>,
+    /// The edge of each cell side (indexed like `cell_verts`).
+    cell_edges: Vec<usize>,
+}
+
+/// Unsigned index type of the scratch arrays of [`build_edges`].
+trait EdgeIndex: Copy + Ord + Default {
+    /// `v` as `Self`; [`build_edges`] only calls it with values that fit.
+    fn from_usize(v: usize) -> Self;
+    fn to_usize(self) -> usize;
+}
+
+impl EdgeIndex for u32 {
+    fn from_usize(v: usize) -> Self {
+        debug_assert!(u32::try_from(v).is_ok());
+        v as u32
+    }
+    fn to_usize(self) -> usize {
+        self as usize
+    }
+}
+
+impl EdgeIndex for usize {
+    fn from_usize(v: usize) -> Self {
+        v
+    }
+    fn to_usize(self) -> usize {
+        self
+    }
+}
+
+/// [`build_edges`] with scratch indices of type `I`.
+fn build_edges_with<I: EdgeIndex>(
+    nv: usize,
+    cell_ptr: &[usize],
+    cell_verts: &[usize],
+) -> Result<Edges, MeshError> {
+    let n_half = cell_verts.len();
+    let nc = cell_ptr.len().saturating_sub(1);
+    // the side in `slot` of cell k (slots s..e) joins cell_verts[slot] to cell_verts[next(slot)]
+    let next = |slot: usize, s: usize, e: usize| if slot + 1 < e { slot + 1 } else { s };
+
+    // 1. counting sort by smaller vertex: bucket v is half[start[v]..start[v + 1]]
+    let mut start = vec![I::default(); nv + 1];
+    for k in 0..nc {
+        let (s, e) = (cell_ptr[k], cell_ptr[k + 1]);
+        for slot in s..e {
+            let (a, b) = (cell_verts[slot], cell_verts[next(slot, s, e)]);
+            let c = &mut start[a.min(b) + 1];
+            *c = I::from_usize(c.to_usize() + 1);
+        }
+    }
+    for v in 0..nv {
+        start[v + 1] = I::from_usize(start[v + 1].to_usize() + start[v].to_usize());
+    }
+    let mut cursor = start.clone();
+    // (larger vertex, 2·slot + [side runs from larger to smaller vertex], cell): the direction
+    // rides along so that step 3 reads no vertex ids; sorting by the second item sorts by slot
+    let mut half = vec![(I::default(), I::default(), I::default()); n_half];
+    for k in 0..nc {
+        let (s, e) = (cell_ptr[k], cell_ptr[k + 1]);
+        for slot in s..e {
+            let (a, b) = (cell_verts[slot], cell_verts[next(slot, s, e)]);
+            let c = &mut cursor[a.min(b)];
+            half[c.to_usize()] = (
+                I::from_usize(a.max(b)),
+                I::from_usize(2 * slot + usize::from(a > b)),
+                I::from_usize(k),
+            );
+            *c = I::from_usize(c.to_usize() + 1);
+        }
+    }
+    drop(cursor);
+    // 2. sort the buckets and count the edges, so that the edge arrays are allocated once
+    let mut ne = 0;
+    for v in 0..nv {
+        let bucket = &mut half[start[v].to_usize()..start[v + 1].to_usize()];
+        bucket.sort_unstable();
+        ne += bucket
+            .iter()
+            .enumerate()
+            .filter(|&(i, h)| i == 0 || bucket[i - 1].0 != h.0)
+            .count();
+    }
+    // 3. runs of equal (smaller, larger) vertex pairs are the edges
+    let mut edges = Vec::with_capacity(ne);
+    let mut edge_cells = Vec::with_capacity(ne);
+    let mut cell_edges = vec![0usize; n_half];
+    for lo in 0..nv {
+        let bucket = &half[start[lo].to_usize()..start[lo + 1].to_usize()];
+        let mut i = 0;
+        while i < bucket.len() {
+            let (hi, code, k) = bucket[i];
+            let (hi, code, k) = (hi.to_usize(), code.to_usize(), k.to_usize());
+            let e = edges.len();
+            edges.push([lo, hi]);
+            cell_edges[code / 2] = e;
+            let mut cells_of_edge = [k, NO_CELL];
+            let mut j = i + 1;
+            while j < bucket.len() && bucket[j].0.to_usize() == hi {
+                let (code2, k2) = (bucket[j].1.to_usize(), bucket[j].2.to_usize());
+                if j > i + 1 {
+                    return Err(MeshError::BadEdge {
+                        a: lo,
+                        b: hi,
+                        msg: "shared by more than two cells".into(),
+                    });
+                }
+                if code2 % 2 == code % 2 {
+                    return Err(MeshError::BadEdge {
+                        a: lo,
+                        b: hi,
+                        msg: format!(
+                            "cells {k} and {k2} traverse it in the same direction (overlapping cells)"
+                        ),
+                    });
+                }
+                cells_of_edge[1] = k2;
+                cell_edges[code2 / 2] = e;
+                j += 1;
+            }
+            edge_cells.push(cells_of_edge);
+            i = j;
+        }
+    }
+    Ok(Edges {
+        edges,
+        edge_cells,
+        cell_edges,
+    })
+}
+
+/// As [`drop_unused_vertices`] for cells stored flat: renumbers the vertex ids of `cell_verts` in
+/// place (vertices are kept in order of first use, an out-of-range id becomes `usize::MAX` so
+/// that [`PolyMesh::from_flat_cells`] reports it) and returns the kept vertices and, for each old
+/// vertex, its new id (`usize::MAX` if dropped).
+pub(crate) fn drop_unused_vertices_flat(
+    vertices: &[Point],
+    cell_verts: &mut [usize],
+) -> (Vec<Point>, Vec<usize>) {
+    const DROPPED: usize = usize::MAX;
+    let mut new_id = vec![DROPPED; vertices.len()];
+    let mut new_vertices = Vec::new();
+    for v in cell_verts.iter_mut() {
+        *v = match new_id.get(*v) {
+            Some(&id) if id != DROPPED => id,
+            Some(_) => {
+                let id = new_vertices.len();
+                new_vertices.push(vertices[*v]);
+                new_id[*v] = id;
+                id
+            }
+            None => DROPPED,
+        };
+    }
+    (new_vertices, new_id)
+}
+
+/// An integer whose order is that of [`f64::total_cmp`] (the sign bit flips the order of the
+/// other bits), so that sorting by it needs no float comparisons; [`from_order_key`] inverts it.
+fn order_key(x: f64) -> u64 {
+    let b = x.to_bits();
+    if b >> 63 == 1 { !b } else { b | 1 << 63 }
+}
+
+/// The inverse of [`order_key`].
+fn from_order_key(k: u64) -> f64 {
+    f64::from_bits(if k >> 63 == 1 { k & !(1 << 63) } else { !k })
+}
+
+/// Finds two vertices closer than a tolerance (relative to the extent of the coordinates) in
+/// both x and y: the vertices are sorted by (x, y, id) and each is compared with the following
+/// ones while x is within reach. The sort moves `(x, y, id)` records, x and y as
+/// [`order_key`]s, rather than ids, so that neither the sort nor the scan reads `vertices` at
+/// random.
 fn check_duplicate_vertices(vertices: &[Point]) -> Result<(), MeshError> {
-    let mut idx: Vec<usize> = (0..vertices.len()).collect();
-    idx.sort_unstable_by(|&a, &b| {
-        vertices[a][0]
-            .total_cmp(&vertices[b][0])
-            .then(vertices[a][1].total_cmp(&vertices[b][1]))
-    });
+    let mut keys: Vec<(u64, u64, usize)> = vertices
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (order_key(p[0]), order_key(p[1]), i))
+        .collect();
+    keys.sort_unstable();
+    let sorted: Vec<(f64, f64, usize)> = keys
+        .into_iter()
+        .map(|(x, y, i)| (from_order_key(x), from_order_key(y), i))
+        .collect();
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for p in vertices {
         lo = lo.min(p[0]).min(p[1]);
@@ -515,32 +736,32 @@ fn check_duplicate_vertices(vertices: &[Point]) -> Result<(), MeshError> {
     let tol = 1e-13 * (hi - lo).max(1e-300);
     // end of the run of identical x values starting at each sorted position: inside a run the
     // y values are sorted, so the scan can jump past the run once y is out of reach (O(n log n))
-    let n = idx.len();
+    let n = sorted.len();
     let mut run_end = vec![n; n];
     for i in (0..n.saturating_sub(1)).rev() {
-        run_end[i] = if vertices[idx[i + 1]][0] == vertices[idx[i]][0] {
+        run_end[i] = if sorted[i + 1].0 == sorted[i].0 {
             run_end[i + 1]
         } else {
             i + 1
         };
     }
     for i in 0..n {
-        let a = idx[i];
+        let (xa, ya, a) = sorted[i];
         let mut j = i + 1;
         while j < n {
-            let b = idx[j];
-            if vertices[b][0] - vertices[a][0] > tol {
+            let (xb, yb, b) = sorted[j];
+            if xb - xa > tol {
                 break;
             }
-            if (vertices[b][1] - vertices[a][1]).abs() <= tol {
+            if (yb - ya).abs() <= tol {
                 return Err(MeshError::DuplicateVertex {
                     a: a.min(b),
                     b: a.max(b),
-                    x: vertices[a][0],
-                    y: vertices[a][1],
+                    x: xa,
+                    y: ya,
                 });
             }
-            if vertices[b][0] == vertices[a][0] && vertices[b][1] - vertices[a][1] > tol {
+            if xb == xa && yb - ya > tol {
                 j = run_end[j];
             } else {
                 j += 1;
@@ -664,6 +885,153 @@ mod tests {
             assert!((vol - 2.0 * m.measure(k)).abs() < 1e-15);
         }
         assert!((m.h() - (0.25f64 + 1.0).sqrt()).abs() < 1e-15);
+    }
+
+    /// The edges as the original construction defined them: all cell sides sorted by
+    /// (smaller vertex, larger vertex) with ties in slot order (a stable sort), runs of equal
+    /// pairs being the edges. Returns `(edges, edge_cells, cell_edges)`; panics on invalid input.
+    fn reference_edges(m: &PolyMesh) -> Edges {
+        let mut sides = Vec::new();
+        for k in 0..m.n_cells() {
+            let c = m.cell_vertices(k);
+            for i in 0..c.len() {
+                let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                sides.push(((a.min(b), a.max(b)), m.cell_ptr[k] + i, k));
+            }
+        }
+        sides.sort_by_key(|s| s.0);
+        let (mut edges, mut edge_cells) = (Vec::<[usize; 2]>::new(), Vec::<[usize; 2]>::new());
+        let mut cell_edges = vec![usize::MAX; sides.len()];
+        for (key, slot, k) in sides {
+            if edges.last() == Some(&[key.0, key.1]) {
+                edge_cells.last_mut().unwrap()[1] = k;
+            } else {
+                edges.push([key.0, key.1]);
+                edge_cells.push([k, NO_CELL]);
+            }
+            cell_edges[slot] = edges.len() - 1;
+        }
+        Edges {
+            edges,
+            edge_cells,
+            cell_edges,
+        }
+    }
+
+    #[test]
+    fn edges_are_numbered_by_vertex_pair_with_lower_cell_first() {
+        let mut meshes = vec![unit_square_2x1()];
+        for f in generate::Family::ALL {
+            meshes.push(f.generate(2).unwrap());
+        }
+        for m in &meshes {
+            let reference = reference_edges(m);
+            assert_eq!(m.edges, reference.edges);
+            assert_eq!(m.edge_cells, reference.edge_cells);
+            assert_eq!(m.cell_edges, reference.cell_edges);
+            assert!(m.edges.windows(2).all(|w| w[0] < w[1]) && m.edges.iter().all(|e| e[0] < e[1]));
+            // both index widths of the bucket arrays give the same result
+            let wide = build_edges_with::<usize>(m.n_vertices(), &m.cell_ptr, &m.cell_verts);
+            let narrow = build_edges_with::<u32>(m.n_vertices(), &m.cell_ptr, &m.cell_verts);
+            assert_eq!(wide, narrow);
+            assert_eq!(wide, Ok(reference));
+            // the boundary edges are sorted by vertex pair, which set_boundary_tags relies on
+            assert!(
+                m.boundary_edges
+                    .windows(2)
+                    .all(|w| m.edges[w[0]] < m.edges[w[1]])
+            );
+        }
+    }
+
+    #[test]
+    fn bad_edges_are_reported_in_vertex_pair_order() {
+        let v = vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.5, -1.0]];
+        // edge (0, 1) is shared by three cells; the first two traverse it in opposite directions
+        let cells = vec![vec![0, 1, 3], vec![1, 0, 4], vec![0, 1, 2], vec![2, 3, 1]];
+        let e = PolyMesh::from_cells(v.clone(), cells).unwrap_err();
+        assert_eq!(
+            e,
+            MeshError::BadEdge {
+                a: 0,
+                b: 1,
+                msg: "shared by more than two cells".into()
+            }
+        );
+        // the same triangle twice: the cells are named in increasing order
+        let cells = vec![vec![2, 3, 1], vec![0, 1, 2], vec![0, 1, 2]];
+        let e = PolyMesh::from_cells(v[..4].to_vec(), cells).unwrap_err();
+        assert_eq!(
+            e,
+            MeshError::BadEdge {
+                a: 0,
+                b: 1,
+                msg: "cells 1 and 2 traverse it in the same direction (overlapping cells)".into()
+            }
+        );
+    }
+
+    #[test]
+    fn tags_on_non_boundary_edges_are_rejected_or_ignored() {
+        let v = vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]];
+        let cells = vec![vec![0, 1, 3], vec![0, 3, 2]];
+        // (0, 3) is interior, (1, 2) no edge at all; (3, 1) is the boundary edge (1, 3)
+        for bad in [(0, 3, 5), (1, 2, 5)] {
+            let e = PolyMesh::from_cells_tagged(v.clone(), cells.clone(), &[(3, 1, 4), bad]);
+            assert!(
+                matches!(&e, Err(MeshError::BadEdge { msg, .. }) if msg.contains("tagged 5")),
+                "{e:?}"
+            );
+        }
+        let mut m = PolyMesh::from_cells(v, cells).unwrap();
+        m.set_boundary_tags(
+            &[(3, 1, 4), (0, 3, 5), (1, 2, 5), (1, 3, 6), (2, 0, 7)],
+            NonBoundaryTag::Ignore,
+        )
+        .unwrap();
+        let tags: Vec<(usize, usize, i32)> = (0..m.n_edges())
+            .map(|e| (m.edges[e][0], m.edges[e][1], m.edge_tag(e)))
+            .collect();
+        // a later entry for the same edge wins; the interior edge keeps 0
+        assert_eq!(
+            tags,
+            vec![(0, 1, 0), (0, 2, 7), (0, 3, 0), (1, 3, 6), (2, 3, 0)]
+        );
+    }
+
+    #[test]
+    fn flat_drop_unused_vertices_matches_the_nested_one() {
+        let v: Vec<Point> = (0..8).map(|i| [i as f64, (i * i) as f64]).collect();
+        let cells = vec![vec![5, 2, 7], vec![7, 2, 3, 9], vec![0, 5, 3]];
+        let (nv, nc, ids) = drop_unused_vertices(&v, &cells);
+        let mut flat: Vec<usize> = cells.concat();
+        let (fv, fids) = drop_unused_vertices_flat(&v, &mut flat);
+        assert_eq!(fv, nv);
+        assert_eq!(flat, nc.concat());
+        let ids: Vec<usize> = ids.iter().map(|i| i.unwrap_or(usize::MAX)).collect();
+        assert_eq!(fids, ids);
+    }
+
+    #[test]
+    fn order_key_follows_total_cmp() {
+        let xs = [
+            f64::NEG_INFINITY,
+            -1e300,
+            -1.0,
+            -1e-300,
+            -0.0,
+            0.0,
+            1e-300,
+            1.0,
+            1e300,
+            f64::INFINITY,
+        ];
+        for &a in &xs {
+            assert_eq!(from_order_key(order_key(a)).to_bits(), a.to_bits());
+            for &b in &xs {
+                assert_eq!(order_key(a).cmp(&order_key(b)), a.total_cmp(&b), "{a} {b}");
+            }
+        }
     }
 
     #[test]

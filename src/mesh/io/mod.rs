@@ -25,6 +25,7 @@ pub use vtu::write_vtu;
 
 use crate::error::{Error, Result};
 use crate::mesh::PolyMesh;
+use std::fmt::Display;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
@@ -166,6 +167,13 @@ impl<'a> Tokens<'a> {
 
     /// The next token; the end of the file is an error mentioning `what` was expected.
     pub(crate) fn next(&mut self, what: &str) -> Result<&'a str> {
+        self.next_with(what)
+    }
+
+    /// As [`Tokens::next`], with `what` formatted only if there is an error: readers pass
+    /// `format_args!("x of node {tag}")`, which costs nothing when the value reads fine (the
+    /// `…_with` methods exist so that a million-node file does not format a million messages).
+    pub(crate) fn next_with(&mut self, what: impl Display) -> Result<&'a str> {
         match self.next_opt()? {
             Some(t) => Ok(t),
             None => Err(self.err(format!("unexpected end of file while reading {what}"))),
@@ -225,14 +233,52 @@ impl<'a> Tokens<'a> {
 
     /// The next token parsed as `T`; `what` names the value in error messages.
     pub(crate) fn parse<T: FromStr>(&mut self, what: &str) -> Result<T> {
-        let tok = self.next(what)?;
+        self.parse_with(what)
+    }
+
+    /// As [`Tokens::parse`], with `what` formatted only on error (see [`Tokens::next_with`]).
+    pub(crate) fn parse_with<T: FromStr>(&mut self, what: impl Display) -> Result<T> {
+        let tok = self.next_with(&what)?;
         tok.parse::<T>()
             .map_err(|_| self.err(format!("cannot read {what} from \"{tok}\"")))
     }
 
+    /// As [`Tokens::parse_with`]`::<u64>` (gmsh node and element tags), with a fast path for the
+    /// usual token of 1 to 19 ASCII digits, which cannot overflow and is converted while it is
+    /// scanned; any other token is read again by [`Tokens::parse_with`], so values and errors are
+    /// exactly those of `str::parse`.
+    pub(crate) fn parse_u64_with(&mut self, what: impl Display) -> Result<u64> {
+        let saved = (self.pos, self.line, self.tok_line);
+        self.skip_whitespace();
+        let start = self.pos;
+        let mut end = start;
+        let mut value: u64 = 0;
+        while let Some(&b) = self.bytes.get(end) {
+            if !b.is_ascii_digit() {
+                break;
+            }
+            value = value.wrapping_mul(10).wrapping_add(u64::from(b - b'0'));
+            end += 1;
+        }
+        let token_ends = self.bytes.get(end).is_none_or(|b| b.is_ascii_whitespace());
+        if (1..=19).contains(&(end - start)) && token_ends {
+            self.pos = end;
+            self.tok_line = self.line;
+            Ok(value)
+        } else {
+            (self.pos, self.line, self.tok_line) = saved;
+            self.parse_with(what)
+        }
+    }
+
     /// A record count: a non-negative integer (a negative one gets a specific message).
     pub(crate) fn count(&mut self, what: &str) -> Result<usize> {
-        let tok = self.next(what)?;
+        self.count_with(what)
+    }
+
+    /// As [`Tokens::count`], with `what` formatted only on error (see [`Tokens::next_with`]).
+    pub(crate) fn count_with(&mut self, what: impl Display) -> Result<usize> {
+        let tok = self.next_with(&what)?;
         match tok.parse::<i64>() {
             Ok(n) if n < 0 => Err(self.err(format!("negative {what}: {n}"))),
             Ok(n) => usize::try_from(n).map_err(|_| self.err(format!("{what} {n} is too large"))),
@@ -244,7 +290,12 @@ impl<'a> Tokens<'a> {
 
     /// A finite floating-point number.
     pub(crate) fn coord(&mut self, what: &str) -> Result<f64> {
-        let tok = self.next(what)?;
+        self.coord_with(what)
+    }
+
+    /// As [`Tokens::coord`], with `what` formatted only on error (see [`Tokens::next_with`]).
+    pub(crate) fn coord_with(&mut self, what: impl Display) -> Result<f64> {
+        let tok = self.next_with(&what)?;
         match tok.parse::<f64>() {
             Ok(x) if x.is_finite() => Ok(x),
             Ok(_) => Err(self.err(format!("{what} is not finite: \"{tok}\""))),
@@ -290,6 +341,34 @@ mod tests {
         assert_eq!(t.next_opt().unwrap(), None);
         let e = t.next("the answer").unwrap_err().to_string();
         assert!(e.contains("t.txt:4:") && e.contains("end of file"), "{e}");
+    }
+
+    #[test]
+    fn u64_fast_path_matches_str_parse() {
+        let p = Path::new("t.txt");
+        let text = "7 0012 +5 18446744073709551615 18446744073709551616 \
+                    1234567890123456789 12345678901234567890 -1 3x 4.0 \u{e9}9";
+        let mut fast = Tokens::new(p, text.as_bytes());
+        let mut slow = Tokens::new(p, text.as_bytes());
+        // 11 tokens, then the end of the file
+        for _ in 0..12 {
+            let a = fast.parse_u64_with("n").map_err(|e| e.to_string());
+            let b = slow.parse::<u64>("n").map_err(|e| e.to_string());
+            assert_eq!(a, b);
+            assert_eq!(
+                (fast.pos, fast.line, fast.tok_line),
+                (slow.pos, slow.line, slow.tok_line)
+            );
+        }
+        assert_eq!(fast.pos, text.len());
+        let mut t = Tokens::new(p, b"\n\n 42\n");
+        assert_eq!(t.parse_u64_with("n").unwrap(), 42);
+        assert_eq!(t.token_line(), 3);
+        let e = t.parse_u64_with("the tag").unwrap_err().to_string();
+        assert!(
+            e.contains("t.txt:3:") && e.contains("end of file while reading the tag"),
+            "{e}"
+        );
     }
 
     #[test]

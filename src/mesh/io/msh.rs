@@ -16,8 +16,9 @@
 
 use super::{Tokens, capacity, read_bytes};
 use crate::error::Result;
-use crate::mesh::{Point, PolyMesh, drop_unused_vertices};
+use crate::mesh::{NonBoundaryTag, Point, PolyMesh, drop_unused_vertices_flat};
 use std::collections::{BTreeSet, HashMap};
+use std::fmt::Display;
 use std::path::Path;
 
 /// A gmsh mesh together with its physical-group names.
@@ -44,7 +45,10 @@ impl MshMesh {
 pub fn read_msh(path: impl AsRef<Path>) -> Result<MshMesh> {
     let path = path.as_ref();
     let bytes = read_bytes(path)?;
-    parse_msh(path, &bytes)
+    let raw = parse_raw(path, &bytes)?;
+    // the text is no longer needed: free it before the mesh is built
+    drop(bytes);
+    build(path, raw)
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -62,11 +66,78 @@ enum LineTag {
     Curve(i32),
 }
 
+/// Position in `$Nodes` of each node tag.
+///
+/// gmsh numbers nodes 1, 2, …, n, so tags below a limit proportional to the announced number of
+/// nodes are kept in a vector indexed by tag (no hashing, and lookups in file order stay
+/// cache-friendly); larger tags, which only sparse numberings produce, go to a hash map. The
+/// limit also bounds the vector by a small multiple of the file size, whatever the header says.
+#[derive(Default)]
+struct NodeIndex {
+    /// Position of node `tag` for `tag < dense_limit` ([`NodeIndex::ABSENT`] if not defined);
+    /// grows on demand up to `dense_limit`.
+    dense: Vec<usize>,
+    dense_limit: u64,
+    sparse: HashMap<u64, usize>,
+}
+
+impl NodeIndex {
+    const ABSENT: usize = usize::MAX;
+
+    /// An index for `count` nodes announced in a section of `len` bytes: dense for tags below
+    /// 2·min(`count`, `len`/8) + 1024 (a node takes at least 8 bytes in either format).
+    fn new(count: usize, len: usize) -> Self {
+        let expected = count.min(len / 8);
+        let limit = expected.saturating_mul(2).saturating_add(1024);
+        NodeIndex {
+            dense: Vec::with_capacity(expected.saturating_add(1)),
+            dense_limit: u64::try_from(limit).unwrap_or(u64::MAX),
+            sparse: HashMap::new(),
+        }
+    }
+
+    /// Records node `tag` at position `pos`; `false` (and no change) if the tag is already known.
+    fn insert(&mut self, tag: u64, pos: usize) -> bool {
+        if tag < self.dense_limit {
+            // tag < dense_limit, which came from a usize
+            let i = tag as usize;
+            if i >= self.dense.len() {
+                self.dense.resize(i + 1, Self::ABSENT);
+            }
+            if self.dense[i] != Self::ABSENT {
+                return false;
+            }
+            self.dense[i] = pos;
+            true
+        } else {
+            match self.sparse.entry(tag) {
+                std::collections::hash_map::Entry::Occupied(_) => false,
+                std::collections::hash_map::Entry::Vacant(v) => {
+                    v.insert(pos);
+                    true
+                }
+            }
+        }
+    }
+
+    /// The position of node `tag`, if it was defined.
+    fn get(&self, tag: u64) -> Option<usize> {
+        if tag < self.dense_limit {
+            self.dense
+                .get(tag as usize)
+                .copied()
+                .filter(|&p| p != Self::ABSENT)
+        } else {
+            self.sparse.get(&tag).copied()
+        }
+    }
+}
+
 /// Everything read from the file, before node tags are resolved.
 #[derive(Default)]
 struct Raw {
     nodes: Vec<Point>,
-    node_index: HashMap<u64, usize>,
+    node_index: NodeIndex,
     /// Node tags of the cells, CSR by `cell_ptr`.
     cell_nodes: Vec<u64>,
     cell_ptr: Vec<usize>,
@@ -117,8 +188,15 @@ fn nodes_of_type(ty: i32) -> Option<usize> {
     })
 }
 
-/// Parses the contents of a `.msh` file (`path` is only used in error messages).
+/// Parses the contents of a `.msh` file (`path` is only used in error messages); what
+/// [`read_msh`] does, for tests that work in memory.
+#[cfg(test)]
 pub(crate) fn parse_msh(path: &Path, bytes: &[u8]) -> Result<MshMesh> {
+    build(path, parse_raw(path, bytes)?)
+}
+
+/// Reads the sections of a `.msh` file, checking its syntax; [`build`] makes the mesh.
+fn parse_raw(path: &Path, bytes: &[u8]) -> Result<Raw> {
     let mut t = Tokens::new(path, bytes);
     match t.next_opt()? {
         Some("$MeshFormat") => {}
@@ -185,7 +263,7 @@ pub(crate) fn parse_msh(path: &Path, bytes: &[u8]) -> Result<MshMesh> {
             return Err(t.err_at(0, format!("the file has no {needed} section")));
         }
     }
-    build(&t, raw)
+    Ok(raw)
 }
 
 /// Reads the next token and checks it is `what` (a section end marker).
@@ -218,8 +296,8 @@ fn read_physical_names(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     let n = t.count("the number of physical names")?;
     raw.physical_names.reserve(capacity(n, t.remaining()));
     for i in 1..=n {
-        let dim: i32 = t.parse(&format!("the dimension of physical name {i}"))?;
-        let tag: i32 = t.parse(&format!("the tag of physical name {i}"))?;
+        let dim: i32 = t.parse_with(format_args!("the dimension of physical name {i}"))?;
+        let tag: i32 = t.parse_with(format_args!("the tag of physical name {i}"))?;
         let rest = t.rest_of_line()?;
         let name = rest
             .strip_prefix('"')
@@ -234,9 +312,9 @@ fn read_physical_names(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
 }
 
 /// Skips a bounding box or coordinates, checking they are numbers.
-fn skip_floats(t: &mut Tokens, n: usize, what: &str) -> Result<()> {
+fn skip_floats(t: &mut Tokens, n: usize, what: impl Display) -> Result<()> {
     for _ in 0..n {
-        t.parse::<f64>(what)?;
+        t.parse_with::<f64>(&what)?;
     }
     Ok(())
 }
@@ -244,28 +322,28 @@ fn skip_floats(t: &mut Tokens, n: usize, what: &str) -> Result<()> {
 fn read_entities(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     let mut counts = [0usize; 4];
     for (d, c) in counts.iter_mut().enumerate() {
-        *c = t.count(&format!("the number of entities of dimension {d}"))?;
+        *c = t.count_with(format_args!("the number of entities of dimension {d}"))?;
     }
     for (dim, &n) in counts.iter().enumerate() {
         for i in 1..=n {
-            let what = format!("entity {i} of dimension {dim}");
-            let tag: i32 = t.parse(&format!("the tag of {what}"))?;
+            let what = format_args!("entity {i} of dimension {dim}");
+            let tag: i32 = t.parse_with(format_args!("the tag of {what}"))?;
             skip_floats(
                 t,
                 if dim == 0 { 3 } else { 6 },
-                &format!("the box of {what}"),
+                format_args!("the box of {what}"),
             )?;
-            let nphys = t.count(&format!("the number of physical tags of {what}"))?;
+            let nphys = t.count_with(format_args!("the number of physical tags of {what}"))?;
             for j in 0..nphys {
-                let p: i32 = t.parse(&format!("a physical tag of {what}"))?;
+                let p: i32 = t.parse_with(format_args!("a physical tag of {what}"))?;
                 if dim == 1 && j == 0 {
                     raw.curve_phys.insert(tag, p);
                 }
             }
             if dim > 0 {
-                let nb = t.count(&format!("the number of bounding entities of {what}"))?;
+                let nb = t.count_with(format_args!("the number of bounding entities of {what}"))?;
                 for _ in 0..nb {
-                    t.parse::<i32>(&format!("a bounding entity of {what}"))?;
+                    t.parse_with::<i32>(format_args!("a bounding entity of {what}"))?;
                 }
             }
         }
@@ -274,7 +352,7 @@ fn read_entities(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
 }
 
 fn add_node(t: &Tokens, raw: &mut Raw, tag: u64, p: Point) -> Result<()> {
-    if raw.node_index.insert(tag, raw.nodes.len()).is_some() {
+    if !raw.node_index.insert(tag, raw.nodes.len()) {
         return Err(t.err(format!("node {tag} is defined twice")));
     }
     raw.nodes.push(p);
@@ -283,14 +361,13 @@ fn add_node(t: &Tokens, raw: &mut Raw, tag: u64, p: Point) -> Result<()> {
 
 fn read_nodes22(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     let n = t.count("the number of nodes")?;
-    let cap = capacity(n, t.remaining());
-    raw.nodes.reserve(cap);
-    raw.node_index.reserve(cap);
+    raw.nodes.reserve(capacity(n, t.remaining()));
+    raw.node_index = NodeIndex::new(n, t.remaining());
     for i in 1..=n {
-        let tag: u64 = t.parse(&format!("the tag of node {i}"))?;
-        let x = t.coord(&format!("x of node {tag}"))?;
-        let y = t.coord(&format!("y of node {tag}"))?;
-        t.coord(&format!("z of node {tag}"))?;
+        let tag = t.parse_u64_with(format_args!("the tag of node {i}"))?;
+        let x = t.coord_with(format_args!("x of node {tag}"))?;
+        let y = t.coord_with(format_args!("y of node {tag}"))?;
+        t.coord_with(format_args!("z of node {tag}"))?;
         add_node(t, raw, tag, [x, y])?;
     }
     expect(t, "$EndNodes")
@@ -302,15 +379,15 @@ fn read_nodes41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     let header_line = t.token_line();
     t.parse::<u64>("the smallest node tag")?;
     t.parse::<u64>("the largest node tag")?;
-    let cap = capacity(n, t.remaining());
-    raw.nodes.reserve(cap);
-    raw.node_index.reserve(cap);
+    raw.nodes.reserve(capacity(n, t.remaining()));
+    raw.node_index = NodeIndex::new(n, t.remaining());
     let mut tags = Vec::new();
     for b in 1..=nblocks {
-        let dim: i32 = t.parse(&format!("the entity dimension of node block {b}"))?;
-        t.parse::<i32>(&format!("the entity tag of node block {b}"))?;
-        let parametric: i32 = t.parse(&format!("the parametric flag of node block {b}"))?;
-        let m = t.count(&format!("the number of nodes of block {b}"))?;
+        let dim: i32 = t.parse_with(format_args!("the entity dimension of node block {b}"))?;
+        t.parse_with::<i32>(format_args!("the entity tag of node block {b}"))?;
+        let parametric: i32 =
+            t.parse_with(format_args!("the parametric flag of node block {b}"))?;
+        let m = t.count_with(format_args!("the number of nodes of block {b}"))?;
         let extra = match parametric {
             0 => 0,
             1 => usize::try_from(dim.clamp(0, 3)).unwrap_or(0),
@@ -323,13 +400,17 @@ fn read_nodes41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
         tags.clear();
         tags.reserve(capacity(m, t.remaining()));
         for _ in 0..m {
-            tags.push(t.parse::<u64>(&format!("a node tag of block {b}"))?);
+            tags.push(t.parse_u64_with(format_args!("a node tag of block {b}"))?);
         }
         for &tag in &tags {
-            let x = t.coord(&format!("x of node {tag}"))?;
-            let y = t.coord(&format!("y of node {tag}"))?;
-            t.coord(&format!("z of node {tag}"))?;
-            skip_floats(t, extra, &format!("a parametric coordinate of node {tag}"))?;
+            let x = t.coord_with(format_args!("x of node {tag}"))?;
+            let y = t.coord_with(format_args!("y of node {tag}"))?;
+            t.coord_with(format_args!("z of node {tag}"))?;
+            skip_floats(
+                t,
+                extra,
+                format_args!("a parametric coordinate of node {tag}"),
+            )?;
             add_node(t, raw, tag, [x, y])?;
         }
     }
@@ -345,17 +426,18 @@ fn read_nodes41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     expect(t, "$EndNodes")
 }
 
-/// Reads the node tags of one element of type `ty` and files it.
-fn read_element(t: &mut Tokens, raw: &mut Raw, ty: i32, tag: LineTag, what: &str) -> Result<()> {
+/// Reads the node tags of element `id` of type `ty` and files it.
+fn read_element(t: &mut Tokens, raw: &mut Raw, ty: i32, tag: LineTag, id: u64) -> Result<()> {
+    let what = format_args!("a node of element {id}");
     match ty {
         1 => {
-            let a: u64 = t.parse(&format!("a node of {what}"))?;
-            let b: u64 = t.parse(&format!("a node of {what}"))?;
+            let a = t.parse_u64_with(what)?;
+            let b = t.parse_u64_with(what)?;
             raw.lines.push(([a, b], tag, t.token_line()));
         }
         2 | 3 => {
             for _ in 0..ty + 1 {
-                raw.cell_nodes.push(t.parse(&format!("a node of {what}"))?);
+                raw.cell_nodes.push(t.parse_u64_with(what)?);
             }
             raw.cell_ptr.push(raw.cell_nodes.len());
             raw.cell_line.push(t.token_line());
@@ -365,7 +447,7 @@ fn read_element(t: &mut Tokens, raw: &mut Raw, ty: i32, tag: LineTag, what: &str
             match nodes_of_type(ty) {
                 Some(n) => {
                     for _ in 0..n {
-                        t.parse::<u64>(&format!("a node of {what}"))?;
+                        t.parse_u64_with(what)?;
                     }
                 }
                 None => {
@@ -381,18 +463,17 @@ fn read_elements22(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     let n = t.count("the number of elements")?;
     raw.cell_ptr.push(0);
     for i in 1..=n {
-        let id: u64 = t.parse(&format!("the tag of element {i}"))?;
-        let what = format!("element {id}");
-        let ty: i32 = t.parse(&format!("the type of {what}"))?;
-        let ntags = t.count(&format!("the number of tags of {what}"))?;
+        let id = t.parse_u64_with(format_args!("the tag of element {i}"))?;
+        let ty: i32 = t.parse_with(format_args!("the type of element {id}"))?;
+        let ntags = t.count_with(format_args!("the number of tags of element {id}"))?;
         let mut phys = 0;
         for j in 0..ntags {
-            let tag: i32 = t.parse(&format!("a tag of {what}"))?;
+            let tag: i32 = t.parse_with(format_args!("a tag of element {id}"))?;
             if j == 0 {
                 phys = tag;
             }
         }
-        read_element(t, raw, ty, LineTag::Physical(phys), &what)?;
+        read_element(t, raw, ty, LineTag::Physical(phys), id)?;
     }
     expect(t, "$EndElements")
 }
@@ -406,18 +487,18 @@ fn read_elements41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     raw.cell_ptr.push(0);
     let mut total = 0usize;
     for b in 1..=nblocks {
-        let dim: i32 = t.parse(&format!("the entity dimension of element block {b}"))?;
-        let entity: i32 = t.parse(&format!("the entity tag of element block {b}"))?;
-        let ty: i32 = t.parse(&format!("the element type of element block {b}"))?;
-        let m = t.count(&format!("the number of elements of block {b}"))?;
+        let dim: i32 = t.parse_with(format_args!("the entity dimension of element block {b}"))?;
+        let entity: i32 = t.parse_with(format_args!("the entity tag of element block {b}"))?;
+        let ty: i32 = t.parse_with(format_args!("the element type of element block {b}"))?;
+        let m = t.count_with(format_args!("the number of elements of block {b}"))?;
         let tag = if dim == 1 {
             LineTag::Curve(entity)
         } else {
             LineTag::Physical(0)
         };
         for _ in 0..m {
-            let id: u64 = t.parse(&format!("an element tag of block {b}"))?;
-            read_element(t, raw, ty, tag, &format!("element {id}"))?;
+            let id = t.parse_u64_with(format_args!("an element tag of block {b}"))?;
+            read_element(t, raw, ty, tag, id)?;
         }
         total = total.saturating_add(m);
     }
@@ -430,25 +511,43 @@ fn read_elements41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     expect(t, "$EndElements")
 }
 
-/// Resolves node tags, drops unused nodes, filters the tagged lines to boundary edges and
-/// builds the mesh.
-fn build(t: &Tokens, raw: Raw) -> Result<MshMesh> {
+/// Resolves node tags, drops unused nodes, builds the mesh and tags its boundary edges.
+///
+/// Errors come in this order: a cell naming an unknown node (first such cell in file order),
+/// a line element naming an unknown node, then the mesh checks of [`PolyMesh::from_cells`].
+/// Tagged lines that are not boundary edges of the mesh are skipped: they are looked up among
+/// the boundary edges of the constructed mesh ([`PolyMesh::set_boundary_tags`] with
+/// [`NonBoundaryTag::Ignore`]), so no second pass over all cell sides is needed.
+fn build(path: &Path, raw: Raw) -> Result<MshMesh> {
+    // only for its error constructors (errors name the file and a line)
+    let t = &Tokens::new(path, &[]);
+    let Raw {
+        nodes,
+        node_index,
+        cell_nodes,
+        cell_ptr,
+        cell_line,
+        lines,
+        curve_phys,
+        physical_names,
+        ignored_types,
+    } = raw;
     let node = |tag: u64, line: usize| {
-        raw.node_index.get(&tag).copied().ok_or_else(|| {
+        node_index.get(tag).ok_or_else(|| {
             t.err_at(
                 line,
                 format!("element refers to node {tag}, which is not in $Nodes"),
             )
         })
     };
-    let nc = raw.cell_line.len();
+    let nc = cell_line.len();
     if nc == 0 {
-        let ignored = if raw.ignored_types.is_empty() {
+        let ignored = if ignored_types.is_empty() {
             String::new()
         } else {
             format!(
                 " (ignored element types: {})",
-                raw.ignored_types
+                ignored_types
                     .iter()
                     .map(i32::to_string)
                     .collect::<Vec<_>>()
@@ -460,62 +559,55 @@ fn build(t: &Tokens, raw: Raw) -> Result<MshMesh> {
             format!("no triangles (type 2) or quadrangles (type 3) in the file{ignored}"),
         ));
     }
-    let mut cells = Vec::with_capacity(nc);
-    for (k, &line) in raw.cell_line.iter().enumerate() {
-        let tags = raw
-            .cell_ptr
+    // cells, flat: the node tags of cell k are cell_nodes[cell_ptr[k]..cell_ptr[k + 1]], and
+    // cell_ptr has nc + 1 entries starting at 0 (read_elements* push them)
+    let mut cell_verts = Vec::with_capacity(cell_nodes.len());
+    for (k, &line) in cell_line.iter().enumerate() {
+        let tags = cell_ptr
             .get(k)
-            .zip(raw.cell_ptr.get(k + 1))
-            .and_then(|(&s, &e)| raw.cell_nodes.get(s..e))
+            .zip(cell_ptr.get(k + 1))
+            .and_then(|(&s, &e)| cell_nodes.get(s..e))
             .unwrap_or_default();
-        cells.push(
-            tags.iter()
-                .map(|&tag| node(tag, line))
-                .collect::<Result<Vec<usize>>>()?,
-        );
-    }
-    let (vertices, cells, new_id) = drop_unused_vertices(&raw.nodes, &cells);
-
-    // boundary edges of the cells: sides used exactly once
-    let mut sides: Vec<(usize, usize)> = Vec::with_capacity(cells.iter().map(Vec::len).sum());
-    for c in &cells {
-        for (i, &a) in c.iter().enumerate() {
-            let b = c[(i + 1) % c.len()];
-            sides.push((a.min(b), a.max(b)));
+        for &tag in tags {
+            cell_verts.push(node(tag, line)?);
         }
     }
-    sides.sort_unstable();
-    let is_boundary = |key: (usize, usize)| {
-        let lo = sides.partition_point(|s| *s < key);
-        let hi = sides.partition_point(|s| *s <= key);
-        hi - lo == 1
-    };
+    if cell_ptr.len() != nc + 1 || cell_ptr.last() != Some(&cell_verts.len()) {
+        // not reached (read_elements* keep cell_ptr in step with cell_line), but never panic
+        return Err(t.err_at(0, "inconsistent element records"));
+    }
+    drop((cell_nodes, cell_line));
+    let (vertices, new_id) = drop_unused_vertices_flat(&nodes, &mut cell_verts);
+    drop(nodes);
+
+    // tagged lines, in file order, as new vertex ids; lines on unused nodes are dropped
     let mut tagged = Vec::new();
-    for &([a, b], tag, line) in &raw.lines {
+    for &([a, b], tag, line) in &lines {
         let tag = match tag {
             LineTag::Physical(p) => p,
-            LineTag::Curve(c) => raw.curve_phys.get(&c).copied().unwrap_or(0),
+            LineTag::Curve(c) => curve_phys.get(&c).copied().unwrap_or(0),
         };
         let (a, b) = (node(a, line)?, node(b, line)?);
         if tag == 0 {
             continue;
         }
-        let (Some(Some(a)), Some(Some(b))) = (new_id.get(a), new_id.get(b)) else {
-            continue;
-        };
-        if a != b && is_boundary(((*a).min(*b), (*a).max(*b))) {
-            tagged.push((*a, *b, tag));
+        match (new_id.get(a), new_id.get(b)) {
+            (Some(&a), Some(&b)) if a != usize::MAX && b != usize::MAX && a != b => {
+                tagged.push((a, b, tag));
+            }
+            _ => {}
         }
     }
-    let mesh = PolyMesh::from_cells_tagged(vertices, cells, &tagged).map_err(|source| {
-        crate::Error::InvalidMeshFile {
-            path: t.path.to_path_buf(),
-            source,
-        }
-    })?;
+    let invalid = |source| crate::Error::InvalidMeshFile {
+        path: t.path.to_path_buf(),
+        source,
+    };
+    let mut mesh = PolyMesh::from_flat_cells(vertices, cell_ptr, cell_verts).map_err(invalid)?;
+    mesh.set_boundary_tags(&tagged, NonBoundaryTag::Ignore)
+        .map_err(invalid)?;
     Ok(MshMesh {
         mesh,
-        physical_names: raw.physical_names,
+        physical_names,
     })
 }
 
@@ -542,6 +634,93 @@ mod tests {
             .map(|&e| m.mesh.edge_tag(e))
             .collect();
         assert_eq!(tags.iter().filter(|&&t| t == 7).count(), 1);
+    }
+
+    /// SQUARE22 with its node tags replaced (the node tags of the elements too).
+    fn square22_with_tags(tags: [&str; 5]) -> String {
+        let mut s = SQUARE22.to_string();
+        for (old, new) in [
+            ("1 0 0 0\n", 0),
+            ("2 1 0 0\n", 1),
+            ("3 1 1 0\n", 2),
+            ("4 0 1 0\n", 3),
+        ] {
+            s = s.replace(old, &format!("{} {}", tags[new], &old[2..]));
+        }
+        s.replace("9 5 5 0\n", &format!("{} 5 5 0\n", tags[4]))
+            .replace("1 15 2 0 1 9\n", &format!("1 15 2 0 1 {}\n", tags[4]))
+            .replace(
+                "2 1 2 7 1 1 2\n3 2 2 1 1 1 2 3\n4 2 2 1 1 1 3 4\n",
+                &format!(
+                    "2 1 2 7 1 {a} {b}\n3 2 2 1 1 {a} {b} {c}\n4 2 2 1 1 {a} {c} {d}\n",
+                    a = tags[0],
+                    b = tags[1],
+                    c = tags[2],
+                    d = tags[3]
+                ),
+            )
+    }
+
+    #[test]
+    fn sparse_node_tags_read_like_dense_ones() {
+        let dense = parse_msh(Path::new("d.msh"), SQUARE22.as_bytes()).unwrap();
+        let sparse = square22_with_tags(["1000000007", "3", "18446744073709551615", "2", "77"]);
+        let sparse = parse_msh(Path::new("s.msh"), sparse.as_bytes()).unwrap();
+        assert_eq!(sparse.mesh.vertices(), dense.mesh.vertices());
+        for k in 0..dense.mesh.n_cells() {
+            assert_eq!(sparse.mesh.cell_vertices(k), dense.mesh.cell_vertices(k));
+        }
+        for e in 0..dense.mesh.n_edges() {
+            assert_eq!(sparse.mesh.edge_tag(e), dense.mesh.edge_tag(e));
+        }
+        // a tag defined twice is an error whether it is stored densely or not
+        for tag in ["3", "1000000007"] {
+            let twice = square22_with_tags([tag, "5", "6", "7", tag]);
+            let e = parse_msh(Path::new("t.msh"), twice.as_bytes()).unwrap_err();
+            assert_eq!(
+                e.to_string(),
+                format!("t.msh:10: node {tag} is defined twice")
+            );
+        }
+        let mut index = NodeIndex::new(3, 1000);
+        assert!(index.insert(2, 0) && index.insert(u64::MAX, 1) && index.insert(1 << 40, 2));
+        assert!(!index.insert(2, 3) && !index.insert(u64::MAX, 3));
+        assert_eq!(
+            [0, 1, 2, 3, u64::MAX, 1 << 40].map(|t| index.get(t)),
+            [None, None, Some(0), None, Some(1), Some(2)]
+        );
+    }
+
+    #[test]
+    fn tagged_lines_off_the_boundary_are_ignored() {
+        // the diagonal 1-3 is interior, the line 1-9 joins a node no cell uses; 2-3 is tagged 8
+        let extra = SQUARE22
+            .replace("$Elements\n4\n", "$Elements\n7\n")
+            .replace(
+                "$EndElements",
+                "5 1 2 5 1 1 3\n6 1 2 6 1 1 9\n7 1 2 8 1 3 2\n$EndElements",
+            );
+        let m = parse_msh(Path::new("s.msh"), extra.as_bytes())
+            .unwrap()
+            .mesh;
+        let mut tags: Vec<(usize, usize, i32)> = (0..m.n_edges())
+            .map(|e| {
+                let [a, b] = m.edge_vertices(e);
+                (a, b, m.edge_tag(e))
+            })
+            .collect();
+        tags.sort_unstable();
+        assert_eq!(
+            tags,
+            vec![(0, 1, 7), (0, 2, 0), (0, 3, 0), (1, 2, 8), (2, 3, 0)]
+        );
+        // an unknown node on a line is still an error, before any mesh check
+        let bad = extra.replace("6 1 2 6 1 1 9", "6 1 2 6 1 1 99");
+        let e = parse_msh(Path::new("s.msh"), bad.as_bytes()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "s.msh:19: element refers to node 99, which is not in $Nodes"
+        );
     }
 
     #[test]
