@@ -16,7 +16,7 @@
 //! `replication/BENCHMARKS.md` and `replication/figures/bench.png` from that CSV only
 //! ([`write_report`]).
 //!
-//! Three variants of gradvi's solver are timed:
+//! Four variants of gradvi's solver are timed:
 //! - `cold`: the default options (the paper's monotony algorithm from A₀ = ∅, as in
 //!   [`crate::solver::solve_problem`]);
 //! - `nested`: the same algorithm with an initial active set predicted by a chain of coarse
@@ -24,13 +24,16 @@
 //!   `gradvi solve`): the coarse solves cost a fraction of the fine one, and the fine
 //!   iteration starts next to its solution. The certificate is the same;
 //! - `nested-par`: `nested` with faer's parallel numeric factorisation instead of the
-//!   sequential default ([`crate::solver::linear::FactorThreads`]), to measure that lever.
+//!   sequential default ([`crate::solver::linear::FactorThreads`]), to measure that lever;
+//! - `nested-nd`: `nested` with the nested-dissection ordering instead of AMD
+//!   ([`crate::solver::linear::Ordering`]), to measure that one.
 //!
 //! Environment: `GRADVI_BENCH_MAX_CELLS` caps the mesh sizes (default [`DEFAULT_MAX_CELLS`]),
 //! `GRADVI_BENCH_DOLFINX_MAX_CELLS` those of the dolfinx runs, `GRADVI_BENCH_VARIANTS`
-//! (comma-separated, default `cold,nested,nested-par`) the gradvi variants. Progress goes to stderr;
-//! `GRADVI_BENCH_LOG=1` adds each case's active-set log and factor size. Lever measured by
-//! hand: `GRADVI_BENCH_ORDERING=nd` (nested dissection instead of AMD).
+//! (comma-separated, default `cold,nested,nested-par,nested-nd`) the gradvi variants. Progress goes to stderr;
+//! `GRADVI_BENCH_LOG=1` adds each case's active-set log and factor size;
+//! `GRADVI_BENCH_MERGE=1` keeps the rows of the existing CSV that the run does not redo (the
+//! report then says that its rows come from several runs).
 //! Arguments: `--report-only` rewrites the report from the existing CSV; `--child FAMILY
 //! SCHEME VARIANT SIZE [FILE]` runs one case and prints its row as JSON.
 
@@ -117,6 +120,9 @@ pub enum Variant {
     /// As `Nested`, with faer's parallel numeric factorisation
     /// ([`crate::solver::linear::FactorThreads::Global`]) instead of the sequential default.
     NestedParallel,
+    /// As `Nested`, with the nested-dissection ordering
+    /// ([`crate::solver::linear::Ordering::NestedDissection`]) instead of AMD.
+    NestedNd,
 }
 
 impl Variant {
@@ -126,6 +132,7 @@ impl Variant {
             Variant::Cold => "cold",
             Variant::Nested => "nested",
             Variant::NestedParallel => "nested-par",
+            Variant::NestedNd => "nested-nd",
         }
     }
     fn parse(s: &str) -> crate::Result<Self> {
@@ -133,8 +140,9 @@ impl Variant {
             "cold" => Ok(Variant::Cold),
             "nested" => Ok(Variant::Nested),
             "nested-par" => Ok(Variant::NestedParallel),
+            "nested-nd" => Ok(Variant::NestedNd),
             _ => Err(bad(format!(
-                "unknown variant '{s}' (cold, nested, nested-par)"
+                "unknown variant '{s}' (cold, nested, nested-par, nested-nd)"
             ))),
         }
     }
@@ -253,6 +261,18 @@ pub struct BenchRow {
     pub peak_mib: f64,
     /// Largest scaled quantity of the certificate (dolfinx: NaN).
     pub certificate: f64,
+    /// Stored values of the Cholesky factor (its fill; 0 for dolfinx and rows of earlier
+    /// versions of this file).
+    #[serde(default)]
+    pub factor_len: usize,
+    /// The active-set changes of the fine iteration, one `+entered/-left` per solve
+    /// (empty for dolfinx and rows of earlier versions).
+    #[serde(default)]
+    pub changes: String,
+    /// Start of the `make bench` run that wrote the row (seconds since the Unix epoch; 0 for
+    /// rows of earlier versions).
+    #[serde(default)]
+    pub run: u64,
 }
 
 fn bad(msg: String) -> crate::Error {
@@ -303,8 +323,8 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
     let mesh_s = t0.elapsed().as_secs_f64();
     let scheme = crate::scheme::build(case.scheme, &mesh)?;
     let problem = paper_test3(C);
-    let ordering = match std::env::var("GRADVI_BENCH_ORDERING").as_deref() {
-        Ok("nd") => crate::solver::linear::Ordering::NestedDissection,
+    let ordering = match case.variant {
+        Variant::NestedNd => crate::solver::linear::Ordering::NestedDissection,
         _ => crate::solver::linear::Ordering::Amd,
     };
     let system = DiscreteSystem::with_options(
@@ -332,7 +352,7 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
     let t1 = Instant::now();
     let predicted = match case.variant {
         Variant::Cold => None,
-        Variant::Nested | Variant::NestedParallel => {
+        Variant::Nested | Variant::NestedParallel | Variant::NestedNd => {
             let points: Vec<Point> = cons.dofs.iter().map(|d| d.point).collect();
             Some(warm_start::predict(&mesh, &problem, &points).map_err(bad)?)
         }
@@ -395,6 +415,14 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
             .max(-c.min_multiplier)
             .max(c.complementarity)
             .max(c.balance_residual),
+        factor_len: system.factor_len(),
+        changes: sol
+            .log
+            .iter()
+            .map(|l| format!("+{}/-{}", l.entered, l.left))
+            .collect::<Vec<_>>()
+            .join(" "),
+        run: 0,
     })
 }
 
@@ -432,7 +460,12 @@ impl Config {
                 .split(',')
                 .map(|s| Variant::parse(s.trim()))
                 .collect::<crate::Result<Vec<_>>>()?,
-            Err(_) => vec![Variant::Cold, Variant::Nested, Variant::NestedParallel],
+            Err(_) => vec![
+                Variant::Cold,
+                Variant::Nested,
+                Variant::NestedParallel,
+                Variant::NestedNd,
+            ],
         };
         Ok(Config {
             root: root.to_path_buf(),
@@ -681,6 +714,9 @@ pub fn run_dolfinx(cfg: &Config, mesh: &Path) -> crate::Result<BenchRow> {
         total_s: s.time_setup_s + s.time_solve_s,
         peak_mib,
         certificate: f64::NAN,
+        factor_len: 0,
+        changes: String::new(),
+        run: 0,
     })
 }
 
@@ -721,12 +757,38 @@ pub fn main_with_args(root: &Path, args: &[String]) -> crate::Result<()> {
     if let Some(d) = csv.parent() {
         std::fs::create_dir_all(d).map_err(|e| io_err(d, e))?;
     }
-    let mut rows: Vec<BenchRow> = Vec::new();
+    let run = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    // GRADVI_BENCH_MERGE: keep the rows of earlier runs that this run does not redo
+    let mut rows: Vec<BenchRow> =
+        if std::env::var_os("GRADVI_BENCH_MERGE").is_some() && csv.exists() {
+            let redo = |r: &BenchRow| {
+                cases.iter().any(|c| {
+                    r.code == "gradvi"
+                        && r.family == c.family.name()
+                        && r.scheme == c.scheme.to_string()
+                        && r.variant == c.variant.name()
+                        && (r.cells as f64 - c.expected_cells() as f64).abs()
+                            <= 0.2 * c.expected_cells() as f64
+                })
+            };
+            let old: Vec<BenchRow> = read_csv(&csv)?;
+            let kept: Vec<BenchRow> = old.into_iter().filter(|r| !redo(r)).collect();
+            eprintln!(
+                "[bench] GRADVI_BENCH_MERGE: keeping {} rows of earlier runs",
+                kept.len()
+            );
+            kept
+        } else {
+            Vec::new()
+        };
     let mut done_dolfinx: Vec<PathBuf> = Vec::new();
     let n_cases = cases.len();
     for (i, case) in cases.iter().enumerate() {
         eprintln!("[bench] ({}/{n_cases}) {} ...", i + 1, case.label());
-        let row = run_child(&exe, case)?;
+        let mut row = run_child(&exe, case)?;
+        row.run = run;
         eprintln!(
             "[bench]   {} cells, NITER {} (+{} coarse), total {:.3} s (factor {:.3}, assemble \
              {:.3}, solve {:.3}, other {:.3}), peak {:.0} MiB",
@@ -747,7 +809,10 @@ pub fn main_with_args(root: &Path, args: &[String]) -> crate::Result<()> {
             && !done_dolfinx.contains(f)
         {
             eprintln!("[bench]   dolfinx P1 on {} ...", f.display());
-            rows.push(run_dolfinx(&cfg, f)?);
+            let mut d = run_dolfinx(&cfg, f)?;
+            d.run = run;
+            rows.retain(|r| !(r.code == "dolfinx" && r.mesh == d.mesh));
+            rows.push(d);
             done_dolfinx.push(f.clone());
         }
         write_csv(&csv, &rows)?;
@@ -792,6 +857,113 @@ fn series_key(r: &BenchRow) -> String {
             r.family
         )
     }
+}
+
+/// A table comparing the `nested` rows with those of `variant` on the same meshes (a lever).
+fn lever_table(md: &mut String, rows: &[BenchRow], variant: &str, title: &str, intro: &str) {
+    let pairs: Vec<(&BenchRow, &BenchRow)> = rows
+        .iter()
+        .filter(|r| r.code == "gradvi" && r.variant == "nested")
+        .filter_map(|s| {
+            rows.iter()
+                .find(|p| {
+                    p.variant == variant
+                        && p.family == s.family
+                        && p.scheme == s.scheme
+                        && p.cells == s.cells
+                })
+                .map(|p| (s, p))
+        })
+        .collect();
+    if pairs.is_empty() {
+        return;
+    }
+    let _ = writeln!(md, "## {title}\n");
+    let _ = writeln!(
+        md,
+        "{intro} Ratio = {variant} / nested (> 1: the default is faster).\n"
+    );
+    let _ = writeln!(
+        md,
+        "| family | scheme | cells | fill nested | fill {variant} | factor/it nested [s] | factor/it {variant} [s] | ratio | total nested [s] | total {variant} [s] |\n|---|---|---|---|---|---|---|---|---|---|"
+    );
+    let per_it = |r: &BenchRow| r.factor_s / r.niter.max(1) as f64;
+    let fill = |r: &BenchRow| {
+        if r.factor_len > 0 {
+            r.factor_len.to_string()
+        } else {
+            "–".into()
+        }
+    };
+    for (d, v) in &pairs {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {} | {:.2} | {} | {} |",
+            d.family,
+            d.scheme,
+            d.cells,
+            fill(d),
+            fill(v),
+            fmt_s(per_it(d)),
+            fmt_s(per_it(v)),
+            per_it(v) / per_it(d),
+            fmt_s(d.total_s),
+            fmt_s(v.total_s)
+        );
+    }
+    let faster = pairs.iter().filter(|(d, v)| per_it(d) < per_it(v)).count();
+    let _ = writeln!(
+        md,
+        "\nThe default factorisation is the faster one on {faster} of the {} cases.\n",
+        pairs.len()
+    );
+}
+
+/// The sizes of the active-set changes per solve of the largest cases of each series.
+fn active_set_changes(md: &mut String, rows: &[BenchRow]) {
+    let mut keys: Vec<String> = rows
+        .iter()
+        .filter(|r| r.code == "gradvi" && !r.changes.is_empty())
+        .map(series_key)
+        .collect();
+    keys.sort();
+    keys.dedup();
+    if keys.is_empty() {
+        return;
+    }
+    let _ = writeln!(md, "## Size of the active-set changes\n");
+    let _ = writeln!(
+        md,
+        "For the largest case of each series: the unknowns that entered and left the active set \
+         before each fine solve (`+entered/-left`; the first solve of the nested variant starts \
+         from the prediction, the cold one from the empty set). Long lists show their first six \
+         and last three steps.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| series | cells | NITER | changes |\n|---|---|---|---|"
+    );
+    for k in &keys {
+        let Some(r) = rows
+            .iter()
+            .filter(|r| r.code == "gradvi" && !r.changes.is_empty() && &series_key(r) == k)
+            .max_by_key(|r| r.cells)
+        else {
+            continue;
+        };
+        let steps: Vec<&str> = r.changes.split(' ').collect();
+        let shown = if steps.len() > 9 {
+            format!(
+                "{} … {}",
+                steps[..6].join(" "),
+                steps[steps.len() - 3..].join(" ")
+            )
+        } else {
+            steps.join(" ")
+        };
+        let _ = writeln!(md, "| {k} | {} | {} | {shown} |", r.cells, r.niter);
+    }
+    let _ = writeln!(md);
 }
 
 /// Least-squares exponent of total time against cells over [`FIT_RANGE`], with the range
@@ -1086,57 +1258,34 @@ pub fn write_report(cfg: &Config) -> crate::Result<()> {
         let _ = writeln!(md);
     }
 
-    // lever: threads of the factorisation
-    let pairs: Vec<(&BenchRow, &BenchRow)> = rows
-        .iter()
-        .filter(|r| r.code == "gradvi" && r.variant == "nested")
-        .filter_map(|s| {
-            rows.iter()
-                .find(|p| {
-                    p.variant == "nested-par"
-                        && p.family == s.family
-                        && p.scheme == s.scheme
-                        && p.cells == s.cells
-                })
-                .map(|p| (s, p))
-        })
-        .collect();
-    if !pairs.is_empty() {
-        let _ = writeln!(md, "## Lever: threads of the numeric factorisation\n");
+    // levers: threads of the factorisation, fill-reducing ordering
+    lever_table(
+        &mut md,
+        &rows,
+        "nested-par",
+        "Lever: threads of the numeric factorisation",
+        "The nested variant with the default sequential factorisation \
+         (`FactorThreads::Sequential`) against the same run with faer's parallel one \
+         (`nested-par`, `FactorThreads::Global`); the assembly is parallel (rayon) in both.",
+    );
+    lever_table(
+        &mut md,
+        &rows,
+        "nested-nd",
+        "Lever: fill-reducing ordering",
+        "The nested variant with the default AMD ordering against the same run with our \
+         nested dissection by level-set separators (`nested-nd`, `Ordering::NestedDissection`). \
+         Fill = stored values of the Cholesky factor.",
+    );
+    active_set_changes(&mut md, &rows);
+    let runs: std::collections::BTreeSet<u64> = rows.iter().map(|r| r.run).collect();
+    if runs.len() > 1 {
         let _ = writeln!(
             md,
-            "The nested variant with the default sequential factorisation \
-             (`FactorThreads::Sequential`) against the same run with faer's parallel one \
-             (`nested-par`, `FactorThreads::Global`); the assembly is parallel (rayon) in both. \
-             Ratio > 1: the sequential factorisation is faster.\n"
-        );
-        let _ = writeln!(
-            md,
-            "| family | scheme | cells | factor/it sequential [s] | factor/it parallel [s] | ratio | total sequential [s] | total parallel [s] |\n|---|---|---|---|---|---|---|---|"
-        );
-        let per_it = |r: &BenchRow| r.factor_s / r.niter.max(1) as f64;
-        for (sq, par) in &pairs {
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} | {:.2} | {} | {} |",
-                sq.family,
-                sq.scheme,
-                sq.cells,
-                fmt_s(per_it(sq)),
-                fmt_s(per_it(par)),
-                per_it(par) / per_it(sq),
-                fmt_s(sq.total_s),
-                fmt_s(par.total_s)
-            );
-        }
-        let faster = pairs
-            .iter()
-            .filter(|(sq, par)| per_it(sq) < per_it(par))
-            .count();
-        let _ = writeln!(
-            md,
-            "\nThe sequential factorisation is the faster one on {faster} of the {} cases.\n",
-            pairs.len()
+            "The rows above come from {} benchmark runs (`GRADVI_BENCH_MERGE`; column `run` of the \
+             CSV, 0 for rows written before the column existed): timings of different runs \
+             are comparable only up to the load of the machine at the time.\n",
+            runs.len()
         );
     }
 
@@ -1304,6 +1453,7 @@ mod tests {
             (SchemeKind::Hmm, Variant::Nested),
             (SchemeKind::P1, Variant::Nested),
             (SchemeKind::Hmm, Variant::NestedParallel),
+            (SchemeKind::Hmm, Variant::NestedNd),
         ] {
             let family = if scheme == SchemeKind::P1 {
                 BenchFamily::Hexagonal
@@ -1341,6 +1491,26 @@ mod tests {
         write_report(&cfg).unwrap();
         let md = std::fs::read_to_string(cfg.report()).unwrap();
         assert!(md.contains("## Targets") && md.contains("## All cases"));
+        for section in [
+            "## Lever: threads of the numeric factorisation",
+            "## Lever: fill-reducing ordering",
+            "## Size of the active-set changes",
+        ] {
+            assert!(md.contains(section), "no {section}");
+        }
+        // the changes of a row add up to its final active set, and the fill is recorded
+        for r in &rows {
+            assert!(
+                r.factor_len > 0 && r.changes.split(' ').count() == r.niter,
+                "{r:?}"
+            );
+        }
+        // rows of an older CSV (without the new columns) still read
+        let old = "family,mesh,code,scheme,variant,cells,unknowns,condensed,nnz,niter,coarse_niter,mesh_s,coarse_s,setup_s,symbolic_s,assemble_s,factor_s,solve_s,other_s,total_s,peak_mib,certificate\n\
+                   gmsh,m,gradvi,hmm,cold,10,20,15,30,2,0,0.1,0,0.1,0.1,0.1,0.1,0.1,0.1,0.6,5,1e-16\n";
+        std::fs::write(cfg.csv(), old).unwrap();
+        let back: Vec<BenchRow> = read_csv(&cfg.csv()).unwrap();
+        assert_eq!((back[0].factor_len, back[0].run), (0, 0));
         assert!(std::fs::read(cfg.figure()).unwrap().starts_with(b"\x89PNG"));
         std::fs::remove_dir_all(&dir).ok();
     }
