@@ -31,10 +31,10 @@ pub enum Ordering {
 /// Threads of the numeric factorisation and the triangular solves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FactorThreads {
-    /// One thread (the default). On the 2-core machines of the benchmark the sequential
-    /// supernodal factorisation was faster than faer's parallel one at every size measured
-    /// (`replication/BENCHMARKS.md`, variant `nested-par`), while the assembly still runs on
-    /// every core (rayon).
+    /// One thread (the default). On the 2-core machine of the benchmark the sequential
+    /// supernodal factorisation was faster than faer's parallel one on most cases, by up to
+    /// about 2× around 10⁵ cells and by little at 10⁶ (`replication/BENCHMARKS.md`, lever
+    /// table of variant `nested-par`); the assembly still runs on every core (rayon).
     #[default]
     Sequential,
     /// faer's global parallelism (`faer::get_global_parallelism()`, rayon by default).
