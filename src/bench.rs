@@ -1097,7 +1097,9 @@ pub fn write_report(cfg: &Config) -> crate::Result<()> {
          **nested** (`gradvi solve --warm-start nested`, `solver::warm_start`) starts the same \
          algorithm from an active set predicted by coarse Cartesian HMM solves of the same \
          problem (about cells/16 coarse cells, themselves warm-started from a mesh 4 times \
-         coarser per direction, …), whose cost is included in the total. \
+         coarser per direction, …), whose cost is included in the total; **nested-par** and **nested-nd** are the nested \
+         variant with faer's parallel factorisation and with a nested-dissection ordering \
+         (the levers below). \
          dolfinx is P1 with PETSc SNES `vinewtonrsls` and LU (`reference/solve.py`); its time is \
          its own `setup + solve` (mesh reading, assembly and the SNES loop; the Python start-up \
          and JIT are excluded). gradvi's total includes mesh reading or generation.\n"
