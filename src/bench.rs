@@ -37,15 +37,14 @@
 //! Arguments: `--report-only` rewrites the report from the existing CSV; `--child FAMILY
 //! SCHEME VARIANT SIZE [FILE]` runs one case and prints its row as JSON.
 
-use crate::assembly::DiscreteSystem;
+use crate::mesh::PolyMesh;
 use crate::mesh::generate::{cartesian, hexagonal};
 use crate::mesh::io::read_mesh;
-use crate::mesh::{Point, PolyMesh};
 use crate::output::plot::{LegendPosition, LineOptions, LineSeries, plot_lines};
 use crate::problem::paper_test3;
 use crate::replication::records::{read_csv, write_csv};
 use crate::scheme::SchemeKind;
-use crate::solver::{ActiveSetOptions, active_set, build_constraints, warm_start};
+use crate::solver::{ActiveSetOptions, WarmStart, solve_problem_with};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -323,21 +322,32 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
     let mesh_s = t0.elapsed().as_secs_f64();
     let scheme = crate::scheme::build(case.scheme, &mesh)?;
     let problem = paper_test3(C);
-    let ordering = match case.variant {
-        Variant::NestedNd => crate::solver::linear::Ordering::NestedDissection,
-        _ => crate::solver::linear::Ordering::Amd,
-    };
-    let system = DiscreteSystem::with_options(
-        scheme.as_ref(),
-        &problem,
-        crate::assembly::SystemOptions {
-            ordering,
-            factor_threads: match case.variant {
-                Variant::NestedParallel => crate::solver::linear::FactorThreads::Global,
-                _ => crate::solver::linear::FactorThreads::Sequential,
-            },
+    let system_options = crate::assembly::SystemOptions {
+        ordering: match case.variant {
+            Variant::NestedNd => crate::solver::linear::Ordering::NestedDissection,
+            _ => crate::solver::linear::Ordering::Amd,
         },
-    )?;
+        factor_threads: match case.variant {
+            Variant::NestedParallel => crate::solver::linear::FactorThreads::Global,
+            _ => crate::solver::linear::FactorThreads::Sequential,
+        },
+    };
+    let opts = ActiveSetOptions {
+        warm_start: match case.variant {
+            Variant::Cold => WarmStart::Cold,
+            Variant::Nested | Variant::NestedParallel | Variant::NestedNd => WarmStart::Nested,
+        },
+        ..Default::default()
+    };
+    let sol = solve_problem_with(scheme.as_ref(), &problem, system_options, &opts)?;
+    let total_s = t0.elapsed().as_secs_f64();
+    if let Some(why) = sol.warm_start.as_ref().and_then(|w| w.skipped.as_ref()) {
+        return Err(bad(format!(
+            "{}: no nested prediction: {why}",
+            case.label()
+        )));
+    }
+    let system = &sol.system;
     if std::env::var_os("GRADVI_BENCH_LOG").is_some() {
         eprintln!(
             "[bench]     condensed {} unknowns, {} entries, factor {} values",
@@ -345,42 +355,17 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
             system.nnz(),
             system.factor_len()
         );
-    }
-    let cons =
-        build_constraints(&system, &problem)?.ok_or_else(|| bad("Test 3 has a barrier".into()))?;
-    // the nested prediction, as `solve_problem` makes it with `WarmStart::Nested`, timed apart
-    let t1 = Instant::now();
-    let predicted = match case.variant {
-        Variant::Cold => None,
-        Variant::Nested | Variant::NestedParallel | Variant::NestedNd => {
-            let points: Vec<Point> = cons.dofs.iter().map(|d| d.point).collect();
-            Some(warm_start::predict(&mesh, &problem, &points).map_err(bad)?)
-        }
-    };
-    let coarse_s = t1.elapsed().as_secs_f64();
-    let opts = ActiveSetOptions {
-        initial_active: predicted.as_ref().map(|(a, _)| a.clone()),
-        ..Default::default()
-    };
-    let sol = active_set::solve(&system, &cons, &opts)?;
-    let total_s = t0.elapsed().as_secs_f64();
-    if std::env::var_os("GRADVI_BENCH_LOG").is_some() {
-        for l in &sol.log {
+        for l in &sol.result.log {
             eprintln!(
                 "[bench]     solve {:>3}: active {:>8} (+{}, -{}), factor {:.3} s",
                 l.solve, l.active, l.entered, l.left, l.timings.factor
             );
         }
     }
-    let (mut assemble_s, mut factor_s, mut solve_s) = (0.0, 0.0, 0.0);
-    for l in &sol.log {
-        assemble_s += l.timings.assemble;
-        factor_s += l.timings.factor;
-        solve_s += l.timings.solve;
-    }
-    let setup_s = system.setup_seconds - system.symbolic_seconds;
-    let symbolic_s = system.symbolic_seconds;
-    let c = sol.certificate;
+    let t = sol.timings;
+    let coarse_s = t.warm_start;
+    let setup_s = t.setup - t.symbolic;
+    let c = sol.result.certificate;
     Ok(BenchRow {
         family: case.family.name().into(),
         mesh: name,
@@ -391,23 +376,23 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
         unknowns: system.n_unknowns(),
         condensed: system.n_condensed(),
         nnz: system.nnz(),
-        niter: sol.niter,
-        coarse_niter: predicted.map_or(0, |(_, r)| r.coarse_solves),
+        niter: sol.niter(),
+        coarse_niter: sol.warm_start.as_ref().map_or(0, |w| w.coarse_solves),
         mesh_s,
         coarse_s,
         setup_s,
-        symbolic_s,
-        assemble_s,
-        factor_s,
-        solve_s,
+        symbolic_s: t.symbolic,
+        assemble_s: t.assemble,
+        factor_s: t.factor,
+        solve_s: t.solve,
         other_s: total_s
             - mesh_s
             - coarse_s
             - setup_s
-            - symbolic_s
-            - assemble_s
-            - factor_s
-            - solve_s,
+            - t.symbolic
+            - t.assemble
+            - t.factor
+            - t.solve,
         total_s,
         peak_mib: peak_memory_mib(),
         certificate: c
@@ -417,6 +402,7 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
             .max(c.balance_residual),
         factor_len: system.factor_len(),
         changes: sol
+            .result
             .log
             .iter()
             .map(|l| format!("+{}/-{}", l.entered, l.left))

@@ -879,6 +879,32 @@ struct Surface {
     tris: Vec<([u32; 3], u8)>,
 }
 
+/// Every cell as a fan of triangles from its centroid (height `cell[k]`) to its sides
+/// (vertex heights `vertex[v]`); points: the vertices, then the centroids.
+fn fan_surface(
+    mesh: &PolyMesh,
+    cell: &[f64],
+    vertex: &[f64],
+    pts: &mut Vec<P3>,
+    tris: &mut Vec<([u32; 3], u8)>,
+) {
+    let nv = mesh.n_vertices();
+    pts.reserve(nv + cell.len());
+    for (v, &z) in vertex.iter().enumerate() {
+        let p = mesh.vertex(v);
+        pts.push([p[0], p[1], z]);
+    }
+    for (k, &uk) in cell.iter().enumerate() {
+        let c = mesh.centroid(k);
+        pts.push([c[0], c[1], uk]);
+        let cv = mesh.cell_vertices(k);
+        for i in 0..cv.len() {
+            let (a, b) = (cv[i], cv[(i + 1) % cv.len()]);
+            tris.push(([a as u32, b as u32, (nv + k) as u32], 1));
+        }
+    }
+}
+
 fn build_surface(mesh: &PolyMesh, field: Field, rendering: CellRendering) -> Surface {
     let nv = mesh.n_vertices();
     let nc = mesh.n_cells();
@@ -886,6 +912,7 @@ fn build_surface(mesh: &PolyMesh, field: Field, rendering: CellRendering) -> Sur
     let mut tris: Vec<([u32; 3], u8)> = Vec::new();
     match (field, rendering) {
         (Field::Cell(u), CellRendering::Fan) => {
+            // vertex heights: area-weighted averages of the adjacent cell values
             let mut num = vec![0.0; nv];
             let mut den = vec![0.0; nv];
             for (k, &uk) in u.iter().enumerate() {
@@ -895,37 +922,15 @@ fn build_surface(mesh: &PolyMesh, field: Field, rendering: CellRendering) -> Sur
                     den[v] += a;
                 }
             }
-            pts.reserve(nv + nc);
-            for v in 0..nv {
-                let p = mesh.vertex(v);
-                let z = if den[v] > 0.0 { num[v] / den[v] } else { 0.0 };
-                pts.push([p[0], p[1], z]);
-            }
-            for (k, &uk) in u.iter().enumerate() {
-                let c = mesh.centroid(k);
-                pts.push([c[0], c[1], uk]);
-                let cv = mesh.cell_vertices(k);
-                for i in 0..cv.len() {
-                    let (a, b) = (cv[i], cv[(i + 1) % cv.len()]);
-                    tris.push(([a as u32, b as u32, (nv + k) as u32], 1));
-                }
-            }
+            let vertex: Vec<f64> = num
+                .iter()
+                .zip(&den)
+                .map(|(&n, &d)| if d > 0.0 { n / d } else { 0.0 })
+                .collect();
+            fan_surface(mesh, u, &vertex, &mut pts, &mut tris);
         }
         (Field::CellWithVertex { cell, vertex }, _) => {
-            pts.reserve(nv + nc);
-            for (v, &z) in vertex.iter().enumerate() {
-                let p = mesh.vertex(v);
-                pts.push([p[0], p[1], z]);
-            }
-            for (k, &uk) in cell.iter().enumerate() {
-                let c = mesh.centroid(k);
-                pts.push([c[0], c[1], uk]);
-                let cv = mesh.cell_vertices(k);
-                for i in 0..cv.len() {
-                    let (a, b) = (cv[i], cv[(i + 1) % cv.len()]);
-                    tris.push(([a as u32, b as u32, (nv + k) as u32], 1));
-                }
-            }
+            fan_surface(mesh, cell, vertex, &mut pts, &mut tris);
         }
         (Field::Cell(u), CellRendering::Flat) => {
             for (k, &uk) in u.iter().enumerate() {

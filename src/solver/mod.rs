@@ -8,7 +8,7 @@ pub mod linear;
 pub mod pgs;
 pub mod warm_start;
 
-use crate::assembly::DiscreteSystem;
+use crate::assembly::{DiscreteSystem, SystemOptions};
 use crate::problem::{ConstraintKind, Problem, check_finite};
 use crate::scheme::{GradientDiscretisation, PointDof};
 pub use active_set::{
@@ -165,8 +165,19 @@ pub fn solve_problem<'a>(
     problem: &Problem,
     opts: &ActiveSetOptions,
 ) -> crate::Result<Solution<'a>> {
+    solve_problem_with(scheme, problem, SystemOptions::default(), opts)
+}
+
+/// As [`solve_problem`], with the options of the linear algebra (fill-reducing ordering,
+/// threads of the factorisation).
+pub fn solve_problem_with<'a>(
+    scheme: &'a dyn GradientDiscretisation,
+    problem: &Problem,
+    system_options: SystemOptions,
+    opts: &ActiveSetOptions,
+) -> crate::Result<Solution<'a>> {
     let t0 = Instant::now();
-    let system = DiscreteSystem::new(scheme, problem)?;
+    let system = DiscreteSystem::with_options(scheme, problem, system_options)?;
     let constraints = build_constraints(&system, problem)?;
     let mut warm = None;
     let result = match &constraints {
