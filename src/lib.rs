@@ -67,20 +67,18 @@
 //!   and cycle detection ([`solver::active_set`]), its nested warm start for fine meshes
 //!   ([`solver::warm_start`]), projected Gauss–Seidel ([`solver::pgs`]).
 //! - [`post`]: errors, orders, fitted slopes, contact-zone metrics.
-//! - [`output`]: PNG plots. [`replication`]: the paper's experiments, figures and report.
+//! - The applications (command line, replication of the paper, cross-check with dolfinx,
+//!   benchmark, plots and reports) live in the `gradvi` binary (`src/main.rs`, `src/app/`), not in
+//!   this library: the library depends on no CLI, plotting, report or CSV crate.
 #![warn(missing_docs)]
 // `!(x > y)` is used on purpose throughout: unlike `x <= y` it is true when x is NaN, so
 // validation rejects NaN data.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 pub mod assembly;
-pub mod bench;
-pub mod crosscheck;
 pub mod error;
 pub mod mesh;
-pub mod output;
 pub mod post;
 pub mod problem;
-pub mod replication;
 pub mod scheme;
 pub mod solver;
 pub use error::{Error, MeshError, Result, SolverError};

@@ -1,6 +1,8 @@
 //! The `gradvi` command line: mesh tools, single solves, the replication of the paper and the
 //! cross-check against dolfinx. Run `gradvi --help` or `gradvi <command> --help`.
 
+mod app;
+
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 use gradvi::mesh::PolyMesh;
@@ -30,7 +32,15 @@ enum Command {
     /// Reproduce the paper's tables and figures (results/*.csv, figures/*.png, REPORT.md).
     Replicate(ReplicateArgs),
     /// Compare gradvi's P1 and HMM with the dolfinx reference solves (CROSSCHECK.md).
-    Crosscheck(gradvi::crosscheck::CrosscheckArgs),
+    Crosscheck(app::crosscheck::CrosscheckArgs),
+    /// The scaling benchmark (run by `make bench`; see README "Performance"). Arguments:
+    /// `--report-only` rewrites BENCHMARKS.md from bench.csv; `--root DIR` is the repository.
+    #[command(hide = true)]
+    Bench {
+        /// Arguments passed to the benchmark driver.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
 }
 
 #[derive(Subcommand)]
@@ -322,7 +332,7 @@ fn solve(a: &SolveArgs) -> Result<()> {
 }
 
 fn replicate(a: &ReplicateArgs) -> Result<()> {
-    let cfg = gradvi::replication::Config {
+    let cfg = app::replication::Config {
         out: a.out.clone(),
         meshes: a.meshes.clone(),
         fvca5: a.fvca5.clone(),
@@ -334,23 +344,23 @@ fn replicate(a: &ReplicateArgs) -> Result<()> {
     if !a.report_only {
         let t0 = std::time::Instant::now();
         eprintln!("running the experiments of the paper's Section 4 (HMM and P1)...");
-        let mut timings = gradvi::replication::experiments::run(&cfg, &mut progress)?;
+        let mut timings = app::replication::experiments::run(&cfg, &mut progress)?;
         let t = std::time::Instant::now();
         eprintln!("drawing the figures...");
-        gradvi::replication::figures::run(&cfg, &mut progress)?;
-        timings.push(gradvi::replication::records::TimingRow {
+        app::replication::figures::run(&cfg, &mut progress)?;
+        timings.push(app::replication::records::TimingRow {
             stage: "figures".into(),
             seconds: t.elapsed().as_secs_f64(),
         });
-        gradvi::replication::records::write_csv(&cfg.results().join("timings.csv"), &timings)?;
+        app::replication::records::write_csv(&cfg.results().join("timings.csv"), &timings)?;
         eprintln!(
             "experiments and figures: {:.1} s",
             t0.elapsed().as_secs_f64()
         );
     } else {
-        gradvi::replication::figures::plots_from_csv(&cfg)?;
+        app::replication::figures::plots_from_csv(&cfg)?;
     }
-    gradvi::replication::report::write(&cfg, &root)?;
+    app::replication::report::write(&cfg, &root)?;
     eprintln!("wrote {}", cfg.out.join("REPORT.md").display());
     Ok(())
 }
@@ -383,6 +393,10 @@ fn main() -> Result<()> {
         }
         Command::Solve(a) => solve(a),
         Command::Replicate(a) => replicate(a),
-        Command::Crosscheck(a) => gradvi::crosscheck::run(a),
+        Command::Crosscheck(a) => app::crosscheck::run(a),
+        Command::Bench { args } => {
+            let root = std::env::current_dir()?;
+            Ok(app::bench::main_with_args(&root, args)?)
+        }
     }
 }

@@ -112,6 +112,14 @@ impl GradientDiscretisation for Hmm<'_> {
     fn n_interior(&self) -> usize {
         self.mesh.n_cells()
     }
+    fn dof_entity(&self, dof: usize) -> super::Entity {
+        let ne = self.mesh.n_edges();
+        if dof < ne {
+            super::Entity::Edge(dof)
+        } else {
+            super::Entity::Cell(dof - ne)
+        }
+    }
     fn n_local_interior(&self, _k: usize) -> usize {
         1
     }

@@ -38,6 +38,18 @@ pub struct PointDof {
     pub measure: f64,
 }
 
+/// The mesh entity an unknown lives on (its value is attached to that vertex, edge or cell, for
+/// output and post-processing).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+pub enum Entity {
+    /// A mesh vertex.
+    Vertex(usize),
+    /// A mesh edge (face).
+    Edge(usize),
+    /// A mesh cell.
+    Cell(usize),
+}
+
 /// The interface every gradient discretisation implements. See the module docs.
 pub trait GradientDiscretisation: Sync {
     /// Short name ("hmm", "p1").
@@ -52,6 +64,8 @@ pub trait GradientDiscretisation: Sync {
     fn n_unknowns(&self) -> usize {
         self.n_skeleton() + self.n_interior()
     }
+    /// The mesh entity of unknown `dof` (HMM: edges then cells; P1: vertices).
+    fn dof_entity(&self, dof: usize) -> Entity;
     /// Number of interior unknowns of cell `k` (they come first in [`Self::local_dofs`]).
     fn n_local_interior(&self, k: usize) -> usize;
     /// The unknowns of cell `k`: interior first, then skeleton. Clears and fills `dofs`.
@@ -88,45 +102,105 @@ pub trait GradientDiscretisation: Sync {
     }
 }
 
-/// The scheme names accepted on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum SchemeKind {
+/// Options common to the constructors of the registered schemes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SchemeOptions {
+    /// HMM stabilisation parameter α (> 0); other schemes have no stabilisation and reject a
+    /// value other than 1.
+    pub alpha: f64,
+}
+
+impl Default for SchemeOptions {
+    fn default() -> Self {
+        SchemeOptions { alpha: 1.0 }
+    }
+}
+
+/// Declares the registered schemes: the [`SchemeKind`] enum (a clap `ValueEnum` with the `cli`
+/// feature), its names, and [`build`]. One line per scheme.
+macro_rules! register_schemes {
+    ($($(#[$doc:meta])* $variant:ident = $name:literal => $ctor:expr,)*) => {
+        /// The registered schemes (`--scheme NAME` on the command line).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+        #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+        #[serde(rename_all = "lowercase")]
+        pub enum SchemeKind {
+            $($(#[$doc])* #[cfg_attr(feature = "cli", value(name = $name))] $variant,)*
+        }
+
+        impl SchemeKind {
+            /// Every registered scheme, in registration order.
+            pub const ALL: &'static [SchemeKind] = &[$(SchemeKind::$variant),*];
+            /// The scheme's name ("hmm", "p1", …).
+            pub fn name(self) -> &'static str {
+                match self { $(SchemeKind::$variant => $name,)* }
+            }
+        }
+
+        /// Builds the scheme of kind `kind` on `mesh` with `options` (a typed error if the mesh
+        /// does not suit the scheme, e.g. P1 on a non-triangular mesh, or an option is invalid).
+        pub fn build_with<'a>(
+            kind: SchemeKind,
+            mesh: &'a PolyMesh,
+            options: &SchemeOptions,
+        ) -> crate::Result<Box<dyn GradientDiscretisation + 'a>> {
+            match kind {
+                $(SchemeKind::$variant => {
+                    let ctor: fn(&'a PolyMesh, &SchemeOptions)
+                        -> crate::Result<Box<dyn GradientDiscretisation + 'a>> = $ctor;
+                    ctor(mesh, options)
+                })*
+            }
+        }
+    };
+}
+
+/// Rejects a stabilisation parameter for a scheme without stabilisation.
+fn no_alpha(name: &str, o: &SchemeOptions) -> crate::Result<()> {
+    if o.alpha != 1.0 {
+        return Err(crate::Error::InvalidData(format!(
+            "the stabilisation parameter alpha = {} is an HMM option; the {name} scheme has none",
+            o.alpha
+        )));
+    }
+    Ok(())
+}
+
+register_schemes! {
     /// Hybrid Mimetic Mixed (SUSHI stabilisation).
-    Hmm,
+    Hmm = "hmm" => |m, o| Ok(Box::new(Hmm::with_alpha(m, o.alpha)?)),
     /// Conforming P1 finite elements on triangles.
-    P1,
+    P1 = "p1" => |m, o| { no_alpha("p1", o)?; Ok(Box::new(P1::new(m)?)) },
 }
 
 impl std::str::FromStr for SchemeKind {
     type Err = crate::Error;
     fn from_str(s: &str) -> crate::Result<Self> {
-        match s.to_ascii_lowercase().as_str() {
-            "hmm" => Ok(SchemeKind::Hmm),
-            "p1" => Ok(SchemeKind::P1),
-            _ => Err(crate::Error::InvalidData(format!(
-                "unknown scheme '{s}' (expected hmm or p1)"
-            ))),
-        }
+        let l = s.to_ascii_lowercase();
+        SchemeKind::ALL
+            .iter()
+            .copied()
+            .find(|k| k.name() == l)
+            .ok_or_else(|| {
+                let names: Vec<_> = SchemeKind::ALL.iter().map(|k| k.name()).collect();
+                crate::Error::InvalidData(format!(
+                    "unknown scheme '{s}' (expected one of: {})",
+                    names.join(", ")
+                ))
+            })
     }
 }
 
 impl std::fmt::Display for SchemeKind {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            SchemeKind::Hmm => "hmm",
-            SchemeKind::P1 => "p1",
-        })
+        f.write_str(self.name())
     }
 }
 
-/// Builds the scheme of kind `kind` on `mesh` (P1 requires a triangle mesh).
+/// Builds the scheme of kind `kind` on `mesh` with the default options.
 pub fn build<'a>(
     kind: SchemeKind,
     mesh: &'a PolyMesh,
 ) -> crate::Result<Box<dyn GradientDiscretisation + 'a>> {
-    Ok(match kind {
-        SchemeKind::Hmm => Box::new(Hmm::new(mesh)),
-        SchemeKind::P1 => Box::new(P1::new(mesh)?),
-    })
+    build_with(kind, mesh, &SchemeOptions::default())
 }

@@ -68,6 +68,9 @@ impl GradientDiscretisation for P1<'_> {
     fn n_interior(&self) -> usize {
         0
     }
+    fn dof_entity(&self, dof: usize) -> super::Entity {
+        super::Entity::Vertex(dof)
+    }
     fn n_local_interior(&self, _k: usize) -> usize {
         0
     }

@@ -7,7 +7,7 @@
 //! 2. solves every reference case with gradvi P1 and HMM on the same mesh and compares
 //!    ([`solve_cases`]): the gradvi-P1 and dolfinx-P1 nodal values (matched by vertex
 //!    coordinates) and active sets, the Test 2 errors of the three solutions (one formula,
-//!    [`crate::post::relative_errors`]), contact metrics, NITER and timings; one row per case
+//!    [`gradvi::post::relative_errors`]), contact metrics, NITER and timings; one row per case
 //!    in `results/crosscheck.csv` ([`CrosscheckRow`]);
 //! 3. writes `CROSSCHECK.md` from that CSV only ([`write_report`]), with computed verdicts, and
 //!    fails (after writing the report) when a comparison with a tolerance fails.
@@ -16,17 +16,17 @@
 //! load = exact integral of the one-sided affine interpolant of f, nodal barriers, Dirichlet
 //! vertices excluded), so their solutions must agree to round-off: [`SAME_PROBLEM_TOL`].
 
-use crate::mesh::io::read_mesh;
-use crate::mesh::{NO_CELL, Point, PolyMesh};
-use crate::post::contact::{contact_measure, free_boundary, hausdorff, switch_point};
-use crate::post::{fitted_slope, order, relative_errors};
-use crate::problem::{Problem, paper_test1, paper_test2, paper_test3};
-use crate::replication::experiments::with_solution;
-use crate::replication::records::{
+use gradvi::mesh::io::read_mesh;
+use gradvi::mesh::{NO_CELL, Point, PolyMesh};
+use gradvi::post::contact::{contact_measure, free_boundary, hausdorff, switch_point};
+use gradvi::post::{fitted_slope, order, relative_errors};
+use gradvi::problem::{Problem, paper_test1, paper_test2, paper_test3};
+use crate::app::replication::experiments::with_solution;
+use crate::app::replication::records::{
     PaperTable1, PaperTable2, PaperTable3, TimingRow, read_csv, write_csv,
 };
-use crate::scheme::{GradientDiscretisation, SchemeKind};
-use crate::solver::Constraints;
+use gradvi::scheme::{GradientDiscretisation, SchemeKind};
+use gradvi::solver::Constraints;
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
@@ -274,7 +274,7 @@ pub fn read_reference(dir: &Path, coarse: bool) -> Result<Vec<ReferenceCase>> {
 }
 
 /// Neighbouring constrained unknowns (positions in `cons.dofs`), for
-/// [`crate::post::contact::free_boundary`]: pairs of cells sharing an edge when the constrained
+/// [`gradvi::post::contact::free_boundary`]: pairs of cells sharing an edge when the constrained
 /// unknowns are cell unknowns (HMM obstacle), pairs of vertices joined by an edge when they are
 /// vertex unknowns (P1), pairs of edges sharing a vertex when they are edge unknowns (HMM
 /// Signorini). Pairs whose unknowns are not both constrained are left out.
@@ -662,7 +662,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     let rows = solve_cases(args, &cases, &mut progress)?;
     let t_solve = t.elapsed().as_secs_f64();
     let res = args.out.join("results");
-    crate::replication::create_dir(&res)?;
+    crate::app::replication::create_dir(&res)?;
     write_csv(&res.join("crosscheck.csv"), &rows)?;
     let timings = vec![
         TimingRow {

@@ -182,8 +182,8 @@ pub struct PaperTable3 {
 }
 
 /// Writes rows to a CSV file (header from the field names).
-pub fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> crate::Result<()> {
-    let err = |e: csv::Error| crate::Error::Io {
+pub fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> gradvi::Result<()> {
+    let err = |e: csv::Error| gradvi::Error::Io {
         path: path.to_path_buf(),
         source: std::io::Error::other(e.to_string()),
     };
@@ -191,15 +191,15 @@ pub fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> crate::Result<()> {
     for r in rows {
         w.serialize(r).map_err(err)?;
     }
-    w.flush().map_err(|source| crate::Error::Io {
+    w.flush().map_err(|source| gradvi::Error::Io {
         path: path.to_path_buf(),
         source,
     })
 }
 
 /// Reads rows from a CSV file with a header. Comment lines starting with `#` are skipped.
-pub fn read_csv<T: DeserializeOwned>(path: &Path) -> crate::Result<Vec<T>> {
-    let err = |e: csv::Error| crate::Error::Io {
+pub fn read_csv<T: DeserializeOwned>(path: &Path) -> gradvi::Result<Vec<T>> {
+    let err = |e: csv::Error| gradvi::Error::Io {
         path: path.to_path_buf(),
         source: std::io::Error::other(e.to_string()),
     };

@@ -1,11 +1,11 @@
 //! The scaling benchmark behind `make bench` (`cargo bench --bench scale`).
 //!
-//! Test 3 of the paper (obstacle problem, C = −5, [`crate::problem::paper_test3`]) is solved
+//! Test 3 of the paper (obstacle problem, C = −5, [`gradvi::problem::paper_test3`]) is solved
 //!
 //! - with HMM and P1 on gmsh triangle meshes of the unit square from 10³ to 10⁶ cells (written
 //!   at bench time from `meshes/test3_4.geo` with smaller characteristic lengths into
 //!   `target/bench-meshes/`, which is not committed),
-//! - with HMM on the hexagonal ([`crate::mesh::generate::hexagonal()`]) and Cartesian families,
+//! - with HMM on the hexagonal ([`gradvi::mesh::generate::hexagonal()`]) and Cartesian families,
 //! - with the dolfinx P1 reference (`reference/solve.py`, PETSc SNES VI) on the same gmsh meshes
 //!   up to [`DOLFINX_MAX_CELLS`] cells.
 //!
@@ -18,15 +18,15 @@
 //!
 //! Four variants of gradvi's solver are timed:
 //! - `cold`: the default options (the paper's monotony algorithm from A₀ = ∅, as in
-//!   [`crate::solver::solve_problem`]);
+//!   [`gradvi::solver::solve_problem`]);
 //! - `nested`: the same algorithm with an initial active set predicted by a chain of coarse
-//!   Cartesian HMM solves ([`crate::solver::warm_start`], `--warm-start nested` of
+//!   Cartesian HMM solves ([`gradvi::solver::warm_start`], `--warm-start nested` of
 //!   `gradvi solve`): the coarse solves cost a fraction of the fine one, and the fine
 //!   iteration starts next to its solution. The certificate is the same;
 //! - `nested-par`: `nested` with faer's parallel numeric factorisation instead of the
-//!   sequential default ([`crate::solver::linear::FactorThreads`]), to measure that lever;
+//!   sequential default ([`gradvi::solver::linear::FactorThreads`]), to measure that lever;
 //! - `nested-nd`: `nested` with the nested-dissection ordering instead of AMD
-//!   ([`crate::solver::linear::Ordering`]), to measure that one.
+//!   ([`gradvi::solver::linear::Ordering`]), to measure that one.
 //!
 //! Environment: `GRADVI_BENCH_MAX_CELLS` caps the mesh sizes (default [`DEFAULT_MAX_CELLS`]),
 //! `GRADVI_BENCH_DOLFINX_MAX_CELLS` those of the dolfinx runs, `GRADVI_BENCH_VARIANTS`
@@ -37,14 +37,14 @@
 //! Arguments: `--report-only` rewrites the report from the existing CSV; `--child FAMILY
 //! SCHEME VARIANT SIZE [FILE]` runs one case and prints its row as JSON.
 
-use crate::mesh::PolyMesh;
-use crate::mesh::generate::{cartesian, hexagonal};
-use crate::mesh::io::read_mesh;
-use crate::output::plot::{LegendPosition, LineOptions, LineSeries, plot_lines};
-use crate::problem::paper_test3;
-use crate::replication::records::{read_csv, write_csv};
-use crate::scheme::SchemeKind;
-use crate::solver::{ActiveSetOptions, WarmStart, solve_problem_with};
+use gradvi::mesh::PolyMesh;
+use gradvi::mesh::generate::{cartesian, hexagonal};
+use gradvi::mesh::io::read_mesh;
+use crate::app::plot::{LegendPosition, LineOptions, LineSeries, plot_lines};
+use gradvi::problem::paper_test3;
+use crate::app::replication::records::{read_csv, write_csv};
+use gradvi::scheme::SchemeKind;
+use gradvi::solver::{ActiveSetOptions, WarmStart, solve_problem_with};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -84,9 +84,9 @@ pub fn gmsh_lc(n: usize) -> f64 {
 pub enum BenchFamily {
     /// gmsh Frontal-Delaunay triangles (`target/bench-meshes/test3_N.msh`).
     Gmsh,
-    /// [`crate::mesh::generate::hexagonal()`] at a level.
+    /// [`gradvi::mesh::generate::hexagonal()`] at a level.
     Hexagonal,
-    /// [`crate::mesh::generate::cartesian()`] n × n.
+    /// [`gradvi::mesh::generate::cartesian()`] n × n.
     Cartesian,
 }
 
@@ -99,7 +99,7 @@ impl BenchFamily {
             BenchFamily::Cartesian => "cartesian",
         }
     }
-    fn parse(s: &str) -> crate::Result<Self> {
+    fn parse(s: &str) -> gradvi::Result<Self> {
         match s {
             "gmsh" => Ok(BenchFamily::Gmsh),
             "hexagonal" => Ok(BenchFamily::Hexagonal),
@@ -117,10 +117,10 @@ pub enum Variant {
     /// Initial active set from coarse Cartesian HMM solves.
     Nested,
     /// As `Nested`, with faer's parallel numeric factorisation
-    /// ([`crate::solver::linear::FactorThreads::Global`]) instead of the sequential default.
+    /// ([`gradvi::solver::linear::FactorThreads::Global`]) instead of the sequential default.
     NestedParallel,
     /// As `Nested`, with the nested-dissection ordering
-    /// ([`crate::solver::linear::Ordering::NestedDissection`]) instead of AMD.
+    /// ([`gradvi::solver::linear::Ordering::NestedDissection`]) instead of AMD.
     NestedNd,
 }
 
@@ -134,7 +134,7 @@ impl Variant {
             Variant::NestedNd => "nested-nd",
         }
     }
-    fn parse(s: &str) -> crate::Result<Self> {
+    fn parse(s: &str) -> gradvi::Result<Self> {
         match s {
             "cold" => Ok(Variant::Cold),
             "nested" => Ok(Variant::Nested),
@@ -168,7 +168,7 @@ impl Case {
         match self.family {
             BenchFamily::Gmsh => self.size,
             BenchFamily::Hexagonal => {
-                crate::mesh::generate::Family::Hexagonal.cells_at_level(self.size)
+                gradvi::mesh::generate::Family::Hexagonal.cells_at_level(self.size)
             }
             BenchFamily::Cartesian => self.size * self.size,
         }
@@ -184,6 +184,7 @@ impl Case {
     }
     fn child_args(&self) -> Vec<String> {
         let mut a = vec![
+            "bench".to_string(),
             "--child".to_string(),
             self.family.name().to_string(),
             self.scheme.to_string(),
@@ -195,7 +196,7 @@ impl Case {
         }
         a
     }
-    fn from_child_args(a: &[String]) -> crate::Result<Self> {
+    fn from_child_args(a: &[String]) -> gradvi::Result<Self> {
         if a.len() < 4 {
             return Err(bad("--child FAMILY SCHEME VARIANT SIZE [FILE]".into()));
         }
@@ -274,12 +275,12 @@ pub struct BenchRow {
     pub run: u64,
 }
 
-fn bad(msg: String) -> crate::Error {
-    crate::Error::InvalidData(msg)
+fn bad(msg: String) -> gradvi::Error {
+    gradvi::Error::InvalidData(msg)
 }
 
-fn io_err(path: &Path, e: impl std::fmt::Display) -> crate::Error {
-    crate::Error::Io {
+fn io_err(path: &Path, e: impl std::fmt::Display) -> gradvi::Error {
+    gradvi::Error::Io {
         path: path.to_path_buf(),
         source: std::io::Error::other(e.to_string()),
     }
@@ -300,7 +301,7 @@ pub fn peak_memory_mib() -> f64 {
 }
 
 /// Runs one case in this process and returns its row (the body of a `--child` process).
-pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
+pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
     let t0 = Instant::now();
     let (mesh, name): (PolyMesh, String) = match case.family {
         BenchFamily::Gmsh => {
@@ -320,16 +321,16 @@ pub fn run_case(case: &Case) -> crate::Result<BenchRow> {
         ),
     };
     let mesh_s = t0.elapsed().as_secs_f64();
-    let scheme = crate::scheme::build(case.scheme, &mesh)?;
+    let scheme = gradvi::scheme::build(case.scheme, &mesh)?;
     let problem = paper_test3(C);
-    let system_options = crate::assembly::SystemOptions {
+    let system_options = gradvi::assembly::SystemOptions {
         ordering: match case.variant {
-            Variant::NestedNd => crate::solver::linear::Ordering::NestedDissection,
-            _ => crate::solver::linear::Ordering::Amd,
+            Variant::NestedNd => gradvi::solver::linear::Ordering::NestedDissection,
+            _ => gradvi::solver::linear::Ordering::Amd,
         },
         factor_threads: match case.variant {
-            Variant::NestedParallel => crate::solver::linear::FactorThreads::Global,
-            _ => crate::solver::linear::FactorThreads::Sequential,
+            Variant::NestedParallel => gradvi::solver::linear::FactorThreads::Global,
+            _ => gradvi::solver::linear::FactorThreads::Sequential,
         },
     };
     let opts = ActiveSetOptions {
@@ -429,8 +430,8 @@ pub struct Config {
 
 impl Config {
     /// Defaults, overridden by the environment variables of the module docs.
-    pub fn from_env(root: &Path) -> crate::Result<Self> {
-        let num = |key: &str, default: usize| -> crate::Result<usize> {
+    pub fn from_env(root: &Path) -> gradvi::Result<Self> {
+        let num = |key: &str, default: usize| -> gradvi::Result<usize> {
             match std::env::var(key) {
                 Ok(v) => v
                     .trim()
@@ -445,7 +446,7 @@ impl Config {
             Ok(v) => v
                 .split(',')
                 .map(|s| Variant::parse(s.trim()))
-                .collect::<crate::Result<Vec<_>>>()?,
+                .collect::<gradvi::Result<Vec<_>>>()?,
             Err(_) => vec![
                 Variant::Cold,
                 Variant::Nested,
@@ -480,7 +481,7 @@ impl Config {
 }
 
 /// Writes (or reuses) the gmsh mesh with about `n` triangles; returns its path.
-pub fn gmsh_mesh(cfg: &Config, n: usize) -> crate::Result<PathBuf> {
+pub fn gmsh_mesh(cfg: &Config, n: usize) -> gradvi::Result<PathBuf> {
     let dir = cfg.mesh_dir();
     std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
     let src_path = cfg.root.join("meshes/test3_4.geo");
@@ -538,7 +539,7 @@ pub fn gmsh_mesh(cfg: &Config, n: usize) -> crate::Result<PathBuf> {
 
 /// The cases of a run, smallest first, within the caps of `cfg`. gmsh meshes are generated
 /// (or reused) on the way.
-pub fn plan(cfg: &Config) -> crate::Result<Vec<Case>> {
+pub fn plan(cfg: &Config) -> gradvi::Result<Vec<Case>> {
     let mut cases = Vec::new();
     for &n in &GMSH_TARGETS {
         if n > cfg.max_cells {
@@ -583,8 +584,8 @@ pub fn plan(cfg: &Config) -> crate::Result<Vec<Case>> {
     Ok(cases)
 }
 
-/// Runs `case` in a child process (`exe --child …`) and parses its row.
-pub fn run_child(exe: &Path, case: &Case) -> crate::Result<BenchRow> {
+/// Runs `case` in a child process (`gradvi bench --child …`) and parses its row.
+pub fn run_child(exe: &Path, case: &Case) -> gradvi::Result<BenchRow> {
     let out = Command::new(exe)
         .args(case.child_args())
         .stderr(Stdio::inherit())
@@ -623,7 +624,7 @@ pub fn dolfinx_available(python: &Path) -> bool {
 
 /// Runs the dolfinx reference on a gmsh mesh (`reference/solve.py --case test3_1_C5 --mesh
 /// FILE`) and reads its summary row. The peak memory is the interpreter's `ru_maxrss`.
-pub fn run_dolfinx(cfg: &Config, mesh: &Path) -> crate::Result<BenchRow> {
+pub fn run_dolfinx(cfg: &Config, mesh: &Path) -> gradvi::Result<BenchRow> {
     let stem = mesh
         .file_stem()
         .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
@@ -709,7 +710,7 @@ pub fn run_dolfinx(cfg: &Config, mesh: &Path) -> crate::Result<BenchRow> {
 /// The benchmark program: `args` are those of the process (without the program name).
 /// `--child …` runs one case and prints its JSON row; `--report-only` rewrites the report from
 /// the CSV; otherwise every case of [`plan`] runs and the CSV, report and figure are written.
-pub fn main_with_args(root: &Path, args: &[String]) -> crate::Result<()> {
+pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
     if let Some(i) = args.iter().position(|a| a == "--child") {
         let case = Case::from_child_args(&args[i + 1..])?;
         let row = run_case(&case)?;
@@ -968,7 +969,7 @@ pub fn growth_exponent(rows: &[&BenchRow]) -> Option<(f64, usize, usize)> {
     let n: Vec<f64> = pts.iter().map(|r| r.cells as f64).collect();
     let t: Vec<f64> = pts.iter().map(|r| r.total_s).collect();
     Some((
-        crate::post::fitted_slope(&n, &t),
+        gradvi::post::fitted_slope(&n, &t),
         pts.iter().map(|r| r.cells).min().unwrap_or(0),
         pts.iter().map(|r| r.cells).max().unwrap_or(0),
     ))
@@ -988,7 +989,7 @@ fn exponent(rows: &[&BenchRow], f: impl Fn(&BenchRow) -> f64) -> Option<f64> {
     }
     let n: Vec<f64> = pts.iter().map(|p| p.0).collect();
     let y: Vec<f64> = pts.iter().map(|p| p.1).collect();
-    Some(crate::post::fitted_slope(&n, &y))
+    Some(gradvi::post::fitted_slope(&n, &y))
 }
 
 fn verdict(ok: bool) -> &'static str {
@@ -996,7 +997,7 @@ fn verdict(ok: bool) -> &'static str {
 }
 
 /// Writes `BENCHMARKS.md` and `bench.png` from `bench.csv` (nothing else is read).
-pub fn write_report(cfg: &Config) -> crate::Result<()> {
+pub fn write_report(cfg: &Config) -> gradvi::Result<()> {
     let rows: Vec<BenchRow> = read_csv(&cfg.csv())?;
     if rows.is_empty() {
         return Err(bad(format!("{}: no rows", cfg.csv().display())));
@@ -1042,7 +1043,7 @@ pub fn write_report(cfg: &Config) -> crate::Result<()> {
         );
         s.dashed = true;
         s.color = Some([120, 120, 120]);
-        s.marker = crate::output::plot::Marker::None;
+        s.marker = crate::app::plot::Marker::None;
         series.push(s);
     }
     let fig = cfg.figure();

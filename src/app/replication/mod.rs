@@ -48,8 +48,8 @@ impl Config {
 }
 
 /// Creates a directory and its parents, as a typed error.
-pub fn create_dir(p: &std::path::Path) -> crate::Result<()> {
-    std::fs::create_dir_all(p).map_err(|source| crate::Error::Io {
+pub fn create_dir(p: &std::path::Path) -> gradvi::Result<()> {
+    std::fs::create_dir_all(p).map_err(|source| gradvi::Error::Io {
         path: p.to_path_buf(),
         source,
     })

@@ -4,16 +4,16 @@
 use super::experiments::{NamedMesh, gmsh_family, test2_polygonal, with_solution};
 use super::records::{PaperTable3, Test2Row, Test3Row, read_csv};
 use super::{Config, create_dir};
-use crate::mesh::PolyMesh;
-use crate::mesh::io::write_vtu;
-use crate::output::plot::{
+use gradvi::mesh::PolyMesh;
+use gradvi::mesh::io::write_vtu;
+use crate::app::plot::{
     Field, LineOptions, LineSeries, MeshPlotOptions, SurfaceOptions, plot_lines, plot_mesh,
     plot_surface,
 };
-use crate::post::contact::switch_point;
-use crate::problem::{Problem, paper_test1, paper_test2, paper_test3};
-use crate::scheme::SchemeKind;
-use crate::solver::Solution;
+use gradvi::post::contact::switch_point;
+use gradvi::problem::{Problem, paper_test1, paper_test2, paper_test3};
+use gradvi::scheme::SchemeKind;
+use gradvi::solver::Solution;
 
 fn tags_test2(mesh: &PolyMesh) -> PolyMesh {
     mesh.with_boundary_tags(|x| {
@@ -44,7 +44,7 @@ fn surface(
     problem: &Problem,
     mut opts: SurfaceOptions,
     switch_axis: Option<usize>,
-) -> crate::Result<Option<f64>> {
+) -> gradvi::Result<Option<f64>> {
     with_solution(&m.mesh, SchemeKind::Hmm, problem, |sol: &Solution| {
         let scheme = sol.system.scheme();
         let cells = scheme.cell_values(sol.u());
@@ -90,7 +90,7 @@ fn surface(
 }
 
 /// Draws every figure. Returns (figure file, caption) pairs for the report.
-pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> crate::Result<()> {
+pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result<()> {
     create_dir(&cfg.figures())?;
     create_dir(&cfg.vtu())?;
     let pick = |v: Vec<NamedMesh>, i: usize| v.into_iter().nth(i);
@@ -220,7 +220,7 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> crate::Result<()> {
 }
 
 /// The plots drawn from the CSV files only.
-pub fn plots_from_csv(cfg: &Config) -> crate::Result<()> {
+pub fn plots_from_csv(cfg: &Config) -> gradvi::Result<()> {
     let rows: Vec<Test2Row> = read_csv(&cfg.results().join("test2.csv"))?;
     let mut series = Vec::new();
     for (fam, scheme, label) in [
@@ -244,7 +244,7 @@ pub fn plots_from_csv(cfg: &Config) -> crate::Result<()> {
         let e0 = first.err_grad;
         let mut s = LineSeries::new("slope 1", vec![[h0, e0], [h0 / 8.0, e0 / 8.0]]);
         s.dashed = true;
-        s.marker = crate::output::plot::Marker::None;
+        s.marker = crate::app::plot::Marker::None;
         series.push(s);
     }
     plot_lines(

@@ -3,14 +3,14 @@
 
 use super::records::*;
 use super::{Config, create_dir};
-use crate::mesh::PolyMesh;
-use crate::mesh::generate::{hexagonal::hexagonal, kershaw::kershaw};
-use crate::mesh::io::read_mesh;
-use crate::post::contact::{contact_measure, switch_point};
-use crate::post::relative_errors;
-use crate::problem::{Problem, paper_test1, paper_test2, paper_test2_tie, paper_test3};
-use crate::scheme::{SchemeKind, build};
-use crate::solver::{ActiveSetOptions, Solution, solve_problem};
+use gradvi::mesh::PolyMesh;
+use gradvi::mesh::generate::{hexagonal::hexagonal, kershaw::kershaw};
+use gradvi::mesh::io::read_mesh;
+use gradvi::post::contact::{contact_measure, switch_point};
+use gradvi::post::relative_errors;
+use gradvi::problem::{Problem, paper_test1, paper_test2, paper_test2_tie, paper_test3};
+use gradvi::scheme::{SchemeKind, build};
+use gradvi::solver::{ActiveSetOptions, Solution, solve_problem};
 use std::time::Instant;
 
 /// The constants C of Test 3.
@@ -26,7 +26,7 @@ pub struct NamedMesh {
     pub mesh: PolyMesh,
 }
 
-fn load(cfg: &Config, file: &str) -> crate::Result<NamedMesh> {
+fn load(cfg: &Config, file: &str) -> gradvi::Result<NamedMesh> {
     let path = cfg.meshes.join(file);
     Ok(NamedMesh {
         name: file.trim_end_matches(".msh").to_string(),
@@ -36,7 +36,7 @@ fn load(cfg: &Config, file: &str) -> crate::Result<NamedMesh> {
 }
 
 /// The gmsh meshes of a test (`test1`, `test2tri`, `test3`), coarsest first.
-pub fn gmsh_family(cfg: &Config, prefix: &str) -> crate::Result<Vec<NamedMesh>> {
+pub fn gmsh_family(cfg: &Config, prefix: &str) -> gradvi::Result<Vec<NamedMesh>> {
     let levels = if cfg.quick { 1 } else { 4 };
     (1..=levels)
         .map(|l| load(cfg, &format!("{prefix}_{l}.msh")))
@@ -45,7 +45,7 @@ pub fn gmsh_family(cfg: &Config, prefix: &str) -> crate::Result<Vec<NamedMesh>> 
 
 /// The Test 2 polygonal meshes: hexagonal levels 1–4 and Kershaw level 2 from the generators,
 /// and the original FVCA5 files when available.
-pub fn test2_polygonal(cfg: &Config) -> crate::Result<Vec<(String, NamedMesh)>> {
+pub fn test2_polygonal(cfg: &Config) -> gradvi::Result<Vec<(String, NamedMesh)>> {
     let levels = if cfg.quick { 2 } else { 4 };
     let mut v = Vec::new();
     for l in 1..=levels {
@@ -118,8 +118,8 @@ pub fn with_solution<R>(
     mesh: &PolyMesh,
     kind: SchemeKind,
     problem: &Problem,
-    f: impl FnOnce(&Solution) -> crate::Result<R>,
-) -> crate::Result<R> {
+    f: impl FnOnce(&Solution) -> gradvi::Result<R>,
+) -> gradvi::Result<R> {
     let scheme = build(kind, mesh)?;
     let sol = solve_problem(scheme.as_ref(), problem, &ActiveSetOptions::default())?;
     f(&sol)
@@ -153,7 +153,7 @@ fn log_rows(case: &str, kind: SchemeKind, mesh: &str, sol: &Solution) -> Vec<Ite
 
 /// Runs every experiment and writes `results/{meshes,test1,test2,test3,iterations}.csv`.
 /// `progress` receives one line per solve.
-pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> crate::Result<Vec<TimingRow>> {
+pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result<Vec<TimingRow>> {
     create_dir(&cfg.results())?;
     let mut meshes = Vec::new();
     let mut iterations = Vec::new();
@@ -221,7 +221,7 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> crate::Result<Vec<Ti
         // the interface convention matters where some x_K lies on y = 1/2 (hexagonal meshes):
         // run the other convention too, as family "<family>-interface-lower"
         let on_interface = (0..m.mesh.n_cells())
-            .any(|k| (m.mesh.centroid(k)[1] - 0.5).abs() <= crate::problem::TEST2_INTERFACE_TOL);
+            .any(|k| (m.mesh.centroid(k)[1] - 0.5).abs() <= gradvi::problem::TEST2_INTERFACE_TOL);
         let mut variants = vec![(fam.clone(), &p)];
         if on_interface {
             variants.push((format!("{fam}-interface-lower"), &p_low));

@@ -4,7 +4,7 @@
 
 use super::Config;
 use super::records::*;
-use crate::post::order;
+use gradvi::post::order;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -45,7 +45,7 @@ fn crate_versions(root: &Path) -> String {
 }
 
 /// Writes `REPORT.md`. `root` is the repository root (for Cargo.lock and git).
-pub fn write(cfg: &Config, root: &Path) -> crate::Result<()> {
+pub fn write(cfg: &Config, root: &Path) -> gradvi::Result<()> {
     let res = cfg.results();
     let meshes: Vec<MeshRow> = read_csv(&res.join("meshes.csv"))?;
     let t1: Vec<Test1Row> = read_csv(&res.join("test1.csv"))?;
@@ -493,5 +493,5 @@ pub fn write(cfg: &Config, root: &Path) -> crate::Result<()> {
     writeln!(w, "![NITER](figures/test3_niter.png)\n").ok();
     writeln!(w, "## Files\n\n- `results/test1.csv`, `results/test2.csv`, `results/test3.csv`: one row per solve; `results/iterations.csv`: the log of every monotony iteration (active-set size, entered, left, violation, residual); `results/meshes.csv`; `results/timings.csv`.\n- `figures/*.png`; `vtu/*.vtu` (not committed): the plotted solutions for ParaView.\n- `paper/*.csv`: the values printed in the paper (Tables 1–3 and the Kershaw line), as data.").ok();
     let path = cfg.out.join("REPORT.md");
-    std::fs::write(&path, r).map_err(|source| crate::Error::Io { path, source })
+    std::fs::write(&path, r).map_err(|source| gradvi::Error::Io { path, source })
 }

@@ -21,8 +21,8 @@ use std::sync::OnceLock;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::error::{Error, Result};
-use crate::mesh::PolyMesh;
+use gradvi::error::{Error, Result};
+use gradvi::mesh::PolyMesh;
 
 // ---------------------------------------------------------------------------------------------
 // Font

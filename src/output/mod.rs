@@ -1,3 +1,0 @@
-//! Outputs: CSV, VTU, PNG plots, markdown.
-
-pub mod plot;
