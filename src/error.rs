@@ -44,6 +44,22 @@ pub enum Error {
     /// The active-set iteration did not converge, cycled, or its certificate failed.
     #[error("active-set solver: {0}")]
     Solver(#[from] SolverError),
+    /// A problem file is invalid (see [`crate::problem::file`]): TOML syntax, an unknown key, a bad
+    /// expression, or data that does not fit the mesh. `line` and `column` are 1-based (0 when
+    /// the error is not tied to a place in the file); the message names the key.
+    #[error("{}: {msg}", place(path, *line, *column))]
+    ProblemFile {
+        /// The problem file.
+        path: PathBuf,
+        /// 1-based line of the offending value (0 if unknown).
+        line: usize,
+        /// 1-based column (in characters) of the offending character (0 if unknown).
+        column: usize,
+        /// What kind of mistake it is.
+        kind: ProblemFileErrorKind,
+        /// What is wrong, and where (key, point, cell or edge).
+        msg: String,
+    },
     /// Plain I/O (writing outputs).
     #[error("{}: {source}", path.display())]
     Io {
@@ -52,6 +68,45 @@ pub enum Error {
         /// Underlying error.
         source: std::io::Error,
     },
+}
+
+/// `path:line:column`, `path:line` or `path`, whichever is known.
+fn place(path: &std::path::Path, line: usize, column: usize) -> String {
+    match (line, column) {
+        (0, _) => path.display().to_string(),
+        (l, 0) => format!("{}:{l}", path.display()),
+        (l, c) => format!("{}:{l}:{c}", path.display()),
+    }
+}
+
+/// The kinds of mistakes in a problem file ([`Error::ProblemFile`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ProblemFileErrorKind {
+    /// The text is not valid TOML.
+    Syntax,
+    /// A key the format does not know.
+    UnknownKey,
+    /// Valid TOML that does not fit the format: a missing key, a value of the wrong type,
+    /// contradictory sections.
+    Schema,
+    /// An expression that does not parse: syntax, unknown variable or function, wrong type.
+    Expression,
+    /// A parameter or definition: unknown override, bad name, cyclic definitions.
+    Parameter,
+    /// The `[mesh]` section, or a mesh that cannot carry the problem.
+    Mesh,
+    /// A tag used in the file that no boundary edge of the mesh carries.
+    Tag,
+    /// A boundary edge that no boundary section selects.
+    UncoveredEdge,
+    /// A boundary edge that two boundary sections select.
+    OverlappingRules,
+    /// A point where no piece of a piecewise datum applies.
+    UncoveredPoint,
+    /// A diffusion tensor that is not symmetric positive definite at some cell.
+    NotSpd,
+    /// A datum that is NaN or infinite at some evaluation point.
+    NonFinite,
 }
 
 /// Invalid mesh: each variant names the cell, edge or vertex at fault.
@@ -161,6 +216,12 @@ pub enum SolverError {
         repeats: usize,
         /// Size of the active set at each iterate.
         history: Vec<usize>,
+    },
+    /// Exhaustive enumeration found no active set satisfying the KKT conditions.
+    #[error("exhaustive enumeration: none of the {candidates} active sets satisfies the KKT conditions")]
+    NoKktPoint {
+        /// Active sets tried.
+        candidates: usize,
     },
     /// The final iterate does not satisfy the discrete variational inequality.
     #[error("certificate failed ({quantity} = {value:e} > tolerance {tol:e})")]

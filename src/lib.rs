@@ -76,9 +76,11 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 pub mod assembly;
 pub mod error;
+pub mod linalg;
 pub mod mesh;
 pub mod post;
 pub mod problem;
 pub mod scheme;
 pub mod solver;
+pub mod vi;
 pub use error::{Error, MeshError, Result, SolverError};

@@ -8,7 +8,7 @@ use gradvi::mesh::io::read_mesh;
 use gradvi::post::relative_errors;
 use gradvi::problem::{paper_test1, paper_test2, paper_test3};
 use gradvi::scheme::{Hmm, P1};
-use gradvi::solver::{ActiveSetOptions, solve_problem};
+use gradvi::solver::{SolveOptions, solve_problem};
 use std::path::PathBuf;
 
 fn root() -> PathBuf {
@@ -31,7 +31,7 @@ fn table2_hexagonal_levels_1_and_2() {
     for (level, eu, eg, niter) in pinned {
         let mesh = hexagonal(level).unwrap();
         let s = Hmm::new(&mesh);
-        let sol = solve_problem(&s, &p, &ActiveSetOptions::default()).unwrap();
+        let sol = solve_problem(&s, &p, &SolveOptions::default()).unwrap();
         let e = relative_errors(&s, sol.u(), &ex.u, &ex.grad);
         assert!(
             close(e.l2_u, eu, 1e-9),
@@ -53,15 +53,15 @@ fn table3_and_table1_on_the_coarsest_meshes() {
     for (c, hmm, p1) in [(-5.0, 8, 6), (-10.0, 8, 6), (-15.0, 5, 5), (-20.0, 5, 4)] {
         let hmm_scheme = Hmm::new(&m3);
         let sol =
-            solve_problem(&hmm_scheme, &paper_test3(c), &ActiveSetOptions::default()).unwrap();
+            solve_problem(&hmm_scheme, &paper_test3(c), &SolveOptions::default()).unwrap();
         assert_eq!(sol.niter(), hmm, "HMM, C = {c}");
         let s1 = P1::new(&m3).unwrap();
-        let sol = solve_problem(&s1, &paper_test3(c), &ActiveSetOptions::default()).unwrap();
+        let sol = solve_problem(&s1, &paper_test3(c), &SolveOptions::default()).unwrap();
         assert_eq!(sol.niter(), p1, "P1, C = {c}");
     }
     let m1 = read_mesh(root().join("meshes/test1_1.msh")).unwrap();
     let s1 = Hmm::new(&m1);
-    let sol = solve_problem(&s1, &paper_test1(), &ActiveSetOptions::default()).unwrap();
+    let sol = solve_problem(&s1, &paper_test1(), &SolveOptions::default()).unwrap();
     assert_eq!(sol.niter(), 4);
     let cons = sol.constraints.as_ref().unwrap();
     let sw = gradvi::post::contact::switch_point(cons, &sol.result.active, 0).unwrap();
@@ -70,20 +70,20 @@ fn table3_and_table1_on_the_coarsest_meshes() {
 
 #[test]
 fn quick_replication_writes_csv_figures_and_report() {
-    let out = std::env::temp_dir().join(format!("gradvi-replicate-test-{}", std::process::id()));
-    let cfg = gradvi::replication::Config {
-        out: out.clone(),
-        meshes: root().join("meshes"),
-        fvca5: None,
-        paper: root().join("replication/paper"),
-        quick: true,
-    };
-    let mut lines = 0;
-    let mut progress = |_: &str| lines += 1;
-    let timings = gradvi::replication::experiments::run(&cfg, &mut progress).unwrap();
-    gradvi::replication::figures::run(&cfg, &mut progress).unwrap();
-    gradvi::replication::records::write_csv(&cfg.results().join("timings.csv"), &timings).unwrap();
-    gradvi::replication::report::write(&cfg, &root()).unwrap();
+    // the replication is an application of the library: run it through the `gradvi` binary
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("replicate-test-{}", std::process::id()));
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_gradvi"))
+        .args(["replicate", "--quick", "--out"])
+        .arg(&out)
+        .arg("--meshes")
+        .arg(root().join("meshes"))
+        .arg("--paper")
+        .arg(root().join("replication/paper"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "gradvi replicate --quick failed: {stderr}");
     let report = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
     for needle in [
         "Table 1",
@@ -104,6 +104,9 @@ fn quick_replication_writes_csv_figures_and_report() {
         let bytes = std::fs::read(out.join("figures").join(f)).unwrap();
         assert_eq!(&bytes[1..4], b"PNG", "{f}");
     }
-    assert!(lines > 10);
+    for f in ["test1.csv", "test2.csv", "test3.csv", "iterations.csv", "timings.csv"] {
+        assert!(out.join("results").join(f).is_file(), "{f}");
+    }
+    assert!(stderr.lines().count() > 10, "progress lines on stderr");
     std::fs::remove_dir_all(&out).ok();
 }

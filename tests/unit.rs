@@ -1,6 +1,8 @@
 //! Unit-tier tests (fast): exactness, readers, generators, solver certificates.
 //! One binary pulling in submodules, so linking stays fast.
 mod common;
+#[path = "unit/cr.rs"]
+mod cr;
 #[path = "unit/generators.rs"]
 mod generators;
 #[path = "unit/mesh_io.rs"]

@@ -24,9 +24,9 @@
 //!   `gradvi solve`): the coarse solves cost a fraction of the fine one, and the fine
 //!   iteration starts next to its solution. The certificate is the same;
 //! - `nested-par`: `nested` with faer's parallel numeric factorisation instead of the
-//!   sequential default ([`gradvi::solver::linear::FactorThreads`]), to measure that lever;
+//!   sequential default ([`gradvi::linalg::FactorThreads`]), to measure that lever;
 //! - `nested-nd`: `nested` with the nested-dissection ordering instead of AMD
-//!   ([`gradvi::solver::linear::Ordering`]), to measure that one.
+//!   ([`gradvi::linalg::Ordering`]), to measure that one.
 //!
 //! Environment: `GRADVI_BENCH_MAX_CELLS` caps the mesh sizes (default [`DEFAULT_MAX_CELLS`]),
 //! `GRADVI_BENCH_DOLFINX_MAX_CELLS` those of the dolfinx runs, `GRADVI_BENCH_VARIANTS`
@@ -44,7 +44,7 @@ use crate::app::plot::{LegendPosition, LineOptions, LineSeries, plot_lines};
 use gradvi::problem::paper_test3;
 use crate::app::replication::records::{read_csv, write_csv};
 use gradvi::scheme::SchemeKind;
-use gradvi::solver::{ActiveSetOptions, WarmStart, solve_problem_with};
+use gradvi::solver::{SolveOptions, WarmStart, solve_problem};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -117,10 +117,10 @@ pub enum Variant {
     /// Initial active set from coarse Cartesian HMM solves.
     Nested,
     /// As `Nested`, with faer's parallel numeric factorisation
-    /// ([`gradvi::solver::linear::FactorThreads::Global`]) instead of the sequential default.
+    /// ([`gradvi::linalg::FactorThreads::Global`]) instead of the sequential default.
     NestedParallel,
     /// As `Nested`, with the nested-dissection ordering
-    /// ([`gradvi::solver::linear::Ordering::NestedDissection`]) instead of AMD.
+    /// ([`gradvi::linalg::Ordering::NestedDissection`]) instead of AMD.
     NestedNd,
 }
 
@@ -325,22 +325,23 @@ pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
     let problem = paper_test3(C);
     let system_options = gradvi::assembly::SystemOptions {
         ordering: match case.variant {
-            Variant::NestedNd => gradvi::solver::linear::Ordering::NestedDissection,
-            _ => gradvi::solver::linear::Ordering::Amd,
+            Variant::NestedNd => gradvi::linalg::Ordering::NestedDissection,
+            _ => gradvi::linalg::Ordering::Amd,
         },
         factor_threads: match case.variant {
-            Variant::NestedParallel => gradvi::solver::linear::FactorThreads::Global,
-            _ => gradvi::solver::linear::FactorThreads::Sequential,
+            Variant::NestedParallel => gradvi::linalg::FactorThreads::Global,
+            _ => gradvi::linalg::FactorThreads::Sequential,
         },
     };
-    let opts = ActiveSetOptions {
+    let opts = SolveOptions {
+        system: system_options,
         warm_start: match case.variant {
             Variant::Cold => WarmStart::Cold,
             Variant::Nested | Variant::NestedParallel | Variant::NestedNd => WarmStart::Nested,
         },
         ..Default::default()
     };
-    let sol = solve_problem_with(scheme.as_ref(), &problem, system_options, &opts)?;
+    let sol = solve_problem(scheme.as_ref(), &problem, &opts)?;
     let total_s = t0.elapsed().as_secs_f64();
     if let Some(why) = sol.warm_start.as_ref().and_then(|w| w.skipped.as_ref()) {
         return Err(bad(format!(

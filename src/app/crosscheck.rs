@@ -17,7 +17,7 @@
 //! vertices excluded), so their solutions must agree to round-off: [`SAME_PROBLEM_TOL`].
 
 use gradvi::mesh::io::read_mesh;
-use gradvi::mesh::{NO_CELL, Point, PolyMesh};
+use gradvi::mesh::{Point, PolyMesh};
 use gradvi::post::contact::{contact_measure, free_boundary, hausdorff, switch_point};
 use gradvi::post::{fitted_slope, order, relative_errors};
 use gradvi::problem::{Problem, paper_test1, paper_test2, paper_test3};
@@ -25,8 +25,8 @@ use crate::app::replication::experiments::with_solution;
 use crate::app::replication::records::{
     PaperTable1, PaperTable2, PaperTable3, TimingRow, read_csv, write_csv,
 };
-use gradvi::scheme::{GradientDiscretisation, SchemeKind};
-use gradvi::solver::Constraints;
+use gradvi::scheme::SchemeKind;
+use gradvi::vi::Constraints;
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
@@ -273,69 +273,6 @@ pub fn read_reference(dir: &Path, coarse: bool) -> Result<Vec<ReferenceCase>> {
         .collect()
 }
 
-/// Neighbouring constrained unknowns (positions in `cons.dofs`), for
-/// [`gradvi::post::contact::free_boundary`]: pairs of cells sharing an edge when the constrained
-/// unknowns are cell unknowns (HMM obstacle), pairs of vertices joined by an edge when they are
-/// vertex unknowns (P1), pairs of edges sharing a vertex when they are edge unknowns (HMM
-/// Signorini). Pairs whose unknowns are not both constrained are left out.
-pub fn neighbours(scheme: &dyn GradientDiscretisation, cons: &Constraints) -> Vec<(usize, usize)> {
-    let mesh = scheme.mesh();
-    let pos: HashMap<usize, usize> = cons
-        .dofs
-        .iter()
-        .enumerate()
-        .map(|(j, d)| (d.dof, j))
-        .collect();
-    let mut out = Vec::new();
-    let mut push = |a: usize, b: usize| {
-        if let (Some(&i), Some(&j)) = (pos.get(&a), pos.get(&b)) {
-            out.push((i.min(j), i.max(j)));
-        }
-    };
-    if scheme.n_interior() > 0 {
-        // cell unknowns: the interior unknowns of each cell
-        let mut dofs = Vec::new();
-        let cell_dof = |k: usize, dofs: &mut Vec<usize>| {
-            scheme.local_dofs(k, dofs);
-            (scheme.n_local_interior(k) > 0).then(|| dofs[0])
-        };
-        for e in 0..mesh.n_edges() {
-            let [k, l] = mesh.edge_cells(e);
-            if l == NO_CELL {
-                continue;
-            }
-            if let (Some(a), Some(b)) = (cell_dof(k, &mut dofs), cell_dof(l, &mut dofs)) {
-                push(a, b);
-            }
-        }
-    }
-    if scheme.n_skeleton() == mesh.n_vertices() && scheme.n_interior() == 0 {
-        // vertex unknowns (P1)
-        for e in 0..mesh.n_edges() {
-            let [a, b] = mesh.edge_vertices(e);
-            push(a, b);
-        }
-    } else if scheme.n_skeleton() == mesh.n_edges() {
-        // edge unknowns (HMM faces): edges sharing a vertex
-        let mut by_vertex: Vec<Vec<usize>> = vec![Vec::new(); mesh.n_vertices()];
-        for e in 0..mesh.n_edges() {
-            for v in mesh.edge_vertices(e) {
-                by_vertex[v].push(e);
-            }
-        }
-        for es in &by_vertex {
-            for (i, &a) in es.iter().enumerate() {
-                for &b in &es[i + 1..] {
-                    push(a, b);
-                }
-            }
-        }
-    }
-    out.sort_unstable();
-    out.dedup();
-    out
-}
-
 /// For each gradvi vertex, the row of the dolfinx nodal file at the same coordinates (exactly,
 /// or to [`MATCH_TOL`]). An error names the first vertex without a match.
 pub fn match_vertices(mesh: &PolyMesh, nodal: &[NodalRow]) -> Result<Vec<usize>> {
@@ -520,7 +457,7 @@ pub fn solve_cases(
                 trace_zone: is2.then(|| trace_zone(cons, sol.u())),
                 contact: is3.then(|| contact_measure(cons, active)),
                 free: if is3 {
-                    free_boundary(cons, active, &neighbours(scheme, cons))
+                    free_boundary(cons, active, &gradvi::post::contact::neighbours(scheme, cons))
                 } else {
                     Vec::new()
                 },
@@ -558,7 +495,7 @@ pub fn solve_cases(
             let swc =
                 |act: &[bool]| axis.map(|a| switch_point(cons, act, a).map_or(0, |s| s.count));
             let (fb_p1, fb_d) = if is3 {
-                let nb = neighbours(scheme, cons);
+                let nb = gradvi::post::contact::neighbours(scheme, cons);
                 (
                     free_boundary(cons, active, &nb),
                     free_boundary(cons, &dact, &nb),

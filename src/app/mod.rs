@@ -6,3 +6,4 @@ pub mod bench;
 pub mod crosscheck;
 pub mod plot;
 pub mod replication;
+pub mod solve;

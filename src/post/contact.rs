@@ -9,7 +9,7 @@
 //! - [`hausdorff`]: the Hausdorff distance between two point sets (used for free boundaries).
 
 use crate::mesh::Point;
-use crate::solver::Constraints;
+use crate::vi::Constraints;
 
 /// A switch along a boundary part: where it is and how many switches there are in total
 /// (1 for a clean single transition).
@@ -126,4 +126,52 @@ mod tests {
         let h = hausdorff(&[[0.0, 0.0], [1.0, 0.0]], &[[0.0, 0.5]]);
         assert!((h - (1.25f64).sqrt()).abs() < 1e-15);
     }
+}
+
+/// Neighbouring constrained unknowns (pairs of positions in `cons.dofs`, `i < j`, sorted), for
+/// [`free_boundary`]. Adjacency follows the mesh entity of each unknown
+/// ([`crate::scheme::GradientDiscretisation::dof_entity`]), so it is the same for every
+/// scheme: cells sharing an edge, vertices joined by an edge, edges sharing a vertex.
+pub fn neighbours(
+    scheme: &dyn crate::scheme::GradientDiscretisation,
+    cons: &Constraints,
+) -> Vec<(usize, usize)> {
+    use crate::scheme::Entity;
+    use std::collections::HashMap;
+    let mesh = scheme.mesh();
+    let pos: HashMap<Entity, usize> = cons
+        .dofs
+        .iter()
+        .enumerate()
+        .map(|(j, d)| (scheme.dof_entity(d.dof), j))
+        .collect();
+    let mut out = Vec::new();
+    let mut push = |a: Entity, b: Entity| {
+        if let (Some(&i), Some(&j)) = (pos.get(&a), pos.get(&b)) {
+            out.push((i.min(j), i.max(j)));
+        }
+    };
+    let mut edges_at_vertex: Vec<Vec<usize>> = vec![Vec::new(); mesh.n_vertices()];
+    for e in 0..mesh.n_edges() {
+        let [k, l] = mesh.edge_cells(e);
+        if l != crate::mesh::NO_CELL {
+            push(Entity::Cell(k), Entity::Cell(l));
+        }
+        let [a, b] = mesh.edge_vertices(e);
+        push(Entity::Vertex(a), Entity::Vertex(b));
+        if pos.contains_key(&Entity::Edge(e)) {
+            edges_at_vertex[a].push(e);
+            edges_at_vertex[b].push(e);
+        }
+    }
+    for es in &edges_at_vertex {
+        for (i, &a) in es.iter().enumerate() {
+            for &b in &es[i + 1..] {
+                push(Entity::Edge(a), Entity::Edge(b));
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
 }

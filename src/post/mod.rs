@@ -2,6 +2,7 @@
 //! slopes, and contact-zone metrics.
 
 pub mod contact;
+pub mod fields;
 
 use crate::mesh::Point;
 use crate::scheme::GradientDiscretisation;

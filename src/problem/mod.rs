@@ -9,6 +9,9 @@
 //! (the paper's Section 6): g_K = g(x_K) on cells, a_σ = a(x_σ) on faces (P1: nodal values).
 //! The paper's three tests are built by [`paper_test1`], [`paper_test2`], [`paper_test3`].
 
+pub mod expr;
+pub mod file;
+
 use crate::mesh::Point;
 use crate::scheme::Tensor;
 use std::f64::consts::PI;

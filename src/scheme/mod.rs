@@ -13,12 +13,14 @@
 //! `local_dofs(k)` lists the interior unknowns of K first, then its skeleton unknowns; the local
 //! matrix and load follow that order.
 
+pub mod cr;
 pub mod hmm;
 pub mod p1;
 
 use crate::mesh::{Point, PolyMesh};
 use nalgebra::{DMatrix, DVector};
 
+pub use cr::Cr;
 pub use hmm::Hmm;
 pub use p1::P1;
 
@@ -171,6 +173,8 @@ register_schemes! {
     Hmm = "hmm" => |m, o| Ok(Box::new(Hmm::with_alpha(m, o.alpha)?)),
     /// Conforming P1 finite elements on triangles.
     P1 = "p1" => |m, o| { no_alpha("p1", o)?; Ok(Box::new(P1::new(m)?)) },
+    /// Crouzeix–Raviart (non-conforming P1) with mass lumping, on triangles.
+    Cr = "cr" => |m, o| { no_alpha("cr", o)?; Ok(Box::new(Cr::new(m)?)) },
 }
 
 impl std::str::FromStr for SchemeKind {

@@ -1,21 +1,43 @@
-//! Solvers: [`linear`] (sparse Cholesky with symbolic reuse), [`active_set`] (the monotony
-//! algorithm with its certificate), [`pgs`] (projected Gauss–Seidel fallback), and
-//! [`solve_problem`], the one entry point that turns a scheme and a problem into a certified
-//! [`Solution`].
+//! The solve driver: from a scheme and a problem to a certified [`Solution`].
+//!
+//! It sits above assembly and the algebraic algorithms ([`crate::vi`]) and decides what they
+//! cannot: how the active-set iteration starts ([`WarmStart`]: cold, or from a nested coarse
+//! prediction, [`warm_start`]), and what happens when it stalls (projected Gauss–Seidel if
+//! [`SolveOptions::fallback`] is set, an error otherwise).
+//!
+//! ```text
+//! solve_problem(scheme, problem, opts)
+//!   = DiscreteSystem::new (symbolic ∥ values) → constraints::build → warm start?
+//!     → vi::active_set::run (→ vi::pgs::solve on a stall, if asked) → Solution
+//! ```
+//! [`solve_with_symbolic`] reuses the symbolic system of an earlier solve on the same scheme.
 
-pub mod active_set;
-pub mod linear;
-pub mod pgs;
+pub mod constraints;
 pub mod warm_start;
 
-use crate::assembly::{DiscreteSystem, SystemOptions};
-use crate::problem::{ConstraintKind, Problem, check_finite};
-use crate::scheme::{GradientDiscretisation, PointDof};
-pub use active_set::{
-    ActiveSetOptions, Certificate, Constraints, IterationLog, Method, VariationalSolution,
-};
+use crate::assembly::{DiscreteSystem, SymbolicSystem, SystemOptions};
+use crate::problem::Problem;
+use crate::scheme::GradientDiscretisation;
+use crate::vi::active_set::{self, Outcome};
+use crate::vi::{Constraints, VariationalSolution, pgs};
+pub use crate::vi::{ActiveSetOptions, Certificate, IterationLog, Method};
+use std::sync::Arc;
 use std::time::Instant;
 pub use warm_start::{WarmStart, WarmStartReport};
+
+/// Options of [`solve_problem`].
+#[derive(Debug, Clone, Default)]
+pub struct SolveOptions {
+    /// The active-set algorithm (c, iteration cap, certificate tolerance, initial active set,
+    /// progress).
+    pub active_set: ActiveSetOptions,
+    /// How the iteration starts when no `active_set.initial_active` is given.
+    pub warm_start: WarmStart,
+    /// On cycling or the iteration cap, fall back to projected Gauss–Seidel instead of failing.
+    pub fallback: bool,
+    /// The linear algebra (fill-reducing ordering, threads of the factorisation).
+    pub system: SystemOptions,
+}
 
 /// Wall-clock timings of a solve, in seconds.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
@@ -38,7 +60,7 @@ pub struct Timings {
 
 /// A certified discrete solution and what it took.
 pub struct Solution<'a> {
-    /// The assembled system (gives access to the scheme and the mesh).
+    /// The assembled system (gives access to the scheme, the mesh and the symbolic system).
     pub system: DiscreteSystem<'a>,
     /// The barrier, if any.
     pub constraints: Option<Constraints>,
@@ -61,100 +83,21 @@ impl Solution<'_> {
     }
     /// The multiplier on every unknown (zero off the constrained unknowns).
     pub fn multiplier_field(&self) -> Vec<f64> {
-        let mut l = vec![0.0; self.result.u.len()];
-        if let Some(c) = &self.constraints {
-            for (j, pd) in c.dofs.iter().enumerate() {
-                l[pd.dof] = self.result.multiplier[j];
-            }
-        }
-        l
+        self.constrained_field(|j| self.result.multiplier[j])
     }
     /// 1 on active unknowns, 0 elsewhere.
     pub fn active_field(&self) -> Vec<f64> {
+        self.constrained_field(|j| if self.result.active[j] { 1.0 } else { 0.0 })
+    }
+    fn constrained_field(&self, value: impl Fn(usize) -> f64) -> Vec<f64> {
         let mut a = vec![0.0; self.result.u.len()];
         if let Some(c) = &self.constraints {
             for (j, pd) in c.dofs.iter().enumerate() {
-                if self.result.active[j] {
-                    a[pd.dof] = 1.0;
-                }
+                a[pd.dof] = value(j);
             }
         }
         a
     }
-}
-
-/// Builds the barrier of `problem` on the unknowns of the system, checking the data and the
-/// non-emptiness of the discrete convex set.
-pub fn build_constraints(
-    system: &DiscreteSystem,
-    problem: &Problem,
-) -> crate::Result<Option<Constraints>> {
-    let Some(c) = &problem.constraint else {
-        return Ok(None);
-    };
-    let scheme = system.scheme();
-    let mesh = scheme.mesh();
-    let s = c.side.sign();
-    let dir = system.dirichlet();
-    let candidates = match c.kind {
-        ConstraintKind::Obstacle => scheme.obstacle_dofs(),
-        ConstraintKind::Signorini => {
-            if system.signorini_dofs().is_empty() {
-                return Err(crate::Error::InvalidData(
-                    "a Signorini barrier is given but no boundary edge is of Signorini type".into(),
-                ));
-            }
-            system.signorini_dofs().to_vec()
-        }
-    };
-    // barrier versus Dirichlet data: the convex set must not be empty. Obstacle: every
-    // Dirichlet trace unknown (u_D must satisfy the barrier on ∂Ω); Signorini: the Dirichlet
-    // unknowns that also carry the trace on Γ3.
-    let mut tr = Vec::new();
-    let mut checks: Vec<PointDof> = Vec::new();
-    match c.kind {
-        ConstraintKind::Obstacle => {
-            for &e in mesh.boundary_edges() {
-                scheme.edge_trace_dofs(e, &mut tr);
-                checks.extend(tr.iter().filter(|t| dir[t.dof].is_some()));
-            }
-        }
-        ConstraintKind::Signorini => {
-            checks.extend(candidates.iter().filter(|t| dir[t.dof].is_some()));
-        }
-    }
-    for t in &checks {
-        let v = dir[t.dof].unwrap_or(0.0);
-        let g = check_finite(
-            (c.barrier)(t.point),
-            &format!("the barrier at {:?}", t.point),
-        )?;
-        if s * (v - g) > 1e-12 * (1.0 + g.abs()) {
-            return Err(crate::Error::Infeasible(format!(
-                "the Dirichlet value {v} at {:?} is {} the barrier {g}: the discrete convex set is empty",
-                t.point,
-                if s > 0.0 { "above" } else { "below" }
-            )));
-        }
-    }
-    let mut dofs = Vec::new();
-    let mut barrier = Vec::new();
-    for pd in candidates {
-        if dir[pd.dof].is_some() {
-            continue;
-        }
-        let g = check_finite(
-            (c.barrier)(pd.point),
-            &format!("the barrier at {:?}", pd.point),
-        )?;
-        dofs.push(pd);
-        barrier.push(g);
-    }
-    Ok(Some(Constraints {
-        dofs,
-        barrier,
-        side: c.side,
-    }))
 }
 
 /// Assembles and solves `problem` with `scheme`: a linear solve if there is no barrier, the
@@ -163,70 +106,94 @@ pub fn build_constraints(
 pub fn solve_problem<'a>(
     scheme: &'a dyn GradientDiscretisation,
     problem: &Problem,
-    opts: &ActiveSetOptions,
-) -> crate::Result<Solution<'a>> {
-    solve_problem_with(scheme, problem, SystemOptions::default(), opts)
-}
-
-/// As [`solve_problem`], with the options of the linear algebra (fill-reducing ordering,
-/// threads of the factorisation).
-pub fn solve_problem_with<'a>(
-    scheme: &'a dyn GradientDiscretisation,
-    problem: &Problem,
-    system_options: SystemOptions,
-    opts: &ActiveSetOptions,
+    opts: &SolveOptions,
 ) -> crate::Result<Solution<'a>> {
     let t0 = Instant::now();
-    let system = DiscreteSystem::with_options(scheme, problem, system_options)?;
-    let constraints = build_constraints(&system, problem)?;
+    let system = DiscreteSystem::new(scheme, problem, opts.system)?;
+    solve_system(system, problem, opts, t0)
+}
+
+/// As [`solve_problem`], on a symbolic system built before for the same scheme (its
+/// `opts.system` is then ignored): only the values are computed for `problem`.
+pub fn solve_with_symbolic<'a>(
+    symbolic: Arc<SymbolicSystem<'a>>,
+    problem: &Problem,
+    opts: &SolveOptions,
+) -> crate::Result<Solution<'a>> {
+    let t0 = Instant::now();
+    let system = DiscreteSystem::with_symbolic(symbolic, problem)?;
+    solve_system(system, problem, opts, t0)
+}
+
+/// The initial active set that the warm start predicts (None: cold), and its report (None:
+/// no warm start was asked for).
+fn warm_start(
+    system: &DiscreteSystem,
+    problem: &Problem,
+    cons: &Constraints,
+    opts: &SolveOptions,
+) -> (Option<Vec<bool>>, Option<WarmStartReport>) {
+    if opts.warm_start != WarmStart::Nested || opts.active_set.initial_active.is_some() {
+        return (None, None);
+    }
+    let points: Vec<_> = cons.dofs.iter().map(|d| d.point).collect();
+    let t = Instant::now();
+    match warm_start::predict(system.scheme().mesh(), problem, &points) {
+        Ok((a, r)) => (Some(a), Some(r)),
+        Err(reason) => (
+            None,
+            Some(WarmStartReport {
+                seconds: t.elapsed().as_secs_f64(),
+                skipped: Some(reason),
+                ..Default::default()
+            }),
+        ),
+    }
+}
+
+/// The active-set method on `system`, with the fallback of `opts`.
+fn solve_constrained(
+    system: &DiscreteSystem,
+    cons: &Constraints,
+    opts: &SolveOptions,
+    initial: Option<Vec<bool>>,
+) -> crate::Result<VariationalSolution> {
+    let o = match initial {
+        Some(a) => ActiveSetOptions {
+            initial_active: Some(a),
+            ..opts.active_set.clone()
+        },
+        None => opts.active_set.clone(),
+    };
+    match active_set::run(system, cons, &o)? {
+        Outcome::Solved(s) => Ok(s),
+        Outcome::Stalled(stall) if opts.fallback => {
+            let mut sol = pgs::solve(system, cons, &pgs::PgsOptions::default())?;
+            sol.niter += stall.log.len();
+            let mut log = stall.log;
+            log.extend(sol.log);
+            sol.log = log;
+            Ok(sol)
+        }
+        Outcome::Stalled(stall) => Err(stall.error.into()),
+    }
+}
+
+fn solve_system<'a>(
+    system: DiscreteSystem<'a>,
+    problem: &Problem,
+    opts: &SolveOptions,
+    t0: Instant,
+) -> crate::Result<Solution<'a>> {
+    let constraints = constraints::build(&system, problem)?;
     let mut warm = None;
     let result = match &constraints {
-        Some(c) if opts.warm_start == WarmStart::Nested && opts.initial_active.is_none() => {
-            let points: Vec<_> = c.dofs.iter().map(|d| d.point).collect();
-            let t = Instant::now();
-            let (initial, report) = match warm_start::predict(scheme.mesh(), problem, &points) {
-                Ok((a, r)) => (Some(a), r),
-                Err(reason) => (
-                    None,
-                    WarmStartReport {
-                        seconds: t.elapsed().as_secs_f64(),
-                        skipped: Some(reason),
-                        ..Default::default()
-                    },
-                ),
-            };
-            warm = Some(report);
-            let o = ActiveSetOptions {
-                initial_active: Some(initial.unwrap_or_else(|| vec![false; points.len()])),
-                ..opts.clone()
-            };
-            active_set::solve(&system, c, &o)?
+        Some(c) => {
+            let (initial, report) = warm_start(&system, problem, c, opts);
+            warm = report;
+            solve_constrained(&system, c, opts, initial)?
         }
-        Some(c) => active_set::solve(&system, c, opts)?,
-        None => {
-            let fixed = vec![None; system.n_unknowns()];
-            let (u, t) = system.solve(&fixed)?;
-            let (cert, _) = active_set::certificate(&system, None, &u, &[]);
-            cert.check(opts.tol)?;
-            VariationalSolution {
-                u,
-                multiplier: vec![],
-                active: vec![],
-                niter: 1,
-                log: vec![IterationLog {
-                    solve: 1,
-                    active: 0,
-                    entered: 0,
-                    left: 0,
-                    violation: 0.0,
-                    residual: cert.balance_residual,
-                    timings: t,
-                }],
-                certificate: cert,
-                method: Method::Linear,
-                iterates: vec![],
-            }
-        }
+        None => crate::vi::solve_unconstrained(&system, opts.active_set.tol)?,
     };
     let mut timings = Timings {
         setup: system.setup_seconds,

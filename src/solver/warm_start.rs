@@ -34,8 +34,10 @@ use crate::problem::{ConstraintKind, Problem};
 use crate::scheme::Hmm;
 use std::time::Instant;
 
-/// How the monotony algorithm starts.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+/// How the monotony algorithm starts (`--warm-start cold|nested` on the command line).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
 pub enum WarmStart {
     /// From A₀ = ∅ (the paper's algorithm; NITER comparable with its tables).
     #[default]
@@ -198,8 +200,9 @@ impl Coarse {
             .map_err(fail)?
             .with_boundary_tags(|p| tags.nearest(p));
         let scheme = Hmm::new(&mesh);
-        let system = crate::assembly::DiscreteSystem::new(&scheme, problem).map_err(fail)?;
-        let cons = super::build_constraints(&system, problem)
+        let system = crate::assembly::DiscreteSystem::new(&scheme, problem, Default::default())
+            .map_err(fail)?;
+        let cons = super::constraints::build(&system, problem)
             .map_err(fail)?
             .ok_or_else(|| "the problem has no barrier".to_string())?;
         let kind = problem
@@ -215,11 +218,11 @@ impl Coarse {
                 })
                 .collect()
         });
-        let opts = super::ActiveSetOptions {
+        let opts = crate::vi::ActiveSetOptions {
             initial_active,
             ..Default::default()
         };
-        let sol = super::active_set::solve(&system, &cons, &opts).map_err(fail)?;
+        let sol = crate::vi::active_set::solve(&system, &cons, &opts).map_err(fail)?;
         let mut out = Coarse {
             nx,
             ny,

@@ -2,52 +2,23 @@
 //! on M-matrices, a closed-form 1D obstacle problem, cycling, infeasibility and bad data.
 
 use crate::common::*;
-use gradvi::assembly::{DiscreteSystem, SolveTimings};
+use gradvi::assembly::DiscreteSystem;
 use gradvi::mesh::PolyMesh;
 use gradvi::problem::*;
 use gradvi::scheme::*;
-use gradvi::solver::active_set::{self, LinearSystem};
+use gradvi::solver::constraints::build as build_constraints;
 use gradvi::solver::*;
+use gradvi::vi::{Constraints, QuadraticEnergy, active_set};
 use gradvi::{Error, SolverError};
 use nalgebra::{DMatrix, DVector};
 
-/// Solves the VI by trying every active set: the one whose solution is feasible with
-/// non-negative multipliers is the discrete solution. Returns it (ties: the first found).
-fn enumerate(sys: &dyn LinearSystem, cons: &Constraints) -> Vec<f64> {
-    let m = cons.dofs.len();
-    assert!(
-        m <= 12,
-        "enumeration is for small problems ({m} constrained unknowns)"
-    );
-    let s = cons.side.sign();
-    let mut best: Option<Vec<f64>> = None;
-    for mask in 0u32..(1 << m) {
-        let mut fixed = vec![None; sys.n_unknowns()];
-        for j in 0..m {
-            if mask & (1 << j) != 0 {
-                fixed[cons.dofs[j].dof] = Some(cons.barrier[j]);
-            }
-        }
-        let (u, _) = sys.solve(&fixed).unwrap();
-        let (r, sc) = sys.residual(&u);
-        let scale = sc.iter().cloned().fold(0.0, f64::max);
-        let umax = u.iter().fold(1e-300f64, |a, x| a.max(x.abs()));
-        let ok = (0..m).all(|j| {
-            let d = cons.dofs[j].dof;
-            let feasible = s * (u[d] - cons.barrier[j]) <= 1e-12 * umax;
-            let mult = mask & (1 << j) == 0 || s * r[d] >= -1e-12 * scale;
-            feasible && mult
-        });
-        if ok {
-            best = Some(u);
-            break;
-        }
-    }
-    best.expect("some active set satisfies the KKT conditions")
+/// The reference solution by exhaustive enumeration of the active sets.
+fn enumerate(sys: &dyn QuadraticEnergy, cons: &Constraints) -> Vec<f64> {
+    gradvi::vi::exhaustive::solve(sys, cons).unwrap().0
 }
 
 fn check_against_enumeration(scheme: &dyn GradientDiscretisation, p: &Problem, min_active: usize) {
-    let sys = DiscreteSystem::new(scheme, p).unwrap();
+    let sys = DiscreteSystem::new(scheme, p, Default::default()).unwrap();
     let cons = build_constraints(&sys, p).unwrap().unwrap();
     let sol = active_set::solve(&sys, &cons, &ActiveSetOptions::default()).unwrap();
     let n_act = sol.active.iter().filter(|&&a| a).count();
@@ -72,10 +43,10 @@ fn check_against_enumeration(scheme: &dyn GradientDiscretisation, p: &Problem, m
 
 /// The projected Gauss–Seidel solution, run to 1e-15.
 fn pgs_solution(sys: &DiscreteSystem, cons: &Constraints) -> Vec<f64> {
-    gradvi::solver::pgs::solve(
+    gradvi::vi::pgs::solve(
         sys,
         cons,
-        &gradvi::solver::pgs::PgsOptions {
+        &gradvi::vi::pgs::PgsOptions {
             tol: 1e-15,
             ..Default::default()
         },
@@ -126,7 +97,7 @@ fn small_problems_match_enumeration_and_pgs() {
 /// For problems with too many constrained unknowns to enumerate: the active-set solution
 /// against projected Gauss–Seidel run to 1e-15.
 fn check_against_pgs(scheme: &dyn GradientDiscretisation, p: &Problem) {
-    let sys = DiscreteSystem::new(scheme, p).unwrap();
+    let sys = DiscreteSystem::new(scheme, p, Default::default()).unwrap();
     let cons = build_constraints(&sys, p).unwrap().unwrap();
     let sol = active_set::solve(&sys, &cons, &ActiveSetOptions::default()).unwrap();
     let n_act = sol.active.iter().filter(|&&a| a).count();
@@ -164,7 +135,7 @@ fn m_matrix_iterates_are_monotone_and_niter_is_bounded() {
     let s = Hmm::new(&mesh);
     for c in [-5.0, -20.0] {
         let p = paper_test3(c);
-        let sys = DiscreteSystem::new(&s, &p).unwrap();
+        let sys = DiscreteSystem::new(&s, &p, Default::default()).unwrap();
         let cons = build_constraints(&sys, &p).unwrap().unwrap();
         let opts = ActiveSetOptions {
             keep_iterates: true,
@@ -219,7 +190,7 @@ fn one_dimensional_obstacle_converges_to_the_closed_form() {
                 }
             })
             .with_constraint(ConstraintKind::Obstacle, Side::Lower, Box::new(|_| -0.5));
-        let sol = solve_problem(&s, &p, &ActiveSetOptions::default()).unwrap();
+        let sol = solve_problem(&s, &p, &SolveOptions::default()).unwrap();
         let cv = s.cell_values(sol.u());
         let e = (0..mesh.n_cells())
             .map(|k| (cv[k] - exact(mesh.centroid(k)[0])).abs())
@@ -241,11 +212,11 @@ fn no_contact_gives_the_linear_solution() {
             Side::Lower,
             Box::new(|_| -10.0),
         );
-        let vi = solve_problem(s.as_ref(), &p, &ActiveSetOptions::default()).unwrap();
+        let vi = solve_problem(s.as_ref(), &p, &SolveOptions::default()).unwrap();
         let lin = solve_problem(
             s.as_ref(),
             &Problem::new("lin", Box::new(|_| -5.0)),
-            &ActiveSetOptions::default(),
+            &SolveOptions::default(),
         )
         .unwrap();
         assert_eq!(vi.niter(), 1);
@@ -253,112 +224,15 @@ fn no_contact_gives_the_linear_solution() {
     }
 }
 
-/// A dense SPD system with Dirichlet-free unknowns, to drive the solver with crafted matrices.
-struct Dense {
-    m: DMatrix<f64>,
-    b: Vec<f64>,
-    dir: Vec<Option<f64>>,
-}
-
-impl LinearSystem for Dense {
-    fn n_unknowns(&self) -> usize {
-        self.b.len()
-    }
-    fn dirichlet(&self) -> &[Option<f64>] {
-        &self.dir
-    }
-    fn load(&self) -> &[f64] {
-        &self.b
-    }
-    fn solve(&self, fixed: &[Option<f64>]) -> gradvi::Result<(Vec<f64>, SolveTimings)> {
-        let n = self.b.len();
-        let free: Vec<usize> = (0..n).filter(|&i| fixed[i].is_none()).collect();
-        let mut u: Vec<f64> = (0..n).map(|i| fixed[i].unwrap_or(0.0)).collect();
-        let a = DMatrix::from_fn(free.len(), free.len(), |i, j| self.m[(free[i], free[j])]);
-        let r = DVector::from_fn(free.len(), |i, _| {
-            let fi = free[i];
-            self.b[fi]
-                - (0..n)
-                    .filter(|j| fixed[*j].is_some())
-                    .map(|j| self.m[(fi, j)] * u[j])
-                    .sum::<f64>()
-        });
-        let x = a.cholesky().unwrap().solve(&r);
-        for (i, &fi) in free.iter().enumerate() {
-            u[fi] = x[i];
-        }
-        Ok((u, SolveTimings::default()))
-    }
-    fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>) {
-        let n = self.b.len();
-        let mut r = self.b.clone();
-        let mut s: Vec<f64> = self.b.iter().map(|x| x.abs()).collect();
-        for i in 0..n {
-            for (j, uj) in u.iter().enumerate() {
-                r[i] -= self.m[(i, j)] * uj;
-                s[i] += (self.m[(i, j)] * uj).abs();
-            }
-        }
-        (r, s)
-    }
-    fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
-        let n = self.b.len();
-        (0..n)
-            .flat_map(|i| (0..n).map(move |j| (i, j)))
-            .map(|(i, j)| (i, j, self.m[(i, j)]))
-            .collect()
-    }
-}
-
-fn cycling_system() -> (Dense, Constraints) {
-    // found by a random search: SPD (not an M-matrix), the plain active-set method cycles
-    let m = DMatrix::from_row_slice(3, 3, &[2.25, -2.5, 4.0, -2.5, 4.75, -5.5, 4.0, -5.5, 8.0]);
-    let sys = Dense {
-        m,
-        b: vec![0.0, 0.75, -0.75],
-        dir: vec![None; 3],
-    };
-    let cons = Constraints {
-        dofs: (0..3)
-            .map(|i| PointDof {
-                dof: i,
-                point: [0.0, 0.0],
-                measure: 1.0,
-            })
-            .collect(),
-        barrier: vec![0.0; 3],
-        side: Side::Upper,
-    };
-    (sys, cons)
-}
-
-#[test]
-fn cycling_is_detected_and_the_fallback_solves() {
-    let (sys, cons) = cycling_system();
-    let err = active_set::solve(&sys, &cons, &ActiveSetOptions::default()).unwrap_err();
-    assert!(
-        matches!(err, Error::Solver(SolverError::Cycling { .. })),
-        "{err}"
-    );
-    let opts = ActiveSetOptions {
-        fallback: true,
-        ..Default::default()
-    };
-    let sol = active_set::solve(&sys, &cons, &opts).unwrap();
-    assert_eq!(sol.method, Method::ProjectedGaussSeidel);
-    sol.certificate.check(1e-10).unwrap();
-    let reference = enumerate(&sys, &cons);
-    for (a, b) in sol.u.iter().zip(&reference) {
-        assert!((a - b).abs() < 1e-10, "{a} vs {b}");
-    }
-}
-
 #[test]
 fn iteration_cap_is_a_typed_error() {
     let mesh = square_grid(8);
     let s = Hmm::new(&mesh);
-    let opts = ActiveSetOptions {
-        max_solves: 1,
+    let opts = SolveOptions {
+        active_set: ActiveSetOptions {
+            max_solves: 1,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let err = solve_problem(&s, &paper_test3(-5.0), &opts).err().unwrap();
@@ -381,12 +255,12 @@ fn infeasible_and_invalid_data_are_rejected() {
         Side::Upper,
         Box::new(|_| -1.0),
     );
-    let e = solve_problem(&p1, &p, &ActiveSetOptions::default())
+    let e = solve_problem(&p1, &p, &SolveOptions::default())
         .err()
         .expect("P1 obstacle below the Dirichlet data");
     assert!(matches!(e, Error::Infeasible(_)), "{e}");
     let hmm = Hmm::new(&tri);
-    let e = solve_problem(&hmm, &p, &ActiveSetOptions::default())
+    let e = solve_problem(&hmm, &p, &SolveOptions::default())
         .err()
         .expect("HMM obstacle below the Dirichlet data");
     assert!(matches!(e, Error::Infeasible(_)), "{e}");
@@ -394,14 +268,14 @@ fn infeasible_and_invalid_data_are_rejected() {
     // corners, for P1 whose corner vertices carry both
     let mut p = paper_test2();
     p.constraint.as_mut().unwrap().barrier = Box::new(|_| -0.1);
-    let e = solve_problem(&p1, &p, &ActiveSetOptions::default())
+    let e = solve_problem(&p1, &p, &SolveOptions::default())
         .err()
         .expect("P1 Signorini corner");
     assert!(matches!(e, Error::Infeasible(_)), "{e}");
     // NaN data
     let nan_f = Problem::new("nan", Box::new(|x| if x[0] > 0.5 { f64::NAN } else { 0.0 }));
     assert!(matches!(
-        solve_problem(&hmm, &nan_f, &ActiveSetOptions::default())
+        solve_problem(&hmm, &nan_f, &SolveOptions::default())
             .err()
             .unwrap(),
         Error::InvalidData(_)
@@ -415,7 +289,7 @@ fn infeasible_and_invalid_data_are_rejected() {
         ..nan_g
     };
     assert!(matches!(
-        solve_problem(&hmm, &nan_g, &ActiveSetOptions::default())
+        solve_problem(&hmm, &nan_g, &SolveOptions::default())
             .err()
             .unwrap(),
         Error::InvalidData(_)
@@ -423,7 +297,7 @@ fn infeasible_and_invalid_data_are_rejected() {
     let bad_a = Problem::new("bad A", Box::new(|_| 1.0))
         .with_diffusion(Box::new(|_| [[1.0, 2.0], [2.0, 1.0]]));
     assert!(matches!(
-        solve_problem(&hmm, &bad_a, &ActiveSetOptions::default())
+        solve_problem(&hmm, &bad_a, &SolveOptions::default())
             .err()
             .unwrap(),
         Error::InvalidData(_)
@@ -431,7 +305,7 @@ fn infeasible_and_invalid_data_are_rejected() {
     let inf_dir =
         Problem::new("inf", Box::new(|_| 1.0)).with_dirichlet(Box::new(|_| f64::INFINITY));
     assert!(matches!(
-        solve_problem(&hmm, &inf_dir, &ActiveSetOptions::default())
+        solve_problem(&hmm, &inf_dir, &SolveOptions::default())
             .err()
             .unwrap(),
         Error::InvalidData(_)
@@ -452,7 +326,7 @@ fn hmm_on_cartesian_with_identity_is_the_two_point_scheme() {
     let f = |x: [f64; 2]| (3.0 * x[0]).sin() + x[1] * x[1];
     let p = Problem::new("tpfa", Box::new(f));
     let s = Hmm::new(&mesh);
-    let sol = solve_problem(&s, &p, &ActiveSetOptions::default()).unwrap();
+    let sol = solve_problem(&s, &p, &SolveOptions::default()).unwrap();
     let nc = mesh.n_cells();
     let mut a = DMatrix::<f64>::zeros(nc, nc);
     let mut b = DVector::<f64>::zeros(nc);

@@ -10,7 +10,7 @@ use gradvi::post::contact::{contact_measure, switch_point};
 use gradvi::post::relative_errors;
 use gradvi::problem::{Problem, paper_test1, paper_test2, paper_test2_tie, paper_test3};
 use gradvi::scheme::{SchemeKind, build};
-use gradvi::solver::{ActiveSetOptions, Solution, solve_problem};
+use gradvi::solver::{Solution, SolveOptions, solve_problem};
 use std::time::Instant;
 
 /// The constants C of Test 3.
@@ -121,7 +121,7 @@ pub fn with_solution<R>(
     f: impl FnOnce(&Solution) -> gradvi::Result<R>,
 ) -> gradvi::Result<R> {
     let scheme = build(kind, mesh)?;
-    let sol = solve_problem(scheme.as_ref(), problem, &ActiveSetOptions::default())?;
+    let sol = solve_problem(scheme.as_ref(), problem, &SolveOptions::default())?;
     f(&sol)
 }
 

@@ -6,10 +6,8 @@
 //! coordinate descent on the energy over a box). Stops when the largest update is below
 //! `tol`·‖u‖∞.
 
-use super::active_set::{
-    Constraints, IterationLog, LinearSystem, Method, VariationalSolution, certificate,
-};
-use crate::assembly::SolveTimings;
+use super::certificate::evaluate;
+use super::{Constraints, IterationLog, Method, QuadraticEnergy, SolveTimings, VariationalSolution};
 use crate::error::SolverError;
 
 /// Options of projected Gauss–Seidel.
@@ -35,7 +33,7 @@ impl Default for PgsOptions {
 
 /// Solves the discrete VI by projected Gauss–Seidel. `niter` of the result counts sweeps.
 pub fn solve(
-    system: &dyn LinearSystem,
+    system: &dyn QuadraticEnergy,
     cons: &Constraints,
     opts: &PgsOptions,
 ) -> crate::Result<VariationalSolution> {
@@ -123,7 +121,8 @@ pub fn solve(
         .enumerate()
         .map(|(j, pd)| u[pd.dof] == cons.barrier[j])
         .collect();
-    let (cert, lambda) = certificate(system, Some(cons), &u, &active);
+    let ev = evaluate(system, Some(cons), &u, &active);
+    let (cert, lambda) = (ev.certificate, ev.multiplier);
     cert.check(opts.certificate_tol)?;
     Ok(VariationalSolution {
         u,
@@ -143,4 +142,36 @@ pub fn solve(
         method: Method::ProjectedGaussSeidel,
         iterates: vec![],
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vi::dense::cycling_system;
+    use crate::vi::exhaustive;
+
+    /// Projected Gauss–Seidel solves the system on which the active-set method cycles, to the
+    /// enumerated solution, with a passing certificate.
+    #[test]
+    fn solves_the_cycling_system() {
+        let (sys, cons) = cycling_system();
+        let sol = solve(&sys, &cons, &PgsOptions::default()).unwrap();
+        assert_eq!(sol.method, Method::ProjectedGaussSeidel);
+        sol.certificate.check(1e-10).unwrap();
+        let (reference, active) = exhaustive::solve(&sys, &cons).unwrap();
+        assert_eq!(sol.active, active);
+        for (a, b) in sol.u.iter().zip(&reference) {
+            assert!((a - b).abs() < 1e-10, "{a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn the_sweep_cap_is_a_typed_error() {
+        let (sys, cons) = cycling_system();
+        let o = PgsOptions { max_sweeps: 1, ..Default::default() };
+        assert!(matches!(
+            solve(&sys, &cons, &o),
+            Err(crate::Error::Solver(SolverError::MaxIterations { .. }))
+        ));
+    }
 }

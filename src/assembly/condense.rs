@@ -1,0 +1,232 @@
+//! Static condensation of one cell, and the recovery of its interior unknowns.
+//!
+//! The local unknowns of a cell are its interior unknowns I (first) and its skeleton unknowns
+//! S. Some unknowns are *fixed* (Dirichlet, or active constraints): I = R ∪ F with R free.
+//! Eliminating R from the local system gives the Schur complement on S
+//!
+//!   S_K = M_SS − M_SR M_RR⁻¹ M_RS,
+//!   g_K = b_S − M_SF u_F − M_SR M_RR⁻¹ (b_R − M_RF u_F),
+//!
+//! and, once the skeleton values u_S are known, u_R = M_RR⁻¹ (b_R − M_RS u_S − M_RF u_F).
+//! One interior unknown (HMM's u_K) has a scalar fast path; the general path uses a dense
+//! Cholesky factorisation of M_RR (SPD as a principal block of an SPD matrix).
+
+use nalgebra::{DMatrix, DVector};
+
+/// Condensation of one cell (see the module docs). `s` (length p²) receives the p×p skeleton
+/// matrix (column-major) and `g` (length p) the p skeleton loads.
+pub fn condense(
+    d: &[usize],
+    ni: usize,
+    m: &[f64],
+    b: &[f64],
+    fx: &dyn Fn(usize) -> Option<f64>,
+    s: &mut [f64],
+    g: &mut [f64],
+) {
+    let nl = d.len();
+    let p = nl - ni;
+    for bcol in 0..p {
+        for arow in 0..p {
+            s[arow + bcol * p] = m[(ni + arow) + (ni + bcol) * nl];
+        }
+    }
+    g.copy_from_slice(&b[ni..]);
+    if ni == 0 {
+        return;
+    }
+    if ni == 1 {
+        // HMM fast path: one cell unknown
+        match fx(d[0]) {
+            Some(v) => {
+                for arow in 0..p {
+                    g[arow] -= m[ni + arow] * v;
+                }
+            }
+            None => {
+                let mkk = m[0];
+                for bcol in 0..p {
+                    let mkb = m[(ni + bcol) * nl];
+                    for arow in 0..p {
+                        s[arow + bcol * p] -= m[ni + arow] * mkb / mkk;
+                    }
+                }
+                for arow in 0..p {
+                    g[arow] -= m[ni + arow] * b[0] / mkk;
+                }
+            }
+        }
+        return;
+    }
+    // general path
+    let free: Vec<usize> = (0..ni).filter(|&i| fx(d[i]).is_none()).collect();
+    let fixed: Vec<(usize, f64)> = (0..ni).filter_map(|i| fx(d[i]).map(|v| (i, v))).collect();
+    let mut br: Vec<f64> = free.iter().map(|&i| b[i]).collect();
+    for &(j, v) in &fixed {
+        for arow in 0..p {
+            g[arow] -= m[(ni + arow) + j * nl] * v;
+        }
+        for (q, &i) in free.iter().enumerate() {
+            br[q] -= m[i + j * nl] * v;
+        }
+    }
+    if free.is_empty() {
+        return;
+    }
+    let r = free.len();
+    let mrr = DMatrix::from_fn(r, r, |a, c| m[free[a] + free[c] * nl]);
+    let msr = DMatrix::from_fn(p, r, |a, c| m[(ni + a) + free[c] * nl]);
+    let chol = mrr
+        .cholesky()
+        .expect("interior block of an SPD local matrix is SPD");
+    let x = chol.solve(&msr.transpose()); // M_RR⁻¹ M_RS
+    let y = chol.solve(&DVector::from_vec(br)); // M_RR⁻¹ b_R
+    for bcol in 0..p {
+        for arow in 0..p {
+            s[arow + bcol * p] -= (0..r).map(|q| msr[(arow, q)] * x[(q, bcol)]).sum::<f64>();
+        }
+    }
+    for arow in 0..p {
+        g[arow] -= (0..r).map(|q| msr[(arow, q)] * y[q]).sum::<f64>();
+    }
+}
+
+/// The interior unknown of a cell with exactly one (HMM's u_K), from its skeleton values.
+pub fn interior_value(
+    d: &[usize],
+    m: &[f64],
+    b: &[f64],
+    fx: &dyn Fn(usize) -> Option<f64>,
+    u: &[f64],
+) -> f64 {
+    let nl = d.len();
+    match fx(d[0]) {
+        Some(v) => v,
+        None => {
+            let mut r = b[0];
+            for j in 1..nl {
+                r -= m[j * nl] * u[d[j]];
+            }
+            r / m[0]
+        }
+    }
+}
+
+/// Recovers the interior unknowns of one cell from its skeleton values.
+pub fn recover_interior(
+    d: &[usize],
+    ni: usize,
+    m: &[f64],
+    b: &[f64],
+    fx: &dyn Fn(usize) -> Option<f64>,
+    u: &mut [f64],
+) {
+    let nl = d.len();
+    if ni == 1 {
+        u[d[0]] = interior_value(d, m, b, fx, u);
+        return;
+    }
+    let free: Vec<usize> = (0..ni).filter(|&i| fx(d[i]).is_none()).collect();
+    for i in 0..ni {
+        if let Some(v) = fx(d[i]) {
+            u[d[i]] = v;
+        }
+    }
+    if free.is_empty() {
+        return;
+    }
+    let r = free.len();
+    let mrr = DMatrix::from_fn(r, r, |a, c| m[free[a] + free[c] * nl]);
+    let rhs = DVector::from_fn(r, |a, _| {
+        let i = free[a];
+        let mut v = b[i];
+        for j in 0..nl {
+            if !free.contains(&j) {
+                v -= m[i + j * nl] * u[d[j]];
+            }
+        }
+        v
+    });
+    let x = mrr.cholesky().expect("SPD interior block").solve(&rhs);
+    for (a, &i) in free.iter().enumerate() {
+        u[d[i]] = x[a];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vi::dense::spd;
+
+    /// Condenses a cell with `ni` interior unknowns (some fixed) and checks S_K and g_K against
+    /// the dense Schur complement, then the recovery against a dense solve of the full system.
+    fn check(ni: usize, p: usize, fixed_interior: &[usize], seed: u64) {
+        let nl = ni + p;
+        let m = spd(nl, seed);
+        let b = DVector::from_fn(nl, |i, _| 1.0 + i as f64 * 0.25);
+        let d: Vec<usize> = (0..nl).collect();
+        let fixed_val = |i: usize| 0.5 - 0.1 * i as f64;
+        let fx = |i: usize| fixed_interior.contains(&i).then(|| fixed_val(i));
+        let mut s = vec![0.0; p * p];
+        let mut g = vec![0.0; p];
+        condense(&d, ni, m.as_slice(), b.as_slice(), &fx, &mut s, &mut g);
+        // dense reference
+        let free: Vec<usize> = (0..ni).filter(|i| !fixed_interior.contains(i)).collect();
+        let r = free.len();
+        let mrr = DMatrix::from_fn(r, r, |a, c| m[(free[a], free[c])]);
+        let msr = DMatrix::from_fn(p, r, |a, c| m[(ni + a, free[c])]);
+        let mss = DMatrix::from_fn(p, p, |a, c| m[(ni + a, ni + c)]);
+        let uf = DVector::from_fn(nl, |i, _| fx(i).unwrap_or(0.0));
+        let br = DVector::from_fn(r, |a, _| {
+            b[free[a]] - (0..ni).map(|j| m[(free[a], j)] * uf[j]).sum::<f64>()
+        });
+        let inv = mrr.clone().try_inverse().unwrap();
+        let s_ref = &mss - &msr * &inv * msr.transpose();
+        let g_ref = DVector::from_fn(p, |a, _| {
+            b[ni + a] - (0..ni).map(|j| m[(ni + a, j)] * uf[j]).sum::<f64>()
+        }) - &msr * &inv * &br;
+        for a in 0..p {
+            assert!((g[a] - g_ref[a]).abs() < 1e-12, "g[{a}]");
+            for c in 0..p {
+                assert!((s[a + c * p] - s_ref[(a, c)]).abs() < 1e-12, "S[{a},{c}]");
+            }
+        }
+        // skeleton values from the condensed system, then recovery = the full solve
+        let us = DMatrix::from_column_slice(p, p, &s)
+            .cholesky()
+            .unwrap()
+            .solve(&DVector::from_column_slice(&g));
+        let mut u = vec![0.0; nl];
+        for a in 0..p {
+            u[ni + a] = us[a];
+        }
+        recover_interior(&d, ni, m.as_slice(), b.as_slice(), &fx, &mut u);
+        // reference: the full system with the fixed interior unknowns as unit rows
+        let mut mf = m.clone();
+        let mut bf = b.clone();
+        for &i in fixed_interior {
+            for j in 0..nl {
+                mf[(i, j)] = if i == j { 1.0 } else { 0.0 };
+            }
+            bf[i] = fixed_val(i);
+        }
+        let uref = mf.lu().solve(&bf).unwrap();
+        for i in 0..nl {
+            assert!((u[i] - uref[i]).abs() < 1e-10, "u[{i}]: {} vs {}", u[i], uref[i]);
+        }
+    }
+
+    #[test]
+    fn one_interior_unknown_fast_path() {
+        check(1, 4, &[], 1);
+        check(1, 3, &[0], 2);
+    }
+
+    #[test]
+    fn several_interior_unknowns_against_the_dense_schur_complement() {
+        check(2, 3, &[], 3);
+        check(3, 4, &[], 4);
+        check(3, 4, &[1], 5);
+        check(2, 5, &[0, 1], 6);
+    }
+}

@@ -1,0 +1,297 @@
+//! The symbolic part of assembly: everything that depends only on the scheme (its unknowns and
+//! how cells couple them), built once and shared by every problem posed on the same scheme.
+//!
+//! - the dof map: the unknowns of each cell, interior first ([`DofMap`]);
+//! - the pattern of the condensed (skeleton) matrix, lower triangle, with a diagonal entry for
+//!   every skeleton unknown, and its symbolic Cholesky factorisation ([`SpdPattern`]);
+//! - the scatter maps: where each local skeleton entry lands in the condensed values
+//!   (`pos`), the local entries that land on each condensed entry (`src`, in cell order), and
+//!   where each unknown appears in the local blocks (`inc`, in cell order). The last two let
+//!   the values be *gathered* entry by entry in parallel, with sums in the order of a
+//!   sequential scatter, so results do not depend on the number of threads.
+//!
+//! Dirichlet and active unknowns keep their rows and columns in the pattern (with a unit
+//! diagonal and zeros elsewhere), so neither the boundary partition nor the active set
+//! changes anything here.
+
+use super::{SystemOptions, cell_chunks};
+use crate::linalg::SpdPattern;
+use crate::scheme::GradientDiscretisation;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// The unknowns of every cell, flattened: cell k's are `dofs[dof_ptr[k]..dof_ptr[k + 1]]`,
+/// its `n_int[k]` interior unknowns first.
+#[derive(Debug, Clone)]
+pub struct DofMap {
+    /// Offsets into `dofs`, one per cell plus one.
+    pub dof_ptr: Vec<usize>,
+    /// The unknowns of the cells, concatenated.
+    pub dofs: Vec<usize>,
+    /// Number of interior unknowns of each cell.
+    pub n_int: Vec<u8>,
+}
+
+impl DofMap {
+    /// Asks the scheme for the unknowns of every cell (in parallel over chunks of cells).
+    pub fn new(scheme: &dyn GradientDiscretisation) -> crate::Result<Self> {
+        let nc = scheme.mesh().n_cells();
+        let chunks: crate::Result<Vec<(Vec<usize>, Vec<usize>, Vec<u8>)>> = cell_chunks(nc)
+            .into_par_iter()
+            .map(|(c0, c1)| {
+                let (mut len, mut all, mut ni) = (Vec::new(), Vec::new(), Vec::new());
+                let mut ld = Vec::new();
+                for k in c0..c1 {
+                    scheme.local_dofs(k, &mut ld);
+                    len.push(ld.len());
+                    all.extend_from_slice(&ld);
+                    let n = scheme.n_local_interior(k);
+                    ni.push(u8::try_from(n).map_err(|_| {
+                        crate::Error::InvalidData(format!(
+                            "cell {k} has {n} interior unknowns (at most 255 are supported)"
+                        ))
+                    })?);
+                }
+                Ok((len, all, ni))
+            })
+            .collect();
+        let chunks = chunks?;
+        let mut dof_ptr = Vec::with_capacity(nc + 1);
+        dof_ptr.push(0);
+        let mut dofs = Vec::with_capacity(chunks.iter().map(|c| c.1.len()).sum());
+        let mut n_int = Vec::with_capacity(nc);
+        for (len, all, ni) in chunks {
+            for l in len {
+                dof_ptr.push(dof_ptr.last().copied().unwrap_or(0) + l);
+            }
+            dofs.extend_from_slice(&all);
+            n_int.extend_from_slice(&ni);
+        }
+        Ok(DofMap {
+            dof_ptr,
+            dofs,
+            n_int,
+        })
+    }
+
+    /// Number of cells.
+    pub fn n_cells(&self) -> usize {
+        self.n_int.len()
+    }
+
+    /// The unknowns of cell k and its number of interior unknowns.
+    pub fn cell(&self, k: usize) -> (&[usize], usize) {
+        (
+            &self.dofs[self.dof_ptr[k]..self.dof_ptr[k + 1]],
+            self.n_int[k] as usize,
+        )
+    }
+
+    /// The skeleton unknowns of cell k.
+    fn skeleton(&self, k: usize) -> &[usize] {
+        &self.dofs[self.dof_ptr[k] + self.n_int[k] as usize..self.dof_ptr[k + 1]]
+    }
+}
+
+/// The scatter and gather maps of the module docs.
+#[derive(Debug, Clone)]
+pub struct ScatterMaps {
+    /// Offsets into `pos`: cell k's p×p skeleton block (column-major) at `pos_ptr[k]`.
+    pub pos_ptr: Vec<usize>,
+    /// Position in the condensed values of each local skeleton entry (lower triangle;
+    /// `u32::MAX` for upper entries).
+    pub pos: Vec<u32>,
+    /// Offsets into `src`, one per condensed entry plus one.
+    pub src_ptr: Vec<usize>,
+    /// For each condensed entry, the indices in `pos` of the local entries landing on it.
+    pub src: Vec<u32>,
+    /// Offsets into `inc`, one per unknown plus one.
+    pub inc_ptr: Vec<usize>,
+    /// For each unknown, its positions in [`DofMap::dofs`], cells ascending.
+    pub inc: Vec<u32>,
+}
+
+/// The symbolic system of a scheme (see the module docs).
+pub struct SymbolicSystem<'a> {
+    scheme: &'a dyn GradientDiscretisation,
+    /// The unknowns of each cell.
+    pub dof_map: DofMap,
+    /// Pattern and symbolic factorisation of the condensed matrix.
+    pub pattern: SpdPattern,
+    /// Where local entries go.
+    pub maps: ScatterMaps,
+    /// Every cell has exactly one interior unknown (HMM): parallel recovery.
+    pub single_interior: bool,
+    /// Time of the symbolic factorisation, seconds.
+    pub symbolic_seconds: f64,
+    /// Time to build everything here, seconds.
+    pub setup_seconds: f64,
+}
+
+impl<'a> SymbolicSystem<'a> {
+    /// Builds the symbolic system of `scheme`.
+    pub fn new(scheme: &'a dyn GradientDiscretisation, options: SystemOptions) -> crate::Result<Self> {
+        let dof_map = DofMap::new(scheme)?;
+        Self::with_dof_map(scheme, dof_map, options)
+    }
+
+    /// As [`SymbolicSystem::new`], from the dof map of `scheme`.
+    pub fn with_dof_map(
+        scheme: &'a dyn GradientDiscretisation,
+        dof_map: DofMap,
+        options: SystemOptions,
+    ) -> crate::Result<Self> {
+        let t0 = Instant::now();
+        let n_skel = scheme.n_skeleton();
+        let n = scheme.n_unknowns();
+        let (col_ptr, row_idx) = condensed_pattern(&dof_map, n_skel)?;
+        // the symbolic factorisation (sequential) runs beside the scatter maps
+        let (symbolic, maps) = rayon::join(
+            || {
+                let t = Instant::now();
+                SpdPattern::with_ordering(n_skel, col_ptr.clone(), row_idx.clone(), options.ordering)
+                    .map(|p| (p.with_threads(options.factor_threads), t.elapsed().as_secs_f64()))
+            },
+            || scatter_maps(&dof_map, n, &col_ptr, &row_idx),
+        );
+        let (pattern, symbolic_seconds) = symbolic?;
+        let maps = maps?;
+        let single_interior = dof_map.n_int.iter().all(|&ni| ni == 1);
+        Ok(SymbolicSystem {
+            scheme,
+            dof_map,
+            pattern,
+            maps,
+            single_interior,
+            symbolic_seconds,
+            setup_seconds: t0.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The scheme.
+    pub fn scheme(&self) -> &'a dyn GradientDiscretisation {
+        self.scheme
+    }
+    /// Number of unknowns (skeleton and interior).
+    pub fn n_unknowns(&self) -> usize {
+        self.scheme.n_unknowns()
+    }
+    /// Size of the condensed system (the skeleton unknowns).
+    pub fn n_condensed(&self) -> usize {
+        self.scheme.n_skeleton()
+    }
+}
+
+/// The lower-triangular CSC pattern (column pointers, row indices) of the condensed matrix.
+fn condensed_pattern(dm: &DofMap, n_skel: usize) -> crate::Result<(Vec<usize>, Vec<usize>)> {
+    let mut pairs: Vec<(usize, usize)> = Vec::new();
+    for k in 0..dm.n_cells() {
+        let sk = dm.skeleton(k);
+        for &i in sk {
+            for &j in sk {
+                if i >= j {
+                    pairs.push((j, i)); // (column, row)
+                }
+            }
+        }
+    }
+    for d in 0..n_skel {
+        pairs.push((d, d)); // every unknown has a diagonal, even if isolated
+    }
+    pairs.par_sort_unstable();
+    pairs.dedup();
+    let mut col_ptr = vec![0usize; n_skel + 1];
+    let mut row_idx = Vec::with_capacity(pairs.len());
+    for &(c, r) in &pairs {
+        col_ptr[c + 1] += 1;
+        row_idx.push(r);
+    }
+    for c in 0..n_skel {
+        col_ptr[c + 1] += col_ptr[c];
+    }
+    if row_idx.len() >= u32::MAX as usize {
+        return Err(crate::Error::Linear(
+            "the condensed matrix has more than 2^32 entries".into(),
+        ));
+    }
+    Ok((col_ptr, row_idx))
+}
+
+/// Offsets and items of a counting sort: item i goes to bucket `key(i)` (if any), buckets
+/// ascending, items ascending within a bucket. Items are below 2^32 (checked by the caller).
+fn counting_sort(
+    n_buckets: usize,
+    keys: impl Iterator<Item = Option<usize>> + Clone,
+) -> (Vec<usize>, Vec<u32>) {
+    let mut ptr = vec![0usize; n_buckets + 1];
+    for b in keys.clone().flatten() {
+        ptr[b + 1] += 1;
+    }
+    for i in 0..n_buckets {
+        ptr[i + 1] += ptr[i];
+    }
+    let mut fill = ptr.clone();
+    let mut items = vec![0u32; ptr[n_buckets]];
+    for (i, key) in keys.enumerate() {
+        if let Some(b) = key {
+            items[fill[b]] = i as u32;
+            fill[b] += 1;
+        }
+    }
+    (ptr, items)
+}
+
+/// The scatter and gather maps (see the module docs).
+fn scatter_maps(
+    dm: &DofMap,
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> crate::Result<ScatterMaps> {
+    let nc = dm.n_cells();
+    let find = |r: usize, c: usize| -> u32 {
+        let s = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+        (col_ptr[c] + s.binary_search(&r).expect("entry is in the pattern")) as u32
+    };
+    let mut pos_ptr = Vec::with_capacity(nc + 1);
+    pos_ptr.push(0);
+    for k in 0..nc {
+        let p = dm.skeleton(k).len();
+        pos_ptr.push(pos_ptr[k] + p * p);
+    }
+    if pos_ptr[nc] >= u32::MAX as usize || dm.dofs.len() >= u32::MAX as usize {
+        return Err(crate::Error::Linear(
+            "more than 2^32 local skeleton entries".into(),
+        ));
+    }
+    let pos: Vec<u32> = cell_chunks(nc)
+        .into_par_iter()
+        .flat_map_iter(|(c0, c1)| {
+            let mut out = Vec::with_capacity(pos_ptr[c1] - pos_ptr[c0]);
+            for k in c0..c1 {
+                let sk = dm.skeleton(k);
+                for &j in sk {
+                    for &i in sk {
+                        out.push(if i >= j { find(i, j) } else { u32::MAX });
+                    }
+                }
+            }
+            out
+        })
+        .collect();
+    // unknown -> positions in `dofs`, cells ascending
+    let (inc_ptr, inc) = counting_sort(n, dm.dofs.iter().map(|&d| Some(d)));
+    // condensed entry -> the local entries landing on it, in cell order
+    let (src_ptr, src) = counting_sort(
+        row_idx.len(),
+        pos.iter().map(|&q| (q != u32::MAX).then_some(q as usize)),
+    );
+    Ok(ScatterMaps {
+        pos_ptr,
+        pos,
+        src_ptr,
+        src,
+        inc_ptr,
+        inc,
+    })
+}

@@ -1,0 +1,188 @@
+//! The numeric part of assembly for one problem: the data evaluated on the scheme (A_K at x_K,
+//! f through the scheme's quadrature, the boundary partition, Dirichlet and Neumann data) and
+//! the local matrices and loads the scheme emits for them. Refilled per problem; the symbolic
+//! part ([`super::symbolic`]) is shared.
+
+use super::cell_chunks;
+use super::symbolic::DofMap;
+use crate::mesh::Point;
+use crate::problem::{BoundaryKind, Problem, check_finite, check_tensor};
+use crate::scheme::{GradientDiscretisation, PointDof};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+
+/// The local matrices and loads of every cell, and the boundary data, for one problem.
+#[derive(Debug, Clone)]
+pub struct ProblemValues {
+    /// Offsets into `mats`, one per cell plus one.
+    pub mat_ptr: Vec<usize>,
+    /// The local matrices, column-major, in the order of the cell's unknowns.
+    pub mats: Vec<f64>,
+    /// The local loads, laid out like [`DofMap::dofs`].
+    pub loads: Vec<f64>,
+    /// Full load vector b (local loads and Neumann data), indexed by unknown.
+    pub load: Vec<f64>,
+    /// The Neumann part of the load on the skeleton unknowns.
+    pub neumann_load: Vec<f64>,
+    /// Dirichlet unknowns and their values.
+    pub dirichlet: Vec<Option<f64>>,
+    /// Unknowns carrying the trace on Γ3, with their points and measures (Dirichlet ones too).
+    pub signorini: Vec<PointDof>,
+}
+
+/// What one parallel task of [`local_data`] computes for its cells.
+#[derive(Default)]
+struct LocalChunk {
+    mat_len: Vec<usize>,
+    mats: Vec<f64>,
+    loads: Vec<f64>,
+    bad_tensor: Option<crate::Error>,
+    bad_source: Option<String>,
+}
+
+impl ProblemValues {
+    /// Evaluates the data of `problem` on `scheme` (whose dof map is `dm`).
+    pub fn evaluate(
+        scheme: &dyn GradientDiscretisation,
+        dm: &DofMap,
+        problem: &Problem,
+    ) -> crate::Result<Self> {
+        let (mat_ptr, mats, loads) = local_data(scheme, problem)?;
+        let n = scheme.n_unknowns();
+        let mut load = vec![0.0; n];
+        for (i, &d) in dm.dofs.iter().enumerate() {
+            load[d] += loads[i];
+        }
+        let mut values = ProblemValues {
+            mat_ptr,
+            mats,
+            loads,
+            load,
+            neumann_load: vec![0.0; scheme.n_skeleton()],
+            dirichlet: vec![None; n],
+            signorini: Vec::new(),
+        };
+        values.boundary_conditions(scheme, problem)?;
+        Ok(values)
+    }
+
+    /// Dirichlet values, Neumann loads and the Signorini unknowns, edge by edge of ∂Ω.
+    fn boundary_conditions(
+        &mut self,
+        scheme: &dyn GradientDiscretisation,
+        problem: &Problem,
+    ) -> crate::Result<()> {
+        let mesh = scheme.mesh();
+        let n = scheme.n_unknowns();
+        let mut sig_meas: Vec<f64> = vec![0.0; n];
+        let mut sig_point: Vec<Option<Point>> = vec![None; n];
+        let mut tr = Vec::new();
+        for &e in mesh.boundary_edges() {
+            let xs = mesh.edge_midpoint(e);
+            let kind = (problem.boundary)(xs, mesh.edge_tag(e));
+            scheme.edge_trace_dofs(e, &mut tr);
+            match kind {
+                BoundaryKind::Dirichlet => {
+                    for t in &tr {
+                        let v = check_finite(
+                            (problem.dirichlet)(t.point),
+                            &format!("the Dirichlet value at {:?}", t.point),
+                        )?;
+                        self.dirichlet[t.dof] = Some(v);
+                    }
+                }
+                BoundaryKind::Neumann => {
+                    let g = check_finite(
+                        (problem.neumann)(xs),
+                        &format!("the Neumann flux at {xs:?}"),
+                    )?;
+                    for t in &tr {
+                        self.load[t.dof] += t.measure * g;
+                        self.neumann_load[t.dof] += t.measure * g;
+                    }
+                }
+                BoundaryKind::Signorini => {
+                    for t in &tr {
+                        sig_meas[t.dof] += t.measure;
+                        sig_point[t.dof] = Some(t.point);
+                    }
+                }
+            }
+        }
+        // Γ3 carries natural (zero-flux) data where inactive: nothing to add to the load.
+        self.signorini = (0..n)
+            .filter_map(|d| {
+                sig_point[d].map(|point| PointDof {
+                    dof: d,
+                    point,
+                    measure: sig_meas[d],
+                })
+            })
+            .collect();
+        Ok(())
+    }
+}
+
+/// The local matrices (for A_K = A(x_K)) and loads of every cell, in parallel over chunks of
+/// cells, concatenated in cell order; the first bad tensor or non-finite load in cell order is
+/// the error, as in a sequential loop.
+fn local_data(
+    scheme: &dyn GradientDiscretisation,
+    problem: &Problem,
+) -> crate::Result<(Vec<usize>, Vec<f64>, Vec<f64>)> {
+    let mesh = scheme.mesh();
+    let nc = mesh.n_cells();
+    let chunks: Vec<LocalChunk> = cell_chunks(nc)
+        .into_par_iter()
+        .map(|(c0, c1)| {
+            let mut out = LocalChunk::default();
+            let mut m = DMatrix::zeros(0, 0);
+            let mut b = DVector::zeros(0);
+            for k in c0..c1 {
+                let xk = mesh.centroid(k);
+                let a = (problem.diffusion)(xk);
+                // the message is formatted only for a bad tensor
+                if check_tensor(&a, "").is_err() {
+                    out.bad_tensor = check_tensor(&a, &format!("x_K = {xk:?} (cell {k})")).err();
+                    break;
+                }
+                scheme.local_matrix(k, &a, &mut m);
+                let f = |p: Point| -> f64 {
+                    match &problem.source_in_cell {
+                        Some(g) => g(p, xk),
+                        None => (problem.source)(p),
+                    }
+                };
+                scheme.local_load(k, &f, &mut b);
+                if out.bad_source.is_none() && b.iter().any(|x| !x.is_finite()) {
+                    out.bad_source = Some(format!(
+                        "the source term f is not finite in cell {k} (x_K = {xk:?})"
+                    ));
+                }
+                out.mats.extend_from_slice(m.as_slice());
+                out.mat_len.push(m.len());
+                out.loads.extend(b.iter());
+            }
+            out
+        })
+        .collect();
+    let bad_source = chunks.iter().find_map(|c| c.bad_source.clone());
+    let mut mat_ptr = Vec::with_capacity(nc + 1);
+    mat_ptr.push(0);
+    let mut mats = Vec::with_capacity(chunks.iter().map(|c| c.mats.len()).sum());
+    let mut loads = Vec::with_capacity(chunks.iter().map(|c| c.loads.len()).sum());
+    for mut c in chunks {
+        if let Some(e) = c.bad_tensor.take() {
+            return Err(e);
+        }
+        for &l in &c.mat_len {
+            mat_ptr.push(mat_ptr.last().copied().unwrap_or(0) + l);
+        }
+        mats.extend_from_slice(&c.mats);
+        loads.extend_from_slice(&c.loads);
+    }
+    if let Some(msg) = bad_source {
+        return Err(crate::Error::InvalidData(msg));
+    }
+    Ok((mat_ptr, mats, loads))
+}

@@ -1,0 +1,356 @@
+//! Does any pair of segments meet, other than at a shared end point? A Shamos–Hoey sweep.
+//!
+//! The segments join vertices given by id; two segments that share an end point (a vertex id)
+//! may meet there and nowhere else, any other contact (crossing, touching, overlapping) is a
+//! *collision*. [`first_collision`] reports one, or proves there is none, in O(n log n) time for
+//! n segments whatever their geometry (M. I. Shamos and D. Hoey, *Geometric intersection
+//! problems*, 1976):
+//!
+//! * a line sweeps the plane in the lexicographic order of the points (x, then y: the plane
+//!   turned by an infinitesimal angle, so that no segment is vertical and no two vertices are
+//!   met at once); at every vertex the segments ending there leave the *active list* and the
+//!   segments starting there enter it;
+//! * the active list holds the segments cut by the sweep line, from bottom to top. As long as
+//!   no collision lies behind the sweep line the order of two active segments never changes, so
+//!   it can be decided once and for all from the segment that starts later: is its start above
+//!   or below the other one (and, if it lies on it, is its end)? That is an exact orientation
+//!   test ([`super::predicates::orient`]), so the list is a `BTreeSet` ordered consistently;
+//! * the leftmost collision is between two segments that are neighbours in the list at some
+//!   moment before the sweep line reaches it, so it suffices to test each segment against its
+//!   neighbours when it enters, and the two segments that become neighbours when one leaves.
+//!
+//! The sweep also answers *point queries*: for chosen vertices, the segment right below the
+//! vertex when the sweep reaches it (the first segment hit by a ray going straight down,
+//! segments at the vertex excluded). The mesh checks use it to tell whether a boundary loop lies
+//! inside a cell ([`super::validate`]).
+
+use super::Point;
+use super::predicates::{lex, orient, segments_meet, segments_overlap_from};
+use std::cmp::Ordering;
+use std::collections::BTreeSet;
+use std::ops::Bound;
+
+/// An active segment: its end points in sweep order and its index. Ordered from bottom to top
+/// (see the module docs); a query point is a degenerate segment with index `usize::MAX`, above
+/// every segment through it.
+#[derive(Clone, Copy, Debug)]
+struct Active {
+    left: Point,
+    right: Point,
+    id: usize,
+}
+
+impl Active {
+    /// Where `self`, which starts no earlier than `other`, lies relative to `other`.
+    fn cmp_later(&self, other: &Active) -> Ordering {
+        orient(other.left, other.right, self.left)
+            .then_with(|| orient(other.left, other.right, self.right))
+            .then(self.id.cmp(&other.id))
+    }
+}
+
+impl Ord for Active {
+    fn cmp(&self, other: &Self) -> Ordering {
+        if self.id == other.id {
+            Ordering::Equal
+        } else if lex(self.left, other.left) == Ordering::Less {
+            other.cmp_later(self).reverse()
+        } else {
+            self.cmp_later(other)
+        }
+    }
+}
+
+impl PartialOrd for Active {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl PartialEq for Active {
+    fn eq(&self, other: &Self) -> bool {
+        self.id == other.id
+    }
+}
+
+impl Eq for Active {}
+
+/// What [`first_collision`] found.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) enum Sweep {
+    /// Segments `i < j` meet outside their shared end points.
+    Collision(usize, usize),
+    /// No collision; for each query vertex, the segment right below it (if any).
+    Clear(Vec<Option<usize>>),
+}
+
+/// An integer whose order is that of the finite float `x`, with `-0.0` and `0.0` equal.
+fn sort_key(x: f64) -> u64 {
+    let b = (x + 0.0).to_bits();
+    if b >> 63 == 1 { !b } else { b | 1 << 63 }
+}
+
+/// The segments that start (`starts`) and end (`ends`) at every vertex, CSR by vertex, and
+/// the vertices in sweep order.
+struct Events {
+    order: Vec<usize>,
+    start_ptr: Vec<usize>,
+    starts: Vec<usize>,
+    end_ptr: Vec<usize>,
+    ends: Vec<usize>,
+}
+
+impl Events {
+    fn new(pts: &[Point], segs: &[[usize; 2]]) -> Events {
+        let mut keyed: Vec<(u64, u64, usize)> = pts
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (sort_key(p[0]), sort_key(p[1]), i))
+            .collect();
+        keyed.sort_unstable();
+        let order = keyed.into_iter().map(|(_, _, i)| i).collect();
+        let left_right = |&[a, b]: &[usize; 2]| {
+            if lex(pts[a], pts[b]) == Ordering::Greater {
+                (b, a)
+            } else {
+                (a, b)
+            }
+        };
+        let csr = |end: fn((usize, usize)) -> usize| {
+            let mut ptr = vec![0usize; pts.len() + 1];
+            for s in segs {
+                ptr[end(left_right(s)) + 1] += 1;
+            }
+            for v in 0..pts.len() {
+                ptr[v + 1] += ptr[v];
+            }
+            let mut fill = ptr.clone();
+            let mut ids = vec![0usize; segs.len()];
+            for (i, s) in segs.iter().enumerate() {
+                let v = end(left_right(s));
+                ids[fill[v]] = i;
+                fill[v] += 1;
+            }
+            (ptr, ids)
+        };
+        let (start_ptr, starts) = csr(|(l, _)| l);
+        let (end_ptr, ends) = csr(|(_, r)| r);
+        Events {
+            order,
+            start_ptr,
+            starts,
+            end_ptr,
+            ends,
+        }
+    }
+}
+
+/// Whether segments `i` and `j` meet outside the end points they share.
+fn collide(pts: &[Point], segs: &[[usize; 2]], i: usize, j: usize) -> bool {
+    let ([a, b], [c, d]) = (segs[i], segs[j]);
+    let shared = if a == c || a == d {
+        Some((a, b, if a == c { d } else { c }))
+    } else if b == c || b == d {
+        Some((b, a, if b == c { d } else { c }))
+    } else {
+        None
+    };
+    match shared {
+        // the same vertex pair twice: they overlap entirely
+        Some((_, p, q)) if p == q => true,
+        Some((v, p, q)) => segments_overlap_from(pts[v], pts[p], pts[q]),
+        None => segments_meet(pts[a], pts[b], pts[c], pts[d]),
+    }
+}
+
+/// Finds two segments of `segs` (pairs of indices into `pts`) that meet anywhere but at an end
+/// point they share, or, if there are none, the segment right below each vertex of `queries`.
+/// The points must be finite and pairwise distinct; a segment must join two distinct points.
+/// O((n + q) log n) for n points and segments and q queries.
+pub(crate) fn first_collision(pts: &[Point], segs: &[[usize; 2]], queries: &[usize]) -> Sweep {
+    let ev = Events::new(pts, segs);
+    let active_seg = |i: usize| {
+        let [a, b] = segs[i];
+        let (l, r) = if lex(pts[a], pts[b]) == Ordering::Greater {
+            (b, a)
+        } else {
+            (a, b)
+        };
+        Active {
+            left: pts[l],
+            right: pts[r],
+            id: i,
+        }
+    };
+    let collision = |i: usize, j: usize| Sweep::Collision(i.min(j), i.max(j));
+    // the queries in sweep order, with their positions in `queries`
+    let mut pending: Vec<(usize, usize)> = queries.iter().copied().zip(0..).collect();
+    pending.sort_unstable_by(|a, b| lex(pts[b.0], pts[a.0]));
+    let mut below = vec![None; queries.len()];
+    let mut list: BTreeSet<Active> = BTreeSet::new();
+    for &v in &ev.order {
+        for &i in &ev.ends[ev.end_ptr[v]..ev.end_ptr[v + 1]] {
+            let s = active_seg(i);
+            let lower = list.range(..s).next_back().map(|a| a.id);
+            let upper = list.range((Bound::Excluded(s), Bound::Unbounded)).next().map(|a| a.id);
+            let removed = list.remove(&s);
+            debug_assert!(removed, "segment {i} not found in the active list");
+            if let (Some(lo), Some(up)) = (lower, upper)
+                && collide(pts, segs, lo, up)
+            {
+                return collision(lo, up);
+            }
+        }
+        while pending.last().is_some_and(|&(q, _)| q == v) {
+            let (_, k) = pending.pop().expect("not empty");
+            let probe = Active {
+                left: pts[v],
+                right: pts[v],
+                id: usize::MAX,
+            };
+            below[k] = list.range(..probe).next_back().map(|a| a.id);
+        }
+        for &i in &ev.starts[ev.start_ptr[v]..ev.start_ptr[v + 1]] {
+            let s = active_seg(i);
+            list.insert(s);
+            let lower = list.range(..s).next_back().map(|a| a.id);
+            let upper = list.range((Bound::Excluded(s), Bound::Unbounded)).next().map(|a| a.id);
+            for n in [lower, upper].into_iter().flatten() {
+                if collide(pts, segs, i, n) {
+                    return collision(i, n);
+                }
+            }
+        }
+    }
+    Sweep::Clear(below)
+}
+
+/// As [`first_collision`] without queries, by testing every pair: for small inputs (and tests).
+pub(crate) fn first_collision_brute(pts: &[Point], segs: &[[usize; 2]]) -> Option<(usize, usize)> {
+    (0..segs.len())
+        .flat_map(|i| (i + 1..segs.len()).map(move |j| (i, j)))
+        .find(|&(i, j)| collide(pts, segs, i, j))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small xorshift generator (deterministic tests without a crate).
+    fn rng(mut s: u64) -> impl FnMut() -> f64 {
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    fn clear(s: &Sweep) -> bool {
+        matches!(s, Sweep::Clear(_))
+    }
+
+    #[test]
+    fn grid_edges_do_not_collide_and_queries_see_below() {
+        // the edges of a 3 × 3 grid of unit squares, plus a query at every vertex
+        let n = 3;
+        let pts: Vec<Point> = (0..=n)
+            .flat_map(|j| (0..=n).map(move |i| [i as f64, j as f64]))
+            .collect();
+        let id = |i: usize, j: usize| j * (n + 1) + i;
+        let mut segs = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                if i < n {
+                    segs.push([id(i, j), id(i + 1, j)]);
+                }
+                if j < n {
+                    segs.push([id(i, j), id(i, j + 1)]);
+                }
+            }
+        }
+        let queries = [id(1, 1), id(0, 0), id(2, 3)];
+        let Sweep::Clear(below) = first_collision(&pts, &segs, &queries) else {
+            panic!("collision in a grid");
+        };
+        // below (1, 1): the edge (1, 0)–(2, 0)? No: the ray down from (1, 1) starts at the
+        // vertex; the sweep excludes the segments at the vertex, so it is the segment right
+        // below in the turned plane, the edge from (1, 0) to (2, 0)
+        let edge = |a: usize, b: usize| segs.iter().position(|s| *s == [a, b]);
+        assert_eq!(below[0], edge(id(1, 0), id(2, 0)));
+        assert_eq!(below[1], None);
+        assert_eq!(below[2], edge(id(2, 2), id(3, 2)));
+    }
+
+    #[test]
+    fn finds_crossings_touchings_and_overlaps() {
+        let pts = [
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [1.0, -1.0],
+            [1.0, 1.0],
+            [1.0, 0.0],
+            [3.0, 0.0],
+        ];
+        // a cross
+        assert_eq!(
+            first_collision(&pts, &[[0, 1], [2, 3]], &[]),
+            Sweep::Collision(0, 1)
+        );
+        // T-junction: vertex 4 on the segment 0–1
+        assert_eq!(
+            first_collision(&pts, &[[0, 1], [4, 3]], &[]),
+            Sweep::Collision(0, 1)
+        );
+        // collinear overlap with a shared end point, and without
+        assert_eq!(
+            first_collision(&pts, &[[0, 1], [0, 4]], &[]),
+            Sweep::Collision(0, 1)
+        );
+        assert_eq!(
+            first_collision(&pts, &[[0, 1], [4, 5]], &[]),
+            Sweep::Collision(0, 1)
+        );
+        // a path through shared vertices is fine
+        assert!(clear(&first_collision(&pts, &[[0, 4], [4, 1], [1, 5]], &[])));
+        // vertical segments
+        assert!(clear(&first_collision(&pts, &[[2, 4], [4, 3]], &[])));
+        assert_eq!(
+            first_collision(&pts, &[[2, 3], [0, 4]], &[]),
+            Sweep::Collision(0, 1)
+        );
+    }
+
+    /// Random segments: the sweep agrees with the brute-force test on whether there is a
+    /// collision, and any pair it reports does collide.
+    #[test]
+    fn agrees_with_brute_force() {
+        let mut r = rng(0x1234_5678_9abc_def1);
+        for case in 0..3000 {
+            let n = 2 + case % 9;
+            // coordinates on a coarse lattice, so that degenerate cases are frequent
+            let pts: Vec<Point> = (0..2 * n)
+                .map(|_| [(r() * 6.0).floor(), (r() * 6.0).floor()])
+                .collect();
+            let mut uniq = pts.clone();
+            uniq.sort_by(|a, b| lex(*a, *b));
+            uniq.dedup();
+            let m = uniq.len();
+            let segs: Vec<[usize; 2]> = (0..n)
+                .filter_map(|_| {
+                    let a = (r() * m as f64) as usize % m;
+                    let b = (r() * m as f64) as usize % m;
+                    (a != b).then_some([a, b])
+                })
+                .collect();
+            let brute = first_collision_brute(&uniq, &segs);
+            match first_collision(&uniq, &segs, &[]) {
+                Sweep::Collision(i, j) => {
+                    assert!(brute.is_some(), "case {case}: {segs:?}");
+                    assert!(collide(&uniq, &segs, i, j), "case {case}");
+                }
+                Sweep::Clear(_) => assert_eq!(brute, None, "case {case}: {uniq:?} {segs:?}"),
+            }
+        }
+    }
+}

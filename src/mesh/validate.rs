@@ -1,0 +1,378 @@
+//! The checks of [`PolyMesh::from_cells`](super::PolyMesh::from_cells): what a mesh must satisfy
+//! before any scheme sees it, why, and at what cost.
+//!
+//! A mesh is a list of vertices and of cells given by vertex lists. HMM and P1 need a
+//! *partition* of a polygonal domain into simple polygons, each strictly star-shaped with respect
+//! to its centroid, meeting edge to edge. Anything else gives a wrong answer without any warning
+//! (overlapping cells count their common part twice; a self-crossing cell has a meaningless
+//! centroid and normals), so every property is checked, in this order, and the first violation is
+//! returned as a [`MeshError`] naming the cells, edges or vertices at fault. n below is the size of
+//! the input (vertices plus cell vertex lists); m the number of vertices of one cell.
+//!
+//! | # | check | error | cost |
+//! |---|---|---|---|
+//! | 1 | at least one cell; finite coordinates | [`MeshError::Empty`], [`MeshError::NonFiniteVertex`] | O(n) |
+//! | 2 | every cell has 3 to [`MAX_CELL_VERTICES`] vertices, all existing | [`MeshError::BadCell`], [`MeshError::CellTooLarge`], [`MeshError::VertexOutOfRange`] | O(n) |
+//! | 3 | no cell lists a vertex twice | [`MeshError::BadCell`] | O(m) for m ≤ 16 (pairs), else O(m log m) (sort) |
+//! | 4 | non-negligible area: \|K\| > 10⁻¹⁴ h_K² (the diameter h_K is the largest vertex distance) | [`MeshError::DegenerateCell`] | O(m) area; h_K by pairs for m ≤ 16, else convex hull and rotating calipers, O(m log m) |
+//! | 5 | every vertex is used | [`MeshError::UnusedVertex`] | O(n) |
+//! | 6 | no two vertices closer than 10⁻¹³ × (extent of the coordinates) in both x and y | [`MeshError::DuplicateVertex`] | O(n log n): sort by square of a grid of that side, compare with the neighbouring squares |
+//! | 7 | every edge has one or two cells, traversed in opposite directions | [`MeshError::BadEdge`] | O(n) |
+//! | 8 | every cell is a simple polygon: no two sides meet except consecutive sides at their common vertex | [`MeshError::SelfIntersectingCell`] | per cell: O(m²) pairs for m ≤ 16, else the sweep below on its sides, O(m log m) |
+//! | 9 | every cell is strictly star-shaped with respect to its centroid: d_{K,σ} > 10⁻¹² h_K | [`MeshError::NotStarShaped`] | O(n) |
+//! | 10 | the boundary splits into closed loops, none pinched, none of zero area (hanging nodes) | [`MeshError::NonConforming`] | O(n) |
+//! | 11 | no two edges meet except at a common vertex (crossing, touching or overlapping edges of different cells) | [`MeshError::CrossingEdges`] | O(n log n), Shamos–Hoey sweep ([`super::sweep`]) |
+//! | 12 | cells do not overlap: the cell areas add up to the area enclosed by the boundary loops | [`MeshError::OverlappingCells`] | O(n log n), the same sweep |
+//!
+//! All the geometric tests of 8, 11 and 12 use exact predicates ([`super::predicates`]), so a
+//! valid mesh is never rejected because of rounding.
+//!
+//! **Why 11 and 12 together exclude overlaps.** Once 1–10 hold, every cell is a simple
+//! counter-clockwise polygon and interior edges are traversed once in each direction, so the
+//! number of cells covering a point x equals the winding number around x of the boundary loops
+//! (the interior edges cancel out). If, moreover, no two edges meet (11), the loops are disjoint
+//! simple polygons, nested in one another, and the cells overlap somewhere exactly when some loop
+//! has the wrong orientation for its nesting: an outer boundary (counter-clockwise) lying inside a
+//! cell, or a hole (clockwise) lying in no cell. Check 12 looks at the point right below the
+//! lowest vertex of every loop, found during the sweep of 11: it is inside a cell if the first
+//! edge below it is an interior edge, or a boundary edge whose cell lies above it. Equivalently,
+//! the area enclosed by the loops, counting holes negatively, must equal Σ_K |K| (which, by
+//! Green's formula, is the area counted with orientations); the error reports both numbers.
+//! Two nested squares (areas 1 and 0.25) give Σ_K |K| = 1.25 against 1 − 0.25 = 0.75.
+//!
+//! **Why a vertex limit.** HMM assembles, for every cell, dense local matrices of size m × m;
+//! [`MAX_CELL_VERTICES`] = 1000 keeps one of them at 8 MB and its factorisation at about 10⁹
+//! flops, while a cell of 3·10⁴ vertices would need 7 GB. No mesh of the benchmarks comes close
+//! (their largest cells have a dozen vertices).
+
+use super::predicates::{lex, orient, segments_meet, segments_overlap_from};
+use super::sweep::{self, Sweep};
+use super::{NO_CELL, Point, dist, polygon_area_centroid, sub};
+use crate::error::MeshError;
+use std::cmp::Ordering;
+
+/// The largest number of vertices of a cell (see the module docs for why).
+pub const MAX_CELL_VERTICES: usize = 1000;
+
+/// Cells with at most this many vertices are checked by comparing all pairs (cheaper than
+/// sorting at this size); larger ones by the O(m log m) methods.
+const SMALL_CELL: usize = 16;
+
+const NONE: usize = usize::MAX;
+
+/// Cached geometry of the cells, as checks 2–5 compute it.
+pub(crate) struct CellGeometry {
+    pub(crate) area: Vec<f64>,
+    pub(crate) centroid: Vec<Point>,
+    pub(crate) diameter: Vec<f64>,
+    /// Outward unit normals, one per cell side (indexed like the cell vertex lists).
+    pub(crate) normals: Vec<Point>,
+    /// d_{K,σ}, one per cell side.
+    pub(crate) dists: Vec<f64>,
+    /// The first cell that is not strictly star-shaped (check 9, reported after checks 5–8).
+    pub(crate) not_star_shaped: Option<MeshError>,
+}
+
+/// Checks 1 (finite coordinates), 2–5, and computes the geometry of every cell; clockwise cells
+/// are reversed in place in `cell_verts`.
+pub(crate) fn cell_geometry(
+    vertices: &[Point],
+    cell_ptr: &[usize],
+    cell_verts: &mut [usize],
+) -> Result<CellGeometry, MeshError> {
+    let nv = vertices.len();
+    let nc = cell_ptr.len().saturating_sub(1);
+    if let Some(v) = vertices
+        .iter()
+        .position(|p| !p[0].is_finite() || !p[1].is_finite())
+    {
+        return Err(MeshError::NonFiniteVertex { vertex: v });
+    }
+    let mut g = CellGeometry {
+        area: Vec::with_capacity(nc),
+        centroid: Vec::with_capacity(nc),
+        diameter: Vec::with_capacity(nc),
+        normals: Vec::with_capacity(cell_verts.len()),
+        dists: Vec::with_capacity(cell_verts.len()),
+        not_star_shaped: None,
+    };
+    let mut used = vec![false; nv];
+    let mut pts: Vec<Point> = Vec::new();
+    for k in 0..nc {
+        let (s, e) = (cell_ptr[k], cell_ptr[k + 1]);
+        check_cell_vertices(k, &cell_verts[s..e], nv)?;
+        for &v in &cell_verts[s..e] {
+            used[v] = true;
+        }
+        pts.clear();
+        pts.extend(cell_verts[s..e].iter().map(|&v| vertices[v]));
+        let (area, centroid) = polygon_area_centroid(&pts);
+        let diam = diameter(&pts);
+        if !(area.abs() > 1e-14 * diam * diam) {
+            return Err(MeshError::DegenerateCell { cell: k, area });
+        }
+        // `area` is now non-zero and not NaN: negative means clockwise
+        if area < 0.0 {
+            cell_verts[s..e].reverse();
+            pts.reverse();
+        }
+        side_geometry(k, &pts, centroid, diam, &mut g);
+        g.area.push(area.abs());
+        g.centroid.push(centroid);
+        g.diameter.push(diam);
+    }
+    if let Some(v) = used.iter().position(|u| !u) {
+        return Err(MeshError::UnusedVertex { vertex: v });
+    }
+    Ok(g)
+}
+
+/// Check 2 and 3 for cell `k` with vertex list `c`.
+fn check_cell_vertices(k: usize, c: &[usize], nv: usize) -> Result<(), MeshError> {
+    if c.len() < 3 {
+        return Err(MeshError::BadCell {
+            cell: k,
+            msg: format!("has {} vertices, at least 3 are needed", c.len()),
+        });
+    }
+    if c.len() > MAX_CELL_VERTICES {
+        return Err(MeshError::CellTooLarge {
+            cell: k,
+            n_vertices: c.len(),
+        });
+    }
+    if let Some(&v) = c.iter().find(|&&v| v >= nv) {
+        return Err(MeshError::VertexOutOfRange {
+            cell: k,
+            vertex: v,
+            n_vertices: nv,
+        });
+    }
+    match repeated_vertex(c) {
+        Some(v) => Err(MeshError::BadCell {
+            cell: k,
+            msg: format!("lists vertex {v} twice"),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The outward normals and d_{K,σ} of the counter-clockwise cell `k` with corners `pts`; the
+/// first side with d_{K,σ} ≤ 10⁻¹² h_K is recorded in `g.not_star_shaped`.
+fn side_geometry(k: usize, pts: &[Point], centroid: Point, diam: f64, g: &mut CellGeometry) {
+    let n = pts.len();
+    for i in 0..n {
+        let (p, q) = (pts[i], pts[(i + 1) % n]);
+        let t = sub(q, p);
+        let len = (t[0] * t[0] + t[1] * t[1]).sqrt();
+        // counter-clockwise cell: outward normal is the tangent rotated by −90°
+        let nrm = [t[1] / len, -t[0] / len];
+        // x_σ, the same bits as edge_midpoint[e] (floating-point addition commutes)
+        let xs = [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
+        let d = (xs[0] - centroid[0]) * nrm[0] + (xs[1] - centroid[1]) * nrm[1];
+        if !(d > 1e-12 * diam) && g.not_star_shaped.is_none() {
+            g.not_star_shaped = Some(MeshError::NotStarShaped {
+                cell: k,
+                local_edge: i,
+                dist: d,
+            });
+        }
+        g.normals.push(nrm);
+        g.dists.push(d);
+    }
+}
+
+/// A vertex listed twice in `c`: of those, the one listed first (check 3).
+fn repeated_vertex(c: &[usize]) -> Option<usize> {
+    if c.len() <= SMALL_CELL {
+        return (0..c.len())
+            .find(|&i| c[i + 1..].contains(&c[i]))
+            .map(|i| c[i]);
+    }
+    let mut sorted: Vec<(usize, usize)> = c.iter().copied().zip(0..).collect();
+    sorted.sort_unstable();
+    // a run of equal vertices starts at its first listing; take the earliest such listing
+    sorted
+        .windows(2)
+        .filter(|w| w[0].0 == w[1].0)
+        .map(|w| w[0])
+        .min_by_key(|&(_, pos)| pos)
+        .map(|(v, _)| v)
+}
+
+/// h_K, the largest distance between two of the points (check 4): all pairs for a small cell,
+/// else the rotating calipers over the convex hull (the farthest pair is a pair of hull
+/// vertices, and an antipodal one).
+pub(crate) fn diameter(pts: &[Point]) -> f64 {
+    if pts.len() <= SMALL_CELL {
+        let mut d: f64 = 0.0;
+        for i in 0..pts.len() {
+            for j in i + 1..pts.len() {
+                d = d.max(dist(pts[i], pts[j]));
+            }
+        }
+        return d;
+    }
+    let h = convex_hull(pts);
+    let n = h.len();
+    if n < 3 {
+        return if n == 2 { dist(h[0], h[1]) } else { 0.0 };
+    }
+    let cross = |u: Point, v: Point| u[0] * v[1] - u[1] * v[0];
+    let mut d: f64 = 0.0;
+    let mut j = 1;
+    for i in 0..n {
+        let i1 = (i + 1) % n;
+        let edge = sub(h[i1], h[i]);
+        // the vertex farthest from the line of side (i, i+1): advance while the next one is
+        // farther (the steps are bounded, for safety against rounding)
+        let mut steps = 0;
+        while steps < n && cross(edge, sub(h[(j + 1) % n], h[j])) > 0.0 {
+            j = (j + 1) % n;
+            steps += 1;
+        }
+        d = d.max(dist(h[i], h[j])).max(dist(h[i1], h[j]));
+    }
+    d
+}
+
+/// The convex hull of `pts`, counter-clockwise without collinear points (Andrew's monotone
+/// chain with exact orientation tests), O(m log m).
+fn convex_hull(pts: &[Point]) -> Vec<Point> {
+    let mut p = pts.to_vec();
+    p.sort_unstable_by(|a, b| lex(*a, *b));
+    p.dedup_by(|a, b| lex(*a, *b) == Ordering::Equal);
+    if p.len() < 3 {
+        return p;
+    }
+    let chain = |points: &mut dyn Iterator<Item = Point>| {
+        let mut h: Vec<Point> = Vec::new();
+        for q in points {
+            while h.len() >= 2 && orient(h[h.len() - 2], h[h.len() - 1], q) != Ordering::Greater {
+                h.pop();
+            }
+            h.push(q);
+        }
+        // the last point starts the other chain
+        h.pop();
+        h
+    };
+    let mut hull = chain(&mut p.iter().copied());
+    hull.extend(chain(&mut p.iter().rev().copied()));
+    hull
+}
+
+/// Two sides of the polygon `pts` (local indices i < j; side i joins corners i and i+1) that
+/// meet other than consecutive sides at their common corner, if any. All pairs for a small
+/// polygon, else the sweep of [`super::sweep`] on its sides. The corners must be distinct points.
+pub(crate) fn self_crossing(pts: &[Point]) -> Option<(usize, usize)> {
+    let m = pts.len();
+    if m > SMALL_CELL {
+        let sides: Vec<[usize; 2]> = (0..m).map(|i| [i, (i + 1) % m]).collect();
+        return match sweep::first_collision(pts, &sides, &[]) {
+            Sweep::Collision(i, j) => Some((i, j)),
+            Sweep::Clear(_) => None,
+        };
+    }
+    for i in 0..m {
+        let (a, b) = (pts[i], pts[(i + 1) % m]);
+        // the next side folds back onto this one
+        if segments_overlap_from(b, a, pts[(i + 2) % m]) {
+            return Some(if i + 1 < m { (i, i + 1) } else { (0, i) });
+        }
+        // sides not adjacent to side i (with j > i; side m−1 is adjacent to side 0)
+        let last = if i == 0 { m - 1 } else { m };
+        for j in i + 2..last {
+            if segments_meet(a, b, pts[j], pts[(j + 1) % m]) {
+                return Some((i, j));
+            }
+        }
+    }
+    None
+}
+
+/// Check 8: every cell is a simple polygon.
+pub(crate) fn check_simple_cells(
+    vertices: &[Point],
+    cell_ptr: &[usize],
+    cell_verts: &[usize],
+) -> Result<(), MeshError> {
+    let mut pts: Vec<Point> = Vec::new();
+    for k in 0..cell_ptr.len().saturating_sub(1) {
+        let c = &cell_verts[cell_ptr[k]..cell_ptr[k + 1]];
+        pts.clear();
+        pts.extend(c.iter().map(|&v| vertices[v]));
+        if let Some((i, j)) = self_crossing(&pts) {
+            let side = |i: usize| [c[i], c[(i + 1) % c.len()]];
+            return Err(MeshError::SelfIntersectingCell {
+                cell: k,
+                sides: [side(i), side(j)],
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Check 6: two vertices closer than `tol` = 10⁻¹³ × (extent of all coordinates) in both x and y.
+///
+/// The plane is cut into squares of side `tol`; two vertices in one square are duplicates, and
+/// a vertex can only be a duplicate of one in a neighbouring square. So the vertices are sorted
+/// by square (column, row), O(n log n) whatever the coordinates; if no square holds two
+/// vertices, each vertex is compared with the vertices of the next square of its column and of
+/// the three neighbouring squares of the next column, found by a pointer that only moves forward.
+pub(crate) fn check_duplicate_vertices(vertices: &[Point]) -> Result<(), MeshError> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for p in vertices {
+        lo = lo.min(p[0]).min(p[1]);
+        hi = hi.max(p[0]).max(p[1]);
+    }
+    let extent = hi - lo;
+    // halves avoid an overflow of hi − lo for coordinates near the largest double
+    let half_tol = if extent.is_finite() {
+        0.5 * (1e-13 * extent.max(1e-300))
+    } else {
+        1e-13 * (0.5 * hi - 0.5 * lo)
+    };
+    let tol = 2.0 * half_tol;
+    let square = |x: f64| ((0.5 * x - 0.5 * lo) / half_tol).floor() as i64;
+    let mut keys: Vec<(i64, i64, usize)> = vertices
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (square(p[0]), square(p[1]), i))
+        .collect();
+    keys.sort_unstable();
+    let duplicate = |a: usize, b: usize| {
+        let (a, b) = (a.min(b), a.max(b));
+        MeshError::DuplicateVertex {
+            a,
+            b,
+            x: vertices[a][0],
+            y: vertices[a][1],
+        }
+    };
+    if let Some(w) = keys.windows(2).find(|w| (w[0].0, w[0].1) == (w[1].0, w[1].1)) {
+        return Err(duplicate(w[0].2, w[1].2));
+    }
+    let close = |a: usize, b: usize| {
+        let (p, q) = (vertices[a], vertices[b]);
+        (p[0] - q[0]).abs() <= tol && (p[1] - q[1]).abs() <= tol
+    };
+    let mut next_col = 0;
+    for (i, &(cx, cy, a)) in keys.iter().enumerate() {
+        if let Some(&(nx, ny, b)) = keys.get(i + 1)
+            && (nx, ny) == (cx, cy + 1)
+            && close(a, b)
+        {
+            return Err(duplicate(a, b));
+        }
+        while next_col < keys.len() && (keys[next_col].0, keys[next_col].1) < (cx + 1, cy - 1) {
+            next_col += 1;
+        }
+        for &(nx, ny, b) in keys[next_col..].iter().take(3) {
+            if nx == cx + 1 && ny <= cy + 1 && close(a, b) {
+                return Err(duplicate(a, b));
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,1413 @@
+//! Problem files: a [`Problem`] described in TOML, so that a problem is posed without writing
+//! Rust. The format is documented, with a complete annotated example, in `problems/README.md`;
+//! the built-in problems are files of that folder ([`builtin`]).
+//!
+//! ```toml
+//! name = "membrane"
+//! [parameters]            # overridable by the caller: load(path, &[("C".into(), -10.0)])
+//! C = -5
+//! [source]
+//! f = "C"                 # expressions of x, y, parameters and definitions
+//! [obstacle]
+//! side = "lower"          # u ≥ ψ
+//! barrier = "-min(x, 1 - x, y, 1 - y)"
+//! ```
+//!
+//! Loading ([`load`], [`parse`]) checks everything that does not depend on a mesh: TOML
+//! syntax (line and column), unknown keys, expressions (position in the expression, unknown
+//! names, number versus condition), parameters and definitions.
+//! [`ProblemFile::check_against_mesh`] checks the rest on a given mesh: tags the mesh does not
+//! carry, boundary edges selected by no section or by two, points where no piece of a
+//! piecewise datum applies, tensors that are not symmetric positive definite, and NaN or
+//! infinite values of every datum at every point where a scheme evaluates it (cell centroids,
+//! vertices and edge midpoints). [`ProblemFile::problem`] then builds the [`Problem`] whose
+//! closures evaluate the compiled expressions. Every failure is an
+//! [`Error::ProblemFile`] naming the file, the line and column, and the key.
+//!
+//! ## Pieces, boundary sections and where data is evaluated
+//! - `[[diffusion.piece]]` and `[[source.piece]]`: the first piece whose `where` holds applies; a
+//!   piece without `where` applies everywhere (the rest). Diffusion pieces are chosen at the
+//!   cell centroid x_K (the schemes take A_K = A(x_K)); source pieces at x_K too
+//!   ([`Problem::source_in_cell`]), so a vertex on an interface takes the formula of the cell
+//!   being assembled.
+//! - `[dirichlet]`, `[neumann]`, `[signorini]`: each selects the boundary edges whose gmsh tag is
+//!   in `tags` or whose midpoint x_σ satisfies `where`; at most one section may have neither,
+//!   and it takes every edge the others leave. Without any section, the whole boundary is
+//!   Dirichlet with u = 0.
+//!
+//! Cell (surface) tags: [`crate::mesh::PolyMesh`] stores no cell tags yet, so pieces are
+//! selected by `where` only; a piece with `tags` is rejected with an error that says so.
+
+use super::expr::{Expr, ExprError, ExprErrorKind, Kind, Scope};
+use super::{BoundaryKind, ConstraintKind, Problem, Side, check_tensor};
+use crate::error::{Error, ProblemFileErrorKind as K, Result};
+use crate::mesh::generate::Family;
+use crate::mesh::{Point, PolyMesh};
+use crate::scheme::{SchemeKind, Tensor};
+use rayon::prelude::*;
+use serde::Deserialize;
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use std::collections::BTreeMap;
+use std::fmt;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use toml::Spanned;
+
+// ------------------------------------------------------------------------------------------
+// The schema: what the TOML file may contain (unknown keys are rejected everywhere).
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFile {
+    name: Option<Spanned<String>>,
+    description: Option<String>,
+    scheme: Option<SchemeKind>,
+    mesh: Option<Spanned<RawMesh>>,
+    #[serde(default)]
+    parameters: BTreeMap<String, Spanned<f64>>,
+    #[serde(default)]
+    definitions: BTreeMap<String, Spanned<Src>>,
+    diffusion: Option<Spanned<RawDiffusion>>,
+    source: Option<Spanned<RawSource>>,
+    dirichlet: Option<RawDirichlet>,
+    neumann: Option<RawNeumann>,
+    signorini: Option<RawSignorini>,
+    obstacle: Option<RawObstacle>,
+    exact: Option<RawExact>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMesh {
+    file: Option<String>,
+    generate: Option<String>,
+    level: Option<usize>,
+    domain: Option<[f64; 4]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDiffusion {
+    #[serde(rename = "A")]
+    a: Option<Spanned<TensorSrc>>,
+    piece: Option<Vec<RawDiffusionPiece>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDiffusionPiece {
+    #[serde(rename = "where")]
+    cond: Option<Spanned<Src>>,
+    tags: Option<Spanned<Vec<i32>>>,
+    #[serde(rename = "A")]
+    a: Spanned<TensorSrc>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSource {
+    f: Option<Spanned<Src>>,
+    piece: Option<Vec<RawSourcePiece>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSourcePiece {
+    #[serde(rename = "where")]
+    cond: Option<Spanned<Src>>,
+    tags: Option<Spanned<Vec<i32>>>,
+    f: Spanned<Src>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDirichlet {
+    tags: Option<Spanned<Vec<i32>>>,
+    #[serde(rename = "where")]
+    cond: Option<Spanned<Src>>,
+    value: Option<Spanned<Src>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawNeumann {
+    tags: Option<Spanned<Vec<i32>>>,
+    #[serde(rename = "where")]
+    cond: Option<Spanned<Src>>,
+    flux: Option<Spanned<Src>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSignorini {
+    tags: Option<Spanned<Vec<i32>>>,
+    #[serde(rename = "where")]
+    cond: Option<Spanned<Src>>,
+    side: RawSide,
+    barrier: Spanned<Src>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawObstacle {
+    side: RawSide,
+    barrier: Spanned<Src>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawExact {
+    u: Spanned<Src>,
+    grad: [Spanned<Src>; 2],
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum RawSide {
+    Upper,
+    Lower,
+}
+
+/// An expression as written: a TOML number or a string.
+#[derive(Debug, Clone)]
+enum Src {
+    Number(f64),
+    Text(String),
+}
+
+struct SrcVisitor;
+
+impl Visitor<'_> for SrcVisitor {
+    type Value = Src;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a number or an expression in a string")
+    }
+    fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<Src, E> {
+        Ok(Src::Text(v.to_string()))
+    }
+    fn visit_f64<E: de::Error>(self, v: f64) -> std::result::Result<Src, E> {
+        Ok(Src::Number(v))
+    }
+    fn visit_i64<E: de::Error>(self, v: i64) -> std::result::Result<Src, E> {
+        Ok(Src::Number(v as f64))
+    }
+    fn visit_u64<E: de::Error>(self, v: u64) -> std::result::Result<Src, E> {
+        Ok(Src::Number(v as f64))
+    }
+}
+
+impl<'de> Deserialize<'de> for Src {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        d.deserialize_any(SrcVisitor)
+    }
+}
+
+/// A diffusion coefficient as written: a scalar a (A = a I) or a 2×2 array.
+enum TensorSrc {
+    Scalar(Src),
+    Matrix([[Src; 2]; 2]),
+}
+
+struct TensorVisitor;
+
+impl<'de> Visitor<'de> for TensorVisitor {
+    type Value = TensorSrc;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a number, an expression in a string, or a 2x2 array [[a11, a12], [a21, a22]]")
+    }
+    fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<TensorSrc, E> {
+        SrcVisitor.visit_str(v).map(TensorSrc::Scalar)
+    }
+    fn visit_f64<E: de::Error>(self, v: f64) -> std::result::Result<TensorSrc, E> {
+        SrcVisitor.visit_f64(v).map(TensorSrc::Scalar)
+    }
+    fn visit_i64<E: de::Error>(self, v: i64) -> std::result::Result<TensorSrc, E> {
+        SrcVisitor.visit_i64(v).map(TensorSrc::Scalar)
+    }
+    fn visit_u64<E: de::Error>(self, v: u64) -> std::result::Result<TensorSrc, E> {
+        SrcVisitor.visit_u64(v).map(TensorSrc::Scalar)
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> std::result::Result<TensorSrc, A::Error> {
+        let r0: [Src; 2] = seq
+            .next_element()?
+            .ok_or_else(|| de::Error::invalid_length(0, &self))?;
+        let r1: [Src; 2] = seq
+            .next_element()?
+            .ok_or_else(|| de::Error::invalid_length(1, &self))?;
+        if seq.next_element::<de::IgnoredAny>()?.is_some() {
+            return Err(de::Error::invalid_length(3, &self));
+        }
+        Ok(TensorSrc::Matrix([r0, r1]))
+    }
+}
+
+impl<'de> Deserialize<'de> for TensorSrc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        d.deserialize_any(TensorVisitor)
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// The compiled problem.
+
+/// Where in the file a datum comes from: its key and the 1-based place of its value.
+#[derive(Debug, Clone)]
+struct Loc {
+    key: String,
+    line: usize,
+    column: usize,
+}
+
+/// A compiled expression and where it was written.
+#[derive(Debug, Clone)]
+struct Field {
+    expr: Expr,
+    loc: Loc,
+}
+
+impl Field {
+    #[inline]
+    fn at(&self, p: Point) -> f64 {
+        self.expr.eval(&p)
+    }
+}
+
+/// A(x): a I, or a full matrix.
+#[derive(Debug, Clone)]
+enum TensorField {
+    Scalar(Field),
+    Matrix([[Field; 2]; 2]),
+}
+
+impl TensorField {
+    #[inline]
+    fn at(&self, p: Point) -> Tensor {
+        match self {
+            TensorField::Scalar(a) => {
+                let c = a.at(p);
+                [[c, 0.0], [0.0, c]]
+            }
+            TensorField::Matrix(m) => [
+                [m[0][0].at(p), m[0][1].at(p)],
+                [m[1][0].at(p), m[1][1].at(p)],
+            ],
+        }
+    }
+    fn loc(&self) -> &Loc {
+        match self {
+            TensorField::Scalar(a) => &a.loc,
+            TensorField::Matrix(m) => &m[0][0].loc,
+        }
+    }
+}
+
+/// One piece of a piecewise datum: it applies where `cond` holds (everywhere if `None`).
+#[derive(Debug, Clone)]
+struct Piece<T> {
+    cond: Option<Field>,
+    value: T,
+}
+
+/// The first piece that applies at `p`; `None` if none does, or if a condition is NaN there.
+fn select<T>(pieces: &[Piece<T>], p: Point) -> Option<&T> {
+    for piece in pieces {
+        match piece.cond.as_ref().map(|c| c.expr.holds(&p)) {
+            None | Some(Some(true)) => return Some(&piece.value),
+            Some(None) => return None,
+            Some(Some(false)) => {}
+        }
+    }
+    None
+}
+
+/// A boundary section with an explicit selection (`tags` or `where`).
+#[derive(Debug, Clone)]
+struct Part {
+    kind: BoundaryKind,
+    section: &'static str,
+    tags: Vec<i32>,
+    tags_loc: Option<Loc>,
+    cond: Option<Field>,
+}
+
+impl Part {
+    /// Whether it selects the edge with midpoint `x` and tag `tag` (`None`: its condition is NaN).
+    fn selects(&self, x: Point, tag: i32) -> Option<bool> {
+        if self.tags.contains(&tag) {
+            return Some(true);
+        }
+        match &self.cond {
+            Some(c) => c.expr.holds(&x),
+            None => Some(false),
+        }
+    }
+}
+
+/// Everything the closures of the [`Problem`] evaluate.
+#[derive(Debug)]
+struct Data {
+    /// Empty: A = I.
+    diffusion: Vec<Piece<TensorField>>,
+    /// Empty: f = 0.
+    source: Vec<Piece<Field>>,
+    parts: Vec<Part>,
+    /// The kind of the section without selection, if any.
+    rest: Option<(BoundaryKind, &'static str)>,
+    dirichlet: Option<Field>,
+    neumann: Option<Field>,
+    constraint: Option<(ConstraintKind, Side, Field)>,
+    exact: Option<(Field, [Field; 2])>,
+}
+
+impl Data {
+    fn diffusion_at(&self, p: Point) -> Tensor {
+        if self.diffusion.is_empty() {
+            return [[1.0, 0.0], [0.0, 1.0]];
+        }
+        select(&self.diffusion, p).map_or([[f64::NAN; 2]; 2], |a| a.at(p))
+    }
+
+    /// f at `p` with the piece chosen at `xk` (NaN where no piece applies).
+    fn source_at(&self, p: Point, xk: Point) -> f64 {
+        if self.source.is_empty() {
+            return 0.0;
+        }
+        select(&self.source, xk).map_or(f64::NAN, |f| f.at(p))
+    }
+
+    /// The section that takes the edge (midpoint `x`, tag `tag`): the first explicit one that
+    /// selects it, else the rest; `None` if none does.
+    fn boundary_at(&self, x: Point, tag: i32) -> Option<BoundaryKind> {
+        self.parts
+            .iter()
+            .find(|p| p.selects(x, tag) == Some(true))
+            .map(|p| p.kind)
+            .or(self.rest.map(|r| r.0))
+    }
+
+    fn has_boundary_sections(&self) -> bool {
+        !self.parts.is_empty() || self.rest.is_some()
+    }
+}
+
+/// How the mesh of a problem file is obtained (`[mesh]`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum MeshSpec {
+    /// A mesh file (`.msh`, `.typ1`, `.typ2`), its path resolved against the problem file's folder.
+    File(PathBuf),
+    /// A generated mesh of the unit square, optionally mapped affinely onto
+    /// `domain` = \[x0, x1, y0, y1\].
+    Generated {
+        /// The family.
+        family: Family,
+        /// Its level (see [`crate::mesh::generate`]).
+        level: usize,
+        /// The rectangle \[x0, x1\] × \[y0, y1\] the unit square is mapped onto.
+        domain: Option<[f64; 4]>,
+    },
+}
+
+impl MeshSpec {
+    /// Reads or generates the mesh.
+    pub fn build(&self) -> Result<PolyMesh> {
+        match self {
+            MeshSpec::File(p) => crate::mesh::io::read_mesh(p),
+            MeshSpec::Generated {
+                family,
+                level,
+                domain,
+            } => {
+                let m = family.generate(*level)?;
+                match domain {
+                    None => Ok(m),
+                    Some(d) => map_unit_square(&m, *d),
+                }
+            }
+        }
+    }
+}
+
+impl fmt::Display for MeshSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            MeshSpec::File(p) => write!(f, "{}", p.display()),
+            MeshSpec::Generated {
+                family,
+                level,
+                domain,
+            } => {
+                write!(f, "{} level {level}", family.name())?;
+                if let Some([x0, x1, y0, y1]) = domain {
+                    write!(f, " on [{x0}, {x1}]x[{y0}, {y1}]")?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// The mesh `m` of the unit square mapped onto \[x0, x1\] × \[y0, y1\] by
+/// (x, y) ↦ (x0 + (x1 − x0) x, y0 + (y1 − y0) y). Boundary tags are not kept.
+pub fn map_unit_square(m: &PolyMesh, [x0, x1, y0, y1]: [f64; 4]) -> Result<PolyMesh> {
+    if !(x1 > x0 && y1 > y0) || ![x0, x1, y0, y1].iter().all(|v| v.is_finite()) {
+        return Err(Error::InvalidData(format!(
+            "the domain [{x0}, {x1}]x[{y0}, {y1}] is not a finite rectangle with x0 < x1, y0 < y1"
+        )));
+    }
+    let v = m
+        .vertices()
+        .iter()
+        .map(|p| [x0 + (x1 - x0) * p[0], y0 + (y1 - y0) * p[1]])
+        .collect();
+    let cells = (0..m.n_cells())
+        .map(|k| m.cell_vertices(k).to_vec())
+        .collect();
+    Ok(PolyMesh::from_cells(v, cells)?)
+}
+
+/// A loaded, checked problem file. Build the [`Problem`] with [`ProblemFile::problem`] after
+/// [`ProblemFile::check_against_mesh`].
+#[derive(Debug, Clone)]
+pub struct ProblemFile {
+    /// The file (for built-in problems, `problems/NAME.toml`).
+    pub path: PathBuf,
+    /// The problem's name (`name`, with `{expr}` replaced by its value; default: the file stem).
+    pub name: String,
+    /// `description`, if given.
+    pub description: Option<String>,
+    /// Every parameter with the value used (default or override), sorted by name.
+    pub parameters: Vec<(String, f64)>,
+    /// `[mesh]`, if given.
+    pub mesh: Option<MeshSpec>,
+    /// `scheme`, if given.
+    pub scheme: Option<SchemeKind>,
+    data: Arc<Data>,
+}
+
+/// The built-in problems, as problem files compiled into the library: `(name, TOML text)`.
+pub const BUILTIN: [(&str, &str); 4] = [
+    ("test1", include_str!("../../problems/test1.toml")),
+    ("test2", include_str!("../../problems/test2.toml")),
+    ("test3", include_str!("../../problems/test3.toml")),
+    ("fvca5-1.1", include_str!("../../problems/fvca5-1.1.toml")),
+];
+
+/// Loads the problem file at `path`, with the parameter values `overrides` replacing the
+/// defaults of `[parameters]` (an exact name, or a unique case-insensitive match; any other name
+/// is an error).
+pub fn load(path: impl AsRef<Path>, overrides: &[(String, f64)]) -> Result<ProblemFile> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse(&text, path, overrides)
+}
+
+/// One of the [`BUILTIN`] problems, by name.
+pub fn builtin(name: &str, overrides: &[(String, f64)]) -> Result<ProblemFile> {
+    let Some((_, text)) = BUILTIN.iter().find(|(n, _)| *n == name) else {
+        let names: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
+        return Err(Error::InvalidData(format!(
+            "unknown problem '{name}' (expected one of: {})",
+            names.join(", ")
+        )));
+    };
+    parse(
+        text,
+        &Path::new("problems").join(format!("{name}.toml")),
+        overrides,
+    )
+}
+
+/// Parses the text of a problem file; `path` is used in messages and to resolve `[mesh] file`.
+pub fn parse(text: &str, path: &Path, overrides: &[(String, f64)]) -> Result<ProblemFile> {
+    let cx = Cx { path, text };
+    // syntax first, so that a syntax error is reported as such
+    if let Err(e) = toml::from_str::<toml::Table>(text) {
+        return Err(cx.toml_error(K::Syntax, &e));
+    }
+    let raw: RawFile = toml::from_str(text).map_err(|e| {
+        let kind = if e.message().starts_with("unknown field") {
+            K::UnknownKey
+        } else {
+            K::Schema
+        };
+        cx.toml_error(kind, &e)
+    })?;
+    let parameters = cx.parameters(&raw.parameters, overrides)?;
+    let mut scope = Scope::new(&["x", "y"]);
+    for (name, v) in &parameters {
+        let loc = cx.loc(&format!("parameters.{name}"), raw.parameters[name].span());
+        scope
+            .set_constant(name, *v)
+            .map_err(|m| cx.at(K::Parameter, &loc, m))?;
+    }
+    cx.definitions(&raw.definitions, &mut scope)?;
+    let data = cx.data(&raw, &scope)?;
+    let name = match &raw.name {
+        Some(n) => cx.name(n, &scope)?,
+        None => path
+            .file_stem()
+            .map_or_else(|| "problem".into(), |s| s.to_string_lossy().into_owned()),
+    };
+    Ok(ProblemFile {
+        path: path.to_path_buf(),
+        name,
+        description: raw.description.clone(),
+        parameters,
+        mesh: raw.mesh.as_ref().map(|m| cx.mesh(m)).transpose()?,
+        scheme: raw.scheme,
+        data: Arc::new(data),
+    })
+}
+
+// ------------------------------------------------------------------------------------------
+// Compilation of the raw file, with errors located in the file.
+
+/// The file being compiled.
+struct Cx<'a> {
+    path: &'a Path,
+    text: &'a str,
+}
+
+impl Cx<'_> {
+    fn error(&self, kind: K, line: usize, column: usize, msg: String) -> Error {
+        Error::ProblemFile {
+            path: self.path.to_path_buf(),
+            line,
+            column,
+            kind,
+            msg,
+        }
+    }
+
+    fn at(&self, kind: K, loc: &Loc, msg: String) -> Error {
+        self.error(kind, loc.line, loc.column, format!("{}: {msg}", loc.key))
+    }
+
+    /// 1-based line and column (in characters) of byte `offset`.
+    fn line_col(&self, offset: usize) -> (usize, usize) {
+        let offset = offset.min(self.text.len());
+        let before = &self.text[..offset];
+        let line = before.matches('\n').count() + 1;
+        let start = before.rfind('\n').map_or(0, |i| i + 1);
+        (line, before[start..].chars().count() + 1)
+    }
+
+    fn loc(&self, key: &str, span: Range<usize>) -> Loc {
+        let (line, column) = self.line_col(span.start);
+        Loc {
+            key: key.to_string(),
+            line,
+            column,
+        }
+    }
+
+    fn toml_error(&self, kind: K, e: &toml::de::Error) -> Error {
+        let (line, column) = e.span().map_or((0, 0), |s| self.line_col(s.start));
+        let msg = e.message().trim_end().replace('\n', "; ");
+        self.error(kind, line, column, msg)
+    }
+
+    /// Compiles an expression of type `kind` written at `src`; errors point at the offending
+    /// character in the file when the string has no escapes.
+    fn expr(&self, key: &str, src: &Spanned<Src>, scope: &Scope, kind: Kind) -> Result<Field> {
+        let loc = self.loc(key, src.span());
+        let text = match src.get_ref() {
+            Src::Number(v) if kind == Kind::Number => {
+                return Ok(Field {
+                    expr: Expr::constant(*v),
+                    loc,
+                });
+            }
+            Src::Number(v) => format!("{v:?}"),
+            Src::Text(t) => t.clone(),
+        };
+        match Expr::parse_kind(&text, scope, Some(kind)) {
+            Ok(expr) => Ok(Field { expr, loc }),
+            Err(e) => Err(self.expr_error(&loc, src.span(), &text, &e)),
+        }
+    }
+
+    fn expr_error(&self, loc: &Loc, span: Range<usize>, text: &str, e: &ExprError) -> Error {
+        // the value is written "text" or 'text' verbatim: point at the character itself
+        let raw = self.text.get(span.clone()).unwrap_or("");
+        let verbatim = raw.len() == text.len() + 2 && raw.get(1..raw.len() - 1) == Some(text);
+        let (line, column) = if verbatim {
+            let byte = text
+                .char_indices()
+                .nth(e.position.saturating_sub(1))
+                .map_or(text.len(), |(b, _)| b);
+            self.line_col(span.start + 1 + byte)
+        } else {
+            (loc.line, loc.column)
+        };
+        self.error(
+            K::Expression,
+            line,
+            column,
+            format!("{}: \"{text}\" {e}", loc.key),
+        )
+    }
+
+    fn expr_opt(
+        &self,
+        key: &str,
+        src: &Option<Spanned<Src>>,
+        scope: &Scope,
+        kind: Kind,
+    ) -> Result<Option<Field>> {
+        src.as_ref()
+            .map(|s| self.expr(key, s, scope, kind))
+            .transpose()
+    }
+
+    /// The parameters with their values: defaults, replaced by the overrides.
+    fn parameters(
+        &self,
+        raw: &BTreeMap<String, Spanned<f64>>,
+        overrides: &[(String, f64)],
+    ) -> Result<Vec<(String, f64)>> {
+        let mut values: Vec<(String, f64)> =
+            raw.iter().map(|(k, v)| (k.clone(), *v.get_ref())).collect();
+        for (name, v) in &values {
+            if !v.is_finite() {
+                let loc = self.loc(&format!("parameters.{name}"), raw[name].span());
+                return Err(self.at(K::Parameter, &loc, format!("the value {v} is not finite")));
+            }
+        }
+        for (name, v) in overrides {
+            let exact = values.iter().position(|(k, _)| k == name);
+            let folded: Vec<usize> = (0..values.len())
+                .filter(|&i| values[i].0.eq_ignore_ascii_case(name))
+                .collect();
+            let i = match (exact, folded.as_slice()) {
+                (Some(i), _) => i,
+                (None, [i]) => *i,
+                _ => {
+                    let known: Vec<&str> = values.iter().map(|(k, _)| k.as_str()).collect();
+                    return Err(self.error(
+                        K::Parameter,
+                        0,
+                        0,
+                        format!(
+                            "the problem has no parameter '{name}' (its parameters: {})",
+                            if known.is_empty() {
+                                "none".into()
+                            } else {
+                                known.join(", ")
+                            }
+                        ),
+                    ));
+                }
+            };
+            if !v.is_finite() {
+                return Err(self.error(
+                    K::Parameter,
+                    0,
+                    0,
+                    format!("the value {v} given for parameter '{name}' is not finite"),
+                ));
+            }
+            values[i].1 = *v;
+        }
+        Ok(values)
+    }
+
+    /// Compiles the definitions in dependency order (each may use the parameters and the other
+    /// definitions); a cycle is an error.
+    fn definitions(&self, raw: &BTreeMap<String, Spanned<Src>>, scope: &mut Scope) -> Result<()> {
+        let mut pending: Vec<&String> = raw.keys().collect();
+        while !pending.is_empty() {
+            let mut deferred = Vec::new();
+            for name in &pending {
+                let key = format!("definitions.{name}");
+                let src = &raw[*name];
+                let text = match src.get_ref() {
+                    Src::Number(v) => format!("{v:?}"),
+                    Src::Text(t) => t.clone(),
+                };
+                match Expr::parse_kind(&text, scope, None) {
+                    Ok(e) => {
+                        let loc = self.loc(&key, src.span());
+                        scope
+                            .define(name, &e)
+                            .map_err(|m| self.at(K::Parameter, &loc, m))?;
+                    }
+                    Err(ExprError {
+                        kind: ExprErrorKind::UnknownVariable(v),
+                        ..
+                    }) if pending.iter().any(|p| **p == v && *p != *name) => deferred.push(*name),
+                    Err(e) => {
+                        let loc = self.loc(&key, src.span());
+                        return Err(self.expr_error(&loc, src.span(), &text, &e));
+                    }
+                }
+            }
+            if deferred.len() == pending.len() {
+                let names: Vec<&str> = deferred.iter().map(|s| s.as_str()).collect();
+                let loc = self.loc(
+                    &format!("definitions.{}", names[0]),
+                    raw[deferred[0]].span(),
+                );
+                return Err(self.at(
+                    K::Parameter,
+                    &loc,
+                    format!(
+                        "the definitions {} depend on each other in a cycle",
+                        names.join(", ")
+                    ),
+                ));
+            }
+            pending = deferred;
+        }
+        Ok(())
+    }
+
+    /// `name`, with every `{expr}` replaced by the value of the (constant) expression.
+    fn name(&self, raw: &Spanned<String>, scope: &Scope) -> Result<String> {
+        let loc = self.loc("name", raw.span());
+        let mut out = String::new();
+        let mut rest = raw.get_ref().as_str();
+        while let Some(i) = rest.find('{') {
+            out.push_str(&rest[..i]);
+            let Some(j) = rest[i..].find('}') else {
+                return Err(self.at(K::Schema, &loc, "a '{' without '}'".into()));
+            };
+            let inner = &rest[i + 1..i + j];
+            let value = Expr::parse(inner, scope)
+                .map_err(|e| self.at(K::Expression, &loc, format!("\"{inner}\" {e}")))?;
+            let Some(v) = value.as_constant() else {
+                return Err(self.at(
+                    K::Expression,
+                    &loc,
+                    format!("\"{inner}\" depends on x or y: a name needs a constant"),
+                ));
+            };
+            out.push_str(&v.to_string());
+            rest = &rest[i + j + 1..];
+        }
+        out.push_str(rest);
+        Ok(out)
+    }
+
+    fn mesh(&self, raw: &Spanned<RawMesh>) -> Result<MeshSpec> {
+        let loc = self.loc("mesh", raw.span());
+        let m = raw.get_ref();
+        let bad = |msg: &str| self.at(K::Mesh, &loc, msg.to_string());
+        match (&m.file, &m.generate) {
+            (Some(file), None) => {
+                if m.level.is_some() || m.domain.is_some() {
+                    return Err(bad(
+                        "'level' and 'domain' go with 'generate', not with 'file'",
+                    ));
+                }
+                let dir = self.path.parent().unwrap_or(Path::new(""));
+                Ok(MeshSpec::File(dir.join(file)))
+            }
+            (None, Some(g)) => {
+                let family: Family = g.parse().map_err(|e: Error| bad(&e.to_string()))?;
+                let level = m.level.ok_or_else(|| bad("'generate' needs a 'level'"))?;
+                family.check_level(level).map_err(|e| bad(&e.to_string()))?;
+                if let Some([x0, x1, y0, y1]) = m.domain
+                    && !(x1 > x0 && y1 > y0 && [x0, x1, y0, y1].iter().all(|v| v.is_finite()))
+                {
+                    return Err(bad("'domain' = [x0, x1, y0, y1] needs x0 < x1 and y0 < y1"));
+                }
+                Ok(MeshSpec::Generated {
+                    family,
+                    level,
+                    domain: m.domain,
+                })
+            }
+            _ => Err(bad("give either 'file' or 'generate' (with 'level')")),
+        }
+    }
+
+    fn data(&self, raw: &RawFile, scope: &Scope) -> Result<Data> {
+        let (parts, rest) = self.boundary(raw, scope)?;
+        let constraint = match (&raw.obstacle, &raw.signorini) {
+            (Some(_), Some(_)) => {
+                return Err(self.error(
+                    K::Schema,
+                    0,
+                    0,
+                    "a problem has one barrier: [obstacle] and [signorini] cannot both be given"
+                        .into(),
+                ));
+            }
+            (Some(o), None) => Some((
+                ConstraintKind::Obstacle,
+                side(o.side),
+                self.expr("obstacle.barrier", &o.barrier, scope, Kind::Number)?,
+            )),
+            (None, Some(s)) => Some((
+                ConstraintKind::Signorini,
+                side(s.side),
+                self.expr("signorini.barrier", &s.barrier, scope, Kind::Number)?,
+            )),
+            (None, None) => None,
+        };
+        let exact = match &raw.exact {
+            Some(e) => Some((
+                self.expr("exact.u", &e.u, scope, Kind::Number)?,
+                [
+                    self.expr("exact.grad[0]", &e.grad[0], scope, Kind::Number)?,
+                    self.expr("exact.grad[1]", &e.grad[1], scope, Kind::Number)?,
+                ],
+            )),
+            None => None,
+        };
+        Ok(Data {
+            diffusion: self.diffusion(raw, scope)?,
+            source: self.source(raw, scope)?,
+            parts,
+            rest,
+            dirichlet: match &raw.dirichlet {
+                Some(d) => self.expr_opt("dirichlet.value", &d.value, scope, Kind::Number)?,
+                None => None,
+            },
+            neumann: match &raw.neumann {
+                Some(n) => self.expr_opt("neumann.flux", &n.flux, scope, Kind::Number)?,
+                None => None,
+            },
+            constraint,
+            exact,
+        })
+    }
+
+    fn tensor(&self, key: &str, raw: &Spanned<TensorSrc>, scope: &Scope) -> Result<TensorField> {
+        let span = raw.span();
+        let sub = |s: &Src| Spanned::new(span.clone(), s.clone());
+        match raw.get_ref() {
+            TensorSrc::Scalar(s) => Ok(TensorField::Scalar(self.expr(
+                key,
+                &sub(s),
+                scope,
+                Kind::Number,
+            )?)),
+            TensorSrc::Matrix(m) => {
+                let e = |i: usize, j: usize| {
+                    self.expr(
+                        &format!("{key}[{i}][{j}]"),
+                        &sub(&m[i][j]),
+                        scope,
+                        Kind::Number,
+                    )
+                };
+                Ok(TensorField::Matrix([
+                    [e(0, 0)?, e(0, 1)?],
+                    [e(1, 0)?, e(1, 1)?],
+                ]))
+            }
+        }
+    }
+
+    /// Rejects cell tags (the mesh stores none) and a piece without `where` before the last.
+    fn check_piece(
+        &self,
+        key: &str,
+        i: usize,
+        n: usize,
+        has_cond: bool,
+        tags: &Option<Spanned<Vec<i32>>>,
+    ) -> Result<()> {
+        if let Some(t) = tags {
+            let loc = self.loc(&format!("{key}[{i}].tags"), t.span());
+            return Err(self.at(
+                K::Mesh,
+                &loc,
+                "pieces by cell (gmsh physical surface) tag are not supported yet: meshes do not \
+                 store cell tags; select the piece with 'where' (a condition on the cell centroid)"
+                    .into(),
+            ));
+        }
+        if !has_cond && i + 1 < n {
+            return Err(self.error(
+                K::Schema,
+                0,
+                0,
+                format!("{key}[{i}]: only the last piece may omit 'where' (it takes the rest)"),
+            ));
+        }
+        Ok(())
+    }
+
+    fn diffusion(&self, raw: &RawFile, scope: &Scope) -> Result<Vec<Piece<TensorField>>> {
+        let Some(d) = &raw.diffusion else {
+            return Ok(Vec::new());
+        };
+        let loc = self.loc("diffusion", d.span());
+        match (&d.get_ref().a, &d.get_ref().piece) {
+            (Some(a), None) => Ok(vec![Piece {
+                cond: None,
+                value: self.tensor("diffusion.A", a, scope)?,
+            }]),
+            (None, Some(pieces)) if !pieces.is_empty() => {
+                let mut out = Vec::new();
+                for (i, p) in pieces.iter().enumerate() {
+                    let key = format!("diffusion.piece[{i}]");
+                    self.check_piece(
+                        "diffusion.piece",
+                        i,
+                        pieces.len(),
+                        p.cond.is_some(),
+                        &p.tags,
+                    )?;
+                    out.push(Piece {
+                        cond: self.expr_opt(
+                            &format!("{key}.where"),
+                            &p.cond,
+                            scope,
+                            Kind::Condition,
+                        )?,
+                        value: self.tensor(&format!("{key}.A"), &p.a, scope)?,
+                    });
+                }
+                Ok(out)
+            }
+            _ => Err(self.at(
+                K::Schema,
+                &loc,
+                "give either 'A' or one or more [[diffusion.piece]]".into(),
+            )),
+        }
+    }
+
+    fn source(&self, raw: &RawFile, scope: &Scope) -> Result<Vec<Piece<Field>>> {
+        let Some(s) = &raw.source else {
+            return Ok(Vec::new());
+        };
+        let loc = self.loc("source", s.span());
+        match (&s.get_ref().f, &s.get_ref().piece) {
+            (Some(f), None) => Ok(vec![Piece {
+                cond: None,
+                value: self.expr("source.f", f, scope, Kind::Number)?,
+            }]),
+            (None, Some(pieces)) if !pieces.is_empty() => {
+                let mut out = Vec::new();
+                for (i, p) in pieces.iter().enumerate() {
+                    let key = format!("source.piece[{i}]");
+                    self.check_piece("source.piece", i, pieces.len(), p.cond.is_some(), &p.tags)?;
+                    out.push(Piece {
+                        cond: self.expr_opt(
+                            &format!("{key}.where"),
+                            &p.cond,
+                            scope,
+                            Kind::Condition,
+                        )?,
+                        value: self.expr(&format!("{key}.f"), &p.f, scope, Kind::Number)?,
+                    });
+                }
+                Ok(out)
+            }
+            _ => Err(self.at(
+                K::Schema,
+                &loc,
+                "give either 'f' or one or more [[source.piece]]".into(),
+            )),
+        }
+    }
+
+    /// The boundary sections with a selection, and the kind of the one without (at most one).
+    #[allow(clippy::type_complexity)]
+    fn boundary(
+        &self,
+        raw: &RawFile,
+        scope: &Scope,
+    ) -> Result<(Vec<Part>, Option<(BoundaryKind, &'static str)>)> {
+        let sections: [(
+            BoundaryKind,
+            &'static str,
+            Option<(&Option<Spanned<Vec<i32>>>, &Option<Spanned<Src>>)>,
+        ); 3] = [
+            (
+                BoundaryKind::Dirichlet,
+                "dirichlet",
+                raw.dirichlet.as_ref().map(|s| (&s.tags, &s.cond)),
+            ),
+            (
+                BoundaryKind::Signorini,
+                "signorini",
+                raw.signorini.as_ref().map(|s| (&s.tags, &s.cond)),
+            ),
+            (
+                BoundaryKind::Neumann,
+                "neumann",
+                raw.neumann.as_ref().map(|s| (&s.tags, &s.cond)),
+            ),
+        ];
+        let mut parts = Vec::new();
+        let mut rest: Option<(BoundaryKind, &'static str)> = None;
+        for (kind, section, sel) in sections {
+            let Some((tags, cond)) = sel else { continue };
+            if tags.is_none() && cond.is_none() {
+                if let Some((_, other)) = rest {
+                    return Err(self.error(
+                        K::Schema,
+                        0,
+                        0,
+                        format!(
+                            "[{other}] and [{section}] both have neither 'tags' nor 'where': \
+                             only one section may take the rest of the boundary"
+                        ),
+                    ));
+                }
+                rest = Some((kind, section));
+                continue;
+            }
+            parts.push(Part {
+                kind,
+                section,
+                tags: tags.as_ref().map_or_else(Vec::new, |t| t.get_ref().clone()),
+                tags_loc: tags
+                    .as_ref()
+                    .map(|t| self.loc(&format!("{section}.tags"), t.span())),
+                cond: self.expr_opt(&format!("{section}.where"), cond, scope, Kind::Condition)?,
+            });
+        }
+        Ok((parts, rest))
+    }
+}
+
+fn side(s: RawSide) -> Side {
+    match s {
+        RawSide::Upper => Side::Upper,
+        RawSide::Lower => Side::Lower,
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// The problem, and the checks against a mesh.
+
+impl ProblemFile {
+    /// The value of parameter `name` (exact name).
+    pub fn parameter(&self, name: &str) -> Option<f64> {
+        self.parameters
+            .iter()
+            .find(|(k, _)| k == name)
+            .map(|(_, v)| *v)
+    }
+
+    /// Builds the [`Problem`]: closures that evaluate the compiled expressions (cheap; call it
+    /// once per solve). Run [`ProblemFile::check_against_mesh`] on the mesh first: on a mesh
+    /// it has not checked, a boundary edge no section selects is taken as Dirichlet, and a
+    /// point no piece covers gets NaN data (which the assembler rejects).
+    pub fn problem(&self) -> Problem {
+        let d = Arc::clone(&self.data);
+        let mut pb = Problem::new(&self.name, Box::new(move |p| d.source_at(p, p)));
+        if self.data.source.iter().any(|p| p.cond.is_some()) {
+            let d = Arc::clone(&self.data);
+            pb = pb.with_source_in_cell(Box::new(move |p, xk| d.source_at(p, xk)));
+        }
+        if !self.data.diffusion.is_empty() {
+            let d = Arc::clone(&self.data);
+            pb = pb.with_diffusion(Box::new(move |p| d.diffusion_at(p)));
+        }
+        if self.data.has_boundary_sections() {
+            let d = Arc::clone(&self.data);
+            pb = pb.with_boundary(move |x, tag| {
+                d.boundary_at(x, tag).unwrap_or(BoundaryKind::Dirichlet)
+            });
+        }
+        if let Some(g) = &self.data.dirichlet {
+            let g = g.expr.clone();
+            pb = pb.with_dirichlet(Box::new(move |p| g.eval(&p)));
+        }
+        if let Some(g) = &self.data.neumann {
+            let g = g.expr.clone();
+            pb = pb.with_neumann(Box::new(move |p| g.eval(&p)));
+        }
+        if let Some((kind, side, b)) = &self.data.constraint {
+            let b = b.expr.clone();
+            pb = pb.with_constraint(*kind, *side, Box::new(move |p| b.eval(&p)));
+        }
+        if let Some((u, [gx, gy])) = &self.data.exact {
+            let (u, gx, gy) = (u.expr.clone(), gx.expr.clone(), gy.expr.clone());
+            pb = pb.with_exact(
+                Box::new(move |p| u.eval(&p)),
+                Box::new(move |p| [gx.eval(&p), gy.eval(&p)]),
+            );
+        }
+        pb
+    }
+
+    /// Checks the problem against `mesh`: every tag of the file is on some boundary edge; every
+    /// boundary edge is selected by exactly one boundary section (or taken by the rest); a piece
+    /// of A and of f applies at every cell; A is symmetric positive definite at every centroid;
+    /// and every datum is finite at every point where a scheme evaluates it:
+    ///
+    /// | datum | points |
+    /// |---|---|
+    /// | A, exact u and ∇u | cell centroids x_K (exact: also vertices) |
+    /// | f (piece of the cell) | x_K, the vertices and edge midpoints of K |
+    /// | obstacle barrier | x_K, vertices, edge midpoints |
+    /// | Dirichlet value, Signorini barrier | midpoints and end points of the edges of that kind |
+    /// | Neumann flux | midpoints of the Neumann edges |
+    ///
+    /// The first failure (in cell, then edge order) is reported, naming the key, the cell or
+    /// edge, and the point.
+    pub fn check_against_mesh(&self, mesh: &PolyMesh) -> Result<()> {
+        self.check_tags(mesh)?;
+        let kinds = self.check_boundary(mesh)?;
+        self.check_cells(mesh)?;
+        self.check_boundary_values(mesh, &kinds)?;
+        if let Some((ConstraintKind::Obstacle, _, b)) = &self.data.constraint {
+            let bad = (0..mesh.n_edges())
+                .into_par_iter()
+                .find_map_first(|e| nonfinite(b, mesh.edge_midpoint(e), &format!("edge {e}")));
+            if let Some(m) = bad {
+                return Err(self.fail(K::NonFinite, &b.loc, m));
+            }
+        }
+        Ok(())
+    }
+
+    fn fail(&self, kind: K, loc: &Loc, msg: String) -> Error {
+        Error::ProblemFile {
+            path: self.path.clone(),
+            line: loc.line,
+            column: loc.column,
+            kind,
+            msg: format!("{}: {msg}", loc.key),
+        }
+    }
+
+    fn check_tags(&self, mesh: &PolyMesh) -> Result<()> {
+        let mut present: Vec<i32> = mesh
+            .boundary_edges()
+            .iter()
+            .map(|&e| mesh.edge_tag(e))
+            .collect();
+        present.sort_unstable();
+        present.dedup();
+        for part in &self.data.parts {
+            for t in &part.tags {
+                if present.binary_search(t).is_err() {
+                    let loc = part.tags_loc.clone().unwrap_or_else(|| Loc {
+                        key: format!("{}.tags", part.section),
+                        line: 0,
+                        column: 0,
+                    });
+                    let list: Vec<String> = present.iter().map(i32::to_string).collect();
+                    return Err(self.fail(
+                        K::Tag,
+                        &loc,
+                        format!(
+                            "tag {t} is on no boundary edge of the mesh (its boundary tags: {})",
+                            list.join(", ")
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The kind of every boundary edge (in the order of `mesh.boundary_edges()`).
+    fn check_boundary(&self, mesh: &PolyMesh) -> Result<Vec<BoundaryKind>> {
+        let d = &self.data;
+        let edges = mesh.boundary_edges();
+        if !d.has_boundary_sections() {
+            return Ok(vec![BoundaryKind::Dirichlet; edges.len()]);
+        }
+        let kinds: Vec<std::result::Result<BoundaryKind, Error>> =
+            edges.par_iter().map(|&e| self.edge_kind(mesh, e)).collect();
+        kinds.into_iter().collect()
+    }
+
+    fn edge_kind(&self, mesh: &PolyMesh, e: usize) -> Result<BoundaryKind> {
+        let d = &self.data;
+        let (x, tag) = (mesh.edge_midpoint(e), mesh.edge_tag(e));
+        let place = format!(
+            "boundary edge {e} (midpoint ({}, {}), tag {tag})",
+            x[0], x[1]
+        );
+        let mut chosen: Option<&Part> = None;
+        for p in &d.parts {
+            match p.selects(x, tag) {
+                None => {
+                    let loc = p.cond.as_ref().map_or_else(
+                        || {
+                            p.tags_loc.clone().unwrap_or(Loc {
+                                key: p.section.into(),
+                                line: 0,
+                                column: 0,
+                            })
+                        },
+                        |c| c.loc.clone(),
+                    );
+                    return Err(self.fail(
+                        K::NonFinite,
+                        &loc,
+                        format!("the condition is NaN at {place}"),
+                    ));
+                }
+                Some(true) => {
+                    if let Some(q) = chosen {
+                        let loc = Loc {
+                            key: format!("[{}] and [{}]", q.section, p.section),
+                            line: 0,
+                            column: 0,
+                        };
+                        return Err(self.fail(
+                            K::OverlappingRules,
+                            &loc,
+                            format!("both select {place}"),
+                        ));
+                    }
+                    chosen = Some(p);
+                }
+                Some(false) => {}
+            }
+        }
+        match (chosen, d.rest) {
+            (Some(p), _) => Ok(p.kind),
+            (None, Some((k, _))) => Ok(k),
+            (None, None) => {
+                let names: Vec<String> =
+                    d.parts.iter().map(|p| format!("[{}]", p.section)).collect();
+                let loc = Loc {
+                    key: "boundary".into(),
+                    line: 0,
+                    column: 0,
+                };
+                Err(self.fail(
+                    K::UncoveredEdge,
+                    &loc,
+                    format!("{place} is selected by none of {}; add its tag or widen a 'where', or leave one section without 'tags' and 'where' to take the rest", names.join(", ")),
+                ))
+            }
+        }
+    }
+
+    /// Per cell: the pieces of A and f apply, A is SPD, f, the obstacle barrier and the exact
+    /// solution are finite.
+    fn check_cells(&self, mesh: &PolyMesh) -> Result<()> {
+        let bad = (0..mesh.n_cells())
+            .into_par_iter()
+            .find_map_first(|k| self.cell_error(mesh, k).err());
+        match bad {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    fn cell_error(&self, mesh: &PolyMesh, k: usize) -> Result<()> {
+        let d = &self.data;
+        let xk = mesh.centroid(k);
+        let place = format!("cell {k} (x_K = ({}, {}))", xk[0], xk[1]);
+        if !d.diffusion.is_empty() {
+            let Some(a) = select(&d.diffusion, xk) else {
+                let loc = Loc {
+                    key: "diffusion".into(),
+                    line: 0,
+                    column: 0,
+                };
+                return Err(self.fail(
+                    K::UncoveredPoint,
+                    &loc,
+                    format!("no piece applies at {place}"),
+                ));
+            };
+            let t = a.at(xk);
+            if !t.iter().flatten().all(|v| v.is_finite()) {
+                return Err(self.fail(K::NonFinite, a.loc(), format!("A = {t:?} at {place}")));
+            }
+            if let Err(e) = check_tensor(&t, &place) {
+                let msg = match e {
+                    Error::InvalidData(m) => m,
+                    e => e.to_string(),
+                };
+                return Err(self.fail(K::NotSpd, a.loc(), msg));
+            }
+        }
+        let verts = mesh.cell_vertices(k).iter().map(|&v| mesh.vertex(v));
+        let mids = mesh.cell_edges(k).iter().map(|&e| mesh.edge_midpoint(e));
+        let points: Vec<Point> = std::iter::once(xk).chain(verts).chain(mids).collect();
+        if !d.source.is_empty() {
+            let Some(f) = select(&d.source, xk) else {
+                let loc = Loc {
+                    key: "source".into(),
+                    line: 0,
+                    column: 0,
+                };
+                return Err(self.fail(
+                    K::UncoveredPoint,
+                    &loc,
+                    format!("no piece applies at {place}"),
+                ));
+            };
+            for &p in &points {
+                if let Some(m) = nonfinite(f, p, &format!("{place}")) {
+                    return Err(self.fail(K::NonFinite, &f.loc, m));
+                }
+            }
+        }
+        let nv = 1 + mesh.cell_vertices(k).len();
+        if let Some((ConstraintKind::Obstacle, _, b)) = &d.constraint {
+            for &p in &points[..nv] {
+                if let Some(m) = nonfinite(b, p, &place) {
+                    return Err(self.fail(K::NonFinite, &b.loc, m));
+                }
+            }
+        }
+        if let Some((u, g)) = &d.exact {
+            for f in std::iter::once(u).chain(g) {
+                for &p in &points[..nv] {
+                    if let Some(m) = nonfinite(f, p, &place) {
+                        return Err(self.fail(K::NonFinite, &f.loc, m));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Dirichlet values, Neumann fluxes and the Signorini barrier on the edges of their kind.
+    fn check_boundary_values(&self, mesh: &PolyMesh, kinds: &[BoundaryKind]) -> Result<()> {
+        let d = &self.data;
+        let sig = match &d.constraint {
+            Some((ConstraintKind::Signorini, _, b)) => Some(b),
+            _ => None,
+        };
+        let bad = mesh
+            .boundary_edges()
+            .par_iter()
+            .zip(kinds)
+            .find_map_first(|(&e, kind)| {
+                let (field, points) = match kind {
+                    BoundaryKind::Dirichlet => (d.dirichlet.as_ref(), true),
+                    BoundaryKind::Neumann => (d.neumann.as_ref(), false),
+                    BoundaryKind::Signorini => (sig, true),
+                };
+                let f = field?;
+                let x = mesh.edge_midpoint(e);
+                let place = format!("boundary edge {e}");
+                let ends = mesh.edge_vertices(e).map(|v| mesh.vertex(v));
+                let pts: &[Point] = if points { &[x, ends[0], ends[1]] } else { &[x] };
+                pts.iter()
+                    .find_map(|&p| nonfinite(f, p, &place))
+                    .map(|m| self.fail(K::NonFinite, &f.loc, m))
+            });
+        match bad {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+}
+
+/// `Some(message)` if `f` is not finite at `p`.
+fn nonfinite(f: &Field, p: Point, place: &str) -> Option<String> {
+    let v = f.at(p);
+    (!v.is_finite()).then(|| {
+        format!(
+            "\"{}\" is {v} at ({}, {}) in {place}",
+            f.expr.source(),
+            p[0],
+            p[1]
+        )
+    })
+}

@@ -1,0 +1,330 @@
+//! The Crouzeix–Raviart (non-conforming P1) scheme with mass lumping, on triangles
+//! (GDM book, Droniou–Eymard–Gallouët–Guichard–Herbin, Chapter 9: non-conforming P1, its
+//! mass-lumped gradient discretisation).
+//!
+//! Unknowns: one value u_σ per edge σ, the value at the midpoint x_σ (all skeleton; nothing to
+//! condense). On a triangle K with edges σ ∈ E_K, write v_σ for the vertex of K opposite σ and
+//! λ_v for the barycentric coordinates. The Crouzeix–Raviart basis function of σ on K is
+//! φ_σ = 1 − 2λ_{v_σ}: it is 1 at x_σ and 0 at the two other midpoints.
+//!
+//! - ∇_D u = the broken gradient of the Crouzeix–Raviart function Σ_σ u_σ φ_σ. Since
+//!   ∇λ_{v_σ} = −|σ| n_{K,σ} / (2|K|), ∇φ_σ = |σ| n_{K,σ} / |K| and
+//!   ∇_K u = (1/|K|) Σ_σ |σ| u_σ n_{K,σ}
+//!   (HMM's consistent gradient without the cell unknown: Σ_σ |σ| n_{K,σ} = 0). With
+//!   G = [|σ| n_{K,σ}/|K|]_σ (2×3), the local matrix is M_K = |K| Gᵀ A_K G, A_K = A(x_K).
+//!   Its rows sum to zero, and it is exact for affine functions (∇_K u = ∇ū when u_σ = ū(x_σ)).
+//! - Π_D u, mass-lumped: with D_{K,σ} = co(σ ∪ {x_K}) the triangle formed by σ and the centroid,
+//!   Π_D u = u_σ on D_{K,σ}. As x_K is the barycentre, the height of D_{K,σ} over σ is a third of
+//!   that of K, so |D_{K,σ}| = |K|/3, and the three D_{K,σ} tile K. An edge σ = K|L carries the
+//!   diamond D_σ = D_{K,σ} ∪ D_{L,σ}, of measure Σ_{K∋σ} |K|/3.
+//! - T_D u = u_σ on σ (the Crouzeix–Raviart trace integrated by the midpoint rule, which is
+//!   exact for it: ∫_σ φ_σ = |σ|, ∫_σ φ_{σ'} = 0 for σ' ≠ σ).
+//!
+//! Quadrature (the choices, and why):
+//! - load: ∫_K f Π_D v = Σ_σ v_σ ∫_{D_{K,σ}} f ≈ Σ_σ v_σ (|K|/3) f(x_{K,σ}), with
+//!   x_{K,σ} = (x_K + s₁ + s₂)/3 the centroid of D_{K,σ} (s₁, s₂ the ends of σ). This
+//!   one-point rule is exact for f affine on K (the book integrates ∫ f Π_D v exactly and
+//!   prescribes no rule; we take the one exact on its degree). Its point lies strictly inside
+//!   K, so the source of the cell is used: the assembler passes the closure of K
+//!   ([`crate::problem::Problem::source_in_cell`] when the data are smooth by pieces), and
+//!   even a plain source discontinuous across mesh lines is evaluated on K's own side. Summed
+//!   over σ it gives |K| f(x_K) for affine f, HMM's cell load (f(x_K) at each of the three
+//!   edges would be exact for constants only);
+//! - diffusion: A is taken constant per triangle, A_K = A(x_K);
+//! - boundary data: ∫_σ g T_D v ≈ |σ| g(x_σ) v_σ; Dirichlet values are imposed at x_σ,
+//!   u_σ = u_D(x_σ);
+//! - obstacle barriers act on every edge unknown, u_σ ≤ g(x_σ) (or ≥): Π_D u is u_σ on D_σ, so
+//!   the barrier is piecewise constant on diamonds, and an edge carries the lumped measure
+//!   |D_σ| = Σ_{K∋σ} |K|/3. Signorini barriers act on the boundary-edge unknowns of Γ3, with
+//!   measure |σ| (from the trace, by the assembler).
+//!
+//! Output: [`GradientDiscretisation::cell_values`] gives the Crouzeix–Raviart function at
+//! x_K, the mean of the three edge values (φ_σ(x_K) = 1/3); the vertex values are the
+//! area-weighted mean, over the triangles around the vertex, of the Crouzeix–Raviart function
+//! of each triangle at that vertex, u_{σ₁} + u_{σ₂} − u_{σ₀} (σ₁, σ₂ the edges through the
+//! vertex, σ₀ the opposite one): exact for affine functions, unlike a mean of centroid values.
+
+use super::{Entity, GradientDiscretisation, PointDof, Tensor};
+use crate::mesh::{Point, PolyMesh};
+use nalgebra::{DMatrix, DVector};
+
+/// The mass-lumped Crouzeix–Raviart scheme on a triangle mesh.
+#[derive(Debug, Clone)]
+pub struct Cr<'a> {
+    mesh: &'a PolyMesh,
+}
+
+impl<'a> Cr<'a> {
+    /// Crouzeix–Raviart on `mesh`; an error if some cell is not a triangle.
+    pub fn new(mesh: &'a PolyMesh) -> crate::Result<Self> {
+        if let Some(k) = (0..mesh.n_cells()).find(|&k| mesh.cell_vertices(k).len() != 3) {
+            return Err(crate::Error::InvalidData(format!(
+                "the Crouzeix–Raviart scheme needs a triangle mesh, but cell {k} has {} vertices",
+                mesh.cell_vertices(k).len()
+            )));
+        }
+        Ok(Cr { mesh })
+    }
+
+    /// Gradients ∇φ_σ = |σ| n_{K,σ} / |K| of the three basis functions of triangle `k`, in the
+    /// order of its local edges (the columns of G).
+    pub fn basis_gradients(&self, k: usize) -> [Point; 3] {
+        let m = self.mesh;
+        let area = m.measure(k);
+        let normals = m.cell_normals(k);
+        let mut g = [[0.0; 2]; 3];
+        for (i, &e) in m.cell_edges(k).iter().enumerate() {
+            let s = m.edge_measure(e) / area;
+            g[i] = [s * normals[i][0], s * normals[i][1]];
+        }
+        g
+    }
+
+    /// The centroid x_{K,σ} of the sub-triangle D_{K,σ} = co(σ ∪ {x_K}) of local edge `i` of
+    /// triangle `k` (local edge i joins local vertices i and i+1).
+    pub fn sub_centroid(&self, k: usize, i: usize) -> Point {
+        let m = self.mesh;
+        let v = m.cell_vertices(k);
+        let (a, b, xk) = (m.vertex(v[i]), m.vertex(v[(i + 1) % 3]), m.centroid(k));
+        [(a[0] + b[0] + xk[0]) / 3.0, (a[1] + b[1] + xk[1]) / 3.0]
+    }
+}
+
+impl GradientDiscretisation for Cr<'_> {
+    fn name(&self) -> &'static str {
+        "cr"
+    }
+    fn mesh(&self) -> &PolyMesh {
+        self.mesh
+    }
+    fn n_skeleton(&self) -> usize {
+        self.mesh.n_edges()
+    }
+    fn n_interior(&self) -> usize {
+        0
+    }
+    fn dof_entity(&self, dof: usize) -> Entity {
+        Entity::Edge(dof)
+    }
+    fn n_local_interior(&self, _k: usize) -> usize {
+        0
+    }
+    fn local_dofs(&self, k: usize, dofs: &mut Vec<usize>) {
+        dofs.clear();
+        dofs.extend_from_slice(self.mesh.cell_edges(k));
+    }
+    fn local_matrix(&self, k: usize, a: &Tensor, m: &mut DMatrix<f64>) {
+        let g = self.basis_gradients(k);
+        let area = self.mesh.measure(k);
+        *m = DMatrix::zeros(3, 3);
+        for i in 0..3 {
+            let ag = [
+                a[0][0] * g[i][0] + a[0][1] * g[i][1],
+                a[1][0] * g[i][0] + a[1][1] * g[i][1],
+            ];
+            for j in 0..3 {
+                m[(j, i)] = area * (ag[0] * g[j][0] + ag[1] * g[j][1]);
+            }
+        }
+    }
+    fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>) {
+        let third = self.mesh.measure(k) / 3.0;
+        *b = DVector::from_fn(3, |i, _| third * f(self.sub_centroid(k, i)));
+    }
+    fn edge_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
+        out.clear();
+        out.push(PointDof {
+            dof: e,
+            point: self.mesh.edge_midpoint(e),
+            measure: self.mesh.edge_measure(e),
+        });
+    }
+    fn obstacle_dofs(&self) -> Vec<PointDof> {
+        let m = self.mesh;
+        let mut meas = vec![0.0; m.n_edges()];
+        for k in 0..m.n_cells() {
+            for &e in m.cell_edges(k) {
+                meas[e] += m.measure(k) / 3.0;
+            }
+        }
+        meas.iter()
+            .enumerate()
+            .map(|(e, &w)| PointDof {
+                dof: e,
+                point: m.edge_midpoint(e),
+                measure: w,
+            })
+            .collect()
+    }
+    fn cell_values(&self, u: &[f64]) -> Vec<f64> {
+        (0..self.mesh.n_cells())
+            .map(|k| self.mesh.cell_edges(k).iter().map(|&e| u[e]).sum::<f64>() / 3.0)
+            .collect()
+    }
+    fn cell_gradients(&self, u: &[f64]) -> Vec<Point> {
+        (0..self.mesh.n_cells())
+            .map(|k| {
+                let g = self.basis_gradients(k);
+                let mut r = [0.0; 2];
+                for (i, &e) in self.mesh.cell_edges(k).iter().enumerate() {
+                    r[0] += u[e] * g[i][0];
+                    r[1] += u[e] * g[i][1];
+                }
+                r
+            })
+            .collect()
+    }
+    fn vertex_values(&self, u: &[f64]) -> Vec<f64> {
+        let m = self.mesh;
+        let mut sum = vec![0.0; m.n_vertices()];
+        let mut weight = vec![0.0; m.n_vertices()];
+        for k in 0..m.n_cells() {
+            let (v, e, area) = (m.cell_vertices(k), m.cell_edges(k), m.measure(k));
+            for j in 0..3 {
+                // local vertex j lies on local edges j and j−1, opposite local edge j+1
+                let value = u[e[j]] + u[e[(j + 2) % 3]] - u[e[(j + 1) % 3]];
+                sum[v[j]] += area * value;
+                weight[v[j]] += area;
+            }
+        }
+        sum.iter().zip(&weight).map(|(s, w)| s / w).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const A: Tensor = [[2.0, 0.3], [0.3, 1.0]];
+
+    /// Four triangles around an interior vertex (not symmetric), and a skewed triangle alone.
+    fn patch() -> PolyMesh {
+        let v = vec![
+            [0.0, 0.0],
+            [1.0, 0.1],
+            [1.2, 0.9],
+            [0.1, 1.1],
+            [0.45, 0.55],
+        ];
+        PolyMesh::from_cells(v, vec![vec![0, 1, 4], vec![1, 2, 4], vec![2, 3, 4], vec![3, 0, 4]])
+            .unwrap()
+    }
+
+    fn affine(p: Point) -> f64 {
+        0.4 + 0.7 * p[0] - 1.9 * p[1]
+    }
+
+    #[test]
+    fn local_matrix_is_symmetric_semidefinite_with_constants_in_kernel() {
+        let m = patch();
+        let s = Cr::new(&m).unwrap();
+        let mut mat = DMatrix::zeros(0, 0);
+        for k in 0..m.n_cells() {
+            s.local_matrix(k, &A, &mut mat);
+            assert_eq!(mat.shape(), (3, 3));
+            let scale = mat.amax();
+            assert!((&mat - mat.transpose()).amax() < 1e-14 * scale);
+            // rows sum to zero: constants are in the kernel
+            assert!((&mat * DVector::from_element(3, 1.0)).amax() < 1e-13 * scale);
+            // semidefinite, and the kernel is exactly the constants (G has rank 2)
+            let mut e: Vec<f64> = mat.symmetric_eigenvalues().iter().cloned().collect();
+            e.sort_by(f64::total_cmp);
+            assert!(e[0].abs() < 1e-13 * scale && e[1] > 1e-3 * scale, "{e:?}");
+        }
+    }
+
+    #[test]
+    fn affine_functions_have_exact_gradient_energy_and_values() {
+        let m = patch();
+        let s = Cr::new(&m).unwrap();
+        let grad = [0.7, -1.9];
+        let u: Vec<f64> = (0..m.n_edges())
+            .map(|e| affine(m.edge_midpoint(e)))
+            .collect();
+        let cg = s.cell_gradients(&u);
+        let cv = s.cell_values(&u);
+        let mut mat = DMatrix::zeros(0, 0);
+        let mut dofs = Vec::new();
+        for k in 0..m.n_cells() {
+            assert!((cg[k][0] - grad[0]).abs() < 1e-13 && (cg[k][1] - grad[1]).abs() < 1e-13);
+            assert!((cv[k] - affine(m.centroid(k))).abs() < 1e-13);
+            // the energy is |K| A∇ū·∇ū
+            s.local_dofs(k, &mut dofs);
+            s.local_matrix(k, &A, &mut mat);
+            let ul = DVector::from_iterator(3, dofs.iter().map(|&d| u[d]));
+            let energy = ul.dot(&(&mat * &ul));
+            let exact = m.measure(k)
+                * (grad[0] * (A[0][0] * grad[0] + A[0][1] * grad[1])
+                    + grad[1] * (A[1][0] * grad[0] + A[1][1] * grad[1]));
+            assert!((energy - exact).abs() < 1e-12 * exact);
+        }
+        // the Crouzeix–Raviart function of each triangle is ū, so are its vertex values
+        for (v, uv) in s.vertex_values(&u).iter().enumerate() {
+            assert!((uv - affine(m.vertex(v))).abs() < 1e-13, "vertex {v}");
+        }
+    }
+
+    #[test]
+    fn lumped_load_and_measures() {
+        let m = patch();
+        let s = Cr::new(&m).unwrap();
+        let mut b = DVector::zeros(0);
+        for k in 0..m.n_cells() {
+            s.local_load(k, &affine, &mut b);
+            let v = m.cell_vertices(k);
+            let xk = m.centroid(k);
+            for i in 0..3 {
+                // ∫_{D_{K,σ}} f for f affine: |D_{K,σ}| times the mean of f at its vertices
+                let (a, c) = (m.vertex(v[i]), m.vertex(v[(i + 1) % 3]));
+                let exact = m.measure(k) / 3.0 * (affine(a) + affine(c) + affine(xk)) / 3.0;
+                assert!((b[i] - exact).abs() < 1e-14, "{k}, {i}: {} vs {exact}", b[i]);
+            }
+            // in total, ∫_K f = |K| f(x_K)
+            assert!((b.sum() - m.measure(k) * affine(xk)).abs() < 1e-14);
+        }
+        // diamonds tile Ω; an interior edge gets a third of each neighbour, a boundary one of one
+        let od = s.obstacle_dofs();
+        assert_eq!(od.len(), m.n_edges());
+        let total: f64 = od.iter().map(|d| d.measure).sum();
+        let area: f64 = (0..m.n_cells()).map(|k| m.measure(k)).sum();
+        assert!((total - area).abs() < 1e-14);
+        for d in &od {
+            let [k, l] = m.edge_cells(d.dof);
+            let expect = if m.is_boundary_edge(d.dof) {
+                m.measure(k) / 3.0
+            } else {
+                (m.measure(k) + m.measure(l)) / 3.0
+            };
+            assert!((d.measure - expect).abs() < 1e-15);
+            assert_eq!(d.point, m.edge_midpoint(d.dof));
+            assert_eq!(s.dof_entity(d.dof), Entity::Edge(d.dof));
+        }
+        let mut tr = Vec::new();
+        let e = m.boundary_edges()[0];
+        s.edge_trace_dofs(e, &mut tr);
+        assert_eq!(
+            tr,
+            vec![PointDof {
+                dof: e,
+                point: m.edge_midpoint(e),
+                measure: m.edge_measure(e)
+            }]
+        );
+        assert_eq!((s.n_skeleton(), s.n_interior()), (m.n_edges(), 0));
+    }
+
+    #[test]
+    fn non_triangle_cells_are_rejected() {
+        let m = PolyMesh::from_cells(
+            vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [2.0, 0.5]],
+            vec![vec![1, 4, 2], vec![0, 1, 2, 3]],
+        )
+        .unwrap();
+        match Cr::new(&m) {
+            Err(crate::Error::InvalidData(msg)) => {
+                assert!(msg.contains("cell 1 has 4 vertices"), "{msg}")
+            }
+            other => panic!("expected InvalidData, got {:?}", other.map(|s| s.name())),
+        }
+    }
+}

@@ -1,0 +1,309 @@
+//! The monotony algorithm of Herbin (SIAM J. Numer. Anal. 40, 2003), i.e. the primal–dual
+//! active set method of Hintermüller–Ito–Kunisch, for the discrete variational inequality
+//!
+//! find u with s(u_j − g_j) ≤ 0 on the constrained unknowns j, minimising ½uᵀMu − bᵀu,
+//!
+//! where s = +1 for an upper barrier (u ≤ g) and s = −1 for a lower one (u ≥ ψ). The
+//! multiplier is the residual of the balance equation: λ_j = s (b − Mu)_j, and the KKT
+//! conditions are λ_j ≥ 0, s(u_j − g_j) ≤ 0, λ_j (u_j − g_j) = 0, (b − Mu)_i = 0 elsewhere.
+//! (For HMM obstacle problems λ_K = s(|K| f_K − Σ_σ |σ| F_{K,σ}); for Signorini faces
+//! λ_σ = −s|σ|(F_{K,σ}) — the paper's Section 4 balances.)
+//!
+//! Iteration (NITER counts the linear solves, as in the paper's Tables 1–3):
+//! 1. A₀ = ∅: solve the unconstrained problem (solve 1).
+//! 2. Given the iterate (u^k, λ^k) of the active set A_k (u^k_j = g_j exactly on A_k,
+//!    λ^k_j = 0 off A_k), set A_{k+1} = { j : λ^k_j / m_j + c·s(u^k_j − g_j) > 0 }, with m_j the
+//!    measure of unknown j (|K|, |σ|, or a vertex's lumped measure) and c > 0 (default 1).
+//!    Because complementarity holds exactly at every iterate, this is Herbin's rule — a
+//!    violated unknown enters, an active unknown with a positive multiplier stays — whatever c;
+//!    c matters only for a warm start given as an initial active set. Round-off is filtered by
+//!    relative thresholds (violations below 10⁻¹³·‖u‖, multipliers below 10⁻¹³ times the
+//!    residual scale are treated as zero).
+//! 3. If A_{k+1} = A_k, stop: u^k is the solution (NITER = k + 1 solves). If A_{k+1} equals an
+//!    older active set, the iteration cycles: a typed error with the history. Otherwise solve
+//!    with A_{k+1} fixed and repeat.
+//!
+//! Every returned solution carries a [`super::Certificate`]; above tolerance the solve is an
+//! error. Cycling and the iteration cap end the iteration with [`Outcome::Stalled`]; the solve
+//! driver decides whether to fall back to projected Gauss–Seidel.
+
+use super::certificate::{Evaluation, evaluate};
+use super::{Constraints, IterationLog, Method, QuadraticEnergy, VariationalSolution};
+use crate::error::SolverError;
+
+/// Options of the active-set solver.
+#[derive(Debug, Clone)]
+pub struct ActiveSetOptions {
+    /// The PDAS parameter c (> 0), multiplying the violation; multipliers are divided by the
+    /// measure of their unknown.
+    pub c: f64,
+    /// Maximum number of linear solves.
+    pub max_solves: usize,
+    /// Tolerance of the certificate (each scaled quantity must be below it).
+    pub tol: f64,
+    /// Initial active set, indexed like [`Constraints::dofs`] (`None`: A₀ = ∅, the paper's
+    /// algorithm).
+    pub initial_active: Option<Vec<bool>>,
+    /// Keep every iterate u^k in [`VariationalSolution::iterates`] (for studies of the
+    /// iteration; costs one vector per solve).
+    pub keep_iterates: bool,
+    /// Called with each line of the iteration log as soon as it is known (progress of long
+    /// runs; `gradvi solve` prints it to stderr).
+    pub progress: Option<fn(&IterationLog)>,
+}
+
+impl Default for ActiveSetOptions {
+    fn default() -> Self {
+        ActiveSetOptions {
+            c: 1.0,
+            max_solves: 500,
+            tol: 1e-10,
+            initial_active: None,
+            keep_iterates: false,
+            progress: None,
+        }
+    }
+}
+
+/// An iteration that stopped without converging: why, and the log up to there.
+#[derive(Debug, Clone)]
+pub struct Stalled {
+    /// Cycling or the iteration cap.
+    pub error: SolverError,
+    /// The solves made.
+    pub log: Vec<IterationLog>,
+}
+
+/// The result of [`run`].
+#[derive(Debug, Clone)]
+pub enum Outcome {
+    /// Converged, certified.
+    Solved(VariationalSolution),
+    /// Cycled or reached the iteration cap (the caller may fall back to another method).
+    Stalled(Stalled),
+}
+
+/// Solves the discrete variational inequality by the active-set method (see module docs);
+/// cycling and the iteration cap are errors.
+pub fn solve(
+    q: &dyn QuadraticEnergy,
+    cons: &Constraints,
+    opts: &ActiveSetOptions,
+) -> crate::Result<VariationalSolution> {
+    match run(q, cons, opts)? {
+        Outcome::Solved(s) => Ok(s),
+        Outcome::Stalled(s) => Err(s.error.into()),
+    }
+}
+
+/// The initial active set of `opts`, checked against the constraints.
+fn initial_active(cons: &Constraints, opts: &ActiveSetOptions) -> crate::Result<Vec<bool>> {
+    if !(opts.c > 0.0 && opts.c.is_finite()) {
+        return Err(crate::Error::InvalidData(format!(
+            "the active-set parameter c must be positive and finite, got {}",
+            opts.c
+        )));
+    }
+    let m = cons.dofs.len();
+    match &opts.initial_active {
+        Some(a) if a.len() == m => Ok(a.clone()),
+        Some(a) => Err(crate::Error::InvalidData(format!(
+            "initial active set has {} entries for {m} constrained unknowns",
+            a.len()
+        ))),
+        None => Ok(vec![false; m]),
+    }
+}
+
+/// The next active set (Herbin's rule, step 2 of the module docs), with round-off thresholds
+/// taken from the scales of the evaluation of the current iterate.
+fn next_active(
+    cons: &Constraints,
+    u: &[f64],
+    active: &[bool],
+    ev: &Evaluation,
+    c: f64,
+) -> Vec<bool> {
+    let s = cons.side.sign();
+    (0..cons.dofs.len())
+        .map(|j| {
+            let pd = &cons.dofs[j];
+            let l = if active[j] { ev.multiplier[j] } else { 0.0 };
+            let gap = if active[j] {
+                0.0
+            } else {
+                s * (u[pd.dof] - cons.barrier[j])
+            };
+            let score = l / pd.measure + c * gap;
+            // round-off thresholds, one per term: an active unknown stays if its multiplier
+            // exceeds round-off of the residual, an inactive one enters if its violation exceeds
+            // round-off of u (a single threshold mixing both would grow like 1/m_j on fine
+            // meshes and let violations through)
+            let thr = if active[j] {
+                1e-13 * ev.scale_r / pd.measure
+            } else {
+                c * 1e-13 * ev.scale_u
+            };
+            score > thr
+        })
+        .collect()
+}
+
+/// The sizes of the active sets met so far.
+fn sizes(history: &[Vec<bool>]) -> Vec<usize> {
+    history
+        .iter()
+        .map(|h| h.iter().filter(|&&a| a).count())
+        .collect()
+}
+
+/// Runs the active-set method (see module docs) and says whether it converged.
+pub fn run(
+    q: &dyn QuadraticEnergy,
+    cons: &Constraints,
+    opts: &ActiveSetOptions,
+) -> crate::Result<Outcome> {
+    let mut active = initial_active(cons, opts)?;
+    let m = active.len();
+    let mut history: Vec<Vec<bool>> = vec![active.clone()];
+    let mut iterates = Vec::new();
+    let mut log: Vec<IterationLog> = Vec::new();
+    let mut entered = active.iter().filter(|&&a| a).count();
+    let mut left = 0;
+    loop {
+        let fixed = cons.fixed(q.n_unknowns(), &active);
+        let (u, timings) = q.minimise_with_fixed(&fixed)?;
+        if opts.keep_iterates {
+            iterates.push(u.clone());
+        }
+        let ev = evaluate(q, Some(cons), &u, &active);
+        log.push(IterationLog {
+            solve: log.len() + 1,
+            active: active.iter().filter(|&&a| a).count(),
+            entered,
+            left,
+            violation: ev.certificate.max_violation,
+            residual: ev.certificate.balance_residual,
+            timings,
+        });
+        if let (Some(report), Some(line)) = (opts.progress, log.last()) {
+            report(line);
+        }
+        let next = next_active(cons, &u, &active, &ev, opts.c);
+        if next == active {
+            ev.certificate.check(opts.tol)?;
+            return Ok(Outcome::Solved(VariationalSolution {
+                u,
+                multiplier: ev.multiplier,
+                active,
+                niter: log.len(),
+                log,
+                certificate: ev.certificate,
+                method: Method::ActiveSet,
+                iterates,
+            }));
+        }
+        let error = if let Some(rep) = history.iter().position(|h| *h == next) {
+            Some(SolverError::Cycling {
+                iteration: log.len(),
+                repeats: rep,
+                history: sizes(&history),
+            })
+        } else if log.len() >= opts.max_solves {
+            Some(SolverError::MaxIterations {
+                iterations: log.len(),
+                history: sizes(&history),
+            })
+        } else {
+            None
+        };
+        if let Some(error) = error {
+            return Ok(Outcome::Stalled(Stalled { error, log }));
+        }
+        entered = (0..m).filter(|&j| next[j] && !active[j]).count();
+        left = (0..m).filter(|&j| !next[j] && active[j]).count();
+        history.push(next.clone());
+        active = next;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::problem::Side;
+    use crate::vi::dense::{Dense, all_constrained, cycling_system, spd};
+    use crate::vi::exhaustive;
+
+    /// Random dense SPD problems with upper and lower barriers: the active-set solution equals
+    /// exhaustive enumeration and its certificate passes, or the iteration stalls (it is not
+    /// guaranteed to converge without the M-matrix property) and says so.
+    #[test]
+    fn dense_problems_against_enumeration() {
+        let mut solved = 0;
+        for seed in 0..40u64 {
+            let n = 6;
+            let m = spd(n, seed + 1);
+            let b: Vec<f64> = (0..n).map(|i| ((i as f64 + seed as f64) * 0.7).sin()).collect();
+            let side = if seed % 2 == 0 { Side::Upper } else { Side::Lower };
+            let g = (0..n).map(|i| 0.1 * (i as f64 - 2.5)).collect();
+            let sys = Dense { m, b, dir: vec![None; n] };
+            let cons = all_constrained(n, g, side);
+            let (reference, ref_active) = exhaustive::solve(&sys, &cons).unwrap();
+            match run(&sys, &cons, &ActiveSetOptions::default()).unwrap() {
+                Outcome::Solved(sol) => {
+                    sol.certificate.check(1e-10).unwrap();
+                    assert_eq!(sol.active, ref_active, "seed {seed}");
+                    for (a, r) in sol.u.iter().zip(&reference) {
+                        assert!((a - r).abs() < 1e-10, "seed {seed}: {a} vs {r}");
+                    }
+                    solved += 1;
+                }
+                Outcome::Stalled(s) => assert!(!s.log.is_empty()),
+            }
+        }
+        assert!(solved >= 30, "only {solved} of 40 converged");
+    }
+
+    /// An M-matrix (1D Laplacian): the monotony algorithm converges, from A₀ = ∅, to the
+    /// enumerated solution.
+    #[test]
+    fn m_matrix_converges_to_the_enumerated_solution() {
+        let n = 8;
+        let m = nalgebra::DMatrix::from_fn(n, n, |i, j| match i.abs_diff(j) {
+            0 => 2.0,
+            1 => -1.0,
+            _ => 0.0,
+        });
+        let sys = Dense { m, b: vec![1.0; n], dir: vec![None; n] };
+        let cons = all_constrained(n, vec![3.0; n], Side::Upper);
+        let sol = solve(&sys, &cons, &ActiveSetOptions::default()).unwrap();
+        let (reference, active) = exhaustive::solve(&sys, &cons).unwrap();
+        assert_eq!(sol.active, active);
+        assert!(sol.active.iter().any(|&a| a) && !sol.active.iter().all(|&a| a));
+        for (a, r) in sol.u.iter().zip(&reference) {
+            assert!((a - r).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn cycling_is_reported_with_its_log() {
+        let (sys, cons) = cycling_system();
+        let Outcome::Stalled(s) = run(&sys, &cons, &ActiveSetOptions::default()).unwrap() else {
+            panic!("the crafted system should cycle");
+        };
+        assert!(matches!(s.error, SolverError::Cycling { .. }), "{}", s.error);
+        assert_eq!(s.log.len(), s.log.last().unwrap().solve);
+        assert!(solve(&sys, &cons, &ActiveSetOptions::default()).is_err());
+    }
+
+    #[test]
+    fn bad_options_are_typed_errors() {
+        let (sys, cons) = cycling_system();
+        for c in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let o = ActiveSetOptions { c, ..Default::default() };
+            assert!(matches!(solve(&sys, &cons, &o), Err(crate::Error::InvalidData(_))));
+        }
+        let o = ActiveSetOptions { initial_active: Some(vec![true]), ..Default::default() };
+        assert!(matches!(solve(&sys, &cons, &o), Err(crate::Error::InvalidData(_))));
+    }
+}

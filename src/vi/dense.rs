@@ -1,0 +1,111 @@
+//! A dense quadratic energy, to drive the algorithms of [`super`] with crafted matrices in the
+//! unit tests.
+
+use super::{Constraints, QuadraticEnergy, SolveTimings};
+use crate::problem::Side;
+use crate::scheme::PointDof;
+use nalgebra::{DMatrix, DVector};
+
+/// ½uᵀMu − bᵀu with dense M and Dirichlet unknowns.
+pub struct Dense {
+    pub m: DMatrix<f64>,
+    pub b: Vec<f64>,
+    pub dir: Vec<Option<f64>>,
+}
+
+impl QuadraticEnergy for Dense {
+    fn n_unknowns(&self) -> usize {
+        self.b.len()
+    }
+    fn dirichlet(&self) -> &[Option<f64>] {
+        &self.dir
+    }
+    fn load(&self) -> &[f64] {
+        &self.b
+    }
+    fn minimise_with_fixed(
+        &self,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        let n = self.b.len();
+        let fx = |i: usize| self.dir[i].or(fixed[i]);
+        let free: Vec<usize> = (0..n).filter(|&i| fx(i).is_none()).collect();
+        let mut u: Vec<f64> = (0..n).map(|i| fx(i).unwrap_or(0.0)).collect();
+        let a = DMatrix::from_fn(free.len(), free.len(), |i, j| self.m[(free[i], free[j])]);
+        let r = DVector::from_fn(free.len(), |i, _| {
+            let fi = free[i];
+            self.b[fi]
+                - (0..n)
+                    .filter(|&j| fx(j).is_some())
+                    .map(|j| self.m[(fi, j)] * u[j])
+                    .sum::<f64>()
+        });
+        let x = a
+            .cholesky()
+            .ok_or_else(|| crate::Error::Linear("dense test matrix is not SPD".into()))?
+            .solve(&r);
+        for (i, &fi) in free.iter().enumerate() {
+            u[fi] = x[i];
+        }
+        Ok((u, SolveTimings::default()))
+    }
+    fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let n = self.b.len();
+        let mut r = self.b.clone();
+        let mut s: Vec<f64> = self.b.iter().map(|x| x.abs()).collect();
+        for i in 0..n {
+            for (j, uj) in u.iter().enumerate() {
+                r[i] -= self.m[(i, j)] * uj;
+                s[i] += (self.m[(i, j)] * uj).abs();
+            }
+        }
+        (r, s)
+    }
+    fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
+        let n = self.b.len();
+        (0..n)
+            .flat_map(|i| (0..n).map(move |j| (i, j)))
+            .map(|(i, j)| (i, j, self.m[(i, j)]))
+            .collect()
+    }
+}
+
+/// Constraints s(u_j − g_j) ≤ 0 on every unknown, with unit measures.
+pub fn all_constrained(n: usize, barrier: Vec<f64>, side: Side) -> Constraints {
+    Constraints {
+        dofs: (0..n)
+            .map(|i| PointDof {
+                dof: i,
+                point: [0.0, 0.0],
+                measure: 1.0,
+            })
+            .collect(),
+        barrier,
+        side,
+    }
+}
+
+/// A deterministic SPD matrix (full, diagonally shifted) of size n.
+pub fn spd(n: usize, seed: u64) -> DMatrix<f64> {
+    let mut s = seed;
+    let mut rnd = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+    };
+    let b = DMatrix::from_fn(n, n, |_, _| rnd());
+    &b * b.transpose() + DMatrix::identity(n, n) * 0.5
+}
+
+/// The 3×3 system on which the plain active-set method cycles (found by a random search: SPD,
+/// not an M-matrix), with upper barriers 0 on all three unknowns.
+pub fn cycling_system() -> (Dense, Constraints) {
+    let m = DMatrix::from_row_slice(3, 3, &[2.25, -2.5, 4.0, -2.5, 4.75, -5.5, 4.0, -5.5, 8.0]);
+    let sys = Dense {
+        m,
+        b: vec![0.0, 0.75, -0.75],
+        dir: vec![None; 3],
+    };
+    (sys, all_constrained(3, vec![0.0; 3], Side::Upper))
+}

@@ -1,0 +1,167 @@
+//! Algorithms for the discrete variational inequality, seen as an algebraic problem: minimise
+//! the quadratic energy ½uᵀMu − bᵀu over {u : u_i = u_D,i on Dirichlet unknowns,
+//! s(u_j − g_j) ≤ 0 on the constrained unknowns j}.
+//!
+//! The algorithms see only the trait [`QuadraticEnergy`] (what they need of M and b) and their
+//! own types: [`Constraints`], [`Certificate`], [`IterationLog`], [`SolveTimings`],
+//! [`VariationalSolution`]. They know nothing of meshes, schemes or assembly; the assembled
+//! system ([`crate::assembly::DiscreteSystem`]) implements the trait, and so do small dense
+//! systems in the tests.
+//!
+//! - [`active_set`]: the monotony (primal–dual active set) algorithm, with cycle detection;
+//! - [`pgs`]: projected Gauss–Seidel, slow and robust (a fallback and an independent reference);
+//! - [`exhaustive`]: enumeration of the active sets, the reference for small problems;
+//! - [`certificate`]: the evidence that a vector solves the inequality.
+//!
+//! Which algorithm runs, from which start, and what happens when one fails, is decided by the
+//! solve driver ([`crate::solver`]), not here.
+
+pub mod active_set;
+pub mod certificate;
+pub mod exhaustive;
+pub mod pgs;
+#[cfg(test)]
+pub(crate) mod dense;
+
+pub use active_set::ActiveSetOptions;
+pub use certificate::{Certificate, Evaluation};
+
+use crate::problem::Side;
+use crate::scheme::PointDof;
+
+/// Timings of one constrained minimisation (a linear solve), in seconds.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+pub struct SolveTimings {
+    /// Assembly of the reduced system (condensation and scatter).
+    pub assemble: f64,
+    /// Numeric factorisation.
+    pub factor: f64,
+    /// Triangular solves and recovery of eliminated unknowns.
+    pub solve: f64,
+}
+
+/// A strictly convex quadratic energy E(u) = ½uᵀMu − bᵀu (M symmetric positive definite on
+/// the non-Dirichlet unknowns) with Dirichlet unknowns, as the algorithms of this module need
+/// it.
+pub trait QuadraticEnergy {
+    /// Number of unknowns.
+    fn n_unknowns(&self) -> usize;
+    /// Dirichlet unknowns and their values (`None`: free).
+    fn dirichlet(&self) -> &[Option<f64>];
+    /// The load vector b.
+    fn load(&self) -> &[f64];
+    /// The minimiser of E with the unknowns `fixed[d] = Some(v)` (and the Dirichlet ones)
+    /// fixed, i.e. the solution of the linear system with those rows replaced.
+    fn minimise_with_fixed(&self, fixed: &[Option<f64>])
+    -> crate::Result<(Vec<f64>, SolveTimings)>;
+    /// r = b − Mu and, for each entry, the scale |b_i| + Σ_j |M_ij u_j| against which it is
+    /// small.
+    fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>);
+    /// The entries (i, j, M_ij) of M, possibly with repeated (i, j) to be summed.
+    fn matrix_triplets(&self) -> Vec<(usize, usize, f64)>;
+}
+
+/// The barrier, on the unknowns it acts on.
+#[derive(Debug, Clone)]
+pub struct Constraints {
+    /// Constrained unknowns (never Dirichlet unknowns), with the point where the barrier was
+    /// evaluated and the measure that scales the multiplier.
+    pub dofs: Vec<PointDof>,
+    /// Barrier value on each constrained unknown (g_K, a_σ, or nodal values).
+    pub barrier: Vec<f64>,
+    /// Upper (u ≤ g) or lower (u ≥ ψ).
+    pub side: Side,
+}
+
+impl Constraints {
+    /// The fixed values of a solve with the active set `active`: u_j = g_j on active j.
+    pub fn fixed(&self, n: usize, active: &[bool]) -> Vec<Option<f64>> {
+        let mut fixed = vec![None; n];
+        for (j, pd) in self.dofs.iter().enumerate() {
+            if active[j] {
+                fixed[pd.dof] = Some(self.barrier[j]);
+            }
+        }
+        fixed
+    }
+}
+
+/// One line of the iteration log.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct IterationLog {
+    /// Linear solve number (1-based).
+    pub solve: usize,
+    /// Size of the active set used for this solve.
+    pub active: usize,
+    /// Unknowns that entered the active set for this solve.
+    pub entered: usize,
+    /// Unknowns that left it.
+    pub left: usize,
+    /// Largest scaled constraint violation of the iterate.
+    pub violation: f64,
+    /// Largest scaled balance residual on inactive unknowns of the iterate.
+    pub residual: f64,
+    /// Timings of the solve.
+    pub timings: SolveTimings,
+}
+
+/// How a solution was obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Method {
+    /// A single linear solve (no barrier).
+    Linear,
+    /// The active-set (monotony) algorithm.
+    ActiveSet,
+    /// Projected Gauss–Seidel (fallback).
+    ProjectedGaussSeidel,
+}
+
+/// The outcome of a solve.
+#[derive(Debug, Clone)]
+pub struct VariationalSolution {
+    /// All unknowns (skeleton first, then interior).
+    pub u: Vec<f64>,
+    /// Multiplier λ_j for each constrained unknown (indexed like [`Constraints::dofs`]).
+    pub multiplier: Vec<f64>,
+    /// Active flag for each constrained unknown.
+    pub active: Vec<bool>,
+    /// Number of linear solves (NITER), or of sweeps for projected Gauss–Seidel.
+    pub niter: usize,
+    /// Iteration log.
+    pub log: Vec<IterationLog>,
+    /// The certificate of the returned u.
+    pub certificate: Certificate,
+    /// How u was obtained.
+    pub method: Method,
+    /// The iterates u^1, u^2, … if [`ActiveSetOptions::keep_iterates`] was set.
+    pub iterates: Vec<Vec<f64>>,
+}
+
+/// The solution of the problem without barrier: one solve, certified.
+pub fn solve_unconstrained(
+    q: &dyn QuadraticEnergy,
+    tol: f64,
+) -> crate::Result<VariationalSolution> {
+    let fixed = vec![None; q.n_unknowns()];
+    let (u, timings) = q.minimise_with_fixed(&fixed)?;
+    let ev = certificate::evaluate(q, None, &u, &[]);
+    ev.certificate.check(tol)?;
+    Ok(VariationalSolution {
+        log: vec![IterationLog {
+            solve: 1,
+            active: 0,
+            entered: 0,
+            left: 0,
+            violation: 0.0,
+            residual: ev.certificate.balance_residual,
+            timings,
+        }],
+        u,
+        multiplier: vec![],
+        active: vec![],
+        niter: 1,
+        certificate: ev.certificate,
+        method: Method::Linear,
+        iterates: vec![],
+    })
+}
