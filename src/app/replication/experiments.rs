@@ -10,7 +10,9 @@ use gradvi::post::contact::{contact_measure, switch_point};
 use gradvi::post::relative_errors;
 use gradvi::problem::{Problem, paper_test1, paper_test2, paper_test2_tie, paper_test3};
 use gradvi::scheme::{SchemeKind, build};
-use gradvi::solver::{Solution, SolveOptions, solve_problem};
+use gradvi::assembly::SymbolicSystem;
+use gradvi::solver::{Solution, SolveOptions, solve_problem, solve_with_symbolic};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// The constants C of Test 3.
@@ -151,26 +153,57 @@ fn log_rows(case: &str, kind: SchemeKind, mesh: &str, sol: &Solution) -> Vec<Ite
         .collect()
 }
 
+/// What the experiments accumulate besides their own tables.
+struct Logs<'a> {
+    meshes: Vec<MeshRow>,
+    iterations: Vec<IterationRow>,
+    timings: Vec<TimingRow>,
+    progress: &'a mut dyn FnMut(&str),
+}
+
+impl Logs<'_> {
+    /// Records the time of a stage begun at `t`.
+    fn stage(&mut self, name: &str, t: Instant) {
+        self.timings.push(TimingRow {
+            stage: name.into(),
+            seconds: t.elapsed().as_secs_f64(),
+        });
+    }
+}
+
+/// The schemes of Tables 1 and 3 (triangle meshes), in registration order.
+const TRIANGLE_SCHEMES: &[SchemeKind] = SchemeKind::ALL;
+
 /// Runs every experiment and writes `results/{meshes,test1,test2,test3,iterations}.csv`.
 /// `progress` receives one line per solve.
 pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result<Vec<TimingRow>> {
     create_dir(&cfg.results())?;
-    let mut meshes = Vec::new();
-    let mut iterations = Vec::new();
-    let mut timings = Vec::new();
-    let schemes = [SchemeKind::Hmm, SchemeKind::P1];
+    let mut logs = Logs {
+        meshes: Vec::new(),
+        iterations: Vec::new(),
+        timings: Vec::new(),
+        progress,
+    };
+    test1(cfg, &mut logs)?;
+    test2(cfg, &mut logs)?;
+    test3(cfg, &mut logs)?;
+    write_csv(&cfg.results().join("meshes.csv"), &logs.meshes)?;
+    write_csv(&cfg.results().join("iterations.csv"), &logs.iterations)?;
+    Ok(logs.timings)
+}
 
-    // ---- Test 1
+/// Test 1 (Signorini): NITER and the switch point on Γ3 -> `test1.csv`.
+fn test1(cfg: &Config, logs: &mut Logs) -> gradvi::Result<()> {
     let t = Instant::now();
     let mut rows1 = Vec::new();
     for m in gmsh_family(cfg, "test1")? {
-        meshes.push(mesh_row(&m));
-        for kind in schemes {
+        logs.meshes.push(mesh_row(&m));
+        for &kind in TRIANGLE_SCHEMES {
             let p = paper_test1();
             let row = with_solution(&m.mesh, kind, &p, |sol| {
                 let cons = sol.constraints.as_ref().expect("Test 1 has a barrier");
                 let sw = switch_point(cons, &sol.result.active, 0);
-                iterations.extend(log_rows("test1", kind, &m.name, sol));
+                logs.iterations.extend(log_rows("test1", kind, &m.name, sol));
                 Ok(Test1Row {
                     scheme: kind.to_string(),
                     mesh: m.name.clone(),
@@ -185,7 +218,7 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result<Vec<T
                     time_s: sol.timings.total,
                 })
             })?;
-            progress(&format!(
+            (logs.progress)(&format!(
                 "test1 {:<4} {:<10} NITER {:>3}  switch x = {:.4}",
                 row.scheme, row.mesh, row.niter, row.switch_x
             ));
@@ -193,31 +226,26 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result<Vec<T
         }
     }
     write_csv(&cfg.results().join("test1.csv"), &rows1)?;
-    timings.push(TimingRow {
-        stage: "test1".into(),
-        seconds: t.elapsed().as_secs_f64(),
-    });
+    logs.stage("test1", t);
+    Ok(())
+}
 
-    // ---- Test 2
+/// Test 2 (heterogeneous Signorini, exact solution): errors, NITER, switch -> `test2.csv`.
+fn test2(cfg: &Config, logs: &mut Logs) -> gradvi::Result<()> {
     let t = Instant::now();
     let mut rows2 = Vec::new();
-    let mut cases: Vec<(String, NamedMesh, SchemeKind)> = Vec::new();
+    let mut cases: Vec<(String, NamedMesh, &[SchemeKind])> = Vec::new();
     for (fam, m) in test2_polygonal(cfg)? {
-        cases.push((fam, m, SchemeKind::Hmm));
+        cases.push((fam, m, &[SchemeKind::Hmm]));
     }
     for m in gmsh_family(cfg, "test2tri")? {
-        cases.push(("triangles".into(), m, SchemeKind::Hmm));
+        cases.push(("triangles".into(), m, &[SchemeKind::Hmm, SchemeKind::P1]));
     }
     let p = paper_test2();
     let p_low = paper_test2_tie(true);
     let exact = p.exact.as_ref().expect("Test 2 has an exact solution");
-    for (fam, m, _) in &cases {
-        meshes.push(mesh_row(m));
-        let kinds: &[SchemeKind] = if fam == "triangles" {
-            &schemes
-        } else {
-            &schemes[..1]
-        };
+    for (fam, m, kinds) in &cases {
+        logs.meshes.push(mesh_row(m));
         // the interface convention matters where some x_K lies on y = 1/2 (hexagonal meshes):
         // run the other convention too, as family "<family>-interface-lower"
         let on_interface = (0..m.mesh.n_cells())
@@ -227,13 +255,13 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result<Vec<T
             variants.push((format!("{fam}-interface-lower"), &p_low));
         }
         for (fam, p) in variants {
-            for &kind in kinds {
+            for &kind in kinds.iter() {
                 let row = with_solution(&m.mesh, kind, p, |sol| {
                     let cons = sol.constraints.as_ref().expect("Test 2 has a barrier");
                     let sw = switch_point(cons, &sol.result.active, 1);
                     let scheme = sol.system.scheme();
                     let e = relative_errors(scheme, sol.u(), &exact.u, &exact.grad);
-                    iterations.extend(log_rows("test2", kind, &m.name, sol));
+                    logs.iterations.extend(log_rows("test2", kind, &m.name, sol));
                     Ok(Test2Row {
                         scheme: kind.to_string(),
                         family: fam.clone(),
@@ -250,7 +278,7 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result<Vec<T
                         time_s: sol.timings.total,
                     })
                 })?;
-                progress(&format!(
+                (logs.progress)(&format!(
                     "test2 {:<4} {:<14} {:<28} NITER {:>3}  e_u = {:.4}  e_grad = {:.4}",
                     row.scheme, row.mesh, row.family, row.niter, row.err_u, row.err_grad
                 ));
@@ -259,36 +287,39 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result<Vec<T
         }
     }
     write_csv(&cfg.results().join("test2.csv"), &rows2)?;
-    timings.push(TimingRow {
-        stage: "test2".into(),
-        seconds: t.elapsed().as_secs_f64(),
-    });
+    logs.stage("test2", t);
+    Ok(())
+}
 
-    // ---- Test 3
+/// Test 3 (obstacle) for the four values of C -> `test3.csv`. The symbolic system (pattern,
+/// symbolic factorisation, scatter maps) of each scheme on each mesh is built once and shared
+/// by the four problems.
+fn test3(cfg: &Config, logs: &mut Logs) -> gradvi::Result<()> {
     let t = Instant::now();
     let mut rows3 = Vec::new();
     for m in gmsh_family(cfg, "test3")? {
-        meshes.push(mesh_row(&m));
-        for kind in schemes {
+        logs.meshes.push(mesh_row(&m));
+        for &kind in TRIANGLE_SCHEMES {
+            let scheme = build(kind, &m.mesh)?;
+            let symbolic = Arc::new(SymbolicSystem::new(scheme.as_ref(), Default::default())?);
             for c in TEST3_C {
                 let p = paper_test3(c);
-                let row = with_solution(&m.mesh, kind, &p, |sol| {
-                    let cons = sol.constraints.as_ref().expect("Test 3 has a barrier");
-                    iterations.extend(log_rows(&p.name, kind, &m.name, sol));
-                    Ok(Test3Row {
-                        scheme: kind.to_string(),
-                        mesh: m.name.clone(),
-                        h: m.mesh.h(),
-                        n_cells: m.mesh.n_cells(),
-                        c,
-                        niter: sol.niter(),
-                        n_active: sol.result.active.iter().filter(|&&a| a).count(),
-                        contact_area: contact_measure(cons, &sol.result.active),
-                        certificate: worst(sol),
-                        time_s: sol.timings.total,
-                    })
-                })?;
-                progress(&format!(
+                let sol = solve_with_symbolic(symbolic.clone(), &p, &SolveOptions::default())?;
+                let cons = sol.constraints.as_ref().expect("Test 3 has a barrier");
+                logs.iterations.extend(log_rows(&p.name, kind, &m.name, &sol));
+                let row = Test3Row {
+                    scheme: kind.to_string(),
+                    mesh: m.name.clone(),
+                    h: m.mesh.h(),
+                    n_cells: m.mesh.n_cells(),
+                    c,
+                    niter: sol.niter(),
+                    n_active: sol.result.active.iter().filter(|&&a| a).count(),
+                    contact_area: contact_measure(cons, &sol.result.active),
+                    certificate: worst(&sol),
+                    time_s: sol.timings.total,
+                };
+                (logs.progress)(&format!(
                     "test3 {:<4} {:<8} C = {:>4}  NITER {:>3}  contact area {:.4}",
                     row.scheme, row.mesh, c, row.niter, row.contact_area
                 ));
@@ -297,11 +328,6 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result<Vec<T
         }
     }
     write_csv(&cfg.results().join("test3.csv"), &rows3)?;
-    timings.push(TimingRow {
-        stage: "test3".into(),
-        seconds: t.elapsed().as_secs_f64(),
-    });
-    write_csv(&cfg.results().join("meshes.csv"), &meshes)?;
-    write_csv(&cfg.results().join("iterations.csv"), &iterations)?;
-    Ok(timings)
+    logs.stage("test3", t);
+    Ok(())
 }
