@@ -41,6 +41,10 @@ pub enum Error {
     /// A linear solve failed (e.g. the matrix is not numerically positive definite).
     #[error("linear solver: {0}")]
     Linear(String),
+    /// The discrete problem has no unique solution (the energy is not bounded below on the
+    /// convex set, or is flat along some direction), detected before solving.
+    #[error("ill-posed problem: {0}")]
+    IllPosed(String),
     /// The active-set iteration did not converge, cycled, or its certificate failed.
     #[error("active-set solver: {0}")]
     Solver(#[from] SolverError),
@@ -192,6 +196,82 @@ pub enum MeshError {
     /// The boundary is not a union of simple closed polygons (hanging nodes, pinched vertices).
     #[error("non-conforming mesh: {0}")]
     NonConforming(String),
+    /// A cell with more vertices than [`MAX_CELL_VERTICES`](crate::mesh::MAX_CELL_VERTICES).
+    #[error(
+        "cell {cell} has {n_vertices} vertices, more than the limit of {}",
+        crate::mesh::MAX_CELL_VERTICES
+    )]
+    CellTooLarge {
+        /// 0-based cell index.
+        cell: usize,
+        /// Its number of vertices.
+        n_vertices: usize,
+    },
+    /// A cell whose boundary crosses or touches itself (not a simple polygon).
+    #[error(
+        "cell {cell} is not a simple polygon: its sides ({}, {}) and ({}, {}) intersect",
+        sides[0][0], sides[0][1], sides[1][0], sides[1][1]
+    )]
+    SelfIntersectingCell {
+        /// 0-based cell index.
+        cell: usize,
+        /// The two sides that meet, as vertex pairs in the cell's order.
+        sides: [[usize; 2]; 2],
+    },
+    /// Two edges that meet away from a common vertex (crossing, touching or overlapping): the
+    /// cells overlap, or a vertex lies on an edge it is not an end of.
+    #[error(
+        "edges ({}, {}) of cell {} and ({}, {}) of cell {} intersect: the cells overlap",
+        edges[0][0], edges[0][1], cells[0], edges[1][0], edges[1][1], cells[1]
+    )]
+    CrossingEdges {
+        /// The two edges, as vertex pairs (smaller vertex first).
+        edges: [[usize; 2]; 2],
+        /// A cell of each edge.
+        cells: [usize; 2],
+    },
+    /// The cells cover some region more than once: their areas add up to more than the area
+    /// enclosed by the boundary loops (holes counted negatively).
+    #[error(
+        "cells overlap: their areas add up to {cells_area} but the boundary loops enclose {enclosed_area}{}",
+        overlap_detail(*loop_vertex, *cell)
+    )]
+    OverlappingCells {
+        /// Σ_K |K|.
+        cells_area: f64,
+        /// The area enclosed by the boundary loops, holes counted negatively.
+        enclosed_area: f64,
+        /// A vertex of a boundary loop that lies inside a cell, or of a hole that lies in none.
+        loop_vertex: Option<usize>,
+        /// The cell that contains that loop, if any.
+        cell: Option<usize>,
+    },
+    /// Building the mesh would need more memory than the budget
+    /// ([`memory_budget`](crate::mesh::budget::memory_budget)).
+    #[error(
+        "{what} would need about {}, more than the memory budget of {}",
+        crate::mesh::budget::human_bytes(*bytes),
+        crate::mesh::budget::human_bytes(*budget)
+    )]
+    TooLarge {
+        /// What was asked for.
+        what: String,
+        /// The estimated peak memory, in bytes.
+        bytes: u64,
+        /// The budget, in bytes.
+        budget: u64,
+    },
+}
+
+/// The end of the message of [`MeshError::OverlappingCells`].
+fn overlap_detail(loop_vertex: Option<usize>, cell: Option<usize>) -> String {
+    match (loop_vertex, cell) {
+        (Some(v), Some(k)) => format!(" (the boundary loop through vertex {v} lies inside cell {k})"),
+        (Some(v), None) => {
+            format!(" (the boundary loop through vertex {v} turns clockwise but no cell surrounds it)")
+        }
+        _ => String::new(),
+    }
 }
 
 /// Failure of the active-set ("monotony") algorithm.

@@ -35,41 +35,67 @@
 //! | R_{K,σ}(u) | u_σ − u_K − ∇_K u·(x_σ − x_K) | [`scheme::hmm`] |
 //! | B_K | α² diag(\|σ\| A_K n_{K,σ}·n_{K,σ} / d_{K,σ}) | [`scheme::Hmm::w_matrix`] |
 //! | F_{K,σ}(u) | the HMM fluxes (paper Section 4) | [`scheme::Hmm::fluxes`] |
-//! | g_K, a_σ | barriers, piecewise constant: g(x_K), a(x_σ) (paper Section 6) | [`solver::build_constraints`] |
-//! | λ | multiplier: residual of the balance equation, s(b − Mu) | [`solver::active_set`] |
-//! | NITER | number of linear solves of the monotony algorithm | [`solver::VariationalSolution::niter`] |
+//! | g_K, a_σ | barriers, piecewise constant: g(x_K), a(x_σ) (paper Section 6) | [`solver::constraints::build`] |
+//! | λ | multiplier: residual of the balance equation, s(b − Mu) | [`vi::active_set`], [`vi::certificate`] |
+//! | NITER | number of linear solves of the monotony algorithm | [`vi::VariationalSolution::niter`] |
 //!
 //! ## The pipeline: mesh → scheme → assemble → solve
 //! ```
 //! use gradvi::mesh::generate::cartesian;
 //! use gradvi::problem::paper_test3;
 //! use gradvi::scheme::Hmm;
-//! use gradvi::solver::{ActiveSetOptions, solve_problem};
+//! use gradvi::solver::{SolveOptions, solve_problem};
 //!
 //! let mesh = cartesian(16, 16)?;                       // flat, validated, immutable
 //! let scheme = Hmm::new(&mesh);                        // emits local matrices
 //! let problem = paper_test3(-20.0);                    // obstacle: u ≥ ψ, f = C
-//! let sol = solve_problem(&scheme, &problem, &ActiveSetOptions::default())?;
+//! let sol = solve_problem(&scheme, &problem, &SolveOptions::default())?;
 //! println!("NITER = {}, certificate = {:?}", sol.niter(), sol.result.certificate);
 //! assert!(sol.result.certificate.check(1e-10).is_ok());
 //! # Ok::<(), gradvi::Error>(())
 //! ```
 //!
-//! ## Modules
-//! - [`mesh`]: [`mesh::PolyMesh`] (flat arrays, cached geometry, validation), readers
-//!   ([`mesh::io`]: gmsh 4.1/2.2, FVCA5 typ1/typ2), writers (VTU, typ2), generators
-//!   ([`mesh::generate`]: Cartesian, hexagonal = FVCA5 `hexa1_k`, Kershaw = `mesh4_1_k`).
-//! - [`scheme`]: the [`scheme::GradientDiscretisation`] trait; [`scheme::Hmm`], [`scheme::P1`].
-//! - [`problem`]: data A, f, Γ1/Γ2/Γ3, barriers; the paper's Tests 1–3.
-//! - [`assembly`]: local matrices stored once, condensed-system pattern and symbolic Cholesky
-//!   built once, values refilled for each active set (static condensation of HMM cell unknowns).
-//! - [`solver`]: sparse Cholesky ([`solver::linear`]), the monotony algorithm with certificate
-//!   and cycle detection ([`solver::active_set`]), its nested warm start for fine meshes
-//!   ([`solver::warm_start`]), projected Gauss–Seidel ([`solver::pgs`]).
-//! - [`post`]: errors, orders, fitted slopes, contact-zone metrics.
-//! - The applications (command line, replication of the paper, cross-check with dolfinx,
-//!   benchmark, plots and reports) live in the `gradvi` binary (`src/main.rs`, `src/app/`), not in
-//!   this library: the library depends on no CLI, plotting, report or CSV crate.
+//! To solve several problems on the same scheme (the four values of C of Test 3), build the
+//! symbolic system once and share it:
+//! ```
+//! # use gradvi::{mesh::generate::cartesian, problem::paper_test3, scheme::Hmm};
+//! use gradvi::assembly::SymbolicSystem;
+//! use gradvi::solver::{SolveOptions, solve_with_symbolic};
+//! use std::sync::Arc;
+//! # let mesh = cartesian(16, 16)?;
+//! # let scheme = Hmm::new(&mesh);
+//! let symbolic = Arc::new(SymbolicSystem::new(&scheme, Default::default())?);
+//! for c in [-5.0, -10.0, -15.0, -20.0] {
+//!     let sol = solve_with_symbolic(symbolic.clone(), &paper_test3(c), &SolveOptions::default())?;
+//!     assert!(sol.result.certificate.check(1e-10).is_ok());
+//! }
+//! # Ok::<(), gradvi::Error>(())
+//! ```
+//!
+//! ## Layers
+//! Each layer uses only the layers above it in this list (no cycles):
+//! 1. [`mesh`]: [`mesh::PolyMesh`] (flat arrays, cached geometry, validation), readers
+//!    ([`mesh::io`]: gmsh 4.1/2.2, FVCA5 typ1/typ2), writers (VTU, typ2), generators
+//!    ([`mesh::generate`]: Cartesian, hexagonal = FVCA5 `hexa1_k`, Kershaw = `mesh4_1_k`).
+//! 2. [`scheme`]: the [`scheme::GradientDiscretisation`] trait (local matrix, local load, trace
+//!    and barrier unknowns, the mesh [`scheme::Entity`] of each unknown); one file per scheme:
+//!    [`scheme::Hmm`], [`scheme::P1`], [`scheme::Cr`]; registered once in [`scheme::SchemeKind`].
+//! 3. [`problem`]: data A, f, Γ1/Γ2/Γ3, barriers; the paper's Tests 1–3.
+//! 4. [`linalg`] (sparse Cholesky with symbolic reuse, orderings) and [`vi`] (the algebraic
+//!    variational-inequality algorithms over the [`vi::QuadraticEnergy`] trait: the monotony
+//!    active-set method, projected Gauss–Seidel, exhaustive enumeration, the certificate).
+//! 5. [`assembly`]: [`assembly::SymbolicSystem`] (dof map, condensed pattern, symbolic
+//!    factorisation, scatter maps; built once per scheme) and [`assembly::DiscreteSystem`]
+//!    (values per problem, refilled per active set; static condensation), which implements
+//!    [`vi::QuadraticEnergy`].
+//! 6. [`solver`]: the driver: builds the constraints, decides the warm start
+//!    ([`solver::warm_start`]) and the fallback, returns a certified [`solver::Solution`].
+//! 7. [`post`]: errors, orders, fitted slopes, contact-zone metrics, fields on mesh entities.
+//!
+//! The applications (command line, replication of the paper, cross-check with dolfinx,
+//! benchmark, plots and reports) live in the `gradvi` binary (`src/main.rs`, `src/app/`), not
+//! in this library: built with `default-features = false`, the library depends on no CLI,
+//! plotting, report or CSV crate.
 #![warn(missing_docs)]
 // `!(x > y)` is used on purpose throughout: unlike `x <= y` it is true when x is NaN, so
 // validation rejects NaN data.

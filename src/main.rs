@@ -148,8 +148,19 @@ fn replicate(a: &ReplicateArgs) -> Result<()> {
     Ok(())
 }
 
-fn main() -> Result<()> {
-    let cli = Cli::parse();
+/// Runs the command; a user error is one clean line on stderr (`error: ...` with its causes)
+/// and exit status 1, whatever `RUST_BACKTRACE` says.
+fn main() -> std::process::ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
     match &cli.command {
         Command::Mesh(MeshCommand::Info { file }) => mesh_info(file),
         Command::Mesh(MeshCommand::Generate {
@@ -159,8 +170,8 @@ fn main() -> Result<()> {
         }) => {
             let m = app::solve::generate(family, *level)?;
             match output.extension().and_then(|e| e.to_str()) {
-                Some("typ2") => write_typ2(output, &m)?,
-                Some("vtu") => write_vtu(output, &m, &[], &[])?,
+                Some("typ2") => app::output::atomic(output, |tmp| Ok(write_typ2(tmp, &m)?))?,
+                Some("vtu") => app::output::atomic(output, |tmp| Ok(write_vtu(tmp, &m, &[], &[])?))?,
                 _ => bail!(
                     "unknown output format for {} (use .typ2 or .vtu)",
                     output.display()

@@ -215,3 +215,63 @@ fn generate_then_read_back() {
     assert!(ok && out.contains("441"), "{out}");
     std::fs::remove_file(path).ok();
 }
+
+#[test]
+fn absurd_or_conflicting_options_are_refused_before_any_work() {
+    let mesh = "meshes/test3_1.msh";
+    let x = tmp("same.out");
+    let x = x.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["--tol", "inf"], "--tol"),
+        (vec!["--tol", "1e308"], "--tol"),
+        (vec!["--tol", "0"], "--tol"),
+        (vec!["--c", "NaN"], "--c"),
+        (vec!["--param", "C=-5", "--param", "C=-10"], "twice"),
+        (vec!["--param", "C=inf"], "finite"),
+        (vec!["--vtu", x, "--json", x], "same file"),
+        (vec!["--vtu", mesh], "overwritten"),
+        (vec!["--scheme", "p1", "--alpha", "2"], "alpha"),
+    ] {
+        let mut full = vec!["solve", "--problem", "test3", "--mesh", mesh];
+        full.extend(args.iter().copied());
+        let (ok, _, err) = gradvi(&full);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+    // the mesh was not touched
+    assert!(std::fs::read_to_string(mesh).unwrap().starts_with("$MeshFormat"));
+    // --level is only meaningful with --generate
+    let (ok, _, err) = gradvi(&["solve", "--problem", "test3", "--mesh", mesh, "--level", "3"]);
+    assert!(!ok && err.contains("--generate"), "{err}");
+}
+
+#[test]
+fn a_user_error_is_one_line_whatever_rust_backtrace_says() {
+    let out = Command::new(env!("CARGO_BIN_EXE_gradvi"))
+        .args(["mesh", "info", "no/such/file.msh"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.starts_with("error: ") && err.contains("no/such/file.msh"), "{err}");
+}
+
+#[test]
+fn problem_names_keep_the_sign_of_their_parameters() {
+    let (ok, out, err) = gradvi(&[
+        "solve", "--problem", "test3", "--param", "C=5", "--generate", "cartesian", "--level",
+        "1",
+    ]);
+    // C = 5 pushes u up, away from the lower barrier: a valid problem
+    assert!(ok, "{err}");
+    assert!(out.contains("test3_C5\n"), "{out}");
+    let (ok, out, err) = gradvi(&[
+        "solve", "--problem", "test3", "--param", "C=-5", "--generate", "cartesian", "--level",
+        "1",
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("test3_C-5\n"), "{out}");
+}

@@ -11,3 +11,5 @@ mod mesh_io;
 mod solver;
 #[path = "unit/warm_start.rs"]
 mod warm_start;
+#[path = "unit/well_posed.rs"]
+mod well_posed;

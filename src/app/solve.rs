@@ -10,7 +10,8 @@ use gradvi::post::fields::EntityFields;
 use gradvi::problem::{PROBLEM_NAMES, by_name};
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with};
 use gradvi::solver::{ActiveSetOptions, Solution, SolveOptions, WarmStart, solve_problem};
-use std::path::PathBuf;
+use super::output::{atomic, check_distinct};
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct SolveArgs {
@@ -26,7 +27,7 @@ pub struct SolveArgs {
     /// Generate the mesh instead: cartesian, hexagonal or kershaw (with --level).
     #[arg(long, requires = "level")]
     generate: Option<String>,
-    /// Level of the generated mesh.
+    /// Level of the generated mesh (only with --generate).
     #[arg(long)]
     level: Option<usize>,
     /// The scheme.
@@ -77,8 +78,48 @@ pub fn generate(family: &str, level: usize) -> Result<PolyMesh> {
     Ok(fam.generate(level)?)
 }
 
+/// Rejects absurd or conflicting options before any work: the certificate tolerance must be
+/// finite and in (0, 1) (a tolerance of 1 or more, or infinite, would switch the certificate
+/// off), the numeric options finite, the outputs distinct from the inputs and each other, and
+/// a parameter given once.
+fn check_options(a: &SolveArgs) -> Result<()> {
+    if !(a.tol > 0.0 && a.tol < 1.0) {
+        bail!("--tol must be in (0, 1), got {} (the certificate would be meaningless)", a.tol);
+    }
+    if !(a.c > 0.0 && a.c.is_finite()) {
+        bail!("--c must be positive and finite, got {}", a.c);
+    }
+    if a.level.is_some() && a.generate.is_none() {
+        bail!("--level is only meaningful with --generate (the mesh comes from --mesh)");
+    }
+    if a.max_solves == 0 {
+        bail!("--max-solves must be at least 1");
+    }
+    for (i, (k, v)) in a.params.iter().enumerate() {
+        if !v.is_finite() {
+            bail!("--param {k}={v}: parameters must be finite");
+        }
+        if a.params[..i].iter().any(|(k2, _)| k2.eq_ignore_ascii_case(k)) {
+            bail!("--param {k} is given twice");
+        }
+    }
+    let mut inputs: Vec<(&str, &Path)> = Vec::new();
+    if let Some(m) = &a.mesh {
+        inputs.push(("mesh", m));
+    }
+    let mut outputs: Vec<(&str, &Path)> = Vec::new();
+    if let Some(v) = &a.vtu {
+        outputs.push(("VTU", v));
+    }
+    if let Some(j) = &a.json {
+        outputs.push(("JSON", j));
+    }
+    check_distinct(&inputs, &outputs)
+}
+
 /// `gradvi solve`.
 pub fn run(a: &SolveArgs) -> Result<()> {
+    check_options(a)?;
     let mesh = match (&a.mesh, &a.generate) {
         (Some(f), None) => read_mesh(f)?,
         (None, Some(fam)) => generate(fam, a.level.unwrap_or(1))?,
@@ -176,7 +217,7 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         t.setup, t.symbolic, t.warm_start, t.assemble, t.factor, t.solve, t.total
     );
     if let Some(path) = &a.vtu {
-        write_solution_vtu(path, scheme.as_ref(), &sol)?;
+        atomic(path, |tmp| write_solution_vtu(tmp, scheme.as_ref(), &sol))?;
         println!("wrote           {}", path.display());
     }
     if let Some(path) = &a.json {
@@ -196,8 +237,10 @@ pub fn run(a: &SolveArgs) -> Result<()> {
             "timings": t,
             "log": sol.result.log,
         });
-        std::fs::write(path, serde_json::to_string_pretty(&j)?)
-            .with_context(|| format!("writing {}", path.display()))?;
+        let text = serde_json::to_string_pretty(&j)?;
+        atomic(path, |tmp| {
+            std::fs::write(tmp, &text).with_context(|| format!("writing {}", path.display()))
+        })?;
         println!("wrote           {}", path.display());
     }
     Ok(())

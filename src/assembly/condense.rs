@@ -11,55 +11,114 @@
 //! One interior unknown (HMM's u_K) has a scalar fast path; the general path uses a dense
 //! Cholesky factorisation of M_RR (SPD as a principal block of an SPD matrix).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Dyn, linalg::Cholesky};
+
+/// The local system of one cell: M_K u_K = b_K in the cell's unknowns.
+#[derive(Debug, Clone, Copy)]
+pub struct CellSystem<'c> {
+    /// The global indices of the local unknowns: the interior ones I first, then the skeleton
+    /// ones S.
+    pub dofs: &'c [usize],
+    /// The number of interior unknowns |I|.
+    pub n_interior: usize,
+    /// The local matrix M_K, column-major, in the order of `dofs`.
+    pub matrix: &'c [f64],
+    /// The local load b_K, in the order of `dofs`.
+    pub load: &'c [f64],
+}
+
+impl CellSystem<'_> {
+    /// The free interior unknowns R = I \ F (local indices).
+    fn free_interior(&self, fx: &dyn Fn(usize) -> Option<f64>) -> Vec<usize> {
+        (0..self.n_interior)
+            .filter(|&i| fx(self.dofs[i]).is_none())
+            .collect()
+    }
+
+    /// The Cholesky factorisation of M_RR, the block of the free interior unknowns `free`.
+    fn free_block_cholesky(&self, free: &[usize]) -> Cholesky<f64, Dyn> {
+        let (m, nl, r) = (self.matrix, self.dofs.len(), free.len());
+        DMatrix::from_fn(r, r, |a, c| m[free[a] + free[c] * nl])
+            .cholesky()
+            .expect("interior block of an SPD local matrix is SPD")
+    }
+}
 
 /// Condensation of one cell (see the module docs). `s` (length p²) receives the p×p skeleton
-/// matrix (column-major) and `g` (length p) the p skeleton loads.
+/// matrix S_K (column-major) and `g` (length p) the p skeleton loads g_K, p = |S|.
 pub fn condense(
-    d: &[usize],
-    ni: usize,
-    m: &[f64],
-    b: &[f64],
+    cell: &CellSystem,
     fx: &dyn Fn(usize) -> Option<f64>,
     s: &mut [f64],
     g: &mut [f64],
 ) {
+    let CellSystem {
+        dofs: d,
+        n_interior: ni,
+        matrix: m,
+        load: b,
+    } = *cell;
     let nl = d.len();
     let p = nl - ni;
+    // S_K = M_SS and g_K = b_S before the elimination
     for bcol in 0..p {
         for arow in 0..p {
             s[arow + bcol * p] = m[(ni + arow) + (ni + bcol) * nl];
         }
     }
     g.copy_from_slice(&b[ni..]);
-    if ni == 0 {
-        return;
+    match ni {
+        0 => {}
+        1 => eliminate_cell_unknown(cell, fx, s, g),
+        _ => eliminate_interior(cell, fx, s, g),
     }
-    if ni == 1 {
-        // HMM fast path: one cell unknown
-        match fx(d[0]) {
-            Some(v) => {
-                for arow in 0..p {
-                    g[arow] -= m[ni + arow] * v;
-                }
-            }
-            None => {
-                let mkk = m[0];
-                for bcol in 0..p {
-                    let mkb = m[(ni + bcol) * nl];
-                    for arow in 0..p {
-                        s[arow + bcol * p] -= m[ni + arow] * mkb / mkk;
-                    }
-                }
-                for arow in 0..p {
-                    g[arow] -= m[ni + arow] * b[0] / mkk;
-                }
+}
+
+/// HMM's fast path, one interior unknown u_K (index 0): if it is fixed to v,
+/// g_K −= M_SK v; otherwise S_K −= M_SK M_KS / M_KK and g_K −= M_SK b_K / M_KK.
+fn eliminate_cell_unknown(
+    cell: &CellSystem,
+    fx: &dyn Fn(usize) -> Option<f64>,
+    s: &mut [f64],
+    g: &mut [f64],
+) {
+    let (d, m, b) = (cell.dofs, cell.matrix, cell.load);
+    let (nl, ni) = (d.len(), 1);
+    let p = nl - ni;
+    match fx(d[0]) {
+        Some(v) => {
+            for arow in 0..p {
+                g[arow] -= m[ni + arow] * v;
             }
         }
-        return;
+        None => {
+            let mkk = m[0];
+            for bcol in 0..p {
+                let mkb = m[(ni + bcol) * nl];
+                for arow in 0..p {
+                    s[arow + bcol * p] -= m[ni + arow] * mkb / mkk;
+                }
+            }
+            for arow in 0..p {
+                g[arow] -= m[ni + arow] * b[0] / mkk;
+            }
+        }
     }
-    // general path
-    let free: Vec<usize> = (0..ni).filter(|&i| fx(d[i]).is_none()).collect();
+}
+
+/// The general path, several interior unknowns: g_K −= M_SF u_F, then with
+/// b_R' = b_R − M_RF u_F and the dense Cholesky factorisation of M_RR,
+/// S_K −= M_SR (M_RR⁻¹ M_RS) and g_K −= M_SR (M_RR⁻¹ b_R').
+fn eliminate_interior(
+    cell: &CellSystem,
+    fx: &dyn Fn(usize) -> Option<f64>,
+    s: &mut [f64],
+    g: &mut [f64],
+) {
+    let (d, ni, m, b) = (cell.dofs, cell.n_interior, cell.matrix, cell.load);
+    let nl = d.len();
+    let p = nl - ni;
+    let free = cell.free_interior(fx);
     let fixed: Vec<(usize, f64)> = (0..ni).filter_map(|i| fx(d[i]).map(|v| (i, v))).collect();
     let mut br: Vec<f64> = free.iter().map(|&i| b[i]).collect();
     for &(j, v) in &fixed {
@@ -74,13 +133,10 @@ pub fn condense(
         return;
     }
     let r = free.len();
-    let mrr = DMatrix::from_fn(r, r, |a, c| m[free[a] + free[c] * nl]);
     let msr = DMatrix::from_fn(p, r, |a, c| m[(ni + a) + free[c] * nl]);
-    let chol = mrr
-        .cholesky()
-        .expect("interior block of an SPD local matrix is SPD");
+    let chol = cell.free_block_cholesky(&free);
     let x = chol.solve(&msr.transpose()); // M_RR⁻¹ M_RS
-    let y = chol.solve(&DVector::from_vec(br)); // M_RR⁻¹ b_R
+    let y = chol.solve(&DVector::from_vec(br)); // M_RR⁻¹ b_R'
     for bcol in 0..p {
         for arow in 0..p {
             s[arow + bcol * p] -= (0..r).map(|q| msr[(arow, q)] * x[(q, bcol)]).sum::<f64>();
@@ -91,14 +147,10 @@ pub fn condense(
     }
 }
 
-/// The interior unknown of a cell with exactly one (HMM's u_K), from its skeleton values.
-pub fn interior_value(
-    d: &[usize],
-    m: &[f64],
-    b: &[f64],
-    fx: &dyn Fn(usize) -> Option<f64>,
-    u: &[f64],
-) -> f64 {
+/// The interior unknown of a cell with exactly one (HMM's u_K), from its skeleton values:
+/// the fixed value, or u_K = (b_K − Σ_{j∈S} M_Kj u_j) / M_KK.
+pub fn interior_value(cell: &CellSystem, fx: &dyn Fn(usize) -> Option<f64>, u: &[f64]) -> f64 {
+    let (d, m, b) = (cell.dofs, cell.matrix, cell.load);
     let nl = d.len();
     match fx(d[0]) {
         Some(v) => v,
@@ -112,21 +164,16 @@ pub fn interior_value(
     }
 }
 
-/// Recovers the interior unknowns of one cell from its skeleton values.
-pub fn recover_interior(
-    d: &[usize],
-    ni: usize,
-    m: &[f64],
-    b: &[f64],
-    fx: &dyn Fn(usize) -> Option<f64>,
-    u: &mut [f64],
-) {
+/// Recovers the interior unknowns of one cell from its skeleton values:
+/// u_F = their fixed values, u_R = M_RR⁻¹ (b_R − Σ_{j∉R} M_Rj u_j).
+pub fn recover_interior(cell: &CellSystem, fx: &dyn Fn(usize) -> Option<f64>, u: &mut [f64]) {
+    let (d, ni, m, b) = (cell.dofs, cell.n_interior, cell.matrix, cell.load);
     let nl = d.len();
     if ni == 1 {
-        u[d[0]] = interior_value(d, m, b, fx, u);
+        u[d[0]] = interior_value(cell, fx, u);
         return;
     }
-    let free: Vec<usize> = (0..ni).filter(|&i| fx(d[i]).is_none()).collect();
+    let free = cell.free_interior(fx);
     for i in 0..ni {
         if let Some(v) = fx(d[i]) {
             u[d[i]] = v;
@@ -136,7 +183,6 @@ pub fn recover_interior(
         return;
     }
     let r = free.len();
-    let mrr = DMatrix::from_fn(r, r, |a, c| m[free[a] + free[c] * nl]);
     let rhs = DVector::from_fn(r, |a, _| {
         let i = free[a];
         let mut v = b[i];
@@ -147,7 +193,7 @@ pub fn recover_interior(
         }
         v
     });
-    let x = mrr.cholesky().expect("SPD interior block").solve(&rhs);
+    let x = cell.free_block_cholesky(&free).solve(&rhs);
     for (a, &i) in free.iter().enumerate() {
         u[d[i]] = x[a];
     }
@@ -169,7 +215,13 @@ mod tests {
         let fx = |i: usize| fixed_interior.contains(&i).then(|| fixed_val(i));
         let mut s = vec![0.0; p * p];
         let mut g = vec![0.0; p];
-        condense(&d, ni, m.as_slice(), b.as_slice(), &fx, &mut s, &mut g);
+        let cell = CellSystem {
+            dofs: &d,
+            n_interior: ni,
+            matrix: m.as_slice(),
+            load: b.as_slice(),
+        };
+        condense(&cell, &fx, &mut s, &mut g);
         // dense reference
         let free: Vec<usize> = (0..ni).filter(|i| !fixed_interior.contains(i)).collect();
         let r = free.len();
@@ -200,7 +252,7 @@ mod tests {
         for a in 0..p {
             u[ni + a] = us[a];
         }
-        recover_interior(&d, ni, m.as_slice(), b.as_slice(), &fx, &mut u);
+        recover_interior(&cell, &fx, &mut u);
         // reference: the full system with the fixed interior unknowns as unit rows
         let mut mf = m.clone();
         let mut bf = b.clone();
@@ -212,7 +264,12 @@ mod tests {
         }
         let uref = mf.lu().solve(&bf).unwrap();
         for i in 0..nl {
-            assert!((u[i] - uref[i]).abs() < 1e-10, "u[{i}]: {} vs {}", u[i], uref[i]);
+            assert!(
+                (u[i] - uref[i]).abs() < 1e-10,
+                "u[{i}]: {} vs {}",
+                u[i],
+                uref[i]
+            );
         }
     }
 

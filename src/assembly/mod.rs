@@ -33,7 +33,7 @@ use crate::linalg::{FactorThreads, Ordering};
 use crate::problem::Problem;
 use crate::scheme::{GradientDiscretisation, PointDof};
 use crate::vi::{QuadraticEnergy, SolveTimings};
-use condense::{condense, interior_value, recover_interior};
+use condense::{CellSystem, condense, interior_value, recover_interior};
 use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -46,9 +46,52 @@ const CHUNK: usize = 4096;
 
 /// The cell ranges `[c0, c1)` of the parallel tasks.
 fn cell_chunks(nc: usize) -> Vec<(usize, usize)> {
-    (0..nc.div_ceil(CHUNK))
-        .map(|c| (c * CHUNK, ((c + 1) * CHUNK).min(nc)))
+    chunks(nc, CHUNK)
+}
+
+/// The ranges `[c0, c1)` of `size` consecutive indices (the last one shorter) covering `0..n`.
+fn chunks(n: usize, size: usize) -> Vec<(usize, usize)> {
+    (0..n.div_ceil(size))
+        .map(|c| (c * size, ((c + 1) * size).min(n)))
         .collect()
+}
+
+/// Splits a buffer laid out by `ptr` (entity e owns `ptr[e]..ptr[e + 1]`, relative to
+/// `ptr[ranges[0].0]`) into the consecutive slices of the entity `ranges`, so that each
+/// parallel task writes its own slice.
+fn split_by_ranges<'b, T>(
+    mut buf: &'b mut [T],
+    ranges: &[(usize, usize)],
+    ptr: &[usize],
+) -> Vec<&'b mut [T]> {
+    let mut slices = Vec::with_capacity(ranges.len());
+    for &(c0, c1) in ranges {
+        let (here, next) = std::mem::take(&mut buf).split_at_mut(ptr[c1] - ptr[c0]);
+        buf = next;
+        slices.push(here);
+    }
+    slices
+}
+
+/// The value of each fixed unknown (Dirichlet, or fixed by the caller), NaN for a free one
+/// (the data and the barriers are finite).
+struct FixedValues(Vec<f64>);
+
+impl FixedValues {
+    fn new(dirichlet: &[Option<f64>], fixed: &[Option<f64>]) -> Self {
+        FixedValues(
+            (0..dirichlet.len())
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|d| dirichlet[d].or(fixed[d]).unwrap_or(f64::NAN))
+                .collect(),
+        )
+    }
+    /// The value of unknown `d` if it is fixed.
+    fn get(&self, d: usize) -> Option<f64> {
+        let v = self.0[d];
+        if v.is_nan() { None } else { Some(v) }
+    }
 }
 
 /// Options of the symbolic system.
@@ -158,12 +201,18 @@ impl<'a> DiscreteSystem<'a> {
         &self.values.load
     }
 
-    /// The unknowns of cell k, its number of interior unknowns, its local matrix and load.
-    fn local(&self, k: usize) -> (&[usize], usize, &[f64], &[f64]) {
+    /// The local system of cell k: its unknowns, its number of interior unknowns, its local
+    /// matrix and load.
+    fn local(&self, k: usize) -> CellSystem<'_> {
         let (d, ni) = self.sym.dof_map.cell(k);
         let r = self.sym.dof_map.dof_ptr[k]..self.sym.dof_map.dof_ptr[k + 1];
         let v = &self.values;
-        (d, ni, &v.mats[v.mat_ptr[k]..v.mat_ptr[k + 1]], &v.loads[r])
+        CellSystem {
+            dofs: d,
+            n_interior: ni,
+            matrix: &v.mats[v.mat_ptr[k]..v.mat_ptr[k + 1]],
+            load: &v.loads[r],
+        }
     }
 
     /// Solves the linear system in which the unknowns with `fixed[d] = Some(v)` (and the
@@ -178,27 +227,7 @@ impl<'a> DiscreteSystem<'a> {
         factor.solve_in_place(&mut rhs);
         let mut u = vec![0.0; self.n];
         u[..self.n_skel].copy_from_slice(&rhs);
-        let nc = self.sym.scheme().mesh().n_cells();
-        if self.sym.single_interior {
-            // one interior unknown per cell, computed in parallel from the skeleton values
-            let interior: Vec<(usize, f64)> = (0..nc)
-                .into_par_iter()
-                .map(|k| {
-                    let (d, _, m, b) = self.local(k);
-                    (d[0], interior_value(d, m, b, &fx, &u))
-                })
-                .collect();
-            for (dof, v) in interior {
-                u[dof] = v;
-            }
-        } else {
-            for k in 0..nc {
-                let (d, ni, m, b) = self.local(k);
-                if ni > 0 {
-                    recover_interior(d, ni, m, b, &fx, &mut u);
-                }
-            }
-        }
+        self.recover_interiors(&fx, &mut u);
         if let Some(i) = u.iter().position(|x| !x.is_finite()) {
             return Err(crate::Error::Linear(format!(
                 "the solution is not finite at unknown {i}"
@@ -215,6 +244,32 @@ impl<'a> DiscreteSystem<'a> {
         ))
     }
 
+    /// Fills the interior unknowns of `u` from its skeleton values, cell by cell
+    /// ([`recover_interior`]): u_R = M_RR⁻¹ (b_R − Σ_{j∉R} M_Rj u_j) on each cell.
+    fn recover_interiors(&self, fx: &(dyn Fn(usize) -> Option<f64> + Sync), u: &mut [f64]) {
+        let nc = self.sym.scheme().mesh().n_cells();
+        if self.sym.single_interior {
+            // one interior unknown per cell, computed in parallel from the skeleton values
+            let interior: Vec<(usize, f64)> = (0..nc)
+                .into_par_iter()
+                .map(|k| {
+                    let cell = self.local(k);
+                    (cell.dofs[0], interior_value(&cell, fx, u))
+                })
+                .collect();
+            for (dof, v) in interior {
+                u[dof] = v;
+            }
+        } else {
+            for k in 0..nc {
+                let cell = self.local(k);
+                if cell.n_interior > 0 {
+                    recover_interior(&cell, fx, u);
+                }
+            }
+        }
+    }
+
     /// The lower-triangular CSC pattern (column pointers, row indices) of the condensed matrix.
     pub fn condensed_pattern(&self) -> (&[usize], &[usize]) {
         (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx())
@@ -222,20 +277,17 @@ impl<'a> DiscreteSystem<'a> {
 
     /// Condensed matrix values (in the order of [`Self::condensed_pattern`]) and right-hand
     /// side, with `fixed` and the Dirichlet unknowns fixed (unit rows).
+    ///
+    /// With P_K the map from the global skeleton unknowns to those of cell K, and F the fixed
+    /// unknowns (value u_F),
+    ///
+    ///   S_ij = Σ_K (P_Kᵀ S_K P_K)_ij            for i, j ∉ F,   S_ii = 1 and S_ij = 0 else,
+    ///   c_i  = b^N_i + Σ_K (P_Kᵀ (g_K − S_K P_K u_F))_i   for i ∉ F,   c_i = u_i for i ∈ F,
+    ///
+    /// where b^N is the Neumann load and (S_K, g_K) the condensed block and load of cell K
+    /// ([`condense`]). Then S u_S = c is the skeleton system with u_F moved to the right.
     pub fn assemble_condensed(&self, fixed: &[Option<f64>]) -> (Vec<f64>, Vec<f64>) {
-        // the value of each fixed unknown, NaN for a free one (data and barriers are finite)
-        let fixed_val: Vec<f64> = (0..self.n)
-            .into_par_iter()
-            .with_min_len(4096)
-            .map(|d| self.values.dirichlet[d].or(fixed[d]).unwrap_or(f64::NAN))
-            .collect();
-        let fx = |d: usize| -> Option<f64> {
-            let v = fixed_val[d];
-            if v.is_nan() { None } else { Some(v) }
-        };
-        let nc = self.sym.scheme().mesh().n_cells();
-        // condensed local blocks, in parallel: cell k's p×p block at pos_ptr[k], its p loads
-        // (minus the fixed columns) at the positions of its skeleton unknowns in `dofs`
+        let fixed = FixedValues::new(&self.values.dirichlet, fixed);
         // buffers kept between calls (they are entirely rewritten where read)
         let (mut sbuf, mut gbuf) = self
             .scratch
@@ -244,143 +296,129 @@ impl<'a> DiscreteSystem<'a> {
             .unwrap_or_default();
         sbuf.resize(self.sym.maps.pos.len(), 0.0);
         gbuf.resize(self.sym.dof_map.dofs.len(), 0.0);
-        {
-            let mut tasks = Vec::new();
-            let (mut s_rest, mut g_rest) = (&mut sbuf[..], &mut gbuf[..]);
-            for (c0, c1) in cell_chunks(nc) {
-                let (s_here, s_next) =
-                    std::mem::take(&mut s_rest).split_at_mut(self.sym.maps.pos_ptr[c1] - self.sym.maps.pos_ptr[c0]);
-                let (g_here, g_next) =
-                    std::mem::take(&mut g_rest).split_at_mut(self.sym.dof_map.dof_ptr[c1] - self.sym.dof_map.dof_ptr[c0]);
-                s_rest = s_next;
-                g_rest = g_next;
-                tasks.push((c0, c1, s_here, g_here));
-            }
-            tasks.into_par_iter().for_each(|(c0, c1, s_out, g_out)| {
-                for k in c0..c1 {
-                    let (d, ni, m, b) = self.local(k);
-                    let nl = d.len();
-                    let p = nl - ni;
-                    let so = self.sym.maps.pos_ptr[k] - self.sym.maps.pos_ptr[c0];
-                    let go = self.sym.dof_map.dof_ptr[k] - self.sym.dof_map.dof_ptr[c0] + ni;
-                    let sk = &mut s_out[so..so + p * p];
-                    let gk = &mut g_out[go..go + p];
-                    condense(d, ni, m, b, &fx, sk, gk);
-                    // the cell's right-hand side: its condensed load minus the columns of the
-                    // fixed skeleton unknowns
-                    for bcol in 0..p {
-                        if let Some(vj) = fx(d[ni + bcol]) {
-                            for arow in 0..p {
-                                gk[arow] -= sk[arow + bcol * p] * vj;
-                            }
-                        }
-                    }
-                }
-            });
-        }
-        // values, gathered entry by entry (column by column in parallel): the sum of the
-        // sources in the order of a sequential scatter; zero in the rows and columns of fixed
-        // unknowns, whose diagonal is 1
-        let (col_ptr, row_idx) = (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx());
-        let is_fixed: Vec<bool> = (0..self.n_skel)
-            .into_par_iter()
-            .with_min_len(4096)
-            .map(|d| fx(d).is_some())
-            .collect();
-        let mut values = vec![0.0; self.sym.pattern.nnz()];
-        {
-            let mut tasks = Vec::new();
-            let mut rest = &mut values[..];
-            let step = CHUNK * 4;
-            for c0 in (0..self.n_skel).step_by(step) {
-                let c1 = (c0 + step).min(self.n_skel);
-                let (here, next) =
-                    std::mem::take(&mut rest).split_at_mut(col_ptr[c1] - col_ptr[c0]);
-                rest = next;
-                tasks.push((c0, c1, here));
-            }
-            tasks.into_par_iter().for_each(|(c0, c1, out)| {
-                let base = col_ptr[c0];
-                for c in c0..c1 {
-                    let col_fixed = is_fixed[c];
-                    for q in col_ptr[c]..col_ptr[c + 1] {
-                        let r = row_idx[q];
-                        out[q - base] = if col_fixed || is_fixed[r] {
-                            if r == c { 1.0 } else { 0.0 }
-                        } else {
-                            let mut v = 0.0;
-                            for &i in &self.sym.maps.src[self.sym.maps.src_ptr[q]..self.sym.maps.src_ptr[q + 1]] {
-                                v += sbuf[i as usize];
-                            }
-                            v
-                        };
-                    }
-                }
-            });
-        }
-        // right-hand side, gathered row by row: the Neumann load plus the cells' loads; the
-        // value on fixed rows
-        let mut rhs = vec![0.0; self.n_skel];
-        rhs.par_iter_mut()
-            .enumerate()
-            .with_min_len(4096)
-            .for_each(|(gi, out)| {
-                *out = match fx(gi) {
-                    Some(v) => v,
-                    None => {
-                        let mut acc = self.values.neumann_load[gi];
-                        for &qd in &self.sym.maps.inc[self.sym.maps.inc_ptr[gi]..self.sym.maps.inc_ptr[gi + 1]] {
-                            acc += gbuf[qd as usize];
-                        }
-                        acc
-                    }
-                };
-            });
+        self.condense_cells(&fixed, &mut sbuf, &mut gbuf);
+        let values = self.gather_matrix(&fixed, &sbuf);
+        let rhs = self.gather_rhs(&fixed, &gbuf);
         if let Ok(mut b) = self.scratch.lock() {
             *b = (sbuf, gbuf);
         }
         (values, rhs)
     }
 
+    /// Condenses every cell, in parallel: cell k's p×p block S_K at `pos_ptr[k]` in `sbuf`,
+    /// and its right-hand side g_K − S_K P_K u_F (its condensed load minus the columns of its
+    /// fixed skeleton unknowns) at the positions of its skeleton unknowns in `gbuf` (laid out
+    /// like `dofs`).
+    fn condense_cells(&self, fixed: &FixedValues, sbuf: &mut [f64], gbuf: &mut [f64]) {
+        let (pos_ptr, dof_ptr) = (&self.sym.maps.pos_ptr, &self.sym.dof_map.dof_ptr);
+        let ranges = cell_chunks(self.sym.scheme().mesh().n_cells());
+        let s_slices = split_by_ranges(sbuf, &ranges, pos_ptr);
+        let g_slices = split_by_ranges(gbuf, &ranges, dof_ptr);
+        let tasks: Vec<_> = ranges.into_iter().zip(s_slices).zip(g_slices).collect();
+        tasks.into_par_iter().for_each(|(((c0, c1), s), g)| {
+            for k in c0..c1 {
+                let (so, go) = (pos_ptr[k] - pos_ptr[c0], dof_ptr[k] - dof_ptr[c0]);
+                self.condense_cell(k, fixed, &mut s[so..], &mut g[go..]);
+            }
+        });
+    }
+
+    /// Condenses cell k: its block S_K into the first p² entries of `s`, and its right-hand
+    /// side g_K − S_K P_K u_F into `g` after its `ni` interior entries (the cell's stretch of
+    /// a buffer laid out like `dofs` starts at `g`).
+    fn condense_cell(&self, k: usize, fixed: &FixedValues, s: &mut [f64], g: &mut [f64]) {
+        let fx = |d: usize| fixed.get(d);
+        let cell = self.local(k);
+        let (d, ni) = (cell.dofs, cell.n_interior);
+        let p = d.len() - ni;
+        let sk = &mut s[..p * p];
+        let gk = &mut g[ni..ni + p];
+        condense(&cell, &fx, sk, gk);
+        // g_K −= S_K P_K u_F, column by column
+        for bcol in 0..p {
+            if let Some(vj) = fx(d[ni + bcol]) {
+                for arow in 0..p {
+                    gk[arow] -= sk[arow + bcol * p] * vj;
+                }
+            }
+        }
+    }
+
+    /// The values of the condensed matrix, gathered entry by entry (column by column in
+    /// parallel): entry q is the sum of its sources `src[src_ptr[q]..src_ptr[q + 1]]` in
+    /// `sbuf`, listed in cell order (the order of a sequential scatter, whatever the number of
+    /// threads); zero in the rows and columns of fixed unknowns, whose diagonal is 1.
+    fn gather_matrix(&self, fixed: &FixedValues, sbuf: &[f64]) -> Vec<f64> {
+        let (col_ptr, row_idx) = (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx());
+        let (src_ptr, src) = (&self.sym.maps.src_ptr, &self.sym.maps.src);
+        let is_fixed: Vec<bool> = (0..self.n_skel)
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|d| fixed.get(d).is_some())
+            .collect();
+        let mut values = vec![0.0; self.sym.pattern.nnz()];
+        let ranges = chunks(self.n_skel, CHUNK * 4);
+        let slices = split_by_ranges(&mut values, &ranges, col_ptr);
+        let tasks: Vec<_> = ranges.into_iter().zip(slices).collect();
+        tasks.into_par_iter().for_each(|((c0, c1), out)| {
+            let base = col_ptr[c0];
+            for c in c0..c1 {
+                let col_fixed = is_fixed[c];
+                for q in col_ptr[c]..col_ptr[c + 1] {
+                    let r = row_idx[q];
+                    out[q - base] = if col_fixed || is_fixed[r] {
+                        if r == c { 1.0 } else { 0.0 }
+                    } else {
+                        let mut v = 0.0;
+                        for &i in &src[src_ptr[q]..src_ptr[q + 1]] {
+                            v += sbuf[i as usize];
+                        }
+                        v
+                    };
+                }
+            }
+        });
+        values
+    }
+
+    /// The right-hand side of the condensed system, gathered row by row: the Neumann load plus
+    /// the cells' contributions `inc[inc_ptr[i]..inc_ptr[i + 1]]` in `gbuf` (in cell order);
+    /// the value on fixed rows.
+    fn gather_rhs(&self, fixed: &FixedValues, gbuf: &[f64]) -> Vec<f64> {
+        let (inc_ptr, inc) = (&self.sym.maps.inc_ptr, &self.sym.maps.inc);
+        let mut rhs = vec![0.0; self.n_skel];
+        rhs.par_iter_mut()
+            .enumerate()
+            .with_min_len(4096)
+            .for_each(|(gi, out)| {
+                *out = match fixed.get(gi) {
+                    Some(v) => v,
+                    None => {
+                        let mut acc = self.values.neumann_load[gi];
+                        for &qd in &inc[inc_ptr[gi]..inc_ptr[gi + 1]] {
+                            acc += gbuf[qd as usize];
+                        }
+                        acc
+                    }
+                };
+            });
+        rhs
+    }
+
     /// The residual r = b − M u of the full (uncondensed) system, and for each unknown the
     /// scale |b_i| + Σ_j |M_ij u_j| against which it is small. On Dirichlet unknowns r is the
     /// reaction, not a balance; on constrained unknowns it is the multiplier (up to sign).
+    ///
+    /// M u = Σ_K P_Kᵀ M_K P_K u: the local products are computed cell by cell in parallel,
+    /// then each row gathers its contributions in cell order (independent of the threads).
     pub fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>) {
-        // cell by cell: (M_K u_K)_i and Σ_j |(M_K)_ij u_j| at the position of local entry i
-        let nc = self.sym.scheme().mesh().n_cells();
         let mut local = self
             .residual_scratch
             .lock()
             .map(|mut b| std::mem::take(&mut *b))
             .unwrap_or_default();
-        local.clear();
-        local.resize(self.sym.dof_map.dofs.len(), [0.0f64; 2]);
-        {
-            let mut tasks = Vec::new();
-            let mut rest = &mut local[..];
-            for (c0, c1) in cell_chunks(nc) {
-                let (here, next) =
-                    std::mem::take(&mut rest).split_at_mut(self.sym.dof_map.dof_ptr[c1] - self.sym.dof_map.dof_ptr[c0]);
-                rest = next;
-                tasks.push((c0, c1, here));
-            }
-            tasks.into_par_iter().for_each(|(c0, c1, out)| {
-                let base = self.sym.dof_map.dof_ptr[c0];
-                for k in c0..c1 {
-                    let (d, _, m, _) = self.local(k);
-                    let nl = d.len();
-                    let o = &mut out[self.sym.dof_map.dof_ptr[k] - base..self.sym.dof_map.dof_ptr[k + 1] - base];
-                    for (j, &gj) in d.iter().enumerate() {
-                        let uj = u[gj];
-                        for (i, oi) in o.iter_mut().enumerate() {
-                            let v = m[i + j * nl] * uj;
-                            oi[0] += v;
-                            oi[1] += v.abs();
-                        }
-                    }
-                }
-            });
-        }
+        self.local_products(u, &mut local);
+        let (inc_ptr, inc) = (&self.sym.maps.inc_ptr, &self.sym.maps.inc);
         // row by row
         let mut r = vec![0.0; self.n];
         let mut scale = vec![0.0; self.n];
@@ -391,7 +429,7 @@ impl<'a> DiscreteSystem<'a> {
             .for_each(|(gi, (ri, si))| {
                 let mut a = self.values.load[gi];
                 let mut b = a.abs();
-                for &q in &self.sym.maps.inc[self.sym.maps.inc_ptr[gi]..self.sym.maps.inc_ptr[gi + 1]] {
+                for &q in &inc[inc_ptr[gi]..inc_ptr[gi + 1]] {
                     a -= local[q as usize][0];
                     b += local[q as usize][1];
                 }
@@ -404,6 +442,34 @@ impl<'a> DiscreteSystem<'a> {
         (r, scale)
     }
 
+    /// Cell by cell, in parallel: [(M_K u_K)_i, Σ_j |(M_K)_ij u_j|] at the position of local
+    /// entry i in `local` (laid out like `dofs`; resized and overwritten).
+    fn local_products(&self, u: &[f64], local: &mut Vec<[f64; 2]>) {
+        let dof_ptr = &self.sym.dof_map.dof_ptr;
+        local.clear();
+        local.resize(self.sym.dof_map.dofs.len(), [0.0f64; 2]);
+        let ranges = cell_chunks(self.sym.scheme().mesh().n_cells());
+        let slices = split_by_ranges(local, &ranges, dof_ptr);
+        let tasks: Vec<_> = ranges.into_iter().zip(slices).collect();
+        tasks.into_par_iter().for_each(|((c0, c1), out)| {
+            let base = dof_ptr[c0];
+            for k in c0..c1 {
+                let cell = self.local(k);
+                let (d, m) = (cell.dofs, cell.matrix);
+                let nl = d.len();
+                let o = &mut out[dof_ptr[k] - base..dof_ptr[k + 1] - base];
+                for (j, &gj) in d.iter().enumerate() {
+                    let uj = u[gj];
+                    for (i, oi) in o.iter_mut().enumerate() {
+                        let v = m[i + j * nl] * uj;
+                        oi[0] += v;
+                        oi[1] += v.abs();
+                    }
+                }
+            }
+        });
+    }
+
     /// The discrete energy ½ uᵀMu − bᵀu (the VI solution minimises it over the convex set).
     pub fn energy(&self, u: &[f64]) -> f64 {
         let (r, _) = self.residual(u);
@@ -412,11 +478,13 @@ impl<'a> DiscreteSystem<'a> {
             - 0.5 * u.iter().zip(&self.values.load).map(|(a, b)| a * b).sum::<f64>()
     }
 
-    /// The entries of the full (uncondensed) matrix, cell by cell (repeated entries sum).
+    /// The entries of the full (uncondensed) matrix M = Σ_K P_Kᵀ M_K P_K, cell by cell: the
+    /// triplets (i, j, (M_K)_ij) in global indices (repeated entries sum).
     pub fn full_matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
         let mut t = Vec::new();
         for k in 0..self.sym.scheme().mesh().n_cells() {
-            let (d, _, m, _) = self.local(k);
+            let cell = self.local(k);
+            let (d, m) = (cell.dofs, cell.matrix);
             let nl = d.len();
             for (j, &gj) in d.iter().enumerate() {
                 for (i, &gi) in d.iter().enumerate() {

@@ -3,8 +3,11 @@
 //! A [`PolyMesh`] is built once from vertex coordinates and cell vertex lists
 //! ([`PolyMesh::from_cells`]); the constructor fixes the orientation of every cell to
 //! counter-clockwise, derives the edges (faces σ), the cell↔edge incidences and the boundary, caches
-//! the geometry named in the crate's notation table, and validates everything HMM needs (see
-//! [`MeshError`]). Nothing is mutated afterwards; transformations return new meshes.
+//! the geometry named in the crate's notation table, and validates everything HMM needs: a
+//! partition of a polygonal domain into simple, star-shaped polygons meeting edge to edge, with
+//! no overlap, checked in O(n log n) time whatever the input (see [`validate`] for the list of
+//! checks and their costs, and [`MeshError`]). Nothing is mutated afterwards; transformations
+//! return new meshes.
 //!
 //! | accessor | maths |
 //! |---|---|
@@ -17,8 +20,14 @@
 //! | [`PolyMesh::cell_dists`] | d_{K,σ} = (x_σ − x_K)·n_{K,σ} > 0 |
 //! | [`PolyMesh::h`] | h = max_K h_K |
 
+pub mod budget;
 pub mod generate;
 pub mod io;
+mod predicates;
+mod sweep;
+pub mod validate;
+
+pub use validate::MAX_CELL_VERTICES;
 
 use crate::error::MeshError;
 
@@ -173,99 +182,12 @@ impl PolyMesh {
             "malformed cell_ptr"
         );
         let nv = vertices.len();
-        let nc = cell_ptr.len().saturating_sub(1);
-        if nc == 0 {
+        if cell_ptr.len() < 2 {
             return Err(MeshError::Empty);
         }
-        for (v, p) in vertices.iter().enumerate() {
-            if !p[0].is_finite() || !p[1].is_finite() {
-                return Err(MeshError::NonFiniteVertex { vertex: v });
-            }
-        }
-        // --- cells: range, size, repeated vertices, orientation, area, centroid, diameter
-        let mut cell_area = Vec::with_capacity(nc);
-        let mut cell_centroid = Vec::with_capacity(nc);
-        let mut cell_diameter = Vec::with_capacity(nc);
-        let mut cell_normals = Vec::with_capacity(cell_verts.len());
-        let mut cell_dists = Vec::with_capacity(cell_verts.len());
-        let mut not_star_shaped = None;
-        let mut used = vec![false; nv];
-        let mut pts: Vec<Point> = Vec::new();
-        for k in 0..nc {
-            let (s, e) = (cell_ptr[k], cell_ptr[k + 1]);
-            let c = &cell_verts[s..e];
-            if c.len() < 3 {
-                return Err(MeshError::BadCell {
-                    cell: k,
-                    msg: format!("has {} vertices, at least 3 are needed", c.len()),
-                });
-            }
-            for &v in c {
-                if v >= nv {
-                    return Err(MeshError::VertexOutOfRange {
-                        cell: k,
-                        vertex: v,
-                        n_vertices: nv,
-                    });
-                }
-                used[v] = true;
-            }
-            for i in 0..c.len() {
-                if c[i + 1..].contains(&c[i]) {
-                    return Err(MeshError::BadCell {
-                        cell: k,
-                        msg: format!("lists vertex {} twice", c[i]),
-                    });
-                }
-            }
-            pts.clear();
-            pts.extend(c.iter().map(|&v| vertices[v]));
-            let (area, centroid) = polygon_area_centroid(&pts);
-            let mut diam: f64 = 0.0;
-            for i in 0..pts.len() {
-                for j in i + 1..pts.len() {
-                    diam = diam.max(dist(pts[i], pts[j]));
-                }
-            }
-            if !(area.abs() > 1e-14 * diam * diam) {
-                return Err(MeshError::DegenerateCell { cell: k, area });
-            }
-            // `area` is now non-zero and not NaN: negative means clockwise
-            if area < 0.0 {
-                cell_verts[s..e].reverse();
-                pts.reverse();
-            }
-            // normals and d_{K,σ}, from the counter-clockwise corners at hand; a cell that is not
-            // star-shaped is reported only after the vertex and edge checks, as it always was
-            let n = pts.len();
-            for i in 0..n {
-                let (p, q) = (pts[i], pts[(i + 1) % n]);
-                let t = sub(q, p);
-                let len = (t[0] * t[0] + t[1] * t[1]).sqrt();
-                // counter-clockwise cell: outward normal is the tangent rotated by −90°
-                let nrm = [t[1] / len, -t[0] / len];
-                // x_σ, the same bits as edge_midpoint[e] (floating-point addition commutes)
-                let xs = [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
-                let d = (xs[0] - centroid[0]) * nrm[0] + (xs[1] - centroid[1]) * nrm[1];
-                if !(d > 1e-12 * diam) && not_star_shaped.is_none() {
-                    not_star_shaped = Some(MeshError::NotStarShaped {
-                        cell: k,
-                        local_edge: i,
-                        dist: d,
-                    });
-                }
-                cell_normals.push(nrm);
-                cell_dists.push(d);
-            }
-            cell_area.push(area.abs());
-            cell_centroid.push(centroid);
-            cell_diameter.push(diam);
-        }
-        if let Some(v) = used.iter().position(|u| !u) {
-            return Err(MeshError::UnusedVertex { vertex: v });
-        }
-        drop(used);
-        check_duplicate_vertices(&vertices)?;
+        // checks 1–5 of `validate`, and the cell geometry
+        let cells = validate::cell_geometry(&vertices, &cell_ptr, &mut cell_verts)?;
+        validate::check_duplicate_vertices(&vertices)?;
 
         // --- edges, numbered in (min, max) vertex order
         let Edges {
@@ -288,37 +210,49 @@ impl PolyMesh {
             })
             .collect();
 
-        // --- star-shapedness with respect to the centroid (d_{K,σ} > 0, computed above)
-        if let Some(err) = not_star_shaped {
+        validate::check_simple_cells(&vertices, &cell_ptr, &cell_verts)?;
+        // star-shapedness with respect to the centroid (d_{K,σ} > 0, computed above)
+        if let Some(err) = cells.not_star_shaped {
             return Err(err);
         }
 
         let boundary_edges: Vec<usize> = (0..ne).filter(|&e| edge_cells[e][1] == NO_CELL).collect();
-        check_boundary_loops(
+        let boundary = validate::boundary_loops(
             &vertices,
             &edges,
-            &edge_cells,
-            &cell_ptr,
             &cell_verts,
+            &cell_ptr,
             &cell_edges,
             &boundary_edges,
         )?;
+        validate::check_no_overlap(
+            &validate::Topology {
+                vertices: &vertices,
+                cell_ptr: &cell_ptr,
+                cell_verts: &cell_verts,
+                edges: &edges,
+                edge_cells: &edge_cells,
+                cell_area: &cells.area,
+            },
+            &boundary,
+        )?;
+        drop(boundary);
 
         let edge_tags = vec![0i32; ne];
-        let h = cell_diameter.iter().cloned().fold(0.0, f64::max);
+        let h = cells.diameter.iter().cloned().fold(0.0, f64::max);
         Ok(PolyMesh {
             vertices,
             cell_ptr,
             cell_verts,
             cell_edges,
-            cell_normals,
-            cell_dists,
+            cell_normals: cells.normals,
+            cell_dists: cells.dists,
             edges,
             edge_cells,
             edge_tags,
-            cell_area,
-            cell_centroid,
-            cell_diameter,
+            cell_area: cells.area,
+            cell_centroid: cells.centroid,
+            cell_diameter: cells.diameter,
             edge_length,
             edge_midpoint,
             boundary_edges,
@@ -700,151 +634,6 @@ pub(crate) fn drop_unused_vertices_flat(
     (new_vertices, new_id)
 }
 
-/// An integer whose order is that of [`f64::total_cmp`] (the sign bit flips the order of the
-/// other bits), so that sorting by it needs no float comparisons; [`from_order_key`] inverts it.
-fn order_key(x: f64) -> u64 {
-    let b = x.to_bits();
-    if b >> 63 == 1 { !b } else { b | 1 << 63 }
-}
-
-/// The inverse of [`order_key`].
-fn from_order_key(k: u64) -> f64 {
-    f64::from_bits(if k >> 63 == 1 { k & !(1 << 63) } else { !k })
-}
-
-/// Finds two vertices closer than a tolerance (relative to the extent of the coordinates) in
-/// both x and y: the vertices are sorted by (x, y, id) and each is compared with the following
-/// ones while x is within reach. The sort moves `(x, y, id)` records, x and y as
-/// [`order_key`]s, rather than ids, so that neither the sort nor the scan reads `vertices` at
-/// random.
-fn check_duplicate_vertices(vertices: &[Point]) -> Result<(), MeshError> {
-    let mut keys: Vec<(u64, u64, usize)> = vertices
-        .iter()
-        .enumerate()
-        .map(|(i, p)| (order_key(p[0]), order_key(p[1]), i))
-        .collect();
-    keys.sort_unstable();
-    let sorted: Vec<(f64, f64, usize)> = keys
-        .into_iter()
-        .map(|(x, y, i)| (from_order_key(x), from_order_key(y), i))
-        .collect();
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for p in vertices {
-        lo = lo.min(p[0]).min(p[1]);
-        hi = hi.max(p[0]).max(p[1]);
-    }
-    let tol = 1e-13 * (hi - lo).max(1e-300);
-    // end of the run of identical x values starting at each sorted position: inside a run the
-    // y values are sorted, so the scan can jump past the run once y is out of reach (O(n log n))
-    let n = sorted.len();
-    let mut run_end = vec![n; n];
-    for i in (0..n.saturating_sub(1)).rev() {
-        run_end[i] = if sorted[i + 1].0 == sorted[i].0 {
-            run_end[i + 1]
-        } else {
-            i + 1
-        };
-    }
-    for i in 0..n {
-        let (xa, ya, a) = sorted[i];
-        let mut j = i + 1;
-        while j < n {
-            let (xb, yb, b) = sorted[j];
-            if xb - xa > tol {
-                break;
-            }
-            if (yb - ya).abs() <= tol {
-                return Err(MeshError::DuplicateVertex {
-                    a: a.min(b),
-                    b: a.max(b),
-                    x: xa,
-                    y: ya,
-                });
-            }
-            if xb == xa && yb - ya > tol {
-                j = run_end[j];
-            } else {
-                j += 1;
-            }
-        }
-    }
-    Ok(())
-}
-
-/// The boundary, oriented by its cells, must split into simple closed loops of non-zero area.
-/// A hanging node (a cell side that is split in its neighbours but not in the cell itself) shows
-/// up as a zero-area loop; a pinched vertex as a vertex with two outgoing boundary edges.
-fn check_boundary_loops(
-    vertices: &[Point],
-    edges: &[[usize; 2]],
-    edge_cells: &[[usize; 2]],
-    cell_ptr: &[usize],
-    cell_verts: &[usize],
-    cell_edges: &[usize],
-    boundary_edges: &[usize],
-) -> Result<(), MeshError> {
-    // oriented boundary edge: start -> end following its cell's counter-clockwise order
-    let mut next: std::collections::BTreeMap<usize, usize> = std::collections::BTreeMap::new();
-    for &e in boundary_edges {
-        let k = edge_cells[e][0];
-        let (s, t) = (cell_ptr[k], cell_ptr[k + 1]);
-        let n = t - s;
-        let i = (s..t)
-            .find(|&i| cell_edges[i] == e)
-            .expect("edge belongs to its cell")
-            - s;
-        let a = cell_verts[s + i];
-        let b = cell_verts[s + (i + 1) % n];
-        if next.insert(a, b).is_some() {
-            return Err(MeshError::NonConforming(format!(
-                "vertex {a} starts two boundary edges (pinched boundary or hanging node)"
-            )));
-        }
-    }
-    let mut total = 0.0;
-    let mut loops = Vec::new();
-    let mut seen = std::collections::BTreeSet::new();
-    for (&start, _) in next.iter() {
-        if seen.contains(&start) {
-            continue;
-        }
-        let mut pts = Vec::new();
-        let mut v = start;
-        loop {
-            if !seen.insert(v) {
-                return Err(MeshError::NonConforming(format!(
-                    "boundary loop through vertex {v} does not close"
-                )));
-            }
-            pts.push(vertices[v]);
-            v = match next.get(&v) {
-                Some(&w) => w,
-                None => {
-                    return Err(MeshError::NonConforming(format!(
-                        "boundary edge ending at vertex {v} has no successor"
-                    )));
-                }
-            };
-            if v == start {
-                break;
-            }
-        }
-        let (area, _) = polygon_area_centroid(&pts);
-        total += area.abs();
-        loops.push((start, area));
-    }
-    let _ = edges;
-    for (start, area) in loops {
-        if area.abs() <= 1e-10 * total {
-            return Err(MeshError::NonConforming(format!(
-                "the boundary loop through vertex {start} encloses no area: a hanging node \
-                 (a cell side split in the neighbouring cells but not in the cell itself)"
-            )));
-        }
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1010,28 +799,6 @@ mod tests {
         assert_eq!(flat, nc.concat());
         let ids: Vec<usize> = ids.iter().map(|i| i.unwrap_or(usize::MAX)).collect();
         assert_eq!(fids, ids);
-    }
-
-    #[test]
-    fn order_key_follows_total_cmp() {
-        let xs = [
-            f64::NEG_INFINITY,
-            -1e300,
-            -1.0,
-            -1e-300,
-            -0.0,
-            0.0,
-            1e-300,
-            1.0,
-            1e300,
-            f64::INFINITY,
-        ];
-        for &a in &xs {
-            assert_eq!(from_order_key(order_key(a)).to_bits(), a.to_bits());
-            for &b in &xs {
-                assert_eq!(order_key(a).cmp(&order_key(b)), a.total_cmp(&b), "{a} {b}");
-            }
-        }
     }
 
     #[test]

@@ -225,8 +225,9 @@ pub(crate) fn first_collision(pts: &[Point], segs: &[[usize; 2]], queries: &[usi
     Sweep::Clear(below)
 }
 
-/// As [`first_collision`] without queries, by testing every pair: for small inputs (and tests).
-pub(crate) fn first_collision_brute(pts: &[Point], segs: &[[usize; 2]]) -> Option<(usize, usize)> {
+/// As [`first_collision`] without queries, by testing every pair.
+#[cfg(test)]
+fn first_collision_brute(pts: &[Point], segs: &[[usize; 2]]) -> Option<(usize, usize)> {
     (0..segs.len())
         .flat_map(|i| (i + 1..segs.len()).map(move |j| (i, j)))
         .find(|&(i, j)| collide(pts, segs, i, j))
@@ -243,6 +244,17 @@ mod tests {
             s ^= s >> 7;
             s ^= s << 17;
             (s >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    #[test]
+    fn sort_key_follows_the_order_of_floats() {
+        let xs = [-1e300, -1.0, -1e-300, -0.0, 0.0, 1e-300, 1.0, 1e300];
+        for &a in &xs {
+            for &b in &xs {
+                let expected = a.partial_cmp(&b).unwrap();
+                assert_eq!(sort_key(a).cmp(&sort_key(b)), expected, "{a} {b}");
+            }
         }
     }
 
@@ -273,9 +285,8 @@ mod tests {
         let Sweep::Clear(below) = first_collision(&pts, &segs, &queries) else {
             panic!("collision in a grid");
         };
-        // below (1, 1): the edge (1, 0)–(2, 0)? No: the ray down from (1, 1) starts at the
-        // vertex; the sweep excludes the segments at the vertex, so it is the segment right
-        // below in the turned plane, the edge from (1, 0) to (2, 0)
+        // right below (1, 1) in the turned plane (x + εy) the segments at (1, 1) do not count:
+        // the first one hit is (1, 0)–(2, 0)
         let edge = |a: usize, b: usize| segs.iter().position(|s| *s == [a, b]);
         assert_eq!(below[0], edge(id(1, 0), id(2, 0)));
         assert_eq!(below[1], None);
@@ -350,6 +361,84 @@ mod tests {
                     assert!(collide(&uniq, &segs, i, j), "case {case}");
                 }
                 Sweep::Clear(_) => assert_eq!(brute, None, "case {case}: {uniq:?} {segs:?}"),
+            }
+        }
+    }
+
+    /// The segment right below vertex `q` in the turned plane, by brute force: of the segments
+    /// the sweep line cuts at `q` (not at `q` itself) that pass below it, the highest at the
+    /// abscissa of `q`, ties (a common left end point) going to the steeper one.
+    fn below_brute(pts: &[Point], segs: &[[usize; 2]], q: usize) -> Option<usize> {
+        let p = pts[q];
+        let mut best: Option<(f64, f64, usize)> = None;
+        for (i, &[a, b]) in segs.iter().enumerate() {
+            let (l, r) = if lex(pts[a], pts[b]) == Ordering::Greater {
+                (pts[b], pts[a])
+            } else {
+                (pts[a], pts[b])
+            };
+            if a == q || b == q || lex(l, p) != Ordering::Less || lex(p, r) != Ordering::Less {
+                continue;
+            }
+            // not vertical: a vertical segment cut by the sweep line at q would contain q
+            let slope = (r[1] - l[1]) / (r[0] - l[0]);
+            let y = l[1] + slope * (p[0] - l[0]);
+            if y < p[1] && best.is_none_or(|(by, bs, _)| (y, slope) > (by, bs)) {
+                best = Some((y, slope, i));
+            }
+        }
+        best.map(|b| b.2)
+    }
+
+    /// Large sets of segments that do not collide, grown one random segment at a time on a
+    /// small lattice (so that collinear, touching and vertical segments abound): the sweep finds
+    /// them clear, and with one more random segment it agrees with the brute-force test.
+    #[test]
+    fn clear_sets_and_one_more_segment() {
+        let mut r = rng(0x0dd_ba11_cafe_f00d);
+        let side = 7;
+        let pts: Vec<Point> = (0..side * side)
+            .map(|i| [(i % side) as f64, (i / side) as f64 + 0.25 * (i % 3) as f64])
+            .collect();
+        let pick = |r: &mut dyn FnMut() -> f64| (r() * pts.len() as f64) as usize % pts.len();
+        for case in 0..200 {
+            let mut segs: Vec<[usize; 2]> = Vec::new();
+            for _ in 0..400 {
+                let (a, b) = (pick(&mut r), pick(&mut r));
+                if a == b {
+                    continue;
+                }
+                segs.push([a, b]);
+                if first_collision_brute(&pts, &segs).is_some() {
+                    segs.pop();
+                }
+            }
+            assert!(segs.len() > 30, "case {case}: only {} segments", segs.len());
+            // queries at end points, as in the mesh checks (a point on no segment could lie on
+            // a vertical one)
+            let queries: Vec<usize> = (0..pts.len())
+                .filter(|&v| segs.iter().any(|s| s.contains(&v)))
+                .collect();
+            let Sweep::Clear(below) = first_collision(&pts, &segs, &queries) else {
+                panic!("case {case}: collision reported in a clear set");
+            };
+            for (&q, b) in queries.iter().zip(&below) {
+                assert_eq!(*b, below_brute(&pts, &segs, q), "case {case}, vertex {q}");
+            }
+            for _ in 0..20 {
+                let (a, b) = (pick(&mut r), pick(&mut r));
+                if a == b {
+                    continue;
+                }
+                segs.push([a, b]);
+                let brute = first_collision_brute(&pts, &segs);
+                match first_collision(&pts, &segs, &[]) {
+                    Sweep::Collision(i, j) => {
+                        assert!(brute.is_some() && collide(&pts, &segs, i, j), "case {case}")
+                    }
+                    Sweep::Clear(_) => assert_eq!(brute, None, "case {case}"),
+                }
+                segs.pop();
             }
         }
     }

@@ -360,19 +360,191 @@ pub(crate) fn check_duplicate_vertices(vertices: &[Point]) -> Result<(), MeshErr
     let mut next_col = 0;
     for (i, &(cx, cy, a)) in keys.iter().enumerate() {
         if let Some(&(nx, ny, b)) = keys.get(i + 1)
-            && (nx, ny) == (cx, cy + 1)
+            && (nx, ny) == (cx, cy.saturating_add(1))
             && close(a, b)
         {
             return Err(duplicate(a, b));
         }
-        while next_col < keys.len() && (keys[next_col].0, keys[next_col].1) < (cx + 1, cy - 1) {
+        let (right, below, above) = (cx.saturating_add(1), cy.saturating_sub(1), cy.saturating_add(1));
+        while next_col < keys.len() && (keys[next_col].0, keys[next_col].1) < (right, below) {
             next_col += 1;
         }
         for &(nx, ny, b) in keys[next_col..].iter().take(3) {
-            if nx == cx + 1 && ny <= cy + 1 && close(a, b) {
+            if nx == right && ny <= above && close(a, b) {
                 return Err(duplicate(a, b));
             }
         }
+    }
+    Ok(())
+}
+
+/// A closed loop of boundary edges.
+pub(crate) struct BoundaryLoop {
+    /// Its smallest vertex id.
+    start: usize,
+    /// Its signed area (positive if counter-clockwise: an outer boundary).
+    area: f64,
+    /// Its lowest vertex in the sweep order (smallest x, then smallest y).
+    lowest: usize,
+}
+
+/// The boundary, oriented by its cells (counter-clockwise, so the cells lie on the left).
+pub(crate) struct Boundary {
+    /// The vertex after each boundary vertex along the boundary (`NONE` off the boundary).
+    next: Vec<usize>,
+    loops: Vec<BoundaryLoop>,
+}
+
+/// Check 10: the boundary, oriented by its cells, splits into simple closed loops of non-zero
+/// area. A hanging node (a cell side that is split in its neighbours but not in the cell itself)
+/// shows up as a zero-area loop; a pinched vertex as a vertex with two outgoing boundary edges.
+/// O(n): the orientation of every boundary edge is read off the cell sides in one pass.
+pub(crate) fn boundary_loops(
+    vertices: &[Point],
+    edges: &[[usize; 2]],
+    cell_verts: &[usize],
+    cell_ptr: &[usize],
+    cell_edges: &[usize],
+    boundary_edges: &[usize],
+) -> Result<Boundary, MeshError> {
+    // whether each edge is traversed from its smaller to its larger vertex by (the last of) its
+    // cells; for a boundary edge, by its only cell
+    let mut forward = vec![false; edges.len()];
+    for k in 0..cell_ptr.len().saturating_sub(1) {
+        let (s, t) = (cell_ptr[k], cell_ptr[k + 1]);
+        for slot in s..t {
+            let next = if slot + 1 < t { slot + 1 } else { s };
+            forward[cell_edges[slot]] = cell_verts[slot] < cell_verts[next];
+        }
+    }
+    let mut next = vec![NONE; vertices.len()];
+    for &e in boundary_edges {
+        let [lo, hi] = edges[e];
+        let (a, b) = if forward[e] { (lo, hi) } else { (hi, lo) };
+        if next[a] != NONE {
+            return Err(MeshError::NonConforming(format!(
+                "vertex {a} starts two boundary edges (pinched boundary or hanging node)"
+            )));
+        }
+        next[a] = b;
+    }
+    let loops = trace_loops(vertices, &next)?;
+    let total: f64 = loops.iter().map(|l| l.area.abs()).sum();
+    if let Some(l) = loops.iter().find(|l| l.area.abs() <= 1e-10 * total) {
+        return Err(MeshError::NonConforming(format!(
+            "the boundary loop through vertex {} encloses no area: a hanging node \
+             (a cell side split in the neighbouring cells but not in the cell itself)",
+            l.start
+        )));
+    }
+    Ok(Boundary { next, loops })
+}
+
+/// Follows `next` from every boundary vertex, in increasing vertex order, into closed loops.
+fn trace_loops(vertices: &[Point], next: &[usize]) -> Result<Vec<BoundaryLoop>, MeshError> {
+    let mut loops = Vec::new();
+    let mut seen = vec![false; vertices.len()];
+    let mut pts = Vec::new();
+    for start in 0..next.len() {
+        if next[start] == NONE || seen[start] {
+            continue;
+        }
+        pts.clear();
+        let (mut v, mut lowest) = (start, start);
+        loop {
+            if std::mem::replace(&mut seen[v], true) {
+                return Err(MeshError::NonConforming(format!(
+                    "boundary loop through vertex {v} does not close"
+                )));
+            }
+            pts.push(vertices[v]);
+            if lex(vertices[v], vertices[lowest]) == Ordering::Less {
+                lowest = v;
+            }
+            v = match next[v] {
+                NONE => {
+                    return Err(MeshError::NonConforming(format!(
+                        "boundary edge ending at vertex {v} has no successor"
+                    )));
+                }
+                w => w,
+            };
+            if v == start {
+                break;
+            }
+        }
+        let (area, _) = polygon_area_centroid(&pts);
+        loops.push(BoundaryLoop {
+            start,
+            area,
+            lowest,
+        });
+    }
+    Ok(loops)
+}
+
+/// The mesh arrays checks 11 and 12 read.
+pub(crate) struct Topology<'a> {
+    pub(crate) vertices: &'a [Point],
+    pub(crate) cell_ptr: &'a [usize],
+    pub(crate) cell_verts: &'a [usize],
+    pub(crate) edges: &'a [[usize; 2]],
+    pub(crate) edge_cells: &'a [[usize; 2]],
+    pub(crate) cell_area: &'a [f64],
+}
+
+impl Topology<'_> {
+    /// The cell on the upper side of edge `e` (the one traversing it from its lower end point in
+    /// the sweep order to the other, since cells are counter-clockwise), if any.
+    fn cell_above(&self, e: usize, boundary: &Boundary) -> Option<usize> {
+        let [a, b] = self.edges[e];
+        let (l, r) = if lex(self.vertices[a], self.vertices[b]) == Ordering::Greater {
+            (b, a)
+        } else {
+            (a, b)
+        };
+        let [k0, k1] = self.edge_cells[e];
+        if k1 == NO_CELL {
+            return (boundary.next[l] == r).then_some(k0);
+        }
+        let c = &self.cell_verts[self.cell_ptr[k0]..self.cell_ptr[k0 + 1]];
+        let i = c.iter().position(|&v| v == l)?;
+        Some(if c[(i + 1) % c.len()] == r { k0 } else { k1 })
+    }
+}
+
+/// Checks 11 and 12 (see the module docs): no two edges meet except at a common vertex, and
+/// every boundary loop lies in a cell exactly if it is a hole.
+pub(crate) fn check_no_overlap(t: &Topology, boundary: &Boundary) -> Result<(), MeshError> {
+    let queries: Vec<usize> = boundary.loops.iter().map(|l| l.lowest).collect();
+    let below = match sweep::first_collision(t.vertices, t.edges, &queries) {
+        Sweep::Collision(e, f) => {
+            return Err(MeshError::CrossingEdges {
+                edges: [t.edges[e], t.edges[f]],
+                cells: [t.edge_cells[e][0], t.edge_cells[f][0]],
+            });
+        }
+        Sweep::Clear(below) => below,
+    };
+    let cells_area: f64 = t.cell_area.iter().sum();
+    let mut enclosed_area = 0.0;
+    let mut culprit = None;
+    for (l, e) in boundary.loops.iter().zip(below) {
+        let around = e.and_then(|e| t.cell_above(e, boundary));
+        let hole = around.is_some();
+        enclosed_area += if hole { -l.area.abs() } else { l.area.abs() };
+        if hole != (l.area < 0.0) && culprit.is_none() {
+            culprit = Some((l.lowest, around));
+        }
+    }
+    let mismatch = !((cells_area - enclosed_area).abs() <= 1e-9 * cells_area);
+    if culprit.is_some() || mismatch {
+        return Err(MeshError::OverlappingCells {
+            cells_area,
+            enclosed_area,
+            loop_vertex: culprit.map(|c| c.0),
+            cell: culprit.and_then(|c| c.1),
+        });
     }
     Ok(())
 }

@@ -259,37 +259,47 @@ enum Node {
     If(Box<Node>, Box<Node>, Box<Node>),
 }
 
+/// A child's value: leaves inline (no call), anything else recursively.
+#[inline(always)]
+fn ev(n: &Node, v: &[f64]) -> f64 {
+    match n {
+        Node::Const(c) => *c,
+        Node::Var(i) => v[*i],
+        n => n.eval(v),
+    }
+}
+
 impl Node {
     fn eval(&self, v: &[f64]) -> f64 {
         match self {
             Node::Const(c) => *c,
             Node::Var(i) => v[*i],
-            Node::Neg(a) => -a.eval(v),
-            Node::Not(a) => match a.eval(v) {
+            Node::Neg(a) => -ev(a, v),
+            Node::Not(a) => match ev(a, v) {
                 c if c.is_nan() => f64::NAN,
                 c => bool_value(c == 0.0),
             },
-            Node::Call1(f, a) => f.apply(a.eval(v)),
-            Node::Call2(f, a, b) => f.apply(a.eval(v), b.eval(v)),
+            Node::Call1(f, a) => f.apply(ev(a, v)),
+            Node::Call2(f, a, b) => f.apply(ev(a, v), ev(b, v)),
             Node::PowI(a, n) => {
-                let a = a.eval(v);
+                let a = ev(a, v);
                 if *n == 2 { a * a } else { a.powi(*n) }
             }
-            Node::Cmp(c, a, b) => c.apply(a.eval(v), b.eval(v)),
-            Node::And(a, b) => match a.eval(v) {
+            Node::Cmp(c, a, b) => c.apply(ev(a, v), ev(b, v)),
+            Node::And(a, b) => match ev(a, v) {
                 c if c.is_nan() => f64::NAN,
                 c if c == 0.0 => 0.0,
-                _ => b.eval(v),
+                _ => ev(b, v),
             },
-            Node::Or(a, b) => match a.eval(v) {
+            Node::Or(a, b) => match ev(a, v) {
                 c if c.is_nan() => f64::NAN,
                 c if c != 0.0 => 1.0,
-                _ => b.eval(v),
+                _ => ev(b, v),
             },
-            Node::If(c, a, b) => match c.eval(v) {
+            Node::If(c, a, b) => match ev(c, v) {
                 t if t.is_nan() => f64::NAN,
-                t if t != 0.0 => a.eval(v),
-                _ => b.eval(v),
+                t if t != 0.0 => ev(a, v),
+                _ => ev(b, v),
             },
         }
     }
@@ -862,7 +872,13 @@ impl Parser<'_> {
             if self.eat(&[")"]).is_some() {
                 return Ok(args);
             }
-            self.expect(",")?;
+            if self.eat(&[","]).is_none() {
+                let found = match self.tokens.get(self.at) {
+                    Some(t) => t.tok.to_string(),
+                    None => "the end of the expression".into(),
+                };
+                return Err(syntax(self.pos(), format!("expected ',' or ')', found {found}")));
+            }
         }
     }
 

@@ -206,7 +206,7 @@ impl<'de> Deserialize<'de> for Src {
 /// A diffusion coefficient as written: a scalar a (A = a I) or a 2×2 array.
 enum TensorSrc {
     Scalar(Src),
-    Matrix([[Src; 2]; 2]),
+    Matrix([[Spanned<Src>; 2]; 2]),
 }
 
 struct TensorVisitor;
@@ -229,10 +229,10 @@ impl<'de> Visitor<'de> for TensorVisitor {
         SrcVisitor.visit_u64(v).map(TensorSrc::Scalar)
     }
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> std::result::Result<TensorSrc, A::Error> {
-        let r0: [Src; 2] = seq
+        let r0: [Spanned<Src>; 2] = seq
             .next_element()?
             .ok_or_else(|| de::Error::invalid_length(0, &self))?;
-        let r1: [Src; 2] = seq
+        let r1: [Spanned<Src>; 2] = seq
             .next_element()?
             .ok_or_else(|| de::Error::invalid_length(1, &self))?;
         if seq.next_element::<de::IgnoredAny>()?.is_some() {
@@ -273,11 +273,11 @@ impl Field {
     }
 }
 
-/// A(x): a I, or a full matrix.
+/// A(x): a I, or a full matrix; `Loc` is where the whole value is written.
 #[derive(Debug, Clone)]
 enum TensorField {
     Scalar(Field),
-    Matrix([[Field; 2]; 2]),
+    Matrix([[Field; 2]; 2], Loc),
 }
 
 impl TensorField {
@@ -288,7 +288,7 @@ impl TensorField {
                 let c = a.at(p);
                 [[c, 0.0], [0.0, c]]
             }
-            TensorField::Matrix(m) => [
+            TensorField::Matrix(m, _) => [
                 [m[0][0].at(p), m[0][1].at(p)],
                 [m[1][0].at(p), m[1][1].at(p)],
             ],
@@ -297,7 +297,7 @@ impl TensorField {
     fn loc(&self) -> &Loc {
         match self {
             TensorField::Scalar(a) => &a.loc,
-            TensorField::Matrix(m) => &m[0][0].loc,
+            TensorField::Matrix(_, loc) => loc,
         }
     }
 }
@@ -472,7 +472,8 @@ pub fn map_unit_square(m: &PolyMesh, [x0, x1, y0, y1]: [f64; 4]) -> Result<PolyM
 pub struct ProblemFile {
     /// The file (for built-in problems, `problems/NAME.toml`).
     pub path: PathBuf,
-    /// The problem's name (`name`, with `{expr}` replaced by its value; default: the file stem).
+    /// The problem's name (`name`, with `{expr}` replaced by its value formatted by
+    /// [`super::format_parameter`]; default: the file stem).
     pub name: String,
     /// `description`, if given.
     pub description: Option<String>,
@@ -786,7 +787,7 @@ impl Cx<'_> {
                     format!("\"{inner}\" depends on x or y: a name needs a constant"),
                 ));
             };
-            out.push_str(&v.to_string());
+            out.push_str(&super::format_parameter(v));
             rest = &rest[i + j + 1..];
         }
         out.push_str(rest);
@@ -890,17 +891,12 @@ impl Cx<'_> {
             )?)),
             TensorSrc::Matrix(m) => {
                 let e = |i: usize, j: usize| {
-                    self.expr(
-                        &format!("{key}[{i}][{j}]"),
-                        &sub(&m[i][j]),
-                        scope,
-                        Kind::Number,
-                    )
+                    self.expr(&format!("{key}[{i}][{j}]"), &m[i][j], scope, Kind::Number)
                 };
-                Ok(TensorField::Matrix([
-                    [e(0, 0)?, e(0, 1)?],
-                    [e(1, 0)?, e(1, 1)?],
-                ]))
+                Ok(TensorField::Matrix(
+                    [[e(0, 0)?, e(0, 1)?], [e(1, 0)?, e(1, 1)?]],
+                    self.loc(key, span.clone()),
+                ))
             }
         }
     }

@@ -341,7 +341,7 @@ pub fn test3_obstacle(p: Point) -> f64 {
 /// Test 3 of the paper (obstacle): −Δu ≥ C, u ≥ ψ, (Δu + C)(ψ − u) = 0, u = 0 on ∂Ω,
 /// ψ = −min(x, 1 − x, y, 1 − y); i.e. f = C with a lower barrier ψ.
 pub fn paper_test3(c: f64) -> Problem {
-    Problem::new(&format!("test3_C{}", c.abs()), Box::new(move |_| c)).with_constraint(
+    Problem::new(&format!("test3_C{}", format_parameter(c)), Box::new(move |_| c)).with_constraint(
         ConstraintKind::Obstacle,
         Side::Lower,
         Box::new(test3_obstacle),
@@ -399,6 +399,16 @@ pub fn by_name(name: &str, params: &[(String, f64)]) -> crate::Result<Problem> {
             "unknown problem '{name}' (expected one of: {})",
             PROBLEM_NAMES.join(", ")
         ))),
+    }
+}
+
+/// A parameter value as it appears in a problem name: the sign kept, integers without a
+/// fractional part, other values in Rust's shortest round-trip form (`-5`, `0.25`, `1e308`).
+pub fn format_parameter(x: f64) -> String {
+    if x.fract() == 0.0 && x.abs() < 1e15 {
+        format!("{}", x as i64)
+    } else {
+        format!("{x:?}")
     }
 }
 

@@ -197,17 +197,14 @@ mod tests {
 
     const A: Tensor = [[2.0, 0.3], [0.3, 1.0]];
 
-    /// Four triangles around an interior vertex (not symmetric), and a skewed triangle alone.
+    /// Four triangles of different shapes around an interior vertex.
     fn patch() -> PolyMesh {
-        let v = vec![
-            [0.0, 0.0],
-            [1.0, 0.1],
-            [1.2, 0.9],
-            [0.1, 1.1],
-            [0.45, 0.55],
-        ];
-        PolyMesh::from_cells(v, vec![vec![0, 1, 4], vec![1, 2, 4], vec![2, 3, 4], vec![3, 0, 4]])
-            .unwrap()
+        let v = vec![[0.0, 0.0], [1.0, 0.1], [1.2, 0.9], [0.1, 1.1], [0.45, 0.55]];
+        PolyMesh::from_cells(
+            v,
+            vec![vec![0, 1, 4], vec![1, 2, 4], vec![2, 3, 4], vec![3, 0, 4]],
+        )
+        .unwrap()
     }
 
     fn affine(p: Point) -> f64 {
@@ -277,7 +274,11 @@ mod tests {
                 // ∫_{D_{K,σ}} f for f affine: |D_{K,σ}| times the mean of f at its vertices
                 let (a, c) = (m.vertex(v[i]), m.vertex(v[(i + 1) % 3]));
                 let exact = m.measure(k) / 3.0 * (affine(a) + affine(c) + affine(xk)) / 3.0;
-                assert!((b[i] - exact).abs() < 1e-14, "{k}, {i}: {} vs {exact}", b[i]);
+                assert!(
+                    (b[i] - exact).abs() < 1e-14,
+                    "{k}, {i}: {} vs {exact}",
+                    b[i]
+                );
             }
             // in total, ∫_K f = |K| f(x_K)
             assert!((b.sum() - m.measure(k) * affine(xk)).abs() < 1e-14);

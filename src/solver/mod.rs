@@ -7,13 +7,15 @@
 //!
 //! ```text
 //! solve_problem(scheme, problem, opts)
-//!   = DiscreteSystem::new (symbolic ∥ values) → constraints::build → warm start?
+//!   = DiscreteSystem::new (symbolic ∥ values) → constraints::build → well_posed::analyse
+//!     → warm start?
 //!     → vi::active_set::run (→ vi::pgs::solve on a stall, if asked) → Solution
 //! ```
 //! [`solve_with_symbolic`] reuses the symbolic system of an earlier solve on the same scheme.
 
 pub mod constraints;
 pub mod warm_start;
+pub mod well_posed;
 
 use crate::assembly::{DiscreteSystem, SymbolicSystem, SystemOptions};
 use crate::problem::Problem;
@@ -186,11 +188,25 @@ fn solve_system<'a>(
     t0: Instant,
 ) -> crate::Result<Solution<'a>> {
     let constraints = constraints::build(&system, problem)?;
+    let floating = well_posed::analyse(&system, constraints.as_ref())?;
     let mut warm = None;
     let result = match &constraints {
         Some(c) => {
-            let (initial, report) = warm_start(&system, problem, c, opts);
+            let (mut initial, report) = warm_start(&system, problem, c, opts);
             warm = report;
+            if !floating.is_empty() {
+                // parts without Dirichlet unknowns: start with their barrier active, or the
+                // first solve would be singular (see well_posed)
+                let a = initial.get_or_insert_with(|| {
+                    opts.active_set
+                        .initial_active
+                        .clone()
+                        .unwrap_or_else(|| vec![false; c.dofs.len()])
+                });
+                for &j in &floating {
+                    a[j] = true;
+                }
+            }
             solve_constrained(&system, c, opts, initial)?
         }
         None => crate::vi::solve_unconstrained(&system, opts.active_set.tol)?,

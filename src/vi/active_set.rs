@@ -104,6 +104,17 @@ fn initial_active(cons: &Constraints, opts: &ActiveSetOptions) -> crate::Result<
             opts.c
         )));
     }
+    if !(opts.tol > 0.0 && opts.tol < 1.0) {
+        return Err(crate::Error::InvalidData(format!(
+            "the certificate tolerance must be in (0, 1), got {}",
+            opts.tol
+        )));
+    }
+    if opts.max_solves == 0 {
+        return Err(crate::Error::InvalidData(
+            "the active-set method needs at least one solve (max_solves = 0)".into(),
+        ));
+    }
     let m = cons.dofs.len();
     match &opts.initial_active {
         Some(a) if a.len() == m => Ok(a.clone()),
@@ -304,6 +315,12 @@ mod tests {
             assert!(matches!(solve(&sys, &cons, &o), Err(crate::Error::InvalidData(_))));
         }
         let o = ActiveSetOptions { initial_active: Some(vec![true]), ..Default::default() };
+        assert!(matches!(solve(&sys, &cons, &o), Err(crate::Error::InvalidData(_))));
+        for tol in [0.0, 1.0, f64::INFINITY, f64::NAN, -1e-10] {
+            let o = ActiveSetOptions { tol, ..Default::default() };
+            assert!(matches!(solve(&sys, &cons, &o), Err(crate::Error::InvalidData(_))), "{tol}");
+        }
+        let o = ActiveSetOptions { max_solves: 0, ..Default::default() };
         assert!(matches!(solve(&sys, &cons, &o), Err(crate::Error::InvalidData(_))));
     }
 }

@@ -7,7 +7,9 @@
 //! `tol`·‖u‖∞.
 
 use super::certificate::evaluate;
-use super::{Constraints, IterationLog, Method, QuadraticEnergy, SolveTimings, VariationalSolution};
+use super::{
+    Constraints, IterationLog, Method, QuadraticEnergy, SolveTimings, VariationalSolution,
+};
 use crate::error::SolverError;
 
 /// Options of projected Gauss–Seidel.
@@ -31,57 +33,85 @@ impl Default for PgsOptions {
     }
 }
 
-/// Solves the discrete VI by projected Gauss–Seidel. `niter` of the result counts sweeps.
-pub fn solve(
-    system: &dyn QuadraticEnergy,
-    cons: &Constraints,
-    opts: &PgsOptions,
-) -> crate::Result<VariationalSolution> {
-    let n = system.n_unknowns();
-    // CSR of the full matrix, duplicates summed
-    let mut t = system.matrix_triplets();
-    t.sort_unstable_by_key(|&(i, j, _)| (i, j));
-    let mut row_ptr = vec![0usize; n + 1];
-    let mut cols = Vec::new();
-    let mut vals: Vec<f64> = Vec::new();
-    let mut last: Option<(usize, usize)> = None;
-    for (i, j, v) in t {
-        if last == Some((i, j)) {
-            *vals.last_mut().expect("non-empty") += v;
-        } else {
-            cols.push(j);
-            vals.push(v);
-            row_ptr[i + 1] += 1;
-            last = Some((i, j));
+/// The full matrix M in compressed sparse rows: the entries of row i are
+/// `vals[row_ptr[i]..row_ptr[i + 1]]`, in the columns `cols[..]` of the same range, sorted.
+struct Csr {
+    row_ptr: Vec<usize>,
+    cols: Vec<usize>,
+    vals: Vec<f64>,
+}
+
+impl Csr {
+    /// Sorts the triplets (i, j, v) by (i, j) and sums the repeated entries (in their sorted
+    /// order, which `sort_unstable` makes deterministic for a given input).
+    fn from_triplets(n: usize, mut t: Vec<(usize, usize, f64)>) -> Csr {
+        t.sort_unstable_by_key(|&(i, j, _)| (i, j));
+        let mut row_ptr = vec![0usize; n + 1];
+        let mut cols = Vec::new();
+        let mut vals: Vec<f64> = Vec::new();
+        let mut last: Option<(usize, usize)> = None;
+        for (i, j, v) in t {
+            if last == Some((i, j)) {
+                *vals.last_mut().expect("non-empty") += v;
+            } else {
+                cols.push(j);
+                vals.push(v);
+                row_ptr[i + 1] += 1;
+                last = Some((i, j));
+            }
         }
-    }
-    for i in 0..n {
-        row_ptr[i + 1] += row_ptr[i];
-    }
-    let b = system.load();
-    let dir = system.dirichlet();
-    let s = cons.side.sign();
-    let mut bound: Vec<Option<f64>> = vec![None; n];
-    for (j, pd) in cons.dofs.iter().enumerate() {
-        bound[pd.dof] = Some(cons.barrier[j]);
-    }
-    let mut u: Vec<f64> = (0..n).map(|i| dir[i].unwrap_or(0.0)).collect();
-    for i in 0..n {
-        if let Some(g) = bound[i]
-            && s * (u[i] - g) > 0.0
-        {
-            u[i] = g;
-        }
-    }
-    let mut sweeps = 0;
-    loop {
-        sweeps += 1;
-        let mut change: f64 = 0.0;
         for i in 0..n {
-            if dir[i].is_some() {
+            row_ptr[i + 1] += row_ptr[i];
+        }
+        Csr {
+            row_ptr,
+            cols,
+            vals,
+        }
+    }
+}
+
+/// The data of the sweeps: M, b, the Dirichlet values, the barrier g_i of each constrained
+/// unknown and the side s (±1) of the constraint s(u_i − g_i) ≤ 0.
+struct Sweeper<'a> {
+    m: Csr,
+    b: &'a [f64],
+    dir: &'a [Option<f64>],
+    bound: Vec<Option<f64>>,
+    s: f64,
+}
+
+impl Sweeper<'_> {
+    /// The projection onto {s(v − g_i) ≤ 0} of a value v of unknown i.
+    fn project(&self, i: usize, v: f64) -> f64 {
+        match self.bound[i] {
+            Some(g) if self.s * (v - g) > 0.0 => g,
+            _ => v,
+        }
+    }
+
+    /// The first iterate: the Dirichlet values, zero elsewhere, projected onto the constraints.
+    fn initial_guess(&self) -> Vec<f64> {
+        (0..self.dir.len())
+            .map(|i| self.project(i, self.dir[i].unwrap_or(0.0)))
+            .collect()
+    }
+
+    /// One sweep over the non-Dirichlet unknowns, in place:
+    /// u_i ← P_i((b_i − Σ_{j≠i} M_ij u_j) / M_ii), with the newest values of the u_j.
+    /// Returns the largest change max_i |Δu_i|.
+    fn sweep(&self, u: &mut [f64]) -> f64 {
+        let Csr {
+            row_ptr,
+            cols,
+            vals,
+        } = &self.m;
+        let mut change: f64 = 0.0;
+        for i in 0..u.len() {
+            if self.dir[i].is_some() {
                 continue;
             }
-            let mut r = b[i];
+            let mut r = self.b[i];
             let mut d = 0.0;
             for q in row_ptr[i]..row_ptr[i + 1] {
                 let j = cols[q];
@@ -91,15 +121,38 @@ pub fn solve(
                     r -= vals[q] * u[j];
                 }
             }
-            let mut v = r / d;
-            if let Some(g) = bound[i]
-                && s * (v - g) > 0.0
-            {
-                v = g;
-            }
+            let v = self.project(i, r / d);
             change = change.max((v - u[i]).abs());
             u[i] = v;
         }
+        change
+    }
+}
+
+/// Solves the discrete VI by projected Gauss–Seidel. `niter` of the result counts sweeps.
+pub fn solve(
+    system: &dyn QuadraticEnergy,
+    cons: &Constraints,
+    opts: &PgsOptions,
+) -> crate::Result<VariationalSolution> {
+    let n = system.n_unknowns();
+    let mut bound: Vec<Option<f64>> = vec![None; n];
+    for (j, pd) in cons.dofs.iter().enumerate() {
+        bound[pd.dof] = Some(cons.barrier[j]);
+    }
+    let sweeper = Sweeper {
+        m: Csr::from_triplets(n, system.matrix_triplets()),
+        b: system.load(),
+        dir: system.dirichlet(),
+        bound,
+        s: cons.side.sign(),
+    };
+    let mut u = sweeper.initial_guess();
+    let mut sweeps = 0;
+    loop {
+        sweeps += 1;
+        let change = sweeper.sweep(&mut u);
+        // stop when max_i |Δu_i| ≤ tol · ‖u‖∞
         let norm = u
             .iter()
             .fold(0.0f64, |m, x| m.max(x.abs()))
@@ -115,6 +168,18 @@ pub fn solve(
             .into());
         }
     }
+    certified_solution(system, cons, opts, u, sweeps)
+}
+
+/// The solution u after `sweeps` sweeps, with its active set {i : u_i = g_i}, its multiplier
+/// and its certificate (an error if the certificate fails).
+fn certified_solution(
+    system: &dyn QuadraticEnergy,
+    cons: &Constraints,
+    opts: &PgsOptions,
+    u: Vec<f64>,
+    sweeps: usize,
+) -> crate::Result<VariationalSolution> {
     let active: Vec<bool> = cons
         .dofs
         .iter()
@@ -168,7 +233,10 @@ mod tests {
     #[test]
     fn the_sweep_cap_is_a_typed_error() {
         let (sys, cons) = cycling_system();
-        let o = PgsOptions { max_sweeps: 1, ..Default::default() };
+        let o = PgsOptions {
+            max_sweeps: 1,
+            ..Default::default()
+        };
         assert!(matches!(
             solve(&sys, &cons, &o),
             Err(crate::Error::Solver(SolverError::MaxIterations { .. }))

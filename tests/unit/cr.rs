@@ -7,7 +7,7 @@ use gradvi::mesh::PolyMesh;
 use gradvi::post::{fitted_slope, relative_errors};
 use gradvi::problem::*;
 use gradvi::scheme::*;
-use gradvi::solver::{SolveOptions, Solution, solve_problem};
+use gradvi::solver::{Solution, SolveOptions, solve_problem};
 use std::path::PathBuf;
 
 const A: Tensor = [[1.5, 0.5], [0.5, 1.5]];
@@ -37,9 +37,11 @@ fn affine_problem() -> Problem {
             }
         })
         .with_dirichlet(Box::new(move |x| 1.0 + g[0] * x[0] + g[1] * x[1]))
-        .with_neumann(Box::new(move |x| {
-            if x[0] > 1.0 - 1e-12 { flux[0] } else { flux[1] }
-        }))
+        .with_neumann(Box::new(
+            move |x| {
+                if x[0] > 1.0 - 1e-12 { flux[0] } else { flux[1] }
+            },
+        ))
 }
 
 #[test]
@@ -68,7 +70,10 @@ fn cr_patch_test_reproduces_affine_solutions() {
             );
         }
         for (v, uv) in s.vertex_values(sol.u()).iter().enumerate() {
-            assert!((uv - exact(mesh.vertex(v))).abs() < 1e-10, "{what}: vertex {v}");
+            assert!(
+                (uv - exact(mesh.vertex(v))).abs() < 1e-10,
+                "{what}: vertex {v}"
+            );
         }
     }
 }
@@ -94,8 +99,14 @@ fn errors(meshes: &[PolyMesh]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
 fn assert_orders(name: &str, (h, eu, eg): (Vec<f64>, Vec<f64>, Vec<f64>)) {
     let (su, sg) = (fitted_slope(&h, &eu), fitted_slope(&h, &eg));
     eprintln!("CR {name}: slope u {su:.3}, slope grad {sg:.3} (errors u {eu:?}, grad {eg:?})");
-    assert!((su - 2.0).abs() <= 0.15, "CR {name}: slope of u {su:.3}, expected 2 ± 0.15");
-    assert!((sg - 1.0).abs() <= 0.15, "CR {name}: slope of ∇u {sg:.3}, expected 1 ± 0.15");
+    assert!(
+        (su - 2.0).abs() <= 0.15,
+        "CR {name}: slope of u {su:.3}, expected 2 ± 0.15"
+    );
+    assert!(
+        (sg - 1.0).abs() <= 0.15,
+        "CR {name}: slope of ∇u {sg:.3}, expected 1 ± 0.15"
+    );
 }
 
 #[test]
@@ -105,9 +116,7 @@ fn cr_converges_at_the_expected_orders() {
         .map(|&n| triangle_grid(n, 0.25))
         .collect();
     assert_orders("perturbed triangles", errors(&tri));
-    let unstructured: Vec<PolyMesh> = (1..=4)
-        .map(|l| gmsh(&format!("test1_{l}.msh")))
-        .collect();
+    let unstructured: Vec<PolyMesh> = (1..=4).map(|l| gmsh(&format!("test1_{l}.msh"))).collect();
     assert_orders("gmsh test1_1..4", errors(&unstructured));
 }
 
@@ -118,7 +127,10 @@ fn kkt_active_sets(sol: &Solution) -> Vec<(Vec<bool>, Vec<f64>)> {
     let sys = &sol.system;
     let cons = sol.constraints.as_ref().expect("a barrier");
     let m = cons.dofs.len();
-    assert!(m <= 12, "enumeration is for tiny problems ({m} constrained unknowns)");
+    assert!(
+        m <= 12,
+        "enumeration is for tiny problems ({m} constrained unknowns)"
+    );
     let s = cons.side.sign();
     let mut found = Vec::new();
     for mask in 0u32..(1 << m) {
@@ -160,7 +172,13 @@ fn check_against_enumeration(mesh: &PolyMesh, p: &Problem, n_constrained: usize)
         p.name
     );
     let found = kkt_active_sets(&sol);
-    assert_eq!(found.len(), 1, "{}: {} KKT active sets", p.name, found.len());
+    assert_eq!(
+        found.len(),
+        1,
+        "{}: {} KKT active sets",
+        p.name,
+        found.len()
+    );
     let (active, u) = &found[0];
     assert_eq!(&sol.result.active, active, "{}: active sets differ", p.name);
     let umax = u.iter().fold(0.0f64, |a, x| a.max(x.abs()));
@@ -200,4 +218,3 @@ fn cr_obstacle_and_signorini_match_enumeration() {
     check_against_enumeration(&grid8, &paper_test1(), 8);
     check_against_enumeration(&triangle_grid(8, 0.0), &paper_test2(), 8);
 }
-

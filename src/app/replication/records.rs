@@ -111,7 +111,7 @@ pub struct Test3Row {
 /// One row of `results/iterations.csv`: the log of the monotony algorithm.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct IterationRow {
-    /// test1, test2, test3_C5, …
+    /// test1, test2, test3_C-5, …
     pub case: String,
     /// hmm or p1.
     pub scheme: String,

@@ -1,0 +1,287 @@
+//! The `GradviError` exception hierarchy: one class per variant of `gradvi::Error` (and of
+//! `gradvi::SolverError`), with the library's message unchanged and the variant's fields as
+//! attributes (`path`, `line`, `column`, `kind`, ...).
+//!
+//! ```text
+//! GradviError
+//! ├── MeshIoError            Error::MeshIo            (path, line)
+//! ├── InvalidMeshError       Error::InvalidMesh, Error::InvalidMeshFile   (path or None)
+//! ├── InvalidDataError       Error::InvalidData (also: bad arrays given to the bindings)
+//! ├── InfeasibleError        Error::Infeasible
+//! ├── LinearSolverError      Error::Linear
+//! ├── SolverError            Error::Solver
+//! │   ├── MaxIterationsError     SolverError::MaxIterations (iterations, history)
+//! │   ├── CyclingError           SolverError::Cycling       (iteration, repeats, history)
+//! │   ├── NoKktPointError        SolverError::NoKktPoint
+//! │   └── CertificateError       SolverError::Certificate   (quantity, value, tol)
+//! ├── ProblemFileError       Error::ProblemFile       (path, line, column, kind)
+//! ├── FileError              Error::Io                (path, errno)
+//! └── InternalError          a panic inside gradvi (a bug): the interpreter survives
+//! ```
+
+use gradvi::error::ProblemFileErrorKind;
+use gradvi::Error;
+use gradvi::SolverError as Stall;
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::BoundObject;
+use pyo3::prelude::*;
+use std::any::Any;
+
+create_exception!(
+    gradvi,
+    GradviError,
+    PyException,
+    "Base class of every error gradvi reports (same message as the Rust library)."
+);
+create_exception!(
+    gradvi,
+    MeshIoError,
+    GradviError,
+    "A mesh file could not be read or parsed (attributes: path, line; line 0 when unknown)."
+);
+create_exception!(
+    gradvi,
+    InvalidMeshError,
+    GradviError,
+    "The mesh is geometrically or topologically invalid (attribute path: the file, or None)."
+);
+create_exception!(
+    gradvi,
+    InvalidDataError,
+    GradviError,
+    "Invalid data: problem data, options, or arrays of the wrong shape or with NaN."
+);
+create_exception!(
+    gradvi,
+    InfeasibleError,
+    GradviError,
+    "The discrete convex set is empty (e.g. Dirichlet data on the wrong side of the barrier)."
+);
+create_exception!(
+    gradvi,
+    LinearSolverError,
+    GradviError,
+    "A linear solve failed (e.g. the matrix is not numerically positive definite)."
+);
+create_exception!(
+    gradvi,
+    SolverError,
+    GradviError,
+    "The active-set iteration did not converge, cycled, or its certificate failed."
+);
+create_exception!(
+    gradvi,
+    MaxIterationsError,
+    SolverError,
+    "The active-set iteration reached its cap (attributes: iterations, history)."
+);
+create_exception!(
+    gradvi,
+    CyclingError,
+    SolverError,
+    "An active set came back (attributes: iteration, repeats, history)."
+);
+create_exception!(
+    gradvi,
+    NoKktPointError,
+    SolverError,
+    "Exhaustive enumeration found no active set satisfying the KKT conditions."
+);
+create_exception!(
+    gradvi,
+    CertificateError,
+    SolverError,
+    "The final iterate failed its certificate (attributes: quantity, value, tol)."
+);
+create_exception!(
+    gradvi,
+    ProblemFileError,
+    GradviError,
+    "A problem file is invalid (attributes: path, line, column, kind)."
+);
+create_exception!(
+    gradvi,
+    FileError,
+    GradviError,
+    "A file could not be read or written (attributes: path, errno)."
+);
+create_exception!(
+    gradvi,
+    InternalError,
+    GradviError,
+    "A bug in gradvi (a panic); the interpreter survives. Please report it with the input."
+);
+
+/// Adds the exception classes to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("GradviError", py.get_type::<GradviError>())?;
+    m.add("MeshIoError", py.get_type::<MeshIoError>())?;
+    m.add("InvalidMeshError", py.get_type::<InvalidMeshError>())?;
+    m.add("InvalidDataError", py.get_type::<InvalidDataError>())?;
+    m.add("InfeasibleError", py.get_type::<InfeasibleError>())?;
+    m.add("LinearSolverError", py.get_type::<LinearSolverError>())?;
+    m.add("SolverError", py.get_type::<SolverError>())?;
+    m.add("MaxIterationsError", py.get_type::<MaxIterationsError>())?;
+    m.add("CyclingError", py.get_type::<CyclingError>())?;
+    m.add("NoKktPointError", py.get_type::<NoKktPointError>())?;
+    m.add("CertificateError", py.get_type::<CertificateError>())?;
+    m.add("ProblemFileError", py.get_type::<ProblemFileError>())?;
+    m.add("FileError", py.get_type::<FileError>())?;
+    m.add("InternalError", py.get_type::<InternalError>())?;
+    Ok(())
+}
+
+/// An `InvalidDataError` with `msg` (for bad arrays and options caught by the bindings).
+pub fn invalid(msg: impl Into<String>) -> PyErr {
+    InvalidDataError::new_err(msg.into())
+}
+
+/// The snake-case name of a problem-file error kind (`"unknown_key"`, `"not_spd"`, ...).
+fn kind_name(kind: ProblemFileErrorKind) -> &'static str {
+    use ProblemFileErrorKind as K;
+    match kind {
+        K::Syntax => "syntax",
+        K::UnknownKey => "unknown_key",
+        K::Schema => "schema",
+        K::Expression => "expression",
+        K::Parameter => "parameter",
+        K::Mesh => "mesh",
+        K::Tag => "tag",
+        K::UncoveredEdge => "uncovered_edge",
+        K::OverlappingRules => "overlapping_rules",
+        K::UncoveredPoint => "uncovered_point",
+        K::NotSpd => "not_spd",
+        K::NonFinite => "non_finite",
+        #[allow(unreachable_patterns)]
+        _ => "other",
+    }
+}
+
+/// The Python exception of a gradvi error: same message, fields as attributes.
+pub fn to_pyerr(py: Python<'_>, e: &Error) -> PyErr {
+    let msg = e.to_string();
+    let (err, attrs): (PyErr, Vec<(&str, Py<PyAny>)>) = match e {
+        Error::MeshIo { path, line, .. } => (
+            MeshIoError::new_err(msg),
+            vec![
+                ("path", path_obj(py, path)),
+                ("line", obj(py, *line)),
+            ],
+        ),
+        Error::InvalidMesh(_) => (
+            InvalidMeshError::new_err(msg),
+            vec![("path", py.None())],
+        ),
+        Error::InvalidMeshFile { path, .. } => (
+            InvalidMeshError::new_err(msg),
+            vec![("path", path_obj(py, path))],
+        ),
+        Error::InvalidData(_) => (InvalidDataError::new_err(msg), vec![]),
+        Error::Infeasible(_) => (InfeasibleError::new_err(msg), vec![]),
+        Error::Linear(_) => (LinearSolverError::new_err(msg), vec![]),
+        Error::Solver(s) => solver_error(py, s, msg),
+        Error::ProblemFile {
+            path,
+            line,
+            column,
+            kind,
+            ..
+        } => (
+            ProblemFileError::new_err(msg),
+            vec![
+                ("path", path_obj(py, path)),
+                ("line", obj(py, *line)),
+                ("column", obj(py, *column)),
+                ("kind", obj(py, kind_name(*kind))),
+            ],
+        ),
+        Error::Io { path, source } => (
+            FileError::new_err(msg),
+            vec![
+                ("path", path_obj(py, path)),
+                ("errno", obj(py, source.raw_os_error())),
+            ],
+        ),
+        #[allow(unreachable_patterns)]
+        _ => (GradviError::new_err(msg), vec![]),
+    };
+    let value = err.value(py);
+    for (name, v) in attrs {
+        // setting an attribute on a fresh exception instance cannot fail in practice; if it
+        // did, the exception is still raised, without that attribute
+        let _ = value.setattr(name, v);
+    }
+    err
+}
+
+fn obj<'py, T: IntoPyObject<'py>>(py: Python<'py>, v: T) -> Py<PyAny> {
+    match v.into_pyobject(py) {
+        Ok(o) => o.into_any().unbind(),
+        Err(_) => py.None(),
+    }
+}
+
+fn path_obj(py: Python<'_>, p: &std::path::Path) -> Py<PyAny> {
+    obj(py, p.display().to_string())
+}
+
+fn solver_error(py: Python<'_>, s: &Stall, msg: String) -> (PyErr, Vec<(&'static str, Py<PyAny>)>) {
+    match s {
+        Stall::MaxIterations {
+            iterations,
+            history,
+        } => (
+            MaxIterationsError::new_err(msg),
+            vec![
+                ("iterations", obj(py, *iterations)),
+                ("history", obj(py, history.clone())),
+            ],
+        ),
+        Stall::Cycling {
+            iteration,
+            repeats,
+            history,
+        } => (
+            CyclingError::new_err(msg),
+            vec![
+                ("iteration", obj(py, *iteration)),
+                ("repeats", obj(py, *repeats)),
+                ("history", obj(py, history.clone())),
+            ],
+        ),
+        Stall::NoKktPoint { candidates } => (
+            NoKktPointError::new_err(msg),
+            vec![("candidates", obj(py, *candidates))],
+        ),
+        Stall::Certificate {
+            quantity,
+            value,
+            tol,
+        } => (
+            CertificateError::new_err(msg),
+            vec![
+                ("quantity", obj(py, quantity.clone())),
+                ("value", obj(py, *value)),
+                ("tol", obj(py, *tol)),
+            ],
+        ),
+        #[allow(unreachable_patterns)]
+        _ => (SolverError::new_err(msg), vec![]),
+    }
+}
+
+/// `InternalError` for a caught panic, with its message.
+pub fn panic_error(panic: Box<dyn Any + Send>) -> PyErr {
+    let what = if let Some(s) = panic.downcast_ref::<&str>() {
+        (*s).to_string()
+    } else if let Some(s) = panic.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "unknown panic payload".to_string()
+    };
+    InternalError::new_err(format!(
+        "internal error in gradvi (a bug, please report it with the input): {what}"
+    ))
+}

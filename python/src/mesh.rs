@@ -1,0 +1,355 @@
+//! `_Mesh`: an immutable, validated `gradvi::mesh::PolyMesh` shared by reference counting.
+
+use crate::errors::invalid;
+use crate::guard;
+use gradvi::mesh::generate::{Family, cartesian_rect};
+use gradvi::mesh::io::{read_mesh, read_msh, write_typ2, write_vtu};
+use gradvi::mesh::{NO_CELL, Point, PolyMesh};
+use gradvi::problem::file::map_unit_square;
+use gradvi::scheme::Cr;
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::str::FromStr;
+use std::sync::Arc;
+
+/// A gradvi mesh (private handle; see `gradvi.Mesh`).
+#[pyclass(name = "_Mesh", module = "gradvi._gradvi", frozen)]
+pub struct PyMesh {
+    pub mesh: Arc<PolyMesh>,
+    /// `(dimension, tag, name)` of a gmsh file's `$PhysicalNames`.
+    pub physical_names: Vec<(i32, i32, String)>,
+}
+
+impl PyMesh {
+    fn new(mesh: PolyMesh) -> Self {
+        PyMesh {
+            mesh: Arc::new(mesh),
+            physical_names: Vec::new(),
+        }
+    }
+}
+
+/// The key of a point in hash tables: its bits (−0 taken as +0).
+pub fn point_key(p: Point) -> [u64; 2] {
+    [(p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits()]
+}
+
+/// An (n, 2) array of points.
+pub fn points_array<'py>(py: Python<'py>, pts: impl ExactSizeIterator<Item = Point>) -> PyResult<Bound<'py, PyAny>> {
+    let n = pts.len();
+    let mut flat = Vec::with_capacity(2 * n);
+    for p in pts {
+        flat.extend_from_slice(&p);
+    }
+    Ok(PyArray1::from_vec(py, flat).reshape([n, 2])?.into_any())
+}
+
+/// A 1-d array from a vector, without copying.
+pub fn vec_array<'py, T: numpy::Element>(py: Python<'py>, v: Vec<T>) -> Bound<'py, PyAny> {
+    PyArray1::from_vec(py, v).into_any()
+}
+
+fn index_array(py: Python<'_>, v: impl Iterator<Item = usize>) -> Bound<'_, PyAny> {
+    vec_array(py, v.map(|i| i as i64).collect::<Vec<i64>>())
+}
+
+fn check_rect(d: [f64; 4]) -> PyResult<()> {
+    if !(d.iter().all(|v| v.is_finite()) && d[1] > d[0] && d[3] > d[2]) {
+        return Err(invalid(format!(
+            "the rectangle [{}, {}] x [{}, {}] must be finite with x0 < x1 and y0 < y1",
+            d[0], d[1], d[2], d[3]
+        )));
+    }
+    Ok(())
+}
+
+#[pymethods]
+impl PyMesh {
+    /// Reads a mesh file (.msh gmsh 4.1/2.2 ASCII, .typ1, .typ2), keeping gmsh physical names.
+    #[staticmethod]
+    fn read(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let is_msh = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("msh"));
+        guard(py, move || {
+            if is_msh {
+                let m = read_msh(&path)?;
+                Ok(PyMesh {
+                    mesh: Arc::new(m.mesh),
+                    physical_names: m.physical_names,
+                })
+            } else {
+                Ok(PyMesh::new(read_mesh(&path)?))
+            }
+        })
+    }
+
+    /// Builds a mesh from points (n, 2), CSR cells (offsets, connectivity) and optional
+    /// boundary tags (k, 3) rows (vertex a, vertex b, tag).
+    #[staticmethod]
+    #[pyo3(signature = (points, offsets, connectivity, tagged_edges=None))]
+    fn from_arrays(
+        py: Python<'_>,
+        points: PyReadonlyArray2<'_, f64>,
+        offsets: PyReadonlyArray1<'_, i64>,
+        connectivity: PyReadonlyArray1<'_, i64>,
+        tagged_edges: Option<PyReadonlyArray2<'_, i64>>,
+    ) -> PyResult<Self> {
+        let pts = points.as_array();
+        if pts.ncols() != 2 {
+            return Err(invalid(format!(
+                "points must have shape (n, 2), got {:?}",
+                pts.shape()
+            )));
+        }
+        let vertices: Vec<Point> = pts.rows().into_iter().map(|r| [r[0], r[1]]).collect();
+        let off = offsets.as_array();
+        let conn = connectivity.as_array();
+        if off.is_empty() || off[0] != 0 || off[off.len() - 1] as usize != conn.len() {
+            return Err(invalid(format!(
+                "cell offsets must start at 0 and end at the length of the connectivity ({})",
+                conn.len()
+            )));
+        }
+        let mut cells = Vec::with_capacity(off.len() - 1);
+        for k in 0..off.len() - 1 {
+            let (a, b) = (off[k], off[k + 1]);
+            if b < a {
+                return Err(invalid(format!("cell offsets decrease at cell {k}")));
+            }
+            let mut c = Vec::with_capacity((b - a) as usize);
+            for &v in conn.slice(numpy::ndarray::s![a as usize..b as usize]) {
+                if v < 0 {
+                    return Err(invalid(format!("cell {k} refers to the negative vertex id {v}")));
+                }
+                c.push(v as usize);
+            }
+            cells.push(c);
+        }
+        let mut tags = Vec::new();
+        if let Some(t) = tagged_edges {
+            let t = t.as_array();
+            if t.ncols() != 3 {
+                return Err(invalid(format!(
+                    "tagged edges must have shape (k, 3) rows (vertex a, vertex b, tag), got {:?}",
+                    t.shape()
+                )));
+            }
+            for (i, r) in t.rows().into_iter().enumerate() {
+                if r[0] < 0 || r[1] < 0 || i32::try_from(r[2]).is_err() {
+                    return Err(invalid(format!(
+                        "tagged edge {i} ({}, {}, tag {}) has a negative vertex or a tag out of the 32-bit range",
+                        r[0], r[1], r[2]
+                    )));
+                }
+                tags.push((r[0] as usize, r[1] as usize, r[2] as i32));
+            }
+        }
+        guard(py, move || {
+            Ok(PyMesh::new(PolyMesh::from_cells_tagged(
+                vertices, cells, &tags,
+            )?))
+        })
+    }
+
+    /// The built-in family `family` at `level`, optionally mapped onto a rectangle.
+    #[staticmethod]
+    #[pyo3(signature = (family, level, domain=None))]
+    fn generate(py: Python<'_>, family: &str, level: usize, domain: Option<[f64; 4]>) -> PyResult<Self> {
+        let fam = Family::from_str(family).map_err(|e| crate::to_pyerr(py, &e))?;
+        if let Some(d) = domain {
+            check_rect(d)?;
+        }
+        guard(py, move || {
+            let m = fam.generate(level)?;
+            Ok(PyMesh::new(match domain {
+                None => m,
+                Some(d) => map_unit_square(&m, d)?,
+            }))
+        })
+    }
+
+    /// nx × ny rectangles on [x0, x1] × [y0, y1].
+    #[staticmethod]
+    fn cartesian(py: Python<'_>, nx: usize, ny: usize, domain: [f64; 4]) -> PyResult<Self> {
+        check_rect(domain)?;
+        guard(py, move || {
+            Ok(PyMesh::new(cartesian_rect(
+                nx,
+                ny,
+                [domain[0], domain[1]],
+                [domain[2], domain[3]],
+            )?))
+        })
+    }
+
+    /// A copy whose boundary edges carry `tags[e]` (one entry per edge; interior entries are
+    /// ignored).
+    fn with_edge_tags(&self, py: Python<'_>, tags: PyReadonlyArray1<'_, i32>) -> PyResult<Self> {
+        let tags = tags.as_array().to_vec();
+        let mesh = Arc::clone(&self.mesh);
+        if tags.len() != mesh.n_edges() {
+            return Err(invalid(format!(
+                "edge tags must have one entry per edge ({}), got {}",
+                mesh.n_edges(),
+                tags.len()
+            )));
+        }
+        let names = self.physical_names.clone();
+        guard(py, move || {
+            let by_mid: HashMap<[u64; 2], usize> = mesh
+                .boundary_edges()
+                .iter()
+                .map(|&e| (point_key(mesh.edge_midpoint(e)), e))
+                .collect();
+            let m = mesh.with_boundary_tags(|x| by_mid.get(&point_key(x)).map_or(0, |&e| tags[e]));
+            Ok(PyMesh {
+                mesh: Arc::new(m),
+                physical_names: names,
+            })
+        })
+    }
+
+    #[getter]
+    fn n_vertices(&self) -> usize {
+        self.mesh.n_vertices()
+    }
+    #[getter]
+    fn n_cells(&self) -> usize {
+        self.mesh.n_cells()
+    }
+    #[getter]
+    fn n_edges(&self) -> usize {
+        self.mesh.n_edges()
+    }
+    #[getter]
+    fn h(&self) -> f64 {
+        self.mesh.h()
+    }
+    #[getter]
+    fn physical_names(&self) -> Vec<(i32, i32, String)> {
+        self.physical_names.clone()
+    }
+    #[getter]
+    fn is_triangular(&self) -> bool {
+        self.mesh.is_triangular()
+    }
+    #[getter]
+    fn bounding_box(&self) -> [f64; 4] {
+        self.mesh.bounding_box()
+    }
+    /// Whether two handles share the same mesh object.
+    fn same_as(&self, other: &PyMesh) -> bool {
+        Arc::ptr_eq(&self.mesh, &other.mesh)
+    }
+
+    /// Every geometry array, as a dict (computed once by the Python layer, which caches it).
+    fn geometry<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let m = &*self.mesh;
+        let (nc, ne) = (m.n_cells(), m.n_edges());
+        let d = PyDict::new(py);
+        d.set_item("points", points_array(py, m.vertices().iter().copied())?)?;
+        let mut offsets = Vec::with_capacity(nc + 1);
+        offsets.push(0i64);
+        let (mut conn, mut cedges, mut normals, mut dists) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for k in 0..nc {
+            conn.extend(m.cell_vertices(k).iter().map(|&v| v as i64));
+            cedges.extend(m.cell_edges(k).iter().map(|&e| e as i64));
+            normals.extend(m.cell_normals(k).iter().copied());
+            dists.extend_from_slice(m.cell_dists(k));
+            offsets.push(conn.len() as i64);
+        }
+        d.set_item("cell_offsets", vec_array(py, offsets))?;
+        d.set_item("cell_connectivity", vec_array(py, conn))?;
+        d.set_item("cell_edges", vec_array(py, cedges))?;
+        d.set_item("cell_normals", points_array(py, normals.into_iter())?)?;
+        d.set_item("cell_dists", vec_array(py, dists))?;
+        d.set_item("centroids", points_array(py, (0..nc).map(|k| m.centroid(k)))?)?;
+        d.set_item("measures", vec_array(py, (0..nc).map(|k| m.measure(k)).collect::<Vec<_>>()))?;
+        d.set_item("diameters", vec_array(py, (0..nc).map(|k| m.diameter(k)).collect::<Vec<_>>()))?;
+        let mut edges = Vec::with_capacity(2 * ne);
+        let mut ecells = Vec::with_capacity(2 * ne);
+        for e in 0..ne {
+            edges.extend(m.edge_vertices(e).iter().map(|&v| v as i64));
+            ecells.extend(
+                m.edge_cells(e)
+                    .iter()
+                    .map(|&k| if k == NO_CELL { -1 } else { k as i64 }),
+            );
+        }
+        d.set_item("edges", PyArray1::from_vec(py, edges).reshape([ne, 2])?)?;
+        d.set_item("edge_cells", PyArray1::from_vec(py, ecells).reshape([ne, 2])?)?;
+        d.set_item("edge_midpoints", points_array(py, (0..ne).map(|e| m.edge_midpoint(e)))?)?;
+        d.set_item("edge_lengths", vec_array(py, (0..ne).map(|e| m.edge_measure(e)).collect::<Vec<_>>()))?;
+        d.set_item("edge_tags", vec_array(py, (0..ne).map(|e| m.edge_tag(e)).collect::<Vec<i32>>()))?;
+        d.set_item("boundary_edges", index_array(py, m.boundary_edges().iter().copied()))?;
+        Ok(d)
+    }
+
+    /// The points where a scheme evaluates problem data: cell centroids, edge midpoints,
+    /// vertices, and for the Crouzeix–Raviart scheme the centroids of the sub-triangles
+    /// co(σ ∪ {x_K}) (3 per cell, in local edge order; empty for the other schemes).
+    fn evaluation_points<'py>(&self, py: Python<'py>, scheme: &str) -> PyResult<Bound<'py, PyDict>> {
+        let m = &*self.mesh;
+        let d = PyDict::new(py);
+        d.set_item("centroids", points_array(py, (0..m.n_cells()).map(|k| m.centroid(k)))?)?;
+        d.set_item("midpoints", points_array(py, (0..m.n_edges()).map(|e| m.edge_midpoint(e)))?)?;
+        d.set_item("vertices", points_array(py, m.vertices().iter().copied())?)?;
+        let sub: Vec<Point> = if scheme.eq_ignore_ascii_case("cr") {
+            let mesh = Arc::clone(&self.mesh);
+            guard(py, move || {
+                let cr = Cr::new(&mesh)?;
+                Ok((0..mesh.n_cells())
+                    .flat_map(|k| (0..3).map(move |i| (k, i)))
+                    .map(|(k, i)| cr.sub_centroid(k, i))
+                    .collect())
+            })?
+        } else {
+            Vec::new()
+        };
+        d.set_item("subcentroids", points_array(py, sub.into_iter())?)?;
+        Ok(d)
+    }
+
+    /// Writes the mesh with named point (per vertex) and cell data to an ASCII .vtu file.
+    fn write_vtu(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        point_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
+        cell_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
+    ) -> PyResult<()> {
+        let pd: Vec<(String, Vec<f64>)> = point_data.into_iter().map(|(n, a)| (n, a.as_array().to_vec())).collect();
+        let cd: Vec<(String, Vec<f64>)> = cell_data.into_iter().map(|(n, a)| (n, a.as_array().to_vec())).collect();
+        let mesh = Arc::clone(&self.mesh);
+        guard(py, move || {
+            let p: Vec<(&str, &[f64])> = pd.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+            let c: Vec<(&str, &[f64])> = cd.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+            write_vtu(&path, &mesh, &p, &c)
+        })
+    }
+
+    /// Writes the mesh as an FVCA5 / HArDCore .typ2 file.
+    fn write_typ2(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let mesh = Arc::clone(&self.mesh);
+        guard(py, move || write_typ2(&path, &mesh))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<gradvi mesh: {} cells, {} edges, {} vertices, h = {:.4e}>",
+            self.mesh.n_cells(),
+            self.mesh.n_edges(),
+            self.mesh.n_vertices(),
+            self.mesh.h()
+        )
+    }
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyMesh>()
+}

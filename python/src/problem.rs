@@ -1,0 +1,547 @@
+//! `_Problem`: a built-in problem, a problem file, or a problem *tabulated* by the Python layer.
+//!
+//! A tabulated problem holds, for one mesh, the value of every datum at every point where a
+//! scheme evaluates it (cell centroids, edge midpoints, vertices, and the sub-triangle centroids
+//! of Crouzeix–Raviart): the Python layer evaluates each vectorised callable once on the
+//! arrays of those points. The closures of the `gradvi::problem::Problem` built here look the
+//! value up by the bits of the point. A point that is not in the table (only the coarse meshes
+//! of the nested warm start ask for such points) calls the point-wise fallback the Python layer
+//! gave for a callable datum, or gets NaN for array data (the warm start is then skipped, with
+//! the reason in the solution's report).
+
+use crate::errors::invalid;
+use crate::guard;
+use crate::mesh::{PyMesh, point_key};
+use gradvi::mesh::{Point, PolyMesh};
+use gradvi::problem::file::{ProblemFile, load};
+use gradvi::problem::{BoundaryKind, ConstraintKind, Problem, Side, by_name};
+use gradvi::scheme::Tensor;
+use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+
+/// What a problem handle stands for.
+pub enum Spec {
+    /// `gradvi::problem::by_name` (the command line's `--problem`).
+    Builtin {
+        name: String,
+        params: Vec<(String, f64)>,
+    },
+    /// A problem file.
+    File(Box<ProblemFile>),
+    /// Data tabulated on one mesh by the Python layer.
+    Tabulated(Arc<Tabulated>),
+}
+
+/// A problem (private handle; see `gradvi.Problem`).
+#[pyclass(name = "_Problem", module = "gradvi._gradvi", frozen)]
+pub struct PyProblem {
+    pub spec: Spec,
+}
+
+/// Points that were not in the table, and errors of the Python fallbacks.
+#[derive(Default)]
+pub struct Misses {
+    /// Points looked up that were not in the table.
+    pub count: AtomicUsize,
+    /// Calls of Python fallbacks.
+    pub calls: AtomicUsize,
+    /// The first point without a value and without a fallback (datum, point).
+    pub first_unresolved: Mutex<Option<(&'static str, Point)>>,
+    /// The first exception raised by a Python fallback.
+    pub py_error: Mutex<Option<PyErr>>,
+}
+
+impl Misses {
+    fn unresolved(&self, what: &'static str, p: Point) {
+        if let Ok(mut g) = self.first_unresolved.lock() {
+            g.get_or_insert((what, p));
+        }
+    }
+    fn py_error(&self, e: PyErr) {
+        if let Ok(mut g) = self.py_error.lock() {
+            g.get_or_insert(e);
+        }
+    }
+}
+
+/// Values of one datum at the rows of the point table.
+struct Column<T> {
+    values: Vec<T>,
+    fallback: Option<Py<PyAny>>,
+}
+
+/// A problem tabulated on a mesh (see the module docs).
+pub struct Tabulated {
+    pub name: String,
+    pub mesh: Arc<PolyMesh>,
+    index: HashMap<[u64; 2], usize>,
+    diffusion: Option<Column<Tensor>>,
+    source: Column<f64>,
+    source_per_cell: bool,
+    dirichlet: Column<f64>,
+    neumann: Column<f64>,
+    /// One code per edge (0 Dirichlet, 1 Neumann, 2 Signorini; interior edges ignored).
+    boundary: Vec<u8>,
+    boundary_fallback: Option<Py<PyAny>>,
+    /// The boundary edge of each boundary midpoint.
+    edge_by_midpoint: HashMap<[u64; 2], usize>,
+    /// Boundary edge midpoints and codes, for the nearest-edge rule on unknown points.
+    boundary_points: Vec<(Point, u8)>,
+    constraint: Option<(ConstraintKind, Side, Column<f64>)>,
+    exact: Option<(Column<f64>, Column<Point>)>,
+    pub misses: Arc<Misses>,
+}
+
+fn kind_of(code: u8) -> BoundaryKind {
+    match code {
+        1 => BoundaryKind::Neumann,
+        2 => BoundaryKind::Signorini,
+        _ => BoundaryKind::Dirichlet,
+    }
+}
+
+impl Tabulated {
+    fn row(&self, p: Point) -> Option<usize> {
+        self.index.get(&point_key(p)).copied()
+    }
+
+    /// Value of `col` at `p`: from the table, else from the fallback, else NaN (recorded).
+    fn lookup<T: Copy>(
+        &self,
+        col: &Column<T>,
+        p: Point,
+        what: &'static str,
+        convert: impl Fn(&Bound<'_, PyAny>) -> PyResult<T>,
+        nan: T,
+    ) -> T {
+        if let Some(i) = self.row(p) {
+            return col.values[i];
+        }
+        self.misses.count.fetch_add(1, Ordering::Relaxed);
+        match &col.fallback {
+            Some(cb) => {
+                self.misses.calls.fetch_add(1, Ordering::Relaxed);
+                Python::attach(|py| match cb.call1(py, (p[0], p[1])).and_then(|r| convert(r.bind(py))) {
+                    Ok(v) => v,
+                    Err(e) => {
+                        self.misses.py_error(e);
+                        nan
+                    }
+                })
+            }
+            None => {
+                self.misses.unresolved(what, p);
+                nan
+            }
+        }
+    }
+
+    fn scalar(&self, col: &Column<f64>, p: Point, what: &'static str) -> f64 {
+        self.lookup(col, p, what, |r| r.extract::<f64>().map_err(Into::into), f64::NAN)
+    }
+
+    fn boundary_at(&self, x: Point, tag: i32) -> BoundaryKind {
+        if let Some(&e) = self.edge_by_midpoint.get(&point_key(x)) {
+            return kind_of(self.boundary[e]);
+        }
+        self.misses.count.fetch_add(1, Ordering::Relaxed);
+        if let Some(cb) = &self.boundary_fallback {
+            self.misses.calls.fetch_add(1, Ordering::Relaxed);
+            return Python::attach(|py| {
+                match cb
+                    .call1(py, (x[0], x[1], tag))
+                    .and_then(|r| r.bind(py).extract::<u8>().map_err(Into::into))
+                {
+                    Ok(c) => kind_of(c),
+                    Err(e) => {
+                        self.misses.py_error(e);
+                        BoundaryKind::Dirichlet
+                    }
+                }
+            });
+        }
+        // nearest boundary edge of the tabulated mesh (the warm start's coarse meshes)
+        let mut best = (f64::INFINITY, 0u8);
+        for &(m, c) in &self.boundary_points {
+            let d = (m[0] - x[0]).powi(2) + (m[1] - x[1]).powi(2);
+            if d < best.0 {
+                best = (d, c);
+            }
+        }
+        kind_of(best.1)
+    }
+
+    /// The `gradvi::problem::Problem` whose closures read this table.
+    pub fn problem(self: &Arc<Self>) -> Problem {
+        let t = Arc::clone(self);
+        let mut pb = Problem::new(&self.name, Box::new(move |p| t.scalar(&t.source, p, "the source term f")));
+        if self.source_per_cell {
+            let t = Arc::clone(self);
+            pb = pb.with_source_in_cell(Box::new(move |_p, xk| t.scalar(&t.source, xk, "the source term f")));
+        }
+        if self.diffusion.is_some() {
+            let t = Arc::clone(self);
+            pb = pb.with_diffusion(Box::new(move |p| {
+                let col = t.diffusion.as_ref().expect("checked above");
+                t.lookup(
+                    col,
+                    p,
+                    "the diffusion tensor A",
+                    |r| {
+                        let v: [f64; 4] = r.extract()?;
+                        Ok([[v[0], v[1]], [v[2], v[3]]])
+                    },
+                    [[f64::NAN; 2]; 2],
+                )
+            }));
+        }
+        let t = Arc::clone(self);
+        pb = pb.with_boundary(move |x, tag| t.boundary_at(x, tag));
+        let t = Arc::clone(self);
+        pb = pb.with_dirichlet(Box::new(move |p| t.scalar(&t.dirichlet, p, "the Dirichlet value")));
+        let t = Arc::clone(self);
+        pb = pb.with_neumann(Box::new(move |p| t.scalar(&t.neumann, p, "the Neumann flux")));
+        if let Some((kind, side, _)) = &self.constraint {
+            let t = Arc::clone(self);
+            pb = pb.with_constraint(
+                *kind,
+                *side,
+                Box::new(move |p| {
+                    let col = &t.constraint.as_ref().expect("checked above").2;
+                    t.scalar(col, p, "the barrier")
+                }),
+            );
+        }
+        if self.exact.is_some() {
+            let (t1, t2) = (Arc::clone(self), Arc::clone(self));
+            pb = pb.with_exact(
+                Box::new(move |p| t1.scalar(&t1.exact.as_ref().expect("checked above").0, p, "the exact solution")),
+                Box::new(move |p| {
+                    let col = &t2.exact.as_ref().expect("checked above").1;
+                    t2.lookup(
+                        col,
+                        p,
+                        "the exact gradient",
+                        |r| r.extract::<[f64; 2]>().map_err(Into::into),
+                        [f64::NAN; 2],
+                    )
+                }),
+            );
+        }
+        pb
+    }
+}
+
+impl PyProblem {
+    /// The `gradvi::problem::Problem` on `mesh` (a problem file is checked against it first),
+    /// and the miss record of a tabulated problem.
+    pub fn instantiate(&self, mesh: &Arc<PolyMesh>) -> gradvi::Result<(Problem, Option<Arc<Misses>>)> {
+        match &self.spec {
+            Spec::Builtin { name, params } => Ok((by_name(name, params)?, None)),
+            Spec::File(pf) => {
+                pf.check_against_mesh(mesh)?;
+                Ok((pf.problem(), None))
+            }
+            Spec::Tabulated(t) => {
+                if !Arc::ptr_eq(&t.mesh, mesh) {
+                    return Err(gradvi::Error::InvalidData(
+                        "this problem was tabulated on another mesh".into(),
+                    ));
+                }
+                Ok((t.problem(), Some(Arc::clone(&t.misses))))
+            }
+        }
+    }
+
+    /// The problem without a mesh (for its description): built-ins and files only.
+    fn describe(&self) -> Option<Problem> {
+        match &self.spec {
+            Spec::Builtin { name, params } => by_name(name, params).ok(),
+            Spec::File(pf) => Some(pf.problem()),
+            Spec::Tabulated(_) => None,
+        }
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Reading the tabulated data handed over by the Python layer.
+
+fn item<'py>(d: &Bound<'py, PyDict>, key: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
+    Ok(d.get_item(key)?.filter(|v| !v.is_none()))
+}
+
+fn scalar_col(d: &Bound<'_, PyDict>, key: &str, m: usize) -> PyResult<Option<Column<f64>>> {
+    let Some(v) = item(d, key)? else {
+        return Ok(None);
+    };
+    let a: PyReadonlyArray1<'_, f64> = v.extract().map_err(|_| invalid(format!("{key}: expected a float64 array")))?;
+    let values = a.as_array().to_vec();
+    if values.len() != m {
+        return Err(invalid(format!("{key}: expected {m} values, got {}", values.len())));
+    }
+    Ok(Some(Column {
+        values,
+        fallback: item(d, &format!("{key}_fallback"))?.map(Bound::unbind),
+    }))
+}
+
+fn required_scalar(d: &Bound<'_, PyDict>, key: &str, m: usize) -> PyResult<Column<f64>> {
+    scalar_col(d, key, m)?.ok_or_else(|| invalid(format!("{key}: missing")))
+}
+
+fn side_of(s: &str) -> PyResult<Side> {
+    match s {
+        "upper" => Ok(Side::Upper),
+        "lower" => Ok(Side::Lower),
+        _ => Err(invalid(format!("side must be \"upper\" or \"lower\", got {s:?}"))),
+    }
+}
+
+#[pymethods]
+impl PyProblem {
+    /// A built-in problem by name, with parameters (e.g. `[("C", -20.0)]` for test3).
+    #[staticmethod]
+    fn builtin(py: Python<'_>, name: String, params: Vec<(String, f64)>) -> PyResult<Self> {
+        // check the name and the parameters now
+        let (n, p) = (name.clone(), params.clone());
+        guard(py, move || by_name(&n, &p).map(|_| ()))?;
+        Ok(PyProblem {
+            spec: Spec::Builtin { name, params },
+        })
+    }
+
+    /// A problem file, with parameter overrides.
+    #[staticmethod]
+    fn from_file(py: Python<'_>, path: PathBuf, params: Vec<(String, f64)>) -> PyResult<Self> {
+        let pf = guard(py, move || load(&path, &params))?;
+        Ok(PyProblem {
+            spec: Spec::File(Box::new(pf)),
+        })
+    }
+
+    /// A problem tabulated on `mesh` at the rows of `points` (m, 2); see the module docs for
+    /// the keys of `data`.
+    #[staticmethod]
+    fn tabulated(
+        name: String,
+        mesh: &PyMesh,
+        points: PyReadonlyArray2<'_, f64>,
+        data: &Bound<'_, PyDict>,
+    ) -> PyResult<Self> {
+        crate::guard_attached(|| {
+            let pts = points.as_array();
+            if pts.ncols() != 2 {
+                return Err(invalid("points must have shape (m, 2)"));
+            }
+            let m = pts.nrows();
+            let mut index = HashMap::with_capacity(m);
+            for (i, r) in pts.rows().into_iter().enumerate() {
+                index.entry(point_key([r[0], r[1]])).or_insert(i);
+            }
+            let mesh_ref = Arc::clone(&mesh.mesh);
+            let diffusion = match item(data, "diffusion")? {
+                None => None,
+                Some(v) => {
+                    let a: PyReadonlyArray3<'_, f64> =
+                        v.extract().map_err(|_| invalid("diffusion: expected a float64 array of shape (m, 2, 2)"))?;
+                    let a = a.as_array();
+                    if a.shape() != [m, 2, 2] {
+                        return Err(invalid(format!("diffusion: expected shape ({m}, 2, 2), got {:?}", a.shape())));
+                    }
+                    let values = (0..m)
+                        .map(|i| [[a[[i, 0, 0]], a[[i, 0, 1]]], [a[[i, 1, 0]], a[[i, 1, 1]]]])
+                        .collect();
+                    Some(Column {
+                        values,
+                        fallback: item(data, "diffusion_fallback")?.map(Bound::unbind),
+                    })
+                }
+            };
+            let boundary: Vec<u8> = match item(data, "boundary")? {
+                None => vec![0; mesh_ref.n_edges()],
+                Some(v) => {
+                    let a: PyReadonlyArray1<'_, u8> =
+                        v.extract().map_err(|_| invalid("boundary: expected a uint8 array"))?;
+                    a.as_array().to_vec()
+                }
+            };
+            if boundary.len() != mesh_ref.n_edges() || boundary.iter().any(|&c| c > 2) {
+                return Err(invalid(format!(
+                    "boundary: expected one code 0, 1 or 2 per edge ({} edges)",
+                    mesh_ref.n_edges()
+                )));
+            }
+            let constraint = match item(data, "constraint")? {
+                None => None,
+                Some(k) => {
+                    let kind = match k.extract::<String>()?.as_str() {
+                        "obstacle" => ConstraintKind::Obstacle,
+                        "signorini" => ConstraintKind::Signorini,
+                        other => return Err(invalid(format!("unknown constraint kind {other:?}"))),
+                    };
+                    let side = side_of(&item(data, "side")?.ok_or_else(|| invalid("side: missing"))?.extract::<String>()?)?;
+                    Some((kind, side, required_scalar(data, "barrier", m)?))
+                }
+            };
+            let exact = match scalar_col(data, "exact_u", m)? {
+                None => None,
+                Some(u) => {
+                    let g = item(data, "exact_grad")?.ok_or_else(|| invalid("exact_grad: missing"))?;
+                    let g: PyReadonlyArray2<'_, f64> =
+                        g.extract().map_err(|_| invalid("exact_grad: expected a float64 array of shape (m, 2)"))?;
+                    let g = g.as_array();
+                    if g.shape() != [m, 2] {
+                        return Err(invalid(format!("exact_grad: expected shape ({m}, 2), got {:?}", g.shape())));
+                    }
+                    let values = g.rows().into_iter().map(|r| [r[0], r[1]]).collect();
+                    Some((
+                        u,
+                        Column {
+                            values,
+                            fallback: item(data, "exact_grad_fallback")?.map(Bound::unbind),
+                        },
+                    ))
+                }
+            };
+            let boundary_points = mesh_ref
+                .boundary_edges()
+                .iter()
+                .map(|&e| (mesh_ref.edge_midpoint(e), boundary[e]))
+                .collect();
+            let edge_by_midpoint = mesh_ref
+                .boundary_edges()
+                .iter()
+                .map(|&e| (point_key(mesh_ref.edge_midpoint(e)), e))
+                .collect();
+            let t = Tabulated {
+                name,
+                index,
+                edge_by_midpoint,
+                diffusion,
+                source: required_scalar(data, "source", m)?,
+                source_per_cell: item(data, "source_per_cell")?.map_or(Ok(false), |v| v.extract::<bool>())?,
+                dirichlet: required_scalar(data, "dirichlet", m)?,
+                neumann: required_scalar(data, "neumann", m)?,
+                boundary,
+                boundary_fallback: item(data, "boundary_fallback")?.map(Bound::unbind),
+                boundary_points,
+                constraint,
+                exact,
+                mesh: mesh_ref,
+                misses: Arc::new(Misses::default()),
+            };
+            Ok(PyProblem {
+                spec: Spec::Tabulated(Arc::new(t)),
+            })
+        })
+    }
+
+    #[getter]
+    fn name(&self) -> String {
+        match &self.spec {
+            Spec::Builtin { .. } => self.describe().map(|p| p.name).unwrap_or_default(),
+            Spec::File(pf) => pf.name.clone(),
+            Spec::Tabulated(t) => t.name.clone(),
+        }
+    }
+    #[getter]
+    fn source(&self) -> &'static str {
+        match &self.spec {
+            Spec::Builtin { .. } => "builtin",
+            Spec::File(_) => "file",
+            Spec::Tabulated(_) => "python",
+        }
+    }
+    #[getter]
+    fn description(&self) -> Option<String> {
+        match &self.spec {
+            Spec::File(pf) => pf.description.clone(),
+            _ => None,
+        }
+    }
+    #[getter]
+    fn path(&self) -> Option<String> {
+        match &self.spec {
+            Spec::File(pf) => Some(pf.path.display().to_string()),
+            _ => None,
+        }
+    }
+    /// Parameters with the values used (files: every parameter; built-ins: those given).
+    #[getter]
+    fn parameters(&self) -> Vec<(String, f64)> {
+        match &self.spec {
+            Spec::Builtin { params, .. } => params.clone(),
+            Spec::File(pf) => pf.parameters.clone(),
+            Spec::Tabulated(_) => Vec::new(),
+        }
+    }
+    /// The scheme the file asks for (`scheme = ...`), if any.
+    #[getter]
+    fn scheme(&self) -> Option<String> {
+        match &self.spec {
+            Spec::File(pf) => pf.scheme.map(|s| s.name().to_string()),
+            _ => None,
+        }
+    }
+    /// The `[mesh]` of a problem file, as text, if any.
+    #[getter]
+    fn mesh_spec(&self) -> Option<String> {
+        match &self.spec {
+            Spec::File(pf) => pf.mesh.as_ref().map(|m| m.to_string()),
+            _ => None,
+        }
+    }
+    /// Builds the mesh of the file's `[mesh]` section (None without one).
+    fn build_mesh(&self, py: Python<'_>) -> PyResult<Option<PyMesh>> {
+        let Spec::File(pf) = &self.spec else {
+            return Ok(None);
+        };
+        let Some(spec) = pf.mesh.clone() else {
+            return Ok(None);
+        };
+        let m = guard(py, move || spec.build())?;
+        Ok(Some(PyMesh {
+            mesh: Arc::new(m),
+            physical_names: Vec::new(),
+        }))
+    }
+    /// (kind, side) of the barrier: ("obstacle" | "signorini", "upper" | "lower"), or None.
+    #[getter]
+    fn constraint(&self) -> Option<(String, String)> {
+        let name = |k: ConstraintKind, s: Side| {
+            (
+                match k {
+                    ConstraintKind::Obstacle => "obstacle",
+                    ConstraintKind::Signorini => "signorini",
+                }
+                .to_string(),
+                match s {
+                    Side::Upper => "upper",
+                    Side::Lower => "lower",
+                }
+                .to_string(),
+            )
+        };
+        match &self.spec {
+            Spec::Tabulated(t) => t.constraint.as_ref().map(|(k, s, _)| name(*k, *s)),
+            _ => self.describe()?.constraint.map(|c| name(c.kind, c.side)),
+        }
+    }
+    /// Whether the exact solution is known.
+    #[getter]
+    fn has_exact(&self) -> bool {
+        match &self.spec {
+            Spec::Tabulated(t) => t.exact.is_some(),
+            _ => self.describe().is_some_and(|p| p.exact.is_some()),
+        }
+    }
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyProblem>()
+}

@@ -1,0 +1,420 @@
+//! `solve`: one problem on one mesh with one scheme; every result as numpy arrays.
+
+use crate::errors::InvalidDataError;
+use crate::mesh::{PyMesh, points_array, vec_array};
+use crate::problem::{Misses, PyProblem};
+use crate::to_pyerr;
+use gradvi::assembly::SystemOptions;
+use gradvi::linalg::{FactorThreads, Ordering};
+use gradvi::mesh::Point;
+use gradvi::post::contact::{contact_measure, free_boundary, neighbours};
+use gradvi::post::fields::EntityFields;
+use gradvi::post::{Errors, relative_errors};
+use gradvi::problem::Side;
+use gradvi::scheme::{Entity, SchemeKind, SchemeOptions, build_with};
+use gradvi::solver::{
+    ActiveSetOptions, Certificate, IterationLog, Method, SolveOptions, Timings, WarmStart, WarmStartReport,
+    solve_problem,
+};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::str::FromStr;
+use std::sync::Arc;
+use std::sync::atomic::Ordering as AtomicOrdering;
+
+/// Everything a solve produces, owned (no borrow of the mesh or the scheme).
+struct Output {
+    problem: String,
+    scheme: &'static str,
+    n_unknowns: usize,
+    n_skeleton: usize,
+    n_condensed: usize,
+    u: Vec<f64>,
+    u_cell: Vec<f64>,
+    u_vertex: Vec<f64>,
+    gradient: Vec<Point>,
+    entity_kind: Vec<u8>,
+    entity_index: Vec<i64>,
+    u_fields: EntityFields,
+    constrained: Option<Constrained>,
+    niter: usize,
+    method: Method,
+    log: Vec<IterationLog>,
+    certificate: Certificate,
+    timings: Timings,
+    warm_start: Option<WarmStartReport>,
+    errors: Option<Errors>,
+    exact_cell: Option<Vec<f64>>,
+    iterates: Vec<Vec<f64>>,
+}
+
+struct Constrained {
+    kind: &'static str,
+    side: Side,
+    dofs: Vec<i64>,
+    points: Vec<Point>,
+    measures: Vec<f64>,
+    barrier: Vec<f64>,
+    multiplier: Vec<f64>,
+    active: Vec<bool>,
+    multiplier_field: Vec<f64>,
+    active_field: Vec<f64>,
+    active_fields: EntityFields,
+    multiplier_fields: EntityFields,
+    active_edge_sums: Option<Vec<f64>>,
+    multiplier_edge_sums: Option<Vec<f64>>,
+    contact_measure: f64,
+    free_boundary: Vec<Point>,
+}
+
+/// The options of one solve, checked.
+struct Options {
+    kind: SchemeKind,
+    scheme: SchemeOptions,
+    solve: SolveOptions,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn options(
+    scheme: &str,
+    alpha: f64,
+    c: f64,
+    max_solves: usize,
+    tol: f64,
+    fallback: bool,
+    warm_start: &str,
+    initial_active: Option<Vec<bool>>,
+    keep_iterates: bool,
+    ordering: &str,
+    factor_threads: &str,
+) -> gradvi::Result<Options> {
+    let bad = |m: String| Err(gradvi::Error::InvalidData(m));
+    if !(tol > 0.0 && tol < 1.0) {
+        return bad(format!("tol must be in (0, 1), got {tol} (the certificate would be meaningless)"));
+    }
+    if !(c > 0.0 && c.is_finite()) {
+        return bad(format!("c must be positive and finite, got {c}"));
+    }
+    if max_solves == 0 {
+        return bad("max_solves must be at least 1".into());
+    }
+    let ordering = match ordering.to_ascii_lowercase().as_str() {
+        "amd" => Ordering::Amd,
+        "nd" | "nested-dissection" | "nested_dissection" => Ordering::NestedDissection,
+        o => return bad(format!("unknown ordering {o:?} (expected \"amd\" or \"nested-dissection\")")),
+    };
+    let factor_threads = match factor_threads.to_ascii_lowercase().as_str() {
+        "sequential" => FactorThreads::Sequential,
+        "global" | "parallel" => FactorThreads::Global,
+        o => return bad(format!("unknown factor_threads {o:?} (expected \"sequential\" or \"global\")")),
+    };
+    Ok(Options {
+        kind: SchemeKind::from_str(scheme)?,
+        scheme: SchemeOptions { alpha },
+        solve: SolveOptions {
+            active_set: ActiveSetOptions {
+                c,
+                max_solves,
+                tol,
+                initial_active,
+                keep_iterates,
+                progress: None,
+            },
+            warm_start: WarmStart::from_str(&warm_start.to_ascii_lowercase())?,
+            fallback,
+            system: SystemOptions {
+                ordering,
+                factor_threads,
+            },
+        },
+    })
+}
+
+fn run(mesh: &Arc<gradvi::mesh::PolyMesh>, problem: &PyProblem, o: &Options) -> gradvi::Result<Output> {
+    let (pb, _) = problem.instantiate(mesh)?;
+    let scheme = build_with(o.kind, mesh, &o.scheme)?;
+    let s = scheme.as_ref();
+    let sol = solve_problem(s, &pb, &o.solve)?;
+    let u = sol.u().to_vec();
+    let n = u.len();
+    let (entity_kind, entity_index) = (0..n)
+        .map(|d| match s.dof_entity(d) {
+            Entity::Vertex(i) => (0u8, i as i64),
+            Entity::Edge(i) => (1u8, i as i64),
+            Entity::Cell(i) => (2u8, i as i64),
+        })
+        .unzip();
+    let constrained = sol.constraints.as_ref().map(|c| {
+        let r = &sol.result;
+        let dofs = || c.dofs.iter().map(|d| d.dof);
+        let active_fields = EntityFields::new(s, dofs(), |j| f64::from(u8::from(r.active[j])));
+        let multiplier_fields = EntityFields::new(s, dofs(), |j| r.multiplier[j]);
+        Constrained {
+            kind: match pb.constraint.as_ref().map(|k| k.kind) {
+                Some(gradvi::problem::ConstraintKind::Signorini) => "signorini",
+                _ => "obstacle",
+            },
+            side: c.side,
+            dofs: c.dofs.iter().map(|d| d.dof as i64).collect(),
+            points: c.dofs.iter().map(|d| d.point).collect(),
+            measures: c.dofs.iter().map(|d| d.measure).collect(),
+            barrier: c.barrier.clone(),
+            multiplier: r.multiplier.clone(),
+            active: r.active.clone(),
+            multiplier_field: sol.multiplier_field(),
+            active_field: sol.active_field(),
+            contact_measure: contact_measure(c, &r.active),
+            free_boundary: free_boundary(c, &r.active, &neighbours(s, c)),
+            active_edge_sums: active_fields.edge_sums_per_cell(s),
+            multiplier_edge_sums: multiplier_fields.edge_sums_per_cell(s),
+            active_fields,
+            multiplier_fields,
+        }
+    });
+    let errors = pb
+        .exact
+        .as_ref()
+        .map(|ex| relative_errors(s, &u, &*ex.u, &*ex.grad));
+    let exact_cell = pb
+        .exact
+        .as_ref()
+        .map(|ex| (0..mesh.n_cells()).map(|k| (ex.u)(mesh.centroid(k))).collect());
+    Ok(Output {
+        problem: pb.name.clone(),
+        scheme: o.kind.name(),
+        n_unknowns: n,
+        n_skeleton: s.n_skeleton(),
+        n_condensed: sol.system.n_condensed(),
+        u_cell: s.cell_values(&u),
+        u_vertex: s.vertex_values(&u),
+        gradient: s.cell_gradients(&u),
+        u_fields: EntityFields::new(s, 0..n, |j| u[j]),
+        entity_kind,
+        entity_index,
+        constrained,
+        niter: sol.niter(),
+        method: sol.result.method,
+        log: sol.result.log.clone(),
+        certificate: sol.result.certificate,
+        timings: sol.timings,
+        warm_start: sol.warm_start.clone(),
+        errors,
+        exact_cell,
+        iterates: sol.result.iterates.clone(),
+        u,
+    })
+}
+
+/// The exception of a failed solve of a tabulated problem whose data was missing somewhere:
+/// the exception of a Python fallback, or an `InvalidDataError` that says which datum and point.
+fn miss_error(py: Python<'_>, e: &gradvi::Error, misses: &Misses) -> Option<PyErr> {
+    if let Some(pe) = misses.py_error.lock().ok().and_then(|mut g| g.take()) {
+        let cause = to_pyerr(py, e);
+        pe.set_cause(py, Some(cause));
+        return Some(pe);
+    }
+    let (what, p) = misses.first_unresolved.lock().ok().and_then(|g| *g)?;
+    Some(InvalidDataError::new_err(format!(
+        "{e} ({what} was asked at ({}, {}), a point where no value was given: array data is \
+         known only on the mesh it was given for)",
+        p[0], p[1]
+    )))
+}
+
+fn entity_fields<'py>(py: Python<'py>, f: EntityFields) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (k, v) in [("vertex", f.vertex), ("edge", f.edge), ("cell", f.cell)] {
+        if let Some(v) = v {
+            d.set_item(k, vec_array(py, v))?;
+        }
+    }
+    Ok(d)
+}
+
+fn to_dict<'py>(py: Python<'py>, o: Output, misses: Option<&Misses>) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("problem", o.problem)?;
+    d.set_item("scheme", o.scheme)?;
+    d.set_item("n_unknowns", o.n_unknowns)?;
+    d.set_item("n_skeleton", o.n_skeleton)?;
+    d.set_item("n_condensed", o.n_condensed)?;
+    d.set_item("niter", o.niter)?;
+    d.set_item(
+        "method",
+        match o.method {
+            Method::Linear => "linear",
+            Method::ActiveSet => "active-set",
+            Method::ProjectedGaussSeidel => "projected-gauss-seidel",
+            #[allow(unreachable_patterns)]
+            _ => "other",
+        },
+    )?;
+    let c = o.certificate;
+    let cert = PyDict::new(py);
+    cert.set_item("max_violation", c.max_violation)?;
+    cert.set_item("min_multiplier", c.min_multiplier)?;
+    cert.set_item("complementarity", c.complementarity)?;
+    cert.set_item("balance_residual", c.balance_residual)?;
+    d.set_item("certificate", cert)?;
+    let t = o.timings;
+    let tim = PyDict::new(py);
+    for (k, v) in [
+        ("setup", t.setup),
+        ("symbolic", t.symbolic),
+        ("warm_start", t.warm_start),
+        ("assemble", t.assemble),
+        ("factor", t.factor),
+        ("solve", t.solve),
+        ("total", t.total),
+    ] {
+        tim.set_item(k, v)?;
+    }
+    d.set_item("timings", tim)?;
+    let log = PyList::empty(py);
+    for l in &o.log {
+        let e = PyDict::new(py);
+        e.set_item("solve", l.solve)?;
+        e.set_item("active", l.active)?;
+        e.set_item("entered", l.entered)?;
+        e.set_item("left", l.left)?;
+        e.set_item("violation", l.violation)?;
+        e.set_item("residual", l.residual)?;
+        e.set_item("assemble", l.timings.assemble)?;
+        e.set_item("factor", l.timings.factor)?;
+        e.set_item("solve_time", l.timings.solve)?;
+        log.append(e)?;
+    }
+    d.set_item("log", log)?;
+    match o.warm_start {
+        None => d.set_item("warm_start", py.None())?,
+        Some(w) => {
+            let e = PyDict::new(py);
+            e.set_item("levels", w.levels)?;
+            e.set_item("coarse_solves", w.coarse_solves)?;
+            e.set_item("predicted_active", w.predicted_active)?;
+            e.set_item("seconds", w.seconds)?;
+            e.set_item("skipped", w.skipped)?;
+            d.set_item("warm_start", e)?;
+        }
+    }
+    match o.errors {
+        None => d.set_item("errors", py.None())?,
+        Some(e) => {
+            let x = PyDict::new(py);
+            x.set_item("l2_u", e.l2_u)?;
+            x.set_item("l2_grad", e.l2_grad)?;
+            d.set_item("errors", x)?;
+        }
+    }
+    if let Some(m) = misses {
+        d.set_item("fallback_calls", m.calls.load(AtomicOrdering::Relaxed))?;
+        d.set_item("untabulated_points", m.count.load(AtomicOrdering::Relaxed))?;
+    }
+    d.set_item("u", vec_array(py, o.u))?;
+    d.set_item("u_cell", vec_array(py, o.u_cell))?;
+    d.set_item("u_vertex", vec_array(py, o.u_vertex))?;
+    d.set_item("gradient", points_array(py, o.gradient.into_iter())?)?;
+    d.set_item("entity_kind", vec_array(py, o.entity_kind))?;
+    d.set_item("entity_index", vec_array(py, o.entity_index))?;
+    d.set_item("u_fields", entity_fields(py, o.u_fields)?)?;
+    d.set_item("exact_cell", o.exact_cell.map(|v| vec_array(py, v)))?;
+    let its = PyList::empty(py);
+    for it in o.iterates {
+        its.append(vec_array(py, it))?;
+    }
+    d.set_item("iterates", its)?;
+    match o.constrained {
+        None => d.set_item("constraint", py.None())?,
+        Some(c) => {
+            let e = PyDict::new(py);
+            e.set_item("kind", c.kind)?;
+            e.set_item(
+                "side",
+                match c.side {
+                    Side::Upper => "upper",
+                    Side::Lower => "lower",
+                },
+            )?;
+            e.set_item("dofs", vec_array(py, c.dofs))?;
+            e.set_item("points", points_array(py, c.points.into_iter())?)?;
+            e.set_item("measures", vec_array(py, c.measures))?;
+            e.set_item("barrier", vec_array(py, c.barrier))?;
+            e.set_item("multiplier", vec_array(py, c.multiplier))?;
+            e.set_item("active", vec_array(py, c.active))?;
+            e.set_item("multiplier_field", vec_array(py, c.multiplier_field))?;
+            e.set_item("active_field", vec_array(py, c.active_field))?;
+            e.set_item("active_fields", entity_fields(py, c.active_fields)?)?;
+            e.set_item("multiplier_fields", entity_fields(py, c.multiplier_fields)?)?;
+            e.set_item("active_edge_sums", c.active_edge_sums.map(|v| vec_array(py, v)))?;
+            e.set_item("multiplier_edge_sums", c.multiplier_edge_sums.map(|v| vec_array(py, v)))?;
+            e.set_item("contact_measure", c.contact_measure)?;
+            e.set_item("free_boundary", points_array(py, c.free_boundary.into_iter())?)?;
+            d.set_item("constraint", e)?;
+        }
+    }
+    Ok(d)
+}
+
+/// Solves `problem` on `mesh`; see `gradvi.solve` for the options.
+#[pyfunction]
+#[pyo3(signature = (mesh, problem, scheme="hmm", alpha=1.0, c=1.0, max_solves=500, tol=1e-10,
+    fallback=false, warm_start="cold", initial_active=None, keep_iterates=false, ordering="amd",
+    factor_threads="sequential"))]
+#[allow(clippy::too_many_arguments)]
+fn solve<'py>(
+    py: Python<'py>,
+    mesh: &PyMesh,
+    problem: &PyProblem,
+    scheme: &str,
+    alpha: f64,
+    c: f64,
+    max_solves: usize,
+    tol: f64,
+    fallback: bool,
+    warm_start: &str,
+    initial_active: Option<numpy::PyReadonlyArray1<'_, bool>>,
+    keep_iterates: bool,
+    ordering: &str,
+    factor_threads: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let initial_active = initial_active.map(|a| a.as_array().to_vec());
+    let o = options(
+        scheme,
+        alpha,
+        c,
+        max_solves,
+        tol,
+        fallback,
+        warm_start,
+        initial_active,
+        keep_iterates,
+        ordering,
+        factor_threads,
+    )
+    .map_err(|e| to_pyerr(py, &e))?;
+    let mesh = Arc::clone(&mesh.mesh);
+    let misses = match &problem.spec {
+        crate::problem::Spec::Tabulated(t) => Some(Arc::clone(&t.misses)),
+        _ => None,
+    };
+    // the solve runs detached from the interpreter; panics become InternalError
+    let out = py.detach(|| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(&mesh, problem, &o))));
+    let out = match out {
+        Ok(Ok(v)) => v,
+        Ok(Err(e)) => {
+            if let Some(m) = &misses {
+                if let Some(err) = miss_error(py, &e, m) {
+                    return Err(err);
+                }
+            }
+            return Err(to_pyerr(py, &e));
+        }
+        Err(p) => return Err(crate::errors::panic_error(p)),
+    };
+    crate::guard_attached(|| to_dict(py, out, misses.as_deref()))
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(solve, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,295 @@
+//! The sparse Cholesky factorisation A = P⁻¹ L Lᵀ P⁻ᵀ of a symmetric positive definite matrix:
+//! the symbolic analysis ([`SpdPattern`], once per pattern), the numeric factorisation
+//! ([`SpdPattern::factor`], once per set of values) and the triangular solves
+//! ([`SpdFactor::solve_in_place`]).
+
+use super::ordering::{Ordering, nested_dissection};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::cholesky::{
+    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::{Conj, Side};
+use std::sync::{Arc, Mutex};
+
+/// Scratch memory of the numeric factorisation, with the size and alignment it was made for.
+type Scratch = (MemBuffer, usize, usize);
+
+/// Buffers kept between factorisations: the values of a dropped factor and the scratch
+/// memory, so that a refactorisation does not map (and page-fault) hundreds of megabytes anew.
+type Pool = Arc<Mutex<(Vec<f64>, Option<Scratch>)>>;
+
+/// Threads of the numeric factorisation and the triangular solves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FactorThreads {
+    /// One thread (the default). On the 2-core machine of the benchmark the sequential
+    /// supernodal factorisation was faster than faer's parallel one on most cases, by up to
+    /// about 2× around 10⁵ cells and by little at 10⁶ (`replication/BENCHMARKS.md`, lever
+    /// table of variant `nested-par`); the assembly still runs on every core (rayon).
+    #[default]
+    Sequential,
+    /// faer's global parallelism (`faer::get_global_parallelism()`, rayon by default).
+    Global,
+}
+
+impl FactorThreads {
+    fn par(self) -> faer::Par {
+        match self {
+            FactorThreads::Sequential => faer::Par::Seq,
+            FactorThreads::Global => faer::get_global_parallelism(),
+        }
+    }
+}
+
+/// A lower-triangular CSC sparsity pattern and its symbolic Cholesky factorisation.
+#[derive(Clone)]
+pub struct SpdPattern {
+    pattern: SymbolicSparseColMat<usize>,
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    pool: Pool,
+    threads: FactorThreads,
+}
+
+impl std::fmt::Debug for SpdPattern {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SpdPattern")
+            .field("n", &self.n())
+            .field("nnz", &self.nnz())
+            .field("factor_len", &self.factor_len())
+            .finish()
+    }
+}
+
+/// The symbolic analysis of the lower triangle `pattern` under `ordering`: the permutation P,
+/// the elimination tree of P A Pᵀ, the pattern of L and its supernodes.
+fn symbolic_factorisation(
+    pattern: &SymbolicSparseColMat<usize>,
+    ordering: Ordering,
+) -> crate::Result<SymbolicCholesky<usize>> {
+    let err = |e: faer::sparse::FaerError| {
+        crate::Error::Linear(format!("symbolic Cholesky failed: {e:?}"))
+    };
+    match ordering {
+        Ordering::Amd => factorize_symbolic_cholesky(
+            pattern.as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            Default::default(),
+        )
+        .map_err(err),
+        Ordering::NestedDissection => {
+            let n = pattern.nrows();
+            // fwd[new] = old, inv[old] = new
+            let fwd = nested_dissection(n, pattern.col_ptr(), pattern.row_idx());
+            let mut inv = vec![0usize; n];
+            for (new, &old) in fwd.iter().enumerate() {
+                inv[old] = new;
+            }
+            let perm = faer::perm::PermRef::new_checked(&fwd, &inv, n);
+            factorize_symbolic_cholesky(
+                pattern.as_ref(),
+                Side::Lower,
+                SymmetricOrdering::Custom(perm),
+                Default::default(),
+            )
+            .map_err(err)
+        }
+    }
+}
+
+/// The kept scratch memory when it is large and aligned enough for `req`, new memory otherwise.
+fn scratch_for(kept: Option<Scratch>, req: StackReq) -> crate::Result<Scratch> {
+    match kept {
+        Some((m, size, align)) if size >= req.size_bytes() && align >= req.align_bytes() => {
+            Ok((m, size, align))
+        }
+        _ => Ok((
+            MemBuffer::try_new(req)
+                .map_err(|e| crate::Error::Linear(format!("numeric Cholesky: {e:?}")))?,
+            req.size_bytes(),
+            req.align_bytes(),
+        )),
+    }
+}
+
+impl SpdPattern {
+    /// Builds the pattern from column pointers and (sorted) row indices of the lower triangle,
+    /// and analyses it once with the default ordering (AMD).
+    pub fn new(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> crate::Result<Self> {
+        Self::with_ordering(n, col_ptr, row_idx, Ordering::default())
+    }
+    /// As [`SpdPattern::new`] with the given fill-reducing ordering.
+    pub fn with_ordering(
+        n: usize,
+        col_ptr: Vec<usize>,
+        row_idx: Vec<usize>,
+        ordering: Ordering,
+    ) -> crate::Result<Self> {
+        let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let symbolic = symbolic_factorisation(&pattern, ordering)?;
+        Ok(SpdPattern {
+            pattern,
+            symbolic: Arc::new(symbolic),
+            pool: Pool::default(),
+            threads: FactorThreads::default(),
+        })
+    }
+    /// Sets the threads of the numeric factorisations and solves.
+    pub fn with_threads(mut self, threads: FactorThreads) -> Self {
+        self.threads = threads;
+        self
+    }
+    /// Matrix dimension.
+    pub fn n(&self) -> usize {
+        self.pattern.nrows()
+    }
+    /// Number of stored entries (lower triangle).
+    pub fn nnz(&self) -> usize {
+        self.pattern.row_idx().len()
+    }
+    /// Number of stored values of the Cholesky factor (its fill, supernodal blocks included).
+    pub fn factor_len(&self) -> usize {
+        self.symbolic.len_val()
+    }
+    /// Column pointers.
+    pub fn col_ptr(&self) -> &[usize] {
+        self.pattern.col_ptr()
+    }
+    /// Row indices.
+    pub fn row_idx(&self) -> &[usize] {
+        self.pattern.row_idx()
+    }
+    /// Numeric factorisation of the matrix with these `values` (same order as `row_idx`),
+    /// reusing the symbolic analysis: the values of L with P A Pᵀ = L Lᵀ, computed
+    /// supernode by supernode in the order of the elimination tree.
+    pub fn factor(&self, values: &[f64]) -> crate::Result<SpdFactor> {
+        let a = SparseColMatRef::new(self.pattern.as_ref(), values);
+        let par = self.threads.par();
+        let len = self.symbolic.len_val();
+        let (mut l_values, kept) = match self.pool.lock() {
+            Ok(mut p) => (std::mem::take(&mut p.0), p.1.take()),
+            Err(_) => (Vec::new(), None),
+        };
+        l_values.clear();
+        l_values.resize(len, 0.0);
+        let req = self
+            .symbolic
+            .factorize_numeric_llt_scratch::<f64>(par, Default::default());
+        let mut mem = scratch_for(kept, req)?;
+        let res = self
+            .symbolic
+            .factorize_numeric_llt(
+                &mut l_values,
+                a,
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(&mut mem.0),
+                Default::default(),
+            )
+            .map(|_| ());
+        if let Ok(mut p) = self.pool.lock() {
+            p.1 = Some(mem);
+        }
+        res.map_err(|e| {
+            crate::Error::Linear(format!(
+                "numeric Cholesky failed ({e:?}): the matrix is not numerically positive definite"
+            ))
+        })?;
+        Ok(SpdFactor {
+            symbolic: self.symbolic.clone(),
+            values: l_values,
+            pool: self.pool.clone(),
+            par,
+        })
+    }
+}
+
+/// A numeric Cholesky factor.
+pub struct SpdFactor {
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    values: Vec<f64>,
+    pool: Pool,
+    par: faer::Par,
+}
+
+impl Drop for SpdFactor {
+    fn drop(&mut self) {
+        if let Ok(mut p) = self.pool.lock() {
+            p.0 = std::mem::take(&mut self.values);
+        }
+    }
+}
+
+impl SpdFactor {
+    /// Solves A x = b in place: x = Pᵀ L⁻ᵀ L⁻¹ P b (a forward and a backward triangular solve
+    /// between the two permutations).
+    pub fn solve_in_place(&self, b: &mut [f64]) {
+        let par = self.par;
+        let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(1, par));
+        let col = faer::ColMut::from_slice_mut(b);
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            col.as_mat_mut(),
+            par,
+            MemStack::new(&mut mem),
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solves_a_tridiagonal_system_and_refactorises() {
+        // lower triangle of tridiag(−1, 2, −1), n = 5
+        let n = 5;
+        let mut col_ptr = vec![0];
+        let mut row_idx = vec![];
+        for j in 0..n {
+            row_idx.push(j);
+            if j + 1 < n {
+                row_idx.push(j + 1);
+            }
+            col_ptr.push(row_idx.len());
+        }
+        let p = SpdPattern::new(n, col_ptr, row_idx).unwrap();
+        for scale in [1.0, 3.0] {
+            let vals: Vec<f64> = p
+                .row_idx()
+                .iter()
+                .enumerate()
+                .map(|(i, _)| i)
+                .collect::<Vec<_>>()
+                .iter()
+                .map(|&i| {
+                    let j = p.col_ptr().iter().rposition(|&c| c <= i).unwrap();
+                    if p.row_idx()[i] == j {
+                        2.0 * scale
+                    } else {
+                        -scale
+                    }
+                })
+                .collect();
+            let f = p.factor(&vals).unwrap();
+            let mut x = vec![1.0; n];
+            f.solve_in_place(&mut x);
+            // residual of A x = 1
+            for i in 0..n {
+                let mut ax = 2.0 * scale * x[i];
+                if i > 0 {
+                    ax -= scale * x[i - 1];
+                }
+                if i + 1 < n {
+                    ax -= scale * x[i + 1];
+                }
+                assert!((ax - 1.0).abs() < 1e-13);
+            }
+        }
+        // an indefinite matrix is an error, not a panic
+        let mut vals = vec![-1.0; p.nnz()];
+        vals[0] = -2.0;
+        assert!(p.factor(&vals).is_err());
+    }
+}

@@ -1,0 +1,104 @@
+//! How much memory building a mesh may take, so that a request too large for the machine is
+//! refused up front with an error giving the estimate, instead of aborting on allocation.
+//!
+//! * [`memory_budget`]: the smaller of [`DEFAULT_MEMORY_BUDGET`] (8 GiB) and the memory the
+//!   kernel reports as available (`MemAvailable` in `/proc/meminfo`, where it exists).
+//! * [`mesh_bytes`]: the peak memory of building and validating a [`PolyMesh`](super::PolyMesh)
+//!   with given numbers of cells, cell sides, vertices and edges. The generators compare it with
+//!   the budget before allocating anything ([`check_budget`]).
+//! * [`max_file_bytes`]: the largest mesh file the readers read, a quarter of the budget (the
+//!   mesh built from a text file needs several times the size of the text). A larger file, or an
+//!   endless stream, is refused after reading at most that much.
+
+use crate::error::MeshError;
+
+/// The memory budget when the machine has at least that much available: 8 GiB.
+pub const DEFAULT_MEMORY_BUDGET: u64 = 8 << 30;
+
+/// The memory the kernel reports as available (`MemAvailable` of `/proc/meminfo`), in bytes;
+/// `None` where that file does not exist or cannot be read.
+pub fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
+/// The memory a mesh may take: [`DEFAULT_MEMORY_BUDGET`], or the available memory if smaller.
+pub fn memory_budget() -> u64 {
+    available_memory().map_or(DEFAULT_MEMORY_BUDGET, |a| a.min(DEFAULT_MEMORY_BUDGET))
+}
+
+/// The largest mesh file the readers accept: a quarter of [`memory_budget`].
+pub fn max_file_bytes() -> u64 {
+    memory_budget() / 4
+}
+
+/// Estimated peak memory, in bytes, of building a mesh with `cells` cells whose vertex lists
+/// hold `sides` entries in all, `vertices` vertices and `edges` edges: the generator's vertex
+/// and cell lists, the arrays of [`PolyMesh`](super::PolyMesh) (CSR cells, side normals and
+/// distances, cell and edge geometry) and the scratch arrays of the checks (edge buckets, the
+/// sorted vertices of the duplicate search and of the sweep). Measured peaks are 75–90% of it.
+pub fn mesh_bytes(cells: u64, sides: u64, vertices: u64, edges: u64) -> u64 {
+    let per_cell = 48 + 40;
+    let per_side = 8 + 8 + 24 + 24;
+    let per_vertex = 16 + 48;
+    let per_edge = 64 + 32;
+    cells
+        .saturating_mul(per_cell)
+        .saturating_add(sides.saturating_mul(per_side))
+        .saturating_add(vertices.saturating_mul(per_vertex))
+        .saturating_add(edges.saturating_mul(per_edge))
+}
+
+/// `Ok` if `bytes` fit in `budget`, else [`MeshError::TooLarge`] naming `what`.
+pub fn check_budget(what: impl Into<String>, bytes: u64, budget: u64) -> Result<(), MeshError> {
+    if bytes <= budget {
+        Ok(())
+    } else {
+        Err(MeshError::TooLarge {
+            what: what.into(),
+            bytes,
+            budget,
+        })
+    }
+}
+
+/// A byte count for people: `"512 B"`, `"3.2 MiB"`, `"6.1 GiB"`.
+pub fn human_bytes(bytes: u64) -> String {
+    const UNITS: [&str; 6] = ["B", "KiB", "MiB", "GiB", "TiB", "PiB"];
+    let mut value = bytes as f64;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < UNITS.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{bytes} B")
+    } else {
+        format!("{value:.1} {}", UNITS[unit])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn budget_and_formatting() {
+        let b = memory_budget();
+        assert!(b > 0 && b <= DEFAULT_MEMORY_BUDGET);
+        assert_eq!(max_file_bytes(), b / 4);
+        assert_eq!(human_bytes(512), "512 B");
+        assert_eq!(human_bytes(3 << 20), "3.0 MiB");
+        assert_eq!(human_bytes(DEFAULT_MEMORY_BUDGET), "8.0 GiB");
+        assert_eq!(human_bytes(u64::MAX), "16384.0 PiB");
+        assert!(check_budget("x", 10, 10).is_ok());
+        let e = check_budget("a big mesh", 11 << 30, 8 << 30).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "a big mesh would need about 11.0 GiB, more than the memory budget of 8.0 GiB"
+        );
+        assert_eq!(mesh_bytes(u64::MAX, 1, 1, 1), u64::MAX);
+    }
+}
