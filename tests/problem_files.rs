@@ -3,6 +3,7 @@
 //! assertion that can fail; every bad file of `tests/data/problems/` gives its typed error,
 //! naming the place.
 
+use gradvi::Error;
 use gradvi::error::ProblemFileErrorKind as K;
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{cartesian, hexagonal, kershaw};
@@ -11,8 +12,7 @@ use gradvi::post::{fitted_slope, relative_errors};
 use gradvi::problem::file::{self, MeshSpec, ProblemFile};
 use gradvi::problem::{Problem, by_name};
 use gradvi::scheme::{GradientDiscretisation, Hmm, P1};
-use gradvi::solver::{SolveOptions, Solution, solve_problem};
-use gradvi::Error;
+use gradvi::solver::{Solution, SolveOptions, solve_problem};
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {
@@ -101,11 +101,18 @@ fn builtin_files_give_the_same_data_bits() {
     for name in gradvi::problem::PROBLEM_NAMES {
         let r = by_name(name, &[]).unwrap();
         let f = file::builtin(name, &[]).unwrap().problem();
-        assert_eq!(r.source_in_cell.is_some(), f.source_in_cell.is_some(), "{name}");
+        assert_eq!(
+            r.source_in_cell.is_some(),
+            f.source_in_cell.is_some(),
+            "{name}"
+        );
         assert_eq!(r.exact.is_some(), f.exact.is_some(), "{name}");
         for &p in &pts {
             let (ar, af) = ((r.diffusion)(p), (f.diffusion)(p));
-            assert!((0..4).all(|i| same(ar[i / 2][i % 2], af[i / 2][i % 2])), "{name} A at {p:?}");
+            assert!(
+                (0..4).all(|i| same(ar[i / 2][i % 2], af[i / 2][i % 2])),
+                "{name} A at {p:?}"
+            );
             assert!(same((r.source)(p), (f.source)(p)), "{name} f at {p:?}");
             if let (Some(sr), Some(sf)) = (&r.source_in_cell, &f.source_in_cell) {
                 for xk in [[0.5, 0.25], [0.5, 0.75], [0.1, 0.5]] {
@@ -113,18 +120,31 @@ fn builtin_files_give_the_same_data_bits() {
                 }
             }
             if p[0] == 0.0 || p[0] == 1.0 || p[1] == 0.0 || p[1] == 1.0 {
-                assert_eq!((r.boundary)(p, 0), (f.boundary)(p, 0), "{name} boundary at {p:?}");
+                assert_eq!(
+                    (r.boundary)(p, 0),
+                    (f.boundary)(p, 0),
+                    "{name} boundary at {p:?}"
+                );
             }
-            assert!(same((r.dirichlet)(p), (f.dirichlet)(p)), "{name} u_D at {p:?}");
+            assert!(
+                same((r.dirichlet)(p), (f.dirichlet)(p)),
+                "{name} u_D at {p:?}"
+            );
             assert!(same((r.neumann)(p), (f.neumann)(p)), "{name} g_N at {p:?}");
             if let (Some(cr), Some(cf)) = (&r.constraint, &f.constraint) {
                 assert_eq!((cr.kind, cr.side), (cf.kind, cf.side), "{name}");
-                assert!(same((cr.barrier)(p), (cf.barrier)(p)), "{name} barrier at {p:?}");
+                assert!(
+                    same((cr.barrier)(p), (cf.barrier)(p)),
+                    "{name} barrier at {p:?}"
+                );
             }
             if let (Some(er), Some(ef)) = (&r.exact, &f.exact) {
                 assert!(same((er.u)(p), (ef.u)(p)), "{name} u at {p:?}");
                 let (gr, gf) = ((er.grad)(p), (ef.grad)(p));
-                assert!(same(gr[0], gf[0]) && same(gr[1], gf[1]), "{name} grad u at {p:?}");
+                assert!(
+                    same(gr[0], gf[0]) && same(gr[1], gf[1]),
+                    "{name} grad u at {p:?}"
+                );
             }
         }
     }
@@ -134,14 +154,42 @@ fn builtin_files_give_the_same_data_bits() {
 #[test]
 fn schema_mistakes_are_reported() {
     let cases: [(&str, K, &str); 9] = [
-        ("[obstacle]\nside = \"lower\"\nbarrier = 0\n[signorini]\nside = \"upper\"\nbarrier = 0", K::Schema, "one barrier"),
-        ("[dirichlet]\n[neumann]", K::Schema, "only one section may take the rest"),
-        ("[[source.piece]]\nf = 1\n[[source.piece]]\nwhere = \"x < 1\"\nf = 2", K::Schema, "only the last piece"),
-        ("[source]\nf = 1\npiece = [{ f = 2 }]", K::Schema, "either 'f' or"),
-        ("[diffusion]\nA = [[1, 0], [0, 1], [0, 0]]", K::Schema, "invalid length"),
-        ("[obstacle]\nside = \"above\"\nbarrier = 0", K::Schema, "unknown variant"),
+        (
+            "[obstacle]\nside = \"lower\"\nbarrier = 0\n[signorini]\nside = \"upper\"\nbarrier = 0",
+            K::Schema,
+            "one barrier",
+        ),
+        (
+            "[dirichlet]\n[neumann]",
+            K::Schema,
+            "only one section may take the rest",
+        ),
+        (
+            "[[source.piece]]\nf = 1\n[[source.piece]]\nwhere = \"x < 1\"\nf = 2",
+            K::Schema,
+            "only the last piece",
+        ),
+        (
+            "[source]\nf = 1\npiece = [{ f = 2 }]",
+            K::Schema,
+            "either 'f' or",
+        ),
+        (
+            "[diffusion]\nA = [[1, 0], [0, 1], [0, 0]]",
+            K::Schema,
+            "invalid length",
+        ),
+        (
+            "[obstacle]\nside = \"above\"\nbarrier = 0",
+            K::Schema,
+            "unknown variant",
+        ),
         ("[mesh]\ngenerate = \"cartesian\"", K::Mesh, "level"),
-        ("[mesh]\ngenerate = \"voronoi\"\nlevel = 1", K::Mesh, "voronoi"),
+        (
+            "[mesh]\ngenerate = \"voronoi\"\nlevel = 1",
+            K::Mesh,
+            "voronoi",
+        ),
         ("name = \"t{x}\"", K::Expression, "depends on x or y"),
     ];
     for (text, kind, words) in cases {
@@ -152,9 +200,17 @@ fn schema_mistakes_are_reported() {
         );
     }
     // a scheme and a mesh file resolved against the problem file's folder
-    let pf = file::parse("scheme = \"p1\"\n[mesh]\nfile = \"m.msh\"", Path::new("dir/p.toml"), &[]).unwrap();
+    let pf = file::parse(
+        "scheme = \"p1\"\n[mesh]\nfile = \"m.msh\"",
+        Path::new("dir/p.toml"),
+        &[],
+    )
+    .unwrap();
     assert_eq!(pf.scheme, Some(gradvi::scheme::SchemeKind::P1));
-    assert_eq!(pf.mesh, Some(MeshSpec::File(Path::new("dir").join("m.msh"))));
+    assert_eq!(
+        pf.mesh,
+        Some(MeshSpec::File(Path::new("dir").join("m.msh")))
+    );
     assert_eq!(pf.name, "p");
 }
 
@@ -184,20 +240,113 @@ fn first_error(name: &str) -> Error {
 /// (file, kind, line, column, words the message must contain).
 const BAD: [(&str, K, usize, usize, &[&str]); 16] = [
     ("syntax.toml", K::Syntax, 5, 9, &["string"]),
-    ("unknown_key.toml", K::UnknownKey, 3, 1, &["unknown field `g`", "`f`"]),
-    ("unknown_section.toml", K::UnknownKey, 2, 2, &["`sorce`", "`source`"]),
-    ("bad_expression.toml", K::Expression, 3, 21, &["source.f", "character 16", "')'"]),
-    ("unknown_variable.toml", K::Expression, 7, 34, &["obstacle.barrier", "character 23", "unknown variable 'z'"]),
-    ("unknown_function.toml", K::Expression, 3, 6, &["source.f", "character 1", "unknown function 'sine'"]),
-    ("type_error.toml", K::Expression, 3, 10, &["dirichlet.where", "expected a condition"]),
-    ("cyclic_definitions.toml", K::Parameter, 3, 5, &["a, b", "cycle"]),
-    ("cell_tags.toml", K::Mesh, 3, 8, &["diffusion.piece[0].tags", "cell tags", "where"]),
-    ("tag_absent.toml", K::Tag, 6, 8, &["dirichlet.tags", "tag 7", "1, 2, 3"]),
-    ("uncovered_edge.toml", K::UncoveredEdge, 0, 0, &["boundary edge 8", "(1, 0.5)", "tag 2"]),
-    ("overlapping_rules.toml", K::OverlappingRules, 0, 0, &["[dirichlet] and [signorini]", "edge 0", "(0.25, 0)"]),
-    ("not_spd.toml", K::NotSpd, 6, 5, &["diffusion.A", "cell 1", "x_K = (0.6666666666666666, 0.16666666666666666)"]),
-    ("nan_value.toml", K::NonFinite, 6, 5, &["source.f", "NaN", "cell 0", "(0.3333333333333333, 0.16666666666666666)"]),
-    ("infinite_barrier.toml", K::NonFinite, 7, 11, &["obstacle.barrier", "-inf", "(0, 0)", "cell 0"]),
+    (
+        "unknown_key.toml",
+        K::UnknownKey,
+        3,
+        1,
+        &["unknown field `g`", "`f`"],
+    ),
+    (
+        "unknown_section.toml",
+        K::UnknownKey,
+        2,
+        2,
+        &["`sorce`", "`source`"],
+    ),
+    (
+        "bad_expression.toml",
+        K::Expression,
+        3,
+        21,
+        &["source.f", "character 16", "')'"],
+    ),
+    (
+        "unknown_variable.toml",
+        K::Expression,
+        7,
+        34,
+        &["obstacle.barrier", "character 23", "unknown variable 'z'"],
+    ),
+    (
+        "unknown_function.toml",
+        K::Expression,
+        3,
+        6,
+        &["source.f", "character 1", "unknown function 'sine'"],
+    ),
+    (
+        "type_error.toml",
+        K::Expression,
+        3,
+        10,
+        &["dirichlet.where", "expected a condition"],
+    ),
+    (
+        "cyclic_definitions.toml",
+        K::Parameter,
+        3,
+        5,
+        &["a, b", "cycle"],
+    ),
+    (
+        "cell_tags.toml",
+        K::Mesh,
+        3,
+        8,
+        &["diffusion.piece[0].tags", "cell tags", "where"],
+    ),
+    (
+        "tag_absent.toml",
+        K::Tag,
+        6,
+        8,
+        &["dirichlet.tags", "tag 7", "1, 2, 3"],
+    ),
+    (
+        "uncovered_edge.toml",
+        K::UncoveredEdge,
+        0,
+        0,
+        &["boundary edge 8", "(1, 0.5)", "tag 2"],
+    ),
+    (
+        "overlapping_rules.toml",
+        K::OverlappingRules,
+        0,
+        0,
+        &["[dirichlet] and [signorini]", "edge 0", "(0.25, 0)"],
+    ),
+    (
+        "not_spd.toml",
+        K::NotSpd,
+        6,
+        5,
+        &[
+            "diffusion.A",
+            "cell 1",
+            "x_K = (0.6666666666666666, 0.16666666666666666)",
+        ],
+    ),
+    (
+        "nan_value.toml",
+        K::NonFinite,
+        6,
+        5,
+        &[
+            "source.f",
+            "NaN",
+            "cell 0",
+            "(0.3333333333333333, 0.16666666666666666)",
+        ],
+    ),
+    (
+        "infinite_barrier.toml",
+        K::NonFinite,
+        7,
+        11,
+        &["obstacle.barrier", "-inf", "(0, 0)", "cell 0"],
+    ),
     ("infeasible.toml", K::Syntax, 0, 0, &[]),
 ];
 
@@ -207,10 +356,20 @@ fn bad_files_give_typed_errors_naming_the_place() {
         let e = first_error(name);
         if name == "infeasible.toml" {
             // the barrier below the Dirichlet data is the solver's check, reached through the file
-            assert!(matches!(&e, Error::Infeasible(m) if m.contains("above the barrier 0.5")), "{e}");
+            assert!(
+                matches!(&e, Error::Infeasible(m) if m.contains("above the barrier 0.5")),
+                "{e}"
+            );
             continue;
         }
-        let Error::ProblemFile { path, line: l, column: c, kind: k, msg } = &e else {
+        let Error::ProblemFile {
+            path,
+            line: l,
+            column: c,
+            kind: k,
+            msg,
+        } = &e
+        else {
             panic!("{name}: not a problem-file error: {e:?}");
         };
         assert_eq!((*k, *l, *c), (kind, line, column), "{name}: {e}");
@@ -220,7 +379,10 @@ fn bad_files_give_typed_errors_naming_the_place() {
         }
         // the displayed message starts with path:line:column
         if line > 0 {
-            assert!(e.to_string().contains(&format!("{name}:{line}:{column}: ")), "{e}");
+            assert!(
+                e.to_string().contains(&format!("{name}:{line}:{column}: ")),
+                "{e}"
+            );
         }
     }
 }
@@ -277,13 +439,20 @@ fn pinned_example(name: &str, pins: [(usize, f64, f64, f64); 2]) -> [f64; 2] {
     let mut out = [0.0; 2];
     for (i, (s, (niter, area, min, max))) in schemes.into_iter().zip(pins).enumerate() {
         let sol = solve(s, &p);
-        assert!(sol.result.certificate.check(1e-10).is_ok(), "{name} {}", s.name());
+        assert!(
+            sol.result.certificate.check(1e-10).is_ok(),
+            "{name} {}",
+            s.name()
+        );
         let cv = s.cell_values(sol.u());
         let lo = cv.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = cv.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let got = (sol.niter(), contact(&sol), lo, hi);
         assert!(
-            got.0 == niter && close(got.1, area, 1e-9) && close(got.2, min, 1e-9) && close(got.3, max, 1e-9),
+            got.0 == niter
+                && close(got.1, area, 1e-9)
+                && close(got.2, min, 1e-9)
+                && close(got.3, max, 1e-9),
             "{name} {}: (NITER, contact, min, max) = {got:?}, pinned {:?}",
             s.name(),
             (niter, area, min, max)
@@ -311,8 +480,18 @@ fn example_hole_obstacle() {
     let [hmm, p1] = pinned_example(
         "hole-obstacle",
         [
-            (8, 2.56175165797121407, 1.16794226157855008e-2, 1.60478751461757219e-1),
-            (5, 2.64412504569232532, 9.10225575735782930e-3, 1.59467040826255957e-1),
+            (
+                8,
+                2.56175165797121407,
+                1.16794226157855008e-2,
+                1.60478751461757219e-1,
+            ),
+            (
+                5,
+                2.64412504569232532,
+                9.10225575735782930e-3,
+                1.59467040826255957e-1,
+            ),
         ],
     );
     assert!((hmm - p1).abs() < 0.05 * hmm, "{hmm} vs {p1}");
@@ -368,11 +547,20 @@ fn example_ex9_converges() {
         eg.push(e.l2_grad);
         ea.push((contact(&sol) - area).abs());
     }
-    let (su, sg, sa) = (fitted_slope(&h, &eu), fitted_slope(&h, &eg), fitted_slope(&h, &ea));
-    println!("ex9: e_u {eu:?} slope {su:.3}; e_grad {eg:?} slope {sg:.3}; contact {ea:?} slope {sa:.3}");
+    let (su, sg, sa) = (
+        fitted_slope(&h, &eu),
+        fitted_slope(&h, &eg),
+        fitted_slope(&h, &ea),
+    );
+    println!(
+        "ex9: e_u {eu:?} slope {su:.3}; e_grad {eg:?} slope {sg:.3}; contact {ea:?} slope {sa:.3}"
+    );
     assert!((su - 1.5).abs() <= 0.25, "slope of e_u {su}: {eu:?}");
     assert!((sg - 1.5).abs() <= 0.25, "slope of e_grad {sg}: {eg:?}");
-    assert!((sa - 1.0).abs() <= 0.25, "slope of the contact area error {sa}: {ea:?}");
+    assert!(
+        (sa - 1.0).abs() <= 0.25,
+        "slope of the contact area error {sa}: {ea:?}"
+    );
     assert!(eu[3] < 2e-4 && ea[3] < 0.06, "{eu:?} {ea:?}");
 }
 

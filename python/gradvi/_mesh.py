@@ -482,7 +482,8 @@ class Mesh:
         return self._g("boundary_edges")
 
     def __repr__(self) -> str:
-        return repr(self._m).replace("<gradvi mesh", "<gradvi.Mesh")
+        m = getattr(self, "_m", None)
+        return "<gradvi.Mesh (not built)>" if m is None else repr(m).replace("<gradvi mesh", "<gradvi.Mesh")
 
     def __eq__(self, other: object) -> bool:
         """Same vertices (bitwise), cells (same order, same starting vertex) and edge tags."""

@@ -76,6 +76,13 @@ class _Points:
         self.E = slice(self.nc, self.nc + self.ne)
         self.V = slice(self.nc + self.ne, self.nc + self.ne + self.nv)
         self.S = slice(self.nc + self.ne + self.nv, self.m)
+        be = mesh.boundary_edges
+        #: rows of the boundary points: boundary edge midpoints and boundary vertices
+        self.boundary_rows = np.concatenate(
+            [self.nc + be, self.nc + self.ne + np.unique(mesh.edges[be].reshape(-1))]
+        )
+        #: rows of the cell centroids
+        self.cell_rows = np.arange(self.nc)
 
     # means over incidences -------------------------------------------------------------
     def _cell_to_edges(self, a: np.ndarray) -> np.ndarray:
@@ -416,7 +423,14 @@ class Problem:
         def scalar(key: str, v: Any, boundary: bool = False) -> None:
             what = {"barrier": f"{s['constraint']} barrier", "exact_u": "exact"}.get(key, key)
             if callable(v):
-                out[key] = _scalar_result(_call(v, what, pts.x, pts.y), m, what)
+                # boundary data is evaluated on the boundary points only, the rest everywhere
+                rows = pts.boundary_rows if boundary else None
+                if rows is None:
+                    out[key] = _scalar_result(_call(v, what, pts.x, pts.y), m, what)
+                else:
+                    vals = np.full(m, np.nan)
+                    vals[rows] = _scalar_result(_call(v, what, pts.x[rows], pts.y[rows]), rows.size, what)
+                    out[key] = vals
                 out[key + "_fallback"] = _point_adapter(v, what)
             elif isinstance(v, _EntityData):
                 out[key] = pts.spread(v, what, boundary)
@@ -470,7 +484,10 @@ class Problem:
                 t = _tensor_result(a(np.array([x]), np.array([y])), 1, "diffusion")[0]
                 return float(t[0, 0]), float(t[0, 1]), float(t[1, 0]), float(t[1, 1])
 
-            return {"diffusion": _tensor_result(_call(a, "diffusion", pts.x, pts.y), m, "diffusion"), "diffusion_fallback": fb}
+            rows = pts.cell_rows  # A_K = A(x_K)
+            out = np.full((m, 2, 2), np.nan)
+            out[rows] = _tensor_result(_call(a, "diffusion", pts.x[rows], pts.y[rows]), rows.size, "diffusion")
+            return {"diffusion": out, "diffusion_fallback": fb}
         if isinstance(a, CellData) or (isinstance(a, np.ndarray) and a.shape[:1] == (pts.nc,) and a.shape != (2, 2)):
             v = a.values if isinstance(a, CellData) else np.asarray(a, dtype=np.float64)
             if v.shape not in ((pts.nc,), (pts.nc, 2, 2)):

@@ -23,28 +23,41 @@ SCHEMES = ("hmm", "p1", "cr")
 _KIND_NAMES = np.array(["vertex", "edge", "cell"])
 
 
-@dataclass(frozen=True)
 class Certificate:
     """Evidence that u solves the discrete variational inequality; every quantity is scaled
-    (see the crate documentation, ``vi::certificate``)."""
+    (see the crate documentation, ``vi::certificate``). Attributes: ``max_violation``
+    (max_j max(0, s(u_j − g_j)) / scale_u), ``min_multiplier`` (min_j λ_j / scale_r, ≥ 0 up to
+    round-off), ``complementarity`` (max_j |λ_j (u_j − g_j)| / (scale_r scale_u)),
+    ``balance_residual`` (max_i |(b − Mu)_i| / scale_r on the free unknowns), and any other
+    quantity the library reports (:meth:`as_dict` lists them all)."""
 
-    #: max_j max(0, s(u_j − g_j)) / scale_u.
-    max_violation: float
-    #: min_j λ_j / scale_r (≥ 0 up to round-off).
-    min_multiplier: float
-    #: max_j |λ_j (u_j − g_j)| / (scale_r scale_u).
-    complementarity: float
-    #: max_i |(b − Mu)_i| / scale_r on the free unknowns.
-    balance_residual: float
+    __slots__ = ("_d",)
+
+    def __init__(self, d: Dict[str, float]) -> None:
+        self._d = {k: float(v) for k, v in d.items()}
+
+    def __getattr__(self, name: str) -> float:
+        try:
+            return self._d[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def as_dict(self) -> Dict[str, float]:
+        """Every quantity, by name."""
+        return dict(self._d)
 
     def worst(self) -> float:
-        """The largest of the four quantities (the minimum multiplier counted by its negative
-        part)."""
-        return max(self.max_violation, max(0.0, -self.min_multiplier), self.complementarity, self.balance_residual)
+        """The largest of the four scaled quantities checked against the tolerance (the minimum
+        multiplier counted by its negative part)."""
+        d = self._d
+        return max(d["max_violation"], max(0.0, -d["min_multiplier"]), d["complementarity"], d["balance_residual"])
 
     def ok(self, tol: float = 1e-10) -> bool:
-        """Whether every quantity is below ``tol``."""
+        """Whether every scaled quantity is below ``tol``."""
         return self.worst() <= tol
+
+    def __repr__(self) -> str:
+        return "Certificate(" + ", ".join(f"{k}={v:.2e}" for k, v in self._d.items()) + ")"
 
 
 @dataclass(frozen=True)
@@ -63,10 +76,13 @@ class IterationLog:
     violation: float
     #: Largest scaled balance residual on the inactive unknowns.
     residual: float
-    #: Seconds: condensation and scatter, numeric factorisation, triangular solves.
-    assemble: float
-    factor: float
-    solve_time: float
+    #: Seconds: ``assemble`` (condensation and scatter), ``factor``, ``solve``.
+    timings: Dict[str, float]
+
+    @classmethod
+    def _from(cls, d: Dict[str, Any]) -> "IterationLog":
+        names = ("solve", "active", "entered", "left", "violation", "residual", "timings")
+        return cls(**{k: d[k] for k in names})
 
 
 class Solution:
@@ -91,13 +107,13 @@ class Solution:
         self._r = r
         c = r["certificate"]
         #: The certificate of u.
-        self.certificate = Certificate(c["max_violation"], c["min_multiplier"], c["complementarity"], c["balance_residual"])
+        self.certificate = Certificate(c)
         #: NITER: the number of linear solves (sweeps for projected Gauss–Seidel).
         self.niter: int = int(r["niter"])
         #: ``"linear"`` (no barrier), ``"active-set"`` or ``"projected-gauss-seidel"``.
         self.method: str = r["method"]
         #: The iteration log, one entry per linear solve.
-        self.log: List[IterationLog] = [IterationLog(**e) for e in r["log"]]
+        self.log: List[IterationLog] = [IterationLog._from(e) for e in r["log"]]
         #: Wall-clock seconds: data (evaluation of Python data), setup, symbolic, warm_start,
         #: assemble, factor, solve, total (total excludes data).
         self.timings: Dict[str, float] = dict(r["timings"], data=data_seconds)
@@ -107,6 +123,10 @@ class Solution:
         self.warm_start: Optional[Dict[str, Any]] = r["warm_start"]
         #: The scheme's name.
         self.scheme: str = r["scheme"]
+        #: Points outside the evaluation table that the solve asked data at (only the coarse
+        #: meshes of the nested warm start do), and how many of them called a Python callable.
+        self.untabulated_points: int = int(r.get("untabulated_points", 0))
+        self.fallback_calls: int = int(r.get("fallback_calls", 0))
         #: The iterates u^1, u^2, … (with ``keep_iterates=True``).
         self.iterates: List[np.ndarray] = list(r["iterates"])
 
@@ -185,6 +205,13 @@ class Solution:
         """Where the barrier was evaluated for each constrained unknown, (n, 2)."""
         v = self._c("points")
         return np.zeros((0, 2)) if v is None else v
+
+    @property
+    def constrained_measures(self) -> np.ndarray:
+        """The measure m_j of each constrained unknown (|K|, |σ|, or a lumped vertex measure):
+        λ_j / m_j is the contact pressure (Signorini) or the density of the reaction (obstacle)."""
+        v = self._c("measures")
+        return np.zeros(0) if v is None else v
 
     @property
     def barrier(self) -> np.ndarray:

@@ -9,6 +9,7 @@
 //! ├── InvalidDataError       Error::InvalidData (also: bad arrays given to the bindings)
 //! ├── InfeasibleError        Error::Infeasible
 //! ├── LinearSolverError      Error::Linear
+//! ├── IllPosedError          Error::IllPosed
 //! ├── SolverError            Error::Solver
 //! │   ├── MaxIterationsError     SolverError::MaxIterations (iterations, history)
 //! │   ├── CyclingError           SolverError::Cycling       (iteration, repeats, history)
@@ -63,6 +64,12 @@ create_exception!(
     LinearSolverError,
     GradviError,
     "A linear solve failed (e.g. the matrix is not numerically positive definite)."
+);
+create_exception!(
+    gradvi,
+    IllPosedError,
+    GradviError,
+    "The discrete problem has no unique solution (energy unbounded or flat), found before solving."
 );
 create_exception!(
     gradvi,
@@ -122,6 +129,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("InvalidDataError", py.get_type::<InvalidDataError>())?;
     m.add("InfeasibleError", py.get_type::<InfeasibleError>())?;
     m.add("LinearSolverError", py.get_type::<LinearSolverError>())?;
+    m.add("IllPosedError", py.get_type::<IllPosedError>())?;
     m.add("SolverError", py.get_type::<SolverError>())?;
     m.add("MaxIterationsError", py.get_type::<MaxIterationsError>())?;
     m.add("CyclingError", py.get_type::<CyclingError>())?;
@@ -181,6 +189,7 @@ pub fn to_pyerr(py: Python<'_>, e: &Error) -> PyErr {
         Error::InvalidData(_) => (InvalidDataError::new_err(msg), vec![]),
         Error::Infeasible(_) => (InfeasibleError::new_err(msg), vec![]),
         Error::Linear(_) => (LinearSolverError::new_err(msg), vec![]),
+        Error::IllPosed(_) => (IllPosedError::new_err(msg), vec![]),
         Error::Solver(s) => solver_error(py, s, msg),
         Error::ProblemFile {
             path,

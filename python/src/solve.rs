@@ -249,54 +249,10 @@ fn to_dict<'py>(py: Python<'py>, o: Output, misses: Option<&Misses>) -> PyResult
             _ => "other",
         },
     )?;
-    let c = o.certificate;
-    let cert = PyDict::new(py);
-    cert.set_item("max_violation", c.max_violation)?;
-    cert.set_item("min_multiplier", c.min_multiplier)?;
-    cert.set_item("complementarity", c.complementarity)?;
-    cert.set_item("balance_residual", c.balance_residual)?;
-    d.set_item("certificate", cert)?;
-    let t = o.timings;
-    let tim = PyDict::new(py);
-    for (k, v) in [
-        ("setup", t.setup),
-        ("symbolic", t.symbolic),
-        ("warm_start", t.warm_start),
-        ("assemble", t.assemble),
-        ("factor", t.factor),
-        ("solve", t.solve),
-        ("total", t.total),
-    ] {
-        tim.set_item(k, v)?;
-    }
-    d.set_item("timings", tim)?;
-    let log = PyList::empty(py);
-    for l in &o.log {
-        let e = PyDict::new(py);
-        e.set_item("solve", l.solve)?;
-        e.set_item("active", l.active)?;
-        e.set_item("entered", l.entered)?;
-        e.set_item("left", l.left)?;
-        e.set_item("violation", l.violation)?;
-        e.set_item("residual", l.residual)?;
-        e.set_item("assemble", l.timings.assemble)?;
-        e.set_item("factor", l.timings.factor)?;
-        e.set_item("solve_time", l.timings.solve)?;
-        log.append(e)?;
-    }
-    d.set_item("log", log)?;
-    match o.warm_start {
-        None => d.set_item("warm_start", py.None())?,
-        Some(w) => {
-            let e = PyDict::new(py);
-            e.set_item("levels", w.levels)?;
-            e.set_item("coarse_solves", w.coarse_solves)?;
-            e.set_item("predicted_active", w.predicted_active)?;
-            e.set_item("seconds", w.seconds)?;
-            e.set_item("skipped", w.skipped)?;
-            d.set_item("warm_start", e)?;
-        }
-    }
+    d.set_item("certificate", json(py, &o.certificate)?)?;
+    d.set_item("timings", json(py, &o.timings)?)?;
+    d.set_item("log", json(py, &o.log)?)?;
+    d.set_item("warm_start", json(py, &o.warm_start)?)?;
     match o.errors {
         None => d.set_item("errors", py.None())?,
         Some(e) => {
@@ -353,6 +309,12 @@ fn to_dict<'py>(py: Python<'py>, o: Output, misses: Option<&Misses>) -> PyResult
         }
     }
     Ok(d)
+}
+
+/// A serialisable value as the Python object `json.loads` makes of it.
+fn json<'py, T: serde::Serialize>(py: Python<'py>, v: &T) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(v).map_err(|e| crate::errors::InternalError::new_err(e.to_string()))?;
+    py.import("json")?.call_method1("loads", (text,))
 }
 
 /// Solves `problem` on `mesh`; see `gradvi.solve` for the options.

@@ -24,5 +24,3 @@ pub mod ordering;
 
 pub use cholesky::{FactorThreads, SpdFactor, SpdPattern};
 pub use ordering::{Ordering, nested_dissection};
-#[cfg(test)]
-mod nd_compare;

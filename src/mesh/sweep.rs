@@ -14,7 +14,9 @@
 //!   no collision lies behind the sweep line the order of two active segments never changes, so
 //!   it can be decided once and for all from the segment that starts later: is its start above
 //!   or below the other one (and, if it lies on it, is its end)? That is an exact orientation
-//!   test ([`super::predicates::orient`]), so the list is a `BTreeSet` ordered consistently;
+//!   test ([`super::predicates::orient`]), so the list can be kept in a balanced search tree
+//!   ([`ActiveList`], a treap threaded by a doubly-linked list: one search per insertion,
+//!   neighbours in O(1), removal without any comparison);
 //! * the leftmost collision is between two segments that are neighbours in the list at some
 //!   moment before the sweep line reaches it, so it suffices to test each segment against its
 //!   neighbours when it enters, and the two segments that become neighbours when one leaves.
@@ -27,12 +29,10 @@
 use super::Point;
 use super::predicates::{lex, orient, segments_meet, segments_overlap_from};
 use std::cmp::Ordering;
-use std::collections::BTreeSet;
-use std::ops::Bound;
 
-/// An active segment: its end points in sweep order and its index. Ordered from bottom to top
-/// (see the module docs); a query point is a degenerate segment with index `usize::MAX`, above
-/// every segment through it.
+/// An active segment: its end points in sweep order and its index, ordered from bottom to top
+/// by [`Active::compare`] (see the module docs). A query point is a degenerate segment with
+/// index `usize::MAX`, above every segment through it.
 #[derive(Clone, Copy, Debug)]
 struct Active {
     left: Point,
@@ -47,10 +47,9 @@ impl Active {
             .then_with(|| orient(other.left, other.right, self.right))
             .then(self.id.cmp(&other.id))
     }
-}
 
-impl Ord for Active {
-    fn cmp(&self, other: &Self) -> Ordering {
+    /// The bottom-to-top order of the active list.
+    fn compare(&self, other: &Active) -> Ordering {
         if self.id == other.id {
             Ordering::Equal
         } else if lex(self.left, other.left) == Ordering::Less {
@@ -61,19 +60,194 @@ impl Ord for Active {
     }
 }
 
-impl PartialOrd for Active {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
+const NIL: u32 = u32::MAX;
+
+/// A node of [`ActiveList`]: a segment, its tree links and its list links.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    seg: Active,
+    /// Heap priority (a hash of the segment index).
+    prio: u32,
+    left: u32,
+    right: u32,
+    parent: u32,
+    prev: u32,
+    next: u32,
 }
 
-impl PartialEq for Active {
-    fn eq(&self, other: &Self) -> bool {
-        self.id == other.id
-    }
+/// The active list: a treap (a binary search tree whose nodes are also a max-heap on random
+/// priorities, so its expected depth is O(log n) whatever the order of insertions) ordered by
+/// [`Active::compare`], threaded by a doubly-linked list in the same order. Nodes live in an
+/// arena that holds only the active segments (so it stays small and in cache); `node_of` finds
+/// the node of a segment for its removal.
+struct ActiveList {
+    nodes: Vec<Node>,
+    free: Vec<u32>,
+    root: u32,
+    node_of: Vec<u32>,
 }
 
-impl Eq for Active {}
+/// A well-mixed 32-bit hash of `i` (the finaliser of SplitMix64).
+fn priority(i: usize) -> u32 {
+    let mut z = (i as u64).wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    (z ^ (z >> 31)) as u32
+}
+
+impl ActiveList {
+    fn new(n_segments: usize) -> Self {
+        ActiveList {
+            nodes: Vec::new(),
+            free: Vec::new(),
+            root: NIL,
+            node_of: vec![NIL; n_segments],
+        }
+    }
+
+    fn id(&self, n: u32) -> Option<usize> {
+        (n != NIL).then(|| self.nodes[n as usize].seg.id)
+    }
+
+    /// Makes `child` (or nothing) take the place of `old` under `parent`.
+    fn replace_child(&mut self, parent: u32, old: u32, child: u32) {
+        if parent == NIL {
+            self.root = child;
+        } else if self.nodes[parent as usize].left == old {
+            self.nodes[parent as usize].left = child;
+        } else {
+            self.nodes[parent as usize].right = child;
+        }
+        if child != NIL {
+            self.nodes[child as usize].parent = parent;
+        }
+    }
+
+    /// Rotates `x` above its parent.
+    fn rotate_up(&mut self, x: u32) {
+        let p = self.nodes[x as usize].parent;
+        let g = self.nodes[p as usize].parent;
+        if self.nodes[p as usize].left == x {
+            let b = self.nodes[x as usize].right;
+            self.nodes[p as usize].left = b;
+            if b != NIL {
+                self.nodes[b as usize].parent = p;
+            }
+            self.nodes[x as usize].right = p;
+        } else {
+            let b = self.nodes[x as usize].left;
+            self.nodes[p as usize].right = b;
+            if b != NIL {
+                self.nodes[b as usize].parent = p;
+            }
+            self.nodes[x as usize].left = p;
+        }
+        self.nodes[p as usize].parent = x;
+        self.replace_child(g, p, x);
+    }
+
+    /// Inserts `s`; returns the segments right below and right above it.
+    fn insert(&mut self, s: Active) -> (Option<usize>, Option<usize>) {
+        let (mut cur, mut parent, mut below, mut above) = (self.root, NIL, NIL, NIL);
+        while cur != NIL {
+            parent = cur;
+            if s.compare(&self.nodes[cur as usize].seg) == Ordering::Less {
+                above = cur;
+                cur = self.nodes[cur as usize].left;
+            } else {
+                below = cur;
+                cur = self.nodes[cur as usize].right;
+            }
+        }
+        let node = Node {
+            seg: s,
+            prio: priority(s.id),
+            left: NIL,
+            right: NIL,
+            parent,
+            prev: below,
+            next: above,
+        };
+        let x = match self.free.pop() {
+            Some(x) => {
+                self.nodes[x as usize] = node;
+                x
+            }
+            None => {
+                self.nodes.push(node);
+                (self.nodes.len() - 1) as u32
+            }
+        };
+        self.node_of[s.id] = x;
+        if parent == NIL {
+            self.root = x;
+        } else if above == parent {
+            self.nodes[parent as usize].left = x;
+        } else {
+            self.nodes[parent as usize].right = x;
+        }
+        if below != NIL {
+            self.nodes[below as usize].next = x;
+        }
+        if above != NIL {
+            self.nodes[above as usize].prev = x;
+        }
+        while self.nodes[x as usize].parent != NIL
+            && self.nodes[x as usize].prio
+                > self.nodes[self.nodes[x as usize].parent as usize].prio
+        {
+            self.rotate_up(x);
+        }
+        (self.id(below), self.id(above))
+    }
+
+    /// Removes segment `id` (if active); returns the segments that were right below and right
+    /// above it.
+    fn remove(&mut self, id: usize) -> (Option<usize>, Option<usize>) {
+        let x = std::mem::replace(&mut self.node_of[id], NIL);
+        if x == NIL {
+            return (None, None);
+        }
+        // rotate x down (its higher-priority child up) until it has at most one child
+        loop {
+            let Node { left, right, .. } = self.nodes[x as usize];
+            if left == NIL || right == NIL {
+                let child = if left == NIL { right } else { left };
+                self.replace_child(self.nodes[x as usize].parent, x, child);
+                break;
+            }
+            let up = if self.nodes[left as usize].prio > self.nodes[right as usize].prio {
+                left
+            } else {
+                right
+            };
+            self.rotate_up(up);
+        }
+        let Node { prev, next, .. } = self.nodes[x as usize];
+        if prev != NIL {
+            self.nodes[prev as usize].next = next;
+        }
+        if next != NIL {
+            self.nodes[next as usize].prev = prev;
+        }
+        self.free.push(x);
+        (self.id(prev), self.id(next))
+    }
+
+    /// The highest active segment below `probe`.
+    fn below(&self, probe: &Active) -> Option<usize> {
+        let (mut cur, mut found) = (self.root, NIL);
+        while cur != NIL {
+            if probe.compare(&self.nodes[cur as usize].seg) == Ordering::Greater {
+                found = cur;
+                cur = self.nodes[cur as usize].right;
+            } else {
+                cur = self.nodes[cur as usize].left;
+            }
+        }
+        self.id(found)
+    }
+}
 
 /// What [`first_collision`] found.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -187,15 +361,10 @@ pub(crate) fn first_collision(pts: &[Point], segs: &[[usize; 2]], queries: &[usi
     let mut pending: Vec<(usize, usize)> = queries.iter().copied().zip(0..).collect();
     pending.sort_unstable_by(|a, b| lex(pts[b.0], pts[a.0]));
     let mut below = vec![None; queries.len()];
-    let mut list: BTreeSet<Active> = BTreeSet::new();
+    let mut list = ActiveList::new(segs.len());
     for &v in &ev.order {
         for &i in &ev.ends[ev.end_ptr[v]..ev.end_ptr[v + 1]] {
-            let s = active_seg(i);
-            let lower = list.range(..s).next_back().map(|a| a.id);
-            let upper = list.range((Bound::Excluded(s), Bound::Unbounded)).next().map(|a| a.id);
-            let removed = list.remove(&s);
-            debug_assert!(removed, "segment {i} not found in the active list");
-            if let (Some(lo), Some(up)) = (lower, upper)
+            if let (Some(lo), Some(up)) = list.remove(i)
                 && collide(pts, segs, lo, up)
             {
                 return collision(lo, up);
@@ -208,14 +377,11 @@ pub(crate) fn first_collision(pts: &[Point], segs: &[[usize; 2]], queries: &[usi
                 right: pts[v],
                 id: usize::MAX,
             };
-            below[k] = list.range(..probe).next_back().map(|a| a.id);
+            below[k] = list.below(&probe);
         }
         for &i in &ev.starts[ev.start_ptr[v]..ev.start_ptr[v + 1]] {
-            let s = active_seg(i);
-            list.insert(s);
-            let lower = list.range(..s).next_back().map(|a| a.id);
-            let upper = list.range((Bound::Excluded(s), Bound::Unbounded)).next().map(|a| a.id);
-            for n in [lower, upper].into_iter().flatten() {
+            let (lo, up) = list.insert(active_seg(i));
+            for n in [lo, up].into_iter().flatten() {
                 if collide(pts, segs, i, n) {
                     return collision(i, n);
                 }
@@ -441,5 +607,79 @@ mod tests {
                 segs.pop();
             }
         }
+    }
+
+    /// Checks the tree, heap and list invariants of `list` and returns its segments in order.
+    fn check_treap(list: &ActiveList) -> Vec<usize> {
+        fn walk(l: &ActiveList, n: u32, parent: u32, out: &mut Vec<u32>) {
+            if n == NIL {
+                return;
+            }
+            let node = l.nodes[n as usize];
+            assert_eq!(node.parent, parent);
+            if parent != NIL {
+                assert!(node.prio <= l.nodes[parent as usize].prio, "heap order");
+            }
+            walk(l, node.left, n, out);
+            out.push(n);
+            walk(l, node.right, n, out);
+        }
+        let mut in_order = Vec::new();
+        walk(list, list.root, NIL, &mut in_order);
+        for (i, &n) in in_order.iter().enumerate() {
+            let node = list.nodes[n as usize];
+            let prev = if i == 0 { NIL } else { in_order[i - 1] };
+            let next = in_order.get(i + 1).copied().unwrap_or(NIL);
+            assert_eq!((node.prev, node.next), (prev, next), "list links");
+            assert_eq!(list.node_of[node.seg.id], n);
+        }
+        in_order.iter().map(|&n| list.nodes[n as usize].seg.id).collect()
+    }
+
+    /// Random insertions and removals of horizontal segments at random heights: the treap keeps
+    /// its invariants, lists them by height and reports the right neighbours.
+    #[test]
+    fn active_list_stays_a_treap() {
+        let mut r = rng(42);
+        let n = 300;
+        let heights: Vec<f64> = (0..n).map(|_| r()).collect();
+        let seg = |i: usize| Active {
+            left: [0.0, heights[i]],
+            right: [1.0, heights[i]],
+            id: i,
+        };
+        let mut list = ActiveList::new(n);
+        let mut active: Vec<usize> = Vec::new();
+        for step in 0..5000 {
+            let i = (r() * n as f64) as usize % n;
+            let by_height = |v: &mut Vec<usize>| {
+                v.sort_by(|&a, &b| heights[a].total_cmp(&heights[b]).then(a.cmp(&b)))
+            };
+            let neighbours = |v: &Vec<usize>, i: usize| {
+                let pos = v.iter().position(|&j| j == i).unwrap();
+                (
+                    pos.checked_sub(1).map(|p| v[p]),
+                    v.get(pos + 1).copied(),
+                )
+            };
+            if active.contains(&i) {
+                let expected = neighbours(&active, i);
+                assert_eq!(list.remove(i), expected, "step {step}");
+                active.retain(|&j| j != i);
+            } else {
+                active.push(i);
+                by_height(&mut active);
+                assert_eq!(list.insert(seg(i)), neighbours(&active, i), "step {step}");
+            }
+            assert_eq!(check_treap(&list), active, "step {step}");
+            let probe = Active {
+                left: [0.5, 0.5],
+                right: [0.5, 0.5],
+                id: usize::MAX,
+            };
+            let expected = active.iter().rev().find(|&&j| heights[j] < 0.5).copied();
+            assert_eq!(list.below(&probe), expected);
+        }
+        assert!(list.nodes.len() <= n);
     }
 }

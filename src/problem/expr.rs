@@ -877,7 +877,10 @@ impl Parser<'_> {
                     Some(t) => t.tok.to_string(),
                     None => "the end of the expression".into(),
                 };
-                return Err(syntax(self.pos(), format!("expected ',' or ')', found {found}")));
+                return Err(syntax(
+                    self.pos(),
+                    format!("expected ',' or ')', found {found}"),
+                ));
             }
         }
     }

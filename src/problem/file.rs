@@ -273,14 +273,25 @@ impl Field {
     }
 }
 
-/// A(x): a I, or a full matrix; `Loc` is where the whole value is written.
+/// A(x): a I, a full matrix of expressions, or a constant matrix (when every entry is
+/// constant); `Loc` is where the whole value is written.
 #[derive(Debug, Clone)]
 enum TensorField {
     Scalar(Field),
     Matrix([[Field; 2]; 2], Loc),
+    Constant(Tensor, Loc),
 }
 
 impl TensorField {
+    /// A full matrix, or a constant one if every entry is.
+    fn matrix(m: [[Field; 2]; 2], loc: Loc) -> TensorField {
+        let c = |i: usize, j: usize| m[i][j].expr.as_constant();
+        match (c(0, 0), c(0, 1), c(1, 0), c(1, 1)) {
+            (Some(a), Some(b), Some(c), Some(d)) => TensorField::Constant([[a, b], [c, d]], loc),
+            _ => TensorField::Matrix(m, loc),
+        }
+    }
+
     #[inline]
     fn at(&self, p: Point) -> Tensor {
         match self {
@@ -292,12 +303,14 @@ impl TensorField {
                 [m[0][0].at(p), m[0][1].at(p)],
                 [m[1][0].at(p), m[1][1].at(p)],
             ],
+            TensorField::Constant(a, _) => *a,
         }
     }
+
     fn loc(&self) -> &Loc {
         match self {
             TensorField::Scalar(a) => &a.loc,
-            TensorField::Matrix(_, loc) => loc,
+            TensorField::Matrix(_, loc) | TensorField::Constant(_, loc) => loc,
         }
     }
 }
@@ -893,7 +906,7 @@ impl Cx<'_> {
                 let e = |i: usize, j: usize| {
                     self.expr(&format!("{key}[{i}][{j}]"), &m[i][j], scope, Kind::Number)
                 };
-                Ok(TensorField::Matrix(
+                Ok(TensorField::matrix(
                     [[e(0, 0)?, e(0, 1)?], [e(1, 0)?, e(1, 1)?]],
                     self.loc(key, span.clone()),
                 ))
@@ -1135,30 +1148,24 @@ impl ProblemFile {
     /// of A and of f applies at every cell; A is symmetric positive definite at every centroid;
     /// and every datum is finite at every point where a scheme evaluates it:
     ///
-    /// | datum | points |
-    /// |---|---|
-    /// | A, exact u and ∇u | cell centroids x_K (exact: also vertices) |
-    /// | f (piece of the cell) | x_K, the vertices and edge midpoints of K |
-    /// | obstacle barrier | x_K, vertices, edge midpoints |
-    /// | Dirichlet value, Signorini barrier | midpoints and end points of the edges of that kind |
-    /// | Neumann flux | midpoints of the Neumann edges |
+    /// | datum | points | used there by |
+    /// |---|---|---|
+    /// | A, exact u and ∇u | cell centroids x_K | every scheme; errors |
+    /// | f | x_K and the vertices (piecewise f: the vertices of each cell, with its piece) | HMM; P1 |
+    /// | obstacle barrier | x_K, vertices, edge midpoints | HMM; P1; CR |
+    /// | Dirichlet value, Signorini barrier | midpoints and end points of the edges of that kind | HMM, CR; P1 |
+    /// | Neumann flux | midpoints of the Neumann edges | every scheme |
     ///
-    /// The first failure (in cell, then edge order) is reported, naming the key, the cell or
-    /// edge, and the point.
+    /// (Other quadrature points, such as CR's sub-triangle centroids for f, are checked by the
+    /// assembler.) The first failure, in cell, vertex, then edge order, is reported, naming the
+    /// key, the cell, vertex or edge, and the point. Cost: a few evaluations per cell, in
+    /// parallel.
     pub fn check_against_mesh(&self, mesh: &PolyMesh) -> Result<()> {
         self.check_tags(mesh)?;
         let kinds = self.check_boundary(mesh)?;
         self.check_cells(mesh)?;
-        self.check_boundary_values(mesh, &kinds)?;
-        if let Some((ConstraintKind::Obstacle, _, b)) = &self.data.constraint {
-            let bad = (0..mesh.n_edges())
-                .into_par_iter()
-                .find_map_first(|e| nonfinite(b, mesh.edge_midpoint(e), &format!("edge {e}")));
-            if let Some(m) = bad {
-                return Err(self.fail(K::NonFinite, &b.loc, m));
-            }
-        }
-        Ok(())
+        self.check_vertices_and_edges(mesh)?;
+        self.check_boundary_values(mesh, &kinds)
     }
 
     fn fail(&self, kind: K, loc: &Loc, msg: String) -> Error {
@@ -1279,90 +1286,112 @@ impl ProblemFile {
         }
     }
 
-    /// Per cell: the pieces of A and f apply, A is SPD, f, the obstacle barrier and the exact
-    /// solution are finite.
+    /// Per cell: the pieces of A and f apply, A is SPD; f (piecewise: also at the vertices of
+    /// the cell, with its piece), the obstacle barrier and the exact solution are finite at x_K.
     fn check_cells(&self, mesh: &PolyMesh) -> Result<()> {
         let bad = (0..mesh.n_cells())
             .into_par_iter()
             .find_map_first(|k| self.cell_error(mesh, k).err());
-        match bad {
-            Some(e) => Err(e),
-            None => Ok(()),
-        }
+        bad.map_or(Ok(()), Err)
     }
 
     fn cell_error(&self, mesh: &PolyMesh, k: usize) -> Result<()> {
         let d = &self.data;
         let xk = mesh.centroid(k);
-        let place = format!("cell {k} (x_K = ({}, {}))", xk[0], xk[1]);
-        if !d.diffusion.is_empty() {
-            let Some(a) = select(&d.diffusion, xk) else {
-                let loc = Loc {
-                    key: "diffusion".into(),
-                    line: 0,
-                    column: 0,
-                };
-                return Err(self.fail(
-                    K::UncoveredPoint,
-                    &loc,
-                    format!("no piece applies at {place}"),
-                ));
+        // formatted only on failure
+        let place = || format!("cell {k} (x_K = ({}, {}))", xk[0], xk[1]);
+        let uncovered = |key: &str| {
+            let loc = Loc {
+                key: key.into(),
+                line: 0,
+                column: 0,
             };
+            let msg = format!("no piece applies at {}", place());
+            self.fail(K::UncoveredPoint, &loc, msg)
+        };
+        if !d.diffusion.is_empty() {
+            let a = select(&d.diffusion, xk).ok_or_else(|| uncovered("diffusion"))?;
             let t = a.at(xk);
             if !t.iter().flatten().all(|v| v.is_finite()) {
-                return Err(self.fail(K::NonFinite, a.loc(), format!("A = {t:?} at {place}")));
+                let msg = format!("A = {t:?} at {}", place());
+                return Err(self.fail(K::NonFinite, a.loc(), msg));
             }
-            if let Err(e) = check_tensor(&t, &place) {
-                let msg = match e {
-                    Error::InvalidData(m) => m,
-                    e => e.to_string(),
+            if check_tensor(&t, "").is_err() {
+                let msg = match check_tensor(&t, &place()) {
+                    Err(Error::InvalidData(m)) => m,
+                    other => format!("{other:?}"),
                 };
                 return Err(self.fail(K::NotSpd, a.loc(), msg));
             }
         }
-        let verts = mesh.cell_vertices(k).iter().map(|&v| mesh.vertex(v));
-        let mids = mesh.cell_edges(k).iter().map(|&e| mesh.edge_midpoint(e));
-        let points: Vec<Point> = std::iter::once(xk).chain(verts).chain(mids).collect();
         if !d.source.is_empty() {
-            let Some(f) = select(&d.source, xk) else {
-                let loc = Loc {
-                    key: "source".into(),
-                    line: 0,
-                    column: 0,
-                };
-                return Err(self.fail(
-                    K::UncoveredPoint,
-                    &loc,
-                    format!("no piece applies at {place}"),
-                ));
-            };
-            for &p in &points {
-                if let Some(m) = nonfinite(f, p, &format!("{place}")) {
-                    return Err(self.fail(K::NonFinite, &f.loc, m));
-                }
+            let f = select(&d.source, xk).ok_or_else(|| uncovered("source"))?;
+            let piecewise = d.source.iter().any(|p| p.cond.is_some());
+            let verts = mesh.cell_vertices(k).iter().map(|&v| mesh.vertex(v));
+            let n = if piecewise { usize::MAX } else { 0 };
+            for p in std::iter::once(xk).chain(verts.take(n)) {
+                self.finite(f, p, &place)?;
             }
         }
-        let nv = 1 + mesh.cell_vertices(k).len();
         if let Some((ConstraintKind::Obstacle, _, b)) = &d.constraint {
-            for &p in &points[..nv] {
-                if let Some(m) = nonfinite(b, p, &place) {
-                    return Err(self.fail(K::NonFinite, &b.loc, m));
-                }
-            }
+            self.finite(b, xk, &place)?;
         }
         if let Some((u, g)) = &d.exact {
             for f in std::iter::once(u).chain(g) {
-                for &p in &points[..nv] {
-                    if let Some(m) = nonfinite(f, p, &place) {
-                        return Err(self.fail(K::NonFinite, &f.loc, m));
-                    }
-                }
+                self.finite(f, xk, &place)?;
             }
         }
         Ok(())
     }
 
-    /// Dirichlet values, Neumann fluxes and the Signorini barrier on the edges of their kind.
+    /// An unpiecewise source and the obstacle barrier at every vertex (P1), and the obstacle
+    /// barrier at every edge midpoint (Crouzeix–Raviart).
+    fn check_vertices_and_edges(&self, mesh: &PolyMesh) -> Result<()> {
+        let d = &self.data;
+        let source = match d.source.as_slice() {
+            [Piece { cond: None, value }] => Some(value),
+            _ => None,
+        };
+        let obstacle = match &d.constraint {
+            Some((ConstraintKind::Obstacle, _, b)) => Some(b),
+            _ => None,
+        };
+        let at_vertices = source.into_iter().chain(obstacle);
+        for f in at_vertices {
+            let bad = (0..mesh.n_vertices()).into_par_iter().find_map_first(|v| {
+                self.finite(f, mesh.vertex(v), &|| format!("vertex {v}"))
+                    .err()
+            });
+            bad.map_or(Ok(()), Err)?;
+        }
+        if let Some(b) = obstacle {
+            let bad = (0..mesh.n_edges()).into_par_iter().find_map_first(|e| {
+                self.finite(b, mesh.edge_midpoint(e), &|| format!("edge {e}"))
+                    .err()
+            });
+            bad.map_or(Ok(()), Err)?;
+        }
+        Ok(())
+    }
+
+    /// `Err` naming the datum, the point and the place if `f` is not finite at `p`.
+    fn finite(&self, f: &Field, p: Point, place: &dyn Fn() -> String) -> Result<()> {
+        let v = f.at(p);
+        if v.is_finite() {
+            return Ok(());
+        }
+        let msg = format!(
+            "\"{}\" is {v} at ({}, {}) in {}",
+            f.expr.source(),
+            p[0],
+            p[1],
+            place()
+        );
+        Err(self.fail(K::NonFinite, &f.loc, msg))
+    }
+
+    /// Dirichlet values, Neumann fluxes and the Signorini barrier on the edges of their kind
+    /// (the Dirichlet value and the barrier also at the end points, for P1).
     fn check_boundary_values(&self, mesh: &PolyMesh, kinds: &[BoundaryKind]) -> Result<()> {
         let d = &self.data;
         let sig = match &d.constraint {
@@ -1374,36 +1403,20 @@ impl ProblemFile {
             .par_iter()
             .zip(kinds)
             .find_map_first(|(&e, kind)| {
-                let (field, points) = match kind {
+                let (field, ends) = match kind {
                     BoundaryKind::Dirichlet => (d.dirichlet.as_ref(), true),
                     BoundaryKind::Neumann => (d.neumann.as_ref(), false),
                     BoundaryKind::Signorini => (sig, true),
                 };
                 let f = field?;
-                let x = mesh.edge_midpoint(e);
-                let place = format!("boundary edge {e}");
-                let ends = mesh.edge_vertices(e).map(|v| mesh.vertex(v));
-                let pts: &[Point] = if points { &[x, ends[0], ends[1]] } else { &[x] };
-                pts.iter()
-                    .find_map(|&p| nonfinite(f, p, &place))
-                    .map(|m| self.fail(K::NonFinite, &f.loc, m))
+                let place = || format!("boundary edge {e}");
+                let [a, b] = mesh.edge_vertices(e).map(|v| mesh.vertex(v));
+                let pts = [mesh.edge_midpoint(e), a, b];
+                let n = if ends { 3 } else { 1 };
+                pts[..n]
+                    .iter()
+                    .find_map(|&p| self.finite(f, p, &place).err())
             });
-        match bad {
-            Some(e) => Err(e),
-            None => Ok(()),
-        }
+        bad.map_or(Ok(()), Err)
     }
-}
-
-/// `Some(message)` if `f` is not finite at `p`.
-fn nonfinite(f: &Field, p: Point, place: &str) -> Option<String> {
-    let v = f.at(p);
-    (!v.is_finite()).then(|| {
-        format!(
-            "\"{}\" is {v} at ({}, {}) in {place}",
-            f.expr.source(),
-            p[0],
-            p[1]
-        )
-    })
 }

@@ -14,6 +14,7 @@
 //! [`solve_with_symbolic`] reuses the symbolic system of an earlier solve on the same scheme.
 
 pub mod constraints;
+pub mod magnitude;
 pub mod warm_start;
 pub mod well_posed;
 
@@ -211,6 +212,10 @@ fn solve_system<'a>(
         }
         None => crate::vi::solve_unconstrained(&system, opts.active_set.tol)?,
     };
+    let mut result = result;
+    let scale = magnitude::data_scale(&system, problem, constraints.as_ref());
+    result.certificate.data_magnitude = magnitude::data_magnitude(&result.u, scale);
+    result.certificate.check(opts.active_set.tol)?;
     let mut timings = Timings {
         setup: system.setup_seconds,
         symbolic: system.symbolic_seconds,

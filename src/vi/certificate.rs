@@ -23,7 +23,14 @@ pub struct Certificate {
     pub complementarity: f64,
     /// max_i |(b − Mu)_i| / scale_r over unknowns that are neither Dirichlet nor active.
     pub balance_residual: f64,
+    /// ‖u‖∞ against the size of the data (set by the solve driver, which knows the data; 0
+    /// for a purely algebraic solve): see `crate::solver::magnitude`. Must not exceed
+    /// [`MAGNITUDE_LIMIT`].
+    pub data_magnitude: f64,
 }
+
+/// The largest accepted [`Certificate::data_magnitude`].
+pub const MAGNITUDE_LIMIT: f64 = 1e6;
 
 impl Certificate {
     /// The first quantity above `tol`, as an error.
@@ -41,6 +48,15 @@ impl Certificate {
                     tol,
                 });
             }
+        }
+        if !(self.data_magnitude <= MAGNITUDE_LIMIT) {
+            return Err(SolverError::Certificate {
+                quantity: "size of u against the size of the data (the system is singular or \
+                           nearly so)"
+                    .into(),
+                value: self.data_magnitude,
+                tol: MAGNITUDE_LIMIT,
+            });
         }
         Ok(())
     }

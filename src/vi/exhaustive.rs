@@ -14,12 +14,29 @@ pub const MAX_CONSTRAINED: usize = 20;
 /// convex set: it would mean round-off larger than the tolerances, 1e-12 relative).
 pub fn solve(q: &dyn QuadraticEnergy, cons: &Constraints) -> crate::Result<(Vec<f64>, Vec<bool>)> {
     let m = cons.dofs.len();
+    let mut found = kkt_active_sets(q, cons, true)?;
+    found
+        .pop()
+        .map(|(a, u)| (u, a))
+        .ok_or(crate::Error::Solver(crate::SolverError::NoKktPoint { candidates: 1 << m }))
+}
+
+/// Every active set whose equality-constrained minimiser satisfies the KKT conditions, with
+/// that minimiser (the first one only if `first_only`). More than one means degenerate data
+/// (an unknown exactly at the barrier with a zero multiplier).
+pub fn kkt_active_sets(
+    q: &dyn QuadraticEnergy,
+    cons: &Constraints,
+    first_only: bool,
+) -> crate::Result<Vec<(Vec<bool>, Vec<f64>)>> {
+    let m = cons.dofs.len();
     if m > MAX_CONSTRAINED {
         return Err(crate::Error::InvalidData(format!(
             "exhaustive enumeration is for at most {MAX_CONSTRAINED} constrained unknowns, got {m}"
         )));
     }
     let s = cons.side.sign();
+    let mut found = Vec::new();
     for mask in 0u32..(1 << m) {
         let active: Vec<bool> = (0..m).map(|j| mask & (1 << j) != 0).collect();
         let (u, _) = q.minimise_with_fixed(&cons.fixed(q.n_unknowns(), &active))?;
@@ -33,8 +50,11 @@ pub fn solve(q: &dyn QuadraticEnergy, cons: &Constraints) -> crate::Result<(Vec<
             feasible && mult
         });
         if ok {
-            return Ok((u, active));
+            found.push((active, u));
+            if first_only {
+                break;
+            }
         }
     }
-    Err(crate::Error::Solver(crate::SolverError::NoKktPoint { candidates: 1 << m }))
+    Ok(found)
 }

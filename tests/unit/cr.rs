@@ -120,40 +120,11 @@ fn cr_converges_at_the_expected_orders() {
     assert_orders("gmsh test1_1..4", errors(&unstructured));
 }
 
-/// Every active set whose equality-constrained solution satisfies the KKT conditions
-/// (feasible; multiplier of the right sign on the active unknowns), as masks over the
-/// constrained unknowns, with their solutions.
+/// Every active set whose equality-constrained solution satisfies the KKT conditions, with
+/// its solution (exhaustive enumeration).
 fn kkt_active_sets(sol: &Solution) -> Vec<(Vec<bool>, Vec<f64>)> {
-    let sys = &sol.system;
     let cons = sol.constraints.as_ref().expect("a barrier");
-    let m = cons.dofs.len();
-    assert!(
-        m <= 12,
-        "enumeration is for tiny problems ({m} constrained unknowns)"
-    );
-    let s = cons.side.sign();
-    let mut found = Vec::new();
-    for mask in 0u32..(1 << m) {
-        let active: Vec<bool> = (0..m).map(|j| mask & (1 << j) != 0).collect();
-        let mut fixed = vec![None; sys.n_unknowns()];
-        for j in (0..m).filter(|&j| active[j]) {
-            fixed[cons.dofs[j].dof] = Some(cons.barrier[j]);
-        }
-        let (u, _) = sys.solve(&fixed).unwrap();
-        let (r, sc) = sys.residual(&u);
-        let scale = sc.iter().cloned().fold(0.0, f64::max);
-        let umax = u.iter().fold(1e-300f64, |a, x| a.max(x.abs()));
-        let kkt = (0..m).all(|j| {
-            let d = cons.dofs[j].dof;
-            let feasible = s * (u[d] - cons.barrier[j]) <= 1e-12 * umax;
-            let multiplier = !active[j] || s * r[d] >= -1e-12 * scale;
-            feasible && multiplier
-        });
-        if kkt {
-            found.push((active, u));
-        }
-    }
-    found
+    gradvi::vi::exhaustive::kkt_active_sets(&sol.system, cons, false).unwrap()
 }
 
 /// Solves `p` with CR on `mesh` and checks the solution against exhaustive enumeration: the

@@ -1,0 +1,84 @@
+//! The absolute part of the certificate: the size of u against the size of the data.
+//!
+//! The certificate's residuals are scaled by the size of the computed u (max_i |b_i| +
+//! Σ_j |M_ij u_j|), so a huge u from a (near-)singular system can pass them. The continuous
+//! problem bounds u by its data: for −div(A∇u) = f in Ω (diameter D, A ≥ λ I), with Dirichlet
+//! values u_D, Neumann flux q and a barrier g, a maximum-principle estimate gives
+//!
+//!   ‖u‖∞ ≤ U := max(‖u_D‖∞, ‖g‖∞) + D² ‖f‖∞ / λ + D ‖q‖∞ / λ
+//!
+//! up to a constant of order one that depends on the geometry and on how much of ∂Ω is
+//! Dirichlet. The certificate's `data_magnitude` = ‖u‖∞ / U must stay below
+//! [`MAGNITUDE_LIMIT`] = 10⁶: a margin no sensible problem comes near, which an answer of 10¹⁰
+//! on data of size 1 cannot pass.
+
+use crate::assembly::DiscreteSystem;
+use crate::problem::{BoundaryKind, Problem};
+use crate::vi::Constraints;
+use rayon::prelude::*;
+
+pub use crate::vi::certificate::MAGNITUDE_LIMIT;
+
+/// U of the module docs, from the data evaluated where the scheme evaluates it.
+pub fn data_scale(system: &DiscreteSystem, problem: &Problem, cons: Option<&Constraints>) -> f64 {
+    let mesh = system.scheme().mesh();
+    let (f_max, lambda) = (0..mesh.n_cells())
+        .into_par_iter()
+        .map(|k| {
+            let x = mesh.centroid(k);
+            let f = match &problem.source_in_cell {
+                Some(g) => g(x, x),
+                None => (problem.source)(x),
+            };
+            let a = (problem.diffusion)(x);
+            // smallest eigenvalue of the symmetric 2×2 tensor
+            let (m, d) = (0.5 * (a[0][0] + a[1][1]), 0.5 * (a[0][0] - a[1][1]));
+            let l = m - (d * d + a[0][1] * a[1][0]).max(0.0).sqrt();
+            (f.abs(), l)
+        })
+        .reduce(|| (0.0, f64::INFINITY), |a, b| (a.0.max(b.0), a.1.min(b.1)));
+    let mut q_max = 0.0f64;
+    for &e in mesh.boundary_edges() {
+        let x = mesh.edge_midpoint(e);
+        if (problem.boundary)(x, mesh.edge_tag(e)) == BoundaryKind::Neumann {
+            q_max = q_max.max((problem.neumann)(x).abs());
+        }
+    }
+    let bb = mesh.bounding_box();
+    let diam = ((bb[2] - bb[0]).powi(2) + (bb[3] - bb[1]).powi(2)).sqrt();
+    let dirichlet = system.dirichlet().iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let barrier = cons.map_or(0.0, |c| c.barrier.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+    dirichlet.max(barrier) + (diam * diam * f_max + diam * q_max) / lambda
+}
+
+/// ‖u‖∞ / U (0 when u = 0).
+pub fn data_magnitude(u: &[f64], scale: f64) -> f64 {
+    let umax = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if umax == 0.0 { 0.0 } else { umax / scale }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vi::Certificate;
+
+    #[test]
+    fn the_certificate_refuses_an_answer_far_larger_than_the_data() {
+        let mesh = crate::mesh::generate::cartesian(8, 8).unwrap();
+        let scheme = crate::scheme::Hmm::new(&mesh);
+        let p = crate::problem::paper_test3(-20.0);
+        let sol = crate::solver::solve_problem(&scheme, &p, &Default::default()).unwrap();
+        // ψ is of size 1 and f = −20 on the unit square: U ≈ 1 + 2·20
+        let scale = data_scale(&sol.system, &p, sol.constraints.as_ref());
+        assert!(scale > 20.0 && scale < 100.0, "{scale}");
+        let m = sol.result.certificate.data_magnitude;
+        assert!(m > 0.0 && m < 1.0, "{m}");
+        // the garbage: |u| ≈ 4.6e10 on data of size 1
+        let bad = Certificate {
+            data_magnitude: data_magnitude(&[-4.6e10], 1.0),
+            ..Default::default()
+        };
+        assert!(bad.check(1e-10).is_err());
+        assert_eq!(data_magnitude(&[0.0, 0.0], 0.0), 0.0);
+    }
+}
