@@ -7,7 +7,7 @@ FVCA5_MESHES ?=
 PYTHON := /usr/bin/python3
 REFDIR := replication/results/reference
 
-.PHONY: all build test test-external lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench clean
+.PHONY: all build test test-external fuzz lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench clean
 
 all: build
 
@@ -22,6 +22,13 @@ test:
 ## the FVCA5 files in ../shared/meshes/fvca5 and dolfinx (installed here if missing). CI runs it.
 test-external: reference-deps
 	$(CARGO) test --release -- --ignored
+
+## fuzz: seeded mutation fuzzing of meshes and problem files through the readers, validation
+## and a small solve, in child processes under memory and time limits (FUZZ_SECONDS, FUZZ_SEED)
+FUZZ_SECONDS ?= 300
+FUZZ_SEED ?= 1
+fuzz: build
+	$(BIN) fuzz --seconds $(FUZZ_SECONDS) --seed $(FUZZ_SEED)
 
 ## lint: formatting, clippy with warnings as errors, and documentation
 lint:

@@ -28,6 +28,9 @@ enum Command {
     Replicate(ReplicateArgs),
     /// Compare gradvi's P1 and HMM with the dolfinx reference solves (CROSSCHECK.md).
     Crosscheck(app::crosscheck::CrosscheckArgs),
+    /// Seeded mutation fuzzing of the readers, validation and solver (run by `make fuzz`).
+    #[command(hide = true)]
+    Fuzz(app::fuzz::FuzzArgs),
     /// The scaling benchmark (run by `make bench`; see README "Performance"). Arguments:
     /// `--report-only` rewrites BENCHMARKS.md from bench.csv; `--root DIR` is the repository.
     #[command(hide = true)]
@@ -188,6 +191,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Solve(a) => app::solve::run(a),
         Command::Replicate(a) => replicate(a),
         Command::Crosscheck(a) => app::crosscheck::run(a),
+        Command::Fuzz(a) => app::fuzz::run(a),
         Command::Bench { args } => {
             let root = std::env::current_dir()?;
             Ok(app::bench::main_with_args(&root, args)?)

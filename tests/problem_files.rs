@@ -345,7 +345,7 @@ const BAD: [(&str, K, usize, usize, &[&str]); 16] = [
         K::NonFinite,
         7,
         11,
-        &["obstacle.barrier", "-inf", "(0, 0)", "cell 0"],
+        &["obstacle.barrier", "-inf", "(0, 0), vertex 0"],
     ),
     ("infeasible.toml", K::Syntax, 0, 0, &[]),
 ];

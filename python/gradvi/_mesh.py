@@ -152,6 +152,8 @@ class Mesh:
         """A mesh of a built-in family of the unit square: ``"cartesian"`` (level k: 2^(k+1)
         squares per side), ``"hexagonal"`` (FVCA5 ``hexa1_k``), ``"kershaw"`` (``mesh4_1_k``).
         ``domain = (x0, x1, y0, y1)`` maps it affinely onto that rectangle."""
+        if int(level) < 1:
+            raise InvalidDataError(f"mesh levels start at 1, got {level}")
         d = None if domain is None else [float(v) for v in domain]
         if d is not None and len(d) != 4:
             raise InvalidDataError("domain must be (x0, x1, y0, y1)")
@@ -165,6 +167,8 @@ class Mesh:
         d = [float(v) for v in domain]
         if len(d) != 4:
             raise InvalidDataError("domain must be (x0, x1, y0, y1)")
+        if int(nx) < 1 or int(ny) < 1:
+            raise InvalidDataError(f"nx and ny must be at least 1, got {nx} x {ny}")
         return cls._wrap(_gradvi._Mesh.cartesian(int(nx), int(ny), d))
 
     @classmethod

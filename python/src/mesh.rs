@@ -118,8 +118,11 @@ impl PyMesh {
         let mut cells = Vec::with_capacity(off.len() - 1);
         for k in 0..off.len() - 1 {
             let (a, b) = (off[k], off[k + 1]);
-            if b < a {
-                return Err(invalid(format!("cell offsets decrease at cell {k}")));
+            if b < a || a < 0 || b as usize > conn.len() {
+                return Err(invalid(format!(
+                    "cell offsets must be non-decreasing from 0 to {}: cell {k} has offsets {a}..{b}",
+                    conn.len()
+                )));
             }
             let mut c = Vec::with_capacity((b - a) as usize);
             for &v in conn.slice(numpy::ndarray::s![a as usize..b as usize]) {

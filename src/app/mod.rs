@@ -4,6 +4,7 @@
 
 pub mod bench;
 pub mod crosscheck;
+pub mod fuzz;
 pub mod output;
 pub mod plot;
 pub mod replication;

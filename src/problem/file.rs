@@ -896,12 +896,13 @@ impl Cx<'_> {
         let span = raw.span();
         let sub = |s: &Src| Spanned::new(span.clone(), s.clone());
         match raw.get_ref() {
-            TensorSrc::Scalar(s) => Ok(TensorField::Scalar(self.expr(
-                key,
-                &sub(s),
-                scope,
-                Kind::Number,
-            )?)),
+            TensorSrc::Scalar(s) => {
+                let a = self.expr(key, &sub(s), scope, Kind::Number)?;
+                Ok(match a.expr.as_constant() {
+                    Some(c) => TensorField::Constant([[c, 0.0], [0.0, c]], a.loc),
+                    None => TensorField::Scalar(a),
+                })
+            }
             TensorSrc::Matrix(m) => {
                 let e = |i: usize, j: usize| {
                     self.expr(&format!("{key}[{i}][{j}]"), &m[i][j], scope, Kind::Number)
@@ -1381,7 +1382,7 @@ impl ProblemFile {
             return Ok(());
         }
         let msg = format!(
-            "\"{}\" is {v} at ({}, {}) in {}",
+            "\"{}\" is {v} at ({}, {}), {}",
             f.expr.source(),
             p[0],
             p[1],

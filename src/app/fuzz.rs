@@ -1,0 +1,248 @@
+//! `gradvi fuzz`: a seeded mutation fuzzer of the whole input path (readers, validation,
+//! problem setup, a small solve), run through the `gradvi` binary in child processes so that
+//! panics, aborts, hangs and memory exhaustion are all observed.
+//!
+//! Each case takes a good input (the small meshes of `tests/data/good/` and `meshes/test*_1.msh`,
+//! and the problem files of `problems/` when present), mutates it with a seeded generator (bit
+//! flips, byte and line deletion, duplication and swaps, truncation, numbers replaced by
+//! extreme values, NaN, huge counts), writes it to a scratch directory and runs
+//! `gradvi solve` on it under a memory limit (`ulimit -v`) and a wall-clock limit. A case
+//! passes when the child exits with 0 (then the CLI has checked the certificate) or 1 (a
+//! typed error, one line on stderr), in time, with no panic message. Anything else is a
+//! failure, and its input is kept in the scratch directory for reproduction.
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Options of `gradvi fuzz`.
+#[derive(Args, Debug)]
+pub struct FuzzArgs {
+    /// Seed of the mutations (the same seed gives the same cases).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Number of cases (0: until --seconds is used up).
+    #[arg(long, default_value_t = 0)]
+    pub iterations: usize,
+    /// Total time budget in seconds.
+    #[arg(long, default_value_t = 60.0)]
+    pub seconds: f64,
+    /// Time limit of one case, seconds.
+    #[arg(long, default_value_t = 20.0)]
+    pub case_seconds: f64,
+    /// Memory limit of one case, MiB (virtual memory, `ulimit -v`).
+    #[arg(long, default_value_t = 4096)]
+    pub memory_mib: u64,
+    /// The repository root (where tests/data/good, meshes/ and problems/ are).
+    #[arg(long, default_value = ".")]
+    pub root: PathBuf,
+    /// Scratch directory (failing inputs are kept there).
+    #[arg(long)]
+    pub scratch: Option<PathBuf>,
+}
+
+/// A small deterministic generator (SplitMix64).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+/// The seed inputs: (path, kind) with kind "mesh" or "problem".
+fn corpus(root: &Path) -> Result<Vec<(PathBuf, &'static str)>> {
+    let mut out = Vec::new();
+    let good = root.join("tests/data/good");
+    for dir in [good, root.join("meshes")] {
+        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+        let mut files: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();
+        files.sort();
+        for f in files {
+            let name = f.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            let small = !name.starts_with("test") || name.ends_with("_1.msh");
+            let ext = f.extension().and_then(|e| e.to_str()).unwrap_or("");
+            if small && ["msh", "typ1", "typ2"].contains(&ext) {
+                out.push((f, "mesh"));
+            }
+        }
+    }
+    if let Ok(entries) = std::fs::read_dir(root.join("problems")) {
+        let mut files: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();
+        files.sort();
+        out.extend(
+            files
+                .into_iter()
+                .filter(|f| f.extension().is_some_and(|e| e == "toml"))
+                .map(|f| (f, "problem")),
+        );
+    }
+    if out.is_empty() {
+        bail!("no seed inputs under {}", root.display());
+    }
+    Ok(out)
+}
+
+/// Replaces the number starting at a random position of a line by an extreme value.
+fn mutate_number(text: &mut Vec<u8>, rng: &mut Rng) {
+    const VALUES: [&str; 9] = [
+        "nan", "inf", "-1", "0", "1e308", "4294967296", "99999999999", "-0", "1e-320",
+    ];
+    let starts: Vec<usize> = (0..text.len())
+        .filter(|&i| text[i].is_ascii_digit() && (i == 0 || !text[i - 1].is_ascii_alphanumeric()))
+        .collect();
+    if starts.is_empty() {
+        return;
+    }
+    let s = starts[rng.below(starts.len())];
+    let mut e = s;
+    while e < text.len() && (text[e].is_ascii_alphanumeric() || b".-+".contains(&text[e])) {
+        e += 1;
+    }
+    let v = VALUES[rng.below(VALUES.len())];
+    text.splice(s..e, v.bytes());
+}
+
+/// One to four random mutations of `data`.
+fn mutate(data: &[u8], rng: &mut Rng) -> Vec<u8> {
+    let mut t = data.to_vec();
+    for _ in 0..1 + rng.below(4) {
+        if t.is_empty() {
+            break;
+        }
+        let n = t.len();
+        match rng.below(7) {
+            0 => {
+                let i = rng.below(n);
+                t[i] ^= 1 << rng.below(8);
+            }
+            1 => t.truncate(rng.below(n)),
+            2 | 3 => mutate_number(&mut t, rng),
+            4 => {
+                // delete a line
+                let i = rng.below(n);
+                let a = t[..i].iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
+                let b = t[i..].iter().position(|&b| b == b'\n').map_or(n, |p| i + p + 1);
+                t.drain(a..b);
+            }
+            5 => {
+                // duplicate a line
+                let i = rng.below(n);
+                let a = t[..i].iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
+                let b = t[i..].iter().position(|&b| b == b'\n').map_or(n, |p| i + p + 1);
+                let line = t[a..b].to_vec();
+                t.splice(b..b, line);
+            }
+            _ => {
+                let (i, j) = (rng.below(n), rng.below(n));
+                t.swap(i, j);
+            }
+        }
+    }
+    t
+}
+
+/// How one case ended.
+enum Verdict {
+    Pass,
+    Fail(String),
+}
+
+/// Runs `gradvi args` under the limits and judges it.
+fn run_case(exe: &Path, args: &[String], a: &FuzzArgs) -> Result<Verdict> {
+    let mut child = Command::new("sh")
+        .arg("-c")
+        .arg(format!("ulimit -v {} && exec \"$0\" \"$@\"", a.memory_mib * 1024))
+        .arg(exe)
+        .args(args)
+        .env("RUST_BACKTRACE", "0")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .context("starting gradvi")?;
+    let t0 = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait()? {
+            break Some(s);
+        }
+        if t0.elapsed().as_secs_f64() > a.case_seconds {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let mut err = String::new();
+    if let Some(mut e) = child.stderr.take() {
+        use std::io::Read;
+        let _ = e.read_to_string(&mut err);
+    }
+    Ok(match status {
+        None => Verdict::Fail(format!("no answer within {} s", a.case_seconds)),
+        Some(_) if err.contains("panicked") => Verdict::Fail(format!("panic: {err}")),
+        Some(s) if s.code() == Some(0) => Verdict::Pass,
+        Some(s) if s.code() == Some(1) && err.trim_end().lines().last().is_some_and(|l| l.starts_with("error: ")) => {
+            Verdict::Pass
+        }
+        Some(s) => Verdict::Fail(format!("exit {s}: {}", err.trim_end())),
+    })
+}
+
+/// `gradvi fuzz` (see the module docs). Fails (nonzero exit) if any case failed.
+pub fn run(a: &FuzzArgs) -> Result<()> {
+    if !(a.seconds > 0.0 && a.case_seconds > 0.0 && a.seconds.is_finite()) {
+        bail!("--seconds and --case-seconds must be positive and finite");
+    }
+    let exe = std::env::current_exe()?;
+    let seeds = corpus(&a.root)?;
+    let scratch = a.scratch.clone().unwrap_or_else(|| {
+        std::env::temp_dir().join(format!("gradvi-fuzz-{}", std::process::id()))
+    });
+    std::fs::create_dir_all(&scratch)?;
+    let mut rng = Rng(a.seed);
+    let (t0, mut cases, mut failures) = (Instant::now(), 0usize, Vec::new());
+    while (a.iterations == 0 || cases < a.iterations) && t0.elapsed().as_secs_f64() < a.seconds {
+        let (src, kind) = &seeds[rng.below(seeds.len())];
+        let data = std::fs::read(src).with_context(|| format!("reading {}", src.display()))?;
+        let ext = src.extension().and_then(|e| e.to_str()).unwrap_or("txt");
+        let input = scratch.join(format!("case{cases:05}.{ext}"));
+        std::fs::write(&input, mutate(&data, &mut rng))?;
+        let input_s = input.display().to_string();
+        let args: Vec<String> = match *kind {
+            "mesh" => ["solve", "--problem", "test3", "--mesh", &input_s, "--max-solves", "60"]
+                .map(String::from)
+                .to_vec(),
+            _ => ["solve", &input_s, "--max-solves", "60"].map(String::from).to_vec(),
+        };
+        match run_case(&exe, &args, a)? {
+            Verdict::Pass => {
+                let _ = std::fs::remove_file(&input);
+            }
+            Verdict::Fail(why) => {
+                eprintln!("FAIL {} (from {}): {why}", input.display(), src.display());
+                failures.push(input);
+            }
+        }
+        cases += 1;
+    }
+    eprintln!(
+        "fuzz: {cases} cases in {:.1} s, seed {}, {} failures",
+        t0.elapsed().as_secs_f64(),
+        a.seed,
+        failures.len()
+    );
+    if !failures.is_empty() {
+        bail!("{} of {cases} cases failed (inputs kept in {})", failures.len(), scratch.display());
+    }
+    let _ = std::fs::remove_dir(&scratch);
+    Ok(())
+}
