@@ -20,8 +20,8 @@ test:
 
 ## test-external: the tests that need what a fresh machine may lack (#[ignore]d in `make test`):
 ## the FVCA5 files in ../shared/meshes/fvca5 and dolfinx (installed here if missing). CI runs it.
-test-external: reference-deps
-	$(CARGO) test --release -- --ignored
+test-external: build reference-deps
+	$(CARGO) test -- --ignored
 
 ## fuzz: seeded mutation fuzzing of meshes and problem files through the readers, validation
 ## and a small solve, in child processes under memory and time limits (FUZZ_SECONDS, FUZZ_SEED)
@@ -80,3 +80,19 @@ bench: build reference-deps
 
 clean:
 	$(CARGO) clean
+
+## python-test: the Python package (python/: PyO3 + maturin). Creates python/.venv, installs
+## maturin, numpy, meshio, pytest, matplotlib and gmsh from PyPI, builds and installs the package
+## (`pip install ./python`, release build in python/target) and runs its pytest suite, which also
+## runs python/examples/. The comparison with the command line uses target/release/gradvi when
+## it has been built (this target builds it first).
+PYTHON3 ?= python3
+PYVENV := python/.venv
+.PHONY: python-test
+python-test: build
+	test -x $(PYVENV)/bin/python || $(PYTHON3) -m venv $(PYVENV)
+	printf '*\n' > $(PYVENV)/.gitignore
+	$(PYVENV)/bin/python -m pip install -q --upgrade pip
+	$(PYVENV)/bin/python -m pip install -q maturin numpy meshio pytest matplotlib gmsh
+	$(PYVENV)/bin/python -m pip install -q ./python
+	cd python && .venv/bin/pytest tests

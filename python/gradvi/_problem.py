@@ -43,8 +43,9 @@ class CellData(_EntityData):
 class EdgeData(_EntityData):
     """Values per edge (one per edge, in mesh order), e.g. boundary data on x_σ.
 
-    At a vertex (P1), the value is the mean over the adjacent edges (for boundary data: the
-    adjacent boundary edges); at a cell centroid, the mean over the cell's edges."""
+    At a vertex (P1), the value is the mean over the adjacent edges weighted by 1/|σ| (for
+    boundary data: over the adjacent boundary edges; exact for affine data along a straight
+    side); at a cell centroid, the mean over the cell's edges."""
 
     kind = "edge"
 
@@ -108,11 +109,11 @@ class _Points:
         ed = self.mesh.edges
         sel = self.mesh.boundary_edges if boundary_only else np.arange(self.ne)
         v = ed[sel].reshape(-1)
-        w = np.repeat(a[sel], 2)
-        s = np.bincount(v, weights=w, minlength=self.nv)
-        n = np.bincount(v, minlength=self.nv)
+        inv = np.repeat(1.0 / self.mesh.edge_lengths[sel], 2)  # weights 1/|σ|
+        s = np.bincount(v, weights=np.repeat(a[sel], 2) * inv, minlength=self.nv)
+        n = np.bincount(v, weights=inv, minlength=self.nv)
         with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(n > 0, s / np.maximum(n, 1), np.nan)
+            return np.where(n > 0, s / np.where(n > 0, n, 1.0), np.nan)
 
     def _vertex_to_cells(self, a: np.ndarray) -> np.ndarray:
         off, conn = self.mesh.cell_offsets, self.mesh.cell_connectivity
@@ -234,9 +235,14 @@ class Problem:
     - the constructor, from Python data. Every datum is a number, a **vectorised** callable
       ``f(x, y)`` taking numpy arrays, or per-entity values (:class:`CellData`,
       :class:`EdgeData`, :class:`VertexData`; a plain array is taken by its length). At
-      :func:`gradvi.solve`, each callable is called **once**, on the arrays of all the points
-      where the scheme evaluates data (cell centroids, edge midpoints, vertices, and for CR the
-      sub-triangle centroids); the Rust assembly then reads the values from that table.
+      :func:`gradvi.solve`, each callable is called **once**, on the arrays of the points where
+      the scheme evaluates that datum: A at the cell centroids x_K; boundary data (u_D, g_N, a
+      Signorini barrier) at the boundary edge midpoints and vertices; f, an obstacle barrier and
+      the exact solution at the centroids, edge midpoints, vertices and, for CR, the centroids
+      of the sub-triangles co(σ ∪ {x_K}). The Rust assembly then reads the values from that
+      table, by point. (Only the coarse meshes of ``warm_start="nested"`` ask for other points:
+      callables are then called point by point there, array data cannot be, and the warm start
+      is skipped with the reason in :attr:`Solution.warm_start`.)
 
     Example (the paper's Test 3, an obstacle problem u ≥ ψ with f = C)::
 

@@ -437,7 +437,9 @@ def solve(
         GradviError: a subclass naming what went wrong: :class:`gradvi.InvalidDataError`
             (options, data with NaN, a scheme unfit for the mesh), :class:`gradvi.InfeasibleError`
             (empty convex set), :class:`gradvi.ProblemFileError`, :class:`gradvi.SolverError`
-            (no convergence, cycling, certificate), :class:`gradvi.LinearSolverError`.
+            (no convergence, cycling, certificate), :class:`gradvi.IllPosedError` (no unique
+            solution, e.g. no Dirichlet part and no barrier), :class:`gradvi.LinearSolverError`.
+            An exception raised by a callable of a Python-built problem propagates unchanged.
     """
     pb = _as_problem(problem)
     if mesh is None:

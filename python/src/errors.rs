@@ -20,12 +20,12 @@
 //! └── InternalError          a panic inside gradvi (a bug): the interpreter survives
 //! ```
 
-use gradvi::error::ProblemFileErrorKind;
 use gradvi::Error;
 use gradvi::SolverError as Stall;
+use gradvi::error::ProblemFileErrorKind;
+use pyo3::BoundObject;
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
-use pyo3::BoundObject;
 use pyo3::prelude::*;
 use std::any::Any;
 
@@ -173,15 +173,9 @@ pub fn to_pyerr(py: Python<'_>, e: &Error) -> PyErr {
     let (err, attrs): (PyErr, Vec<(&str, Py<PyAny>)>) = match e {
         Error::MeshIo { path, line, .. } => (
             MeshIoError::new_err(msg),
-            vec![
-                ("path", path_obj(py, path)),
-                ("line", obj(py, *line)),
-            ],
+            vec![("path", path_obj(py, path)), ("line", obj(py, *line))],
         ),
-        Error::InvalidMesh(_) => (
-            InvalidMeshError::new_err(msg),
-            vec![("path", py.None())],
-        ),
+        Error::InvalidMesh(_) => (InvalidMeshError::new_err(msg), vec![("path", py.None())]),
         Error::InvalidMeshFile { path, .. } => (
             InvalidMeshError::new_err(msg),
             vec![("path", path_obj(py, path))],

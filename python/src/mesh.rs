@@ -38,7 +38,10 @@ pub fn point_key(p: Point) -> [u64; 2] {
 }
 
 /// An (n, 2) array of points.
-pub fn points_array<'py>(py: Python<'py>, pts: impl ExactSizeIterator<Item = Point>) -> PyResult<Bound<'py, PyAny>> {
+pub fn points_array<'py>(
+    py: Python<'py>,
+    pts: impl ExactSizeIterator<Item = Point>,
+) -> PyResult<Bound<'py, PyAny>> {
     let n = pts.len();
     let mut flat = Vec::with_capacity(2 * n);
     for p in pts {
@@ -127,7 +130,9 @@ impl PyMesh {
             let mut c = Vec::with_capacity((b - a) as usize);
             for &v in conn.slice(numpy::ndarray::s![a as usize..b as usize]) {
                 if v < 0 {
-                    return Err(invalid(format!("cell {k} refers to the negative vertex id {v}")));
+                    return Err(invalid(format!(
+                        "cell {k} refers to the negative vertex id {v}"
+                    )));
                 }
                 c.push(v as usize);
             }
@@ -162,7 +167,12 @@ impl PyMesh {
     /// The built-in family `family` at `level`, optionally mapped onto a rectangle.
     #[staticmethod]
     #[pyo3(signature = (family, level, domain=None))]
-    fn generate(py: Python<'_>, family: &str, level: usize, domain: Option<[f64; 4]>) -> PyResult<Self> {
+    fn generate(
+        py: Python<'_>,
+        family: &str,
+        level: usize,
+        domain: Option<[f64; 4]>,
+    ) -> PyResult<Self> {
         let fam = Family::from_str(family).map_err(|e| crate::to_pyerr(py, &e))?;
         if let Some(d) = domain {
             check_rect(d)?;
@@ -258,7 +268,8 @@ impl PyMesh {
         d.set_item("points", points_array(py, m.vertices().iter().copied())?)?;
         let mut offsets = Vec::with_capacity(nc + 1);
         offsets.push(0i64);
-        let (mut conn, mut cedges, mut normals, mut dists) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let (mut conn, mut cedges, mut normals, mut dists) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for k in 0..nc {
             conn.extend(m.cell_vertices(k).iter().map(|&v| v as i64));
             cedges.extend(m.cell_edges(k).iter().map(|&e| e as i64));
@@ -271,9 +282,18 @@ impl PyMesh {
         d.set_item("cell_edges", vec_array(py, cedges))?;
         d.set_item("cell_normals", points_array(py, normals.into_iter())?)?;
         d.set_item("cell_dists", vec_array(py, dists))?;
-        d.set_item("centroids", points_array(py, (0..nc).map(|k| m.centroid(k)))?)?;
-        d.set_item("measures", vec_array(py, (0..nc).map(|k| m.measure(k)).collect::<Vec<_>>()))?;
-        d.set_item("diameters", vec_array(py, (0..nc).map(|k| m.diameter(k)).collect::<Vec<_>>()))?;
+        d.set_item(
+            "centroids",
+            points_array(py, (0..nc).map(|k| m.centroid(k)))?,
+        )?;
+        d.set_item(
+            "measures",
+            vec_array(py, (0..nc).map(|k| m.measure(k)).collect::<Vec<_>>()),
+        )?;
+        d.set_item(
+            "diameters",
+            vec_array(py, (0..nc).map(|k| m.diameter(k)).collect::<Vec<_>>()),
+        )?;
         let mut edges = Vec::with_capacity(2 * ne);
         let mut ecells = Vec::with_capacity(2 * ne);
         for e in 0..ne {
@@ -285,22 +305,47 @@ impl PyMesh {
             );
         }
         d.set_item("edges", PyArray1::from_vec(py, edges).reshape([ne, 2])?)?;
-        d.set_item("edge_cells", PyArray1::from_vec(py, ecells).reshape([ne, 2])?)?;
-        d.set_item("edge_midpoints", points_array(py, (0..ne).map(|e| m.edge_midpoint(e)))?)?;
-        d.set_item("edge_lengths", vec_array(py, (0..ne).map(|e| m.edge_measure(e)).collect::<Vec<_>>()))?;
-        d.set_item("edge_tags", vec_array(py, (0..ne).map(|e| m.edge_tag(e)).collect::<Vec<i32>>()))?;
-        d.set_item("boundary_edges", index_array(py, m.boundary_edges().iter().copied()))?;
+        d.set_item(
+            "edge_cells",
+            PyArray1::from_vec(py, ecells).reshape([ne, 2])?,
+        )?;
+        d.set_item(
+            "edge_midpoints",
+            points_array(py, (0..ne).map(|e| m.edge_midpoint(e)))?,
+        )?;
+        d.set_item(
+            "edge_lengths",
+            vec_array(py, (0..ne).map(|e| m.edge_measure(e)).collect::<Vec<_>>()),
+        )?;
+        d.set_item(
+            "edge_tags",
+            vec_array(py, (0..ne).map(|e| m.edge_tag(e)).collect::<Vec<i32>>()),
+        )?;
+        d.set_item(
+            "boundary_edges",
+            index_array(py, m.boundary_edges().iter().copied()),
+        )?;
         Ok(d)
     }
 
     /// The points where a scheme evaluates problem data: cell centroids, edge midpoints,
     /// vertices, and for the Crouzeix–Raviart scheme the centroids of the sub-triangles
     /// co(σ ∪ {x_K}) (3 per cell, in local edge order; empty for the other schemes).
-    fn evaluation_points<'py>(&self, py: Python<'py>, scheme: &str) -> PyResult<Bound<'py, PyDict>> {
+    fn evaluation_points<'py>(
+        &self,
+        py: Python<'py>,
+        scheme: &str,
+    ) -> PyResult<Bound<'py, PyDict>> {
         let m = &*self.mesh;
         let d = PyDict::new(py);
-        d.set_item("centroids", points_array(py, (0..m.n_cells()).map(|k| m.centroid(k)))?)?;
-        d.set_item("midpoints", points_array(py, (0..m.n_edges()).map(|e| m.edge_midpoint(e)))?)?;
+        d.set_item(
+            "centroids",
+            points_array(py, (0..m.n_cells()).map(|k| m.centroid(k)))?,
+        )?;
+        d.set_item(
+            "midpoints",
+            points_array(py, (0..m.n_edges()).map(|e| m.edge_midpoint(e)))?,
+        )?;
         d.set_item("vertices", points_array(py, m.vertices().iter().copied())?)?;
         let sub: Vec<Point> = if scheme.eq_ignore_ascii_case("cr") {
             let mesh = Arc::clone(&self.mesh);
@@ -326,12 +371,20 @@ impl PyMesh {
         point_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
         cell_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
     ) -> PyResult<()> {
-        let pd: Vec<(String, Vec<f64>)> = point_data.into_iter().map(|(n, a)| (n, a.as_array().to_vec())).collect();
-        let cd: Vec<(String, Vec<f64>)> = cell_data.into_iter().map(|(n, a)| (n, a.as_array().to_vec())).collect();
+        let pd: Vec<(String, Vec<f64>)> = point_data
+            .into_iter()
+            .map(|(n, a)| (n, a.as_array().to_vec()))
+            .collect();
+        let cd: Vec<(String, Vec<f64>)> = cell_data
+            .into_iter()
+            .map(|(n, a)| (n, a.as_array().to_vec()))
+            .collect();
         let mesh = Arc::clone(&self.mesh);
         guard(py, move || {
-            let p: Vec<(&str, &[f64])> = pd.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
-            let c: Vec<(&str, &[f64])> = cd.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+            let p: Vec<(&str, &[f64])> =
+                pd.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+            let c: Vec<(&str, &[f64])> =
+                cd.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
             write_vtu(&path, &mesh, &p, &c)
         })
     }

@@ -126,11 +126,13 @@ impl Tabulated {
         match &col.fallback {
             Some(cb) => {
                 self.misses.calls.fetch_add(1, Ordering::Relaxed);
-                Python::attach(|py| match cb.call1(py, (p[0], p[1])).and_then(|r| convert(r.bind(py))) {
-                    Ok(v) => v,
-                    Err(e) => {
-                        self.misses.py_error(e);
-                        nan
+                Python::attach(|py| {
+                    match cb.call1(py, (p[0], p[1])).and_then(|r| convert(r.bind(py))) {
+                        Ok(v) => v,
+                        Err(e) => {
+                            self.misses.py_error(e);
+                            nan
+                        }
                     }
                 })
             }
@@ -142,7 +144,7 @@ impl Tabulated {
     }
 
     fn scalar(&self, col: &Column<f64>, p: Point, what: &'static str) -> f64 {
-        self.lookup(col, p, what, |r| r.extract::<f64>().map_err(Into::into), f64::NAN)
+        self.lookup(col, p, what, |r| r.extract::<f64>(), f64::NAN)
     }
 
     fn boundary_at(&self, x: Point, tag: i32) -> BoundaryKind {
@@ -155,7 +157,7 @@ impl Tabulated {
             return Python::attach(|py| {
                 match cb
                     .call1(py, (x[0], x[1], tag))
-                    .and_then(|r| r.bind(py).extract::<u8>().map_err(Into::into))
+                    .and_then(|r| r.bind(py).extract::<u8>())
                 {
                     Ok(c) => kind_of(c),
                     Err(e) => {
@@ -179,10 +181,15 @@ impl Tabulated {
     /// The `gradvi::problem::Problem` whose closures read this table.
     pub fn problem(self: &Arc<Self>) -> Problem {
         let t = Arc::clone(self);
-        let mut pb = Problem::new(&self.name, Box::new(move |p| t.scalar(&t.source, p, "the source term f")));
+        let mut pb = Problem::new(
+            &self.name,
+            Box::new(move |p| t.scalar(&t.source, p, "the source term f")),
+        );
         if self.source_per_cell {
             let t = Arc::clone(self);
-            pb = pb.with_source_in_cell(Box::new(move |_p, xk| t.scalar(&t.source, xk, "the source term f")));
+            pb = pb.with_source_in_cell(Box::new(move |_p, xk| {
+                t.scalar(&t.source, xk, "the source term f")
+            }));
         }
         if self.diffusion.is_some() {
             let t = Arc::clone(self);
@@ -203,9 +210,13 @@ impl Tabulated {
         let t = Arc::clone(self);
         pb = pb.with_boundary(move |x, tag| t.boundary_at(x, tag));
         let t = Arc::clone(self);
-        pb = pb.with_dirichlet(Box::new(move |p| t.scalar(&t.dirichlet, p, "the Dirichlet value")));
+        pb = pb.with_dirichlet(Box::new(move |p| {
+            t.scalar(&t.dirichlet, p, "the Dirichlet value")
+        }));
         let t = Arc::clone(self);
-        pb = pb.with_neumann(Box::new(move |p| t.scalar(&t.neumann, p, "the Neumann flux")));
+        pb = pb.with_neumann(Box::new(move |p| {
+            t.scalar(&t.neumann, p, "the Neumann flux")
+        }));
         if let Some((kind, side, _)) = &self.constraint {
             let t = Arc::clone(self);
             pb = pb.with_constraint(
@@ -220,14 +231,20 @@ impl Tabulated {
         if self.exact.is_some() {
             let (t1, t2) = (Arc::clone(self), Arc::clone(self));
             pb = pb.with_exact(
-                Box::new(move |p| t1.scalar(&t1.exact.as_ref().expect("checked above").0, p, "the exact solution")),
+                Box::new(move |p| {
+                    t1.scalar(
+                        &t1.exact.as_ref().expect("checked above").0,
+                        p,
+                        "the exact solution",
+                    )
+                }),
                 Box::new(move |p| {
                     let col = &t2.exact.as_ref().expect("checked above").1;
                     t2.lookup(
                         col,
                         p,
                         "the exact gradient",
-                        |r| r.extract::<[f64; 2]>().map_err(Into::into),
+                        |r| r.extract::<[f64; 2]>(),
                         [f64::NAN; 2],
                     )
                 }),
@@ -240,7 +257,10 @@ impl Tabulated {
 impl PyProblem {
     /// The `gradvi::problem::Problem` on `mesh` (a problem file is checked against it first),
     /// and the miss record of a tabulated problem.
-    pub fn instantiate(&self, mesh: &Arc<PolyMesh>) -> gradvi::Result<(Problem, Option<Arc<Misses>>)> {
+    pub fn instantiate(
+        &self,
+        mesh: &Arc<PolyMesh>,
+    ) -> gradvi::Result<(Problem, Option<Arc<Misses>>)> {
         match &self.spec {
             Spec::Builtin { name, params } => Ok((by_name(name, params)?, None)),
             Spec::File(pf) => {
@@ -279,10 +299,15 @@ fn scalar_col(d: &Bound<'_, PyDict>, key: &str, m: usize) -> PyResult<Option<Col
     let Some(v) = item(d, key)? else {
         return Ok(None);
     };
-    let a: PyReadonlyArray1<'_, f64> = v.extract().map_err(|_| invalid(format!("{key}: expected a float64 array")))?;
+    let a: PyReadonlyArray1<'_, f64> = v
+        .extract()
+        .map_err(|_| invalid(format!("{key}: expected a float64 array")))?;
     let values = a.as_array().to_vec();
     if values.len() != m {
-        return Err(invalid(format!("{key}: expected {m} values, got {}", values.len())));
+        return Err(invalid(format!(
+            "{key}: expected {m} values, got {}",
+            values.len()
+        )));
     }
     Ok(Some(Column {
         values,
@@ -298,7 +323,9 @@ fn side_of(s: &str) -> PyResult<Side> {
     match s {
         "upper" => Ok(Side::Upper),
         "lower" => Ok(Side::Lower),
-        _ => Err(invalid(format!("side must be \"upper\" or \"lower\", got {s:?}"))),
+        _ => Err(invalid(format!(
+            "side must be \"upper\" or \"lower\", got {s:?}"
+        ))),
     }
 }
 
@@ -347,11 +374,15 @@ impl PyProblem {
             let diffusion = match item(data, "diffusion")? {
                 None => None,
                 Some(v) => {
-                    let a: PyReadonlyArray3<'_, f64> =
-                        v.extract().map_err(|_| invalid("diffusion: expected a float64 array of shape (m, 2, 2)"))?;
+                    let a: PyReadonlyArray3<'_, f64> = v.extract().map_err(|_| {
+                        invalid("diffusion: expected a float64 array of shape (m, 2, 2)")
+                    })?;
                     let a = a.as_array();
                     if a.shape() != [m, 2, 2] {
-                        return Err(invalid(format!("diffusion: expected shape ({m}, 2, 2), got {:?}", a.shape())));
+                        return Err(invalid(format!(
+                            "diffusion: expected shape ({m}, 2, 2), got {:?}",
+                            a.shape()
+                        )));
                     }
                     let values = (0..m)
                         .map(|i| [[a[[i, 0, 0]], a[[i, 0, 1]]], [a[[i, 1, 0]], a[[i, 1, 1]]]])
@@ -365,8 +396,9 @@ impl PyProblem {
             let boundary: Vec<u8> = match item(data, "boundary")? {
                 None => vec![0; mesh_ref.n_edges()],
                 Some(v) => {
-                    let a: PyReadonlyArray1<'_, u8> =
-                        v.extract().map_err(|_| invalid("boundary: expected a uint8 array"))?;
+                    let a: PyReadonlyArray1<'_, u8> = v
+                        .extract()
+                        .map_err(|_| invalid("boundary: expected a uint8 array"))?;
                     a.as_array().to_vec()
                 }
             };
@@ -384,19 +416,28 @@ impl PyProblem {
                         "signorini" => ConstraintKind::Signorini,
                         other => return Err(invalid(format!("unknown constraint kind {other:?}"))),
                     };
-                    let side = side_of(&item(data, "side")?.ok_or_else(|| invalid("side: missing"))?.extract::<String>()?)?;
+                    let side = side_of(
+                        &item(data, "side")?
+                            .ok_or_else(|| invalid("side: missing"))?
+                            .extract::<String>()?,
+                    )?;
                     Some((kind, side, required_scalar(data, "barrier", m)?))
                 }
             };
             let exact = match scalar_col(data, "exact_u", m)? {
                 None => None,
                 Some(u) => {
-                    let g = item(data, "exact_grad")?.ok_or_else(|| invalid("exact_grad: missing"))?;
-                    let g: PyReadonlyArray2<'_, f64> =
-                        g.extract().map_err(|_| invalid("exact_grad: expected a float64 array of shape (m, 2)"))?;
+                    let g =
+                        item(data, "exact_grad")?.ok_or_else(|| invalid("exact_grad: missing"))?;
+                    let g: PyReadonlyArray2<'_, f64> = g.extract().map_err(|_| {
+                        invalid("exact_grad: expected a float64 array of shape (m, 2)")
+                    })?;
                     let g = g.as_array();
                     if g.shape() != [m, 2] {
-                        return Err(invalid(format!("exact_grad: expected shape ({m}, 2), got {:?}", g.shape())));
+                        return Err(invalid(format!(
+                            "exact_grad: expected shape ({m}, 2), got {:?}",
+                            g.shape()
+                        )));
                     }
                     let values = g.rows().into_iter().map(|r| [r[0], r[1]]).collect();
                     Some((
@@ -424,7 +465,8 @@ impl PyProblem {
                 edge_by_midpoint,
                 diffusion,
                 source: required_scalar(data, "source", m)?,
-                source_per_cell: item(data, "source_per_cell")?.map_or(Ok(false), |v| v.extract::<bool>())?,
+                source_per_cell: item(data, "source_per_cell")?
+                    .map_or(Ok(false), |v| v.extract::<bool>())?,
                 dirichlet: required_scalar(data, "dirichlet", m)?,
                 neumann: required_scalar(data, "neumann", m)?,
                 boundary,

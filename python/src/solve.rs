@@ -13,8 +13,8 @@ use gradvi::post::{Errors, relative_errors};
 use gradvi::problem::Side;
 use gradvi::scheme::{Entity, SchemeKind, SchemeOptions, build_with};
 use gradvi::solver::{
-    ActiveSetOptions, Certificate, IterationLog, Method, SolveOptions, Timings, WarmStart, WarmStartReport,
-    solve_problem,
+    ActiveSetOptions, Certificate, IterationLog, Method, SolveOptions, Timings, WarmStart,
+    WarmStartReport, solve_problem,
 };
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -90,7 +90,9 @@ fn options(
 ) -> gradvi::Result<Options> {
     let bad = |m: String| Err(gradvi::Error::InvalidData(m));
     if !(tol > 0.0 && tol < 1.0) {
-        return bad(format!("tol must be in (0, 1), got {tol} (the certificate would be meaningless)"));
+        return bad(format!(
+            "tol must be in (0, 1), got {tol} (the certificate would be meaningless)"
+        ));
     }
     if !(c > 0.0 && c.is_finite()) {
         return bad(format!("c must be positive and finite, got {c}"));
@@ -101,12 +103,20 @@ fn options(
     let ordering = match ordering.to_ascii_lowercase().as_str() {
         "amd" => Ordering::Amd,
         "nd" | "nested-dissection" | "nested_dissection" => Ordering::NestedDissection,
-        o => return bad(format!("unknown ordering {o:?} (expected \"amd\" or \"nested-dissection\")")),
+        o => {
+            return bad(format!(
+                "unknown ordering {o:?} (expected \"amd\" or \"nested-dissection\")"
+            ));
+        }
     };
     let factor_threads = match factor_threads.to_ascii_lowercase().as_str() {
         "sequential" => FactorThreads::Sequential,
         "global" | "parallel" => FactorThreads::Global,
-        o => return bad(format!("unknown factor_threads {o:?} (expected \"sequential\" or \"global\")")),
+        o => {
+            return bad(format!(
+                "unknown factor_threads {o:?} (expected \"sequential\" or \"global\")"
+            ));
+        }
     };
     Ok(Options {
         kind: SchemeKind::from_str(scheme)?,
@@ -130,7 +140,11 @@ fn options(
     })
 }
 
-fn run(mesh: &Arc<gradvi::mesh::PolyMesh>, problem: &PyProblem, o: &Options) -> gradvi::Result<Output> {
+fn run(
+    mesh: &Arc<gradvi::mesh::PolyMesh>,
+    problem: &PyProblem,
+    o: &Options,
+) -> gradvi::Result<Output> {
     let (pb, _) = problem.instantiate(mesh)?;
     let scheme = build_with(o.kind, mesh, &o.scheme)?;
     let s = scheme.as_ref();
@@ -175,10 +189,11 @@ fn run(mesh: &Arc<gradvi::mesh::PolyMesh>, problem: &PyProblem, o: &Options) -> 
         .exact
         .as_ref()
         .map(|ex| relative_errors(s, &u, &*ex.u, &*ex.grad));
-    let exact_cell = pb
-        .exact
-        .as_ref()
-        .map(|ex| (0..mesh.n_cells()).map(|k| (ex.u)(mesh.centroid(k))).collect());
+    let exact_cell = pb.exact.as_ref().map(|ex| {
+        (0..mesh.n_cells())
+            .map(|k| (ex.u)(mesh.centroid(k)))
+            .collect()
+    });
     Ok(Output {
         problem: pb.name.clone(),
         scheme: o.kind.name(),
@@ -231,7 +246,11 @@ fn entity_fields<'py>(py: Python<'py>, f: EntityFields) -> PyResult<Bound<'py, P
     Ok(d)
 }
 
-fn to_dict<'py>(py: Python<'py>, o: Output, misses: Option<&Misses>) -> PyResult<Bound<'py, PyDict>> {
+fn to_dict<'py>(
+    py: Python<'py>,
+    o: Output,
+    misses: Option<&Misses>,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("problem", o.problem)?;
     d.set_item("scheme", o.scheme)?;
@@ -301,10 +320,19 @@ fn to_dict<'py>(py: Python<'py>, o: Output, misses: Option<&Misses>) -> PyResult
             e.set_item("active_field", vec_array(py, c.active_field))?;
             e.set_item("active_fields", entity_fields(py, c.active_fields)?)?;
             e.set_item("multiplier_fields", entity_fields(py, c.multiplier_fields)?)?;
-            e.set_item("active_edge_sums", c.active_edge_sums.map(|v| vec_array(py, v)))?;
-            e.set_item("multiplier_edge_sums", c.multiplier_edge_sums.map(|v| vec_array(py, v)))?;
+            e.set_item(
+                "active_edge_sums",
+                c.active_edge_sums.map(|v| vec_array(py, v)),
+            )?;
+            e.set_item(
+                "multiplier_edge_sums",
+                c.multiplier_edge_sums.map(|v| vec_array(py, v)),
+            )?;
             e.set_item("contact_measure", c.contact_measure)?;
-            e.set_item("free_boundary", points_array(py, c.free_boundary.into_iter())?)?;
+            e.set_item(
+                "free_boundary",
+                points_array(py, c.free_boundary.into_iter())?,
+            )?;
             d.set_item("constraint", e)?;
         }
     }
@@ -313,7 +341,8 @@ fn to_dict<'py>(py: Python<'py>, o: Output, misses: Option<&Misses>) -> PyResult
 
 /// A serialisable value as the Python object `json.loads` makes of it.
 fn json<'py, T: serde::Serialize>(py: Python<'py>, v: &T) -> PyResult<Bound<'py, PyAny>> {
-    let text = serde_json::to_string(v).map_err(|e| crate::errors::InternalError::new_err(e.to_string()))?;
+    let text = serde_json::to_string(v)
+        .map_err(|e| crate::errors::InternalError::new_err(e.to_string()))?;
     py.import("json")?.call_method1("loads", (text,))
 }
 
@@ -360,14 +389,14 @@ fn solve<'py>(
         _ => None,
     };
     // the solve runs detached from the interpreter; panics become InternalError
-    let out = py.detach(|| std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(&mesh, problem, &o))));
+    let out = py.detach(|| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(&mesh, problem, &o)))
+    });
     let out = match out {
         Ok(Ok(v)) => v,
         Ok(Err(e)) => {
-            if let Some(m) = &misses {
-                if let Some(err) = miss_error(py, &e, m) {
-                    return Err(err);
-                }
+            if let Some(err) = misses.as_ref().and_then(|m| miss_error(py, &e, m)) {
+                return Err(err);
             }
             return Err(to_pyerr(py, &e));
         }

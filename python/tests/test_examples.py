@@ -24,8 +24,6 @@ def test_test3_example(tmp_path):
 
 
 def test_gmsh_signorini_example(tmp_path):
-    pytest.importorskip("gmsh")
-    pytest.importorskip("matplotlib")
     text = run("gmsh_signorini.py", tmp_path, str(tmp_path))
     assert "hmm: NITER" in text and "p1: NITER" in text
     png = tmp_path / "gmsh_signorini.png"

@@ -1,0 +1,121 @@
+"""Type stubs of the private extension module ``gradvi._gradvi`` (PyO3). The public API is the
+``gradvi`` package, which wraps these handles; see ``help(gradvi)``."""
+
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+class GradviError(Exception):
+    """Base class of every error gradvi reports (same message as the Rust library)."""
+
+class MeshIoError(GradviError):
+    path: str
+    line: int
+
+class InvalidMeshError(GradviError):
+    path: Optional[str]
+
+class InvalidDataError(GradviError): ...
+class InfeasibleError(GradviError): ...
+class LinearSolverError(GradviError): ...
+class IllPosedError(GradviError): ...
+class SolverError(GradviError): ...
+
+class MaxIterationsError(SolverError):
+    iterations: int
+    history: List[int]
+
+class CyclingError(SolverError):
+    iteration: int
+    repeats: int
+    history: List[int]
+
+class NoKktPointError(SolverError):
+    candidates: int
+
+class CertificateError(SolverError):
+    quantity: str
+    value: float
+    tol: float
+
+class ProblemFileError(GradviError):
+    path: str
+    line: int
+    column: int
+    kind: str
+
+class FileError(GradviError):
+    path: str
+    errno: Optional[int]
+
+class InternalError(GradviError): ...
+
+class _Mesh:
+    @staticmethod
+    def read(path: str) -> _Mesh: ...
+    @staticmethod
+    def from_arrays(
+        points: npt.NDArray[np.float64],
+        offsets: npt.NDArray[np.int64],
+        connectivity: npt.NDArray[np.int64],
+        tagged_edges: Optional[npt.NDArray[np.int64]] = None,
+    ) -> _Mesh: ...
+    @staticmethod
+    def generate(family: str, level: int, domain: Optional[Sequence[float]] = None) -> _Mesh: ...
+    @staticmethod
+    def cartesian(nx: int, ny: int, domain: Sequence[float]) -> _Mesh: ...
+    def with_edge_tags(self, tags: npt.NDArray[np.int32]) -> _Mesh: ...
+    n_vertices: int
+    n_cells: int
+    n_edges: int
+    h: float
+    physical_names: List[Tuple[int, int, str]]
+    is_triangular: bool
+    bounding_box: Tuple[float, float, float, float]
+    def same_as(self, other: _Mesh) -> bool: ...
+    def geometry(self) -> Dict[str, np.ndarray]: ...
+    def evaluation_points(self, scheme: str) -> Dict[str, npt.NDArray[np.float64]]: ...
+    def write_vtu(
+        self,
+        path: str,
+        point_data: List[Tuple[str, npt.NDArray[np.float64]]],
+        cell_data: List[Tuple[str, npt.NDArray[np.float64]]],
+    ) -> None: ...
+    def write_typ2(self, path: str) -> None: ...
+
+class _Problem:
+    @staticmethod
+    def builtin(name: str, params: List[Tuple[str, float]]) -> _Problem: ...
+    @staticmethod
+    def from_file(path: str, params: List[Tuple[str, float]]) -> _Problem: ...
+    @staticmethod
+    def tabulated(name: str, mesh: _Mesh, points: npt.NDArray[np.float64], data: Dict[str, Any]) -> _Problem: ...
+    name: str
+    source: str
+    description: Optional[str]
+    path: Optional[str]
+    parameters: List[Tuple[str, float]]
+    scheme: Optional[str]
+    mesh_spec: Optional[str]
+    constraint: Optional[Tuple[str, str]]
+    has_exact: bool
+    def build_mesh(self) -> Optional[_Mesh]: ...
+
+def solve(
+    mesh: _Mesh,
+    problem: _Problem,
+    scheme: str = "hmm",
+    alpha: float = 1.0,
+    c: float = 1.0,
+    max_solves: int = 500,
+    tol: float = 1e-10,
+    fallback: bool = False,
+    warm_start: str = "cold",
+    initial_active: Optional[npt.NDArray[np.bool_]] = None,
+    keep_iterates: bool = False,
+    ordering: str = "amd",
+    factor_threads: str = "sequential",
+) -> Dict[str, Any]: ...
