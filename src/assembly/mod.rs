@@ -285,7 +285,7 @@ impl<'a> DiscreteSystem<'a> {
     ///   c_i  = b^N_i + Σ_K (P_Kᵀ (g_K − S_K P_K u_F))_i   for i ∉ F,   c_i = u_i for i ∈ F,
     ///
     /// where b^N is the Neumann load and (S_K, g_K) the condensed block and load of cell K
-    /// ([`condense`]). Then S u_S = c is the skeleton system with u_F moved to the right.
+    /// ([`condense()`]). Then S u_S = c is the skeleton system with u_F moved to the right.
     pub fn assemble_condensed(&self, fixed: &[Option<f64>]) -> (Vec<f64>, Vec<f64>) {
         let fixed = FixedValues::new(&self.values.dirichlet, fixed);
         // buffers kept between calls (they are entirely rewritten where read)
