@@ -266,9 +266,13 @@ pub enum MeshError {
 /// The end of the message of [`MeshError::OverlappingCells`].
 fn overlap_detail(loop_vertex: Option<usize>, cell: Option<usize>) -> String {
     match (loop_vertex, cell) {
-        (Some(v), Some(k)) => format!(" (the boundary loop through vertex {v} lies inside cell {k})"),
+        (Some(v), Some(k)) => {
+            format!(" (the boundary loop through vertex {v} lies inside cell {k})")
+        }
         (Some(v), None) => {
-            format!(" (the boundary loop through vertex {v} turns clockwise but no cell surrounds it)")
+            format!(
+                " (the boundary loop through vertex {v} turns clockwise but no cell surrounds it)"
+            )
         }
         _ => String::new(),
     }
@@ -298,7 +302,9 @@ pub enum SolverError {
         history: Vec<usize>,
     },
     /// Exhaustive enumeration found no active set satisfying the KKT conditions.
-    #[error("exhaustive enumeration: none of the {candidates} active sets satisfies the KKT conditions")]
+    #[error(
+        "exhaustive enumeration: none of the {candidates} active sets satisfies the KKT conditions"
+    )]
     NoKktPoint {
         /// Active sets tried.
         candidates: usize,

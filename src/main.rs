@@ -174,7 +174,9 @@ fn run(cli: Cli) -> Result<()> {
             let m = app::solve::generate(family, *level)?;
             match output.extension().and_then(|e| e.to_str()) {
                 Some("typ2") => app::output::atomic(output, |tmp| Ok(write_typ2(tmp, &m)?))?,
-                Some("vtu") => app::output::atomic(output, |tmp| Ok(write_vtu(tmp, &m, &[], &[])?))?,
+                Some("vtu") => {
+                    app::output::atomic(output, |tmp| Ok(write_vtu(tmp, &m, &[], &[])?))?
+                }
                 _ => bail!(
                     "unknown output format for {} (use .typ2 or .vtu)",
                     output.display()

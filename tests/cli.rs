@@ -239,9 +239,21 @@ fn absurd_or_conflicting_options_are_refused_before_any_work() {
         assert!(err.contains(needle), "{args:?}: {err}");
     }
     // the mesh was not touched
-    assert!(std::fs::read_to_string(mesh).unwrap().starts_with("$MeshFormat"));
+    assert!(
+        std::fs::read_to_string(mesh)
+            .unwrap()
+            .starts_with("$MeshFormat")
+    );
     // --level is only meaningful with --generate
-    let (ok, _, err) = gradvi(&["solve", "--problem", "test3", "--mesh", mesh, "--level", "3"]);
+    let (ok, _, err) = gradvi(&[
+        "solve",
+        "--problem",
+        "test3",
+        "--mesh",
+        mesh,
+        "--level",
+        "3",
+    ]);
     assert!(!ok && err.contains("--generate"), "{err}");
 }
 
@@ -256,20 +268,37 @@ fn a_user_error_is_one_line_whatever_rust_backtrace_says() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.starts_with("error: ") && err.contains("no/such/file.msh"), "{err}");
+    assert!(
+        err.starts_with("error: ") && err.contains("no/such/file.msh"),
+        "{err}"
+    );
 }
 
 #[test]
 fn problem_names_keep_the_sign_of_their_parameters() {
     let (ok, out, err) = gradvi(&[
-        "solve", "--problem", "test3", "--param", "C=5", "--generate", "cartesian", "--level",
+        "solve",
+        "--problem",
+        "test3",
+        "--param",
+        "C=5",
+        "--generate",
+        "cartesian",
+        "--level",
         "1",
     ]);
     // C = 5 pushes u up, away from the lower barrier: a valid problem
     assert!(ok, "{err}");
     assert!(out.contains("test3_C5\n"), "{out}");
     let (ok, out, err) = gradvi(&[
-        "solve", "--problem", "test3", "--param", "C=-5", "--generate", "cartesian", "--level",
+        "solve",
+        "--problem",
+        "test3",
+        "--param",
+        "C=-5",
+        "--generate",
+        "cartesian",
+        "--level",
         "1",
     ]);
     assert!(ok, "{err}");

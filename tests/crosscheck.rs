@@ -69,7 +69,11 @@ fn gradvi_p1_equals_dolfinx_p1_on_coarse_meshes() {
             r.case,
             r.active_n_diff
         );
-        assert_eq!(r.n_constrained_gradvi, r.n_constrained_dolfinx, "{}", r.case);
+        assert_eq!(
+            r.n_constrained_gradvi, r.n_constrained_dolfinx,
+            "{}",
+            r.case
+        );
     }
     let report = std::fs::read_to_string(out.join("CROSSCHECK.md")).unwrap();
     assert!(report.contains("## 1. Same discrete problem"));

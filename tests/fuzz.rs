@@ -6,7 +6,15 @@
 #[test]
 fn forty_seeded_mutations_end_cleanly() {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_gradvi"))
-        .args(["fuzz", "--seed", "7", "--iterations", "40", "--seconds", "240"])
+        .args([
+            "fuzz",
+            "--seed",
+            "7",
+            "--iterations",
+            "40",
+            "--seconds",
+            "240",
+        ])
         .args(["--case-seconds", "30", "--memory-mib", "4096", "--root"])
         .arg(env!("CARGO_MANIFEST_DIR"))
         .output()

@@ -52,8 +52,7 @@ fn table3_and_table1_on_the_coarsest_meshes() {
     let m3 = read_mesh(root().join("meshes/test3_1.msh")).unwrap();
     for (c, hmm, p1) in [(-5.0, 8, 6), (-10.0, 8, 6), (-15.0, 5, 5), (-20.0, 5, 4)] {
         let hmm_scheme = Hmm::new(&m3);
-        let sol =
-            solve_problem(&hmm_scheme, &paper_test3(c), &SolveOptions::default()).unwrap();
+        let sol = solve_problem(&hmm_scheme, &paper_test3(c), &SolveOptions::default()).unwrap();
         assert_eq!(sol.niter(), hmm, "HMM, C = {c}");
         let s1 = P1::new(&m3).unwrap();
         let sol = solve_problem(&s1, &paper_test3(c), &SolveOptions::default()).unwrap();
@@ -83,7 +82,10 @@ fn quick_replication_writes_csv_figures_and_report() {
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&run.stderr);
-    assert!(run.status.success(), "gradvi replicate --quick failed: {stderr}");
+    assert!(
+        run.status.success(),
+        "gradvi replicate --quick failed: {stderr}"
+    );
     let report = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
     for needle in [
         "Table 1",
@@ -104,7 +106,13 @@ fn quick_replication_writes_csv_figures_and_report() {
         let bytes = std::fs::read(out.join("figures").join(f)).unwrap();
         assert_eq!(&bytes[1..4], b"PNG", "{f}");
     }
-    for f in ["test1.csv", "test2.csv", "test3.csv", "iterations.csv", "timings.csv"] {
+    for f in [
+        "test1.csv",
+        "test2.csv",
+        "test3.csv",
+        "iterations.csv",
+        "timings.csv",
+    ] {
         assert!(out.join("results").join(f).is_file(), "{f}");
     }
     assert!(stderr.lines().count() > 10, "progress lines on stderr");

@@ -7,6 +7,8 @@ mod cr;
 mod generators;
 #[path = "unit/mesh_io.rs"]
 mod mesh_io;
+#[path = "unit/mesh_validity.rs"]
+mod mesh_validity;
 #[path = "unit/solver.rs"]
 mod solver;
 #[path = "unit/warm_start.rs"]

@@ -37,19 +37,20 @@
 //! Arguments: `--report-only` rewrites the report from the existing CSV; `--child FAMILY
 //! SCHEME VARIANT SIZE [FILE]` runs one case and prints its row as JSON.
 
+use crate::app::replication::records::{read_csv, write_csv};
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{cartesian, hexagonal};
 use gradvi::mesh::io::read_mesh;
-use crate::app::plot::{LegendPosition, LineOptions, LineSeries, plot_lines};
 use gradvi::problem::paper_test3;
-use crate::app::replication::records::{read_csv, write_csv};
 use gradvi::scheme::SchemeKind;
 use gradvi::solver::{SolveOptions, WarmStart, solve_problem};
 use serde::{Deserialize, Serialize};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
+
+mod report;
+pub use report::write_report;
 
 /// The constant C of Test 3 used throughout.
 pub const C: f64 = -5.0;
@@ -463,27 +464,25 @@ impl Config {
             python: PathBuf::from("/usr/bin/python3"),
         })
     }
-    /// `replication/results/bench.csv`.
-    pub fn csv(&self) -> PathBuf {
-        self.root.join("replication/results/bench.csv")
-    }
-    /// `replication/BENCHMARKS.md`.
-    pub fn report(&self) -> PathBuf {
-        self.root.join("replication/BENCHMARKS.md")
-    }
-    /// `replication/figures/bench.png`.
-    pub fn figure(&self) -> PathBuf {
-        self.root.join("replication/figures/bench.png")
-    }
-    /// Where the gmsh meshes are written.
-    pub fn mesh_dir(&self) -> PathBuf {
-        self.root.join("target/bench-meshes")
+    /// A file or directory of the benchmark: `rel` ([`CSV`], [`REPORT`], [`FIGURE`],
+    /// [`MESH_DIR`]) below the repository root.
+    pub fn path(&self, rel: &str) -> PathBuf {
+        self.root.join(rel)
     }
 }
 
+/// The CSV of the benchmark, the single source of its report and figure.
+pub const CSV: &str = "replication/results/bench.csv";
+/// The report.
+pub const REPORT: &str = "replication/BENCHMARKS.md";
+/// The figure.
+pub const FIGURE: &str = "replication/figures/bench.png";
+/// Where the gmsh meshes are written (not committed).
+pub const MESH_DIR: &str = "target/bench-meshes";
+
 /// Writes (or reuses) the gmsh mesh with about `n` triangles; returns its path.
 pub fn gmsh_mesh(cfg: &Config, n: usize) -> gradvi::Result<PathBuf> {
-    let dir = cfg.mesh_dir();
+    let dir = cfg.path(MESH_DIR);
     std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
     let src_path = cfg.root.join("meshes/test3_4.geo");
     let src = std::fs::read_to_string(&src_path).map_err(|e| io_err(&src_path, e))?;
@@ -629,7 +628,7 @@ pub fn run_dolfinx(cfg: &Config, mesh: &Path) -> gradvi::Result<BenchRow> {
     let stem = mesh
         .file_stem()
         .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-    let outdir = cfg.mesh_dir().join(format!("dolfinx_{stem}"));
+    let outdir = cfg.path(MESH_DIR).join(format!("dolfinx_{stem}"));
     let _ = std::fs::remove_dir_all(&outdir);
     let script = cfg.root.join("reference/solve.py");
     let case = format!("test3_1_C{}", C.abs());
@@ -741,7 +740,7 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
             cfg.python.display()
         );
     }
-    let csv = cfg.csv();
+    let csv = cfg.path(CSV);
     if let Some(d) = csv.parent() {
         std::fs::create_dir_all(d).map_err(|e| io_err(d, e))?;
     }
@@ -809,628 +808,10 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
     eprintln!(
         "[bench] wrote {}, {} and {} in {:.1} s",
         csv.display(),
-        cfg.report().display(),
-        cfg.figure().display(),
+        cfg.path(REPORT).display(),
+        cfg.path(FIGURE).display(),
         t0.elapsed().as_secs_f64()
     );
-    Ok(())
-}
-
-// ---------------------------------------------------------------------------------------------
-// Report
-// ---------------------------------------------------------------------------------------------
-
-fn fmt_s(x: f64) -> String {
-    if !x.is_finite() {
-        "–".into()
-    } else if x >= 100.0 {
-        format!("{x:.0}")
-    } else if x >= 10.0 {
-        format!("{x:.1}")
-    } else if x >= 0.1 {
-        format!("{x:.2}")
-    } else {
-        format!("{x:.3}")
-    }
-}
-
-fn series_key(r: &BenchRow) -> String {
-    if r.code == "dolfinx" {
-        format!("dolfinx P1 ({})", r.family)
-    } else {
-        format!(
-            "gradvi {} {} ({})",
-            r.scheme.to_uppercase(),
-            r.variant,
-            r.family
-        )
-    }
-}
-
-/// A table comparing the `nested` rows with those of `variant` on the same meshes (a lever).
-fn lever_table(md: &mut String, rows: &[BenchRow], variant: &str, title: &str, intro: &str) {
-    let pairs: Vec<(&BenchRow, &BenchRow)> = rows
-        .iter()
-        .filter(|r| r.code == "gradvi" && r.variant == "nested")
-        .filter_map(|s| {
-            rows.iter()
-                .find(|p| {
-                    p.variant == variant
-                        && p.family == s.family
-                        && p.scheme == s.scheme
-                        && p.cells == s.cells
-                })
-                .map(|p| (s, p))
-        })
-        .collect();
-    if pairs.is_empty() {
-        return;
-    }
-    let _ = writeln!(md, "## {title}\n");
-    let _ = writeln!(
-        md,
-        "{intro} Ratio = {variant} / nested (> 1: the default is faster).\n"
-    );
-    let _ = writeln!(
-        md,
-        "| family | scheme | cells | fill nested | fill {variant} | factor/it nested [s] | factor/it {variant} [s] | ratio | total nested [s] | total {variant} [s] |\n|---|---|---|---|---|---|---|---|---|---|"
-    );
-    let per_it = |r: &BenchRow| r.factor_s / r.niter.max(1) as f64;
-    let fill = |r: &BenchRow| {
-        if r.factor_len > 0 {
-            r.factor_len.to_string()
-        } else {
-            "–".into()
-        }
-    };
-    for (d, v) in &pairs {
-        let _ = writeln!(
-            md,
-            "| {} | {} | {} | {} | {} | {} | {} | {:.2} | {} | {} |",
-            d.family,
-            d.scheme,
-            d.cells,
-            fill(d),
-            fill(v),
-            fmt_s(per_it(d)),
-            fmt_s(per_it(v)),
-            per_it(v) / per_it(d),
-            fmt_s(d.total_s),
-            fmt_s(v.total_s)
-        );
-    }
-    let faster = pairs.iter().filter(|(d, v)| per_it(d) < per_it(v)).count();
-    let _ = writeln!(
-        md,
-        "\nThe default factorisation is the faster one on {faster} of the {} cases.\n",
-        pairs.len()
-    );
-}
-
-/// The sizes of the active-set changes per solve of the largest cases of each series.
-fn active_set_changes(md: &mut String, rows: &[BenchRow]) {
-    // the levers nested-par and nested-nd follow the iterates of nested exactly
-    let shown = |r: &BenchRow| {
-        r.code == "gradvi"
-            && !r.changes.is_empty()
-            && (r.variant == "cold" || r.variant == "nested")
-    };
-    let mut keys: Vec<String> = rows.iter().filter(|r| shown(r)).map(series_key).collect();
-    keys.sort();
-    keys.dedup();
-    if keys.is_empty() {
-        return;
-    }
-    let _ = writeln!(md, "## Size of the active-set changes\n");
-    let _ = writeln!(
-        md,
-        "For the largest case of each series: the unknowns that entered and left the active set \
-         before each fine solve (`+entered/-left`; the first solve of the nested variant starts \
-         from the prediction, the cold one from the empty set; `nested-par` and `nested-nd` \
-         follow the iterates of `nested`). Long lists show their first six and last three \
-         steps.\n"
-    );
-    let _ = writeln!(
-        md,
-        "| series | cells | NITER | changes |\n|---|---|---|---|"
-    );
-    for k in &keys {
-        let Some(r) = rows
-            .iter()
-            .filter(|r| shown(r) && &series_key(r) == k)
-            .max_by_key(|r| r.cells)
-        else {
-            continue;
-        };
-        let steps: Vec<&str> = r.changes.split(' ').collect();
-        let shown = if steps.len() > 9 {
-            format!(
-                "{} … {}",
-                steps[..6].join(" "),
-                steps[steps.len() - 3..].join(" ")
-            )
-        } else {
-            steps.join(" ")
-        };
-        let _ = writeln!(md, "| {k} | {} | {} | {shown} |", r.cells, r.niter);
-    }
-    let _ = writeln!(md);
-}
-
-/// Least-squares exponent of total time against cells over [`FIT_RANGE`], with the range
-/// actually used; `None` with fewer than three points.
-pub fn growth_exponent(rows: &[&BenchRow]) -> Option<(f64, usize, usize)> {
-    let pts: Vec<&&BenchRow> = rows
-        .iter()
-        .filter(|r| r.cells >= FIT_RANGE.0 && r.cells <= FIT_RANGE.1 && r.total_s > 0.0)
-        .collect();
-    if pts.len() < 3 {
-        return None;
-    }
-    let n: Vec<f64> = pts.iter().map(|r| r.cells as f64).collect();
-    let t: Vec<f64> = pts.iter().map(|r| r.total_s).collect();
-    Some((
-        gradvi::post::fitted_slope(&n, &t),
-        pts.iter().map(|r| r.cells).min().unwrap_or(0),
-        pts.iter().map(|r| r.cells).max().unwrap_or(0),
-    ))
-}
-
-/// Least-squares exponent of `f(row)` against cells over [`FIT_RANGE`] (`None` with fewer
-/// than three points).
-fn exponent(rows: &[&BenchRow], f: impl Fn(&BenchRow) -> f64) -> Option<f64> {
-    let pts: Vec<(f64, f64)> = rows
-        .iter()
-        .filter(|r| r.cells >= FIT_RANGE.0 && r.cells <= FIT_RANGE.1)
-        .map(|r| (r.cells as f64, f(r)))
-        .filter(|p| p.1 > 0.0 && p.1.is_finite())
-        .collect();
-    if pts.len() < 3 {
-        return None;
-    }
-    let n: Vec<f64> = pts.iter().map(|p| p.0).collect();
-    let y: Vec<f64> = pts.iter().map(|p| p.1).collect();
-    Some(gradvi::post::fitted_slope(&n, &y))
-}
-
-fn verdict(ok: bool) -> &'static str {
-    if ok { "**met**" } else { "**not met**" }
-}
-
-/// Writes `BENCHMARKS.md` and `bench.png` from `bench.csv` (nothing else is read).
-pub fn write_report(cfg: &Config) -> gradvi::Result<()> {
-    let rows: Vec<BenchRow> = read_csv(&cfg.csv())?;
-    if rows.is_empty() {
-        return Err(bad(format!("{}: no rows", cfg.csv().display())));
-    }
-    // series in order of first appearance
-    let mut keys: Vec<String> = Vec::new();
-    for r in &rows {
-        let k = series_key(r);
-        if !keys.contains(&k) {
-            keys.push(k);
-        }
-    }
-    let series_rows = |k: &str| -> Vec<&BenchRow> {
-        let mut v: Vec<&BenchRow> = rows.iter().filter(|r| series_key(r) == k).collect();
-        v.sort_by_key(|r| r.cells);
-        v
-    };
-
-    // --- figure
-    let mut series: Vec<LineSeries> = keys
-        .iter()
-        .map(|k| {
-            LineSeries::new(
-                k.clone(),
-                series_rows(k)
-                    .iter()
-                    .map(|r| [r.cells as f64, r.total_s])
-                    .collect(),
-            )
-        })
-        .collect();
-    let xmin = rows.iter().map(|r| r.cells).min().unwrap_or(1) as f64;
-    let xmax = rows.iter().map(|r| r.cells).max().unwrap_or(1) as f64;
-    let t_ref = rows
-        .iter()
-        .filter(|r| r.code == "gradvi")
-        .map(|r| r.total_s)
-        .fold(f64::INFINITY, f64::min);
-    if xmax > xmin && t_ref.is_finite() && t_ref > 0.0 {
-        let mut s = LineSeries::new(
-            "N^1.3 (target growth)",
-            vec![[xmin, t_ref], [xmax, t_ref * (xmax / xmin).powf(1.3)]],
-        );
-        s.dashed = true;
-        s.color = Some([120, 120, 120]);
-        s.marker = crate::app::plot::Marker::None;
-        series.push(s);
-    }
-    let fig = cfg.figure();
-    if let Some(d) = fig.parent() {
-        std::fs::create_dir_all(d).map_err(|e| io_err(d, e))?;
-    }
-    plot_lines(
-        &fig,
-        &series,
-        &LineOptions {
-            title: format!("Test 3 (C = {C}): total time against cells"),
-            x_label: "cells".into(),
-            y_label: "total time [s]".into(),
-            size: (1000, 700),
-            log_x: true,
-            log_y: true,
-            legend: LegendPosition::Best,
-            ..Default::default()
-        },
-    )?;
-
-    // --- markdown
-    let mut md = String::new();
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let _ = writeln!(md, "# Benchmarks: performance and scale\n");
-    let _ = writeln!(
-        md,
-        "Generated by `make bench` (`cargo bench --bench scale`, `src/bench.rs`) from \
-         `replication/results/bench.csv`; every number below is read from that file. Test 3 of \
-         the paper (obstacle problem u ≥ ψ, f = C = {C}) on the unit square; {threads} hardware \
-         threads on the machine that wrote this report. `cargo bench --bench scale -- \
-         --report-only` rewrites this page from the CSV.\n"
-    );
-    let _ = writeln!(
-        md,
-        "Variants: **cold** is the monotony algorithm of `gradvi solve` and `solve_problem` \
-         from A₀ = ∅ (sparse Cholesky, AMD ordering, the symbolic factorisation built once); \
-         **nested** (`gradvi solve --warm-start nested`, `solver::warm_start`) starts the same \
-         algorithm from an active set predicted by coarse Cartesian HMM solves of the same \
-         problem (about cells/16 coarse cells, themselves warm-started from a mesh 4 times \
-         coarser per direction, …), whose cost is included in the total; **nested-par** and **nested-nd** are the nested \
-         variant with faer's parallel factorisation and with a nested-dissection ordering \
-         (the levers below). \
-         dolfinx is P1 with PETSc SNES `vinewtonrsls` and LU (`reference/solve.py`); its time is \
-         its own `setup + solve` (mesh reading, assembly and the SNES loop; the Python start-up \
-         and JIT are excluded). gradvi's total includes mesh reading or generation.\n"
-    );
-
-    // targets
-    let _ = writeln!(md, "## Targets\n");
-    let _ = writeln!(md, "| target | measured | verdict |\n|---|---|---|");
-    let largest = |code: &str, scheme: &str, variant: &str, family: &str| -> Option<&BenchRow> {
-        rows.iter()
-            .filter(|r| {
-                r.code == code && r.scheme == scheme && r.variant == variant && r.family == family
-            })
-            .max_by_key(|r| r.cells)
-    };
-    for variant in ["cold", "nested"] {
-        if let Some(r) = largest("gradvi", "hmm", variant, "gmsh").filter(|r| r.cells >= 500_000) {
-            let _ = writeln!(
-                md,
-                "| HMM ({variant}) on a 10⁶-cell mesh: < 30 s and < 4 GiB | {} cells: {} s, {:.0} MiB | {} |",
-                r.cells,
-                fmt_s(r.total_s),
-                r.peak_mib,
-                verdict(r.total_s < 30.0 && r.peak_mib < 4096.0)
-            );
-        }
-    }
-    let dolf: Vec<&BenchRow> = rows.iter().filter(|r| r.code == "dolfinx").collect();
-    let same_mesh = |d: &BenchRow, scheme: &str, variant: &str| -> Option<&BenchRow> {
-        rows.iter().find(|r| {
-            r.code == "gradvi"
-                && r.family == d.family
-                && r.mesh == d.mesh
-                && r.scheme == scheme
-                && r.variant == variant
-        })
-    };
-    for variant in ["cold", "nested"] {
-        let big: Vec<(f64, usize)> = dolf
-            .iter()
-            // the mesh generated for 10⁵ cells has slightly fewer: count it in
-            .filter(|d| d.cells >= P1_TARGET_MIN_CELLS)
-            .filter_map(|d| same_mesh(d, "p1", variant).map(|g| (d.total_s / g.total_s, d.cells)))
-            .collect();
-        if !big.is_empty() {
-            let worst = big.iter().map(|b| b.0).fold(f64::INFINITY, f64::min);
-            let list: Vec<String> = big
-                .iter()
-                .map(|(s, n)| format!("{s:.1}× ({n} cells)"))
-                .collect();
-            let _ = writeln!(
-                md,
-                "| gradvi-P1 ({variant}) ≥ 10× faster than dolfinx-P1 at ≥ 100k cells | {} | {} |",
-                list.join(", "),
-                verdict(worst >= 10.0)
-            );
-        }
-        let hmm: Vec<(f64, usize)> = dolf
-            .iter()
-            .filter_map(|d| same_mesh(d, "hmm", variant).map(|g| (d.total_s / g.total_s, d.cells)))
-            .collect();
-        if !hmm.is_empty() {
-            let worst = hmm.iter().map(|b| b.0).fold(f64::INFINITY, f64::min);
-            let _ = writeln!(
-                md,
-                "| gradvi-HMM ({variant}) faster than dolfinx-P1 at equal cells | speed-up from {:.2}× to {:.2}× over {} meshes | {} |",
-                worst,
-                hmm.iter().map(|b| b.0).fold(0.0, f64::max),
-                hmm.len(),
-                verdict(worst > 1.0)
-            );
-        }
-    }
-    for k in &keys {
-        if !k.starts_with("gradvi") {
-            continue;
-        }
-        if let Some((p, lo, hi)) = growth_exponent(&series_rows(k)) {
-            let _ = writeln!(
-                md,
-                "| {k}: total time ≤ N^1.3 from 10⁴ to 10⁶ cells | N^{p:.2} (fit over {lo}–{hi} cells) | {} |",
-                verdict(p <= 1.3)
-            );
-        }
-    }
-    let _ = writeln!(md);
-
-    let _ = writeln!(md, "![total time against cells](figures/bench.png)\n");
-
-    // growth
-    let _ = writeln!(md, "## Growth exponents\n");
-    let _ = writeln!(
-        md,
-        "Least-squares slopes against ln(cells) (`post::fitted_slope`) of ln(total time), \
-         ln(NITER), ln(numeric factorisation time per iteration) and ln(peak memory), over the \
-         cases with {} to {} cells.\n",
-        FIT_RANGE.0, FIT_RANGE.1
-    );
-    let _ = writeln!(
-        md,
-        "| series | points | total time | NITER | factorisation per iteration | peak memory |\n|---|---|---|---|---|---|"
-    );
-    let show = |x: Option<f64>| x.map_or("–".to_string(), |p| format!("{p:.2}"));
-    for k in &keys {
-        let sr = series_rows(k);
-        let pts = sr
-            .iter()
-            .filter(|r| r.cells >= FIT_RANGE.0 && r.cells <= FIT_RANGE.1)
-            .count();
-        let _ = writeln!(
-            md,
-            "| {k} | {pts} | {} | {} | {} | {} |",
-            show(exponent(&sr, |r| r.total_s)),
-            show(exponent(&sr, |r| r.niter as f64)),
-            show(exponent(&sr, |r| r.factor_s / r.niter.max(1) as f64)),
-            show(exponent(&sr, |r| r.peak_mib)),
-        );
-    }
-    let _ = writeln!(md);
-
-    // comparison with dolfinx
-    if !dolf.is_empty() {
-        let _ = writeln!(md, "## gradvi against dolfinx on the same gmsh meshes\n");
-        let _ = writeln!(
-            md,
-            "Speed-up = dolfinx time / gradvi time (> 1: gradvi is faster).\n"
-        );
-        let _ = writeln!(
-            md,
-            "| mesh | cells | dolfinx P1 [s] | SNES its | P1 cold [s] | speed-up | P1 nested [s] | speed-up | HMM cold [s] | speed-up | HMM nested [s] | speed-up |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
-        );
-        for d in &dolf {
-            let mut line = format!(
-                "| {} | {} | {} | {} ",
-                d.mesh,
-                d.cells,
-                fmt_s(d.total_s),
-                d.niter
-            );
-            for (scheme, variant) in [
-                ("p1", "cold"),
-                ("p1", "nested"),
-                ("hmm", "cold"),
-                ("hmm", "nested"),
-            ] {
-                match same_mesh(d, scheme, variant) {
-                    Some(g) => {
-                        let _ = write!(
-                            line,
-                            "| {} | {:.1}× ",
-                            fmt_s(g.total_s),
-                            d.total_s / g.total_s
-                        );
-                    }
-                    None => line.push_str("| – | – "),
-                }
-            }
-            line.push('|');
-            let _ = writeln!(md, "{line}");
-        }
-        let _ = writeln!(md);
-    }
-
-    // levers: threads of the factorisation, fill-reducing ordering
-    lever_table(
-        &mut md,
-        &rows,
-        "nested-par",
-        "Lever: threads of the numeric factorisation",
-        "The nested variant with the default sequential factorisation \
-         (`FactorThreads::Sequential`) against the same run with faer's parallel one \
-         (`nested-par`, `FactorThreads::Global`); the assembly is parallel (rayon) in both.",
-    );
-    lever_table(
-        &mut md,
-        &rows,
-        "nested-nd",
-        "Lever: fill-reducing ordering",
-        "The nested variant with the default AMD ordering against the same run with our \
-         nested dissection by level-set separators (`nested-nd`, `Ordering::NestedDissection`). \
-         Fill = stored values of the Cholesky factor.",
-    );
-    active_set_changes(&mut md, &rows);
-    let runs: std::collections::BTreeSet<u64> = rows.iter().map(|r| r.run).collect();
-    if runs.len() > 1 {
-        let _ = writeln!(
-            md,
-            "The rows above come from {} benchmark runs (`GRADVI_BENCH_MERGE`; column `run` of the \
-             CSV, 0 for rows written before the column existed): timings of different runs \
-             are comparable only up to the load of the machine at the time.\n",
-            runs.len()
-        );
-    }
-
-    // profile of the largest cases
-    let _ = writeln!(md, "## Where the time goes\n");
-    let _ = writeln!(
-        md,
-        "Share of the total of each phase for the largest case of each gradvi series \
-         (factor = numeric Cholesky, all iterations; assemble = condensation and scatter; solve = \
-         triangular solves and recovery of the cell unknowns; other = the active-set loop's \
-         residuals and certificates; coarse = the coarse solves of the nested variant).\n"
-    );
-    let _ = writeln!(
-        md,
-        "| series | cells | NITER | total [s] | mesh | setup | symbolic | coarse | assemble | factor | solve | other |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
-    );
-    for k in &keys {
-        if !k.starts_with("gradvi") {
-            continue;
-        }
-        if let Some(r) = series_rows(k).last() {
-            let pc = |x: f64| format!("{:.0}%", 100.0 * x / r.total_s);
-            let _ = writeln!(
-                md,
-                "| {k} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                r.cells,
-                r.niter,
-                fmt_s(r.total_s),
-                pc(r.mesh_s),
-                pc(r.setup_s),
-                pc(r.symbolic_s),
-                pc(r.coarse_s),
-                pc(r.assemble_s),
-                pc(r.factor_s),
-                pc(r.solve_s),
-                pc(r.other_s)
-            );
-        }
-    }
-    let _ = writeln!(md);
-
-    // what stands in the way
-    let _ = writeln!(md, "## What stands in the way\n");
-    let _ = writeln!(
-        md,
-        "For the largest case of each gradvi series: the linear solves (NITER of them, plus the \
-         coarse ones of the nested variant) against everything else.\n"
-    );
-    for k in &keys {
-        if !k.starts_with("gradvi") {
-            continue;
-        }
-        if let Some(r) = series_rows(k).last() {
-            let it = r.niter.max(1) as f64;
-            let per_it = (r.assemble_s + r.factor_s + r.solve_s + r.other_s) / it;
-            let _ = writeln!(
-                md,
-                "- {k}, {} cells: NITER = {}; numeric factorisations {} s ({:.0}% of the {} s \
-                 total), {} s each; one whole active-set step (assembly, factorisation, solves, \
-                 residuals and certificate) {} s; setup, symbolic analysis, mesh and coarse \
-                 solves {} s; peak {:.0} MiB.",
-                r.cells,
-                r.niter,
-                fmt_s(r.factor_s),
-                100.0 * r.factor_s / r.total_s,
-                fmt_s(r.total_s),
-                fmt_s(r.factor_s / it),
-                fmt_s(per_it),
-                fmt_s(r.total_s - per_it * it),
-                r.peak_mib
-            );
-        }
-    }
-    let _ = writeln!(
-        md,
-        "\nThe cold iteration puts every violated unknown in the active set at once and then \
-         frees one layer of cells along the free boundary per solve, so NITER grows like the \
-         number of cell layers between the first contact zone and the final one, ∝ 1/h ∝ N^½ \
-         (NITER exponents above). Every solve needs one numeric factorisation, whose cost per \
-         iteration grows at least linearly in N (factorisation exponents above, AMD fill). The \
-         cold total therefore grows like N raised to the sum of the two exponents whatever the \
-         constant factors of the linear algebra, and the growth target can only be met by \
-         bounding NITER: the nested variant does it with coarse solves, whose cost is a \
-         fraction of the fine one. Reusing a factorisation across active sets (the factor of \
-         an earlier active set as a preconditioner of conjugate gradients) would replace one \
-         factorisation by several triangular solves per step while each step changes hundreds \
-         to thousands of unknowns; the per-iteration `solve` column (one pair of triangular \
-         solves and the recovery of the cell unknowns) against the `factor/it` column gives \
-         the break-even number of such iterations.\n"
-    );
-
-    // all rows
-    let _ = writeln!(md, "## All cases\n");
-    let _ = writeln!(
-        md,
-        "Times in seconds; per-iteration columns are divided by NITER (the fine iteration); \
-         `coarse` lists the coarse solves of the nested variant as linear solves / seconds. \
-         dolfinx: setup = everything before SNES (mesh reading included), solve = SNES.\n"
-    );
-    for fam in ["gmsh", "hexagonal", "cartesian"] {
-        let mut fr: Vec<&BenchRow> = rows.iter().filter(|r| r.family == fam).collect();
-        if fr.is_empty() {
-            continue;
-        }
-        fr.sort_by(|a, b| {
-            (a.cells, &a.code, &a.scheme, &a.variant)
-                .cmp(&(b.cells, &b.code, &b.scheme, &b.variant))
-        });
-        let _ = writeln!(md, "### {fam}\n");
-        let _ = writeln!(
-            md,
-            "| cells | code | scheme | variant | unknowns | condensed | NITER | coarse | mesh | setup | symbolic | assemble/it | factor/it | solve/it | other | total | peak MiB | certificate |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
-        );
-        for r in fr {
-            let it = r.niter.max(1) as f64;
-            let coarse = if r.coarse_niter > 0 {
-                format!("{} / {}", r.coarse_niter, fmt_s(r.coarse_s))
-            } else {
-                "–".into()
-            };
-            let cert = if r.certificate.is_finite() {
-                format!("{:.0e}", r.certificate)
-            } else {
-                "–".into()
-            };
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.0} | {} |",
-                r.cells,
-                r.code,
-                r.scheme,
-                r.variant,
-                r.unknowns,
-                r.condensed,
-                r.niter,
-                coarse,
-                fmt_s(r.mesh_s),
-                fmt_s(r.setup_s),
-                fmt_s(r.symbolic_s),
-                fmt_s(r.assemble_s / it),
-                fmt_s(r.factor_s / it),
-                fmt_s(r.solve_s / it),
-                fmt_s(r.other_s),
-                fmt_s(r.total_s),
-                r.peak_mib,
-                cert
-            );
-        }
-        let _ = writeln!(md);
-    }
-    let path = cfg.report();
-    std::fs::write(&path, md).map_err(|e| io_err(&path, e))?;
     Ok(())
 }
 
@@ -1479,10 +860,10 @@ mod tests {
             variants: vec![Variant::Cold, Variant::Nested],
             python: PathBuf::from("/nonexistent"),
         };
-        std::fs::create_dir_all(cfg.csv().parent().unwrap()).unwrap();
-        write_csv(&cfg.csv(), &rows).unwrap();
+        std::fs::create_dir_all(cfg.path(CSV).parent().unwrap()).unwrap();
+        write_csv(&cfg.path(CSV), &rows).unwrap();
         write_report(&cfg).unwrap();
-        let md = std::fs::read_to_string(cfg.report()).unwrap();
+        let md = std::fs::read_to_string(cfg.path(REPORT)).unwrap();
         assert!(md.contains("## Targets") && md.contains("## All cases"));
         for section in [
             "## Lever: threads of the numeric factorisation",
@@ -1501,10 +882,14 @@ mod tests {
         // rows of an older CSV (without the new columns) still read
         let old = "family,mesh,code,scheme,variant,cells,unknowns,condensed,nnz,niter,coarse_niter,mesh_s,coarse_s,setup_s,symbolic_s,assemble_s,factor_s,solve_s,other_s,total_s,peak_mib,certificate\n\
                    gmsh,m,gradvi,hmm,cold,10,20,15,30,2,0,0.1,0,0.1,0.1,0.1,0.1,0.1,0.1,0.6,5,1e-16\n";
-        std::fs::write(cfg.csv(), old).unwrap();
-        let back: Vec<BenchRow> = read_csv(&cfg.csv()).unwrap();
+        std::fs::write(cfg.path(CSV), old).unwrap();
+        let back: Vec<BenchRow> = read_csv(&cfg.path(CSV)).unwrap();
         assert_eq!((back[0].factor_len, back[0].run), (0, 0));
-        assert!(std::fs::read(cfg.figure()).unwrap().starts_with(b"\x89PNG"));
+        assert!(
+            std::fs::read(cfg.path(FIGURE))
+                .unwrap()
+                .starts_with(b"\x89PNG")
+        );
         std::fs::remove_dir_all(&dir).ok();
     }
 }

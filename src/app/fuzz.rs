@@ -64,7 +64,9 @@ fn corpus(root: &Path) -> Result<Vec<(PathBuf, &'static str)>> {
     let mut out = Vec::new();
     let good = root.join("tests/data/good");
     for dir in [good, root.join("meshes")] {
-        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
         let mut files: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();
         files.sort();
         for f in files {
@@ -95,7 +97,15 @@ fn corpus(root: &Path) -> Result<Vec<(PathBuf, &'static str)>> {
 /// Replaces the number starting at a random position of a line by an extreme value.
 fn mutate_number(text: &mut Vec<u8>, rng: &mut Rng) {
     const VALUES: [&str; 9] = [
-        "nan", "inf", "-1", "0", "1e308", "4294967296", "99999999999", "-0", "1e-320",
+        "nan",
+        "inf",
+        "-1",
+        "0",
+        "1e308",
+        "4294967296",
+        "99999999999",
+        "-0",
+        "1e-320",
     ];
     let starts: Vec<usize> = (0..text.len())
         .filter(|&i| text[i].is_ascii_digit() && (i == 0 || !text[i - 1].is_ascii_alphanumeric()))
@@ -130,15 +140,27 @@ fn mutate(data: &[u8], rng: &mut Rng) -> Vec<u8> {
             4 => {
                 // delete a line
                 let i = rng.below(n);
-                let a = t[..i].iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
-                let b = t[i..].iter().position(|&b| b == b'\n').map_or(n, |p| i + p + 1);
+                let a = t[..i]
+                    .iter()
+                    .rposition(|&b| b == b'\n')
+                    .map_or(0, |p| p + 1);
+                let b = t[i..]
+                    .iter()
+                    .position(|&b| b == b'\n')
+                    .map_or(n, |p| i + p + 1);
                 t.drain(a..b);
             }
             5 => {
                 // duplicate a line
                 let i = rng.below(n);
-                let a = t[..i].iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
-                let b = t[i..].iter().position(|&b| b == b'\n').map_or(n, |p| i + p + 1);
+                let a = t[..i]
+                    .iter()
+                    .rposition(|&b| b == b'\n')
+                    .map_or(0, |p| p + 1);
+                let b = t[i..]
+                    .iter()
+                    .position(|&b| b == b'\n')
+                    .map_or(n, |p| i + p + 1);
                 let line = t[a..b].to_vec();
                 t.splice(b..b, line);
             }
@@ -161,7 +183,10 @@ enum Verdict {
 fn run_case(exe: &Path, args: &[String], a: &FuzzArgs) -> Result<Verdict> {
     let mut child = Command::new("sh")
         .arg("-c")
-        .arg(format!("ulimit -v {} && exec \"$0\" \"$@\"", a.memory_mib * 1024))
+        .arg(format!(
+            "ulimit -v {} && exec \"$0\" \"$@\"",
+            a.memory_mib * 1024
+        ))
         .arg(exe)
         .args(args)
         .env("RUST_BACKTRACE", "0")
@@ -190,7 +215,14 @@ fn run_case(exe: &Path, args: &[String], a: &FuzzArgs) -> Result<Verdict> {
         None => Verdict::Fail(format!("no answer within {} s", a.case_seconds)),
         Some(_) if err.contains("panicked") => Verdict::Fail(format!("panic: {err}")),
         Some(s) if s.code() == Some(0) => Verdict::Pass,
-        Some(s) if s.code() == Some(1) && err.trim_end().lines().last().is_some_and(|l| l.starts_with("error: ")) => {
+        Some(s)
+            if s.code() == Some(1)
+                && err
+                    .trim_end()
+                    .lines()
+                    .last()
+                    .is_some_and(|l| l.starts_with("error: ")) =>
+        {
             Verdict::Pass
         }
         Some(s) => Verdict::Fail(format!("exit {s}: {}", err.trim_end())),
@@ -218,10 +250,20 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
         std::fs::write(&input, mutate(&data, &mut rng))?;
         let input_s = input.display().to_string();
         let args: Vec<String> = match *kind {
-            "mesh" => ["solve", "--problem", "test3", "--mesh", &input_s, "--max-solves", "60"]
+            "mesh" => [
+                "solve",
+                "--problem",
+                "test3",
+                "--mesh",
+                &input_s,
+                "--max-solves",
+                "60",
+            ]
+            .map(String::from)
+            .to_vec(),
+            _ => ["solve", &input_s, "--max-solves", "60"]
                 .map(String::from)
                 .to_vec(),
-            _ => ["solve", &input_s, "--max-solves", "60"].map(String::from).to_vec(),
         };
         match run_case(&exe, &args, a)? {
             Verdict::Pass => {
@@ -241,7 +283,11 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
         failures.len()
     );
     if !failures.is_empty() {
-        bail!("{} of {cases} cases failed (inputs kept in {})", failures.len(), scratch.display());
+        bail!(
+            "{} of {cases} cases failed (inputs kept in {})",
+            failures.len(),
+            scratch.display()
+        );
     }
     let _ = std::fs::remove_dir(&scratch);
     Ok(())

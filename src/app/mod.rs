@@ -5,6 +5,7 @@
 pub mod bench;
 pub mod crosscheck;
 pub mod fuzz;
+pub mod markdown;
 pub mod output;
 pub mod plot;
 pub mod replication;

@@ -92,11 +92,13 @@ mod tests {
         assert!(check_distinct(&[("mesh", &mesh)], &[("VTU", &a), ("JSON", &b)]).is_ok());
         // a failed write leaves nothing behind and the old file intact
         std::fs::write(&a, "old").unwrap();
-        assert!(atomic(&a, |tmp| {
-            std::fs::write(tmp, "half")?;
-            bail!("failed")
-        })
-        .is_err());
+        assert!(
+            atomic(&a, |tmp| {
+                std::fs::write(tmp, "half")?;
+                bail!("failed")
+            })
+            .is_err()
+        );
         assert_eq!(std::fs::read_to_string(&a).unwrap(), "old");
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
         atomic(&a, |tmp| Ok(std::fs::write(tmp, "new")?)).unwrap();

@@ -1,24 +1,30 @@
 //! `gradvi solve`: one problem on one mesh with one scheme; prints NITER, the iteration log,
 //! the certificate, errors and timings; optionally writes VTU and JSON.
 
+use super::output::{atomic, check_distinct};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::Family;
 use gradvi::mesh::io::{read_mesh, write_vtu};
 use gradvi::post::fields::EntityFields;
-use gradvi::problem::{PROBLEM_NAMES, by_name};
+use gradvi::problem::file;
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with};
 use gradvi::solver::{ActiveSetOptions, Solution, SolveOptions, WarmStart, solve_problem};
-use super::output::{atomic, check_distinct};
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
+#[command(after_help = "A problem of your own is a TOML file: see \"Your own problem\" in README.md \
+and the format in problems/README.md (examples: problems/*.toml).")]
 pub struct SolveArgs {
-    /// Problem: test1, test2, test3 (paper Section 4) or fvca5-1.1 (linear, exact solution).
+    /// A problem file (TOML; format: problems/README.md). Give this or --problem.
+    #[arg(conflicts_with = "problem", required_unless_present = "problem")]
+    file: Option<PathBuf>,
+    /// A built-in problem: test1, test2, test3 (paper Section 4) or fvca5-1.1 (linear, exact
+    /// solution); served from the files problems/NAME.toml compiled into gradvi.
     #[arg(long)]
-    problem: String,
-    /// Problem parameter key=value (repeatable), e.g. --param C=-10 for test3.
+    problem: Option<String>,
+    /// Problem parameter name=value (repeatable), e.g. --param C=-10 for test3.
     #[arg(long = "param", value_parser = parse_param)]
     params: Vec<(String, f64)>,
     /// Mesh file (.msh, .typ1, .typ2).
@@ -30,9 +36,9 @@ pub struct SolveArgs {
     /// Level of the generated mesh (only with --generate).
     #[arg(long)]
     level: Option<usize>,
-    /// The scheme.
-    #[arg(long, value_enum, default_value_t = SchemeKind::Hmm)]
-    scheme: SchemeKind,
+    /// The scheme (default: the problem file's `scheme`, else hmm).
+    #[arg(long, value_enum)]
+    scheme: Option<SchemeKind>,
     /// HMM stabilisation parameter α.
     #[arg(long, default_value_t = 1.0)]
     alpha: f64,
@@ -84,7 +90,10 @@ pub fn generate(family: &str, level: usize) -> Result<PolyMesh> {
 /// a parameter given once.
 fn check_options(a: &SolveArgs) -> Result<()> {
     if !(a.tol > 0.0 && a.tol < 1.0) {
-        bail!("--tol must be in (0, 1), got {} (the certificate would be meaningless)", a.tol);
+        bail!(
+            "--tol must be in (0, 1), got {} (the certificate would be meaningless)",
+            a.tol
+        );
     }
     if !(a.c > 0.0 && a.c.is_finite()) {
         bail!("--c must be positive and finite, got {}", a.c);
@@ -99,13 +108,19 @@ fn check_options(a: &SolveArgs) -> Result<()> {
         if !v.is_finite() {
             bail!("--param {k}={v}: parameters must be finite");
         }
-        if a.params[..i].iter().any(|(k2, _)| k2.eq_ignore_ascii_case(k)) {
+        if a.params[..i]
+            .iter()
+            .any(|(k2, _)| k2.eq_ignore_ascii_case(k))
+        {
             bail!("--param {k} is given twice");
         }
     }
     let mut inputs: Vec<(&str, &Path)> = Vec::new();
     if let Some(m) = &a.mesh {
         inputs.push(("mesh", m));
+    }
+    if let Some(f) = &a.file {
+        inputs.push(("problem", f));
     }
     let mut outputs: Vec<(&str, &Path)> = Vec::new();
     if let Some(v) = &a.vtu {
@@ -117,17 +132,44 @@ fn check_options(a: &SolveArgs) -> Result<()> {
     check_distinct(&inputs, &outputs)
 }
 
+/// The mesh named by the problem file's `[mesh]` is an input too: an output equal to it is an
+/// error (the message), `None` otherwise.
+fn outputs_equal_mesh_file(a: &SolveArgs, pf: &file::ProblemFile) -> Option<String> {
+    let Some(file::MeshSpec::File(m)) = &pf.mesh else {
+        return None;
+    };
+    let outputs: Vec<(&str, &Path)> = [("VTU", &a.vtu), ("JSON", &a.json)]
+        .into_iter()
+        .filter_map(|(w, p)| p.as_deref().map(|p| (w, p)))
+        .collect();
+    check_distinct(&[("mesh", m.as_path())], &outputs)
+        .err()
+        .map(|e| e.to_string())
+}
+
 /// `gradvi solve`.
 pub fn run(a: &SolveArgs) -> Result<()> {
     check_options(a)?;
-    let mesh = match (&a.mesh, &a.generate) {
-        (Some(f), None) => read_mesh(f)?,
-        (None, Some(fam)) => generate(fam, a.level.unwrap_or(1))?,
-        _ => bail!("give either --mesh FILE or --generate FAMILY --level K"),
+    let pf = match (&a.file, &a.problem) {
+        (Some(f), _) => file::load(f, &a.params)?,
+        (None, Some(name)) => file::builtin(name, &a.params)?,
+        (None, None) => bail!("give a problem file or --problem NAME"),
     };
-    let problem = by_name(&a.problem, &a.params)
-        .with_context(|| format!("known problems: {}", PROBLEM_NAMES.join(", ")))?;
-    let kind = a.scheme;
+    let (mesh, mesh_desc) = match (&a.mesh, &a.generate, &pf.mesh) {
+        (Some(f), None, _) => (read_mesh(f)?, f.display().to_string()),
+        (None, Some(fam), _) => {
+            let level = a.level.unwrap_or(1);
+            (generate(fam, level)?, format!("{fam} level {level}"))
+        }
+        (None, None, Some(spec)) => (spec.build()?, spec.to_string()),
+        _ => bail!("give --mesh FILE or --generate FAMILY --level K (the problem has no [mesh])"),
+    };
+    pf.check_against_mesh(&mesh)?;
+    if let Some(dup) = outputs_equal_mesh_file(a, &pf) {
+        bail!("{dup}");
+    }
+    let problem = pf.problem();
+    let kind = a.scheme.or(pf.scheme).unwrap_or(SchemeKind::Hmm);
     let scheme = build_with(kind, &mesh, &SchemeOptions { alpha: a.alpha })?;
     let active_set = ActiveSetOptions {
         c: a.c,
@@ -223,6 +265,12 @@ pub fn run(a: &SolveArgs) -> Result<()> {
     if let Some(path) = &a.json {
         let j = serde_json::json!({
             "problem": problem.name,
+            "problem_file": {
+                "path": pf.path.display().to_string(),
+                "name": pf.name,
+                "parameters": pf.parameters.iter().cloned().collect::<std::collections::BTreeMap<_, _>>(),
+            },
+            "mesh": mesh_desc,
             "scheme": kind,
             "n_cells": mesh.n_cells(),
             "h": mesh.h(),
@@ -277,7 +325,10 @@ fn write_solution_vtu(
             cell_data.push(("active_cell", a));
             cell_data.push(("multiplier_cell", l));
         }
-        if let (Some(a), Some(l)) = (act.edge_sums_per_cell(scheme), lam.edge_sums_per_cell(scheme)) {
+        if let (Some(a), Some(l)) = (
+            act.edge_sums_per_cell(scheme),
+            lam.edge_sums_per_cell(scheme),
+        ) {
             cell_data.push(("active_edges", a));
             cell_data.push(("multiplier_edges", l));
         }

@@ -475,7 +475,11 @@ impl<'a> DiscreteSystem<'a> {
         let (r, _) = self.residual(u);
         // ½uᵀMu − bᵀu = ½uᵀ(Mu − b) − ½bᵀu = −½uᵀr − ½bᵀu
         -0.5 * u.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>()
-            - 0.5 * u.iter().zip(&self.values.load).map(|(a, b)| a * b).sum::<f64>()
+            - 0.5
+                * u.iter()
+                    .zip(&self.values.load)
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>()
     }
 
     /// The entries of the full (uncondensed) matrix M = Σ_K P_Kᵀ M_K P_K, cell by cell: the
@@ -506,7 +510,10 @@ impl QuadraticEnergy for DiscreteSystem<'_> {
     fn load(&self) -> &[f64] {
         &self.values.load
     }
-    fn minimise_with_fixed(&self, fixed: &[Option<f64>]) -> crate::Result<(Vec<f64>, SolveTimings)> {
+    fn minimise_with_fixed(
+        &self,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         DiscreteSystem::solve(self, fixed)
     }
     fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>) {

@@ -36,7 +36,9 @@ impl DofMap {
     /// Asks the scheme for the unknowns of every cell (in parallel over chunks of cells).
     pub fn new(scheme: &dyn GradientDiscretisation) -> crate::Result<Self> {
         let nc = scheme.mesh().n_cells();
-        let chunks: crate::Result<Vec<(Vec<usize>, Vec<usize>, Vec<u8>)>> = cell_chunks(nc)
+        // per chunk of cells: the number of unknowns of each cell, the unknowns, the interior counts
+        type Chunk = (Vec<usize>, Vec<usize>, Vec<u8>);
+        let chunks: crate::Result<Vec<Chunk>> = cell_chunks(nc)
             .into_par_iter()
             .map(|(c0, c1)| {
                 let (mut len, mut all, mut ni) = (Vec::new(), Vec::new(), Vec::new());
@@ -130,7 +132,10 @@ pub struct SymbolicSystem<'a> {
 
 impl<'a> SymbolicSystem<'a> {
     /// Builds the symbolic system of `scheme`.
-    pub fn new(scheme: &'a dyn GradientDiscretisation, options: SystemOptions) -> crate::Result<Self> {
+    pub fn new(
+        scheme: &'a dyn GradientDiscretisation,
+        options: SystemOptions,
+    ) -> crate::Result<Self> {
         let dof_map = DofMap::new(scheme)?;
         Self::with_dof_map(scheme, dof_map, options)
     }
@@ -149,13 +154,24 @@ impl<'a> SymbolicSystem<'a> {
         let (symbolic, maps) = rayon::join(
             || {
                 let t = Instant::now();
-                SpdPattern::with_ordering(n_skel, col_ptr.clone(), row_idx.clone(), options.ordering)
-                    .map(|p| (p.with_threads(options.factor_threads), t.elapsed().as_secs_f64()))
+                SpdPattern::with_ordering(
+                    n_skel,
+                    col_ptr.clone(),
+                    row_idx.clone(),
+                    options.ordering,
+                )
+                .map(|p| {
+                    (
+                        p.with_threads(options.factor_threads),
+                        t.elapsed().as_secs_f64(),
+                    )
+                })
             },
             || scatter_maps(&dof_map, n, &col_ptr, &row_idx),
         );
         let (pattern, symbolic_seconds) = symbolic?;
         let maps = maps?;
+        check_numeric_memory(&pattern, &maps, n)?;
         let single_interior = dof_map.n_int.iter().all(|&ni| ni == 1);
         Ok(SymbolicSystem {
             scheme,
@@ -180,6 +196,32 @@ impl<'a> SymbolicSystem<'a> {
     pub fn n_condensed(&self) -> usize {
         self.scheme.n_skeleton()
     }
+}
+
+/// The memory the numeric phase will allocate (the Cholesky factor, whose size the symbolic
+/// factorisation has just computed, the condensed values, the condensation and residual
+/// buffers and a few vectors of unknowns), checked against the memory the kernel reports as
+/// available before anything is allocated: a typed error with the estimate instead of an abort.
+fn check_numeric_memory(pattern: &SpdPattern, maps: &ScatterMaps, n: usize) -> crate::Result<()> {
+    let Some(available) = crate::mesh::budget::available_memory() else {
+        return Ok(());
+    };
+    let bytes = 8 * (pattern.factor_len() as u64)
+        + 8 * (pattern.nnz() as u64)
+        + 8 * (maps.pos.len() as u64)
+        + 24 * (maps.inc.len() as u64)
+        + 8 * 6 * (n as u64);
+    if bytes > available {
+        use crate::mesh::budget::human_bytes;
+        return Err(crate::Error::Linear(format!(
+            "the numeric factorisation needs about {} (a Cholesky factor of {} entries), more \
+             than the {} of memory available",
+            human_bytes(bytes),
+            pattern.factor_len(),
+            human_bytes(available)
+        )));
+    }
+    Ok(())
 }
 
 /// The lower-triangular CSC pattern (column pointers, row indices) of the condensed matrix.

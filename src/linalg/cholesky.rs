@@ -193,7 +193,10 @@ impl SpdPattern {
         }
         res.map_err(|e| {
             crate::Error::Linear(format!(
-                "numeric Cholesky failed ({e:?}): the matrix is not numerically positive definite"
+                "numeric Cholesky failed ({e:?}): the condensed matrix of order {} is singular or \
+                 not numerically positive definite (a part of the mesh without Dirichlet \
+                 unknowns or active barrier, or a degenerate cell)",
+                self.n()
             ))
         })?;
         Ok(SpdFactor {

@@ -195,7 +195,11 @@ mod tests {
         );
         let t = 1e-200;
         assert_eq!(
-            orient([0.0, 0.0], [t, t], [2.0 * t, f64::from_bits((2.0 * t).to_bits() - 1)]),
+            orient(
+                [0.0, 0.0],
+                [t, t],
+                [2.0 * t, f64::from_bits((2.0 * t).to_bits() - 1)]
+            ),
             Ordering::Less
         );
     }

@@ -27,16 +27,18 @@
 //! inside a cell ([`super::validate`]).
 
 use super::Point;
-use super::predicates::{lex, orient, segments_meet, segments_overlap_from};
+use super::predicates::{orient, segments_meet, segments_overlap_from};
 use std::cmp::Ordering;
 
-/// An active segment: its end points in sweep order and its index, ordered from bottom to top
-/// by [`Active::compare`] (see the module docs). A query point is a degenerate segment with
-/// index `usize::MAX`, above every segment through it.
+/// An active segment: its end points in sweep order, their ranks in that order and its index
+/// (in [`Events::segs`]), ordered from bottom to top by [`Active::compare`] (see the module
+/// docs). A query point is a degenerate segment with index `usize::MAX`, above every segment
+/// through it.
 #[derive(Clone, Copy, Debug)]
 struct Active {
     left: Point,
     right: Point,
+    ends: [usize; 2],
     id: usize,
 }
 
@@ -52,7 +54,7 @@ impl Active {
     fn compare(&self, other: &Active) -> Ordering {
         if self.id == other.id {
             Ordering::Equal
-        } else if lex(self.left, other.left) == Ordering::Less {
+        } else if self.ends[0] < other.ends[0] {
             other.cmp_later(self).reverse()
         } else {
             self.cmp_later(other)
@@ -109,6 +111,11 @@ impl ActiveList {
         (n != NIL).then(|| self.nodes[n as usize].seg.id)
     }
 
+    /// The segment of node `n`.
+    fn seg(&self, n: u32) -> &Active {
+        &self.nodes[n as usize].seg
+    }
+
     /// Makes `child` (or nothing) take the place of `old` under `parent`.
     fn replace_child(&mut self, parent: u32, old: u32, child: u32) {
         if parent == NIL {
@@ -146,25 +153,45 @@ impl ActiveList {
         self.replace_child(g, p, x);
     }
 
-    /// Inserts `s`; returns the segments right below and right above it.
-    fn insert(&mut self, s: Active) -> (Option<usize>, Option<usize>) {
-        let (mut cur, mut parent, mut below, mut above) = (self.root, NIL, NIL, NIL);
-        while cur != NIL {
-            parent = cur;
-            if s.compare(&self.nodes[cur as usize].seg) == Ordering::Less {
-                above = cur;
-                cur = self.nodes[cur as usize].left;
-            } else {
-                below = cur;
-                cur = self.nodes[cur as usize].right;
-            }
+    /// Makes the new node `x` a leaf at its place in the tree, given its neighbours in the
+    /// list (`below`, `above`, either may be `NIL`), and restores the heap order.
+    fn attach(&mut self, x: u32, below: u32, above: u32) {
+        let parent = if below != NIL && self.nodes[below as usize].right == NIL {
+            self.nodes[below as usize].right = x;
+            below
+        } else if above != NIL {
+            // `below` has a right subtree, whose leftmost node is `above`, or there is no
+            // `below` and `above` is the first node: either way `above` has no left child
+            debug_assert_eq!(self.nodes[above as usize].left, NIL);
+            self.nodes[above as usize].left = x;
+            above
+        } else {
+            debug_assert_eq!(self.root, NIL);
+            self.root = x;
+            NIL
+        };
+        self.nodes[x as usize].parent = parent;
+        while self.nodes[x as usize].parent != NIL
+            && self.nodes[x as usize].prio > self.nodes[self.nodes[x as usize].parent as usize].prio
+        {
+            self.rotate_up(x);
         }
+    }
+
+    /// Inserts `s` right above node `below` (`NIL`: at the bottom), which must be its place in
+    /// the order; returns its node.
+    fn insert_after(&mut self, below: u32, s: Active) -> u32 {
+        let above = if below != NIL {
+            self.nodes[below as usize].next
+        } else {
+            self.first()
+        };
         let node = Node {
             seg: s,
             prio: priority(s.id),
             left: NIL,
             right: NIL,
-            parent,
+            parent: NIL,
             prev: below,
             next: above,
         };
@@ -179,34 +206,40 @@ impl ActiveList {
             }
         };
         self.node_of[s.id] = x;
-        if parent == NIL {
-            self.root = x;
-        } else if above == parent {
-            self.nodes[parent as usize].left = x;
-        } else {
-            self.nodes[parent as usize].right = x;
-        }
         if below != NIL {
             self.nodes[below as usize].next = x;
         }
         if above != NIL {
             self.nodes[above as usize].prev = x;
         }
-        while self.nodes[x as usize].parent != NIL
-            && self.nodes[x as usize].prio
-                > self.nodes[self.nodes[x as usize].parent as usize].prio
-        {
-            self.rotate_up(x);
-        }
-        (self.id(below), self.id(above))
+        self.attach(x, below, above);
+        x
     }
 
-    /// Removes segment `id` (if active); returns the segments that were right below and right
+    /// The bottom node.
+    fn first(&self) -> u32 {
+        let mut cur = self.root;
+        while cur != NIL && self.nodes[cur as usize].left != NIL {
+            cur = self.nodes[cur as usize].left;
+        }
+        cur
+    }
+
+    /// Inserts `s` at its place; returns the segments right below and right above it.
+    #[cfg(test)]
+    fn insert(&mut self, s: Active) -> (Option<usize>, Option<usize>) {
+        let below = self.below_node(&s);
+        let x = self.insert_after(below, s);
+        let Node { prev, next, .. } = self.nodes[x as usize];
+        (self.id(prev), self.id(next))
+    }
+
+    /// Removes segment `id` (if active); returns the nodes that were right below and right
     /// above it.
-    fn remove(&mut self, id: usize) -> (Option<usize>, Option<usize>) {
+    fn remove_nodes(&mut self, id: usize) -> (u32, u32) {
         let x = std::mem::replace(&mut self.node_of[id], NIL);
         if x == NIL {
-            return (None, None);
+            return (NIL, NIL);
         }
         // rotate x down (its higher-priority child up) until it has at most one child
         loop {
@@ -231,11 +264,18 @@ impl ActiveList {
             self.nodes[next as usize].prev = prev;
         }
         self.free.push(x);
+        (prev, next)
+    }
+
+    /// As [`ActiveList::remove_nodes`], with segment indices.
+    #[cfg(test)]
+    fn remove(&mut self, id: usize) -> (Option<usize>, Option<usize>) {
+        let (prev, next) = self.remove_nodes(id);
         (self.id(prev), self.id(next))
     }
 
-    /// The highest active segment below `probe`.
-    fn below(&self, probe: &Active) -> Option<usize> {
+    /// The node of the highest active segment below `probe` (`NIL` if none).
+    fn below_node(&self, probe: &Active) -> u32 {
         let (mut cur, mut found) = (self.root, NIL);
         while cur != NIL {
             if probe.compare(&self.nodes[cur as usize].seg) == Ordering::Greater {
@@ -245,7 +285,12 @@ impl ActiveList {
                 cur = self.nodes[cur as usize].left;
             }
         }
-        self.id(found)
+        found
+    }
+
+    /// The highest active segment below `probe`.
+    fn below(&self, probe: &Active) -> Option<usize> {
+        self.id(self.below_node(probe))
     }
 }
 
@@ -264,87 +309,182 @@ fn sort_key(x: f64) -> u64 {
     if b >> 63 == 1 { !b } else { b | 1 << 63 }
 }
 
-/// The segments that start (`starts`) and end (`ends`) at every vertex, CSR by vertex, and
-/// the vertices in sweep order.
+/// The input renumbered in sweep order, so that the sweep reads its arrays (nearly) in order
+/// instead of jumping around the vertex numbering: vertices by rank, segments by the rank of
+/// their left end.
 struct Events {
-    order: Vec<usize>,
+    /// The points in sweep order.
+    pts: Vec<Point>,
+    /// The rank of every vertex in the sweep order.
+    rank: Vec<usize>,
+    /// (rank of the left end, rank of the right end, index in the input) of every segment,
+    /// by left end; `segs[start_ptr[r]..start_ptr[r + 1]]` start at rank r.
+    segs: Vec<(usize, usize, usize)>,
     start_ptr: Vec<usize>,
-    starts: Vec<usize>,
+    /// CSR by the rank of the right end: positions in `segs` of the segments ending there.
     end_ptr: Vec<usize>,
     ends: Vec<usize>,
 }
 
+/// A CSR of `0..keys.len()` by key (`n` keys), in increasing order within each key.
+fn csr(keys: impl Iterator<Item = usize> + Clone, n: usize) -> (Vec<usize>, Vec<usize>) {
+    let mut ptr = vec![0usize; n + 1];
+    for k in keys.clone() {
+        ptr[k + 1] += 1;
+    }
+    for i in 0..n {
+        ptr[i + 1] += ptr[i];
+    }
+    let mut fill = ptr.clone();
+    let mut ids = vec![0usize; ptr[n]];
+    for (i, k) in keys.enumerate() {
+        ids[fill[k]] = i;
+        fill[k] += 1;
+    }
+    (ptr, ids)
+}
+
 impl Events {
     fn new(pts: &[Point], segs: &[[usize; 2]]) -> Events {
+        let n = pts.len();
         let mut keyed: Vec<(u64, u64, usize)> = pts
             .iter()
             .enumerate()
             .map(|(i, p)| (sort_key(p[0]), sort_key(p[1]), i))
             .collect();
         keyed.sort_unstable();
-        let order = keyed.into_iter().map(|(_, _, i)| i).collect();
-        let left_right = |&[a, b]: &[usize; 2]| {
-            if lex(pts[a], pts[b]) == Ordering::Greater {
-                (b, a)
-            } else {
-                (a, b)
-            }
-        };
-        let csr = |end: fn((usize, usize)) -> usize| {
-            let mut ptr = vec![0usize; pts.len() + 1];
-            for s in segs {
-                ptr[end(left_right(s)) + 1] += 1;
-            }
-            for v in 0..pts.len() {
-                ptr[v + 1] += ptr[v];
-            }
-            let mut fill = ptr.clone();
-            let mut ids = vec![0usize; segs.len()];
-            for (i, s) in segs.iter().enumerate() {
-                let v = end(left_right(s));
-                ids[fill[v]] = i;
-                fill[v] += 1;
-            }
-            (ptr, ids)
-        };
-        let (start_ptr, starts) = csr(|(l, _)| l);
-        let (end_ptr, ends) = csr(|(_, r)| r);
+        let mut rank = vec![0usize; n];
+        let mut sorted_pts = Vec::with_capacity(n);
+        for (r, &(_, _, v)) in keyed.iter().enumerate() {
+            rank[v] = r;
+            sorted_pts.push(pts[v]);
+        }
+        drop(keyed);
+        let ranked = segs.iter().map(|&[a, b]| {
+            let (ra, rb) = (rank[a], rank[b]);
+            (ra.min(rb), ra.max(rb))
+        });
+        let (start_ptr, by_left) = csr(ranked.clone().map(|(l, _)| l), n);
+        let segs: Vec<(usize, usize, usize)> = by_left
+            .into_iter()
+            .map(|i| {
+                let [a, b] = segs[i];
+                let (ra, rb) = (rank[a], rank[b]);
+                (ra.min(rb), ra.max(rb), i)
+            })
+            .collect();
+        let (end_ptr, ends) = csr(segs.iter().map(|s| s.1), n);
         Events {
-            order,
+            pts: sorted_pts,
+            rank,
+            segs,
             start_ptr,
-            starts,
             end_ptr,
             ends,
         }
     }
+
+    /// The active segment for `segs[j]`.
+    fn active(&self, j: usize) -> Active {
+        let (l, r, _) = self.segs[j];
+        Active {
+            left: self.pts[l],
+            right: self.pts[r],
+            ends: [l, r],
+            id: j,
+        }
+    }
 }
 
-/// Whether segments `i` and `j` meet outside the end points they share.
-fn collide(pts: &[Point], segs: &[[usize; 2]], i: usize, j: usize) -> bool {
-    let ([a, b], [c, d]) = (segs[i], segs[j]);
-    let shared = if a == c || a == d {
-        Some((a, b, if a == c { d } else { c }))
-    } else if b == c || b == d {
-        Some((b, a, if b == c { d } else { c }))
-    } else {
-        None
-    };
-    match shared {
+/// Whether two segments meet outside the end points they share.
+fn collide(s: &Active, t: &Active) -> bool {
+    let ([sl, sr], [tl, tr]) = (s.ends, t.ends);
+    if (sl, sr) == (tl, tr) {
         // the same vertex pair twice: they overlap entirely
-        Some((_, p, q)) if p == q => true,
-        Some((v, p, q)) => segments_overlap_from(pts[v], pts[p], pts[q]),
-        None => segments_meet(pts[a], pts[b], pts[c], pts[d]),
+        true
+    } else if sl == tl {
+        segments_overlap_from(s.left, s.right, t.right)
+    } else if sr == tr {
+        segments_overlap_from(s.right, s.left, t.left)
+    } else if sl == tr || sr == tl {
+        // one ends where the other starts: they leave that vertex on opposite sides
+        false
+    } else {
+        segments_meet(s.left, s.right, t.left, t.right)
     }
 }
 
 /// Finds two segments of `segs` (pairs of indices into `pts`) that meet anywhere but at an end
-/// point they share, or, if there are none, the segment right below each vertex of `queries`.
-/// The points must be finite and pairwise distinct; a segment must join two distinct points.
-/// O((n + q) log n) for n points and segments and q queries.
+/// point they share, or, if there are none, the segment right below each vertex of `queries`
+/// (which must be end points of segments). The points must be finite and pairwise distinct; a
+/// segment must join two distinct points. O((n + q) log n) for n points and segments and q
+/// queries (expected, over the priorities of the treap, whatever the input).
 pub(crate) fn first_collision(pts: &[Point], segs: &[[usize; 2]], queries: &[usize]) -> Sweep {
     let ev = Events::new(pts, segs);
-    let active_seg = |i: usize| {
-        let [a, b] = segs[i];
+    let collision = |i: usize, j: usize| {
+        let (a, b) = (ev.segs[i].2, ev.segs[j].2);
+        Sweep::Collision(a.min(b), a.max(b))
+    };
+    // the queries by rank, last first, with their positions in `queries`
+    let mut pending: Vec<(usize, usize)> = queries.iter().map(|&q| ev.rank[q]).zip(0..).collect();
+    pending.sort_unstable_by(|a, b| b.cmp(a));
+    let mut below = vec![None; queries.len()];
+    let mut list = ActiveList::new(ev.segs.len());
+    let mut starting: Vec<Active> = Vec::new();
+    for r in 0..ev.pts.len() {
+        let ending = &ev.ends[ev.end_ptr[r]..ev.end_ptr[r + 1]];
+        let probe = Active {
+            left: ev.pts[r],
+            right: ev.pts[r],
+            ends: [r, r],
+            id: usize::MAX,
+        };
+        // the segments ending at r are neighbours in the list (or a collision was found
+        // earlier); once they are gone, `below_r` and `above_r` are the neighbours of r
+        let (mut below_r, mut above_r) = (NIL, NIL);
+        for &j in ending {
+            (below_r, above_r) = list.remove_nodes(j);
+        }
+        while pending.last().is_some_and(|&(q, _)| q == r) {
+            let (_, k) = pending.pop().expect("not empty");
+            below[k] = list.below(&probe).map(|j| ev.segs[j].2);
+        }
+        let starts = ev.start_ptr[r]..ev.start_ptr[r + 1];
+        if starts.is_empty() {
+            if below_r != NIL && above_r != NIL && collide(list.seg(below_r), list.seg(above_r)) {
+                return collision(list.seg(below_r).id, list.seg(above_r).id);
+            }
+            continue;
+        }
+        if ending.is_empty() {
+            below_r = list.below_node(&probe);
+        }
+        debug_assert!(below_r == NIL || probe.compare(list.seg(below_r)) == Ordering::Greater);
+        // the segments starting at r, bottom to top (a consistent order: they share r)
+        starting.clear();
+        starting.extend(starts.map(|j| ev.active(j)));
+        starting.sort_unstable_by(|a, b| a.compare(b));
+        let mut last = below_r;
+        for s in &starting {
+            if last != NIL && collide(list.seg(last), s) {
+                return collision(list.seg(last).id, s.id);
+            }
+            last = list.insert_after(last, *s);
+        }
+        let above = list.nodes[last as usize].next;
+        if above != NIL && collide(list.seg(last), list.seg(above)) {
+            return collision(list.seg(last).id, list.seg(above).id);
+        }
+    }
+    Sweep::Clear(below)
+}
+
+/// [`collide`] for segments `i` and `j` of `segs`.
+#[cfg(test)]
+fn collide_ids(pts: &[Point], segs: &[[usize; 2]], i: usize, j: usize) -> bool {
+    use super::predicates::lex;
+    let active = |k: usize| {
+        let [a, b] = segs[k];
         let (l, r) = if lex(pts[a], pts[b]) == Ordering::Greater {
             (b, a)
         } else {
@@ -353,42 +493,11 @@ pub(crate) fn first_collision(pts: &[Point], segs: &[[usize; 2]], queries: &[usi
         Active {
             left: pts[l],
             right: pts[r],
-            id: i,
+            ends: [l, r],
+            id: k,
         }
     };
-    let collision = |i: usize, j: usize| Sweep::Collision(i.min(j), i.max(j));
-    // the queries in sweep order, with their positions in `queries`
-    let mut pending: Vec<(usize, usize)> = queries.iter().copied().zip(0..).collect();
-    pending.sort_unstable_by(|a, b| lex(pts[b.0], pts[a.0]));
-    let mut below = vec![None; queries.len()];
-    let mut list = ActiveList::new(segs.len());
-    for &v in &ev.order {
-        for &i in &ev.ends[ev.end_ptr[v]..ev.end_ptr[v + 1]] {
-            if let (Some(lo), Some(up)) = list.remove(i)
-                && collide(pts, segs, lo, up)
-            {
-                return collision(lo, up);
-            }
-        }
-        while pending.last().is_some_and(|&(q, _)| q == v) {
-            let (_, k) = pending.pop().expect("not empty");
-            let probe = Active {
-                left: pts[v],
-                right: pts[v],
-                id: usize::MAX,
-            };
-            below[k] = list.below(&probe);
-        }
-        for &i in &ev.starts[ev.start_ptr[v]..ev.start_ptr[v + 1]] {
-            let (lo, up) = list.insert(active_seg(i));
-            for n in [lo, up].into_iter().flatten() {
-                if collide(pts, segs, i, n) {
-                    return collision(i, n);
-                }
-            }
-        }
-    }
-    Sweep::Clear(below)
+    collide(&active(i), &active(j))
 }
 
 /// As [`first_collision`] without queries, by testing every pair.
@@ -396,12 +505,13 @@ pub(crate) fn first_collision(pts: &[Point], segs: &[[usize; 2]], queries: &[usi
 fn first_collision_brute(pts: &[Point], segs: &[[usize; 2]]) -> Option<(usize, usize)> {
     (0..segs.len())
         .flat_map(|i| (i + 1..segs.len()).map(move |j| (i, j)))
-        .find(|&(i, j)| collide(pts, segs, i, j))
+        .find(|&(i, j)| collide_ids(pts, segs, i, j))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::predicates::lex;
 
     /// A small xorshift generator (deterministic tests without a crate).
     fn rng(mut s: u64) -> impl FnMut() -> f64 {
@@ -489,7 +599,11 @@ mod tests {
             Sweep::Collision(0, 1)
         );
         // a path through shared vertices is fine
-        assert!(clear(&first_collision(&pts, &[[0, 4], [4, 1], [1, 5]], &[])));
+        assert!(clear(&first_collision(
+            &pts,
+            &[[0, 4], [4, 1], [1, 5]],
+            &[]
+        )));
         // vertical segments
         assert!(clear(&first_collision(&pts, &[[2, 4], [4, 3]], &[])));
         assert_eq!(
@@ -524,7 +638,7 @@ mod tests {
             match first_collision(&uniq, &segs, &[]) {
                 Sweep::Collision(i, j) => {
                     assert!(brute.is_some(), "case {case}: {segs:?}");
-                    assert!(collide(&uniq, &segs, i, j), "case {case}");
+                    assert!(collide_ids(&uniq, &segs, i, j), "case {case}");
                 }
                 Sweep::Clear(_) => assert_eq!(brute, None, "case {case}: {uniq:?} {segs:?}"),
             }
@@ -600,7 +714,10 @@ mod tests {
                 let brute = first_collision_brute(&pts, &segs);
                 match first_collision(&pts, &segs, &[]) {
                     Sweep::Collision(i, j) => {
-                        assert!(brute.is_some() && collide(&pts, &segs, i, j), "case {case}")
+                        assert!(
+                            brute.is_some() && collide_ids(&pts, &segs, i, j),
+                            "case {case}"
+                        )
                     }
                     Sweep::Clear(_) => assert_eq!(brute, None, "case {case}"),
                 }
@@ -633,7 +750,10 @@ mod tests {
             assert_eq!((node.prev, node.next), (prev, next), "list links");
             assert_eq!(list.node_of[node.seg.id], n);
         }
-        in_order.iter().map(|&n| list.nodes[n as usize].seg.id).collect()
+        in_order
+            .iter()
+            .map(|&n| list.nodes[n as usize].seg.id)
+            .collect()
     }
 
     /// Random insertions and removals of horizontal segments at random heights: the treap keeps
@@ -646,6 +766,7 @@ mod tests {
         let seg = |i: usize| Active {
             left: [0.0, heights[i]],
             right: [1.0, heights[i]],
+            ends: [0, 1],
             id: i,
         };
         let mut list = ActiveList::new(n);
@@ -657,10 +778,7 @@ mod tests {
             };
             let neighbours = |v: &Vec<usize>, i: usize| {
                 let pos = v.iter().position(|&j| j == i).unwrap();
-                (
-                    pos.checked_sub(1).map(|p| v[p]),
-                    v.get(pos + 1).copied(),
-                )
+                (pos.checked_sub(1).map(|p| v[p]), v.get(pos + 1).copied())
             };
             if active.contains(&i) {
                 let expected = neighbours(&active, i);
@@ -675,6 +793,7 @@ mod tests {
             let probe = Active {
                 left: [0.5, 0.5],
                 right: [0.5, 0.5],
+                ends: [1, 1],
                 id: usize::MAX,
             };
             let expected = active.iter().rev().find(|&&j| heights[j] < 0.5).copied();

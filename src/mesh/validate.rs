@@ -350,7 +350,10 @@ pub(crate) fn check_duplicate_vertices(vertices: &[Point]) -> Result<(), MeshErr
             y: vertices[a][1],
         }
     };
-    if let Some(w) = keys.windows(2).find(|w| (w[0].0, w[0].1) == (w[1].0, w[1].1)) {
+    if let Some(w) = keys
+        .windows(2)
+        .find(|w| (w[0].0, w[0].1) == (w[1].0, w[1].1))
+    {
         return Err(duplicate(w[0].2, w[1].2));
     }
     let close = |a: usize, b: usize| {
@@ -365,7 +368,11 @@ pub(crate) fn check_duplicate_vertices(vertices: &[Point]) -> Result<(), MeshErr
         {
             return Err(duplicate(a, b));
         }
-        let (right, below, above) = (cx.saturating_add(1), cy.saturating_sub(1), cy.saturating_add(1));
+        let (right, below, above) = (
+            cx.saturating_add(1),
+            cy.saturating_sub(1),
+            cy.saturating_add(1),
+        );
         while next_col < keys.len() && (keys[next_col].0, keys[next_col].1) < (right, below) {
             next_col += 1;
         }

@@ -95,39 +95,6 @@ pub fn hausdorff(a: &[Point], b: &[Point]) -> f64 {
     one(a, b).max(one(b, a))
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::problem::Side;
-    use crate::scheme::PointDof;
-
-    #[test]
-    fn switch_and_measure() {
-        let xs = [0.9, 0.1, 0.3, 0.5, 0.7];
-        let cons = Constraints {
-            dofs: xs
-                .iter()
-                .map(|&x| PointDof {
-                    dof: 0,
-                    point: [x, 0.0],
-                    measure: 0.2,
-                })
-                .collect(),
-            barrier: vec![0.0; 5],
-            side: Side::Lower,
-        };
-        let active = [true, false, false, true, true];
-        let s = switch_point(&cons, &active, 0).unwrap();
-        assert!((s.at - 0.4).abs() < 1e-15 && (s.half_gap - 0.1).abs() < 1e-15);
-        assert_eq!(s.count, 1);
-        assert!(!s.starts_active);
-        assert!((contact_measure(&cons, &active) - 0.6).abs() < 1e-15);
-        assert!(switch_point(&cons, &[true; 5], 0).is_none());
-        let h = hausdorff(&[[0.0, 0.0], [1.0, 0.0]], &[[0.0, 0.5]]);
-        assert!((h - (1.25f64).sqrt()).abs() < 1e-15);
-    }
-}
-
 /// Neighbouring constrained unknowns (pairs of positions in `cons.dofs`, `i < j`, sorted), for
 /// [`free_boundary`]. Adjacency follows the mesh entity of each unknown
 /// ([`crate::scheme::GradientDiscretisation::dof_entity`]), so it is the same for every
@@ -175,3 +142,37 @@ pub fn neighbours(
     out.dedup();
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::problem::Side;
+    use crate::scheme::PointDof;
+
+    #[test]
+    fn switch_and_measure() {
+        let xs = [0.9, 0.1, 0.3, 0.5, 0.7];
+        let cons = Constraints {
+            dofs: xs
+                .iter()
+                .map(|&x| PointDof {
+                    dof: 0,
+                    point: [x, 0.0],
+                    measure: 0.2,
+                })
+                .collect(),
+            barrier: vec![0.0; 5],
+            side: Side::Lower,
+        };
+        let active = [true, false, false, true, true];
+        let s = switch_point(&cons, &active, 0).unwrap();
+        assert!((s.at - 0.4).abs() < 1e-15 && (s.half_gap - 0.1).abs() < 1e-15);
+        assert_eq!(s.count, 1);
+        assert!(!s.starts_active);
+        assert!((contact_measure(&cons, &active) - 0.6).abs() < 1e-15);
+        assert!(switch_point(&cons, &[true; 5], 0).is_none());
+        let h = hausdorff(&[[0.0, 0.0], [1.0, 0.0]], &[[0.0, 0.5]]);
+        assert!((h - (1.25f64).sqrt()).abs() < 1e-15);
+    }
+}
+

@@ -33,7 +33,11 @@
 //! do `min` and `max` (unlike `f64::min`), so that a NaN anywhere is seen by validation instead of
 //! silently choosing a branch.
 //!
-//! An [`Expr`] is an immutable tree (`Send + Sync`); [`Expr::eval`] allocates nothing.
+//! An [`Expr`] keeps its tree (for inlining definitions and folding) and the tree compiled to
+//! nested closures, one per node, with constant and variable operands of arithmetic inlined:
+//! [`Expr::eval`] calls them, allocating nothing, from any thread (`Send + Sync`). This runs
+//! 3 to 6 times faster than walking the tree ([`Expr::eval_tree`], the reference semantics,
+//! which gives the same bits), and within a small factor of a Rust closure.
 
 use std::collections::HashMap;
 use std::fmt;
@@ -287,11 +291,10 @@ impl Node {
                 if *n == 2 { a * a } else { a.powi(*n) }
             }
             Node::Cmp(c, a, b) => c.apply(ev(a, v), ev(b, v)),
-            Node::And(a, b) => match ev(a, v) {
-                c if c.is_nan() => f64::NAN,
-                c if c == 0.0 => 0.0,
-                _ => ev(b, v),
-            },
+            Node::And(a, b) => {
+                let c = ev(a, v);
+                if c.is_nan() || c == 0.0 { c } else { ev(b, v) }
+            }
             Node::Or(a, b) => match ev(a, v) {
                 c if c.is_nan() => f64::NAN,
                 c if c != 0.0 => 1.0,
@@ -384,6 +387,13 @@ fn compile(n: &Node) -> Fun {
             let (a, k) = (compile(a), *k);
             Box::new(move |v| a(v).powi(k))
         }
+        n => compile_logic(n),
+    }
+}
+
+/// Comparisons, logic and conditionals (the other nodes of [`compile`]).
+fn compile_logic(n: &Node) -> Fun {
+    match n {
         Node::Cmp(c, a, b) => {
             let (c, a, b) = (*c, compile(a), compile(b));
             Box::new(move |v| c.apply(a(v), b(v)))
@@ -397,10 +407,9 @@ fn compile(n: &Node) -> Fun {
         }
         Node::And(a, b) => {
             let (a, b) = (compile(a), compile(b));
-            Box::new(move |v| match a(v) {
-                c if c.is_nan() => f64::NAN,
-                c if c == 0.0 => 0.0,
-                _ => b(v),
+            Box::new(move |v| {
+                let c = a(v);
+                if c.is_nan() || c == 0.0 { c } else { b(v) }
             })
         }
         Node::Or(a, b) => {
@@ -418,6 +427,11 @@ fn compile(n: &Node) -> Fun {
                 t if t != 0.0 => a(v),
                 _ => b(v),
             })
+        }
+        // (every other node is compiled by `compile`; walk the tree if one ever comes here)
+        n => {
+            let n = n.clone();
+            Box::new(move |v| n.eval(v))
         }
     }
 }
@@ -1099,7 +1113,7 @@ mod tests {
         assert_eq!(ev("if(x < 0, -1, 1) * abs(x)", -2.0, 0.0), -2.0);
         assert_eq!(ev("x < 1 and not (y >= 2 || y == 0)", 0.0, 1.0), 1.0);
         assert_eq!(ev("x < 1 && !(y > 0)", 0.0, 1.0), 0.0);
-        assert_eq!(ev("ln(e) + log10(100) + sqrt(4) + exp(0)", 0.0, 0.0), 5.0);
+        assert_eq!(ev("ln(e) + log10(100) + sqrt(4) + exp(0)", 0.0, 0.0), 6.0);
     }
 
     #[test]
@@ -1132,7 +1146,7 @@ mod tests {
             "min(x, 1 - x, y, 1 - y)",
             "max(sqrt(x - 0.5), y)",
             "hypot(x, y)^0.5",
-            "if(x < 0.5 and not (y >= 0.5 or x == y), x, y != 0.25)",
+            "if(x < 0.5 and not (y >= 0.5 or x == y), x < y, y != 0.25)",
             "if(sqrt(x - 0.5) < 1, 1, 2)",
             "floor(10*x) + ceil(10*y) + log10(x) + asin(y)",
         ];

@@ -19,8 +19,8 @@
 //! [`ProblemFile::check_against_mesh`] checks the rest on a given mesh: tags the mesh does not
 //! carry, boundary edges selected by no section or by two, points where no piece of a
 //! piecewise datum applies, tensors that are not symmetric positive definite, and NaN or
-//! infinite values of every datum at every point where a scheme evaluates it (cell centroids,
-//! vertices and edge midpoints). [`ProblemFile::problem`] then builds the [`Problem`] whose
+//! infinite values of every datum at the points where the schemes evaluate it (see the table
+//! there). [`ProblemFile::problem`] then builds the [`Problem`] whose
 //! closures evaluate the compiled expressions. Every failure is an
 //! [`Error::ProblemFile`] naming the file, the line and column, and the key.
 //!
@@ -278,7 +278,7 @@ impl Field {
 #[derive(Debug, Clone)]
 enum TensorField {
     Scalar(Field),
-    Matrix([[Field; 2]; 2], Loc),
+    Matrix(Box<[[Field; 2]; 2]>, Loc),
     Constant(Tensor, Loc),
 }
 
@@ -288,7 +288,7 @@ impl TensorField {
         let c = |i: usize, j: usize| m[i][j].expr.as_constant();
         match (c(0, 0), c(0, 1), c(1, 0), c(1, 1)) {
             (Some(a), Some(b), Some(c), Some(d)) => TensorField::Constant([[a, b], [c, d]], loc),
-            _ => TensorField::Matrix(m, loc),
+            _ => TensorField::Matrix(Box::new(m), loc),
         }
     }
 
@@ -463,7 +463,7 @@ impl fmt::Display for MeshSpec {
 /// The mesh `m` of the unit square mapped onto \[x0, x1\] × \[y0, y1\] by
 /// (x, y) ↦ (x0 + (x1 − x0) x, y0 + (y1 − y0) y). Boundary tags are not kept.
 pub fn map_unit_square(m: &PolyMesh, [x0, x1, y0, y1]: [f64; 4]) -> Result<PolyMesh> {
-    if !(x1 > x0 && y1 > y0) || ![x0, x1, y0, y1].iter().all(|v| v.is_finite()) {
+    if !(x1 > x0 && y1 > y0 && [x0, x1, y0, y1].iter().all(|v| v.is_finite())) {
         return Err(Error::InvalidData(format!(
             "the domain [{x0}, {x1}]x[{y0}, {y1}] is not a finite rectangle with x0 < x1, y0 < y1"
         )));

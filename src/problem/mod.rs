@@ -341,7 +341,11 @@ pub fn test3_obstacle(p: Point) -> f64 {
 /// Test 3 of the paper (obstacle): −Δu ≥ C, u ≥ ψ, (Δu + C)(ψ − u) = 0, u = 0 on ∂Ω,
 /// ψ = −min(x, 1 − x, y, 1 − y); i.e. f = C with a lower barrier ψ.
 pub fn paper_test3(c: f64) -> Problem {
-    Problem::new(&format!("test3_C{}", format_parameter(c)), Box::new(move |_| c)).with_constraint(
+    Problem::new(
+        &format!("test3_C{}", format_parameter(c)),
+        Box::new(move |_| c),
+    )
+    .with_constraint(
         ConstraintKind::Obstacle,
         Side::Lower,
         Box::new(test3_obstacle),

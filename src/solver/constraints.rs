@@ -9,10 +9,7 @@ use crate::vi::Constraints;
 
 /// Builds the barrier of `problem` on the unknowns of the system, checking the data and the
 /// non-emptiness of the discrete convex set.
-pub fn build(
-    system: &DiscreteSystem,
-    problem: &Problem,
-) -> crate::Result<Option<Constraints>> {
+pub fn build(system: &DiscreteSystem, problem: &Problem) -> crate::Result<Option<Constraints>> {
     let Some(c) = &problem.constraint else {
         return Ok(None);
     };
@@ -80,4 +77,3 @@ pub fn build(
         side: c.side,
     }))
 }
-

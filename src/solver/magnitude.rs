@@ -46,8 +46,14 @@ pub fn data_scale(system: &DiscreteSystem, problem: &Problem, cons: Option<&Cons
     }
     let bb = mesh.bounding_box();
     let diam = ((bb[2] - bb[0]).powi(2) + (bb[3] - bb[1]).powi(2)).sqrt();
-    let dirichlet = system.dirichlet().iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    let barrier = cons.map_or(0.0, |c| c.barrier.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+    let dirichlet = system
+        .dirichlet()
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let barrier = cons.map_or(0.0, |c| {
+        c.barrier.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+    });
     dirichlet.max(barrier) + (diam * diam * f_max + diam * q_max) / lambda
 }
 

@@ -76,7 +76,11 @@ pub fn analyse(system: &DiscreteSystem, cons: Option<&Constraints>) -> crate::Re
             )));
         };
         let s = c.side.sign();
-        let (dir_t, bound) = if s > 0.0 { ("−∞", "upper") } else { ("+∞", "lower") };
+        let (dir_t, bound) = if s > 0.0 {
+            ("−∞", "upper")
+        } else {
+            ("+∞", "lower")
+        };
         if !(s * sum_b[r] > 1e-12 * sum_abs[r]) {
             let why = if s * sum_b[r] < 0.0 {
                 format!(

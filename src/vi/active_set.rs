@@ -254,10 +254,20 @@ mod tests {
         for seed in 0..40u64 {
             let n = 6;
             let m = spd(n, seed + 1);
-            let b: Vec<f64> = (0..n).map(|i| ((i as f64 + seed as f64) * 0.7).sin()).collect();
-            let side = if seed % 2 == 0 { Side::Upper } else { Side::Lower };
+            let b: Vec<f64> = (0..n)
+                .map(|i| ((i as f64 + seed as f64) * 0.7).sin())
+                .collect();
+            let side = if seed % 2 == 0 {
+                Side::Upper
+            } else {
+                Side::Lower
+            };
             let g = (0..n).map(|i| 0.1 * (i as f64 - 2.5)).collect();
-            let sys = Dense { m, b, dir: vec![None; n] };
+            let sys = Dense {
+                m,
+                b,
+                dir: vec![None; n],
+            };
             let cons = all_constrained(n, g, side);
             let (reference, ref_active) = exhaustive::solve(&sys, &cons).unwrap();
             match run(&sys, &cons, &ActiveSetOptions::default()).unwrap() {
@@ -285,7 +295,11 @@ mod tests {
             1 => -1.0,
             _ => 0.0,
         });
-        let sys = Dense { m, b: vec![1.0; n], dir: vec![None; n] };
+        let sys = Dense {
+            m,
+            b: vec![1.0; n],
+            dir: vec![None; n],
+        };
         let cons = all_constrained(n, vec![3.0; n], Side::Upper);
         let sol = solve(&sys, &cons, &ActiveSetOptions::default()).unwrap();
         let (reference, active) = exhaustive::solve(&sys, &cons).unwrap();
@@ -302,7 +316,11 @@ mod tests {
         let Outcome::Stalled(s) = run(&sys, &cons, &ActiveSetOptions::default()).unwrap() else {
             panic!("the crafted system should cycle");
         };
-        assert!(matches!(s.error, SolverError::Cycling { .. }), "{}", s.error);
+        assert!(
+            matches!(s.error, SolverError::Cycling { .. }),
+            "{}",
+            s.error
+        );
         assert_eq!(s.log.len(), s.log.last().unwrap().solve);
         assert!(solve(&sys, &cons, &ActiveSetOptions::default()).is_err());
     }
@@ -311,16 +329,40 @@ mod tests {
     fn bad_options_are_typed_errors() {
         let (sys, cons) = cycling_system();
         for c in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-            let o = ActiveSetOptions { c, ..Default::default() };
-            assert!(matches!(solve(&sys, &cons, &o), Err(crate::Error::InvalidData(_))));
+            let o = ActiveSetOptions {
+                c,
+                ..Default::default()
+            };
+            assert!(matches!(
+                solve(&sys, &cons, &o),
+                Err(crate::Error::InvalidData(_))
+            ));
         }
-        let o = ActiveSetOptions { initial_active: Some(vec![true]), ..Default::default() };
-        assert!(matches!(solve(&sys, &cons, &o), Err(crate::Error::InvalidData(_))));
+        let o = ActiveSetOptions {
+            initial_active: Some(vec![true]),
+            ..Default::default()
+        };
+        assert!(matches!(
+            solve(&sys, &cons, &o),
+            Err(crate::Error::InvalidData(_))
+        ));
         for tol in [0.0, 1.0, f64::INFINITY, f64::NAN, -1e-10] {
-            let o = ActiveSetOptions { tol, ..Default::default() };
-            assert!(matches!(solve(&sys, &cons, &o), Err(crate::Error::InvalidData(_))), "{tol}");
+            let o = ActiveSetOptions {
+                tol,
+                ..Default::default()
+            };
+            assert!(
+                matches!(solve(&sys, &cons, &o), Err(crate::Error::InvalidData(_))),
+                "{tol}"
+            );
         }
-        let o = ActiveSetOptions { max_solves: 0, ..Default::default() };
-        assert!(matches!(solve(&sys, &cons, &o), Err(crate::Error::InvalidData(_))));
+        let o = ActiveSetOptions {
+            max_solves: 0,
+            ..Default::default()
+        };
+        assert!(matches!(
+            solve(&sys, &cons, &o),
+            Err(crate::Error::InvalidData(_))
+        ));
     }
 }

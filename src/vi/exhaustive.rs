@@ -18,7 +18,9 @@ pub fn solve(q: &dyn QuadraticEnergy, cons: &Constraints) -> crate::Result<(Vec<
     found
         .pop()
         .map(|(a, u)| (u, a))
-        .ok_or(crate::Error::Solver(crate::SolverError::NoKktPoint { candidates: 1 << m }))
+        .ok_or(crate::Error::Solver(crate::SolverError::NoKktPoint {
+            candidates: 1 << m,
+        }))
 }
 
 /// Every active set whose equality-constrained minimiser satisfies the KKT conditions, with

@@ -18,10 +18,10 @@
 
 pub mod active_set;
 pub mod certificate;
-pub mod exhaustive;
-pub mod pgs;
 #[cfg(test)]
 pub(crate) mod dense;
+pub mod exhaustive;
+pub mod pgs;
 
 pub use active_set::ActiveSetOptions;
 pub use certificate::{Certificate, Evaluation};

@@ -67,7 +67,10 @@ fn a_barrier_on_the_wrong_side_of_the_load_is_unbounded() {
         .with_boundary(|_, _| BoundaryKind::Neumann)
         .with_constraint(ConstraintKind::Obstacle, Side::Lower, Box::new(|_| -1.0));
     let e = solve(SchemeKind::Hmm, &p).unwrap_err();
-    assert!(matches!(&e, Error::IllPosed(m) if m.contains("not unique")), "{e}");
+    assert!(
+        matches!(&e, Error::IllPosed(m) if m.contains("not unique")),
+        "{e}"
+    );
 }
 
 #[test]

@@ -3,14 +3,14 @@
 
 use super::records::*;
 use super::{Config, create_dir};
+use gradvi::assembly::SymbolicSystem;
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{hexagonal::hexagonal, kershaw::kershaw};
 use gradvi::mesh::io::read_mesh;
 use gradvi::post::contact::{contact_measure, switch_point};
 use gradvi::post::relative_errors;
-use gradvi::problem::{Problem, paper_test1, paper_test2, paper_test2_tie, paper_test3};
+use gradvi::problem::{Problem, file, paper_test2_tie};
 use gradvi::scheme::{SchemeKind, build};
-use gradvi::assembly::SymbolicSystem;
 use gradvi::solver::{Solution, SolveOptions, solve_problem, solve_with_symbolic};
 use std::sync::Arc;
 use std::time::Instant;
@@ -153,6 +153,12 @@ fn log_rows(case: &str, kind: SchemeKind, mesh: &str, sol: &Solution) -> Vec<Ite
         .collect()
 }
 
+/// A built-in problem, from its file `problems/NAME.toml` (compiled into gradvi), the way
+/// `gradvi solve --problem NAME` serves it.
+fn builtin(name: &str, params: &[(String, f64)]) -> gradvi::Result<Problem> {
+    Ok(file::builtin(name, params)?.problem())
+}
+
 /// What the experiments accumulate besides their own tables.
 struct Logs<'a> {
     meshes: Vec<MeshRow>,
@@ -199,11 +205,12 @@ fn test1(cfg: &Config, logs: &mut Logs) -> gradvi::Result<()> {
     for m in gmsh_family(cfg, "test1")? {
         logs.meshes.push(mesh_row(&m));
         for &kind in TRIANGLE_SCHEMES {
-            let p = paper_test1();
+            let p = builtin("test1", &[])?;
             let row = with_solution(&m.mesh, kind, &p, |sol| {
                 let cons = sol.constraints.as_ref().expect("Test 1 has a barrier");
                 let sw = switch_point(cons, &sol.result.active, 0);
-                logs.iterations.extend(log_rows("test1", kind, &m.name, sol));
+                logs.iterations
+                    .extend(log_rows("test1", kind, &m.name, sol));
                 Ok(Test1Row {
                     scheme: kind.to_string(),
                     mesh: m.name.clone(),
@@ -241,7 +248,7 @@ fn test2(cfg: &Config, logs: &mut Logs) -> gradvi::Result<()> {
     for m in gmsh_family(cfg, "test2tri")? {
         cases.push(("triangles".into(), m, &[SchemeKind::Hmm, SchemeKind::P1]));
     }
-    let p = paper_test2();
+    let p = builtin("test2", &[])?;
     let p_low = paper_test2_tie(true);
     let exact = p.exact.as_ref().expect("Test 2 has an exact solution");
     for (fam, m, kinds) in &cases {
@@ -261,7 +268,8 @@ fn test2(cfg: &Config, logs: &mut Logs) -> gradvi::Result<()> {
                     let sw = switch_point(cons, &sol.result.active, 1);
                     let scheme = sol.system.scheme();
                     let e = relative_errors(scheme, sol.u(), &exact.u, &exact.grad);
-                    logs.iterations.extend(log_rows("test2", kind, &m.name, sol));
+                    logs.iterations
+                        .extend(log_rows("test2", kind, &m.name, sol));
                     Ok(Test2Row {
                         scheme: kind.to_string(),
                         family: fam.clone(),
@@ -303,10 +311,11 @@ fn test3(cfg: &Config, logs: &mut Logs) -> gradvi::Result<()> {
             let scheme = build(kind, &m.mesh)?;
             let symbolic = Arc::new(SymbolicSystem::new(scheme.as_ref(), Default::default())?);
             for c in TEST3_C {
-                let p = paper_test3(c);
+                let p = builtin("test3", &[("C".into(), c)])?;
                 let sol = solve_with_symbolic(symbolic.clone(), &p, &SolveOptions::default())?;
                 let cons = sol.constraints.as_ref().expect("Test 3 has a barrier");
-                logs.iterations.extend(log_rows(&p.name, kind, &m.name, &sol));
+                logs.iterations
+                    .extend(log_rows(&p.name, kind, &m.name, &sol));
                 let row = Test3Row {
                     scheme: kind.to_string(),
                     mesh: m.name.clone(),

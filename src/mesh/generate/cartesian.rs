@@ -14,7 +14,8 @@
 //! Counts: (nx+1)(ny+1) vertices, nx·ny cells, nx(ny+1) + ny(nx+1) edges, 2(nx+ny) boundary edges,
 //! h = √((x₁−x₀)²/nx² + (y₁−y₀)²/ny²).
 
-use super::check_cell_count;
+use super::{Counts, check_cell_count, check_memory};
+use crate::mesh::budget::memory_budget;
 use crate::error::{Error, Result};
 use crate::mesh::{Point, PolyMesh};
 
@@ -40,9 +41,20 @@ pub fn cartesian_rect(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<
             )));
         }
     }
-    check_cell_count(&format!("a {nx} × {ny} Cartesian mesh"), nx.checked_mul(ny))?;
+    let what = format!("a {nx} × {ny} Cartesian mesh");
+    check_cell_count(&what, nx.checked_mul(ny))?;
+    check_memory(&what, counts(nx, ny), memory_budget())?;
     let (vertices, cells) = cartesian_data(nx, ny, x, y);
     Ok(PolyMesh::from_cells(vertices, cells)?)
+}
+
+/// Cells, cell sides, vertices and edges of the nx × ny mesh.
+pub(crate) fn counts(nx: usize, ny: usize) -> Counts {
+    let (nx, ny) = (nx as u64, ny as u64);
+    let (nx1, ny1) = (nx.checked_add(1)?, ny.checked_add(1)?);
+    let cells = nx.checked_mul(ny)?;
+    let edges = nx.checked_mul(ny1)?.checked_add(ny.checked_mul(nx1)?)?;
+    Some([cells, cells.checked_mul(4)?, nx1.checked_mul(ny1)?, edges])
 }
 
 /// Coordinate `i` of `n` equal steps on `[a, b]`, exactly `b` for `i = n`.

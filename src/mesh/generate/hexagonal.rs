@@ -54,7 +54,8 @@
 //!
 //! Everything is index arithmetic: O(cells) time, no search.
 
-use super::check_cell_count;
+use super::{Counts, check_cell_count, check_memory};
+use crate::mesh::budget::memory_budget;
 use crate::error::{Error, Result};
 use crate::mesh::{Point, PolyMesh};
 use std::f64::consts::PI;
@@ -86,12 +87,27 @@ pub fn hexagonal_grid(n: usize) -> Result<PolyMesh> {
             "a hexagonal mesh needs a lattice of at least 1 × 1 squares (got n = 0)".into(),
         ));
     }
-    check_cell_count(
-        &format!("a hexagonal mesh on a {n} × {n} lattice"),
-        n.checked_add(1).and_then(|m| m.checked_mul(m)),
-    )?;
+    let what = format!("a hexagonal mesh on a {n} × {n} lattice");
+    check_cell_count(&what, n.checked_add(1).and_then(|m| m.checked_mul(m)))?;
+    check_memory(&what, counts(n), memory_budget())?;
     let (vertices, cells) = hexagonal_data(n);
     Ok(PolyMesh::from_cells(vertices, cells)?)
+}
+
+/// Cells, cell sides, vertices and edges of the construction on the n × n lattice:
+/// (n+1)², 6n² + 12n (twice the 3n² + 10n edges, less the 8n boundary edges), 2n² + 8n and
+/// 3n² + 10n.
+pub(crate) fn counts(n: usize) -> Counts {
+    let n = n as u64;
+    let n2 = n.checked_mul(n)?;
+    let n1 = n.checked_add(1)?;
+    let cells = n1.checked_mul(n1)?;
+    Some([
+        cells,
+        n2.checked_mul(6)?.checked_add(n.checked_mul(12)?)?,
+        n2.checked_mul(2)?.checked_add(n.checked_mul(8)?)?,
+        n2.checked_mul(3)?.checked_add(n.checked_mul(10)?)?,
+    ])
 }
 
 /// A side of the unit square, for the boundary numbering.

@@ -83,8 +83,26 @@ fn amplitude(i: usize) -> f64 {
 /// [`Error::InvalidData`](crate::Error::InvalidData).
 pub fn kershaw(level: usize) -> Result<PolyMesh> {
     super::Family::Kershaw.check_level(level)?;
+    super::check_memory(
+        &format!("the Kershaw mesh of level {level}"),
+        counts(level),
+        crate::mesh::budget::memory_budget(),
+    )?;
     let (vertices, cells) = kershaw_data(level);
     Ok(PolyMesh::from_cells(vertices, cells)?)
+}
+
+/// Cells, cell sides, vertices and edges of level k (n = 17k): n², 4n², (n+1)², 2n(n+1).
+pub(crate) fn counts(k: usize) -> super::Counts {
+    let n = (k as u64).checked_mul(COARSE_N as u64)?;
+    let n1 = n.checked_add(1)?;
+    let cells = n.checked_mul(n)?;
+    Some([
+        cells,
+        cells.checked_mul(4)?,
+        n1.checked_mul(n1)?,
+        n.checked_mul(n1)?.checked_mul(2)?,
+    ])
 }
 
 /// (1−s)·a + s·b, exactly a when a = b (keeps y = 1 exact on the top side).

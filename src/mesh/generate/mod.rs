@@ -9,7 +9,12 @@
 //! The maths of each construction is documented in its module ([`cartesian`](mod@cartesian),
 //! [`hexagonal`](mod@hexagonal), [`kershaw`](mod@kershaw)). All generators return a validated
 //! [`PolyMesh`] (counter-clockwise cells) and never panic: invalid arguments, and meshes larger
-//! than [`MAX_CELLS`], are reported as [`Error::InvalidData`].
+//! than [`MAX_CELLS`], are reported as [`Error::InvalidData`]. Before allocating anything, every
+//! generator estimates the memory it will need ([`budget::mesh_bytes`], from the exact numbers of
+//! cells, vertices and edges) and refuses, with [`MeshError::TooLarge`](crate::MeshError::TooLarge) giving the estimate, a
+//! mesh that does not fit in the memory budget ([`budget::memory_budget`]: 8 GiB, or the available
+//! memory if less); [`Family::generate_within`] takes a smaller budget, for callers that need
+//! memory for more than the mesh.
 //!
 //! [`Family`] names the three families for the command line (`"cartesian"`, `"hexagonal"`,
 //! `"kershaw"`), generates a level ([`Family::generate`]) and predicts its size without building
@@ -21,8 +26,10 @@
 //! | Hexagonal | `hexa1_k`: n = 10·2^(k−1) lattice steps per side, 20·2^(k−1) edges on x=0 | (n+1)² (121, 441, 1681, …) | 9 (6.6 M cells) |
 //! | Kershaw | `mesh4_1_k`: 17k × 17k quadrangles, 17k edges on x=0 | 289 k² | 240 (16.6 M cells) |
 //!
-//! The largest levels come from the cap [`MAX_CELLS`] = 2^24 cells (a mesh of that size already
-//! takes several gigabytes).
+//! The largest levels come from the cap [`MAX_CELLS`] = 2^24 cells; the memory budget may stop
+//! earlier. Estimated peaks ([`Family::memory_estimate`]): Cartesian level 9 (1 M cells) 0.5 GB,
+//! level 10 2.0 GB, level 11 8.2 GB; hexagonal level 8 (1.6 M cells) 1.2 GB, level 9 5.0 GB;
+//! Kershaw level 100 (2.9 M cells) 1.4 GB, level 240 8.1 GB (1 GB = 10⁹ bytes; 8 GiB = 8.6 GB).
 
 pub mod cartesian;
 pub mod hexagonal;
@@ -34,6 +41,7 @@ pub use kershaw::kershaw;
 
 use crate::error::{Error, Result};
 use crate::mesh::PolyMesh;
+use crate::mesh::budget::{self, check_budget, mesh_bytes};
 use std::fmt;
 use std::str::FromStr;
 
@@ -52,6 +60,17 @@ pub(crate) fn check_cell_count(what: &str, cells: Option<usize>) -> Result<()> {
             "{what} would have more cells than can be counted (limit {MAX_CELLS})"
         ))),
     }
+}
+
+/// Numbers of cells, cell sides (entries of the cell vertex lists), vertices and edges of a
+/// mesh, for its memory estimate; `None` if they overflow.
+pub(crate) type Counts = Option<[u64; 4]>;
+
+/// [`MeshError::TooLarge`](crate::MeshError::TooLarge) (as an [`Error`]) if a mesh with these counts would need more memory
+/// than `budget`.
+pub(crate) fn check_memory(what: &str, counts: Counts, budget: u64) -> Result<()> {
+    let bytes = counts.map_or(u64::MAX, |[c, s, v, e]| mesh_bytes(c, s, v, e));
+    check_budget(what, bytes, budget).map_err(Error::from)
 }
 
 /// A family of generated meshes, indexed by a refinement level ≥ 1 (see the module docs for
@@ -137,10 +156,42 @@ impl Family {
         Ok(())
     }
 
+    /// The counts of the mesh at `level` (cells, cell sides, vertices, edges).
+    fn counts(self, level: usize) -> Counts {
+        match self {
+            Family::Cartesian => {
+                let n = cartesian_level_n(level)?;
+                cartesian::counts(n, n)
+            }
+            Family::Hexagonal => hexagonal::counts(hexagonal::level_n(level)?),
+            Family::Kershaw => kershaw::counts(level),
+        }
+    }
+
+    /// Estimated peak memory, in bytes, of generating the mesh at `level`
+    /// ([`budget::mesh_bytes`]); `u64::MAX` when it cannot be counted.
+    pub fn memory_estimate(self, level: usize) -> u64 {
+        self.counts(level)
+            .map_or(u64::MAX, |[c, s, v, e]| mesh_bytes(c, s, v, e))
+    }
+
     /// Builds the mesh of this family at `level` (see the table in the module docs).
-    /// Level 0 and levels above [`Family::max_level`] give [`Error::InvalidData`].
+    /// Level 0 and levels above [`Family::max_level`] give [`Error::InvalidData`]; a mesh that
+    /// would not fit in [`budget::memory_budget`] gives [`MeshError::TooLarge`](crate::MeshError::TooLarge).
     pub fn generate(self, level: usize) -> Result<PolyMesh> {
+        self.generate_within(level, budget::memory_budget())
+    }
+
+    /// As [`Family::generate`], refusing ([`MeshError::TooLarge`](crate::MeshError::TooLarge), with the estimate) a mesh
+    /// whose [`Family::memory_estimate`] exceeds `budget` bytes, before allocating anything.
+    pub fn generate_within(self, level: usize, budget: u64) -> Result<PolyMesh> {
         self.check_level(level)?;
+        let what = format!(
+            "the {} mesh of level {level} ({} cells)",
+            self.name(),
+            self.cells_at_level(level)
+        );
+        check_memory(&what, self.counts(level), budget)?;
         match self {
             Family::Cartesian => {
                 let n = cartesian_level_n(level).expect("checked by check_level");
@@ -243,5 +294,46 @@ mod tests {
         assert!(Family::Cartesian.check_level(12).is_err());
         assert!(Family::Hexagonal.check_level(12).is_err());
         assert!(Family::Kershaw.check_level(13).is_ok());
+    }
+
+    #[test]
+    fn counts_match_the_meshes_and_budgets_refuse_up_front() {
+        let count = |m: &PolyMesh| {
+            let sides: usize = (0..m.n_cells()).map(|k| m.cell_vertices(k).len()).sum();
+            Some([m.n_cells(), sides, m.n_vertices(), m.n_edges()].map(|x| x as u64))
+        };
+        for f in Family::ALL {
+            for level in 1..=2 {
+                assert_eq!(f.counts(level), count(&f.generate(level).unwrap()), "{f} {level}");
+            }
+            let estimate = f.memory_estimate(2);
+            assert!(f.generate_within(2, estimate).is_ok());
+            match f.generate_within(2, estimate - 1) {
+                Err(Error::InvalidMesh(crate::MeshError::TooLarge { bytes, budget, .. })) => {
+                    assert_eq!((bytes, budget), (estimate, estimate - 1))
+                }
+                r => panic!("{f}: {r:?}"),
+            }
+            assert_eq!(f.memory_estimate(usize::MAX), u64::MAX);
+        }
+        for (nx, ny) in [(1, 1), (3, 5)] {
+            assert_eq!(cartesian::counts(nx, ny), count(&cartesian(nx, ny).unwrap()));
+        }
+        for n in 1..5 {
+            assert_eq!(hexagonal::counts(n), count(&hexagonal_grid(n).unwrap()));
+        }
+        let gb = |f: Family, l: usize| (f.memory_estimate(l) as f64 / 1e8).round() / 10.0;
+        assert_eq!(
+            [
+                gb(Family::Cartesian, 9),
+                gb(Family::Cartesian, 10),
+                gb(Family::Cartesian, 11),
+                gb(Family::Hexagonal, 8),
+                gb(Family::Hexagonal, 9),
+                gb(Family::Kershaw, 100),
+                gb(Family::Kershaw, 240)
+            ],
+            [0.5, 2.0, 8.2, 1.2, 5.0, 1.4, 8.1]
+        );
     }
 }

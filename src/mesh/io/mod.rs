@@ -12,6 +12,15 @@
 //! cannot be parsed, and [`Error::InvalidMesh`] when it parses but
 //! the mesh is geometrically or topologically invalid (the checks of
 //! [`PolyMesh::from_cells`]). Readers never panic on bad input.
+//!
+//! **Bounded reading.** A mesh file is text, so the readers stop reading at the first line that
+//! is not: a byte that is neither printable nor a blank (`\t`, `\n`, `\r`, form feed) such as
+//! the zeros of `/dev/zero`, invalid UTF-8, or a line longer than [`MAX_LINE_BYTES`]. The text
+//! before that line is parsed as usual, and its parse error, if any, is reported (a binary
+//! gmsh file is still reported as such); otherwise the non-text line is. No file larger than
+//! [`max_file_bytes`](crate::mesh::budget::max_file_bytes) (a quarter of the memory budget) is
+//! read: an endless stream of text is refused once that much has been read. Counts announced by
+//! headers never reserve more memory than the rest of the file could fill.
 
 pub mod msh;
 pub mod typ1;
@@ -51,18 +60,150 @@ pub fn read_mesh(path: impl AsRef<Path>) -> Result<PolyMesh> {
     }
 }
 
-/// Reads a whole file, mapping failures to [`Error::Io`].
-pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+/// The longest line a mesh file may have (1 MiB; the longest line of a valid file is a cell of
+/// [`MAX_CELL_VERTICES`](crate::mesh::MAX_CELL_VERTICES) vertices, about 10 KB).
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// The first line of a file that is not text: its 1-based number and what is wrong.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct NotText {
+    line: usize,
+    msg: String,
 }
 
-/// Capacity to reserve for `count` records announced by a file of `len` bytes: never more than
-/// the file could hold, so that an absurd count cannot exhaust memory before it is checked.
+/// The text of a mesh file: its bytes up to the first line that is not text (if any).
+pub(crate) struct Text {
+    pub(crate) bytes: Vec<u8>,
+    pub(crate) stop: Option<NotText>,
+}
+
+/// Whether `b` may appear in a text line: printable ASCII, a blank other than the newline, or a
+/// byte of a multi-byte UTF-8 character (checked per line).
+fn is_text_byte(b: u8) -> bool {
+    matches!(b, b' '..=b'~' | b'\t' | b'\r' | 0x0c | 0x80..=0xff)
+}
+
+/// Incremental check that a growing buffer is text, line by line.
+#[derive(Default)]
+struct TextScan {
+    /// Start of the current (unfinished) line.
+    line_start: usize,
+    /// Its 1-based number, minus one.
+    line: usize,
+    /// Bytes of the current line already checked.
+    pos: usize,
+    /// Whether the current line has non-ASCII bytes (checked as UTF-8 when it ends).
+    non_ascii: bool,
+}
+
+impl TextScan {
+    /// Checks `bytes[self.pos..]`, `end` telling whether the file ends there. At the first line
+    /// that is not text, returns the offset where that line starts and what is wrong.
+    fn scan(&mut self, bytes: &[u8], end: bool) -> Option<(usize, NotText)> {
+        let stop = |s: &Self, msg: String| Some((s.line_start, NotText { line: s.line + 1, msg }));
+        while self.pos < bytes.len() {
+            let rest = &bytes[self.pos..];
+            let run = rest.iter().position(|&b| b == b'\n').unwrap_or(rest.len());
+            let chunk = &rest[..run];
+            if let Some(i) = chunk.iter().position(|&b| !is_text_byte(b)) {
+                let msg = format!("byte 0x{:02x} is not text: is this a binary file?", chunk[i]);
+                return stop(self, msg);
+            }
+            self.non_ascii |= !chunk.is_ascii();
+            self.pos += run;
+            if self.pos - self.line_start > MAX_LINE_BYTES {
+                return stop(self, format!("a line longer than {MAX_LINE_BYTES} bytes: not a mesh file"));
+            }
+            if run == rest.len() {
+                break;
+            }
+            if let Some(err) = self.end_line(bytes) {
+                return Some(err);
+            }
+            self.pos += 1;
+            self.line += 1;
+            self.line_start = self.pos;
+        }
+        if end && self.line_start < bytes.len() {
+            return self.end_line(bytes);
+        }
+        None
+    }
+
+    /// The UTF-8 check of the line that ends at `self.pos`.
+    fn end_line(&mut self, bytes: &[u8]) -> Option<(usize, NotText)> {
+        let bad = self.non_ascii && std::str::from_utf8(&bytes[self.line_start..self.pos]).is_err();
+        self.non_ascii = false;
+        bad.then(|| {
+            let msg = "invalid text (not UTF-8): is this a binary file?".to_string();
+            (self.line_start, NotText { line: self.line + 1, msg })
+        })
+    }
+}
+
+/// The text part of `bytes` (the whole file): its prefix before the first line that is not text.
+pub(crate) fn text_prefix(bytes: &[u8]) -> (&[u8], Option<NotText>) {
+    match TextScan::default().scan(bytes, true) {
+        Some((cut, stop)) => (&bytes[..cut], Some(stop)),
+        None => (bytes, None),
+    }
+}
+
+/// Reads a mesh file up to its first line that is not text (see the module docs), at most
+/// [`max_file_bytes`](crate::mesh::budget::max_file_bytes) bytes; I/O failures are
+/// [`Error::Io`], a file too large [`Error::MeshIo`].
+pub(crate) fn read_text(path: &Path) -> Result<Text> {
+    use std::io::Read;
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let limit = usize::try_from(crate::mesh::budget::max_file_bytes()).unwrap_or(usize::MAX);
+    let too_large = |what: String| Error::MeshIo {
+        path: path.to_path_buf(),
+        line: 0,
+        msg: format!(
+            "{what}, more than the limit of {limit} bytes (a quarter of the memory budget)"
+        ),
+    };
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let known = file.metadata().ok().filter(|m| m.is_file()).map(|m| m.len());
+    if let Some(len) = known.filter(|&len| len > limit as u64) {
+        return Err(too_large(format!("the file has {len} bytes")));
+    }
+    let mut bytes = Vec::with_capacity(known.map_or(0, |l| l as usize).saturating_add(1));
+    let mut scan = TextScan::default();
+    const CHUNK: usize = 1 << 20;
+    loop {
+        let len = bytes.len();
+        bytes.resize(len + CHUNK, 0);
+        let n = match file.read(&mut bytes[len..]) {
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => 0,
+            Err(e) => return Err(io(e)),
+        };
+        bytes.truncate(len + n);
+        if bytes.len() > limit {
+            return Err(too_large(format!("more than {limit} bytes read")));
+        }
+        if let Some((cut, stop)) = scan.scan(&bytes, n == 0) {
+            bytes.truncate(cut);
+            return Ok(Text {
+                bytes,
+                stop: Some(stop),
+            });
+        }
+        if n == 0 {
+            return Ok(Text { bytes, stop: None });
+        }
+    }
+}
+
+/// Capacity to reserve for `count` records announced by a file of which `len` bytes remain:
+/// never more than those bytes could hold (a record takes at least 4 bytes, such as `"0 0\n"`),
+/// so that an absurd count cannot exhaust memory before it is checked.
 pub(crate) fn capacity(count: usize, len: usize) -> usize {
-    count.min(len / 2 + 1)
+    count.min(len / 4 + 1)
 }
 
 /// A whitespace tokenizer over the bytes of a text file that tracks 1-based line numbers.
@@ -78,18 +219,50 @@ pub(crate) struct Tokens<'a> {
     line: usize,
     /// Line of the last token returned (or of `pos` before any token).
     tok_line: usize,
+    /// Why the text ends early: reported when the parser reaches the end of `bytes`.
+    stop: Option<NotText>,
 }
 
 impl<'a> Tokens<'a> {
-    /// A tokenizer over `bytes`, reporting errors against `path`.
+    /// A tokenizer over the text part of `bytes` (see [`text_prefix`]), reporting errors
+    /// against `path`.
     pub(crate) fn new(path: &'a Path, bytes: &'a [u8]) -> Self {
+        let (bytes, stop) = text_prefix(bytes);
         Tokens {
             path,
             bytes,
             pos: 0,
             line: 1,
             tok_line: 1,
+            stop,
         }
+    }
+
+    /// A tokenizer over a file read by [`read_text`].
+    pub(crate) fn from_text(path: &'a Path, text: &'a Text) -> Self {
+        Tokens {
+            path,
+            bytes: &text.bytes,
+            pos: 0,
+            line: 1,
+            tok_line: 1,
+            stop: text.stop.clone(),
+        }
+    }
+
+    /// The end of the text: `Ok(None)` at the end of the file, the reason why the text stops
+    /// early otherwise.
+    fn end(&self) -> Result<Option<&'a str>> {
+        match &self.stop {
+            None => Ok(None),
+            Some(s) => Err(self.err_at(s.line, s.msg.clone())),
+        }
+    }
+
+    /// `Err` if the file stops being text somewhere after the part read so far (for readers
+    /// that skip the end of a file).
+    pub(crate) fn check_text(&self) -> Result<()> {
+        self.end().map(|_| ())
     }
 
     /// Number of bytes not yet read.
@@ -158,7 +331,7 @@ impl<'a> Tokens<'a> {
     /// The next token, or `None` at the end of the file.
     pub(crate) fn next_opt(&mut self) -> Result<Option<&'a str>> {
         match self.next_raw() {
-            None => Ok(None),
+            None => self.end(),
             Some(raw) => std::str::from_utf8(raw)
                 .map(Some)
                 .map_err(|_| self.err("invalid text (not ASCII/UTF-8): is this a binary file?")),
@@ -200,7 +373,7 @@ impl<'a> Tokens<'a> {
         self.skip_whitespace();
         if self.pos >= self.bytes.len() {
             self.tok_line = self.last_line();
-            return Ok(None);
+            return self.end().map(|_| None);
         }
         self.tok_line = self.line;
         let line = self.line;
@@ -447,6 +620,60 @@ mod tests {
                 run(&b);
             }
         }
+    }
+
+    /// The text ends at the first line with a byte that is not text, invalid UTF-8 or more
+    /// than [`MAX_LINE_BYTES`] bytes; the parser sees the lines before and then that error.
+    #[test]
+    fn text_stops_at_the_first_line_that_is_not_text() {
+        let p = Path::new("t.msh");
+        let mut long = b"a b\n".to_vec();
+        long.extend(std::iter::repeat_n(b'7', MAX_LINE_BYTES + 1));
+        let cases: [(&[u8], usize, &str); 5] = [
+            (b"a b\nc \x00 d\ne\n", 2, "byte 0x00 is not text"),
+            (b"a b\n\xc3\xa9\n\xff\xfe\n", 3, "not UTF-8"),
+            (b"a b\n\x1b[0m\n", 2, "byte 0x1b"),
+            (b"a b\nc\n\xe9", 3, "not UTF-8"),
+            (&long, 2, "longer than"),
+        ];
+        for (bytes, line, what) in cases {
+            let mut t = Tokens::new(p, bytes);
+            assert_eq!(t.next("x").unwrap(), "a");
+            let e = loop {
+                match t.next_opt() {
+                    Ok(Some(_)) => {}
+                    Ok(None) => panic!("no error for {what}"),
+                    Err(e) => break e.to_string(),
+                }
+            };
+            assert!(e.starts_with(&format!("t.msh:{line}: ")) && e.contains(what), "{e}");
+            let mut t = Tokens::new(p, bytes);
+            t.next_line().unwrap();
+            if line > 2 {
+                t.next_line().unwrap();
+            }
+            assert!(t.next_line().is_err() && t.check_text().is_err());
+        }
+        assert!(Tokens::new(p, "x \u{e9}\n".as_bytes()).check_text().is_ok());
+        // a parse error before the non-text line wins
+        let e = msh::parse_msh(p, b"$MeshFormat\n4.1 1 8\n\x01\x00\x00\x00\n").unwrap_err();
+        assert!(e.to_string().starts_with("t.msh:2: binary .msh"), "{e}");
+    }
+
+    /// An endless file of zeros is refused at once, without reading it to the end.
+    #[test]
+    fn endless_files_are_not_read_to_the_end() {
+        let zero = Path::new("/dev/zero");
+        if !zero.exists() {
+            return;
+        }
+        let t0 = std::time::Instant::now();
+        let text = read_text(zero).unwrap();
+        assert!(text.bytes.is_empty());
+        assert_eq!(text.stop.unwrap().line, 1);
+        let e = msh::parse_msh(zero, &[0; 4096]).unwrap_err();
+        assert_eq!(e.to_string(), "/dev/zero:1: byte 0x00 is not text: is this a binary file?");
+        assert!(t0.elapsed().as_secs_f64() < 5.0);
     }
 
     #[test]

@@ -14,7 +14,7 @@
 //!
 //! Binary files and the formats 4.0 and 3.0 are rejected with a clear message.
 
-use super::{Tokens, capacity, read_bytes};
+use super::{Tokens, capacity, read_text};
 use crate::error::Result;
 use crate::mesh::{NonBoundaryTag, Point, PolyMesh, drop_unused_vertices_flat};
 use std::collections::{BTreeSet, HashMap};
@@ -44,10 +44,10 @@ impl MshMesh {
 /// Reads a gmsh ASCII mesh (format 4.1 or 2.2); see the module docs.
 pub fn read_msh(path: impl AsRef<Path>) -> Result<MshMesh> {
     let path = path.as_ref();
-    let bytes = read_bytes(path)?;
-    let raw = parse_raw(path, &bytes)?;
+    let text = read_text(path)?;
+    let raw = parse_raw(Tokens::from_text(path, &text))?;
     // the text is no longer needed: free it before the mesh is built
-    drop(bytes);
+    drop(text);
     build(path, raw)
 }
 
@@ -192,12 +192,11 @@ fn nodes_of_type(ty: i32) -> Option<usize> {
 /// [`read_msh`] does, for tests that work in memory.
 #[cfg(test)]
 pub(crate) fn parse_msh(path: &Path, bytes: &[u8]) -> Result<MshMesh> {
-    build(path, parse_raw(path, bytes)?)
+    build(path, parse_raw(Tokens::new(path, bytes))?)
 }
 
 /// Reads the sections of a `.msh` file, checking its syntax; [`build`] makes the mesh.
-fn parse_raw(path: &Path, bytes: &[u8]) -> Result<Raw> {
-    let mut t = Tokens::new(path, bytes);
+fn parse_raw(mut t: Tokens) -> Result<Raw> {
     match t.next_opt()? {
         Some("$MeshFormat") => {}
         Some(tok) => {

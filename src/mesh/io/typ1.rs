@@ -22,7 +22,7 @@
 //! the mesh: every listed edge must be an edge of the mesh between the cells it names, and every
 //! edge (boundary edge) of the mesh must be listed exactly once.
 
-use super::{Tokens, capacity, read_bytes};
+use super::{Tokens, capacity, read_text};
 use crate::error::Result;
 use crate::mesh::{NO_CELL, Point, PolyMesh};
 use std::path::Path;
@@ -31,8 +31,8 @@ use std::path::Path;
 /// (see the module docs).
 pub fn read_typ1(path: impl AsRef<Path>) -> Result<PolyMesh> {
     let path = path.as_ref();
-    let bytes = read_bytes(path)?;
-    parse_typ1(path, &bytes)
+    let text = read_text(path)?;
+    parse_tokens(path, Tokens::from_text(path, &text))
 }
 
 /// One record of the `all edges` list (0-based; `l == NO_CELL` on the boundary).
@@ -46,9 +46,15 @@ struct EdgeRecord {
 
 const NONE: usize = usize::MAX;
 
-/// Parses the contents of a `.typ1` file (`path` is only used in error messages).
+/// Parses the contents of a `.typ1` file (`path` is only used in error messages); what the
+/// reader does, for tests that work in memory.
+#[cfg(test)]
 pub(crate) fn parse_typ1(path: &Path, bytes: &[u8]) -> Result<PolyMesh> {
-    let mut t = Tokens::new(path, bytes);
+    parse_tokens(path, Tokens::new(path, bytes))
+}
+
+/// Parses a `.typ1` file from its tokens.
+fn parse_tokens(path: &Path, mut t: Tokens) -> Result<PolyMesh> {
     t.expect_header(&["vertices"])?;
     let nv = t.count("the number of vertices")?;
     let mut vertices: Vec<Point> = Vec::with_capacity(capacity(nv, t.remaining()));

@@ -16,9 +16,9 @@
 //! Edges are derived from consecutive vertices; hanging nodes must be listed as cell vertices
 //! (180° angles), as in every typ2 file of the FVCA5 benchmark.
 
-use super::{Tokens, capacity, read_bytes};
+use super::{Tokens, capacity, read_text};
 use crate::error::{Error, Result};
-use crate::mesh::{Point, PolyMesh};
+use crate::mesh::{MAX_CELL_VERTICES, Point, PolyMesh};
 use std::io::Write;
 use std::path::Path;
 
@@ -27,17 +27,24 @@ use std::path::Path;
 /// error, as it usually means a wrong count.
 pub fn read_typ2(path: impl AsRef<Path>) -> Result<PolyMesh> {
     let path = path.as_ref();
-    let bytes = read_bytes(path)?;
-    parse_typ2(path, &bytes)
+    let text = read_text(path)?;
+    parse_tokens(path, Tokens::from_text(path, &text))
 }
 
-/// Parses the contents of a `.typ2` file (`path` is only used in error messages).
+/// Parses the contents of a `.typ2` file (`path` is only used in error messages); what the
+/// reader does, for tests that work in memory.
+#[cfg(test)]
 pub(crate) fn parse_typ2(path: &Path, bytes: &[u8]) -> Result<PolyMesh> {
-    let mut t = Tokens::new(path, bytes);
+    parse_tokens(path, Tokens::new(path, bytes))
+}
+
+/// Parses a `.typ2` file from its tokens.
+fn parse_tokens(path: &Path, mut t: Tokens) -> Result<PolyMesh> {
     let (vertices, cells) = parse_records(&mut t)?;
     match t.next_line()? {
         None => {}
-        Some((_, text)) if super::normalize_header(text) == "centers" => {}
+        // the block is not read, but it must be text like the rest of the file
+        Some((_, text)) if super::normalize_header(text) == "centers" => t.check_text()?,
         Some((line, text)) => {
             return Err(t.err_at(
                 line,
@@ -66,11 +73,17 @@ fn parse_records(t: &mut Tokens) -> Result<(Vec<Point>, Vec<Vec<usize>>)> {
     }
     t.expect_header(&["cells", "control volumes"])?;
     let nc = t.count("the number of cells")?;
-    let mut cells = Vec::with_capacity(capacity(nc, t.remaining()));
+    // a cell record takes at least 8 bytes ("3 1 2 3\n")
+    let mut cells = Vec::with_capacity(capacity(nc, t.remaining() / 2));
     for k in 1..=nc {
         let n = t.count(&format!("the number of vertices of cell {k}"))?;
         if n < 3 {
             return Err(t.err(format!("cell {k} has {n} vertices, at least 3 are needed")));
+        }
+        if n > MAX_CELL_VERTICES {
+            return Err(t.err(format!(
+                "cell {k} has {n} vertices, more than the limit of {MAX_CELL_VERTICES}"
+            )));
         }
         let mut c = Vec::with_capacity(capacity(n, t.remaining()));
         for _ in 0..n {
