@@ -14,8 +14,10 @@ use gradvi::solver::{ActiveSetOptions, Solution, SolveOptions, WarmStart, solve_
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
-#[command(after_help = "A problem of your own is a TOML file: see \"Your own problem\" in README.md \
-and the format in problems/README.md (examples: problems/*.toml).")]
+#[command(
+    after_help = "A problem of your own is a TOML file: see \"Your own problem\" in README.md \
+and the format in problems/README.md (examples: problems/*.toml)."
+)]
 pub struct SolveArgs {
     /// A problem file (TOML; format: problems/README.md). Give this or --problem.
     #[arg(conflicts_with = "problem", required_unless_present = "problem")]

@@ -175,4 +175,3 @@ mod tests {
         assert!((h - (1.25f64).sqrt()).abs() < 1e-15);
     }
 }
-
