@@ -17,6 +17,29 @@ import math
 import sys
 
 
+def physical_tags(lines, i, count):
+    """{entity tag: physical tags} of the `count` curve or surface lines of $Entities from line i."""
+    out = {}
+    for w in (lines[i + j].split() for j in range(count)):
+        nphys = int(w[7])
+        out[int(w[0])] = [int(t) for t in w[8:8 + nphys]]
+    return out
+
+
+def blocks(lines, i, lines_per_entry):
+    """The entity blocks of the $Nodes or $Elements section whose header is line i: a list of
+    (block header as integers, line of its first entry), and the line after the last block. A
+    block of n entries spans lines_per_entry * n lines after its header."""
+    nblocks = int(lines[i + 1].split()[0])
+    i += 2
+    out = []
+    for _ in range(nblocks):
+        head = list(map(int, lines[i].split()))
+        out.append((head, i + 1))
+        i += 1 + lines_per_entry * head[3]
+    return out, i
+
+
 def read_msh41(path):
     with open(path) as fh:
         lines = fh.read().split("\n")
@@ -36,41 +59,22 @@ def read_msh41(path):
             i += 2
         elif s == "$Entities":
             np_, nc, ns, nv = map(int, lines[i + 1].split())
-            i += 2
-            i += np_
-            for _ in range(nc):
-                w = lines[i].split()
-                tag = int(w[0])
-                nphys = int(w[7])
-                curve_phys[tag] = [int(t) for t in w[8:8 + nphys]]
-                i += 1
-            for _ in range(ns):
-                w = lines[i].split()
-                tag = int(w[0])
-                nphys = int(w[7])
-                surf_phys[tag] = [int(t) for t in w[8:8 + nphys]]
-                i += 1
-            i += nv
+            i += 2 + np_
+            curve_phys = physical_tags(lines, i, nc)
+            surf_phys = physical_tags(lines, i + nc, ns)
+            i += nc + ns + nv
         elif s == "$Nodes":
-            nblocks = int(lines[i + 1].split()[0])
-            i += 2
-            for _ in range(nblocks):
-                _dim, _tag, _param, nb = map(int, lines[i].split())
-                i += 1
-                tags = [int(lines[i + k]) for k in range(nb)]
-                i += nb
+            # a block: the node tags, then their coordinates
+            node_blocks, i = blocks(lines, i, 2)
+            for (_dim, _tag, _param, nb), j in node_blocks:
                 for k in range(nb):
-                    x, y, _z = map(float, lines[i + k].split())
-                    nodes[tags[k]] = (x, y)
-                i += nb
+                    x, y, _z = map(float, lines[j + nb + k].split())
+                    nodes[int(lines[j + k])] = (x, y)
         elif s == "$Elements":
-            nblocks = int(lines[i + 1].split()[0])
-            i += 2
-            for _ in range(nblocks):
-                dim, etag, etype, nb = map(int, lines[i].split())
-                i += 1
+            element_blocks, i = blocks(lines, i, 1)
+            for (_dim, etag, etype, nb), j in element_blocks:
                 for k in range(nb):
-                    w = list(map(int, lines[i + k].split()))
+                    w = list(map(int, lines[j + k].split()))
                     if etype == 1:
                         lines_el.append((etag, w[1], w[2]))
                     elif etype == 2:
@@ -79,7 +83,6 @@ def read_msh41(path):
                         pass
                     else:
                         raise ValueError(f"{path}: unexpected element type {etype}")
-                i += nb
         else:
             i += 1
     return curve_phys, surf_phys, nodes, lines_el, tris

@@ -3,11 +3,13 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-fn gradvi(args: &[&str]) -> (bool, String, String) {
+/// Runs `gradvi args` in the repository with `RUST_BACKTRACE=backtrace`: (success, stdout,
+/// stderr).
+fn gradvi_with(args: &[&str], backtrace: &str) -> (bool, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_gradvi"))
         .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env("RUST_BACKTRACE", "0")
+        .env("RUST_BACKTRACE", backtrace)
         .output()
         .expect("run gradvi");
     (
@@ -15,6 +17,15 @@ fn gradvi(args: &[&str]) -> (bool, String, String) {
         String::from_utf8_lossy(&out.stdout).into_owned(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
+}
+
+fn gradvi(args: &[&str]) -> (bool, String, String) {
+    gradvi_with(args, "0")
+}
+
+/// The words of a command line (no quoting: for arguments without spaces).
+fn words(line: &str) -> Vec<&str> {
+    line.split_whitespace().collect()
 }
 
 fn tmp(name: &str) -> PathBuf {
@@ -55,74 +66,18 @@ fn bad_meshes_give_a_nonzero_exit_naming_the_file() {
 fn bad_arguments_give_a_nonzero_exit() {
     let out = tmp("x.typ2");
     let out = out.to_str().unwrap();
+    let solve = "solve --problem test3 --generate cartesian --level";
     for args in [
-        vec!["mesh", "generate", "hexagonal", "--level", "0", "-o", out],
-        vec!["mesh", "generate", "octagonal", "--level", "1", "-o", out],
-        vec![
-            "solve",
-            "--problem",
-            "nope",
-            "--generate",
-            "cartesian",
-            "--level",
-            "1",
-        ],
-        vec![
-            "solve",
-            "--problem",
-            "test3",
-            "--generate",
-            "cartesian",
-            "--level",
-            "1",
-            "--warm-start",
-            "lukewarm",
-        ],
-        vec![
-            "solve",
-            "--problem",
-            "test3",
-            "--param",
-            "D=1",
-            "--generate",
-            "cartesian",
-            "--level",
-            "1",
-        ],
-        vec![
-            "solve",
-            "--problem",
-            "test3",
-            "--generate",
-            "hexagonal",
-            "--level",
-            "1",
-            "--scheme",
-            "p1",
-        ],
-        vec![
-            "solve",
-            "--problem",
-            "test3",
-            "--generate",
-            "cartesian",
-            "--level",
-            "2",
-            "--max-solves",
-            "1",
-        ],
-        vec![
-            "solve",
-            "--problem",
-            "test3",
-            "--generate",
-            "cartesian",
-            "--level",
-            "1",
-            "--c",
-            "-1",
-        ],
+        format!("mesh generate hexagonal --level 0 -o {out}"),
+        format!("mesh generate octagonal --level 1 -o {out}"),
+        "solve --problem nope --generate cartesian --level 1".into(),
+        format!("{solve} 1 --warm-start lukewarm"),
+        format!("{solve} 1 --param D=1"),
+        "solve --problem test3 --generate hexagonal --level 1 --scheme p1".into(),
+        format!("{solve} 2 --max-solves 1"),
+        format!("{solve} 1 --c -1"),
     ] {
+        let args = words(&args);
         let (ok, _, err) = gradvi(&args);
         assert!(!ok, "{args:?} succeeded");
         assert!(
@@ -136,21 +91,12 @@ fn bad_arguments_give_a_nonzero_exit() {
 #[test]
 fn solve_prints_niter_and_writes_vtu_and_json() {
     let (vtu, json) = (tmp("u.vtu"), tmp("u.json"));
-    let (ok, out, err) = gradvi(&[
-        "solve",
-        "--problem",
-        "test3",
-        "--param",
-        "C=-20",
-        "--mesh",
-        "meshes/test3_1.msh",
-        "--scheme",
-        "hmm",
-        "--vtu",
-        vtu.to_str().unwrap(),
-        "--json",
-        json.to_str().unwrap(),
-    ]);
+    let (ok, out, err) = gradvi(&words(&format!(
+        "solve --problem test3 --param C=-20 --mesh meshes/test3_1.msh --scheme hmm --vtu {} \
+         --json {}",
+        vtu.display(),
+        json.display()
+    )));
     assert!(ok, "{err}");
     assert!(out.contains("NITER           5"), "{out}");
     // progress: one stderr line per solve, as it happens
@@ -165,15 +111,9 @@ fn solve_prints_niter_and_writes_vtu_and_json() {
         assert!(v.contains(&format!("Name=\"{name}\"")), "VTU lacks {name}");
     }
     // a problem with an exact solution prints its errors
-    let (ok, out, _) = gradvi(&[
-        "solve",
-        "--problem",
-        "fvca5-1.1",
-        "--generate",
-        "kershaw",
-        "--level",
-        "1",
-    ]);
+    let (ok, out, _) = gradvi(&words(
+        "solve --problem fvca5-1.1 --generate kershaw --level 1",
+    ));
     assert!(ok && out.contains("errors"), "{out}");
     std::fs::remove_file(vtu).ok();
     std::fs::remove_file(json).ok();
@@ -182,19 +122,11 @@ fn solve_prints_niter_and_writes_vtu_and_json() {
 #[test]
 fn solve_with_a_nested_warm_start_reports_it() {
     let json = tmp("nested.json");
-    let (ok, out, err) = gradvi(&[
-        "solve",
-        "--problem",
-        "test3",
-        "--param",
-        "C=-20",
-        "--mesh",
-        "meshes/test3_4.msh",
-        "--warm-start",
-        "nested",
-        "--json",
-        json.to_str().unwrap(),
-    ]);
+    let (ok, out, err) = gradvi(&words(&format!(
+        "solve --problem test3 --param C=-20 --mesh meshes/test3_4.msh --warm-start nested \
+         --json {}",
+        json.display()
+    )));
     assert!(ok, "{err}");
     assert!(out.contains("warm start      nested"), "{out}");
     let j: serde_json::Value =
@@ -245,28 +177,16 @@ fn absurd_or_conflicting_options_are_refused_before_any_work() {
             .starts_with("$MeshFormat")
     );
     // --level is only meaningful with --generate
-    let (ok, _, err) = gradvi(&[
-        "solve",
-        "--problem",
-        "test3",
-        "--mesh",
-        mesh,
-        "--level",
-        "3",
-    ]);
+    let (ok, _, err) = gradvi(&words(&format!(
+        "solve --problem test3 --mesh {mesh} --level 3"
+    )));
     assert!(!ok && err.contains("--generate"), "{err}");
 }
 
 #[test]
 fn a_user_error_is_one_line_whatever_rust_backtrace_says() {
-    let out = Command::new(env!("CARGO_BIN_EXE_gradvi"))
-        .args(["mesh", "info", "no/such/file.msh"])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env("RUST_BACKTRACE", "1")
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success());
+    let (ok, _, err) = gradvi_with(&["mesh", "info", "no/such/file.msh"], "1");
+    assert!(!ok);
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(
         err.starts_with("error: ") && err.contains("no/such/file.msh"),
@@ -276,31 +196,12 @@ fn a_user_error_is_one_line_whatever_rust_backtrace_says() {
 
 #[test]
 fn problem_names_keep_the_sign_of_their_parameters() {
-    let (ok, out, err) = gradvi(&[
-        "solve",
-        "--problem",
-        "test3",
-        "--param",
-        "C=5",
-        "--generate",
-        "cartesian",
-        "--level",
-        "1",
-    ]);
     // C = 5 pushes u up, away from the lower barrier: a valid problem
-    assert!(ok, "{err}");
-    assert!(out.contains("test3_C5\n"), "{out}");
-    let (ok, out, err) = gradvi(&[
-        "solve",
-        "--problem",
-        "test3",
-        "--param",
-        "C=-5",
-        "--generate",
-        "cartesian",
-        "--level",
-        "1",
-    ]);
-    assert!(ok, "{err}");
-    assert!(out.contains("test3_C-5\n"), "{out}");
+    for (c, name) in [("5", "test3_C5\n"), ("-5", "test3_C-5\n")] {
+        let (ok, out, err) = gradvi(&words(&format!(
+            "solve --problem test3 --param C={c} --generate cartesian --level 1"
+        )));
+        assert!(ok, "{err}");
+        assert!(out.contains(name), "{out}");
+    }
 }

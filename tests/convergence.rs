@@ -2,39 +2,13 @@
 
 mod common;
 
-use common::{fvca5_dir, triangle_grid};
+use common::{ANISOTROPIC as A, affine_problem, fvca5_dir, triangle_grid};
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{cartesian, hexagonal, kershaw};
 use gradvi::post::{fitted_slope, relative_errors};
 use gradvi::problem::{BoundaryKind, Problem, fvca5_test11, paper_test2};
 use gradvi::scheme::{GradientDiscretisation, Hmm, P1};
 use gradvi::solver::{SolveOptions, solve_problem};
-
-const A: [[f64; 2]; 2] = [[1.5, 0.5], [0.5, 1.5]];
-
-/// ū = 1 + 2x − 3y (f = 0) with A anisotropic: Dirichlet on the left and bottom sides, Neumann
-/// flux A∇ū·n elsewhere.
-fn affine_problem() -> Problem {
-    let g = [2.0, -3.0];
-    let flux = [
-        A[0][0] * g[0] + A[0][1] * g[1],
-        A[1][0] * g[0] + A[1][1] * g[1],
-    ];
-    Problem::new("affine", Box::new(|_| 0.0))
-        .with_diffusion(Box::new(|_| A))
-        .with_boundary(|x, _| {
-            if x[0] < 1e-12 || x[1] < 1e-12 {
-                BoundaryKind::Dirichlet
-            } else {
-                BoundaryKind::Neumann
-            }
-        })
-        .with_dirichlet(Box::new(move |x| 1.0 + g[0] * x[0] + g[1] * x[1]))
-        .with_neumann(Box::new(move |x| {
-            // outward normal: +x on x = 1, +y on y = 1
-            if x[0] > 1.0 - 1e-12 { flux[0] } else { flux[1] }
-        }))
-}
 
 fn check_patch(scheme: &dyn GradientDiscretisation, what: &str) {
     let sol = solve_problem(scheme, &affine_problem(), &SolveOptions::default()).unwrap();

@@ -3,6 +3,9 @@
 //! assertion that can fail; every bad file of `tests/data/problems/` gives its typed error,
 //! naming the place.
 
+mod common;
+
+use common::assert_close;
 use gradvi::Error;
 use gradvi::error::ProblemFileErrorKind as K;
 use gradvi::mesh::PolyMesh;
@@ -34,18 +37,8 @@ fn same_solution(scheme: &dyn GradientDiscretisation, builtin: &Problem, from_fi
     let a = solve(scheme, builtin);
     let b = solve(scheme, from_file);
     assert_eq!(a.niter(), b.niter(), "{}: NITER", builtin.name);
-    let scale = a.u().iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let diff = a
-        .u()
-        .iter()
-        .zip(b.u())
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-    assert!(
-        diff <= 1e-12 * scale,
-        "{} with {}: max difference {diff:e} (scale {scale:e})",
-        builtin.name,
-        scheme.name()
-    );
+    let what = format!("{} with {}", builtin.name, scheme.name());
+    assert_close(a.u(), b.u(), 1e-12, &what);
     assert_eq!(builtin.name, from_file.name);
 }
 
@@ -151,55 +144,71 @@ fn builtin_files_give_the_same_data_bits() {
     }
 }
 
-/// Contradictory or incomplete sections, found when loading.
+/// Contradictory or incomplete sections, found when loading: problem files, each followed by
+/// a line `#> Kind: words the message contains`.
+const SCHEMA_MISTAKES: &str = r#"
+[obstacle]
+side = "lower"
+barrier = 0
+[signorini]
+side = "upper"
+barrier = 0
+#> Schema: one barrier
+[dirichlet]
+[neumann]
+#> Schema: only one section may take the rest
+[[source.piece]]
+f = 1
+[[source.piece]]
+where = "x < 1"
+f = 2
+#> Schema: only the last piece
+[source]
+f = 1
+piece = [{ f = 2 }]
+#> Schema: either 'f' or
+[diffusion]
+A = [[1, 0], [0, 1], [0, 0]]
+#> Schema: invalid length
+[obstacle]
+side = "above"
+barrier = 0
+#> Schema: unknown variant
+[mesh]
+generate = "cartesian"
+#> Mesh: level
+[mesh]
+generate = "voronoi"
+level = 1
+#> Mesh: voronoi
+name = "t{x}"
+#> Expression: depends on x or y
+"#;
+
 #[test]
 fn schema_mistakes_are_reported() {
-    let cases: [(&str, K, &str); 9] = [
-        (
-            "[obstacle]\nside = \"lower\"\nbarrier = 0\n[signorini]\nside = \"upper\"\nbarrier = 0",
-            K::Schema,
-            "one barrier",
-        ),
-        (
-            "[dirichlet]\n[neumann]",
-            K::Schema,
-            "only one section may take the rest",
-        ),
-        (
-            "[[source.piece]]\nf = 1\n[[source.piece]]\nwhere = \"x < 1\"\nf = 2",
-            K::Schema,
-            "only the last piece",
-        ),
-        (
-            "[source]\nf = 1\npiece = [{ f = 2 }]",
-            K::Schema,
-            "either 'f' or",
-        ),
-        (
-            "[diffusion]\nA = [[1, 0], [0, 1], [0, 0]]",
-            K::Schema,
-            "invalid length",
-        ),
-        (
-            "[obstacle]\nside = \"above\"\nbarrier = 0",
-            K::Schema,
-            "unknown variant",
-        ),
-        ("[mesh]\ngenerate = \"cartesian\"", K::Mesh, "level"),
-        (
-            "[mesh]\ngenerate = \"voronoi\"\nlevel = 1",
-            K::Mesh,
-            "voronoi",
-        ),
-        ("name = \"t{x}\"", K::Expression, "depends on x or y"),
-    ];
-    for (text, kind, words) in cases {
-        let e = file::parse(text, Path::new("inline.toml"), &[]).unwrap_err();
+    let mut text = String::new();
+    for line in SCHEMA_MISTAKES.lines().skip(1) {
+        let Some(expected) = line.strip_prefix("#> ") else {
+            text.push_str(line);
+            text.push('\n');
+            continue;
+        };
+        let (kind, words) = expected.split_once(": ").unwrap();
+        let e = file::parse(&text, Path::new("inline.toml"), &[]).unwrap_err();
+        let Error::ProblemFile { kind: k, msg, .. } = &e else {
+            panic!("{text:?}: not a problem-file error: {e}");
+        };
         assert!(
-            matches!(&e, Error::ProblemFile { kind: k, msg, .. } if *k == kind && msg.contains(words)),
+            format!("{k:?}") == kind && msg.contains(words),
             "{text:?}: {e}"
         );
+        text.clear();
     }
+    assert!(
+        text.is_empty(),
+        "a case without its expected error: {text:?}"
+    );
     // a scheme and a mesh file resolved against the problem file's folder
     let pf = file::parse(
         "scheme = \"p1\"\n[mesh]\nfile = \"m.msh\"",
@@ -239,116 +248,24 @@ fn first_error(name: &str) -> Error {
 }
 
 /// (file, kind, line, column, words the message must contain).
+#[rustfmt::skip]
 const BAD: [(&str, K, usize, usize, &[&str]); 16] = [
-    ("syntax.toml", K::Syntax, 5, 9, &["string"]),
-    (
-        "unknown_key.toml",
-        K::UnknownKey,
-        3,
-        1,
-        &["unknown field `g`", "`f`"],
-    ),
-    (
-        "unknown_section.toml",
-        K::UnknownKey,
-        2,
-        2,
-        &["`sorce`", "`source`"],
-    ),
-    (
-        "bad_expression.toml",
-        K::Expression,
-        3,
-        21,
-        &["source.f", "character 16", "')'"],
-    ),
-    (
-        "unknown_variable.toml",
-        K::Expression,
-        7,
-        34,
-        &["obstacle.barrier", "character 23", "unknown variable 'z'"],
-    ),
-    (
-        "unknown_function.toml",
-        K::Expression,
-        3,
-        6,
-        &["source.f", "character 1", "unknown function 'sine'"],
-    ),
-    (
-        "type_error.toml",
-        K::Expression,
-        3,
-        10,
-        &["dirichlet.where", "expected a condition"],
-    ),
-    (
-        "cyclic_definitions.toml",
-        K::Parameter,
-        3,
-        5,
-        &["a, b", "cycle"],
-    ),
-    (
-        "cell_tags.toml",
-        K::Mesh,
-        3,
-        8,
-        &["diffusion.piece[0].tags", "cell tags", "where"],
-    ),
-    (
-        "tag_absent.toml",
-        K::Tag,
-        6,
-        8,
-        &["dirichlet.tags", "tag 7", "1, 2, 3"],
-    ),
-    (
-        "uncovered_edge.toml",
-        K::UncoveredEdge,
-        0,
-        0,
-        &["boundary edge 8", "(1, 0.5)", "tag 2"],
-    ),
-    (
-        "overlapping_rules.toml",
-        K::OverlappingRules,
-        0,
-        0,
-        &["[dirichlet] and [signorini]", "edge 0", "(0.25, 0)"],
-    ),
-    (
-        "not_spd.toml",
-        K::NotSpd,
-        6,
-        5,
-        &[
-            "diffusion.A",
-            "cell 1",
-            "x_K = (0.6666666666666666, 0.16666666666666666)",
-        ],
-    ),
-    (
-        "nan_value.toml",
-        K::NonFinite,
-        6,
-        5,
-        &[
-            "source.f",
-            "NaN",
-            "cell 0",
-            "(0.3333333333333333, 0.16666666666666666)",
-        ],
-    ),
-    (
-        "infinite_barrier.toml",
-        K::NonFinite,
-        7,
-        11,
-        &["obstacle.barrier", "-inf", "(0, 0), vertex 0"],
-    ),
-    ("infeasible.toml", K::Syntax, 0, 0, &[]),
+    ("syntax.toml",             K::Syntax,           5, 9,  &["string"]),
+    ("unknown_key.toml",        K::UnknownKey,       3, 1,  &["unknown field `g`", "`f`"]),
+    ("unknown_section.toml",    K::UnknownKey,       2, 2,  &["`sorce`", "`source`"]),
+    ("bad_expression.toml",     K::Expression,       3, 21, &["source.f", "character 16", "')'"]),
+    ("unknown_variable.toml",   K::Expression,       7, 34, &["obstacle.barrier", "character 23", "unknown variable 'z'"]),
+    ("unknown_function.toml",   K::Expression,       3, 6,  &["source.f", "character 1", "unknown function 'sine'"]),
+    ("type_error.toml",         K::Expression,       3, 10, &["dirichlet.where", "expected a condition"]),
+    ("cyclic_definitions.toml", K::Parameter,        3, 5,  &["a, b", "cycle"]),
+    ("cell_tags.toml",          K::Mesh,             3, 8,  &["diffusion.piece[0].tags", "cell tags", "where"]),
+    ("tag_absent.toml",         K::Tag,              6, 8,  &["dirichlet.tags", "tag 7", "1, 2, 3"]),
+    ("uncovered_edge.toml",     K::UncoveredEdge,    0, 0,  &["boundary edge 8", "(1, 0.5)", "tag 2"]),
+    ("overlapping_rules.toml",  K::OverlappingRules, 0, 0,  &["[dirichlet] and [signorini]", "edge 0", "(0.25, 0)"]),
+    ("not_spd.toml",            K::NotSpd,           6, 5,  &["diffusion.A", "cell 1", "x_K = (0.6666666666666666, 0.16666666666666666)"]),
+    ("nan_value.toml",          K::NonFinite,        6, 5,  &["source.f", "NaN", "cell 0", "(0.3333333333333333, 0.16666666666666666)"]),
+    ("infinite_barrier.toml",   K::NonFinite,        7, 11, &["obstacle.barrier", "-inf", "(0, 0), vertex 0"]),
+    ("infeasible.toml",         K::Syntax,           0, 0,  &[]),
 ];
 
 #[test]

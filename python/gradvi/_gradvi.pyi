@@ -68,13 +68,7 @@ class _Mesh:
     @staticmethod
     def cartesian(nx: int, ny: int, domain: Sequence[float]) -> _Mesh: ...
     def with_edge_tags(self, tags: npt.NDArray[np.int32]) -> _Mesh: ...
-    n_vertices: int
-    n_cells: int
-    n_edges: int
-    h: float
-    physical_names: List[Tuple[int, int, str]]
-    is_triangular: bool
-    bounding_box: Tuple[float, float, float, float]
+    def scalars(self) -> Dict[str, Any]: ...
     def same_as(self, other: _Mesh) -> bool: ...
     def geometry(self) -> Dict[str, np.ndarray]: ...
     def evaluation_points(self, scheme: str) -> Dict[str, npt.NDArray[np.float64]]: ...
@@ -104,18 +98,19 @@ class _Problem:
     has_exact: bool
     def build_mesh(self) -> Optional[_Mesh]: ...
 
+# every option is given (their defaults are those of gradvi.solve)
 def solve(
     mesh: _Mesh,
     problem: _Problem,
-    scheme: str = "hmm",
-    alpha: float = 1.0,
-    c: float = 1.0,
-    max_solves: int = 500,
-    tol: float = 1e-10,
-    fallback: bool = False,
-    warm_start: str = "cold",
-    initial_active: Optional[npt.NDArray[np.bool_]] = None,
-    keep_iterates: bool = False,
-    ordering: str = "amd",
-    factor_threads: str = "sequential",
+    scheme: str,
+    alpha: float,
+    c: float,
+    max_solves: int,
+    tol: float,
+    fallback: bool,
+    warm_start: str,
+    initial_active: Optional[npt.NDArray[np.bool_]],
+    keep_iterates: bool,
+    ordering: str,
+    factor_threads: str,
 ) -> Dict[str, Any]: ...

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from typing import TYPE_CHECKING, Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, Any, Callable, Dict, Generic, List, Mapping, Optional, Sequence, Tuple, TypeVar, Union, overload
 
 import numpy as np
 
@@ -82,6 +82,33 @@ def _tag_rows(boundary_tags: Any) -> Optional[np.ndarray]:
     return np.ascontiguousarray(t)
 
 
+T = TypeVar("T")
+
+
+class _Scalar(Generic[T]):
+    """A read-only scalar attribute of :class:`Mesh`: the entry of the same name of the native
+    mesh's scalars, converted by ``convert``."""
+
+    def __init__(self, convert: Callable[[Any], T], doc: str) -> None:
+        self._convert = convert
+        self.__doc__ = doc
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self._name = name
+
+    @overload
+    def __get__(self, mesh: None, owner: Optional[type] = None) -> "_Scalar[T]": ...
+    @overload
+    def __get__(self, mesh: "Mesh", owner: Optional[type] = None) -> T: ...
+    def __get__(self, mesh: Optional["Mesh"], owner: Optional[type] = None) -> Any:
+        if mesh is None:
+            return self
+        return self._convert(mesh._scalar(self._name))
+
+    def __set__(self, mesh: "Mesh", value: Any) -> None:
+        raise AttributeError(f"Mesh.{self._name} is read-only")
+
+
 class Mesh:
     """A conforming two-dimensional polygonal mesh: flat, validated, immutable.
 
@@ -103,7 +130,7 @@ class Mesh:
     ``cell_edges``, ``cell_normals`` (n_{K,σ}), ``cell_dists`` (d_{K,σ}).
     """
 
-    __slots__ = ("_m", "_geo")
+    __slots__ = ("_m", "_geo", "_scalars")
 
     def __init__(
         self,
@@ -127,12 +154,14 @@ class Mesh:
         off, conn = _cells_csr(cells)
         self._m = _gradvi._Mesh.from_arrays(_points2d(points), off, conn, _tag_rows(boundary_tags))
         self._geo: Optional[Dict[str, Any]] = None
+        self._scalars: Optional[Dict[str, Any]] = None
 
     @classmethod
     def _wrap(cls, handle: Any) -> "Mesh":
         m = cls.__new__(cls)
         m._m = handle
         m._geo = None
+        m._scalars = None
         return m
 
     # ---------------------------------------------------------------- constructors
@@ -351,40 +380,26 @@ class Mesh:
 
     # ---------------------------------------------------------------- sizes and geometry
 
-    @property
-    def n_vertices(self) -> int:
-        """Number of vertices."""
-        return int(self._m.n_vertices)
-
-    @property
-    def n_cells(self) -> int:
-        """Number of cells K."""
-        return int(self._m.n_cells)
-
-    @property
-    def n_edges(self) -> int:
-        """Number of edges σ."""
-        return int(self._m.n_edges)
-
-    @property
-    def h(self) -> float:
-        """h = max_K h_K."""
-        return float(self._m.h)
+    n_vertices = _Scalar(int, "Number of vertices.")
+    n_cells = _Scalar(int, "Number of cells K.")
+    n_edges = _Scalar(int, "Number of edges σ.")
+    h = _Scalar(float, "h = max_K h_K.")
+    is_triangular = _Scalar(bool, "Whether every cell is a triangle (P1 and CR need it).")
 
     @property
     def bounding_box(self) -> Tuple[float, float, float, float]:
         """(xmin, ymin, xmax, ymax)."""
-        return tuple(self._m.bounding_box)  # type: ignore[return-value]
-
-    @property
-    def is_triangular(self) -> bool:
-        """Whether every cell is a triangle (P1 and CR need it)."""
-        return bool(self._m.is_triangular)
+        return tuple(self._scalar("bounding_box"))  # type: ignore[return-value]
 
     @property
     def physical_names(self) -> Dict[str, Tuple[int, int]]:
         """gmsh physical names of a ``.msh`` file: ``{name: (dimension, tag)}``."""
-        return {name: (dim, tag) for dim, tag, name in self._m.physical_names}
+        return {name: (dim, tag) for dim, tag, name in self._scalar("physical_names")}
+
+    def _scalar(self, key: str) -> Any:
+        if self._scalars is None:
+            self._scalars = self._m.scalars()
+        return self._scalars[key]
 
     def _g(self, key: str) -> np.ndarray:
         if self._geo is None:

@@ -230,49 +230,29 @@ fn path_obj(py: Python<'_>, p: &std::path::Path) -> Py<PyAny> {
     obj(py, p.display().to_string())
 }
 
+/// Matches a solver error to its exception class, with the variant's fields as attributes of
+/// the same names: `Variant => ExceptionClass { field, ... }`.
+macro_rules! solver_exceptions {
+    ($py:expr, $s:expr, $msg:expr;
+     $($variant:ident => $class:ident { $($field:ident),* }),* $(,)?) => {
+        match $s {
+            $(Stall::$variant { $($field),* } => (
+                $class::new_err($msg),
+                vec![$((stringify!($field), obj($py, $field.clone()))),*],
+            ),)*
+            #[allow(unreachable_patterns)]
+            _ => (SolverError::new_err($msg), vec![]),
+        }
+    };
+}
+
 fn solver_error(py: Python<'_>, s: &Stall, msg: String) -> (PyErr, Vec<(&'static str, Py<PyAny>)>) {
-    match s {
-        Stall::MaxIterations {
-            iterations,
-            history,
-        } => (
-            MaxIterationsError::new_err(msg),
-            vec![
-                ("iterations", obj(py, *iterations)),
-                ("history", obj(py, history.clone())),
-            ],
-        ),
-        Stall::Cycling {
-            iteration,
-            repeats,
-            history,
-        } => (
-            CyclingError::new_err(msg),
-            vec![
-                ("iteration", obj(py, *iteration)),
-                ("repeats", obj(py, *repeats)),
-                ("history", obj(py, history.clone())),
-            ],
-        ),
-        Stall::NoKktPoint { candidates } => (
-            NoKktPointError::new_err(msg),
-            vec![("candidates", obj(py, *candidates))],
-        ),
-        Stall::Certificate {
-            quantity,
-            value,
-            tol,
-        } => (
-            CertificateError::new_err(msg),
-            vec![
-                ("quantity", obj(py, quantity.clone())),
-                ("value", obj(py, *value)),
-                ("tol", obj(py, *tol)),
-            ],
-        ),
-        #[allow(unreachable_patterns)]
-        _ => (SolverError::new_err(msg), vec![]),
-    }
+    solver_exceptions!(py, s, msg;
+        MaxIterations => MaxIterationsError { iterations, history },
+        Cycling => CyclingError { iteration, repeats, history },
+        NoKktPoint => NoKktPointError { candidates },
+        Certificate => CertificateError { quantity, value, tol },
+    )
 }
 
 /// `InternalError` for a caught panic, with its message.

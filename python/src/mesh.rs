@@ -50,6 +50,16 @@ pub fn points_array<'py>(
     Ok(PyArray1::from_vec(py, flat).reshape([n, 2])?.into_any())
 }
 
+/// `f(m, k)` for every cell k of `m`.
+fn per_cell<T>(m: &PolyMesh, f: fn(&PolyMesh, usize) -> T) -> Vec<T> {
+    (0..m.n_cells()).map(|k| f(m, k)).collect()
+}
+
+/// `f(m, e)` for every edge e of `m`.
+fn per_edge<T>(m: &PolyMesh, f: fn(&PolyMesh, usize) -> T) -> Vec<T> {
+    (0..m.n_edges()).map(|e| f(m, e)).collect()
+}
+
 /// A 1-d array from a vector, without copying.
 pub fn vec_array<'py, T: numpy::Element>(py: Python<'py>, v: Vec<T>) -> Bound<'py, PyAny> {
     PyArray1::from_vec(py, v).into_any()
@@ -227,33 +237,19 @@ impl PyMesh {
         })
     }
 
-    #[getter]
-    fn n_vertices(&self) -> usize {
-        self.mesh.n_vertices()
-    }
-    #[getter]
-    fn n_cells(&self) -> usize {
-        self.mesh.n_cells()
-    }
-    #[getter]
-    fn n_edges(&self) -> usize {
-        self.mesh.n_edges()
-    }
-    #[getter]
-    fn h(&self) -> f64 {
-        self.mesh.h()
-    }
-    #[getter]
-    fn physical_names(&self) -> Vec<(i32, i32, String)> {
-        self.physical_names.clone()
-    }
-    #[getter]
-    fn is_triangular(&self) -> bool {
-        self.mesh.is_triangular()
-    }
-    #[getter]
-    fn bounding_box(&self) -> [f64; 4] {
-        self.mesh.bounding_box()
+    /// The scalar attributes (sizes, h, whether every cell is a triangle, bounding box, gmsh
+    /// physical names), as a dict (computed once by the Python layer, which caches it).
+    fn scalars<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let m = &*self.mesh;
+        let d = PyDict::new(py);
+        d.set_item("n_vertices", m.n_vertices())?;
+        d.set_item("n_cells", m.n_cells())?;
+        d.set_item("n_edges", m.n_edges())?;
+        d.set_item("h", m.h())?;
+        d.set_item("is_triangular", m.is_triangular())?;
+        d.set_item("bounding_box", m.bounding_box())?;
+        d.set_item("physical_names", self.physical_names.clone())?;
+        Ok(d)
     }
     /// Whether two handles share the same mesh object.
     fn same_as(&self, other: &PyMesh) -> bool {
@@ -284,16 +280,10 @@ impl PyMesh {
         d.set_item("cell_dists", vec_array(py, dists))?;
         d.set_item(
             "centroids",
-            points_array(py, (0..nc).map(|k| m.centroid(k)))?,
+            points_array(py, per_cell(m, PolyMesh::centroid).into_iter())?,
         )?;
-        d.set_item(
-            "measures",
-            vec_array(py, (0..nc).map(|k| m.measure(k)).collect::<Vec<_>>()),
-        )?;
-        d.set_item(
-            "diameters",
-            vec_array(py, (0..nc).map(|k| m.diameter(k)).collect::<Vec<_>>()),
-        )?;
+        d.set_item("measures", vec_array(py, per_cell(m, PolyMesh::measure)))?;
+        d.set_item("diameters", vec_array(py, per_cell(m, PolyMesh::diameter)))?;
         let mut edges = Vec::with_capacity(2 * ne);
         let mut ecells = Vec::with_capacity(2 * ne);
         for e in 0..ne {
@@ -311,16 +301,13 @@ impl PyMesh {
         )?;
         d.set_item(
             "edge_midpoints",
-            points_array(py, (0..ne).map(|e| m.edge_midpoint(e)))?,
+            points_array(py, per_edge(m, PolyMesh::edge_midpoint).into_iter())?,
         )?;
         d.set_item(
             "edge_lengths",
-            vec_array(py, (0..ne).map(|e| m.edge_measure(e)).collect::<Vec<_>>()),
+            vec_array(py, per_edge(m, PolyMesh::edge_measure)),
         )?;
-        d.set_item(
-            "edge_tags",
-            vec_array(py, (0..ne).map(|e| m.edge_tag(e)).collect::<Vec<i32>>()),
-        )?;
+        d.set_item("edge_tags", vec_array(py, per_edge(m, PolyMesh::edge_tag)))?;
         d.set_item(
             "boundary_edges",
             index_array(py, m.boundary_edges().iter().copied()),
@@ -340,11 +327,11 @@ impl PyMesh {
         let d = PyDict::new(py);
         d.set_item(
             "centroids",
-            points_array(py, (0..m.n_cells()).map(|k| m.centroid(k)))?,
+            points_array(py, per_cell(m, PolyMesh::centroid).into_iter())?,
         )?;
         d.set_item(
             "midpoints",
-            points_array(py, (0..m.n_edges()).map(|e| m.edge_midpoint(e)))?,
+            points_array(py, per_edge(m, PolyMesh::edge_midpoint).into_iter())?,
         )?;
         d.set_item("vertices", points_array(py, m.vertices().iter().copied())?)?;
         let sub: Vec<Point> = if scheme.eq_ignore_ascii_case("cr") {

@@ -74,20 +74,8 @@ struct Options {
     solve: SolveOptions,
 }
 
-#[allow(clippy::too_many_arguments)]
-fn options(
-    scheme: &str,
-    alpha: f64,
-    c: f64,
-    max_solves: usize,
-    tol: f64,
-    fallback: bool,
-    warm_start: &str,
-    initial_active: Option<Vec<bool>>,
-    keep_iterates: bool,
-    ordering: &str,
-    factor_threads: &str,
-) -> gradvi::Result<Options> {
+/// Checks the numbers of the active-set options.
+fn check_numbers(c: f64, max_solves: usize, tol: f64) -> gradvi::Result<()> {
     let bad = |m: String| Err(gradvi::Error::InvalidData(m));
     if !(tol > 0.0 && tol < 1.0) {
         return bad(format!(
@@ -100,44 +88,29 @@ fn options(
     if max_solves == 0 {
         return bad("max_solves must be at least 1".into());
     }
-    let ordering = match ordering.to_ascii_lowercase().as_str() {
-        "amd" => Ordering::Amd,
-        "nd" | "nested-dissection" | "nested_dissection" => Ordering::NestedDissection,
-        o => {
-            return bad(format!(
-                "unknown ordering {o:?} (expected \"amd\" or \"nested-dissection\")"
-            ));
-        }
-    };
-    let factor_threads = match factor_threads.to_ascii_lowercase().as_str() {
-        "sequential" => FactorThreads::Sequential,
-        "global" | "parallel" => FactorThreads::Global,
-        o => {
-            return bad(format!(
-                "unknown factor_threads {o:?} (expected \"sequential\" or \"global\")"
-            ));
-        }
-    };
-    Ok(Options {
-        kind: SchemeKind::from_str(scheme)?,
-        scheme: SchemeOptions { alpha },
-        solve: SolveOptions {
-            active_set: ActiveSetOptions {
-                c,
-                max_solves,
-                tol,
-                initial_active,
-                keep_iterates,
-                progress: None,
-            },
-            warm_start: WarmStart::from_str(&warm_start.to_ascii_lowercase())?,
-            fallback,
-            system: SystemOptions {
-                ordering,
-                factor_threads,
-            },
-        },
-    })
+    Ok(())
+}
+
+/// The fill-reducing ordering named `name`.
+fn ordering(name: &str) -> gradvi::Result<Ordering> {
+    match name.to_ascii_lowercase().as_str() {
+        "amd" => Ok(Ordering::Amd),
+        "nd" | "nested-dissection" | "nested_dissection" => Ok(Ordering::NestedDissection),
+        o => Err(gradvi::Error::InvalidData(format!(
+            "unknown ordering {o:?} (expected \"amd\" or \"nested-dissection\")"
+        ))),
+    }
+}
+
+/// The threads of the numeric factorisation named `name`.
+fn factor_threads(name: &str) -> gradvi::Result<FactorThreads> {
+    match name.to_ascii_lowercase().as_str() {
+        "sequential" => Ok(FactorThreads::Sequential),
+        "global" | "parallel" => Ok(FactorThreads::Global),
+        o => Err(gradvi::Error::InvalidData(format!(
+            "unknown factor_threads {o:?} (expected \"sequential\" or \"global\")"
+        ))),
+    }
 }
 
 fn run(
@@ -346,11 +319,11 @@ fn json<'py, T: serde::Serialize>(py: Python<'py>, v: &T) -> PyResult<Bound<'py,
     py.import("json")?.call_method1("loads", (text,))
 }
 
-/// Solves `problem` on `mesh`; see `gradvi.solve` for the options.
+/// Solves `problem` on `mesh`; see `gradvi.solve` for the options (and their defaults, stated
+/// there only: this function is called with every option).
 #[pyfunction]
-#[pyo3(signature = (mesh, problem, scheme="hmm", alpha=1.0, c=1.0, max_solves=500, tol=1e-10,
-    fallback=false, warm_start="cold", initial_active=None, keep_iterates=false, ordering="amd",
-    factor_threads="sequential"))]
+#[pyo3(signature = (mesh, problem, scheme, alpha, c, max_solves, tol, fallback, warm_start,
+    initial_active, keep_iterates, ordering, factor_threads))]
 #[allow(clippy::too_many_arguments)]
 fn solve<'py>(
     py: Python<'py>,
@@ -369,20 +342,31 @@ fn solve<'py>(
     factor_threads: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let initial_active = initial_active.map(|a| a.as_array().to_vec());
-    let o = options(
-        scheme,
-        alpha,
-        c,
-        max_solves,
-        tol,
-        fallback,
-        warm_start,
-        initial_active,
-        keep_iterates,
-        ordering,
-        factor_threads,
-    )
-    .map_err(|e| to_pyerr(py, &e))?;
+    let options = || -> gradvi::Result<Options> {
+        check_numbers(c, max_solves, tol)?;
+        let system = SystemOptions {
+            ordering: self::ordering(ordering)?,
+            factor_threads: self::factor_threads(factor_threads)?,
+        };
+        Ok(Options {
+            kind: SchemeKind::from_str(scheme)?,
+            scheme: SchemeOptions { alpha },
+            solve: SolveOptions {
+                active_set: ActiveSetOptions {
+                    c,
+                    max_solves,
+                    tol,
+                    initial_active,
+                    keep_iterates,
+                    progress: None,
+                },
+                warm_start: WarmStart::from_str(&warm_start.to_ascii_lowercase())?,
+                fallback,
+                system,
+            },
+        })
+    };
+    let o = options().map_err(|e| to_pyerr(py, &e))?;
     let mesh = Arc::clone(&mesh.mesh);
     let misses = match &problem.spec {
         crate::problem::Spec::Tabulated(t) => Some(Arc::clone(&t.misses)),

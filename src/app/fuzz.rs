@@ -122,6 +122,19 @@ fn mutate_number(text: &mut Vec<u8>, rng: &mut Rng) {
     text.splice(s..e, v.bytes());
 }
 
+/// The line of `t` that holds byte `i`, with its newline if it has one.
+fn line_around(t: &[u8], i: usize) -> std::ops::Range<usize> {
+    let a = t[..i]
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |p| p + 1);
+    let b = t[i..]
+        .iter()
+        .position(|&b| b == b'\n')
+        .map_or(t.len(), |p| i + p + 1);
+    a..b
+}
+
 /// One to four random mutations of `data`.
 fn mutate(data: &[u8], rng: &mut Rng) -> Vec<u8> {
     let mut t = data.to_vec();
@@ -139,30 +152,14 @@ fn mutate(data: &[u8], rng: &mut Rng) -> Vec<u8> {
             2 | 3 => mutate_number(&mut t, rng),
             4 => {
                 // delete a line
-                let i = rng.below(n);
-                let a = t[..i]
-                    .iter()
-                    .rposition(|&b| b == b'\n')
-                    .map_or(0, |p| p + 1);
-                let b = t[i..]
-                    .iter()
-                    .position(|&b| b == b'\n')
-                    .map_or(n, |p| i + p + 1);
-                t.drain(a..b);
+                let line = line_around(&t, rng.below(n));
+                t.drain(line);
             }
             5 => {
                 // duplicate a line
-                let i = rng.below(n);
-                let a = t[..i]
-                    .iter()
-                    .rposition(|&b| b == b'\n')
-                    .map_or(0, |p| p + 1);
-                let b = t[i..]
-                    .iter()
-                    .position(|&b| b == b'\n')
-                    .map_or(n, |p| i + p + 1);
-                let line = t[a..b].to_vec();
-                t.splice(b..b, line);
+                let line = line_around(&t, rng.below(n));
+                let (copy, end) = (t[line.clone()].to_vec(), line.end);
+                t.splice(end..end, copy);
             }
             _ => {
                 let (i, j) = (rng.below(n), rng.below(n));

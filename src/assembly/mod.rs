@@ -129,6 +129,7 @@ impl<'a> DiscreteSystem<'a> {
     ) -> crate::Result<Self> {
         let t0 = Instant::now();
         let dof_map = DofMap::new(scheme)?;
+        dof_map.check_setup_memory()?;
         let (values, sym) = rayon::join(
             || ProblemValues::evaluate(scheme, &dof_map, problem),
             || SymbolicSystem::with_dof_map(scheme, dof_map.clone(), options),
@@ -294,7 +295,7 @@ impl<'a> DiscreteSystem<'a> {
             .lock()
             .map(|mut b| std::mem::take(&mut *b))
             .unwrap_or_default();
-        sbuf.resize(self.sym.maps.pos.len(), 0.0);
+        sbuf.resize(self.sym.maps.pos.items.len(), 0.0);
         gbuf.resize(self.sym.dof_map.dofs.len(), 0.0);
         self.condense_cells(&fixed, &mut sbuf, &mut gbuf);
         let values = self.gather_matrix(&fixed, &sbuf);
@@ -305,12 +306,12 @@ impl<'a> DiscreteSystem<'a> {
         (values, rhs)
     }
 
-    /// Condenses every cell, in parallel: cell k's p×p block S_K at `pos_ptr[k]` in `sbuf`,
+    /// Condenses every cell, in parallel: cell k's p×p block S_K at `pos.ptr[k]` in `sbuf`,
     /// and its right-hand side g_K − S_K P_K u_F (its condensed load minus the columns of its
     /// fixed skeleton unknowns) at the positions of its skeleton unknowns in `gbuf` (laid out
     /// like `dofs`).
     fn condense_cells(&self, fixed: &FixedValues, sbuf: &mut [f64], gbuf: &mut [f64]) {
-        let (pos_ptr, dof_ptr) = (&self.sym.maps.pos_ptr, &self.sym.dof_map.dof_ptr);
+        let (pos_ptr, dof_ptr) = (&self.sym.maps.pos.ptr, &self.sym.dof_map.dof_ptr);
         let ranges = cell_chunks(self.sym.scheme().mesh().n_cells());
         let s_slices = split_by_ranges(sbuf, &ranges, pos_ptr);
         let g_slices = split_by_ranges(gbuf, &ranges, dof_ptr);
@@ -345,12 +346,12 @@ impl<'a> DiscreteSystem<'a> {
     }
 
     /// The values of the condensed matrix, gathered entry by entry (column by column in
-    /// parallel): entry q is the sum of its sources `src[src_ptr[q]..src_ptr[q + 1]]` in
+    /// parallel): entry q is the sum of its sources `src.list(q)` in
     /// `sbuf`, listed in cell order (the order of a sequential scatter, whatever the number of
     /// threads); zero in the rows and columns of fixed unknowns, whose diagonal is 1.
     fn gather_matrix(&self, fixed: &FixedValues, sbuf: &[f64]) -> Vec<f64> {
         let (col_ptr, row_idx) = (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx());
-        let (src_ptr, src) = (&self.sym.maps.src_ptr, &self.sym.maps.src);
+        let src = &self.sym.maps.src;
         let is_fixed: Vec<bool> = (0..self.n_skel)
             .into_par_iter()
             .with_min_len(4096)
@@ -370,7 +371,7 @@ impl<'a> DiscreteSystem<'a> {
                         if r == c { 1.0 } else { 0.0 }
                     } else {
                         let mut v = 0.0;
-                        for &i in &src[src_ptr[q]..src_ptr[q + 1]] {
+                        for &i in src.list(q) {
                             v += sbuf[i as usize];
                         }
                         v
@@ -382,10 +383,10 @@ impl<'a> DiscreteSystem<'a> {
     }
 
     /// The right-hand side of the condensed system, gathered row by row: the Neumann load plus
-    /// the cells' contributions `inc[inc_ptr[i]..inc_ptr[i + 1]]` in `gbuf` (in cell order);
+    /// the cells' contributions `inc.list(i)` in `gbuf` (in cell order);
     /// the value on fixed rows.
     fn gather_rhs(&self, fixed: &FixedValues, gbuf: &[f64]) -> Vec<f64> {
-        let (inc_ptr, inc) = (&self.sym.maps.inc_ptr, &self.sym.maps.inc);
+        let inc = &self.sym.maps.inc;
         let mut rhs = vec![0.0; self.n_skel];
         rhs.par_iter_mut()
             .enumerate()
@@ -395,7 +396,7 @@ impl<'a> DiscreteSystem<'a> {
                     Some(v) => v,
                     None => {
                         let mut acc = self.values.neumann_load[gi];
-                        for &qd in &inc[inc_ptr[gi]..inc_ptr[gi + 1]] {
+                        for &qd in inc.list(gi) {
                             acc += gbuf[qd as usize];
                         }
                         acc
@@ -418,7 +419,7 @@ impl<'a> DiscreteSystem<'a> {
             .map(|mut b| std::mem::take(&mut *b))
             .unwrap_or_default();
         self.local_products(u, &mut local);
-        let (inc_ptr, inc) = (&self.sym.maps.inc_ptr, &self.sym.maps.inc);
+        let inc = &self.sym.maps.inc;
         // row by row
         let mut r = vec![0.0; self.n];
         let mut scale = vec![0.0; self.n];
@@ -429,7 +430,7 @@ impl<'a> DiscreteSystem<'a> {
             .for_each(|(gi, (ri, si))| {
                 let mut a = self.values.load[gi];
                 let mut b = a.abs();
-                for &q in &inc[inc_ptr[gi]..inc_ptr[gi + 1]] {
+                for &q in inc.list(gi) {
                     a -= local[q as usize][0];
                     b += local[q as usize][1];
                 }

@@ -89,28 +89,69 @@ impl DofMap {
         )
     }
 
+    /// Estimated peak memory, in bytes, of building the symbolic system and the values on
+    /// this dof map, before the Cholesky factor (checked separately once its size is known):
+    /// per local entry, the local matrix (8 bytes), its scatter position and source (4 + 4)
+    /// and the (column, row) pairs sorted into the pattern (16); per unknown, a few vectors.
+    pub fn setup_bytes(&self) -> u64 {
+        let entries: u64 = (0..self.n_cells())
+            .map(|k| {
+                let l = (self.dof_ptr[k + 1] - self.dof_ptr[k]) as u64;
+                l * l
+            })
+            .sum();
+        entries.saturating_mul(32) + 64 * self.dofs.len() as u64
+    }
+
+    /// An error if [`DofMap::setup_bytes`] exceeds the memory the kernel reports as available.
+    pub fn check_setup_memory(&self) -> crate::Result<()> {
+        use crate::mesh::budget::{available_memory, human_bytes};
+        let bytes = self.setup_bytes();
+        match available_memory() {
+            Some(available) if bytes > available => Err(crate::Error::Linear(format!(
+                "assembling the system needs about {} (local matrices, pattern and scatter maps \
+                 of {} cells), more than the {} of memory available",
+                human_bytes(bytes),
+                self.n_cells(),
+                human_bytes(available)
+            ))),
+            _ => Ok(()),
+        }
+    }
+
     /// The skeleton unknowns of cell k.
     fn skeleton(&self, k: usize) -> &[usize] {
         &self.dofs[self.dof_ptr[k] + self.n_int[k] as usize..self.dof_ptr[k + 1]]
     }
 }
 
+/// Lists of items, one per key, flattened: list i is `items[ptr[i]..ptr[i + 1]]`.
+#[derive(Debug, Clone)]
+pub struct Ragged<T> {
+    /// Offsets into `items`, one per list plus one.
+    pub ptr: Vec<usize>,
+    /// The lists, concatenated.
+    pub items: Vec<T>,
+}
+
+impl<T> Ragged<T> {
+    /// List `i`.
+    #[inline]
+    pub fn list(&self, i: usize) -> &[T] {
+        &self.items[self.ptr[i]..self.ptr[i + 1]]
+    }
+}
+
 /// The scatter and gather maps of the module docs.
 #[derive(Debug, Clone)]
 pub struct ScatterMaps {
-    /// Offsets into `pos`: cell k's p×p skeleton block (column-major) at `pos_ptr[k]`.
-    pub pos_ptr: Vec<usize>,
-    /// Position in the condensed values of each local skeleton entry (lower triangle;
-    /// `u32::MAX` for upper entries).
-    pub pos: Vec<u32>,
-    /// Offsets into `src`, one per condensed entry plus one.
-    pub src_ptr: Vec<usize>,
-    /// For each condensed entry, the indices in `pos` of the local entries landing on it.
-    pub src: Vec<u32>,
-    /// Offsets into `inc`, one per unknown plus one.
-    pub inc_ptr: Vec<usize>,
-    /// For each unknown, its positions in [`DofMap::dofs`], cells ascending.
-    pub inc: Vec<u32>,
+    /// Per cell, the position in the condensed values of each entry of its p×p skeleton block
+    /// (column-major; lower triangle, `u32::MAX` for upper entries).
+    pub pos: Ragged<u32>,
+    /// Per condensed entry, the indices in `pos.items` of the local entries landing on it.
+    pub src: Ragged<u32>,
+    /// Per unknown, its positions in [`DofMap::dofs`], cells ascending.
+    pub inc: Ragged<u32>,
 }
 
 /// The symbolic system of a scheme (see the module docs).
@@ -137,6 +178,7 @@ impl<'a> SymbolicSystem<'a> {
         options: SystemOptions,
     ) -> crate::Result<Self> {
         let dof_map = DofMap::new(scheme)?;
+        dof_map.check_setup_memory()?;
         Self::with_dof_map(scheme, dof_map, options)
     }
 
@@ -208,8 +250,8 @@ fn check_numeric_memory(pattern: &SpdPattern, maps: &ScatterMaps, n: usize) -> c
     };
     let bytes = 8 * (pattern.factor_len() as u64)
         + 8 * (pattern.nnz() as u64)
-        + 8 * (maps.pos.len() as u64)
-        + 24 * (maps.inc.len() as u64)
+        + 8 * (maps.pos.items.len() as u64)
+        + 24 * (maps.inc.items.len() as u64)
         + 8 * 6 * (n as u64);
     if bytes > available {
         use crate::mesh::budget::human_bytes;
@@ -259,12 +301,12 @@ fn condensed_pattern(dm: &DofMap, n_skel: usize) -> crate::Result<(Vec<usize>, V
     Ok((col_ptr, row_idx))
 }
 
-/// Offsets and items of a counting sort: item i goes to bucket `key(i)` (if any), buckets
+/// The buckets of a counting sort: item i goes to bucket `key(i)` (if any), buckets
 /// ascending, items ascending within a bucket. Items are below 2^32 (checked by the caller).
 fn counting_sort(
     n_buckets: usize,
     keys: impl Iterator<Item = Option<usize>> + Clone,
-) -> (Vec<usize>, Vec<u32>) {
+) -> Ragged<u32> {
     let mut ptr = vec![0usize; n_buckets + 1];
     for b in keys.clone().flatten() {
         ptr[b + 1] += 1;
@@ -280,7 +322,7 @@ fn counting_sort(
             fill[b] += 1;
         }
     }
-    (ptr, items)
+    Ragged { ptr, items }
 }
 
 /// The scatter and gather maps (see the module docs).
@@ -322,18 +364,18 @@ fn scatter_maps(
         })
         .collect();
     // unknown -> positions in `dofs`, cells ascending
-    let (inc_ptr, inc) = counting_sort(n, dm.dofs.iter().map(|&d| Some(d)));
+    let inc = counting_sort(n, dm.dofs.iter().map(|&d| Some(d)));
     // condensed entry -> the local entries landing on it, in cell order
-    let (src_ptr, src) = counting_sort(
+    let src = counting_sort(
         row_idx.len(),
         pos.iter().map(|&q| (q != u32::MAX).then_some(q as usize)),
     );
     Ok(ScatterMaps {
-        pos_ptr,
-        pos,
-        src_ptr,
+        pos: Ragged {
+            ptr: pos_ptr,
+            items: pos,
+        },
         src,
-        inc_ptr,
         inc,
     })
 }

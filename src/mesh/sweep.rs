@@ -3,8 +3,8 @@
 //! The segments join vertices given by id; two segments that share an end point (a vertex id)
 //! may meet there and nowhere else, any other contact (crossing, touching, overlapping) is a
 //! *collision*. [`first_collision`] reports one, or proves there is none, in O(n log n) time for
-//! n segments whatever their geometry (M. I. Shamos and D. Hoey, *Geometric intersection
-//! problems*, 1976):
+//! n segments whatever their geometry (expected time over the random priorities of the treap;
+//! M. I. Shamos and D. Hoey, *Geometric intersection problems*, 1976):
 //!
 //! * a line sweeps the plane in the lexicographic order of the points (x, then y: the plane
 //!   turned by an infinitesimal angle, so that no segment is vertical and no two vertices are
@@ -15,11 +15,15 @@
 //!   it can be decided once and for all from the segment that starts later: is its start above
 //!   or below the other one (and, if it lies on it, is its end)? That is an exact orientation
 //!   test ([`super::predicates::orient`]), so the list can be kept in a balanced search tree
-//!   ([`ActiveList`], a treap threaded by a doubly-linked list: one search per insertion,
-//!   neighbours in O(1), removal without any comparison);
+//!   ([`ActiveList`], a treap threaded by a doubly-linked list: neighbours in O(1), removal
+//!   without any comparison). The segments starting at a vertex go where the segments ending
+//!   there left the list, so only vertices where no segment ends need a search (in a mesh, few);
 //! * the leftmost collision is between two segments that are neighbours in the list at some
 //!   moment before the sweep line reaches it, so it suffices to test each segment against its
 //!   neighbours when it enters, and the two segments that become neighbours when one leaves.
+//!
+//! Before the sweep the vertices are sorted and renumbered in sweep order ([`Events`]), so that
+//! the sweep reads its arrays nearly in order: a million-cell mesh is swept in about 0.35 s.
 //!
 //! The sweep also answers *point queries*: for chosen vertices, the segment right below the
 //! vertex when the sweep reaches it (the first segment hit by a ray going straight down,

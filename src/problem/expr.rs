@@ -852,26 +852,28 @@ impl Parser<'_> {
     }
 
     fn or(&mut self) -> Parsed {
-        let (mut a, mut k, pos) = self.and()?;
-        while self.eat(&["||"]).is_some() {
-            let p = self.pos();
-            expect_kind(Kind::Condition, k, pos)?;
-            let (c, kc, _) = self.and()?;
-            expect_kind(Kind::Condition, kc, p)?;
-            a = Node::Or(b(a), b(c)).folded();
-            k = Kind::Condition;
-        }
-        Ok((a, k, pos))
+        self.logical("||", Self::and, Node::Or)
     }
 
     fn and(&mut self) -> Parsed {
-        let (mut a, k, pos) = self.not()?;
-        while self.eat(&["&&"]).is_some() {
+        self.logical("&&", Self::not, Node::And)
+    }
+
+    /// `operand (op operand)*`, left-associative, for a logical operator `op` whose operands
+    /// (parsed by `operand`) are conditions.
+    fn logical(
+        &mut self,
+        op: &'static str,
+        operand: fn(&mut Self) -> Parsed,
+        node: fn(Box<Node>, Box<Node>) -> Node,
+    ) -> Parsed {
+        let (mut a, k, pos) = operand(self)?;
+        while self.eat(&[op]).is_some() {
             let p = self.pos();
             expect_kind(Kind::Condition, k, pos)?;
-            let (c, kc, _) = self.not()?;
+            let (c, kc, _) = operand(self)?;
             expect_kind(Kind::Condition, kc, p)?;
-            a = Node::And(b(a), b(c)).folded();
+            a = node(b(a), b(c)).folded();
         }
         Ok((a, k, pos))
     }

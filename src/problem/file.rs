@@ -86,67 +86,89 @@ struct RawMesh {
     domain: Option<[f64; 4]>,
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawDiffusion {
-    #[serde(rename = "A")]
-    a: Option<Spanned<TensorSrc>>,
-    piece: Option<Vec<RawDiffusionPiece>>,
+/// A datum given whole (`KEY = ...`) or by pieces (`[[SECTION.piece]]`, each with `where`,
+/// `tags` and `KEY`): the section's struct, its piece's struct, and their [`Piecewise`] view.
+macro_rules! piecewise_section {
+    ($section:ident, $piece:ident, $name:literal, $key:literal, $ty:ty) => {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct $section {
+            #[serde(rename = $key)]
+            value: Option<Spanned<$ty>>,
+            piece: Option<Vec<$piece>>,
+        }
+
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct $piece {
+            #[serde(rename = "where")]
+            cond: Option<Spanned<Src>>,
+            tags: Option<Spanned<Vec<i32>>>,
+            #[serde(rename = $key)]
+            value: Spanned<$ty>,
+        }
+
+        impl Piecewise for $section {
+            type Value = $ty;
+            const SECTION: &'static str = $name;
+            const KEY: &'static str = $key;
+            fn whole(&self) -> Option<&Spanned<$ty>> {
+                self.value.as_ref()
+            }
+            fn pieces(&self) -> Option<Vec<PieceSrc<'_, $ty>>> {
+                let pieces = self.piece.as_ref()?;
+                Some(
+                    pieces
+                        .iter()
+                        .map(|p| (&p.cond, &p.tags, &p.value))
+                        .collect(),
+                )
+            }
+        }
+    };
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawDiffusionPiece {
-    #[serde(rename = "where")]
-    cond: Option<Spanned<Src>>,
-    tags: Option<Spanned<Vec<i32>>>,
-    #[serde(rename = "A")]
-    a: Spanned<TensorSrc>,
+/// One piece as written: its condition (`where`), its cell tags and its value.
+type PieceSrc<'a, T> = (
+    &'a Option<Spanned<Src>>,
+    &'a Option<Spanned<Vec<i32>>>,
+    &'a Spanned<T>,
+);
+
+/// A piecewise datum as written (made by `piecewise_section!`).
+trait Piecewise {
+    /// The value as written (an expression, or a tensor).
+    type Value;
+    /// The section ("diffusion").
+    const SECTION: &'static str;
+    /// The key of the value ("A").
+    const KEY: &'static str;
+    /// The value, if given whole.
+    fn whole(&self) -> Option<&Spanned<Self::Value>>;
+    /// The pieces, if given by pieces.
+    fn pieces(&self) -> Option<Vec<PieceSrc<'_, Self::Value>>>;
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawSource {
-    f: Option<Spanned<Src>>,
-    piece: Option<Vec<RawSourcePiece>>,
+piecewise_section!(RawDiffusion, RawDiffusionPiece, "diffusion", "A", TensorSrc);
+piecewise_section!(RawSource, RawSourcePiece, "source", "f", Src);
+
+/// A boundary section: the edges it selects (`tags`, `where`), then its own keys.
+macro_rules! boundary_section {
+    ($name:ident { $($key:ident: $ty:ty),* }) => {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct $name {
+            tags: Option<Spanned<Vec<i32>>>,
+            #[serde(rename = "where")]
+            cond: Option<Spanned<Src>>,
+            $($key: $ty,)*
+        }
+    };
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawSourcePiece {
-    #[serde(rename = "where")]
-    cond: Option<Spanned<Src>>,
-    tags: Option<Spanned<Vec<i32>>>,
-    f: Spanned<Src>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawDirichlet {
-    tags: Option<Spanned<Vec<i32>>>,
-    #[serde(rename = "where")]
-    cond: Option<Spanned<Src>>,
-    value: Option<Spanned<Src>>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawNeumann {
-    tags: Option<Spanned<Vec<i32>>>,
-    #[serde(rename = "where")]
-    cond: Option<Spanned<Src>>,
-    flux: Option<Spanned<Src>>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawSignorini {
-    tags: Option<Spanned<Vec<i32>>>,
-    #[serde(rename = "where")]
-    cond: Option<Spanned<Src>>,
-    side: RawSide,
-    barrier: Spanned<Src>,
-}
+boundary_section!(RawDirichlet { value: Option<Spanned<Src>> });
+boundary_section!(RawNeumann { flux: Option<Spanned<Src>> });
+boundary_section!(RawSignorini { side: RawSide, barrier: Spanned<Src> });
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -875,8 +897,11 @@ impl Cx<'_> {
             None => None,
         };
         Ok(Data {
-            diffusion: self.diffusion(raw, scope)?,
-            source: self.source(raw, scope)?,
+            diffusion: self
+                .piecewise(&raw.diffusion, scope, |key, a| self.tensor(key, a, scope))?,
+            source: self.piecewise(&raw.source, scope, |key, f| {
+                self.expr(key, f, scope, Kind::Number)
+            })?,
             parts,
             rest,
             dirichlet: match &raw.dirichlet {
@@ -945,35 +970,38 @@ impl Cx<'_> {
         Ok(())
     }
 
-    fn diffusion(&self, raw: &RawFile, scope: &Scope) -> Result<Vec<Piece<TensorField>>> {
-        let Some(d) = &raw.diffusion else {
+    /// A piecewise datum (`[diffusion]`, `[source]`), its values compiled by `value`
+    /// (given the key); empty if the section is absent.
+    fn piecewise<R: Piecewise, V>(
+        &self,
+        raw: &Option<Spanned<R>>,
+        scope: &Scope,
+        value: impl Fn(&str, &Spanned<R::Value>) -> Result<V>,
+    ) -> Result<Vec<Piece<V>>> {
+        let Some(d) = raw else {
             return Ok(Vec::new());
         };
-        let loc = self.loc("diffusion", d.span());
-        match (&d.get_ref().a, &d.get_ref().piece) {
-            (Some(a), None) => Ok(vec![Piece {
+        let (section, key) = (R::SECTION, R::KEY);
+        let loc = self.loc(section, d.span());
+        match (d.get_ref().whole(), d.get_ref().pieces()) {
+            (Some(v), None) => Ok(vec![Piece {
                 cond: None,
-                value: self.tensor("diffusion.A", a, scope)?,
+                value: value(&format!("{section}.{key}"), v)?,
             }]),
             (None, Some(pieces)) if !pieces.is_empty() => {
                 let mut out = Vec::new();
-                for (i, p) in pieces.iter().enumerate() {
-                    let key = format!("diffusion.piece[{i}]");
-                    self.check_piece(
-                        "diffusion.piece",
-                        i,
-                        pieces.len(),
-                        p.cond.is_some(),
-                        &p.tags,
-                    )?;
+                let list = format!("{section}.piece");
+                for (i, &(cond, tags, v)) in pieces.iter().enumerate() {
+                    let at = format!("{list}[{i}]");
+                    self.check_piece(&list, i, pieces.len(), cond.is_some(), tags)?;
                     out.push(Piece {
                         cond: self.expr_opt(
-                            &format!("{key}.where"),
-                            &p.cond,
+                            &format!("{at}.where"),
+                            cond,
                             scope,
                             Kind::Condition,
                         )?,
-                        value: self.tensor(&format!("{key}.A"), &p.a, scope)?,
+                        value: value(&format!("{at}.{key}"), v)?,
                     });
                 }
                 Ok(out)
@@ -981,42 +1009,7 @@ impl Cx<'_> {
             _ => Err(self.at(
                 K::Schema,
                 &loc,
-                "give either 'A' or one or more [[diffusion.piece]]".into(),
-            )),
-        }
-    }
-
-    fn source(&self, raw: &RawFile, scope: &Scope) -> Result<Vec<Piece<Field>>> {
-        let Some(s) = &raw.source else {
-            return Ok(Vec::new());
-        };
-        let loc = self.loc("source", s.span());
-        match (&s.get_ref().f, &s.get_ref().piece) {
-            (Some(f), None) => Ok(vec![Piece {
-                cond: None,
-                value: self.expr("source.f", f, scope, Kind::Number)?,
-            }]),
-            (None, Some(pieces)) if !pieces.is_empty() => {
-                let mut out = Vec::new();
-                for (i, p) in pieces.iter().enumerate() {
-                    let key = format!("source.piece[{i}]");
-                    self.check_piece("source.piece", i, pieces.len(), p.cond.is_some(), &p.tags)?;
-                    out.push(Piece {
-                        cond: self.expr_opt(
-                            &format!("{key}.where"),
-                            &p.cond,
-                            scope,
-                            Kind::Condition,
-                        )?,
-                        value: self.expr(&format!("{key}.f"), &p.f, scope, Kind::Number)?,
-                    });
-                }
-                Ok(out)
-            }
-            _ => Err(self.at(
-                K::Schema,
-                &loc,
-                "give either 'f' or one or more [[source.piece]]".into(),
+                format!("give either '{key}' or one or more [[{section}.piece]]"),
             )),
         }
     }

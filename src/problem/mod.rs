@@ -193,20 +193,29 @@ pub fn check_finite(v: f64, what: &str) -> crate::Result<f64> {
 /// Geometric tolerance for "on the line x = c" tests of edge midpoints on the unit square.
 const ON: f64 = 1e-12;
 
+/// The boundary of the Signorini tests: Γ1 (Dirichlet) where `gamma1(x_σ)`, else Γ3
+/// (Signorini) where `gamma3(x_σ)`, else Γ2 (Neumann).
+fn signorini_sides(
+    gamma1: fn(Point) -> bool,
+    gamma3: fn(Point) -> bool,
+) -> impl Fn(Point, i32) -> BoundaryKind + Send + Sync + 'static {
+    move |x, _| {
+        if gamma1(x) {
+            BoundaryKind::Dirichlet
+        } else if gamma3(x) {
+            BoundaryKind::Signorini
+        } else {
+            BoundaryKind::Neumann
+        }
+    }
+}
+
 /// Test 1 of the paper (Signorini, from Yang & Chao): −Δu = 2π sin(2πx) in (0,1)²;
 /// Γ1 = \[0,1\]×{1} (u = 0); Γ2 = {0,1}×\[0,1\] (∇u·n = 0); Γ3 = \[0,1\]×{0} with
 /// u ≥ 0, ∇u·n ≥ 0, u∇u·n = 0 (a lower barrier 0).
 pub fn paper_test1() -> Problem {
     Problem::new("test1", Box::new(|p| 2.0 * PI * (2.0 * PI * p[0]).sin()))
-        .with_boundary(|x, _| {
-            if x[1] > 1.0 - ON {
-                BoundaryKind::Dirichlet
-            } else if x[1] < ON {
-                BoundaryKind::Signorini
-            } else {
-                BoundaryKind::Neumann
-            }
-        })
+        .with_boundary(signorini_sides(|x| x[1] > 1.0 - ON, |x| x[1] < ON))
         .with_constraint(ConstraintKind::Signorini, Side::Lower, Box::new(|_| 0.0))
 }
 
@@ -320,15 +329,10 @@ pub fn paper_test2_tie(tie_lower: bool) -> Problem {
         test2_source_piece(p, test2_lower(xk[1], tie_lower))
     }))
     .with_diffusion(Box::new(move |p| test2_diffusion_tie(p, tie_lower)))
-    .with_boundary(|x, _| {
-        if x[1] < ON || x[1] > 1.0 - ON {
-            BoundaryKind::Dirichlet
-        } else if x[0] < ON {
-            BoundaryKind::Signorini
-        } else {
-            BoundaryKind::Neumann
-        }
-    })
+    .with_boundary(signorini_sides(
+        |x| x[1] < ON || x[1] > 1.0 - ON,
+        |x| x[0] < ON,
+    ))
     .with_constraint(ConstraintKind::Signorini, Side::Upper, Box::new(|_| 0.0))
     .with_exact(Box::new(test2_exact), Box::new(test2_exact_grad))
 }

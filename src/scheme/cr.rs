@@ -38,17 +38,19 @@
 //!   |D_σ| = Σ_{K∋σ} |K|/3. Signorini barriers act on the boundary-edge unknowns of Γ3, with
 //!   measure |σ| (from the trace, by the assembler).
 //!
-//! Output: [`GradientDiscretisation::cell_values`] gives the Crouzeix–Raviart function at
+//! Output: [`super::GradientDiscretisation::cell_values`] gives the Crouzeix–Raviart function at
 //! x_K, the mean of the three edge values (φ_σ(x_K) = 1/3); the vertex values are the
 //! area-weighted mean, over the triangles around the vertex, of the Crouzeix–Raviart function
 //! of each triangle at that vertex, u_{σ₁} + u_{σ₂} − u_{σ₀} (σ₁, σ₂ the edges through the
 //! vertex, σ₀ the opposite one): exact for affine functions, unlike a mean of centroid values.
 
-use super::{Entity, GradientDiscretisation, PointDof, Tensor};
+use super::PointDof;
+use super::triangle::TriangleUnknowns;
 use crate::mesh::{Point, PolyMesh};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
-/// The mass-lumped Crouzeix–Raviart scheme on a triangle mesh.
+/// The mass-lumped Crouzeix–Raviart scheme on a triangle mesh: a triangle scheme (see
+/// `scheme/triangle.rs`) with an unknown on every edge.
 #[derive(Debug, Clone)]
 pub struct Cr<'a> {
     mesh: &'a PolyMesh,
@@ -57,27 +59,8 @@ pub struct Cr<'a> {
 impl<'a> Cr<'a> {
     /// Crouzeix–Raviart on `mesh`; an error if some cell is not a triangle.
     pub fn new(mesh: &'a PolyMesh) -> crate::Result<Self> {
-        if let Some(k) = (0..mesh.n_cells()).find(|&k| mesh.cell_vertices(k).len() != 3) {
-            return Err(crate::Error::InvalidData(format!(
-                "the Crouzeix–Raviart scheme needs a triangle mesh, but cell {k} has {} vertices",
-                mesh.cell_vertices(k).len()
-            )));
-        }
+        super::triangle::require_triangles(mesh, "the Crouzeix–Raviart scheme")?;
         Ok(Cr { mesh })
-    }
-
-    /// Gradients ∇φ_σ = |σ| n_{K,σ} / |K| of the three basis functions of triangle `k`, in the
-    /// order of its local edges (the columns of G).
-    pub fn basis_gradients(&self, k: usize) -> [Point; 3] {
-        let m = self.mesh;
-        let area = m.measure(k);
-        let normals = m.cell_normals(k);
-        let mut g = [[0.0; 2]; 3];
-        for (i, &e) in m.cell_edges(k).iter().enumerate() {
-            let s = m.edge_measure(e) / area;
-            g[i] = [s * normals[i][0], s * normals[i][1]];
-        }
-        g
     }
 
     /// The centroid x_{K,σ} of the sub-triangle D_{K,σ} = co(σ ∪ {x_K}) of local edge `i` of
@@ -90,89 +73,27 @@ impl<'a> Cr<'a> {
     }
 }
 
-impl GradientDiscretisation for Cr<'_> {
-    fn name(&self) -> &'static str {
-        "cr"
-    }
-    fn mesh(&self) -> &PolyMesh {
-        self.mesh
-    }
-    fn n_skeleton(&self) -> usize {
-        self.mesh.n_edges()
-    }
-    fn n_interior(&self) -> usize {
-        0
-    }
-    fn dof_entity(&self, dof: usize) -> Entity {
-        Entity::Edge(dof)
-    }
-    fn n_local_interior(&self, _k: usize) -> usize {
-        0
-    }
-    fn local_dofs(&self, k: usize, dofs: &mut Vec<usize>) {
-        dofs.clear();
-        dofs.extend_from_slice(self.mesh.cell_edges(k));
-    }
-    fn local_matrix(&self, k: usize, a: &Tensor, m: &mut DMatrix<f64>) {
-        let g = self.basis_gradients(k);
-        let area = self.mesh.measure(k);
-        *m = DMatrix::zeros(3, 3);
-        for i in 0..3 {
-            let ag = [
-                a[0][0] * g[i][0] + a[0][1] * g[i][1],
-                a[1][0] * g[i][0] + a[1][1] * g[i][1],
-            ];
-            for j in 0..3 {
-                m[(j, i)] = area * (ag[0] * g[j][0] + ag[1] * g[j][1]);
-            }
+impl super::triangle::TriangleScheme for Cr<'_> {
+    const NAME: &'static str = "cr";
+    const UNKNOWNS: TriangleUnknowns = TriangleUnknowns::Edges;
+    /// ∇φ_σ = |σ| n_{K,σ} / |K|, in the order of the local edges (the columns of G).
+    fn basis_gradients(&self, k: usize) -> [Point; 3] {
+        let m = self.mesh;
+        let area = m.measure(k);
+        let normals = m.cell_normals(k);
+        let mut g = [[0.0; 2]; 3];
+        for (i, &e) in m.cell_edges(k).iter().enumerate() {
+            let s = m.edge_measure(e) / area;
+            g[i] = [s * normals[i][0], s * normals[i][1]];
         }
+        g
     }
     fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>) {
         let third = self.mesh.measure(k) / 3.0;
         *b = DVector::from_fn(3, |i, _| third * f(self.sub_centroid(k, i)));
     }
     fn edge_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
-        out.clear();
-        out.push(PointDof {
-            dof: e,
-            point: self.mesh.edge_midpoint(e),
-            measure: self.mesh.edge_measure(e),
-        });
-    }
-    fn obstacle_dofs(&self) -> Vec<PointDof> {
-        let m = self.mesh;
-        let mut meas = vec![0.0; m.n_edges()];
-        for k in 0..m.n_cells() {
-            for &e in m.cell_edges(k) {
-                meas[e] += m.measure(k) / 3.0;
-            }
-        }
-        meas.iter()
-            .enumerate()
-            .map(|(e, &w)| PointDof {
-                dof: e,
-                point: m.edge_midpoint(e),
-                measure: w,
-            })
-            .collect()
-    }
-    fn cell_values(&self, u: &[f64]) -> Vec<f64> {
-        (0..self.mesh.n_cells())
-            .map(|k| self.mesh.cell_edges(k).iter().map(|&e| u[e]).sum::<f64>() / 3.0)
-            .collect()
-    }
-    fn cell_gradients(&self, u: &[f64]) -> Vec<Point> {
-        (0..self.mesh.n_cells())
-            .map(|k| {
-                let g = self.basis_gradients(k);
-                let mut r = [0.0; 2];
-                for (i, &e) in self.mesh.cell_edges(k).iter().enumerate() {
-                    r[0] += u[e] * g[i][0];
-                    r[1] += u[e] * g[i][1];
-                }
-                r
-            })
-            .collect()
+        super::edge_unknown_trace(self.mesh, e, out);
     }
     fn vertex_values(&self, u: &[f64]) -> Vec<f64> {
         let m = self.mesh;
@@ -189,11 +110,16 @@ impl GradientDiscretisation for Cr<'_> {
         }
         sum.iter().zip(&weight).map(|(s, w)| s / w).collect()
     }
+    fn mesh(&self) -> &PolyMesh {
+        self.mesh
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scheme::{Entity, GradientDiscretisation, Tensor};
+    use nalgebra::DMatrix;
 
     const A: Tensor = [[2.0, 0.3], [0.3, 1.0]];
 

@@ -152,12 +152,7 @@ impl GradientDiscretisation for Hmm<'_> {
         b[0] = self.mesh.measure(k) * f(self.mesh.centroid(k));
     }
     fn edge_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
-        out.clear();
-        out.push(PointDof {
-            dof: e,
-            point: self.mesh.edge_midpoint(e),
-            measure: self.mesh.edge_measure(e),
-        });
+        super::edge_unknown_trace(self.mesh, e, out);
     }
     fn obstacle_dofs(&self) -> Vec<PointDof> {
         (0..self.mesh.n_cells())

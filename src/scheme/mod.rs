@@ -12,10 +12,16 @@
 //!
 //! `local_dofs(k)` lists the interior unknowns of K first, then its skeleton unknowns; the local
 //! matrix and load follow that order.
+//!
+//! P1 and Crouzeix–Raviart are both schemes on triangles with three skeleton unknowns per cell
+//! and a gradient constant on each: what follows from that (local matrix, gradients, cell values,
+//! lumped obstacle measures) is written once, in `triangle.rs`, and each of the two files states
+//! only its basis gradients, its quadratures and its vertex values.
 
 pub mod cr;
 pub mod hmm;
 pub mod p1;
+mod triangle;
 
 use crate::mesh::{Point, PolyMesh};
 use nalgebra::{DMatrix, DVector};
@@ -102,6 +108,18 @@ pub trait GradientDiscretisation: Sync {
             })
             .collect()
     }
+}
+
+/// The trace of the schemes with one unknown per edge, numbered like the edges (HMM,
+/// Crouzeix–Raviart): T_D v = v_σ on σ, so boundary edge `e` carries its own unknown, at x_σ,
+/// with weight |σ|.
+fn edge_unknown_trace(mesh: &PolyMesh, e: usize, out: &mut Vec<PointDof>) {
+    out.clear();
+    out.push(PointDof {
+        dof: e,
+        point: mesh.edge_midpoint(e),
+        measure: mesh.edge_measure(e),
+    });
 }
 
 /// Options common to the constructors of the registered schemes.

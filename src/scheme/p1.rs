@@ -16,11 +16,13 @@
 //! - obstacle barriers are nodal: u(x_v) ≤ g(x_v) (or ≥); a vertex carries the lumped measure
 //!   Σ_{T∋v} |T|/3, a Signorini vertex the measure Σ_{σ∋v, σ⊂Γ3} |σ|/2.
 
-use super::{GradientDiscretisation, PointDof, Tensor};
+use super::PointDof;
+use super::triangle::TriangleUnknowns;
 use crate::mesh::{Point, PolyMesh};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
-/// P1 finite elements on a triangle mesh.
+/// P1 finite elements on a triangle mesh: a triangle scheme (see `scheme/triangle.rs`) with an
+/// unknown on every vertex.
 #[derive(Debug, Clone)]
 pub struct P1<'a> {
     mesh: &'a PolyMesh,
@@ -29,17 +31,16 @@ pub struct P1<'a> {
 impl<'a> P1<'a> {
     /// P1 on `mesh`; an error if some cell is not a triangle.
     pub fn new(mesh: &'a PolyMesh) -> crate::Result<Self> {
-        if let Some(k) = (0..mesh.n_cells()).find(|&k| mesh.cell_vertices(k).len() != 3) {
-            return Err(crate::Error::InvalidData(format!(
-                "P1 needs a triangle mesh, but cell {k} has {} vertices",
-                mesh.cell_vertices(k).len()
-            )));
-        }
+        super::triangle::require_triangles(mesh, "P1")?;
         Ok(P1 { mesh })
     }
+}
 
-    /// Gradients of the three barycentric functions of triangle `k` (constant on K).
-    pub fn basis_gradients(&self, k: usize) -> [Point; 3] {
+impl super::triangle::TriangleScheme for P1<'_> {
+    const NAME: &'static str = "p1";
+    const UNKNOWNS: TriangleUnknowns = TriangleUnknowns::Vertices;
+    /// The gradients of the three barycentric functions λ_i of triangle `k`.
+    fn basis_gradients(&self, k: usize) -> [Point; 3] {
         let v = self.mesh.cell_vertices(k);
         let p: Vec<Point> = v.iter().map(|&i| self.mesh.vertex(i)).collect();
         let twice_area =
@@ -52,45 +53,6 @@ impl<'a> P1<'a> {
             g[i] = [(a[1] - b[1]) / twice_area, (b[0] - a[0]) / twice_area];
         }
         g
-    }
-}
-
-impl GradientDiscretisation for P1<'_> {
-    fn name(&self) -> &'static str {
-        "p1"
-    }
-    fn mesh(&self) -> &PolyMesh {
-        self.mesh
-    }
-    fn n_skeleton(&self) -> usize {
-        self.mesh.n_vertices()
-    }
-    fn n_interior(&self) -> usize {
-        0
-    }
-    fn dof_entity(&self, dof: usize) -> super::Entity {
-        super::Entity::Vertex(dof)
-    }
-    fn n_local_interior(&self, _k: usize) -> usize {
-        0
-    }
-    fn local_dofs(&self, k: usize, dofs: &mut Vec<usize>) {
-        dofs.clear();
-        dofs.extend_from_slice(self.mesh.cell_vertices(k));
-    }
-    fn local_matrix(&self, k: usize, a: &Tensor, m: &mut DMatrix<f64>) {
-        let g = self.basis_gradients(k);
-        let area = self.mesh.measure(k);
-        *m = DMatrix::zeros(3, 3);
-        for i in 0..3 {
-            let ag = [
-                a[0][0] * g[i][0] + a[0][1] * g[i][1],
-                a[1][0] * g[i][0] + a[1][1] * g[i][1],
-            ];
-            for j in 0..3 {
-                m[(j, i)] = area * (ag[0] * g[j][0] + ag[1] * g[j][1]);
-            }
-        }
     }
     fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>) {
         let v = self.mesh.cell_vertices(k);
@@ -110,56 +72,19 @@ impl GradientDiscretisation for P1<'_> {
             });
         }
     }
-    fn obstacle_dofs(&self) -> Vec<PointDof> {
-        let mut meas = vec![0.0; self.mesh.n_vertices()];
-        for k in 0..self.mesh.n_cells() {
-            for &v in self.mesh.cell_vertices(k) {
-                meas[v] += self.mesh.measure(k) / 3.0;
-            }
-        }
-        meas.iter()
-            .enumerate()
-            .map(|(v, &m)| PointDof {
-                dof: v,
-                point: self.mesh.vertex(v),
-                measure: m,
-            })
-            .collect()
-    }
-    fn cell_values(&self, u: &[f64]) -> Vec<f64> {
-        (0..self.mesh.n_cells())
-            .map(|k| {
-                self.mesh
-                    .cell_vertices(k)
-                    .iter()
-                    .map(|&v| u[v])
-                    .sum::<f64>()
-                    / 3.0
-            })
-            .collect()
-    }
-    fn cell_gradients(&self, u: &[f64]) -> Vec<Point> {
-        (0..self.mesh.n_cells())
-            .map(|k| {
-                let g = self.basis_gradients(k);
-                let v = self.mesh.cell_vertices(k);
-                let mut r = [0.0; 2];
-                for i in 0..3 {
-                    r[0] += u[v[i]] * g[i][0];
-                    r[1] += u[v[i]] * g[i][1];
-                }
-                r
-            })
-            .collect()
-    }
     fn vertex_values(&self, u: &[f64]) -> Vec<f64> {
         u[..self.mesh.n_vertices()].to_vec()
+    }
+    fn mesh(&self) -> &PolyMesh {
+        self.mesh
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scheme::GradientDiscretisation;
+    use nalgebra::DMatrix;
 
     #[test]
     fn stiffness_of_reference_triangle() {

@@ -22,7 +22,7 @@ use crate::assembly::{DiscreteSystem, SymbolicSystem, SystemOptions};
 use crate::problem::Problem;
 use crate::scheme::GradientDiscretisation;
 use crate::vi::active_set::{self, Outcome};
-pub use crate::vi::{ActiveSetOptions, Certificate, IterationLog, Method};
+pub use crate::vi::{ActiveSetOptions, Certificate, IterationLog, IterationStep, Method};
 use crate::vi::{Constraints, VariationalSolution, pgs};
 use std::sync::Arc;
 use std::time::Instant;

@@ -28,7 +28,9 @@
 //! driver decides whether to fall back to projected Gauss–Seidel.
 
 use super::certificate::{Evaluation, evaluate};
-use super::{Constraints, IterationLog, Method, QuadraticEnergy, VariationalSolution};
+use super::{
+    Constraints, IterationLog, IterationStep, Method, QuadraticEnergy, VariationalSolution,
+};
 use crate::error::SolverError;
 
 /// Options of the active-set solver.
@@ -189,12 +191,14 @@ pub fn run(
         }
         let ev = evaluate(q, Some(cons), &u, &active);
         log.push(IterationLog {
-            solve: log.len() + 1,
-            active: active.iter().filter(|&&a| a).count(),
-            entered,
-            left,
-            violation: ev.certificate.max_violation,
-            residual: ev.certificate.balance_residual,
+            step: IterationStep {
+                solve: log.len() + 1,
+                active: active.iter().filter(|&&a| a).count(),
+                entered,
+                left,
+                violation: ev.certificate.max_violation,
+                residual: ev.certificate.balance_residual,
+            },
             timings,
         });
         if let (Some(report), Some(line)) = (opts.progress, log.last()) {

@@ -3,10 +3,10 @@
 //! s(u_j − g_j) ≤ 0 on the constrained unknowns j}.
 //!
 //! The algorithms see only the trait [`QuadraticEnergy`] (what they need of M and b) and their
-//! own types: [`Constraints`], [`Certificate`], [`IterationLog`], [`SolveTimings`],
-//! [`VariationalSolution`]. They know nothing of meshes, schemes or assembly; the assembled
-//! system ([`crate::assembly::DiscreteSystem`]) implements the trait, and so do small dense
-//! systems in the tests.
+//! own types: [`Constraints`], [`Certificate`], [`IterationLog`] (an [`IterationStep`] and its
+//! [`SolveTimings`]), [`VariationalSolution`]. They know nothing of meshes, schemes or assembly;
+//! the assembled system ([`crate::assembly::DiscreteSystem`]) implements the trait, and so do
+//! small dense systems in the tests.
 //!
 //! - [`active_set`]: the monotony (primal–dual active set) algorithm, with cycle detection;
 //! - [`pgs`]: projected Gauss–Seidel, slow and robust (a fallback and an independent reference);
@@ -86,9 +86,10 @@ impl Constraints {
     }
 }
 
-/// One line of the iteration log.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
-pub struct IterationLog {
+/// What one solve of an iteration did: one line of the iteration log without its timings
+/// (the columns of the replication's `iterations.csv`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct IterationStep {
     /// Linear solve number (1-based).
     pub solve: usize,
     /// Size of the active set used for this solve.
@@ -101,8 +102,24 @@ pub struct IterationLog {
     pub violation: f64,
     /// Largest scaled balance residual on inactive unknowns of the iterate.
     pub residual: f64,
+}
+
+/// One line of the iteration log: the [`IterationStep`] (its fields read through the log,
+/// `l.solve`, `l.active`, …) and the timings of the solve.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct IterationLog {
+    /// What the solve did.
+    #[serde(flatten)]
+    pub step: IterationStep,
     /// Timings of the solve.
     pub timings: SolveTimings,
+}
+
+impl std::ops::Deref for IterationLog {
+    type Target = IterationStep;
+    fn deref(&self) -> &IterationStep {
+        &self.step
+    }
 }
 
 /// How a solution was obtained.
@@ -153,12 +170,14 @@ pub fn solve_unconstrained(
     ev.certificate.check(tol)?;
     Ok(VariationalSolution {
         log: vec![IterationLog {
-            solve: 1,
-            active: 0,
-            entered: 0,
-            left: 0,
-            violation: 0.0,
-            residual: ev.certificate.balance_residual,
+            step: IterationStep {
+                solve: 1,
+                active: 0,
+                entered: 0,
+                left: 0,
+                violation: 0.0,
+                residual: ev.certificate.balance_residual,
+            },
             timings,
         }],
         u,

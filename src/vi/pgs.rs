@@ -8,7 +8,8 @@
 
 use super::certificate::evaluate;
 use super::{
-    Constraints, IterationLog, Method, QuadraticEnergy, SolveTimings, VariationalSolution,
+    Constraints, IterationLog, IterationStep, Method, QuadraticEnergy, SolveTimings,
+    VariationalSolution,
 };
 use crate::error::SolverError;
 
@@ -195,12 +196,14 @@ fn certified_solution(
         active: active.clone(),
         niter: sweeps,
         log: vec![IterationLog {
-            solve: sweeps,
-            active: active.iter().filter(|&&a| a).count(),
-            entered: 0,
-            left: 0,
-            violation: cert.max_violation,
-            residual: cert.balance_residual,
+            step: IterationStep {
+                solve: sweeps,
+                active: active.iter().filter(|&&a| a).count(),
+                entered: 0,
+                left: 0,
+                violation: cert.max_violation,
+                residual: cert.balance_residual,
+            },
             timings: SolveTimings::default(),
         }],
         certificate: cert,

@@ -10,38 +10,11 @@ use gradvi::scheme::*;
 use gradvi::solver::{Solution, SolveOptions, solve_problem};
 use std::path::PathBuf;
 
-const A: Tensor = [[1.5, 0.5], [0.5, 1.5]];
-
 fn gmsh(name: &str) -> PolyMesh {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("meshes")
         .join(name);
     gradvi::mesh::io::read_mesh(&path).unwrap()
-}
-
-/// ū = 1 + 2x − 3y (f = 0) with A anisotropic: Dirichlet on the left and bottom sides, the
-/// Neumann flux A∇ū·n on the right and top sides.
-fn affine_problem() -> Problem {
-    let g = [2.0, -3.0];
-    let flux = [
-        A[0][0] * g[0] + A[0][1] * g[1],
-        A[1][0] * g[0] + A[1][1] * g[1],
-    ];
-    Problem::new("affine", Box::new(|_| 0.0))
-        .with_diffusion(Box::new(|_| A))
-        .with_boundary(|x, _| {
-            if x[0] < 1e-12 || x[1] < 1e-12 {
-                BoundaryKind::Dirichlet
-            } else {
-                BoundaryKind::Neumann
-            }
-        })
-        .with_dirichlet(Box::new(move |x| 1.0 + g[0] * x[0] + g[1] * x[1]))
-        .with_neumann(Box::new(
-            move |x| {
-                if x[0] > 1.0 - 1e-12 { flux[0] } else { flux[1] }
-            },
-        ))
 }
 
 #[test]

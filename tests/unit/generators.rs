@@ -232,3 +232,46 @@ fn counts_and_h_without_the_files() {
         assert!((area - 1.0).abs() < 1e-12, "{what}: area {area}");
     }
 }
+
+/// The levels that aborted on allocation under an 8 GB limit (issue 13) are refused at once by
+/// a smaller budget, with an error giving the estimate; the estimate grows with the level and
+/// the default budget lets the usual levels through.
+#[test]
+fn memory_budget_refuses_large_levels_up_front() {
+    use gradvi::MeshError;
+    use gradvi::mesh::budget::{DEFAULT_MEMORY_BUDGET, memory_budget};
+    for (family, level, budget) in [
+        (Family::Cartesian, 11, 4u64 << 30),
+        (Family::Hexagonal, 8, 512 << 20),
+        (Family::Kershaw, 100, 512 << 20),
+    ] {
+        let estimate = family.memory_estimate(level);
+        assert!(estimate > budget);
+        assert!(estimate > family.memory_estimate(level - 1));
+        let t0 = std::time::Instant::now();
+        let e = family.generate_within(level, budget).unwrap_err();
+        assert!(
+            t0.elapsed().as_secs_f64() < 1.0,
+            "{family} {level}: slow refusal"
+        );
+        match &e {
+            gradvi::Error::InvalidMesh(MeshError::TooLarge {
+                bytes, budget: b, ..
+            }) => {
+                assert_eq!((*bytes, *b), (estimate, budget));
+            }
+            _ => panic!("{family} {level}: {e:?}"),
+        }
+        let msg = e.to_string();
+        assert!(
+            msg.contains(&format!("{family} mesh of level {level}"))
+                && msg.contains("more than the memory budget of"),
+            "{msg}"
+        );
+    }
+    assert!(memory_budget() <= DEFAULT_MEMORY_BUDGET);
+    for f in Family::ALL {
+        assert!(f.memory_estimate(3) < 64 << 20, "{f}");
+        assert!(f.generate_within(3, 64 << 20).is_ok());
+    }
+}

@@ -588,7 +588,7 @@ fn typ2_write_read_round_trip_of_fvca5_files() {
 fn typ2_round_trips(sources: &[PathBuf]) {
     let out = scratch("typ2");
     for src in sources {
-        let m = read_mesh(&src).expect("source mesh");
+        let m = read_mesh(src).expect("source mesh");
         let path = out.join("round.typ2");
         write_typ2(&path, &m).expect("write_typ2");
         let back = read_typ2(&path).expect("read back");

@@ -43,7 +43,13 @@ fn corpus() -> Vec<(&'static str, Expect)> {
             "crossing_squares.typ2",
             Mesh(
                 |e| {
-                    matches!(e, MeshError::CrossingEdges { edges: [[2, 3], [4, 7]], cells: [0, 1] })
+                    matches!(
+                        e,
+                        MeshError::CrossingEdges {
+                            edges: [[2, 3], [4, 7]],
+                            cells: [0, 1]
+                        }
+                    )
                 },
                 "edges (2, 3) of cell 0 and (4, 7) of cell 1 intersect",
             ),
@@ -75,7 +81,10 @@ fn corpus() -> Vec<(&'static str, Expect)> {
         ),
         (
             "typ2_absurd_count.typ2",
-            Parse(8, "cell 1 has 1000000000000 vertices, more than the limit of 1000"),
+            Parse(
+                8,
+                "cell 1 has 1000000000000 vertices, more than the limit of 1000",
+            ),
         ),
         (
             "msh22_truncated.msh",
@@ -109,7 +118,12 @@ fn invalid_corpus_is_rejected_with_typed_errors() {
         let msg = err.to_string();
         assert!(!msg.contains('\n'), "{name}: not one line: {msg}");
         match (expect, &err) {
-            (Expect::Parse(line, text), Error::MeshIo { path: p, line: l, .. }) => {
+            (
+                Expect::Parse(line, text),
+                Error::MeshIo {
+                    path: p, line: l, ..
+                },
+            ) => {
                 assert_eq!((p, *l), (&path, line), "{name}: {msg}");
                 assert!(msg.contains(text), "{name}: {msg}");
             }
@@ -219,11 +233,17 @@ fn self_intersecting_cells_are_rejected() {
     ));
     let v = vec![[0.0, 0.0], [2.0, 0.0], [0.0, 1.0], [1.0, 1.5]];
     let e = PolyMesh::from_cells(v, vec![vec![0, 1, 2, 3]]).unwrap_err();
-    assert!(matches!(e, MeshError::SelfIntersectingCell { cell: 0, .. }), "{e}");
+    assert!(
+        matches!(e, MeshError::SelfIntersectingCell { cell: 0, .. }),
+        "{e}"
+    );
     // a side folding back onto the previous one
     let v = vec![[0.0, 0.0], [2.0, 0.0], [1.0, 0.0], [1.0, 1.0]];
     let e = PolyMesh::from_cells(v, vec![vec![0, 1, 2, 3]]).unwrap_err();
-    assert!(matches!(e, MeshError::SelfIntersectingCell { cell: 0, .. }), "{e}");
+    assert!(
+        matches!(e, MeshError::SelfIntersectingCell { cell: 0, .. }),
+        "{e}"
+    );
 }
 
 #[test]
@@ -252,7 +272,12 @@ fn cells_beyond_the_vertex_limit_are_refused_at_once() {
 /// old duplicate scan quadratic), and the thinnest cells that still pass the area check.
 fn sliver_strip(n: usize) -> (Vec<Point>, Vec<Vec<usize>>) {
     let v = (0..n + 2)
-        .map(|j| [(j % 2) as f64 * 5e-14 + j as f64 * 1e-19, j as f64 / n as f64])
+        .map(|j| {
+            [
+                (j % 2) as f64 * 5e-14 + j as f64 * 1e-19,
+                j as f64 / n as f64,
+            ]
+        })
         .collect();
     (v, (0..n).map(|j| vec![j, j + 1, j + 2]).collect())
 }
@@ -317,7 +342,9 @@ fn validation_times() {
         .collect();
     let id = |i: usize, j: usize| j * (n + 1) + i;
     let c: Vec<Vec<usize>> = (0..n)
-        .flat_map(|j| (0..n).map(move |i| vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]))
+        .flat_map(|j| {
+            (0..n).map(move |i| vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
+        })
         .collect();
     time("10^6 squares", v, c);
     let (v, c) = sliver_strip(300_000);
@@ -330,6 +357,9 @@ fn validation_times() {
     if path.exists() {
         let t0 = Instant::now();
         let r = gradvi::mesh::io::read_msh(path).map(|_| ());
-        println!("/dev/zero as msh: {:.3} s ({r:?})", t0.elapsed().as_secs_f64());
+        println!(
+            "/dev/zero as msh: {:.3} s ({r:?})",
+            t0.elapsed().as_secs_f64()
+        );
     }
 }

@@ -26,13 +26,7 @@ fn compare(scheme: &dyn GradientDiscretisation, p: &Problem) -> (usize, usize, W
     cold.result.certificate.check(1e-10).unwrap();
     nested.result.certificate.check(1e-10).unwrap();
     assert_eq!(cold.result.active, nested.result.active);
-    let scale = cold.u().iter().fold(0.0f64, |a, x| a.max(x.abs()));
-    let diff = cold
-        .u()
-        .iter()
-        .zip(nested.u())
-        .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
-    assert!(diff <= 1e-12 * scale, "cold and nested differ by {diff:e}");
+    assert_close(cold.u(), nested.u(), 1e-12, "cold and nested");
     let report = nested.warm_start.clone().expect("a nested solve reports");
     (cold.niter(), nested.niter(), report)
 }

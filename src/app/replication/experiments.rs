@@ -12,6 +12,8 @@ use gradvi::post::relative_errors;
 use gradvi::problem::{Problem, file, paper_test2_tie};
 use gradvi::scheme::{SchemeKind, build};
 use gradvi::solver::{Solution, SolveOptions, solve_problem, solve_with_symbolic};
+use serde::Serialize;
+use std::fmt::{self, Display};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -140,15 +142,12 @@ fn log_rows(case: &str, kind: SchemeKind, mesh: &str, sol: &Solution) -> Vec<Ite
         .log
         .iter()
         .map(|l| IterationRow {
-            case: case.into(),
-            scheme: kind.to_string(),
-            mesh: mesh.into(),
-            solve: l.solve,
-            active: l.active,
-            entered: l.entered,
-            left: l.left,
-            violation: l.violation,
-            residual: l.residual,
+            run: Run {
+                case: case.into(),
+                scheme: kind.to_string(),
+                mesh: mesh.into(),
+            },
+            step: l.step,
         })
         .collect()
 }
@@ -175,6 +174,61 @@ impl Logs<'_> {
             seconds: t.elapsed().as_secs_f64(),
         });
     }
+
+    /// Keeps the iteration log of `sol`, the solve of `case` with `kind` on mesh `mesh`.
+    fn keep_log(&mut self, case: &str, kind: SchemeKind, mesh: &str, sol: &Solution) {
+        self.iterations.extend(log_rows(case, kind, mesh, sol));
+    }
+
+    /// Solves `problem` (case `case`) with `kind` on `m`, keeps its iteration log, and makes
+    /// the row of the solution with `row`, reported on one line.
+    fn solve_row<R: Display>(
+        &mut self,
+        case: &str,
+        m: &NamedMesh,
+        kind: SchemeKind,
+        problem: &Problem,
+        row: impl FnOnce(&Solution) -> R,
+    ) -> gradvi::Result<R> {
+        let r = with_solution(&m.mesh, kind, problem, |sol| {
+            self.keep_log(case, kind, &m.name, sol);
+            Ok(row(sol))
+        })?;
+        (self.progress)(&r.to_string());
+        Ok(r)
+    }
+}
+
+// The progress line of each row.
+
+impl Display for Test1Row {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "test1 {:<4} {:<10} NITER {:>3}  switch x = {:.4}",
+            self.scheme, self.mesh, self.niter, self.switch_x
+        )
+    }
+}
+
+impl Display for Test2Row {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "test2 {:<4} {:<14} {:<28} NITER {:>3}  e_u = {:.4}  e_grad = {:.4}",
+            self.scheme, self.mesh, self.family, self.niter, self.err_u, self.err_grad
+        )
+    }
+}
+
+impl Display for Test3Row {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "test3 {:<4} {:<8} C = {:>4}  NITER {:>3}  contact area {:.4}",
+            self.scheme, self.mesh, self.c, self.niter, self.contact_area
+        )
+    }
 }
 
 /// The schemes of Tables 1 and 3 (triangle meshes), in registration order.
@@ -190,57 +244,75 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result<Vec<T
         timings: Vec::new(),
         progress,
     };
-    test1(cfg, &mut logs)?;
-    test2(cfg, &mut logs)?;
-    test3(cfg, &mut logs)?;
+    table(cfg, &mut logs, "test1", test1)?;
+    table(cfg, &mut logs, "test2", test2)?;
+    table(cfg, &mut logs, "test3", test3)?;
     write_csv(&cfg.results().join("meshes.csv"), &logs.meshes)?;
     write_csv(&cfg.results().join("iterations.csv"), &logs.iterations)?;
     Ok(logs.timings)
 }
 
-/// Test 1 (Signorini): NITER and the switch point on Γ3 -> `test1.csv`.
-fn test1(cfg: &Config, logs: &mut Logs) -> gradvi::Result<()> {
+/// Runs `experiment`, writes its rows to `results/NAME.csv` and records its time.
+fn table<R: Serialize>(
+    cfg: &Config,
+    logs: &mut Logs,
+    name: &str,
+    experiment: fn(&Config, &mut Logs) -> gradvi::Result<Vec<R>>,
+) -> gradvi::Result<()> {
     let t = Instant::now();
-    let mut rows1 = Vec::new();
-    for m in gmsh_family(cfg, "test1")? {
-        logs.meshes.push(mesh_row(&m));
-        for &kind in TRIANGLE_SCHEMES {
-            let p = builtin("test1", &[])?;
-            let row = with_solution(&m.mesh, kind, &p, |sol| {
-                let cons = sol.constraints.as_ref().expect("Test 1 has a barrier");
-                let sw = switch_point(cons, &sol.result.active, 0);
-                logs.iterations
-                    .extend(log_rows("test1", kind, &m.name, sol));
-                Ok(Test1Row {
-                    scheme: kind.to_string(),
-                    mesh: m.name.clone(),
-                    h: m.mesh.h(),
-                    n_cells: m.mesh.n_cells(),
-                    n_gamma3: m.mesh.boundary_edges_on(1, 0.0),
-                    niter: sol.niter(),
-                    switch_x: sw.map_or(f64::NAN, |s| s.at),
-                    switch_half_gap: sw.map_or(f64::NAN, |s| s.half_gap),
-                    switch_count: sw.map_or(0, |s| s.count),
-                    certificate: worst(sol),
-                    time_s: sol.timings.total,
-                })
-            })?;
-            (logs.progress)(&format!(
-                "test1 {:<4} {:<10} NITER {:>3}  switch x = {:.4}",
-                row.scheme, row.mesh, row.niter, row.switch_x
-            ));
-            rows1.push(row);
-        }
-    }
-    write_csv(&cfg.results().join("test1.csv"), &rows1)?;
-    logs.stage("test1", t);
+    let rows = experiment(cfg, logs)?;
+    write_csv(&cfg.results().join(format!("{name}.csv")), &rows)?;
+    logs.stage(name, t);
     Ok(())
 }
 
-/// Test 2 (heterogeneous Signorini, exact solution): errors, NITER, switch -> `test2.csv`.
-fn test2(cfg: &Config, logs: &mut Logs) -> gradvi::Result<()> {
-    let t = Instant::now();
-    let mut rows2 = Vec::new();
+/// The rows `rows(logs, m, kind)` for every gmsh mesh `m` of `family` (kept for `meshes.csv`)
+/// and every triangle scheme `kind`.
+fn on_gmsh_family<R>(
+    cfg: &Config,
+    logs: &mut Logs,
+    family: &str,
+    mut rows: impl FnMut(&mut Logs, &NamedMesh, SchemeKind) -> gradvi::Result<Vec<R>>,
+) -> gradvi::Result<Vec<R>> {
+    let mut out = Vec::new();
+    for m in gmsh_family(cfg, family)? {
+        logs.meshes.push(mesh_row(&m));
+        for &kind in TRIANGLE_SCHEMES {
+            out.extend(rows(logs, &m, kind)?);
+        }
+    }
+    Ok(out)
+}
+
+/// Test 1 (Signorini): NITER and the switch point on Γ3 (the rows of `test1.csv`).
+fn test1(cfg: &Config, logs: &mut Logs) -> gradvi::Result<Vec<Test1Row>> {
+    on_gmsh_family(cfg, logs, "test1", |logs, m, kind| {
+        let p = builtin("test1", &[])?;
+        let row = logs.solve_row("test1", m, kind, &p, |sol| {
+            let cons = sol.constraints.as_ref().expect("Test 1 has a barrier");
+            let sw = switch_point(cons, &sol.result.active, 0);
+            Test1Row {
+                scheme: kind.to_string(),
+                mesh: m.name.clone(),
+                h: m.mesh.h(),
+                n_cells: m.mesh.n_cells(),
+                n_gamma3: m.mesh.boundary_edges_on(1, 0.0),
+                niter: sol.niter(),
+                switch_x: sw.map_or(f64::NAN, |s| s.at),
+                switch_half_gap: sw.map_or(f64::NAN, |s| s.half_gap),
+                switch_count: sw.map_or(0, |s| s.count),
+                certificate: worst(sol),
+                time_s: sol.timings.total,
+            }
+        })?;
+        Ok(vec![row])
+    })
+}
+
+/// Test 2 (heterogeneous Signorini, exact solution): errors, NITER, switch (the rows of
+/// `test2.csv`).
+fn test2(cfg: &Config, logs: &mut Logs) -> gradvi::Result<Vec<Test2Row>> {
+    let mut rows = Vec::new();
     let mut cases: Vec<(String, NamedMesh, &[SchemeKind])> = Vec::new();
     for (fam, m) in test2_polygonal(cfg)? {
         cases.push((fam, m, &[SchemeKind::Hmm]));
@@ -263,14 +335,12 @@ fn test2(cfg: &Config, logs: &mut Logs) -> gradvi::Result<()> {
         }
         for (fam, p) in variants {
             for &kind in kinds.iter() {
-                let row = with_solution(&m.mesh, kind, p, |sol| {
+                rows.push(logs.solve_row("test2", m, kind, p, |sol| {
                     let cons = sol.constraints.as_ref().expect("Test 2 has a barrier");
                     let sw = switch_point(cons, &sol.result.active, 1);
                     let scheme = sol.system.scheme();
                     let e = relative_errors(scheme, sol.u(), &exact.u, &exact.grad);
-                    logs.iterations
-                        .extend(log_rows("test2", kind, &m.name, sol));
-                    Ok(Test2Row {
+                    Test2Row {
                         scheme: kind.to_string(),
                         family: fam.clone(),
                         mesh: m.name.clone(),
@@ -284,59 +354,42 @@ fn test2(cfg: &Config, logs: &mut Logs) -> gradvi::Result<()> {
                         switch_count: sw.map_or(0, |s| s.count),
                         certificate: worst(sol),
                         time_s: sol.timings.total,
-                    })
-                })?;
-                (logs.progress)(&format!(
-                    "test2 {:<4} {:<14} {:<28} NITER {:>3}  e_u = {:.4}  e_grad = {:.4}",
-                    row.scheme, row.mesh, row.family, row.niter, row.err_u, row.err_grad
-                ));
-                rows2.push(row);
+                    }
+                })?);
             }
         }
     }
-    write_csv(&cfg.results().join("test2.csv"), &rows2)?;
-    logs.stage("test2", t);
-    Ok(())
+    Ok(rows)
 }
 
-/// Test 3 (obstacle) for the four values of C -> `test3.csv`. The symbolic system (pattern,
-/// symbolic factorisation, scatter maps) of each scheme on each mesh is built once and shared
-/// by the four problems.
-fn test3(cfg: &Config, logs: &mut Logs) -> gradvi::Result<()> {
-    let t = Instant::now();
-    let mut rows3 = Vec::new();
-    for m in gmsh_family(cfg, "test3")? {
-        logs.meshes.push(mesh_row(&m));
-        for &kind in TRIANGLE_SCHEMES {
-            let scheme = build(kind, &m.mesh)?;
-            let symbolic = Arc::new(SymbolicSystem::new(scheme.as_ref(), Default::default())?);
-            for c in TEST3_C {
-                let p = builtin("test3", &[("C".into(), c)])?;
-                let sol = solve_with_symbolic(symbolic.clone(), &p, &SolveOptions::default())?;
-                let cons = sol.constraints.as_ref().expect("Test 3 has a barrier");
-                logs.iterations
-                    .extend(log_rows(&p.name, kind, &m.name, &sol));
-                let row = Test3Row {
-                    scheme: kind.to_string(),
-                    mesh: m.name.clone(),
-                    h: m.mesh.h(),
-                    n_cells: m.mesh.n_cells(),
-                    c,
-                    niter: sol.niter(),
-                    n_active: sol.result.active.iter().filter(|&&a| a).count(),
-                    contact_area: contact_measure(cons, &sol.result.active),
-                    certificate: worst(&sol),
-                    time_s: sol.timings.total,
-                };
-                (logs.progress)(&format!(
-                    "test3 {:<4} {:<8} C = {:>4}  NITER {:>3}  contact area {:.4}",
-                    row.scheme, row.mesh, c, row.niter, row.contact_area
-                ));
-                rows3.push(row);
-            }
+/// Test 3 (obstacle) for the four values of C (the rows of `test3.csv`). The symbolic system
+/// (pattern, symbolic factorisation, scatter maps) of each scheme on each mesh is built once and
+/// shared by the four problems.
+fn test3(cfg: &Config, logs: &mut Logs) -> gradvi::Result<Vec<Test3Row>> {
+    on_gmsh_family(cfg, logs, "test3", |logs, m, kind| {
+        let scheme = build(kind, &m.mesh)?;
+        let symbolic = Arc::new(SymbolicSystem::new(scheme.as_ref(), Default::default())?);
+        let mut rows = Vec::new();
+        for c in TEST3_C {
+            let p = builtin("test3", &[("C".into(), c)])?;
+            let sol = solve_with_symbolic(symbolic.clone(), &p, &SolveOptions::default())?;
+            let cons = sol.constraints.as_ref().expect("Test 3 has a barrier");
+            logs.keep_log(&p.name, kind, &m.name, &sol);
+            let row = Test3Row {
+                scheme: kind.to_string(),
+                mesh: m.name.clone(),
+                h: m.mesh.h(),
+                n_cells: m.mesh.n_cells(),
+                c,
+                niter: sol.niter(),
+                n_active: sol.result.active.iter().filter(|&&a| a).count(),
+                contact_area: contact_measure(cons, &sol.result.active),
+                certificate: worst(&sol),
+                time_s: sol.timings.total,
+            };
+            (logs.progress)(&row.to_string());
+            rows.push(row);
         }
-    }
-    write_csv(&cfg.results().join("test3.csv"), &rows3)?;
-    logs.stage("test3", t);
-    Ok(())
+        Ok(rows)
+    })
 }

@@ -1,6 +1,7 @@
 //! The CSV schemas of `replication/results/` and of the paper's values, with readers and
 //! writers. Every table, plot and report is made from these files.
 
+use gradvi::solver::IterationStep;
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 use std::path::Path;
 
@@ -108,27 +109,33 @@ pub struct Test3Row {
     pub time_s: f64,
 }
 
-/// One row of `results/iterations.csv`: the log of the monotony algorithm.
+/// Which solve a row belongs to.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct IterationRow {
+pub struct Run {
     /// test1, test2, test3_C-5, …
     pub case: String,
     /// hmm or p1.
     pub scheme: String,
     /// Mesh name.
     pub mesh: String,
-    /// Solve number.
-    pub solve: usize,
-    /// Active-set size.
-    pub active: usize,
-    /// Entered.
-    pub entered: usize,
-    /// Left.
-    pub left: usize,
-    /// Scaled violation of the iterate.
-    pub violation: f64,
-    /// Scaled balance residual of the iterate.
-    pub residual: f64,
+}
+
+/// One row of `results/iterations.csv`, a line of the log of the monotony algorithm: the
+/// columns of the [`Run`], then those of the [`IterationStep`].
+#[derive(Debug, Clone)]
+pub struct IterationRow {
+    /// The solve.
+    pub run: Run,
+    /// Its iteration.
+    pub step: IterationStep,
+}
+
+impl Serialize for IterationRow {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        // a pair of structs is one CSV record with the fields of both (the csv crate writes no
+        // nested struct, nor a `#[serde(flatten)]` map)
+        (&self.run, &self.step).serialize(s)
+    }
 }
 
 /// One row of `results/timings.csv`.

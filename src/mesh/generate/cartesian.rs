@@ -15,8 +15,8 @@
 //! h = √((x₁−x₀)²/nx² + (y₁−y₀)²/ny²).
 
 use super::{Counts, check_cell_count, check_memory};
-use crate::mesh::budget::memory_budget;
 use crate::error::{Error, Result};
+use crate::mesh::budget::memory_budget;
 use crate::mesh::{Point, PolyMesh};
 
 /// The nx × ny uniform mesh of \[0,1\]² (see the module docs for the numbering).

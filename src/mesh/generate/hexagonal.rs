@@ -55,8 +55,8 @@
 //! Everything is index arithmetic: O(cells) time, no search.
 
 use super::{Counts, check_cell_count, check_memory};
-use crate::mesh::budget::memory_budget;
 use crate::error::{Error, Result};
+use crate::mesh::budget::memory_budget;
 use crate::mesh::{Point, PolyMesh};
 use std::f64::consts::PI;
 

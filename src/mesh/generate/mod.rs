@@ -304,7 +304,11 @@ mod tests {
         };
         for f in Family::ALL {
             for level in 1..=2 {
-                assert_eq!(f.counts(level), count(&f.generate(level).unwrap()), "{f} {level}");
+                assert_eq!(
+                    f.counts(level),
+                    count(&f.generate(level).unwrap()),
+                    "{f} {level}"
+                );
             }
             let estimate = f.memory_estimate(2);
             assert!(f.generate_within(2, estimate).is_ok());
@@ -317,7 +321,10 @@ mod tests {
             assert_eq!(f.memory_estimate(usize::MAX), u64::MAX);
         }
         for (nx, ny) in [(1, 1), (3, 5)] {
-            assert_eq!(cartesian::counts(nx, ny), count(&cartesian(nx, ny).unwrap()));
+            assert_eq!(
+                cartesian::counts(nx, ny),
+                count(&cartesian(nx, ny).unwrap())
+            );
         }
         for n in 1..5 {
             assert_eq!(hexagonal::counts(n), count(&hexagonal_grid(n).unwrap()));

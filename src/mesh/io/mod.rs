@@ -100,19 +100,33 @@ impl TextScan {
     /// Checks `bytes[self.pos..]`, `end` telling whether the file ends there. At the first line
     /// that is not text, returns the offset where that line starts and what is wrong.
     fn scan(&mut self, bytes: &[u8], end: bool) -> Option<(usize, NotText)> {
-        let stop = |s: &Self, msg: String| Some((s.line_start, NotText { line: s.line + 1, msg }));
+        let stop = |s: &Self, msg: String| {
+            Some((
+                s.line_start,
+                NotText {
+                    line: s.line + 1,
+                    msg,
+                },
+            ))
+        };
         while self.pos < bytes.len() {
             let rest = &bytes[self.pos..];
             let run = rest.iter().position(|&b| b == b'\n').unwrap_or(rest.len());
             let chunk = &rest[..run];
             if let Some(i) = chunk.iter().position(|&b| !is_text_byte(b)) {
-                let msg = format!("byte 0x{:02x} is not text: is this a binary file?", chunk[i]);
+                let msg = format!(
+                    "byte 0x{:02x} is not text: is this a binary file?",
+                    chunk[i]
+                );
                 return stop(self, msg);
             }
             self.non_ascii |= !chunk.is_ascii();
             self.pos += run;
             if self.pos - self.line_start > MAX_LINE_BYTES {
-                return stop(self, format!("a line longer than {MAX_LINE_BYTES} bytes: not a mesh file"));
+                return stop(
+                    self,
+                    format!("a line longer than {MAX_LINE_BYTES} bytes: not a mesh file"),
+                );
             }
             if run == rest.len() {
                 break;
@@ -136,7 +150,13 @@ impl TextScan {
         self.non_ascii = false;
         bad.then(|| {
             let msg = "invalid text (not UTF-8): is this a binary file?".to_string();
-            (self.line_start, NotText { line: self.line + 1, msg })
+            (
+                self.line_start,
+                NotText {
+                    line: self.line + 1,
+                    msg,
+                },
+            )
         })
     }
 }
@@ -167,7 +187,11 @@ pub(crate) fn read_text(path: &Path) -> Result<Text> {
         ),
     };
     let mut file = std::fs::File::open(path).map_err(io)?;
-    let known = file.metadata().ok().filter(|m| m.is_file()).map(|m| m.len());
+    let known = file
+        .metadata()
+        .ok()
+        .filter(|m| m.is_file())
+        .map(|m| m.len());
     if let Some(len) = known.filter(|&len| len > limit as u64) {
         return Err(too_large(format!("the file has {len} bytes")));
     }
@@ -646,7 +670,10 @@ mod tests {
                     Err(e) => break e.to_string(),
                 }
             };
-            assert!(e.starts_with(&format!("t.msh:{line}: ")) && e.contains(what), "{e}");
+            assert!(
+                e.starts_with(&format!("t.msh:{line}: ")) && e.contains(what),
+                "{e}"
+            );
             let mut t = Tokens::new(p, bytes);
             t.next_line().unwrap();
             if line > 2 {
@@ -672,7 +699,10 @@ mod tests {
         assert!(text.bytes.is_empty());
         assert_eq!(text.stop.unwrap().line, 1);
         let e = msh::parse_msh(zero, &[0; 4096]).unwrap_err();
-        assert_eq!(e.to_string(), "/dev/zero:1: byte 0x00 is not text: is this a binary file?");
+        assert_eq!(
+            e.to_string(),
+            "/dev/zero:1: byte 0x00 is not text: is this a binary file?"
+        );
         assert!(t0.elapsed().as_secs_f64() < 5.0);
     }
 
