@@ -63,16 +63,18 @@ fn errors(meshes: &[PolyMesh], p1: bool, problem: &Problem) -> (Vec<f64>, Vec<f6
     (h, eu, eg)
 }
 
-fn assert_slopes(name: &str, (h, eu, eg): (Vec<f64>, Vec<f64>, Vec<f64>), su: f64, sg_min: f64) {
+/// Both fitted slopes within ±0.15 of the expected orders (two-sided: a slope far above the
+/// expected one is as suspicious as one below it).
+fn assert_slopes(name: &str, (h, eu, eg): (Vec<f64>, Vec<f64>, Vec<f64>), su: f64, sg: f64) {
     let (a, b) = (fitted_slope(&h, &eu), fitted_slope(&h, &eg));
     eprintln!("{name}: slope u {a:.3}, slope grad {b:.3} (errors u {eu:?}, grad {eg:?})");
     assert!(
-        (a - su).abs() <= 0.15 || a > su,
+        (a - su).abs() <= 0.15,
         "{name}: slope of u {a:.3}, expected {su} ± 0.15"
     );
     assert!(
-        b >= sg_min,
-        "{name}: slope of the gradient {b:.3} < {sg_min}"
+        (b - sg).abs() <= 0.15,
+        "{name}: slope of the gradient {b:.3}, expected {sg} ± 0.15"
     );
 }
 
@@ -89,16 +91,17 @@ fn fvca5_test11_converges_on_four_families() {
         .iter()
         .map(|&n| triangle_grid(n, 0.25))
         .collect();
-    // HMM: order 2 on u at centroids, order 1 or better on ∇_K u
-    assert_slopes("HMM Cartesian", errors(&cart, false, &p), 2.0, 0.85);
-    assert_slopes("HMM hexagonal", errors(&hex, false, &p), 2.0, 0.85);
-    assert_slopes("HMM Kershaw", errors(&ker, false, &p), 2.0, 0.85);
-    assert_slopes("HMM triangles", errors(&tri, false, &p), 2.0, 0.85);
+    // HMM: order 2 on u at centroids on every family. The theory guarantees order 1 for
+    // ∇_K u; sampled at the centroids it superconverges (order 2) on the Cartesian and the
+    // smoothly mapped Kershaw families, not on the perturbed triangles (order 1); on the
+    // hexagonal family the measured slope is 1.46, its successive ratios rising (1.26, 1.42,
+    // 1.49) — a partial superconvergence that the band pins at 1.5.
+    assert_slopes("HMM Cartesian", errors(&cart, false, &p), 2.0, 2.0);
+    assert_slopes("HMM hexagonal", errors(&hex, false, &p), 2.0, 1.5);
+    assert_slopes("HMM Kershaw", errors(&ker, false, &p), 2.0, 2.0);
+    assert_slopes("HMM triangles", errors(&tri, false, &p), 2.0, 1.0);
     // P1 on triangles: order 2 in L² (at centroids), order 1 for the gradient
-    let (h, eu, eg) = errors(&tri, true, &p);
-    let sg = fitted_slope(&h, &eg);
-    assert!((sg - 1.0).abs() <= 0.15, "P1 gradient slope {sg}");
-    assert_slopes("P1 triangles", (h, eu, eg), 2.0, 0.85);
+    assert_slopes("P1 triangles", errors(&tri, true, &p), 2.0, 1.0);
 }
 
 #[test]
@@ -109,10 +112,8 @@ fn fvca5_triangles_from_the_shared_files() {
     let meshes: Vec<PolyMesh> = (1..=4)
         .map(|l| gradvi::mesh::io::read_mesh(dir.join(format!("mesh1_{l}.typ2"))).unwrap())
         .collect();
-    assert_slopes("HMM FVCA5 mesh1", errors(&meshes, false, &p), 2.0, 0.85);
-    let (h, eu, eg) = errors(&meshes, true, &p);
-    assert!((fitted_slope(&h, &eg) - 1.0).abs() <= 0.15);
-    assert_slopes("P1 FVCA5 mesh1", (h, eu, eg), 2.0, 0.85);
+    assert_slopes("HMM FVCA5 mesh1", errors(&meshes, false, &p), 2.0, 1.0);
+    assert_slopes("P1 FVCA5 mesh1", errors(&meshes, true, &p), 2.0, 1.0);
 }
 
 #[test]
@@ -140,21 +141,21 @@ fn mixed_dirichlet_neumann_converges() {
         (A[0][0] * g[0] + A[0][1] * g[1]) * n[0] + (A[1][0] * g[0] + A[1][1] * g[1]) * n[1]
     });
     let hex: Vec<PolyMesh> = (1..=4).map(|l| hexagonal(l).unwrap()).collect();
-    assert_slopes("HMM hexagonal mixed", errors(&hex, false, &p), 2.0, 0.85);
+    assert_slopes("HMM hexagonal mixed", errors(&hex, false, &p), 2.0, 1.5);
     let tri: Vec<PolyMesh> = [8, 16, 32, 64]
         .iter()
         .map(|&n| triangle_grid(n, 0.25))
         .collect();
-    assert_slopes("P1 triangles mixed", errors(&tri, true, &p), 2.0, 0.85);
+    assert_slopes("P1 triangles mixed", errors(&tri, true, &p), 2.0, 1.0);
 }
 
 #[test]
 fn test2_gradient_order_on_hexagonal_meshes() {
-    // the paper's Test 2 (Signorini, heterogeneous): order ≥ 0.85 on ∇u between the last two
-    // hexagonal meshes, as the replication issue requires
+    // the paper's Test 2 (Signorini, heterogeneous, u ∈ H² only piecewise): order 1 on ∇u
+    // between the last two hexagonal meshes (the paper's rate; measured 1.01), ± 0.15
     let p = paper_test2();
     let hex: Vec<PolyMesh> = (3..=4).map(|l| hexagonal(l).unwrap()).collect();
     let (h, _, eg) = errors(&hex, false, &p);
     let order = gradvi::post::order(eg[0], eg[1], h[0], h[1]);
-    assert!(order >= 0.85, "order on the gradient {order}");
+    assert!((order - 1.0).abs() <= 0.15, "order on the gradient {order}");
 }

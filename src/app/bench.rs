@@ -361,7 +361,7 @@ pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
         for l in &sol.result.log {
             eprintln!(
                 "[bench]     solve {:>3}: active {:>8} (+{}, -{}), factor {:.3} s",
-                l.solve, l.active, l.entered, l.left, l.timings.factor
+                l.step.solve, l.step.active, l.step.entered, l.step.left, l.timings.factor
             );
         }
     }
@@ -408,7 +408,7 @@ pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
             .result
             .log
             .iter()
-            .map(|l| format!("+{}/-{}", l.entered, l.left))
+            .map(|l| format!("+{}/-{}", l.step.entered, l.step.left))
             .collect::<Vec<_>>()
             .join(" "),
         run: 0,
@@ -584,21 +584,24 @@ pub fn plan(cfg: &Config) -> gradvi::Result<Vec<Case>> {
     Ok(cases)
 }
 
-/// Runs `case` in a child process (`gradvi bench --child …`) and parses its row.
-pub fn run_child(exe: &Path, case: &Case) -> gradvi::Result<BenchRow> {
-    let out = Command::new(exe)
-        .args(case.child_args())
+/// Runs `cmd` (the program `exe`) with stderr passed through, and returns its standard output;
+/// an error naming `what` if it fails.
+fn stdout_of(mut cmd: Command, exe: &Path, what: &str) -> gradvi::Result<String> {
+    let out = cmd
         .stderr(Stdio::inherit())
         .output()
         .map_err(|e| io_err(exe, e))?;
     if !out.status.success() {
-        return Err(bad(format!(
-            "case {} failed ({})",
-            case.label(),
-            out.status
-        )));
+        return Err(bad(format!("{what} failed ({})", out.status)));
     }
-    let text = String::from_utf8_lossy(&out.stdout);
+    Ok(String::from_utf8_lossy(&out.stdout).into_owned())
+}
+
+/// Runs `case` in a child process (`gradvi bench --child …`) and parses its row.
+pub fn run_child(exe: &Path, case: &Case) -> gradvi::Result<BenchRow> {
+    let mut cmd = Command::new(exe);
+    cmd.args(case.child_args());
+    let text = stdout_of(cmd, exe, &format!("case {}", case.label()))?;
     let line = text
         .lines()
         .rev()
@@ -637,26 +640,16 @@ pub fn run_dolfinx(cfg: &Config, mesh: &Path) -> gradvi::Result<BenchRow> {
         try:\n    runpy.run_path(sys.argv[0], run_name='__main__')\n\
         finally:\n    print('BENCH_MAXRSS_KB', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\n";
     let t0 = Instant::now();
-    let out = Command::new(&cfg.python)
-        .arg("-c")
+    let mut cmd = Command::new(&cfg.python);
+    cmd.arg("-c")
         .arg(wrapper)
         .arg(&script)
         .args(["--case", &case, "--mesh"])
         .arg(mesh)
         .arg("--outdir")
-        .arg(&outdir)
-        .stderr(Stdio::inherit())
-        .output()
-        .map_err(|e| io_err(&cfg.python, e))?;
+        .arg(&outdir);
+    let text = stdout_of(cmd, &cfg.python, &format!("dolfinx on {}", mesh.display()))?;
     let wall = t0.elapsed().as_secs_f64();
-    if !out.status.success() {
-        return Err(bad(format!(
-            "dolfinx on {} failed ({})",
-            mesh.display(),
-            out.status
-        )));
-    }
-    let text = String::from_utf8_lossy(&out.stdout);
     let peak_mib = text
         .lines()
         .find_map(|l| l.strip_prefix("BENCH_MAXRSS_KB "))

@@ -180,11 +180,11 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         progress: Some(|l| {
             eprintln!(
                 "  solve {:>3}: active {} (+{}, -{}), violation {:.2e}, {:.2} s",
-                l.solve,
-                l.active,
-                l.entered,
-                l.left,
-                l.violation,
+                l.step.solve,
+                l.step.active,
+                l.step.entered,
+                l.step.left,
+                l.step.violation,
                 l.timings.assemble + l.timings.factor + l.timings.solve
             )
         }),
@@ -237,7 +237,7 @@ pub fn run(a: &SolveArgs) -> Result<()> {
     for l in &sol.result.log {
         println!(
             "  {:>5}  {:>6}  {:>7}  {:>4}  {:>9.2e}  {:>8.2e}",
-            l.solve, l.active, l.entered, l.left, l.violation, l.residual
+            l.step.solve, l.step.active, l.step.entered, l.step.left, l.step.violation, l.step.residual
         );
     }
     let c = sol.result.certificate;

@@ -307,21 +307,7 @@ fn counting_sort(
     n_buckets: usize,
     keys: impl Iterator<Item = Option<usize>> + Clone,
 ) -> Ragged<u32> {
-    let mut ptr = vec![0usize; n_buckets + 1];
-    for b in keys.clone().flatten() {
-        ptr[b + 1] += 1;
-    }
-    for i in 0..n_buckets {
-        ptr[i + 1] += ptr[i];
-    }
-    let mut fill = ptr.clone();
-    let mut items = vec![0u32; ptr[n_buckets]];
-    for (i, key) in keys.enumerate() {
-        if let Some(b) = key {
-            items[fill[b]] = i as u32;
-            fill[b] += 1;
-        }
-    }
+    let (ptr, items) = crate::mesh::buckets::counting_sort(n_buckets, keys, |i| i as u32);
     Ragged { ptr, items }
 }
 

@@ -20,6 +20,7 @@
 //! | [`PolyMesh::cell_dists`] | d_{K,σ} = (x_σ − x_K)·n_{K,σ} > 0 |
 //! | [`PolyMesh::h`] | h = max_K h_K |
 
+pub(crate) mod buckets;
 pub mod budget;
 pub mod generate;
 pub mod io;
@@ -632,6 +633,24 @@ pub(crate) fn drop_unused_vertices_flat(
         };
     }
     (new_vertices, new_id)
+}
+
+/// A small xorshift generator (deterministic tests without a crate).
+#[cfg(test)]
+pub(crate) fn xorshift(mut s: u64) -> impl FnMut() -> u64 {
+    move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        s
+    }
+}
+
+/// [`xorshift`] as numbers in [0, 1).
+#[cfg(test)]
+pub(crate) fn test_rng(s: u64) -> impl FnMut() -> f64 {
+    let mut next = xorshift(s);
+    move || (next() >> 11) as f64 / (1u64 << 53) as f64
 }
 
 #[cfg(test)]

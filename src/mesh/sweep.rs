@@ -332,31 +332,13 @@ struct Events {
 
 /// A CSR of `0..keys.len()` by key (`n` keys), in increasing order within each key.
 fn csr(keys: impl Iterator<Item = usize> + Clone, n: usize) -> (Vec<usize>, Vec<usize>) {
-    let mut ptr = vec![0usize; n + 1];
-    for k in keys.clone() {
-        ptr[k + 1] += 1;
-    }
-    for i in 0..n {
-        ptr[i + 1] += ptr[i];
-    }
-    let mut fill = ptr.clone();
-    let mut ids = vec![0usize; ptr[n]];
-    for (i, k) in keys.enumerate() {
-        ids[fill[k]] = i;
-        fill[k] += 1;
-    }
-    (ptr, ids)
+    super::buckets::counting_sort(n, keys.map(Some), |i| i)
 }
 
 impl Events {
     fn new(pts: &[Point], segs: &[[usize; 2]]) -> Events {
         let n = pts.len();
-        let mut keyed: Vec<(u64, u64, usize)> = pts
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (sort_key(p[0]), sort_key(p[1]), i))
-            .collect();
-        keyed.sort_unstable();
+        let keyed = super::buckets::sorted_point_keys(pts, sort_key);
         let mut rank = vec![0usize; n];
         let mut sorted_pts = Vec::with_capacity(n);
         for (r, &(_, _, v)) in keyed.iter().enumerate() {
@@ -516,16 +498,7 @@ fn first_collision_brute(pts: &[Point], segs: &[[usize; 2]]) -> Option<(usize, u
 mod tests {
     use super::*;
     use crate::mesh::predicates::lex;
-
-    /// A small xorshift generator (deterministic tests without a crate).
-    fn rng(mut s: u64) -> impl FnMut() -> f64 {
-        move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use crate::mesh::test_rng as rng;
 
     #[test]
     fn sort_key_follows_the_order_of_floats() {
@@ -583,37 +556,29 @@ mod tests {
             [1.0, 0.0],
             [3.0, 0.0],
         ];
-        // a cross
-        assert_eq!(
-            first_collision(&pts, &[[0, 1], [2, 3]], &[]),
-            Sweep::Collision(0, 1)
-        );
-        // T-junction: vertex 4 on the segment 0–1
-        assert_eq!(
-            first_collision(&pts, &[[0, 1], [4, 3]], &[]),
-            Sweep::Collision(0, 1)
-        );
-        // collinear overlap with a shared end point, and without
-        assert_eq!(
-            first_collision(&pts, &[[0, 1], [0, 4]], &[]),
-            Sweep::Collision(0, 1)
-        );
-        assert_eq!(
-            first_collision(&pts, &[[0, 1], [4, 5]], &[]),
-            Sweep::Collision(0, 1)
-        );
-        // a path through shared vertices is fine
-        assert!(clear(&first_collision(
-            &pts,
-            &[[0, 4], [4, 1], [1, 5]],
-            &[]
-        )));
-        // vertical segments
-        assert!(clear(&first_collision(&pts, &[[2, 4], [4, 3]], &[])));
-        assert_eq!(
-            first_collision(&pts, &[[2, 3], [0, 4]], &[]),
-            Sweep::Collision(0, 1)
-        );
+        // (the segments, whether they collide)
+        let cases: [(&[[usize; 2]], bool); 7] = [
+            // a cross
+            (&[[0, 1], [2, 3]], true),
+            // T-junction: vertex 4 on the segment 0–1
+            (&[[0, 1], [4, 3]], true),
+            // collinear overlap with a shared end point, and without
+            (&[[0, 1], [0, 4]], true),
+            (&[[0, 1], [4, 5]], true),
+            // a path through shared vertices is fine
+            (&[[0, 4], [4, 1], [1, 5]], false),
+            // vertical segments
+            (&[[2, 4], [4, 3]], false),
+            (&[[2, 3], [0, 4]], true),
+        ];
+        for (segs, collides) in cases {
+            let found = first_collision(&pts, segs, &[]);
+            if collides {
+                assert_eq!(found, Sweep::Collision(0, 1), "{segs:?}");
+            } else {
+                assert!(clear(&found), "{segs:?}");
+            }
+        }
     }
 
     /// Random segments: the sweep agrees with the brute-force test on whether there is a

@@ -339,12 +339,7 @@ pub(crate) fn check_duplicate_vertices(vertices: &[Point]) -> Result<(), MeshErr
     };
     let tol = 2.0 * half_tol;
     let square = |x: f64| ((0.5 * x - 0.5 * lo) / half_tol).floor() as i64;
-    let mut keys: Vec<(i64, i64, usize)> = vertices
-        .iter()
-        .enumerate()
-        .map(|(i, p)| (square(p[0]), square(p[1]), i))
-        .collect();
-    keys.sort_unstable();
+    let keys = super::buckets::sorted_point_keys(vertices, square);
     let duplicate = |a: usize, b: usize| {
         let (a, b) = (a.min(b), a.max(b));
         MeshError::DuplicateVertex {
@@ -564,14 +559,7 @@ pub(crate) fn check_no_overlap(t: &Topology, boundary: &Boundary) -> Result<(), 
 mod tests {
     use super::*;
 
-    fn rng(mut s: u64) -> impl FnMut() -> f64 {
-        move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use crate::mesh::test_rng as rng;
 
     /// A random polygon, star-shaped around the origin when `simple` (increasing angles),
     /// else with its corners in random order.

@@ -325,7 +325,7 @@ mod tests {
             "{}",
             s.error
         );
-        assert_eq!(s.log.len(), s.log.last().unwrap().solve);
+        assert_eq!(s.log.len(), s.log.last().unwrap().step.solve);
         assert!(solve(&sys, &cons, &ActiveSetOptions::default()).is_err());
     }
 

@@ -115,13 +115,6 @@ pub struct IterationLog {
     pub timings: SolveTimings,
 }
 
-impl std::ops::Deref for IterationLog {
-    type Target = IterationStep;
-    fn deref(&self) -> &IterationStep {
-        &self.step
-    }
-}
-
 /// How a solution was obtained.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Method {

@@ -30,6 +30,28 @@ fn read_no_panic(path: &Path) -> gradvi::Result<PolyMesh> {
     }
 }
 
+/// Asserts that the files of the corpus `dir` are exactly `names`.
+pub(crate) fn assert_corpus_is<'a>(dir: &Path, names: impl Iterator<Item = &'a str>) {
+    let mut on_disk: Vec<String> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| {
+            e.expect("dir entry")
+                .file_name()
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    on_disk.sort();
+    let mut listed: Vec<String> = names.map(str::to_string).collect();
+    listed.sort();
+    assert_eq!(
+        on_disk,
+        listed,
+        "{}: corpus and expectations differ",
+        dir.display()
+    );
+}
+
 /// What a malformed file must produce.
 enum Expect {
     /// `Error::MeshIo` at this 1-based line (0: not tied to a line).
@@ -108,20 +130,8 @@ fn malformed_files_are_rejected_with_context() {
     let dir = data("malformed");
     let expectations = malformed_expectations();
     // every file of the corpus has an expectation, and vice versa
-    let mut on_disk: Vec<String> = std::fs::read_dir(&dir)
-        .expect("tests/data/malformed")
-        .map(|e| {
-            e.expect("dir entry")
-                .file_name()
-                .to_string_lossy()
-                .into_owned()
-        })
-        .collect();
-    on_disk.sort();
-    let mut listed: Vec<String> = expectations.iter().map(|(n, _)| n.to_string()).collect();
-    listed.sort();
-    assert_eq!(on_disk, listed, "malformed corpus and expectations differ");
-    assert!(listed.len() >= 12);
+    assert_corpus_is(&dir, expectations.iter().map(|(n, _)| *n));
+    assert!(expectations.len() >= 12);
 
     for (name, expect) in &expectations {
         let path = dir.join(name);
@@ -164,13 +174,6 @@ fn malformed_files_are_rejected_with_context() {
 #[test]
 fn readers_never_panic_on_truncated_or_corrupted_files() {
     let out = scratch("fuzz");
-    let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
-    let mut rand = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        seed
-    };
     for name in [
         "square_41.msh",
         "square_22.msh",
@@ -189,10 +192,11 @@ fn readers_never_panic_on_truncated_or_corrupted_files() {
             let _ = read_no_panic(&path);
         }
         const NOISE: &[u8] = b"-.x$\xff";
-        for _ in 0..20 {
+        // 20 corruptions spread over the file
+        for k in 0..20 {
             let mut b = bytes.clone();
-            let i = (rand() % b.len() as u64) as usize;
-            b[i] = NOISE[(rand() % NOISE.len() as u64) as usize];
+            let i = (k * 7919 + 13) % b.len();
+            b[i] = NOISE[k % NOISE.len()];
             std::fs::write(&path, &b).expect("write");
             let _ = read_no_panic(&path);
         }

@@ -99,14 +99,7 @@ fn corpus() -> Vec<(&'static str, Expect)> {
 fn invalid_corpus_is_rejected_with_typed_errors() {
     let dir = data("invalid");
     let expectations = corpus();
-    let mut on_disk: Vec<String> = std::fs::read_dir(&dir)
-        .expect("tests/data/invalid")
-        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
-        .collect();
-    on_disk.sort();
-    let mut listed: Vec<String> = expectations.iter().map(|(n, _)| n.to_string()).collect();
-    listed.sort();
-    assert_eq!(on_disk, listed, "invalid corpus and expectations differ");
+    crate::mesh_io::assert_corpus_is(&dir, expectations.iter().map(|(n, _)| *n));
     for (name, expect) in expectations {
         let path = dir.join(name);
         let t0 = Instant::now();

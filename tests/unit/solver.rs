@@ -151,10 +151,10 @@ fn m_matrix_iterates_are_monotone_and_niter_is_bounded() {
             }
         }
         for l in &sol.log[1..] {
-            assert!(l.violation == 0.0, "{:?}", sol.log);
+            assert!(l.step.violation == 0.0, "{:?}", sol.log);
         }
         for l in &sol.log[2..] {
-            assert!(l.entered == 0, "{:?}", sol.log);
+            assert!(l.step.entered == 0, "{:?}", sol.log);
         }
         assert!(
             sol.niter >= 3,

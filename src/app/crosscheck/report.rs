@@ -336,16 +336,23 @@ fn test1_switch(md: &mut Doc, t1: &Rows, failed: &mut Vec<String>) {
     }
 }
 
+/// A paragraph (the tolerance of a check), then the table of the check.
+fn intro_table(md: &mut Doc, intro: String, header: String, align: &str) -> Table {
+    md.para(intro);
+    Table::new(&header, align)
+}
+
 /// What [`zone_sentence`] reads of a row for one solution: switch, zone trace, active count.
 type Pick = fn(&CrosscheckRow) -> (Option<f64>, Option<f64>, usize);
 
 /// Section 3, Test 2: switch ordinates near 0.5, or a zone trace that decreases.
 fn test2_switch(md: &mut Doc, t2: &Rows, failed: &mut Vec<String>) {
-    md.para(format!(
-        "Tolerance: for each scheme in contact somewhere on Γ3, |switch − 0.5| ≤ {SWITCH_TOL_H}h on each mesh. In the exact solution the contact on y > 1/2 is *degenerate*: ū = 0 **and** A∇ū·n = 0 there (no strict complementarity), so a discrete solution may stay strictly below the barrier and have no active unknown at all, hence no switch. For such a scheme the check is instead that its trace in the exact contact zone tends to 0: *zone trace* = max |u| over the Γ3 unknowns with y > 1/2 divided by max |u| over all Γ3 unknowns (0 when every such unknown is in contact), which must decrease from the coarsest to the finest mesh (checked when there are at least 2 meshes)."
-    ));
-    let mut t = Table::new(
-        &format!(
+    let mut t = intro_table(
+        md,
+        format!(
+            "Tolerance: for each scheme in contact somewhere on Γ3, |switch − 0.5| ≤ {SWITCH_TOL_H}h on each mesh. In the exact solution the contact on y > 1/2 is *degenerate*: ū = 0 **and** A∇ū·n = 0 there (no strict complementarity), so a discrete solution may stay strictly below the barrier and have no active unknown at all, hence no switch. For such a scheme the check is instead that its trace in the exact contact zone tends to 0: *zone trace* = max |u| over the Γ3 unknowns with y > 1/2 divided by max |u| over all Γ3 unknowns (0 when every such unknown is in contact), which must decrease from the coarsest to the finest mesh (checked when there are at least 2 meshes)."
+        ),
+        format!(
             "{SWITCH_COLUMNS} | max abs(switch − 0.5) | {SWITCH_TOL_H}h | zone trace HMM | zone trace gradvi-P1 | zone trace dolfinx-P1 | "
         ),
         "lrrrrrrrrrl",
@@ -454,11 +461,12 @@ fn zone_sentence(t2: &Rows, name: &str, pick: Pick) -> (String, bool) {
 
 /// Section 3, Test 3: contact areas and the Hausdorff distance of the free boundaries.
 fn test3_contact(md: &mut Doc, t3: &Rows, failed: &mut Vec<String>) {
-    md.para(format!(
-        "Tolerance: Hausdorff distance between the HMM and P1 free boundaries ≤ {HAUSDORFF_TOL_H}h on every mesh, and smaller on the finest mesh than on the coarsest (checked when there are at least 2 meshes). gradvi-P1 and dolfinx-P1 must have the same free boundary (Hausdorff 0)."
-    ));
-    let mut t = Table::new(
-        &format!(
+    let mut t = intro_table(
+        md,
+        format!(
+            "Tolerance: Hausdorff distance between the HMM and P1 free boundaries ≤ {HAUSDORFF_TOL_H}h on every mesh, and smaller on the finest mesh than on the coarsest (checked when there are at least 2 meshes). gradvi-P1 and dolfinx-P1 must have the same free boundary (Hausdorff 0)."
+        ),
+        format!(
             "C | mesh | h | contact HMM | contact gradvi-P1 | contact dolfinx-P1 | Hausdorff HMM–P1 | {HAUSDORFF_TOL_H}h | Hausdorff gradvi-P1–dolfinx-P1 | "
         ),
         "rlrrrrrrrl",

@@ -88,9 +88,7 @@ fn cartesian_data(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> (Vec<Point>
 mod tests {
     use super::*;
 
-    fn total_area(m: &PolyMesh) -> f64 {
-        (0..m.n_cells()).map(|k| m.measure(k)).sum()
-    }
+    use crate::mesh::generate::total_area;
 
     #[test]
     fn unit_square_counts_area_and_h() {

@@ -313,9 +313,7 @@ fn hexagonal_data(n: usize) -> (Vec<Point>, Vec<Vec<usize>>) {
 mod tests {
     use super::*;
 
-    fn total_area(m: &PolyMesh) -> f64 {
-        (0..m.n_cells()).map(|k| m.measure(k)).sum()
-    }
+    use crate::mesh::generate::total_area;
 
     #[test]
     fn level_1_is_hexa1_1() {

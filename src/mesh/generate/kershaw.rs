@@ -194,9 +194,7 @@ mod tests {
     use super::*;
     use crate::error::Error;
 
-    fn total_area(m: &PolyMesh) -> f64 {
-        (0..m.n_cells()).map(|k| m.measure(k)).sum()
-    }
+    use crate::mesh::generate::total_area;
 
     #[test]
     fn counts_area_and_h() {

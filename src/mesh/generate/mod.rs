@@ -233,6 +233,12 @@ impl FromStr for Family {
     }
 }
 
+/// The total area of the cells (for the generators' tests).
+#[cfg(test)]
+pub(crate) fn total_area(m: &PolyMesh) -> f64 {
+    (0..m.n_cells()).map(|k| m.measure(k)).sum()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

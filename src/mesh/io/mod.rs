@@ -521,6 +521,25 @@ pub(crate) fn normalize_header(text: &str) -> String {
         .join(" ")
 }
 
+/// Parses `text` (as the file `name`) with each edit `(from, to, prefix, needle)` applied:
+/// the edit must be rejected with a message that starts with `prefix` and contains `needle`.
+#[cfg(test)]
+pub(crate) fn assert_edits_rejected(
+    parse: fn(&Path, &[u8]) -> Result<PolyMesh>,
+    name: &str,
+    text: &str,
+    edits: &[(&str, &str, &str, &str)],
+) {
+    for &(from, to, prefix, needle) in edits {
+        assert!(text.contains(from), "{name}: no {from:?} to edit");
+        let bad = text.replace(from, to);
+        let e = parse(Path::new(name), bad.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with(prefix) && e.contains(needle), "{e}");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -585,43 +604,36 @@ mod tests {
     /// panics (in memory, so that it is fast; tests/unit/mesh_io.rs does a sample via files).
     #[test]
     fn fuzz_truncations_and_corruptions() {
-        type Parser = fn(&Path, &[u8]) -> Result<()>;
-        let cases: [(&str, &[u8], Parser); 5] = [
+        let cases: [(&str, &[u8]); 5] = [
             (
                 "a.msh",
                 include_bytes!("../../../tests/data/good/square_41.msh"),
-                |p, b| msh::parse_msh(p, b).map(|_| ()),
             ),
             (
                 "b.msh",
                 include_bytes!("../../../tests/data/good/square_22.msh"),
-                |p, b| msh::parse_msh(p, b).map(|_| ()),
             ),
             (
                 "c.msh",
                 include_bytes!("../../../tests/data/good/square_41_gmsh22.msh"),
-                |p, b| msh::parse_msh(p, b).map(|_| ()),
             ),
             (
                 "d.typ1",
                 include_bytes!("../../../tests/data/good/hanging.typ1"),
-                |p, b| typ1::parse_typ1(p, b).map(|_| ()),
             ),
             (
                 "e.typ2",
                 include_bytes!("../../../tests/data/good/hanging.typ2"),
-                |p, b| typ2::parse_typ2(p, b).map(|_| ()),
             ),
         ];
-        let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
-        let mut rand = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
+        let parse = |p: &Path, b: &[u8]| match p.extension().and_then(|e| e.to_str()) {
+            Some("msh") => msh::parse_msh(p, b).map(|_| ()),
+            Some("typ1") => typ1::parse_typ1(p, b).map(|_| ()),
+            _ => typ2::parse_typ2(p, b).map(|_| ()),
         };
+        let mut rand = crate::mesh::xorshift(0x2545_f491_4f6c_dd1d);
         const NOISE: &[u8] = b"0123456789-.eE+ \n$\"x\xff";
-        for (name, bytes, parse) in cases {
+        for (name, bytes) in cases {
             let path = Path::new(name);
             assert!(parse(path, bytes).is_ok(), "{name}");
             let run = |b: &[u8]| {

@@ -372,12 +372,19 @@ fn read_nodes22(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     expect(t, "$EndNodes")
 }
 
-fn read_nodes41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
-    let nblocks = t.count("the number of node blocks")?;
-    let n = t.count("the number of nodes")?;
+/// The header of a gmsh 4.1 `$Nodes` or `$Elements` section (`what`: "node" or "element"):
+/// the numbers of blocks and of items, and the line of the latter; the tag range is skipped.
+fn read_block_header41(t: &mut Tokens, what: &str) -> Result<(usize, usize, usize)> {
+    let nblocks = t.count_with(format_args!("the number of {what} blocks"))?;
+    let n = t.count_with(format_args!("the number of {what}s"))?;
     let header_line = t.token_line();
-    t.parse::<u64>("the smallest node tag")?;
-    t.parse::<u64>("the largest node tag")?;
+    t.parse_with::<u64>(format_args!("the smallest {what} tag"))?;
+    t.parse_with::<u64>(format_args!("the largest {what} tag"))?;
+    Ok((nblocks, n, header_line))
+}
+
+fn read_nodes41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+    let (nblocks, n, header_line) = read_block_header41(t, "node")?;
     raw.nodes.reserve(capacity(n, t.remaining()));
     raw.node_index = NodeIndex::new(n, t.remaining());
     let mut tags = Vec::new();
@@ -478,11 +485,7 @@ fn read_elements22(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
 }
 
 fn read_elements41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
-    let nblocks = t.count("the number of element blocks")?;
-    let n = t.count("the number of elements")?;
-    let header_line = t.token_line();
-    t.parse::<u64>("the smallest element tag")?;
-    t.parse::<u64>("the largest element tag")?;
+    let (nblocks, n, header_line) = read_block_header41(t, "element")?;
     raw.cell_ptr.push(0);
     let mut total = 0usize;
     for b in 1..=nblocks {

@@ -102,6 +102,25 @@ fn write_data(w: &mut impl Write, name: &str, values: &[f64]) -> std::io::Result
     writeln!(w, "        </DataArray>")
 }
 
+/// A `DataArray` of the `<Cells>` block, of type `ty` and named `name`: one line per cell
+/// `k < n_cells`, written by `line`.
+fn write_cell_array<W: Write>(
+    w: &mut W,
+    ty: &str,
+    name: &str,
+    n_cells: usize,
+    mut line: impl FnMut(&mut W, usize) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "        <DataArray type=\"{ty}\" Name=\"{name}\" format=\"ascii\">"
+    )?;
+    for k in 0..n_cells {
+        line(w, k)?;
+    }
+    writeln!(w, "        </DataArray>")
+}
+
 fn write_to(
     w: &mut impl Write,
     mesh: &PolyMesh,
@@ -149,36 +168,22 @@ fn write_to(
     writeln!(w, "        </DataArray>")?;
     writeln!(w, "      </Points>")?;
     writeln!(w, "      <Cells>")?;
-    writeln!(
-        w,
-        "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
-    )?;
-    for k in 0..mesh.n_cells() {
+    let n = mesh.n_cells();
+    write_cell_array(w, "Int64", "connectivity", n, |w, k| {
         write!(w, "         ")?;
         for &v in mesh.cell_vertices(k) {
             write!(w, " {v}")?;
         }
-        writeln!(w)?;
-    }
-    writeln!(w, "        </DataArray>")?;
-    writeln!(
-        w,
-        "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">"
-    )?;
+        writeln!(w)
+    })?;
     let mut offset = 0usize;
-    for k in 0..mesh.n_cells() {
+    write_cell_array(w, "Int64", "offsets", n, |w, k| {
         offset += mesh.cell_vertices(k).len();
-        writeln!(w, "          {offset}")?;
-    }
-    writeln!(w, "        </DataArray>")?;
-    writeln!(
-        w,
-        "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">"
-    )?;
-    for _ in 0..mesh.n_cells() {
-        writeln!(w, "          {VTK_POLYGON}")?;
-    }
-    writeln!(w, "        </DataArray>")?;
+        writeln!(w, "          {offset}")
+    })?;
+    write_cell_array(w, "UInt8", "types", n, |w, _| {
+        writeln!(w, "          {VTK_POLYGON}")
+    })?;
     writeln!(w, "      </Cells>")?;
     writeln!(w, "    </Piece>")?;
     writeln!(w, "  </UnstructuredGrid>")?;

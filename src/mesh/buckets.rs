@@ -1,0 +1,42 @@
+//! Sorting helpers: a counting sort into buckets (compressed sparse rows), shared by the
+//! mesh sweep and the symbolic assembly, and the sorted lattice keys of points.
+
+/// The buckets of a counting sort: item i goes to bucket `key(i)` (if any), buckets
+/// ascending, items ascending within a bucket, each stored as `item(i)`.
+/// Returns the bucket offsets (`n_buckets + 1` of them) and the items.
+pub(crate) fn counting_sort<T: Copy + Default>(
+    n_buckets: usize,
+    keys: impl Iterator<Item = Option<usize>> + Clone,
+    item: impl Fn(usize) -> T,
+) -> (Vec<usize>, Vec<T>) {
+    let mut ptr = vec![0usize; n_buckets + 1];
+    for b in keys.clone().flatten() {
+        ptr[b + 1] += 1;
+    }
+    for i in 0..n_buckets {
+        ptr[i + 1] += ptr[i];
+    }
+    let mut fill = ptr.clone();
+    let mut items = vec![T::default(); ptr[n_buckets]];
+    for (i, key) in keys.enumerate() {
+        if let Some(b) = key {
+            items[fill[b]] = item(i);
+            fill[b] += 1;
+        }
+    }
+    (ptr, items)
+}
+
+/// The points keyed by `key` of each coordinate, `(key(x), key(y), index)`, sorted.
+pub(crate) fn sorted_point_keys<K: Ord>(
+    pts: &[super::Point],
+    key: impl Fn(f64) -> K,
+) -> Vec<(K, K, usize)> {
+    let mut keyed: Vec<(K, K, usize)> = pts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (key(p[0]), key(p[1]), i))
+        .collect();
+    keyed.sort_unstable();
+    keyed
+}
