@@ -237,7 +237,12 @@ pub fn run(a: &SolveArgs) -> Result<()> {
     for l in &sol.result.log {
         println!(
             "  {:>5}  {:>6}  {:>7}  {:>4}  {:>9.2e}  {:>8.2e}",
-            l.step.solve, l.step.active, l.step.entered, l.step.left, l.step.violation, l.step.residual
+            l.step.solve,
+            l.step.active,
+            l.step.entered,
+            l.step.left,
+            l.step.violation,
+            l.step.residual
         );
     }
     let c = sol.result.certificate;
