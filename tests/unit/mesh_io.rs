@@ -57,72 +57,73 @@ enum Expect {
     /// `Error::MeshIo` at this 1-based line (0: not tied to a line).
     Parse(usize),
     /// `Error::InvalidMesh` with a matching `MeshError`.
-    Mesh(fn(&MeshError) -> bool),
+    Mesh(MeshTest),
 }
 
+/// A test of a `MeshError`.
+type MeshTest = fn(&MeshError) -> bool;
+
+/// The malformed files rejected by the parsers, with the 1-based line of the error (0: not
+/// tied to a line).
+const PARSE_ERRORS: [(&str, usize); 27] = [
+    ("typ2_zero_id.typ2", 10),
+    ("typ2_id_too_large.typ2", 9),
+    ("typ2_missing_header.typ2", 1),
+    ("typ2_negative_count.typ2", 2),
+    ("typ2_truncated.typ2", 9),
+    ("typ2_nan.typ2", 4),
+    ("typ2_empty.typ2", 1),
+    ("typ2_trailing_garbage.typ2", 10),
+    ("typ2_bad_count.typ2", 8),
+    ("msh22_bad_number.msh", 7),
+    ("msh22_nan.msh", 8),
+    ("msh22_missing_header.msh", 1),
+    ("msh22_node_zero.msh", 14),
+    ("msh22_version3.msh", 2),
+    ("msh22_only_lines.msh", 0),
+    ("msh22_truncated_elements.msh", 13),
+    ("msh41_truncated_nodes.msh", 12),
+    ("msh41_negative_count.msh", 5),
+    ("msh41_binary.msh", 2),
+    ("msh41_unknown_node.msh", 20),
+    ("msh41_count_mismatch.msh", 17),
+    ("msh41_missing_end.msh", 15),
+    ("typ1_truncated.typ1", 32),
+    ("typ1_bad_number.typ1", 5),
+    ("typ1_cell_out_of_range.typ1", 36),
+    ("typ1_wrong_edge_cells.typ1", 38),
+    ("typ1_missing_header.typ1", 12),
+];
+
+/// The malformed files rejected as invalid meshes, with a test of the `MeshError`.
+const MESH_ERRORS: [(&str, MeshTest); 7] = [
+    ("typ2_zero_area.typ2", |e| {
+        matches!(e, MeshError::DegenerateCell { cell: 0, .. })
+    }),
+    ("typ2_duplicate_vertices.typ2", |e| {
+        matches!(e, MeshError::DuplicateVertex { a: 2, b: 4, .. })
+    }),
+    ("typ2_edge_three_cells.typ2", |e| {
+        matches!(e, MeshError::BadEdge { a: 0, b: 1, .. })
+    }),
+    ("typ2_not_star_shaped.typ2", |e| {
+        matches!(e, MeshError::NotStarShaped { cell: 0, .. })
+    }),
+    ("msh22_edge_three_cells.msh", |e| {
+        matches!(e, MeshError::BadEdge { a: 0, b: 1, .. })
+    }),
+    ("msh41_zero_area.msh", |e| {
+        matches!(e, MeshError::DegenerateCell { cell: 0, .. })
+    }),
+    ("typ1_hanging_unlisted.typ1", |e| {
+        matches!(e, MeshError::NonConforming(_))
+    }),
+];
+
 fn malformed_expectations() -> Vec<(&'static str, Expect)> {
-    use Expect::*;
-    vec![
-        // typ2
-        ("typ2_zero_id.typ2", Parse(10)),
-        ("typ2_id_too_large.typ2", Parse(9)),
-        ("typ2_missing_header.typ2", Parse(1)),
-        ("typ2_negative_count.typ2", Parse(2)),
-        ("typ2_truncated.typ2", Parse(9)),
-        ("typ2_nan.typ2", Parse(4)),
-        ("typ2_empty.typ2", Parse(1)),
-        ("typ2_trailing_garbage.typ2", Parse(10)),
-        ("typ2_bad_count.typ2", Parse(8)),
-        (
-            "typ2_zero_area.typ2",
-            Mesh(|e| matches!(e, MeshError::DegenerateCell { cell: 0, .. })),
-        ),
-        (
-            "typ2_duplicate_vertices.typ2",
-            Mesh(|e| matches!(e, MeshError::DuplicateVertex { a: 2, b: 4, .. })),
-        ),
-        (
-            "typ2_edge_three_cells.typ2",
-            Mesh(|e| matches!(e, MeshError::BadEdge { a: 0, b: 1, .. })),
-        ),
-        (
-            "typ2_not_star_shaped.typ2",
-            Mesh(|e| matches!(e, MeshError::NotStarShaped { cell: 0, .. })),
-        ),
-        // gmsh 2.2
-        ("msh22_bad_number.msh", Parse(7)),
-        ("msh22_nan.msh", Parse(8)),
-        ("msh22_missing_header.msh", Parse(1)),
-        ("msh22_node_zero.msh", Parse(14)),
-        ("msh22_version3.msh", Parse(2)),
-        ("msh22_only_lines.msh", Parse(0)),
-        ("msh22_truncated_elements.msh", Parse(13)),
-        (
-            "msh22_edge_three_cells.msh",
-            Mesh(|e| matches!(e, MeshError::BadEdge { a: 0, b: 1, .. })),
-        ),
-        // gmsh 4.1
-        ("msh41_truncated_nodes.msh", Parse(12)),
-        ("msh41_negative_count.msh", Parse(5)),
-        ("msh41_binary.msh", Parse(2)),
-        ("msh41_unknown_node.msh", Parse(20)),
-        ("msh41_count_mismatch.msh", Parse(17)),
-        ("msh41_missing_end.msh", Parse(15)),
-        (
-            "msh41_zero_area.msh",
-            Mesh(|e| matches!(e, MeshError::DegenerateCell { cell: 0, .. })),
-        ),
-        // typ1
-        ("typ1_truncated.typ1", Parse(32)),
-        ("typ1_bad_number.typ1", Parse(5)),
-        ("typ1_cell_out_of_range.typ1", Parse(36)),
-        ("typ1_wrong_edge_cells.typ1", Parse(38)),
-        ("typ1_missing_header.typ1", Parse(12)),
-        (
-            "typ1_hanging_unlisted.typ1",
-            Mesh(|e| matches!(e, MeshError::NonConforming(_))),
-        ),
-    ]
+    let parse = PARSE_ERRORS.map(|(name, line)| (name, Expect::Parse(line)));
+    let mesh = MESH_ERRORS.map(|(name, pred)| (name, Expect::Mesh(pred)));
+    parse.into_iter().chain(mesh).collect()
 }
 
 #[test]
@@ -216,16 +217,28 @@ fn total_area(m: &PolyMesh) -> f64 {
     (0..m.n_cells()).map(|k| m.measure(k)).sum()
 }
 
+/// Reads a gmsh mesh of the unit square and checks its numbers of vertices, cells and edges,
+/// its area and its numbers of boundary edges by tag.
+fn read_unit_square(
+    path: &Path,
+    counts: (usize, usize, usize),
+    tags: [(i32, usize); 3],
+) -> gradvi::mesh::io::MshMesh {
+    let r = read_msh(path).expect("gmsh file");
+    let m = &r.mesh;
+    assert_eq!((m.n_vertices(), m.n_cells(), m.n_edges()), counts);
+    assert!((total_area(m) - 1.0).abs() < 1e-15);
+    assert_eq!(tag_counts(m), BTreeMap::from(tags));
+    r
+}
+
 #[test]
 fn gmsh_41_unit_square() {
     let path = data("good/square_41.msh");
-    let r = read_msh(&path).expect("square_41.msh");
-    let m = &r.mesh;
     // node 5 at (2, 2) belongs to a geometry point only and is dropped
-    assert_eq!((m.n_vertices(), m.n_cells(), m.n_edges()), (6, 5, 10));
+    let r = read_unit_square(&path, (6, 5, 10), [(1, 2), (2, 2), (3, 1)]);
+    let m = &r.mesh;
     assert_eq!(m.bounding_box(), [0.0, 0.0, 1.0, 1.0]);
-    assert!((total_area(m) - 1.0).abs() < 1e-15);
-    assert_eq!(tag_counts(m), BTreeMap::from([(1, 2), (2, 2), (3, 1)]));
     assert!((0..m.n_edges()).all(|e| m.is_boundary_edge(e) || m.edge_tag(e) == 0));
     assert_eq!(r.physical_names.len(), 5);
     assert!(
@@ -256,14 +269,11 @@ fn gmsh_41_unit_square() {
 #[test]
 fn gmsh_22_unit_square() {
     let path = data("good/square_22.msh");
-    let r = read_msh(&path).expect("square_22.msh");
+    // node 10 is used by a point element only: dropped. 3 quadrangles + 2 triangles. The
+    // interior line tagged 7 is ignored.
+    let r = read_unit_square(&path, (9, 5, 13), [(1, 2), (2, 4), (3, 2)]);
     let m = &r.mesh;
-    // node 10 is used by a point element only: dropped. 3 quadrangles + 2 triangles.
-    assert_eq!((m.n_vertices(), m.n_cells(), m.n_edges()), (9, 5, 13));
     assert_eq!(m.boundary_edges().len(), 8);
-    assert!((total_area(m) - 1.0).abs() < 1e-15);
-    // the interior line tagged 7 is ignored
-    assert_eq!(tag_counts(m), BTreeMap::from([(1, 2), (2, 4), (3, 2)]));
     assert!((0..m.n_edges()).all(|e| m.edge_tag(e) != 7));
     assert_eq!(r.physical_names.len(), 4);
     assert_eq!(r.physical_tag(1, "bottom"), Some(1));
@@ -650,14 +660,12 @@ fn vtu_round_trip() {
         .collect();
     let area: Vec<f64> = (0..m.n_cells()).map(|k| m.measure(k)).collect();
     let id: Vec<f64> = (0..m.n_cells()).map(|k| k as f64).collect();
+    let write = |path: &Path| {
+        let cell_data: [(&str, &[f64]); 2] = [("area", &area), ("cell \"id\"", &id)];
+        write_vtu(path, &m, &[("u", &u)], &cell_data).expect("vtu");
+    };
     let path = out.join("x.vtu");
-    write_vtu(
-        &path,
-        &m,
-        &[("u", &u)],
-        &[("area", &area), ("cell \"id\"", &id)],
-    )
-    .expect("vtu");
+    write(&path);
     let xml = std::fs::read_to_string(&path).expect("read vtu");
     assert!(xml.starts_with("<?xml"));
     let piece = &xml[xml.find("<Piece").expect("Piece")..];
@@ -705,13 +713,7 @@ fn vtu_round_trip() {
 
     // deterministic
     let path2 = out.join("y.vtu");
-    write_vtu(
-        &path2,
-        &m,
-        &[("u", &u)],
-        &[("area", &area), ("cell \"id\"", &id)],
-    )
-    .expect("vtu");
+    write(&path2);
     assert_eq!(std::fs::read(&path).ok(), std::fs::read(&path2).ok());
 
     // wrong lengths are errors, not panics

@@ -521,25 +521,6 @@ pub(crate) fn normalize_header(text: &str) -> String {
         .join(" ")
 }
 
-/// Parses `text` (as the file `name`) with each edit `(from, to, prefix, needle)` applied:
-/// the edit must be rejected with a message that starts with `prefix` and contains `needle`.
-#[cfg(test)]
-pub(crate) fn assert_edits_rejected(
-    parse: fn(&Path, &[u8]) -> Result<PolyMesh>,
-    name: &str,
-    text: &str,
-    edits: &[(&str, &str, &str, &str)],
-) {
-    for &(from, to, prefix, needle) in edits {
-        assert!(text.contains(from), "{name}: no {from:?} to edit");
-        let bad = text.replace(from, to);
-        let e = parse(Path::new(name), bad.as_bytes())
-            .unwrap_err()
-            .to_string();
-        assert!(e.starts_with(prefix) && e.contains(needle), "{e}");
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -598,6 +579,75 @@ mod tests {
         assert!(t.index1("id", 5).is_err());
         assert_eq!(t.index1("id", 5).unwrap(), 4);
         assert!(t.parse::<i32>("tag").is_err());
+    }
+
+    /// Small edits of valid typ1 and typ2 files are rejected with messages that start with
+    /// `prefix` (the file and line) and contain `needle`.
+    #[test]
+    fn edited_files_are_rejected() {
+        type Parser = fn(&Path, &[u8]) -> Result<crate::mesh::PolyMesh>;
+        let (t1, t2): (Parser, Parser) = (typ1::parse_typ1, typ2::parse_typ2);
+        let (hanging, square) = (typ1::tests::HANGING, typ2::tests::SQUARE);
+        let cases = [
+            // typ1: wrong cells for an edge
+            (
+                t1,
+                "h.typ1",
+                hanging,
+                "7 8 2 3\n",
+                "7 8 2 1\n",
+                "h.typ1:38:",
+                "",
+            ),
+            // typ1: a missing boundary edge
+            (
+                t1,
+                "h.typ1",
+                hanging,
+                " 7\n1 2\n2 3\n",
+                " 6\n1 2\n",
+                "",
+                "boundary edges",
+            ),
+            // typ1: L out of range
+            (
+                t1,
+                "h.typ1",
+                hanging,
+                "7 8 2 3\n",
+                "7 8 2 4\n",
+                "h.typ1:38:",
+                "",
+            ),
+            // typ2: a bad number, a vertex out of range, a bad block name
+            (
+                t2,
+                "sq.typ2",
+                square,
+                "1 1.0E+000",
+                "1 1.0E+0x0",
+                "sq.typ2:5:",
+                "",
+            ),
+            (
+                t2,
+                "sq.typ2",
+                square,
+                "4 1 2 3 4",
+                "4 1 2 3 5",
+                "sq.typ2:9:",
+                "",
+            ),
+            (t2, "sq.typ2", square, "centers", "more", "sq.typ2:10:", ""),
+        ];
+        for (parse, name, text, from, to, prefix, needle) in cases {
+            assert!(text.contains(from), "{name}: no {from:?} to edit");
+            let bad = text.replace(from, to);
+            let e = parse(Path::new(name), bad.as_bytes())
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with(prefix) && e.contains(needle), "{e}");
+        }
     }
 
     /// Every prefix and many random byte corruptions of the valid test files: errors, never
