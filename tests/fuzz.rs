@@ -22,4 +22,15 @@ fn forty_seeded_mutations_end_cleanly() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(err.contains("fuzz: 40 cases"), "{err}");
+    // the slice exercises both outcomes: some mutants are valid inputs, solved and certified;
+    // most are refused
+    let summary = err.lines().find(|l| l.starts_with("fuzz: ")).unwrap_or_default();
+    let count = |what: &str| -> usize {
+        summary
+            .split([':', ','])
+            .find_map(|p| p.trim().strip_suffix(what).and_then(|n| n.trim().parse().ok()))
+            .unwrap_or(0)
+    };
+    assert!(count("solved and certified") > 0, "{summary}");
+    assert!(count("refused with a typed error") > 0, "{summary}");
 }

@@ -172,7 +172,11 @@ fn mutate(data: &[u8], rng: &mut Rng) -> Vec<u8> {
 
 /// How one case ended.
 enum Verdict {
-    Pass,
+    /// A certified solution (exit 0).
+    Solved,
+    /// A typed error (exit 1, one line).
+    Refused,
+    /// Anything else.
     Fail(String),
 }
 
@@ -211,7 +215,7 @@ fn run_case(exe: &Path, args: &[String], a: &FuzzArgs) -> Result<Verdict> {
     Ok(match status {
         None => Verdict::Fail(format!("no answer within {} s", a.case_seconds)),
         Some(_) if err.contains("panicked") => Verdict::Fail(format!("panic: {err}")),
-        Some(s) if s.code() == Some(0) => Verdict::Pass,
+        Some(s) if s.code() == Some(0) => Verdict::Solved,
         Some(s)
             if s.code() == Some(1)
                 && err
@@ -220,7 +224,7 @@ fn run_case(exe: &Path, args: &[String], a: &FuzzArgs) -> Result<Verdict> {
                     .last()
                     .is_some_and(|l| l.starts_with("error: ")) =>
         {
-            Verdict::Pass
+            Verdict::Refused
         }
         Some(s) => Verdict::Fail(format!("exit {s}: {}", err.trim_end())),
     })
@@ -239,6 +243,7 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
     std::fs::create_dir_all(&scratch)?;
     let mut rng = Rng(a.seed);
     let (t0, mut cases, mut failures) = (Instant::now(), 0usize, Vec::new());
+    let mut solved = 0usize;
     while (a.iterations == 0 || cases < a.iterations) && t0.elapsed().as_secs_f64() < a.seconds {
         let (src, kind) = &seeds[rng.below(seeds.len())];
         let data = std::fs::read(src).with_context(|| format!("reading {}", src.display()))?;
@@ -262,8 +267,10 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
                 .map(String::from)
                 .to_vec(),
         };
-        match run_case(&exe, &args, a)? {
-            Verdict::Pass => {
+        let verdict = run_case(&exe, &args, a)?;
+        match &verdict {
+            Verdict::Solved | Verdict::Refused => {
+                solved += usize::from(matches!(verdict, Verdict::Solved));
                 let _ = std::fs::remove_file(&input);
             }
             Verdict::Fail(why) => {
@@ -274,9 +281,11 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
         cases += 1;
     }
     eprintln!(
-        "fuzz: {cases} cases in {:.1} s, seed {}, {} failures",
+        "fuzz: {cases} cases in {:.1} s, seed {}: {solved} solved and certified, {} refused \
+         with a typed error, {} failures",
         t0.elapsed().as_secs_f64(),
         a.seed,
+        cases - solved - failures.len(),
         failures.len()
     );
     if !failures.is_empty() {
