@@ -24,11 +24,18 @@ fn forty_seeded_mutations_end_cleanly() {
     assert!(err.contains("fuzz: 40 cases"), "{err}");
     // the slice exercises both outcomes: some mutants are valid inputs, solved and certified;
     // most are refused
-    let summary = err.lines().find(|l| l.starts_with("fuzz: ")).unwrap_or_default();
+    let summary = err
+        .lines()
+        .find(|l| l.starts_with("fuzz: "))
+        .unwrap_or_default();
     let count = |what: &str| -> usize {
         summary
             .split([':', ','])
-            .find_map(|p| p.trim().strip_suffix(what).and_then(|n| n.trim().parse().ok()))
+            .find_map(|p| {
+                p.trim()
+                    .strip_suffix(what)
+                    .and_then(|n| n.trim().parse().ok())
+            })
             .unwrap_or(0)
     };
     assert!(count("solved and certified") > 0, "{summary}");
