@@ -258,7 +258,7 @@ const BAD: [(&str, K, usize, usize, &[&str]); 16] = [
     ("unknown_function.toml",   K::Expression,       3, 6,  &["source.f", "character 1", "unknown function 'sine'"]),
     ("type_error.toml",         K::Expression,       3, 10, &["dirichlet.where", "expected a condition"]),
     ("cyclic_definitions.toml", K::Parameter,        3, 5,  &["a, b", "cycle"]),
-    ("cell_tags.toml",          K::Mesh,             3, 8,  &["diffusion.piece[0].tags", "cell tags", "where"]),
+    ("cell_tags.toml",          K::Tag,              3, 8,  &["diffusion.piece[0].tags", "cell tag 10", "no cell of the mesh"]),
     ("tag_absent.toml",         K::Tag,              6, 8,  &["dirichlet.tags", "tag 7", "1, 2, 3"]),
     ("uncovered_edge.toml",     K::UncoveredEdge,    0, 0,  &["boundary edge 8", "(1, 0.5)", "tag 2"]),
     ("overlapping_rules.toml",  K::OverlappingRules, 0, 0,  &["[dirichlet] and [signorini]", "edge 0", "(0.25, 0)"]),
@@ -519,4 +519,38 @@ fn readme_example_is_a_valid_problem() {
     let sol = solve(&s, &pf.problem());
     assert!(sol.result.certificate.check(1e-10).is_ok());
     assert!(contact(&sol) > 0.0);
+}
+
+/// Cells carry the gmsh physical surface they belong to (format 4.1: the surface entity's
+/// physical tag), and a piece selected by `tags` gives exactly the solution of the same piece
+/// selected by `where`.
+#[test]
+fn pieces_by_cell_tag_equal_pieces_by_condition() {
+    let (pf, mesh) = example("signorini-layers");
+    for k in 0..mesh.n_cells() {
+        let expected = if mesh.centroid(k)[0] < 1.0 { 1 } else { 2 };
+        assert_eq!(mesh.cell_tag(k), expected, "cell {k}");
+    }
+    let text = std::fs::read_to_string(problems().join("signorini-layers.toml"))
+        .unwrap()
+        .replace("tags = [1]\nA = 1", "where = \"x < 1\"\nA = 1")
+        .replace("tags = [2]\nA = [[10", "A = [[10");
+    assert!(!text.contains("tags = [2]\nA"), "the rewrite must remove the cell tags");
+    let by_where = file::parse(&text, &problems().join("signorini-layers.toml"), &[]).unwrap();
+    by_where.check_against_mesh(&mesh).unwrap();
+    let (a, b) = (pf.problem(), by_where.problem());
+    assert!(a.diffusion_by_tag.is_some() && b.diffusion_by_tag.is_none());
+    for scheme in [&Hmm::new(&mesh) as &dyn GradientDiscretisation, &P1::new(&mesh).unwrap()] {
+        same_solution(scheme, &a, &b);
+    }
+}
+
+/// Format 2.2: a cell's tag is its first (physical) tag.
+#[test]
+fn gmsh22_cells_carry_their_physical_tag() {
+    let mesh = read_mesh(root().join("tests/data/good/square_41_gmsh22.msh")).unwrap();
+    assert!(mesh.n_cells() > 0);
+    for k in 0..mesh.n_cells() {
+        assert_eq!(mesh.cell_tag(k), 10, "cell {k}");
+    }
 }

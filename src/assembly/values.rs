@@ -140,19 +140,15 @@ fn local_data(
             let mut b = DVector::zeros(0);
             for k in c0..c1 {
                 let xk = mesh.centroid(k);
-                let a = (problem.diffusion)(xk);
+                let tag = mesh.cell_tag(k);
+                let a = problem.diffusion_in(xk, tag);
                 // the message is formatted only for a bad tensor
                 if check_tensor(&a, "").is_err() {
                     out.bad_tensor = check_tensor(&a, &format!("x_K = {xk:?} (cell {k})")).err();
                     break;
                 }
                 scheme.local_matrix(k, &a, &mut m);
-                let f = |p: Point| -> f64 {
-                    match &problem.source_in_cell {
-                        Some(g) => g(p, xk),
-                        None => (problem.source)(p),
-                    }
-                };
+                let f = |p: Point| -> f64 { problem.source_in(p, xk, tag) };
                 scheme.local_load(k, &f, &mut b);
                 if out.bad_source.is_none() && b.iter().any(|x| !x.is_finite()) {
                     out.bad_source = Some(format!(

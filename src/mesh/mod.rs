@@ -56,6 +56,8 @@ pub struct PolyMesh {
     edge_cells: Vec<[usize; 2]>,
     /// Boundary tag of each edge (0 for interior edges and untagged boundary edges).
     edge_tags: Vec<i32>,
+    /// Tag of each cell (gmsh physical surface; 0 when untagged).
+    cell_tags: Vec<i32>,
     cell_area: Vec<f64>,
     cell_centroid: Vec<Point>,
     cell_diameter: Vec<f64>,
@@ -240,6 +242,7 @@ impl PolyMesh {
         drop(boundary);
 
         let edge_tags = vec![0i32; ne];
+        let cell_tags = vec![0i32; cells.area.len()];
         let h = cells.diameter.iter().cloned().fold(0.0, f64::max);
         Ok(PolyMesh {
             vertices,
@@ -251,6 +254,7 @@ impl PolyMesh {
             edges,
             edge_cells,
             edge_tags,
+            cell_tags,
             cell_area: cells.area,
             cell_centroid: cells.centroid,
             cell_diameter: cells.diameter,
@@ -291,6 +295,25 @@ impl PolyMesh {
             }
         }
         Ok(())
+    }
+
+    /// Returns the mesh with cell `k` tagged `tags[k]` (gmsh physical surfaces: heterogeneous
+    /// media given as subdomains); an error if `tags` does not have one entry per cell.
+    pub fn with_cell_tags(mut self, tags: Vec<i32>) -> Result<PolyMesh, MeshError> {
+        if tags.len() != self.n_cells() {
+            return Err(MeshError::NonConforming(format!(
+                "{} cell tags for {} cells",
+                tags.len(),
+                self.n_cells()
+            )));
+        }
+        self.cell_tags = tags;
+        Ok(self)
+    }
+
+    /// The tag of cell `k` (its gmsh physical surface; 0 when untagged).
+    pub fn cell_tag(&self, k: usize) -> i32 {
+        self.cell_tags[k]
     }
 
     /// Returns a copy whose boundary edges are tagged by `tag(x_σ)` (interior edges keep tag 0).

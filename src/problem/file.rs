@@ -35,8 +35,8 @@
 //!   and it takes every edge the others leave. Without any section, the whole boundary is
 //!   Dirichlet with u = 0.
 //!
-//! Cell (surface) tags: [`crate::mesh::PolyMesh`] stores no cell tags yet, so pieces are
-//! selected by `where` only; a piece with `tags` is rejected with an error that says so.
+//! Cell (surface) tags: a piece of A or f may be selected by `tags` (gmsh physical surfaces,
+//! [`crate::mesh::PolyMesh::cell_tag`]) and/or `where` (a condition on the cell centroid).
 
 use super::expr::{Expr, ExprError, ExprErrorKind, Kind, Scope};
 use super::{BoundaryKind, ConstraintKind, Problem, Side, check_tensor};
@@ -337,16 +337,24 @@ impl TensorField {
     }
 }
 
-/// One piece of a piecewise datum: it applies where `cond` holds (everywhere if `None`).
+/// One piece of a piecewise datum: it applies on the cells whose tag is in `tags` (any cell
+/// if empty) and where `cond` holds at the centroid (everywhere if `None`).
 #[derive(Debug, Clone)]
 struct Piece<T> {
     cond: Option<Field>,
+    tags: Vec<i32>,
+    /// Where `tags` is written (for errors).
+    tags_loc: Option<Loc>,
     value: T,
 }
 
-/// The first piece that applies at `p`; `None` if none does, or if a condition is NaN there.
-fn select<T>(pieces: &[Piece<T>], p: Point) -> Option<&T> {
+/// The first piece that applies at centroid `p` of a cell tagged `tag`; `None` if none does,
+/// or if a condition is NaN there.
+fn select<T>(pieces: &[Piece<T>], p: Point, tag: i32) -> Option<&T> {
     for piece in pieces {
+        if !piece.tags.is_empty() && !piece.tags.contains(&tag) {
+            continue;
+        }
         match piece.cond.as_ref().map(|c| c.expr.holds(&p)) {
             None | Some(Some(true)) => return Some(&piece.value),
             Some(None) => return None,
@@ -396,19 +404,26 @@ struct Data {
 }
 
 impl Data {
-    fn diffusion_at(&self, p: Point) -> Tensor {
+    fn diffusion_at(&self, p: Point, tag: i32) -> Tensor {
         if self.diffusion.is_empty() {
             return [[1.0, 0.0], [0.0, 1.0]];
         }
-        select(&self.diffusion, p).map_or([[f64::NAN; 2]; 2], |a| a.at(p))
+        select(&self.diffusion, p, tag).map_or([[f64::NAN; 2]; 2], |a| a.at(p))
     }
 
     /// f at `p` with the piece chosen at `xk` (NaN where no piece applies).
-    fn source_at(&self, p: Point, xk: Point) -> f64 {
+    fn source_at(&self, p: Point, xk: Point, tag: i32) -> f64 {
         if self.source.is_empty() {
             return 0.0;
         }
-        select(&self.source, xk).map_or(f64::NAN, |f| f.at(p))
+        select(&self.source, xk, tag).map_or(f64::NAN, |f| f.at(p))
+    }
+
+    /// Whether some piece of A or f is selected by cell tags.
+    fn uses_cell_tags(&self) -> bool {
+        let tagged = |t: &[i32]| !t.is_empty();
+        self.diffusion.iter().any(|p| tagged(&p.tags))
+            || self.source.iter().any(|p| tagged(&p.tags))
     }
 
     /// The section that takes the edge (midpoint `x`, tag `tag`): the first explicit one that
@@ -940,7 +955,7 @@ impl Cx<'_> {
         }
     }
 
-    /// Rejects cell tags (the mesh stores none) and a piece without `where` before the last.
+    /// Rejects a piece with neither `tags` nor `where` before the last.
     fn check_piece(
         &self,
         key: &str,
@@ -949,22 +964,15 @@ impl Cx<'_> {
         has_cond: bool,
         tags: &Option<Spanned<Vec<i32>>>,
     ) -> Result<()> {
-        if let Some(t) = tags {
-            let loc = self.loc(&format!("{key}[{i}].tags"), t.span());
-            return Err(self.at(
-                K::Mesh,
-                &loc,
-                "pieces by cell (gmsh physical surface) tag are not supported yet: meshes do not \
-                 store cell tags; select the piece with 'where' (a condition on the cell centroid)"
-                    .into(),
-            ));
-        }
-        if !has_cond && i + 1 < n {
+        if !has_cond && tags.is_none() && i + 1 < n {
             return Err(self.error(
                 K::Schema,
                 0,
                 0,
-                format!("{key}[{i}]: only the last piece may omit 'where' (it takes the rest)"),
+                format!(
+                    "{key}[{i}]: only the last piece may omit both 'tags' and 'where' (it \
+                     takes the rest)"
+                ),
             ));
         }
         Ok(())
@@ -986,6 +994,8 @@ impl Cx<'_> {
         match (d.get_ref().whole(), d.get_ref().pieces()) {
             (Some(v), None) => Ok(vec![Piece {
                 cond: None,
+                tags: Vec::new(),
+                tags_loc: None,
                 value: value(&format!("{section}.{key}"), v)?,
             }]),
             (None, Some(pieces)) if !pieces.is_empty() => {
@@ -1001,6 +1011,8 @@ impl Cx<'_> {
                             scope,
                             Kind::Condition,
                         )?,
+                        tags: tags.as_ref().map_or_else(Vec::new, |t| t.get_ref().clone()),
+                        tags_loc: tags.as_ref().map(|t| self.loc(&format!("{at}.tags"), t.span())),
                         value: value(&format!("{at}.{key}"), v)?,
                     });
                 }
@@ -1100,14 +1112,20 @@ impl ProblemFile {
     /// point no piece covers gets NaN data (which the assembler rejects).
     pub fn problem(&self) -> Problem {
         let d = Arc::clone(&self.data);
-        let mut pb = Problem::new(&self.name, Box::new(move |p| d.source_at(p, p)));
+        let mut pb = Problem::new(&self.name, Box::new(move |p| d.source_at(p, p, 0)));
         if self.data.source.iter().any(|p| p.cond.is_some()) {
             let d = Arc::clone(&self.data);
-            pb = pb.with_source_in_cell(Box::new(move |p, xk| d.source_at(p, xk)));
+            pb = pb.with_source_in_cell(Box::new(move |p, xk| d.source_at(p, xk, 0)));
         }
         if !self.data.diffusion.is_empty() {
             let d = Arc::clone(&self.data);
-            pb = pb.with_diffusion(Box::new(move |p| d.diffusion_at(p)));
+            pb = pb.with_diffusion(Box::new(move |p| d.diffusion_at(p, 0)));
+        }
+        if self.data.uses_cell_tags() {
+            let (d, e) = (Arc::clone(&self.data), Arc::clone(&self.data));
+            pb = pb
+                .with_diffusion_by_tag(Box::new(move |xk, t| d.diffusion_at(xk, t)))
+                .with_source_by_tag(Box::new(move |p, xk, t| e.source_at(p, xk, t)));
         }
         if self.data.has_boundary_sections() {
             let d = Arc::clone(&self.data);
@@ -1198,6 +1216,38 @@ impl ProblemFile {
                         ),
                     ));
                 }
+            }
+        }
+        self.check_cell_tags(mesh)
+    }
+
+    /// Every cell tag named by a piece of A or f is the tag of some cell of the mesh.
+    fn check_cell_tags(&self, mesh: &PolyMesh) -> Result<()> {
+        let mut present: Vec<i32> = (0..mesh.n_cells()).map(|k| mesh.cell_tag(k)).collect();
+        present.sort_unstable();
+        present.dedup();
+        let d = &self.data;
+        let named = d
+            .diffusion
+            .iter()
+            .map(|p| ("diffusion.piece", &p.tags, &p.tags_loc))
+            .chain(d.source.iter().map(|p| ("source.piece", &p.tags, &p.tags_loc)));
+        for (key, tags, tags_loc) in named {
+            if let Some(t) = tags.iter().find(|t| present.binary_search(t).is_err()) {
+                let list: Vec<String> = present.iter().map(i32::to_string).collect();
+                let loc = tags_loc.clone().unwrap_or_else(|| Loc {
+                    key: format!("{key}.tags"),
+                    line: 0,
+                    column: 0,
+                });
+                return Err(self.fail(
+                    K::Tag,
+                    &loc,
+                    format!(
+                        "cell tag {t} is on no cell of the mesh (its cell tags: {})",
+                        list.join(", ")
+                    ),
+                ));
             }
         }
         Ok(())
@@ -1304,7 +1354,8 @@ impl ProblemFile {
             self.fail(K::UncoveredPoint, &loc, msg)
         };
         if !d.diffusion.is_empty() {
-            let a = select(&d.diffusion, xk).ok_or_else(|| uncovered("diffusion"))?;
+            let a = select(&d.diffusion, xk, mesh.cell_tag(k))
+                .ok_or_else(|| uncovered("diffusion"))?;
             let t = a.at(xk);
             if !t.iter().flatten().all(|v| v.is_finite()) {
                 let msg = format!("A = {t:?} at {}", place());
@@ -1319,7 +1370,7 @@ impl ProblemFile {
             }
         }
         if !d.source.is_empty() {
-            let f = select(&d.source, xk).ok_or_else(|| uncovered("source"))?;
+            let f = select(&d.source, xk, mesh.cell_tag(k)).ok_or_else(|| uncovered("source"))?;
             let piecewise = d.source.iter().any(|p| p.cond.is_some());
             let verts = mesh.cell_vertices(k).iter().map(|&v| mesh.vertex(v));
             let n = if piecewise { usize::MAX } else { 0 };
@@ -1343,7 +1394,7 @@ impl ProblemFile {
     fn check_vertices_and_edges(&self, mesh: &PolyMesh) -> Result<()> {
         let d = &self.data;
         let source = match d.source.as_slice() {
-            [Piece { cond: None, value }] => Some(value),
+            [Piece { cond: None, value, tags, .. }] if tags.is_empty() => Some(value),
             _ => None,
         };
         let obstacle = match &d.constraint {

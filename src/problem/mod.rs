@@ -93,6 +93,12 @@ pub struct Problem {
     /// it, so that a vertex on a discontinuity takes the value of the cell being assembled.
     /// `None`: `source` is used everywhere.
     pub source_in_cell: Option<Box<dyn Fn(Point, Point) -> f64 + Send + Sync>>,
+    /// For media given by subdomains: A on the cell with centroid x_K and cell tag t (its gmsh
+    /// physical surface), called as `A(x_K, t)`. `None`: `diffusion` is used.
+    pub diffusion_by_tag: Option<Box<dyn Fn(Point, i32) -> Tensor + Send + Sync>>,
+    /// For sources given by subdomains: f(x) on the cell with centroid x_K and tag t, called as
+    /// `f(x, x_K, t)`; takes precedence over `source_in_cell` and `source`.
+    pub source_by_tag: Option<Box<dyn Fn(Point, Point, i32) -> f64 + Send + Sync>>,
     /// Boundary kind of an edge from its midpoint and its mesh tag.
     pub boundary: Box<dyn Fn(Point, i32) -> BoundaryKind + Send + Sync>,
     /// Dirichlet value u_D on Γ1.
@@ -113,6 +119,8 @@ impl Problem {
             diffusion: Box::new(|_| [[1.0, 0.0], [0.0, 1.0]]),
             source,
             source_in_cell: None,
+            diffusion_by_tag: None,
+            source_by_tag: None,
             boundary: Box::new(|_, _| BoundaryKind::Dirichlet),
             dirichlet: Box::new(|_| 0.0),
             neumann: Box::new(|_| 0.0),
@@ -126,6 +134,38 @@ impl Problem {
         f: Box<dyn Fn(Point, Point) -> f64 + Send + Sync>,
     ) -> Self {
         self.source_in_cell = Some(f);
+        self
+    }
+    /// A on the cell with centroid x_K and cell tag t (see [`Problem::diffusion_by_tag`]).
+    pub fn diffusion_in(&self, xk: Point, tag: i32) -> Tensor {
+        match &self.diffusion_by_tag {
+            Some(a) => a(xk, tag),
+            None => (self.diffusion)(xk),
+        }
+    }
+    /// f at x for the cell with centroid x_K and cell tag t: the most specific of
+    /// [`Problem::source_by_tag`], [`Problem::source_in_cell`] and [`Problem::source`].
+    pub fn source_in(&self, x: Point, xk: Point, tag: i32) -> f64 {
+        match (&self.source_by_tag, &self.source_in_cell) {
+            (Some(f), _) => f(x, xk, tag),
+            (None, Some(f)) => f(x, xk),
+            (None, None) => (self.source)(x),
+        }
+    }
+    /// Sets A by cell tag (see [`Problem::diffusion_by_tag`]).
+    pub fn with_diffusion_by_tag(
+        mut self,
+        a: Box<dyn Fn(Point, i32) -> Tensor + Send + Sync>,
+    ) -> Self {
+        self.diffusion_by_tag = Some(a);
+        self
+    }
+    /// Sets f by cell tag (see [`Problem::source_by_tag`]).
+    pub fn with_source_by_tag(
+        mut self,
+        f: Box<dyn Fn(Point, Point, i32) -> f64 + Send + Sync>,
+    ) -> Self {
+        self.source_by_tag = Some(f);
         self
     }
     /// Sets A(x).

@@ -26,11 +26,9 @@ pub fn data_scale(system: &DiscreteSystem, problem: &Problem, cons: Option<&Cons
         .into_par_iter()
         .map(|k| {
             let x = mesh.centroid(k);
-            let f = match &problem.source_in_cell {
-                Some(g) => g(x, x),
-                None => (problem.source)(x),
-            };
-            let a = (problem.diffusion)(x);
+            let tag = mesh.cell_tag(k);
+            let f = problem.source_in(x, x, tag);
+            let a = problem.diffusion_in(x, tag);
             // smallest eigenvalue of the symmetric 2×2 tensor
             let (m, d) = (0.5 * (a[0][0] + a[1][1]), 0.5 * (a[0][0] - a[1][1]));
             let l = m - (d * d + a[0][1] * a[1][0]).max(0.0).sqrt();

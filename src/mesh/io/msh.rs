@@ -1,6 +1,9 @@
 //! gmsh `.msh` files, ASCII formats 4.1 and 2.2 (2.0 and 2.1 are read as 2.2).
 //!
-//! * Triangles (element type 2) and quadrangles (type 3) become the cells.
+//! * Triangles (element type 2) and quadrangles (type 3) become the cells. Each cell gets a
+//!   cell tag ([`PolyMesh::cell_tag`]): in format 4.1 the first physical tag of its surface
+//!   entity, in format 2.2 its first tag; 0 when it has none (heterogeneous media given as
+//!   gmsh physical surfaces).
 //! * Line elements (type 1) carry boundary tags: in format 4.1 the first physical tag of the
 //!   curve entity the elements belong to (from the `$Entities` section), in format 2.2 the first
 //!   tag of the element (its physical tag). Lines without a physical tag, or with tag 0, leave
@@ -57,12 +60,12 @@ enum Version {
     V41,
 }
 
-/// How a line element gets its boundary tag.
+/// How a line element gets its boundary tag (and a cell its cell tag).
 #[derive(Clone, Copy)]
 enum LineTag {
     /// Format 2.2: the element's own physical tag.
     Physical(i32),
-    /// Format 4.1: the physical tag of this curve entity.
+    /// Format 4.1: the physical tag of this curve (surface, for a cell) entity.
     Curve(i32),
 }
 
@@ -142,8 +145,11 @@ struct Raw {
     cell_nodes: Vec<u64>,
     cell_ptr: Vec<usize>,
     cell_line: Vec<usize>,
+    /// The tag of each cell, as for lines: its physical tag (2.2) or its surface entity (4.1).
+    cell_tag: Vec<LineTag>,
     lines: Vec<([u64; 2], LineTag, usize)>,
     curve_phys: HashMap<i32, i32>,
+    surface_phys: HashMap<i32, i32>,
     physical_names: Vec<(i32, i32, String)>,
     ignored_types: BTreeSet<i32>,
 }
@@ -338,6 +344,9 @@ fn read_entities(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
                 if dim == 1 && j == 0 {
                     raw.curve_phys.insert(tag, p);
                 }
+                if dim == 2 && j == 0 {
+                    raw.surface_phys.insert(tag, p);
+                }
             }
             if dim > 0 {
                 let nb = t.count_with(format_args!("the number of bounding entities of {what}"))?;
@@ -447,6 +456,7 @@ fn read_element(t: &mut Tokens, raw: &mut Raw, ty: i32, tag: LineTag, id: u64) -
             }
             raw.cell_ptr.push(raw.cell_nodes.len());
             raw.cell_line.push(t.token_line());
+            raw.cell_tag.push(tag);
         }
         _ => {
             raw.ignored_types.insert(ty);
@@ -493,7 +503,7 @@ fn read_elements41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
         let entity: i32 = t.parse_with(format_args!("the entity tag of element block {b}"))?;
         let ty: i32 = t.parse_with(format_args!("the element type of element block {b}"))?;
         let m = t.count_with(format_args!("the number of elements of block {b}"))?;
-        let tag = if dim == 1 {
+        let tag = if dim == 1 || dim == 2 {
             LineTag::Curve(entity)
         } else {
             LineTag::Physical(0)
@@ -529,8 +539,10 @@ fn build(path: &Path, raw: Raw) -> Result<MshMesh> {
         cell_nodes,
         cell_ptr,
         cell_line,
+        cell_tag,
         lines,
         curve_phys,
+        surface_phys,
         physical_names,
         ignored_types,
     } = raw;
@@ -604,7 +616,17 @@ fn build(path: &Path, raw: Raw) -> Result<MshMesh> {
         path: t.path.to_path_buf(),
         source,
     };
-    let mut mesh = PolyMesh::from_flat_cells(vertices, cell_ptr, cell_verts).map_err(invalid)?;
+    // cell tags: the physical tag (2.2) or the physical tag of the surface entity (4.1)
+    let cell_tags: Vec<i32> = cell_tag
+        .iter()
+        .map(|t| match *t {
+            LineTag::Physical(p) => p,
+            LineTag::Curve(s) => surface_phys.get(&s).copied().unwrap_or(0),
+        })
+        .collect();
+    let mut mesh = PolyMesh::from_flat_cells(vertices, cell_ptr, cell_verts)
+        .and_then(|m| m.with_cell_tags(cell_tags))
+        .map_err(invalid)?;
     mesh.set_boundary_tags(&tagged, NonBoundaryTag::Ignore)
         .map_err(invalid)?;
     Ok(MshMesh {
