@@ -535,12 +535,18 @@ fn pieces_by_cell_tag_equal_pieces_by_condition() {
         .unwrap()
         .replace("tags = [1]\nA = 1", "where = \"x < 1\"\nA = 1")
         .replace("tags = [2]\nA = [[10", "A = [[10");
-    assert!(!text.contains("tags = [2]\nA"), "the rewrite must remove the cell tags");
+    assert!(
+        !text.contains("tags = [2]\nA"),
+        "the rewrite must remove the cell tags"
+    );
     let by_where = file::parse(&text, &problems().join("signorini-layers.toml"), &[]).unwrap();
     by_where.check_against_mesh(&mesh).unwrap();
     let (a, b) = (pf.problem(), by_where.problem());
     assert!(a.diffusion_by_tag.is_some() && b.diffusion_by_tag.is_none());
-    for scheme in [&Hmm::new(&mesh) as &dyn GradientDiscretisation, &P1::new(&mesh).unwrap()] {
+    for scheme in [
+        &Hmm::new(&mesh) as &dyn GradientDiscretisation,
+        &P1::new(&mesh).unwrap(),
+    ] {
         same_solution(scheme, &a, &b);
     }
 }

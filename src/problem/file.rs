@@ -1012,7 +1012,9 @@ impl Cx<'_> {
                             Kind::Condition,
                         )?,
                         tags: tags.as_ref().map_or_else(Vec::new, |t| t.get_ref().clone()),
-                        tags_loc: tags.as_ref().map(|t| self.loc(&format!("{at}.tags"), t.span())),
+                        tags_loc: tags
+                            .as_ref()
+                            .map(|t| self.loc(&format!("{at}.tags"), t.span())),
                         value: value(&format!("{at}.{key}"), v)?,
                     });
                 }
@@ -1231,7 +1233,11 @@ impl ProblemFile {
             .diffusion
             .iter()
             .map(|p| ("diffusion.piece", &p.tags, &p.tags_loc))
-            .chain(d.source.iter().map(|p| ("source.piece", &p.tags, &p.tags_loc)));
+            .chain(
+                d.source
+                    .iter()
+                    .map(|p| ("source.piece", &p.tags, &p.tags_loc)),
+            );
         for (key, tags, tags_loc) in named {
             if let Some(t) = tags.iter().find(|t| present.binary_search(t).is_err()) {
                 let list: Vec<String> = present.iter().map(i32::to_string).collect();
@@ -1354,8 +1360,8 @@ impl ProblemFile {
             self.fail(K::UncoveredPoint, &loc, msg)
         };
         if !d.diffusion.is_empty() {
-            let a = select(&d.diffusion, xk, mesh.cell_tag(k))
-                .ok_or_else(|| uncovered("diffusion"))?;
+            let a =
+                select(&d.diffusion, xk, mesh.cell_tag(k)).ok_or_else(|| uncovered("diffusion"))?;
             let t = a.at(xk);
             if !t.iter().flatten().all(|v| v.is_finite()) {
                 let msg = format!("A = {t:?} at {}", place());
@@ -1394,7 +1400,14 @@ impl ProblemFile {
     fn check_vertices_and_edges(&self, mesh: &PolyMesh) -> Result<()> {
         let d = &self.data;
         let source = match d.source.as_slice() {
-            [Piece { cond: None, value, tags, .. }] if tags.is_empty() => Some(value),
+            [
+                Piece {
+                    cond: None,
+                    value,
+                    tags,
+                    ..
+                },
+            ] if tags.is_empty() => Some(value),
             _ => None,
         };
         let obstacle = match &d.constraint {
