@@ -22,6 +22,10 @@ pub type ScalarFn = Box<dyn Fn(Point) -> f64 + Send + Sync>;
 pub type TensorFn = Box<dyn Fn(Point) -> Tensor + Send + Sync>;
 /// A vector field on Ω.
 pub type VectorFn = Box<dyn Fn(Point) -> Point + Send + Sync>;
+/// A tensor field given by cell: A(x_K, cell tag).
+pub type TaggedTensorFn = Box<dyn Fn(Point, i32) -> Tensor + Send + Sync>;
+/// A source given by cell: f(x, x_K, cell tag).
+pub type TaggedScalarFn = Box<dyn Fn(Point, Point, i32) -> f64 + Send + Sync>;
 
 /// The kind of boundary condition on an edge.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -95,10 +99,10 @@ pub struct Problem {
     pub source_in_cell: Option<Box<dyn Fn(Point, Point) -> f64 + Send + Sync>>,
     /// For media given by subdomains: A on the cell with centroid x_K and cell tag t (its gmsh
     /// physical surface), called as `A(x_K, t)`. `None`: `diffusion` is used.
-    pub diffusion_by_tag: Option<Box<dyn Fn(Point, i32) -> Tensor + Send + Sync>>,
+    pub diffusion_by_tag: Option<TaggedTensorFn>,
     /// For sources given by subdomains: f(x) on the cell with centroid x_K and tag t, called as
     /// `f(x, x_K, t)`; takes precedence over `source_in_cell` and `source`.
-    pub source_by_tag: Option<Box<dyn Fn(Point, Point, i32) -> f64 + Send + Sync>>,
+    pub source_by_tag: Option<TaggedScalarFn>,
     /// Boundary kind of an edge from its midpoint and its mesh tag.
     pub boundary: Box<dyn Fn(Point, i32) -> BoundaryKind + Send + Sync>,
     /// Dirichlet value u_D on Γ1.
@@ -153,18 +157,12 @@ impl Problem {
         }
     }
     /// Sets A by cell tag (see [`Problem::diffusion_by_tag`]).
-    pub fn with_diffusion_by_tag(
-        mut self,
-        a: Box<dyn Fn(Point, i32) -> Tensor + Send + Sync>,
-    ) -> Self {
+    pub fn with_diffusion_by_tag(mut self, a: TaggedTensorFn) -> Self {
         self.diffusion_by_tag = Some(a);
         self
     }
     /// Sets f by cell tag (see [`Problem::source_by_tag`]).
-    pub fn with_source_by_tag(
-        mut self,
-        f: Box<dyn Fn(Point, Point, i32) -> f64 + Send + Sync>,
-    ) -> Self {
+    pub fn with_source_by_tag(mut self, f: TaggedScalarFn) -> Self {
         self.source_by_tag = Some(f);
         self
     }
