@@ -88,8 +88,7 @@ pub fn generate(family: &str, level: usize) -> Result<PolyMesh> {
 
 /// Rejects absurd or conflicting options before any work: the certificate tolerance must be
 /// finite and in (0, 1) (a tolerance of 1 or more, or infinite, would switch the certificate
-/// off), the numeric options finite, the outputs distinct from the inputs and each other, and
-/// a parameter given once.
+/// off), the numeric options finite, and a parameter given once.
 fn check_options(a: &SolveArgs) -> Result<()> {
     if !(a.tol > 0.0 && a.tol < 1.0) {
         bail!(
@@ -117,36 +116,29 @@ fn check_options(a: &SolveArgs) -> Result<()> {
             bail!("--param {k} is given twice");
         }
     }
-    let mut inputs: Vec<(&str, &Path)> = Vec::new();
-    if let Some(m) = &a.mesh {
-        inputs.push(("mesh", m));
-    }
-    if let Some(f) = &a.file {
-        inputs.push(("problem", f));
-    }
-    let mut outputs: Vec<(&str, &Path)> = Vec::new();
-    if let Some(v) = &a.vtu {
-        outputs.push(("VTU", v));
-    }
-    if let Some(j) = &a.json {
-        outputs.push(("JSON", j));
-    }
-    check_distinct(&inputs, &outputs)
+    Ok(())
 }
 
-/// The mesh named by the problem file's `[mesh]` is an input too: an output equal to it is an
-/// error (the message), `None` otherwise.
-fn outputs_equal_mesh_file(a: &SolveArgs, pf: &file::ProblemFile) -> Option<String> {
-    let Some(file::MeshSpec::File(m)) = &pf.mesh else {
-        return None;
+/// Outputs distinct from the inputs (the mesh, the problem file and the mesh the problem file
+/// names) and from each other.
+fn check_paths(a: &SolveArgs, pf: &file::ProblemFile) -> Result<()> {
+    let pf_mesh = match &pf.mesh {
+        Some(file::MeshSpec::File(m)) => Some(m.as_path()),
+        _ => None,
     };
-    let outputs: Vec<(&str, &Path)> = [("VTU", &a.vtu), ("JSON", &a.json)]
+    let inputs: Vec<(&str, &Path)> = [
+        ("mesh", a.mesh.as_deref()),
+        ("problem", a.file.as_deref()),
+        ("mesh", pf_mesh),
+    ]
+    .into_iter()
+    .filter_map(|(w, p)| p.map(|p| (w, p)))
+    .collect();
+    let outputs: Vec<(&str, &Path)> = [("VTU", a.vtu.as_deref()), ("JSON", a.json.as_deref())]
         .into_iter()
-        .filter_map(|(w, p)| p.as_deref().map(|p| (w, p)))
+        .filter_map(|(w, p)| p.map(|p| (w, p)))
         .collect();
-    check_distinct(&[("mesh", m.as_path())], &outputs)
-        .err()
-        .map(|e| e.to_string())
+    check_distinct(&inputs, &outputs)
 }
 
 /// `gradvi solve`.
@@ -157,6 +149,7 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         (None, Some(name)) => file::builtin(name, &a.params)?,
         (None, None) => bail!("give a problem file or --problem NAME"),
     };
+    check_paths(a, &pf)?;
     let (mesh, mesh_desc) = match (&a.mesh, &a.generate, &pf.mesh) {
         (Some(f), None, _) => (read_mesh(f)?, f.display().to_string()),
         (None, Some(fam), _) => {
@@ -167,9 +160,6 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         _ => bail!("give --mesh FILE or --generate FAMILY --level K (the problem has no [mesh])"),
     };
     pf.check_against_mesh(&mesh)?;
-    if let Some(dup) = outputs_equal_mesh_file(a, &pf) {
-        bail!("{dup}");
-    }
     let problem = pf.problem();
     let kind = a.scheme.or(pf.scheme).unwrap_or(SchemeKind::Hmm);
     let scheme = build_with(kind, &mesh, &SchemeOptions { alpha: a.alpha })?;

@@ -420,34 +420,6 @@ pub fn fvca5_test11() -> Problem {
     )
 }
 
-/// The problems known by name on the command line, with their parameters (`C` for test3).
-pub fn by_name(name: &str, params: &[(String, f64)]) -> crate::Result<Problem> {
-    let param = |key: &str, default: f64| {
-        params
-            .iter()
-            .find(|(k, _)| k.eq_ignore_ascii_case(key))
-            .map_or(default, |(_, v)| *v)
-    };
-    for (k, _) in params {
-        let known = matches!((name, k.to_ascii_lowercase().as_str()), ("test3", "c"));
-        if !known {
-            return Err(crate::Error::InvalidData(format!(
-                "problem '{name}' has no parameter '{k}'"
-            )));
-        }
-    }
-    match name {
-        "test1" => Ok(paper_test1()),
-        "test2" => Ok(paper_test2()),
-        "test3" => Ok(paper_test3(param("C", -5.0))),
-        "fvca5-1.1" => Ok(fvca5_test11()),
-        _ => Err(crate::Error::InvalidData(format!(
-            "unknown problem '{name}' (expected one of: {})",
-            PROBLEM_NAMES.join(", ")
-        ))),
-    }
-}
-
 /// A parameter value as it appears in a problem name: the sign kept, integers without a
 /// fractional part, other values in Rust's shortest round-trip form (`-5`, `0.25`, `1e308`).
 pub fn format_parameter(x: f64) -> String {
@@ -457,9 +429,6 @@ pub fn format_parameter(x: f64) -> String {
         format!("{x:?}")
     }
 }
-
-/// Names accepted by [`by_name`].
-pub const PROBLEM_NAMES: [&str; 4] = ["test1", "test2", "test3", "fvca5-1.1"];
 
 #[cfg(test)]
 mod tests {

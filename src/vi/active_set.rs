@@ -106,12 +106,7 @@ fn initial_active(cons: &Constraints, opts: &ActiveSetOptions) -> crate::Result<
             opts.c
         )));
     }
-    if !(opts.tol > 0.0 && opts.tol < 1.0) {
-        return Err(crate::Error::InvalidData(format!(
-            "the certificate tolerance must be in (0, 1), got {}",
-            opts.tol
-        )));
-    }
+    super::certificate::check_tolerance(opts.tol)?;
     if opts.max_solves == 0 {
         return Err(crate::Error::InvalidData(
             "the active-set method needs at least one solve (max_solves = 0)".into(),

@@ -62,6 +62,18 @@ impl Certificate {
     }
 }
 
+/// An error unless `tol` is a usable certificate tolerance: finite and in (0, 1) (a tolerance
+/// of 1 or more, infinite or NaN would switch the certificate off).
+pub fn check_tolerance(tol: f64) -> crate::Result<()> {
+    if tol > 0.0 && tol < 1.0 {
+        Ok(())
+    } else {
+        Err(crate::Error::InvalidData(format!(
+            "the certificate tolerance must be in (0, 1), got {tol}"
+        )))
+    }
+}
+
 /// What [`evaluate`] computed from one residual.
 #[derive(Debug, Clone)]
 pub struct Evaluation {

@@ -152,11 +152,7 @@ pub fn solve_unconstrained(
     q: &dyn QuadraticEnergy,
     tol: f64,
 ) -> crate::Result<VariationalSolution> {
-    if !(tol > 0.0 && tol < 1.0) {
-        return Err(crate::Error::InvalidData(format!(
-            "the certificate tolerance must be in (0, 1), got {tol}"
-        )));
-    }
+    certificate::check_tolerance(tol)?;
     let fixed = vec![None; q.n_unknowns()];
     let (u, timings) = q.minimise_with_fixed(&fixed)?;
     let ev = certificate::evaluate(q, None, &u, &[]);
