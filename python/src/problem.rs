@@ -13,8 +13,8 @@ use crate::errors::invalid;
 use crate::guard;
 use crate::mesh::{PyMesh, point_key};
 use gradvi::mesh::{Point, PolyMesh};
-use gradvi::problem::file::{ProblemFile, load};
-use gradvi::problem::{BoundaryKind, ConstraintKind, Problem, Side, by_name};
+use gradvi::problem::file::{ProblemFile, builtin, load};
+use gradvi::problem::{BoundaryKind, ConstraintKind, Problem, Side};
 use gradvi::scheme::Tensor;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::prelude::*;
@@ -26,7 +26,7 @@ use std::sync::{Arc, Mutex};
 
 /// What a problem handle stands for.
 pub enum Spec {
-    /// `gradvi::problem::by_name` (the command line's `--problem`).
+    /// `gradvi::problem::file::builtin` (the command line's `--problem`).
     Builtin {
         name: String,
         params: Vec<(String, f64)>,
@@ -262,7 +262,11 @@ impl PyProblem {
         mesh: &Arc<PolyMesh>,
     ) -> gradvi::Result<(Problem, Option<Arc<Misses>>)> {
         match &self.spec {
-            Spec::Builtin { name, params } => Ok((by_name(name, params)?, None)),
+            Spec::Builtin { name, params } => {
+                let pf = builtin(name, params)?;
+                pf.check_against_mesh(mesh)?;
+                Ok((pf.problem(), None))
+            }
             Spec::File(pf) => {
                 pf.check_against_mesh(mesh)?;
                 Ok((pf.problem(), None))
@@ -281,7 +285,7 @@ impl PyProblem {
     /// The problem without a mesh (for its description): built-ins and files only.
     fn describe(&self) -> Option<Problem> {
         match &self.spec {
-            Spec::Builtin { name, params } => by_name(name, params).ok(),
+            Spec::Builtin { name, params } => builtin(name, params).ok().map(|pf| pf.problem()),
             Spec::File(pf) => Some(pf.problem()),
             Spec::Tabulated(_) => None,
         }
@@ -336,7 +340,7 @@ impl PyProblem {
     fn builtin(py: Python<'_>, name: String, params: Vec<(String, f64)>) -> PyResult<Self> {
         // check the name and the parameters now
         let (n, p) = (name.clone(), params.clone());
-        guard(py, move || by_name(&n, &p).map(|_| ()))?;
+        guard(py, move || builtin(&n, &p).map(|_| ()))?;
         Ok(PyProblem {
             spec: Spec::Builtin { name, params },
         })

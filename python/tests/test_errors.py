@@ -73,7 +73,8 @@ def test_bad_options(test3_mesh):
             gradvi.solve(test3_mesh, pb, **kw)
     with pytest.raises(gradvi.InvalidDataError, match="unknown problem"):
         gradvi.Problem.builtin("test9")
-    with pytest.raises(gradvi.InvalidDataError, match="no parameter"):
+    # built-ins are problem files: an unknown parameter is the file's Parameter error
+    with pytest.raises(gradvi.ProblemFileError, match="no parameter 'C'"):
         gradvi.Problem.builtin("test1", C=1)
     # P1 needs triangles
     with pytest.raises(gradvi.GradviError, match="triang"):
