@@ -26,8 +26,9 @@ fn problems() -> PathBuf {
     root().join("problems")
 }
 
+/// The paper's cold start, so that the pinned NITER are those of its algorithm.
 fn solve<'a>(scheme: &'a dyn GradientDiscretisation, p: &Problem) -> Solution<'a> {
-    solve_problem(scheme, p, &SolveOptions::default())
+    solve_problem(scheme, p, &SolveOptions::paper())
         .unwrap_or_else(|e| panic!("{} with {}: {e}", p.name, scheme.name()))
 }
 

@@ -31,7 +31,7 @@ fn table2_hexagonal_levels_1_and_2() {
     for (level, eu, eg, niter) in pinned {
         let mesh = hexagonal(level).unwrap();
         let s = Hmm::new(&mesh);
-        let sol = solve_problem(&s, &p, &SolveOptions::default()).unwrap();
+        let sol = solve_problem(&s, &p, &SolveOptions::paper()).unwrap();
         let e = relative_errors(&s, sol.u(), &ex.u, &ex.grad);
         assert!(
             close(e.l2_u, eu, 1e-9),
@@ -52,15 +52,15 @@ fn table3_and_table1_on_the_coarsest_meshes() {
     let m3 = read_mesh(root().join("meshes/test3_1.msh")).unwrap();
     for (c, hmm, p1) in [(-5.0, 8, 6), (-10.0, 8, 6), (-15.0, 5, 5), (-20.0, 5, 4)] {
         let hmm_scheme = Hmm::new(&m3);
-        let sol = solve_problem(&hmm_scheme, &paper_test3(c), &SolveOptions::default()).unwrap();
+        let sol = solve_problem(&hmm_scheme, &paper_test3(c), &SolveOptions::paper()).unwrap();
         assert_eq!(sol.niter(), hmm, "HMM, C = {c}");
         let s1 = P1::new(&m3).unwrap();
-        let sol = solve_problem(&s1, &paper_test3(c), &SolveOptions::default()).unwrap();
+        let sol = solve_problem(&s1, &paper_test3(c), &SolveOptions::paper()).unwrap();
         assert_eq!(sol.niter(), p1, "P1, C = {c}");
     }
     let m1 = read_mesh(root().join("meshes/test1_1.msh")).unwrap();
     let s1 = Hmm::new(&m1);
-    let sol = solve_problem(&s1, &paper_test1(), &SolveOptions::default()).unwrap();
+    let sol = solve_problem(&s1, &paper_test1(), &SolveOptions::paper()).unwrap();
     assert_eq!(sol.niter(), 4);
     let cons = sol.constraints.as_ref().unwrap();
     let sw = gradvi::post::contact::switch_point(cons, &sol.result.active, 0).unwrap();

@@ -394,7 +394,7 @@ def solve(
     max_solves: int = 500,
     tol: float = 1e-10,
     fallback: bool = False,
-    warm_start: str = "cold",
+    warm_start: str = "nested",
     initial_active: Optional[Sequence[bool]] = None,
     keep_iterates: bool = False,
     ordering: str = "amd",
@@ -424,9 +424,9 @@ def solve(
         max_solves: cap on the number of linear solves.
         tol: tolerance of the certificate, in (0, 1).
         fallback: on cycling or the cap, fall back to projected Gauss–Seidel instead of raising.
-        warm_start: ``"cold"`` (A₀ = ∅, the paper's NITER) or ``"nested"`` (an active set
-            predicted by coarse Cartesian HMM solves of the same problem: same solution, fewer
-            solves on fine meshes of rectangles).
+        warm_start: ``"nested"`` (the default: an active set predicted by coarse HMM solves
+            of the same problem on agglomerated meshes of the domain: same solution, fewer
+            solves on fine meshes) or ``"cold"`` (A₀ = ∅, the paper's NITER).
         initial_active: an initial active set, one flag per constrained unknown.
         keep_iterates: keep every iterate in :attr:`Solution.iterates`.
         ordering: fill-reducing ordering of the Cholesky factorisation, ``"amd"`` or

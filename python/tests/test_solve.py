@@ -69,7 +69,7 @@ def test_test3_equals_committed_results():
 
 def test_nested_warm_start_gives_the_same_solution(root):
     mesh = gradvi.Mesh.read(root / "meshes" / "test3_3.msh")
-    cold = gradvi.solve(mesh, make_test3(-5.0))
+    cold = gradvi.solve(mesh, make_test3(-5.0), warm_start="cold")
     warm = gradvi.solve(mesh, make_test3(-5.0), warm_start="nested")
     assert warm.warm_start is not None and warm.warm_start["skipped"] is None
     assert warm.untabulated_points > 0 and warm.fallback_calls > 0  # the coarse meshes' points

@@ -56,10 +56,11 @@ pub struct SolveArgs {
     /// On cycling or non-convergence, fall back to projected Gauss–Seidel.
     #[arg(long)]
     fallback: bool,
-    /// Start of the active-set iteration: cold (A₀ = ∅, the paper's algorithm and NITER) or
-    /// nested (an active set predicted by coarse Cartesian HMM solves of the same problem;
-    /// same solution, far fewer solves on fine meshes; rectangular domains).
-    #[arg(long, value_enum, default_value_t = WarmStart::Cold)]
+    /// Start of the active-set iteration: nested (the default: an active set predicted by
+    /// coarse HMM solves of the same problem on agglomerated meshes of the domain; same
+    /// solution, far fewer solves on fine meshes) or cold (A₀ = ∅, the paper's algorithm and
+    /// NITER).
+    #[arg(long, value_enum, default_value_t = WarmStart::Nested)]
     warm_start: WarmStart,
     /// Write the solution (u, active set, multiplier) to this VTU file.
     #[arg(long)]
@@ -211,9 +212,9 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         match &w.skipped {
             Some(why) => println!("warm start      skipped, cold start: {why}"),
             None => {
-                let lv: Vec<String> = w.levels.iter().map(|(x, y)| format!("{x}x{y}")).collect();
+                let lv: Vec<String> = w.levels.iter().map(|n| format!("{n}")).collect();
                 println!(
-                    "warm start      nested: {} coarse solves on {}, {} unknowns predicted active, {:.3} s",
+                    "warm start      nested: {} coarse solves on {} cells, {} unknowns predicted active, {:.3} s",
                     w.coarse_solves,
                     lv.join(", "),
                     w.predicted_active,

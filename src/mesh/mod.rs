@@ -20,6 +20,7 @@
 //! | [`PolyMesh::cell_dists`] | d_{K,σ} = (x_σ − x_K)·n_{K,σ} > 0 |
 //! | [`PolyMesh::h`] | h = max_K h_K |
 
+pub mod agglomerate;
 pub(crate) mod buckets;
 pub mod budget;
 pub mod generate;

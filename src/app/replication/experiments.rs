@@ -125,7 +125,7 @@ pub fn with_solution<R>(
     f: impl FnOnce(&Solution) -> gradvi::Result<R>,
 ) -> gradvi::Result<R> {
     let scheme = build(kind, mesh)?;
-    let sol = solve_problem(scheme.as_ref(), problem, &SolveOptions::default())?;
+    let sol = solve_problem(scheme.as_ref(), problem, &SolveOptions::paper())?;
     f(&sol)
 }
 
@@ -372,7 +372,7 @@ fn test3(cfg: &Config, logs: &mut Logs) -> gradvi::Result<Vec<Test3Row>> {
         let mut rows = Vec::new();
         for c in TEST3_C {
             let p = builtin("test3", &[("C".into(), c)])?;
-            let sol = solve_with_symbolic(symbolic.clone(), &p, &SolveOptions::default())?;
+            let sol = solve_with_symbolic(symbolic.clone(), &p, &SolveOptions::paper())?;
             let cons = sol.constraints.as_ref().expect("Test 3 has a barrier");
             logs.keep_log(&p.name, kind, &m.name, &sol);
             let row = Test3Row {

@@ -1,0 +1,459 @@
+//! Coarse polygonal meshes of the *same domain* by agglomerating the cells of a fine mesh.
+//!
+//! The warm start of the active-set solver ([`crate::solver::warm_start`]) solves the problem
+//! on coarser meshes of the domain first. A user's mesh comes alone (a gmsh file, no geometry
+//! description), so the coarse meshes are made from it: HMM accepts any star-shaped polygons,
+//! so unions of fine cells are admissible cells once their boundaries are simplified.
+//!
+//! ## Construction, for a target cell size H
+//! 1. **Aggregates.** Each fine cell K gets the key (⌊(x_K − x₀)/H⌋, ⌊(y_K − y₀)/H⌋, tag of K)
+//!    (x_K its centroid, (x₀, y₀) the corner of the bounding box). Aggregates are the connected
+//!    components (through interior edges) of the cells sharing a key, so an aggregate never
+//!    mixes two materials (cell tags) and is a patch of about (H/h)² fine cells. Aggregates of
+//!    area below H²/4 (slivers along the boundary or along material interfaces) are merged into
+//!    the neighbour of the same tag with which they share the longest interface.
+//! 2. **Corners.** A fine vertex is a corner (a coarse vertex) if it lies on the boundary of
+//!    the domain, or at least three interface edges meet there (an interface edge separates two
+//!    aggregates). Between two corners, the interface of two aggregates is a chain of fine
+//!    edges; it is replaced by the straight segment joining its corners. Both aggregates use the
+//!    same segment, so the straightened cells still tile the domain, whose boundary is kept
+//!    exactly: every fine boundary edge is a coarse boundary edge with its tag, so Dirichlet,
+//!    Neumann and Signorini data and the Signorini unknowns carry over one to one.
+//! 3. **Checks.** A straightened aggregate is kept if its boundary is one loop without pinches
+//!    and the polygon through its corners is star-shaped with respect to its centroid with some
+//!    margin: every d_{K,σ} ≥ [`MIN_DIST_RATIO`] · r_K (r_K the largest distance from the
+//!    centroid to a corner), and the angles of its sides seen from the centroid are positive and
+//!    add up to 2π (so the polygon is simple). An aggregate that fails is *dissolved*: its fine
+//!    cells become coarse cells of their own, with all their vertices as corners. This can only
+//!    add corners to neighbours, and is repeated until no aggregate fails; a fine cell alone is
+//!    always admissible, so it terminates.
+//! 4. The coarse mesh is then built and validated like any input mesh
+//!    ([`PolyMesh::from_cells_tagged`]: conformity, no overlap, star-shapedness), in
+//!    O(n log n). A failure there (two straightened chords crossing) is returned as an error: the
+//!    caller then does without coarse meshes.
+//!
+//! Cost: linear in the fine mesh apart from sorting the half-edges of each aggregate.
+
+use super::{NO_CELL, Point, PolyMesh, polygon_area_centroid};
+use crate::error::MeshError;
+
+/// Marker for "no coarse edge" in [`Agglomeration::boundary_edge_of`] (interior fine edges).
+pub const NO_EDGE: usize = usize::MAX;
+
+/// Least ratio d_{K,σ} / r_K of a straightened aggregate (see the module docs): below it the
+/// aggregate is dissolved, so coarse cells stay reasonably shaped.
+pub const MIN_DIST_RATIO: f64 = 0.1;
+
+/// Aggregates smaller than this fraction of H² are merged into a neighbour.
+const SMALL_FRACTION: f64 = 0.25;
+
+/// Rounds of dissolution before giving up (each dissolves at least one aggregate; in practice
+/// one or two rounds suffice).
+const MAX_ROUNDS: usize = 50;
+
+/// A coarse mesh made of unions of the cells of a fine one, and the maps between them.
+#[derive(Debug, Clone)]
+pub struct Agglomeration {
+    /// The coarse mesh (validated; cell tags and boundary tags from the fine mesh).
+    pub mesh: PolyMesh,
+    /// The coarse cell of each fine cell.
+    pub cell_of: Vec<usize>,
+    /// The coarse edge of each fine boundary edge (the same segment); [`NO_EDGE`] for interior
+    /// fine edges.
+    pub boundary_edge_of: Vec<usize>,
+    /// Fine cells left alone because their aggregate could not be straightened.
+    pub dissolved_cells: usize,
+}
+
+/// Agglomerates `fine` into cells of size about `size` (see the module docs).
+pub fn agglomerate(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError> {
+    if !(size.is_finite() && size > 0.0) {
+        return Err(MeshError::NonConforming(format!(
+            "agglomeration size must be positive and finite, got {size}"
+        )));
+    }
+    let mut label = initial_aggregates(fine, size);
+    merge_small(fine, &mut label, SMALL_FRACTION * size * size);
+    let mut dissolved = vec![false; fine.n_cells()];
+    for _ in 0..MAX_ROUNDS {
+        let corner = corners(fine, &label, &dissolved);
+        let polys = polygons(fine, &label, &corner);
+        let mut failed = false;
+        for (a, poly) in polys.iter().enumerate() {
+            if poly.is_none() {
+                failed = true;
+                dissolve(&mut label, &mut dissolved, a);
+            }
+        }
+        if !failed {
+            return build(fine, &label, &corner, polys, &dissolved);
+        }
+        label = renumber(&label);
+    }
+    Err(MeshError::NonConforming(format!(
+        "agglomeration did not settle in {MAX_ROUNDS} rounds"
+    )))
+}
+
+/// Union–find with path halving.
+fn find(parent: &mut [usize], mut i: usize) -> usize {
+    while parent[i] != i {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    i
+}
+
+/// Dense labels 0.. in order of first appearance of each root.
+fn labels_from_roots(parent: &mut [usize]) -> Vec<usize> {
+    let n = parent.len();
+    let mut id = vec![usize::MAX; n];
+    let mut next = 0;
+    let mut label = vec![0; n];
+    for k in 0..n {
+        let r = find(parent, k);
+        if id[r] == usize::MAX {
+            id[r] = next;
+            next += 1;
+        }
+        label[k] = id[r];
+    }
+    label
+}
+
+/// Step 1: connected components of the cells with the same (square, tag) key.
+fn initial_aggregates(fine: &PolyMesh, size: f64) -> Vec<usize> {
+    let bb = fine.bounding_box();
+    let key = |k: usize| {
+        let c = fine.centroid(k);
+        (
+            ((c[0] - bb[0]) / size).floor() as i64,
+            ((c[1] - bb[1]) / size).floor() as i64,
+            fine.cell_tag(k),
+        )
+    };
+    let keys: Vec<_> = (0..fine.n_cells()).map(key).collect();
+    let mut parent: Vec<usize> = (0..fine.n_cells()).collect();
+    for e in 0..fine.n_edges() {
+        let [a, b] = fine.edge_cells(e);
+        if b != NO_CELL && keys[a] == keys[b] {
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            if ra != rb {
+                parent[ra.max(rb)] = ra.min(rb);
+            }
+        }
+    }
+    labels_from_roots(&mut parent)
+}
+
+/// Merges the aggregates of area below `min_area` into the neighbour of the same tag with the
+/// longest common interface (one pass, in label order).
+fn merge_small(fine: &PolyMesh, label: &mut Vec<usize>, min_area: f64) {
+    let na = label.iter().max().map_or(0, |m| m + 1);
+    let mut area = vec![0.0; na];
+    for (k, &a) in label.iter().enumerate() {
+        area[a] += fine.measure(k);
+    }
+    // interfaces (a, b, length) between aggregates of the same tag, both directions
+    let mut iface: Vec<(usize, usize, f64)> = Vec::new();
+    for e in 0..fine.n_edges() {
+        let [k, l] = fine.edge_cells(e);
+        if l == NO_CELL || fine.cell_tag(k) != fine.cell_tag(l) {
+            continue;
+        }
+        let (a, b) = (label[k], label[l]);
+        if a != b && (area[a] < min_area || area[b] < min_area) {
+            let len = fine.edge_measure(e);
+            iface.push((a, b, len));
+            iface.push((b, a, len));
+        }
+    }
+    iface.sort_by(|x, y| (x.0, x.1).cmp(&(y.0, y.1)));
+    let mut parent: Vec<usize> = (0..na).collect();
+    let mut i = 0;
+    while i < iface.len() {
+        let a = iface[i].0;
+        let mut best: Option<(usize, f64)> = None;
+        while i < iface.len() && iface[i].0 == a {
+            let b = iface[i].1;
+            let mut len = 0.0;
+            while i < iface.len() && iface[i].0 == a && iface[i].1 == b {
+                len += iface[i].2;
+                i += 1;
+            }
+            if best.is_none_or(|(_, l)| len > l) {
+                best = Some((b, len));
+            }
+        }
+        if let Some((b, _)) = best
+            && area[a] < min_area
+        {
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            if ra != rb {
+                parent[ra] = rb;
+            }
+        }
+    }
+    let agg = labels_from_roots(&mut parent);
+    for l in label.iter_mut() {
+        *l = agg[*l];
+    }
+    *label = renumber(label);
+}
+
+/// Dense labels in order of first appearance.
+fn renumber(label: &[usize]) -> Vec<usize> {
+    let na = label.iter().max().map_or(0, |m| m + 1);
+    let mut id = vec![usize::MAX; na];
+    let mut next = 0;
+    label
+        .iter()
+        .map(|&a| {
+            if id[a] == usize::MAX {
+                id[a] = next;
+                next += 1;
+            }
+            id[a]
+        })
+        .collect()
+}
+
+/// Gives each fine cell of aggregate `a` a label of its own (fresh labels at the end).
+fn dissolve(label: &mut [usize], dissolved: &mut [bool], a: usize) {
+    let mut next = label.iter().max().map_or(0, |m| m + 1);
+    let mut first = true;
+    for (k, l) in label.iter_mut().enumerate() {
+        if *l == a {
+            dissolved[k] = true;
+            if first {
+                first = false; // keeps label a
+            } else {
+                *l = next;
+                next += 1;
+            }
+        }
+    }
+}
+
+/// Step 2: the corners (see the module docs), and every vertex of a dissolved cell.
+fn corners(fine: &PolyMesh, label: &[usize], dissolved: &[bool]) -> Vec<bool> {
+    let mut count = vec![0u32; fine.n_vertices()];
+    let mut corner = vec![false; fine.n_vertices()];
+    for e in 0..fine.n_edges() {
+        let [k, l] = fine.edge_cells(e);
+        let [v, w] = fine.edge_vertices(e);
+        if l == NO_CELL {
+            corner[v] = true;
+            corner[w] = true;
+        } else if label[k] != label[l] {
+            count[v] += 1;
+            count[w] += 1;
+        }
+    }
+    for (k, &d) in dissolved.iter().enumerate() {
+        if d {
+            for &v in fine.cell_vertices(k) {
+                corner[v] = true;
+            }
+        }
+    }
+    for (c, &n) in corner.iter_mut().zip(&count) {
+        *c |= n >= 3;
+    }
+    corner
+}
+
+/// Step 3: for each aggregate, its corners in counter-clockwise order, or `None` if its
+/// straightened polygon is not admissible (several boundary loops, a pinch, fewer than three
+/// corners, or not star-shaped with margin). Aggregates of one cell are always admissible.
+fn polygons(fine: &PolyMesh, label: &[usize], corner: &[bool]) -> Vec<Option<Vec<usize>>> {
+    let na = label.iter().max().map_or(0, |m| m + 1);
+    // boundary half-edges (aggregate, from, to), counter-clockwise for their aggregate
+    let mut half: Vec<(usize, usize, usize)> = Vec::new();
+    let mut size = vec![0usize; na];
+    for k in 0..fine.n_cells() {
+        size[label[k]] += 1;
+        let (vs, es) = (fine.cell_vertices(k), fine.cell_edges(k));
+        for (i, &e) in es.iter().enumerate() {
+            let [c0, c1] = fine.edge_cells(e);
+            let other = if c0 == k { c1 } else { c0 };
+            if other == NO_CELL || label[other] != label[k] {
+                half.push((label[k], vs[i], vs[(i + 1) % vs.len()]));
+            }
+        }
+    }
+    half.sort_unstable();
+    let mut out = vec![None; na];
+    let mut start = 0;
+    while start < half.len() {
+        let a = half[start].0;
+        let mut end = start;
+        while end < half.len() && half[end].0 == a {
+            end += 1;
+        }
+        out[a] = trace(fine, &half[start..end], corner, size[a] == 1);
+        start = end;
+    }
+    out
+}
+
+/// The corners of one aggregate's boundary loop (its half-edges sorted by start vertex), or
+/// `None` if it is not admissible.
+fn trace(
+    fine: &PolyMesh,
+    half: &[(usize, usize, usize)],
+    corner: &[bool],
+    single: bool,
+) -> Option<Vec<usize>> {
+    if half.windows(2).any(|w| w[0].1 == w[1].1) {
+        return None; // two half-edges leave one vertex: a pinch
+    }
+    let next = |v: usize| -> Option<usize> {
+        half.binary_search_by(|h| h.1.cmp(&v))
+            .ok()
+            .map(|i| half[i].2)
+    };
+    let start = half.iter().map(|h| h.1).find(|&v| corner[v])?;
+    let mut poly = vec![start];
+    let mut v = next(start)?;
+    let mut steps = 1;
+    while v != start {
+        if corner[v] {
+            poly.push(v);
+        }
+        v = next(v)?;
+        steps += 1;
+        if steps > half.len() {
+            return None;
+        }
+    }
+    if steps != half.len() || poly.len() < 3 {
+        return None; // several loops (a hole), or a lens
+    }
+    if single || admissible(&poly.iter().map(|&v| fine.vertex(v)).collect::<Vec<_>>()) {
+        Some(poly)
+    } else {
+        None
+    }
+}
+
+/// Whether the counter-clockwise polygon `p` is star-shaped with respect to its centroid with
+/// margin [`MIN_DIST_RATIO`] and simple (angles seen from the centroid positive, summing to 2π).
+fn admissible(p: &[Point]) -> bool {
+    let (area, c) = polygon_area_centroid(p);
+    if !(area > 0.0) {
+        return false;
+    }
+    let r = p
+        .iter()
+        .map(|q| (q[0] - c[0]).hypot(q[1] - c[1]))
+        .fold(0.0, f64::max);
+    let mut angle = 0.0;
+    for i in 0..p.len() {
+        let (a, b) = (p[i], p[(i + 1) % p.len()]);
+        let (u, w) = ([a[0] - c[0], a[1] - c[1]], [b[0] - c[0], b[1] - c[1]]);
+        let cross = u[0] * w[1] - u[1] * w[0];
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        if !(cross / len >= MIN_DIST_RATIO * r) {
+            return false;
+        }
+        angle += cross.atan2(u[0] * w[0] + u[1] * w[1]);
+    }
+    (angle - std::f64::consts::TAU).abs() < 1e-6
+}
+
+/// Step 4: the coarse mesh from the admissible polygons.
+fn build(
+    fine: &PolyMesh,
+    label: &[usize],
+    corner: &[bool],
+    polys: Vec<Option<Vec<usize>>>,
+    dissolved: &[bool],
+) -> Result<Agglomeration, MeshError> {
+    let mut id = vec![usize::MAX; fine.n_vertices()];
+    let mut vertices = Vec::new();
+    for (v, &c) in corner.iter().enumerate() {
+        if c {
+            id[v] = vertices.len();
+            vertices.push(fine.vertex(v));
+        }
+    }
+    let cells: Vec<Vec<usize>> = polys
+        .into_iter()
+        .map(|p| p.unwrap_or_default().into_iter().map(|v| id[v]).collect())
+        .collect();
+    let tagged: Vec<(usize, usize, i32)> = fine
+        .boundary_edges()
+        .iter()
+        .filter(|&&e| fine.edge_tag(e) != 0)
+        .map(|&e| {
+            let [a, b] = fine.edge_vertices(e);
+            (id[a], id[b], fine.edge_tag(e))
+        })
+        .collect();
+    let na = cells.len();
+    let mut cell_tags = vec![0; na];
+    for (k, &a) in label.iter().enumerate() {
+        cell_tags[a] = fine.cell_tag(k);
+    }
+    let mesh = PolyMesh::from_cells_tagged(vertices, cells, &tagged)?.with_cell_tags(cell_tags)?;
+    // fine boundary edge → coarse edge with the same (renumbered) end points
+    let mut boundary_edge_of = vec![NO_EDGE; fine.n_edges()];
+    let coarse_b = mesh.boundary_edges();
+    for &e in fine.boundary_edges() {
+        let [a, b] = fine.edge_vertices(e);
+        let key = [id[a].min(id[b]), id[a].max(id[b])];
+        let pos = coarse_b
+            .binary_search_by(|&ce| mesh.edge_vertices(ce).cmp(&key))
+            .map_err(|_| {
+                MeshError::NonConforming(format!(
+                    "agglomeration lost the boundary edge {e} ({a}, {b})"
+                ))
+            })?;
+        boundary_edge_of[e] = coarse_b[pos];
+    }
+    Ok(Agglomeration {
+        mesh,
+        cell_of: label.to_vec(),
+        boundary_edge_of,
+        dissolved_cells: dissolved.iter().filter(|&&d| d).count(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::cartesian_rect;
+
+    fn total_area(m: &PolyMesh) -> f64 {
+        (0..m.n_cells()).map(|k| m.measure(k)).sum()
+    }
+
+    #[test]
+    fn cartesian_agglomerates_to_cartesian() {
+        let fine = cartesian_rect(32, 32, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        let agg = agglomerate(&fine, 0.125).unwrap();
+        assert_eq!(agg.mesh.n_cells(), 64);
+        assert_eq!(agg.dissolved_cells, 0);
+        assert!((total_area(&agg.mesh) - 1.0).abs() < 1e-12);
+        // every coarse cell holds 16 fine cells, and contains their centroids' square
+        let mut count = [0usize; 64];
+        for &c in &agg.cell_of {
+            count[c] += 1;
+        }
+        assert!(count.iter().all(|&n| n == 16));
+        for (k, &c) in agg.cell_of.iter().enumerate() {
+            let (p, q) = (fine.centroid(k), agg.mesh.centroid(c));
+            assert!((p[0] - q[0]).abs() < 0.0625 && (p[1] - q[1]).abs() < 0.0625);
+        }
+        // boundary edges carry over one to one
+        let mut seen = std::collections::HashSet::new();
+        for &e in fine.boundary_edges() {
+            let ce = agg.boundary_edge_of[e];
+            assert!(agg.mesh.is_boundary_edge(ce));
+            assert!(seen.insert(ce));
+            assert!((agg.mesh.edge_measure(ce) - fine.edge_measure(e)).abs() < 1e-15);
+        }
+        assert_eq!(seen.len(), agg.mesh.boundary_edges().len());
+    }
+}
