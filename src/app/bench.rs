@@ -49,6 +49,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
+pub mod peers;
 mod report;
 pub use report::write_report;
 
@@ -713,12 +714,19 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
         );
         return Ok(());
     }
+    if let Some(i) = args.iter().position(|a| a == "--peer-child") {
+        return peers::child_main(&args[i + 1..], root);
+    }
     let cfg = Config::from_env(root)?;
     if args.iter().any(|a| a == "--report-only") {
         return write_report(&cfg);
     }
     let t0 = Instant::now();
     let exe = std::env::current_exe().map_err(|e| io_err(Path::new("current_exe"), e))?;
+    if args.iter().any(|a| a == "--peers") {
+        peers::run(&cfg, &exe)?;
+        return write_report(&cfg);
+    }
     eprintln!(
         "[bench] Test 3 (C = {C}), cells up to {} (GRADVI_BENCH_MAX_CELLS), dolfinx up to {} \
          (GRADVI_BENCH_DOLFINX_MAX_CELLS)",

@@ -78,16 +78,11 @@ pub fn agglomerate(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshErro
     for _ in 0..MAX_ROUNDS {
         let corner = corners(fine, &label, &dissolved);
         let polys = polygons(fine, &label, &corner);
-        let mut failed = false;
-        for (a, poly) in polys.iter().enumerate() {
-            if poly.is_none() {
-                failed = true;
-                dissolve(&mut label, &mut dissolved, a);
-            }
-        }
-        if !failed {
+        let failed: Vec<bool> = polys.iter().map(Option::is_none).collect();
+        if !failed.contains(&true) {
             return build(fine, &label, &corner, polys, &dissolved);
         }
+        dissolve(&mut label, &mut dissolved, &failed);
         label = renumber(&label);
     }
     Err(MeshError::NonConforming(format!(
@@ -218,19 +213,15 @@ fn renumber(label: &[usize]) -> Vec<usize> {
         .collect()
 }
 
-/// Gives each fine cell of aggregate `a` a label of its own (fresh labels at the end).
-fn dissolve(label: &mut [usize], dissolved: &mut [bool], a: usize) {
-    let mut next = label.iter().max().map_or(0, |m| m + 1);
-    let mut first = true;
+/// Gives each fine cell of the aggregates `a` with `failed[a]` a label of its own (fresh labels
+/// at the end), in one pass.
+fn dissolve(label: &mut [usize], dissolved: &mut [bool], failed: &[bool]) {
+    let mut next = failed.len();
     for (k, l) in label.iter_mut().enumerate() {
-        if *l == a {
+        if failed[*l] {
             dissolved[k] = true;
-            if first {
-                first = false; // keeps label a
-            } else {
-                *l = next;
-                next += 1;
-            }
+            *l = next;
+            next += 1;
         }
     }
 }

@@ -48,6 +48,51 @@ pub fn cartesian_rect(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<
     Ok(PolyMesh::from_cells(vertices, cells)?)
 }
 
+/// The nx × ny grid of the rectangle `[x[0], x[1]] × [y[0], y[1]]` with every square cut into
+/// two triangles by its diagonal from the lower-left to the upper-right vertex: square (i, j)
+/// gives triangles `2(j·nx + i)` = [v(i,j), v(i+1,j), v(i+1,j+1)] and `2(j·nx + i) + 1` =
+/// [v(i,j), v(i+1,j+1), v(i,j+1)], vertices numbered as in the module docs. On it, P1 with
+/// f = 0 gives the five-point finite-difference Laplacian at the vertices (the diagonal
+/// couplings cancel), the discretisation of PETSc's obstacle example `snes/tutorials/ex9.c`.
+/// Same requirements as [`cartesian_rect`], with 2·nx·ny ≤ [`MAX_CELLS`](super::MAX_CELLS).
+pub fn cartesian_triangles(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<PolyMesh> {
+    if nx == 0 || ny == 0 {
+        return Err(Error::InvalidData(format!(
+            "a Cartesian mesh needs at least one cell per direction (got {nx} × {ny})"
+        )));
+    }
+    for (name, r) in [("x", x), ("y", y)] {
+        if !(r[0].is_finite() && r[1].is_finite() && r[0] < r[1]) {
+            return Err(Error::InvalidData(format!(
+                "invalid {name} range [{}, {}] for a Cartesian mesh (need finite bounds, lower < upper)",
+                r[0], r[1]
+            )));
+        }
+    }
+    let what = format!("a {nx} × {ny} triangulated Cartesian mesh");
+    check_cell_count(&what, nx.checked_mul(ny).and_then(|c| c.checked_mul(2)))?;
+    let c = counts(nx, ny).and_then(|[c, _, v, e]| {
+        Some([c.checked_mul(2)?, c.checked_mul(6)?, v, e.checked_add(c)?])
+    });
+    check_memory(&what, c, memory_budget())?;
+    let xs: Vec<f64> = (0..=nx).map(|i| grid_coord(x[0], x[1], i, nx)).collect();
+    let mut vertices = Vec::with_capacity((nx + 1) * (ny + 1));
+    for j in 0..=ny {
+        let yj = grid_coord(y[0], y[1], j, ny);
+        vertices.extend(xs.iter().map(|&xi| [xi, yj]));
+    }
+    let v = |i: usize, j: usize| j * (nx + 1) + i;
+    let mut cell_verts = Vec::with_capacity(6 * nx * ny);
+    for j in 0..ny {
+        for i in 0..nx {
+            cell_verts.extend([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+            cell_verts.extend([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+        }
+    }
+    let cell_ptr: Vec<usize> = (0..=2 * nx * ny).map(|k| 3 * k).collect();
+    Ok(PolyMesh::from_flat_cells(vertices, cell_ptr, cell_verts)?)
+}
+
 /// Cells, cell sides, vertices and edges of the nx × ny mesh.
 pub(crate) fn counts(nx: usize, ny: usize) -> Counts {
     let (nx, ny) = (nx as u64, ny as u64);
@@ -113,6 +158,17 @@ mod tests {
         assert_eq!(m.vertex(6), [0.25, 0.25]);
         assert_eq!(m.vertex(24), [1.0, 1.0]);
         assert_eq!(m.centroid(1), [0.375, 0.125]);
+    }
+
+    #[test]
+    fn triangulated_grid() {
+        let m = cartesian_triangles(4, 3, [-2.0, 2.0], [-2.0, 2.0]).unwrap();
+        assert_eq!(m.n_cells(), 24);
+        assert_eq!(m.n_vertices(), 20);
+        assert_eq!(m.n_edges(), 4 * 4 + 3 * 5 + 12);
+        assert!((total_area(&m) - 16.0).abs() < 1e-12);
+        assert!(m.is_triangular());
+        assert_eq!(m.cell_vertices(1), &[0, 6, 5]);
     }
 
     #[test]

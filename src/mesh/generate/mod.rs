@@ -35,7 +35,7 @@ pub mod cartesian;
 pub mod hexagonal;
 pub mod kershaw;
 
-pub use cartesian::{cartesian, cartesian_rect};
+pub use cartesian::{cartesian, cartesian_rect, cartesian_triangles};
 pub use hexagonal::{hexagonal, hexagonal_grid};
 pub use kershaw::kershaw;
 

@@ -1,0 +1,427 @@
+//! The peer benchmark (`gradvi bench --peers`, part of `make bench`):
+//!
+//! 1. **PETSc's obstacle example side by side.** Bueler's radial obstacle problem
+//!    (`problems/ex9.toml`) as PETSc's `snes/tutorials/ex9.c` solves it, with grid sequencing
+//!    and geometric multigrid (`-snes_grid_sequence K -pc_type mg`, built from Debian's
+//!    packages by `benches/petsc/*.sh`), next to gradvi on the same problem at equal numbers of
+//!    unknowns: P1 on the (G−1)² squares of the G × G grid cut into triangles (the same
+//!    five-point discrete problem, G² unknowns with the boundary, as ex9 counts them) and HMM
+//!    on the (G−1)² squares. Each row records time, peak memory, iterations and the errors
+//!    against the exact solution (max and mean over the nodes for ex9 and P1, as ex9 computes
+//!    them, boundary included; over the cell centres for HMM).
+//! 2. **Any domain.** The paper's Test 3 data (C = −5) on gmsh meshes of an L-shaped domain, a
+//!    disk and a square with a hole (`benches/domains/*.geo`) from 10⁴ to 10⁶ cells, HMM and
+//!    P1 with the default (nested) start: NITER and the growth of the total time.
+//!
+//! Every case runs in a child process, as in the scaling benchmark, so that peak memory is the
+//! case's own. Rows go to `replication/results/bench_peers.csv`; the report's first sections
+//! are written from it ([`super::report`]).
+
+use super::{Config, bad, io_err, peak_memory_mib, stdout_of};
+use crate::app::replication::records::{read_csv, write_csv};
+use gradvi::mesh::PolyMesh;
+use gradvi::mesh::generate::{cartesian_rect, cartesian_triangles};
+use gradvi::mesh::io::read_mesh;
+use gradvi::problem::{Problem, paper_test3};
+use gradvi::scheme::{Entity, SchemeKind};
+use gradvi::solver::{SolveOptions, solve_problem};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+/// The CSV of this benchmark.
+pub const CSV: &str = "replication/results/bench_peers.csv";
+/// Grids G (G × G nodes) of the ex9 comparison; `GRADVI_BENCH_EX9_MAX_GRID` caps them
+/// (default [`DEFAULT_MAX_GRID`]).
+pub const EX9_GRIDS: [usize; 5] = [257, 513, 1025, 2049, 4097];
+/// Default cap on G (4097 needs 14 GiB for PETSc alone).
+pub const DEFAULT_MAX_GRID: usize = 2049;
+/// The domains of the "any domain" family (`benches/domains/NAME.geo`).
+pub const DOMAINS: [&str; 3] = ["lshape", "disk", "hole"];
+/// gmsh characteristic lengths of the domain meshes (about 11k, 44k, 177k and 700k cells on
+/// the L-shape; a little more on the others).
+pub const DOMAIN_LC: [f64; 4] = [0.0125, 0.00625, 0.003125, 0.0015625];
+
+/// One row of [`CSV`].
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct PeerRow {
+    /// ex9, lshape, disk or hole.
+    pub family: String,
+    /// gradvi or petsc.
+    pub code: String,
+    /// p1, hmm (gradvi); fd (PETSc's five-point finite differences).
+    pub scheme: String,
+    /// How the linear systems are solved: direct or iterative (gradvi), gs+mg (PETSc).
+    pub linear: String,
+    /// G of the G × G grid (ex9), 0 for the gmsh domains.
+    pub grid: usize,
+    /// Cells (0 for PETSc).
+    pub cells: usize,
+    /// Unknowns (ex9: G² for P1 and PETSc).
+    pub unknowns: usize,
+    /// Linear solves of the fine active-set iteration (PETSc: Newton steps on the finest grid).
+    pub niter: usize,
+    /// Linear solves of the coarse levels (PETSc: Newton steps on the coarser grids).
+    pub coarse_niter: usize,
+    /// Krylov iterations, all solves (0 with the direct solver).
+    pub krylov: usize,
+    /// Everything, from the mesh to the certified solution (PETSc: the process's wall clock).
+    pub total_s: f64,
+    /// The coarse solves of the warm start.
+    pub coarse_s: f64,
+    /// Numeric factorisations or Krylov solves, all iterations.
+    pub linear_s: f64,
+    /// Peak resident memory of the process, MiB.
+    pub peak_mib: f64,
+    /// Largest error against the exact solution (ex9).
+    pub err_max: f64,
+    /// Mean error against the exact solution (ex9).
+    pub err_mean: f64,
+    /// Largest scaled quantity of the certificate (NaN for PETSc).
+    pub certificate: f64,
+}
+
+/// The ex9 problem of `problems/ex9.toml`.
+fn ex9_problem(root: &Path) -> gradvi::Result<Problem> {
+    Ok(gradvi::problem::file::load(root.join("problems/ex9.toml"), &[])?.problem())
+}
+
+/// Errors against the exact solution, as ex9 computes them: for P1 the nodal values at every
+/// vertex (boundary included), max and mean; for HMM the cell values at the centroids.
+fn errors(
+    scheme: &dyn gradvi::scheme::GradientDiscretisation,
+    problem: &Problem,
+    u: &[f64],
+) -> (f64, f64) {
+    let Some(exact) = &problem.exact else {
+        return (f64::NAN, f64::NAN);
+    };
+    let mesh = scheme.mesh();
+    let mut max: f64 = 0.0;
+    let mut sum = 0.0;
+    let mut count = 0usize;
+    let mut add = |value: f64, p| {
+        let e = (value - (exact.u)(p)).abs();
+        max = max.max(e);
+        sum += e;
+        count += 1;
+    };
+    match scheme.dof_entity(0) {
+        Entity::Vertex(_) => {
+            for d in 0..scheme.n_unknowns() {
+                if let Entity::Vertex(v) = scheme.dof_entity(d) {
+                    add(u[d], mesh.vertex(v));
+                }
+            }
+        }
+        _ => {
+            for (k, v) in scheme.cell_values(u).into_iter().enumerate() {
+                add(v, mesh.centroid(k));
+            }
+        }
+    }
+    (max, sum / count.max(1) as f64)
+}
+
+/// The solve options of a linear-solver variant.
+fn options(linear: &str) -> gradvi::Result<SolveOptions> {
+    match linear {
+        "direct" => Ok(SolveOptions::default()),
+        _ => Err(bad(format!("unknown linear solver '{linear}'"))),
+    }
+}
+
+/// Solves one gradvi case in this process (the body of a `--peer-child` process).
+fn run_gradvi(
+    family: &str,
+    scheme: SchemeKind,
+    linear: &str,
+    size: usize,
+    file: Option<&Path>,
+    root: &Path,
+) -> gradvi::Result<PeerRow> {
+    let t0 = Instant::now();
+    let (mesh, problem, grid): (PolyMesh, Problem, usize) = match family {
+        "ex9" => {
+            let n = size - 1;
+            let mesh = match scheme {
+                SchemeKind::P1 => cartesian_triangles(n, n, [-2.0, 2.0], [-2.0, 2.0])?,
+                _ => cartesian_rect(n, n, [-2.0, 2.0], [-2.0, 2.0])?,
+            };
+            (mesh, ex9_problem(root)?, size)
+        }
+        _ => {
+            let f = file.ok_or_else(|| bad(format!("{family}: a domain case needs its mesh")))?;
+            (read_mesh(f)?, paper_test3(super::C), 0)
+        }
+    };
+    let scheme_obj = gradvi::scheme::build(scheme, &mesh)?;
+    let sol = solve_problem(scheme_obj.as_ref(), &problem, &options(linear)?)?;
+    let total_s = t0.elapsed().as_secs_f64();
+    if let Some(why) = sol.warm_start.as_ref().and_then(|w| w.skipped.as_ref()) {
+        return Err(bad(format!("{family} {size}: no nested prediction: {why}")));
+    }
+    let (err_max, err_mean) = errors(scheme_obj.as_ref(), &problem, sol.u());
+    let c = sol.result.certificate;
+    let t = sol.timings;
+    Ok(PeerRow {
+        family: family.into(),
+        code: "gradvi".into(),
+        scheme: scheme.to_string(),
+        linear: linear.into(),
+        grid,
+        cells: mesh.n_cells(),
+        unknowns: sol.system.n_unknowns(),
+        niter: sol.niter(),
+        coarse_niter: sol.warm_start.as_ref().map_or(0, |w| w.coarse_solves),
+        krylov: 0,
+        total_s,
+        coarse_s: t.warm_start,
+        linear_s: t.factor + t.solve,
+        peak_mib: peak_memory_mib(),
+        err_max,
+        err_mean,
+        certificate: c
+            .max_violation
+            .max(-c.min_multiplier)
+            .max(c.complementarity)
+            .max(c.balance_residual),
+    })
+}
+
+/// Arguments of a child process: FAMILY SCHEME LINEAR SIZE [FILE].
+pub fn child_main(args: &[String], root: &Path) -> gradvi::Result<()> {
+    if args.len() < 4 {
+        return Err(bad("--peer-child FAMILY SCHEME LINEAR SIZE [FILE]".into()));
+    }
+    let size = args[3]
+        .parse()
+        .map_err(|_| bad(format!("bad size '{}'", args[3])))?;
+    let row = run_gradvi(
+        &args[0],
+        args[1].parse()?,
+        &args[2],
+        size,
+        args.get(4).map(Path::new),
+        root,
+    )?;
+    println!(
+        "{}",
+        serde_json::to_string(&row).map_err(|e| bad(e.to_string()))?
+    );
+    Ok(())
+}
+
+/// PETSc's ex9 at grid G through `benches/petsc/run_ex9.sh` (built once by `build.sh`).
+fn run_petsc(cfg: &Config, bin: &Path, grid: usize) -> gradvi::Result<PeerRow> {
+    let mut cmd = Command::new("bash");
+    cmd.arg(cfg.path("benches/petsc/run_ex9.sh"))
+        .arg(bin)
+        .arg(grid.to_string());
+    let text = stdout_of(cmd, Path::new("benches/petsc/run_ex9.sh"), "PETSc ex9")?;
+    #[derive(Deserialize)]
+    struct Ex9 {
+        unknowns: usize,
+        seconds: f64,
+        peak_mib: f64,
+        snes_iterations: usize,
+        snes_iterations_final: usize,
+        ksp_iterations: usize,
+        err_max: f64,
+        err_mean: f64,
+    }
+    let line = text
+        .lines()
+        .rev()
+        .find(|l| l.starts_with('{'))
+        .unwrap_or("");
+    let r: Ex9 = serde_json::from_str(line)
+        .map_err(|e| bad(format!("PETSc ex9 at {grid}: bad output ({e}): {text}")))?;
+    Ok(PeerRow {
+        family: "ex9".into(),
+        code: "petsc".into(),
+        scheme: "fd".into(),
+        linear: "gs+mg".into(),
+        grid,
+        cells: 0,
+        unknowns: r.unknowns,
+        niter: r.snes_iterations_final,
+        coarse_niter: r.snes_iterations - r.snes_iterations_final,
+        krylov: r.ksp_iterations,
+        total_s: r.seconds,
+        coarse_s: f64::NAN,
+        linear_s: f64::NAN,
+        peak_mib: r.peak_mib,
+        err_max: r.err_max,
+        err_mean: r.err_mean,
+        certificate: f64::NAN,
+    })
+}
+
+/// Installs (if missing) and builds PETSc's ex9; its path, or why not.
+fn build_petsc(cfg: &Config) -> Result<PathBuf, String> {
+    let run = |script: &str, arg: Option<&Path>| -> Result<String, String> {
+        let mut cmd = Command::new("bash");
+        cmd.arg(cfg.path(script));
+        if let Some(a) = arg {
+            cmd.arg(a);
+        }
+        let out = cmd
+            .stderr(Stdio::inherit())
+            .output()
+            .map_err(|e| format!("{script}: {e}"))?;
+        if !out.status.success() {
+            return Err(format!("{script} failed ({})", out.status));
+        }
+        Ok(String::from_utf8_lossy(&out.stdout).into_owned())
+    };
+    run("benches/petsc/install.sh", None)?;
+    let out = run(
+        "benches/petsc/build.sh",
+        Some(&cfg.path("target/petsc-ex9")),
+    )?;
+    let bin = out.lines().last().unwrap_or("").trim().to_string();
+    Ok(PathBuf::from(bin))
+}
+
+/// The gmsh mesh of `domain` at characteristic length `lc` (written once into
+/// `target/bench-meshes/`).
+fn domain_mesh(cfg: &Config, domain: &str, lc: f64) -> gradvi::Result<PathBuf> {
+    let dir = cfg.path(super::MESH_DIR);
+    std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
+    let geo = cfg.path(&format!("benches/domains/{domain}.geo"));
+    let msh = dir.join(format!("{domain}_{lc}.msh"));
+    if msh.exists() {
+        return Ok(msh);
+    }
+    eprintln!("[bench] gmsh: meshing {} (lc {lc})", geo.display());
+    let tmp = dir.join(format!("{domain}_{lc}.msh.part"));
+    let status = Command::new("gmsh")
+        .args([
+            "-2",
+            "-nt",
+            "1",
+            "-format",
+            "msh41",
+            "-v",
+            "2",
+            "-setnumber",
+            "lc",
+        ])
+        .arg(lc.to_string())
+        .arg(&geo)
+        .arg("-o")
+        .arg(&tmp)
+        .stdout(Stdio::null())
+        .status()
+        .map_err(|e| io_err(Path::new("gmsh"), e))?;
+    if !status.success() {
+        return Err(io_err(&geo, format!("gmsh failed: {status}")));
+    }
+    std::fs::rename(&tmp, &msh).map_err(|e| io_err(&msh, e))?;
+    Ok(msh)
+}
+
+/// One gradvi case run in a child process.
+fn gradvi_child(
+    exe: &Path,
+    family: &str,
+    scheme: SchemeKind,
+    linear: &str,
+    size: usize,
+    file: Option<&Path>,
+) -> gradvi::Result<PeerRow> {
+    let mut cmd = Command::new(exe);
+    cmd.args(["bench", "--peer-child", family, &scheme.to_string(), linear])
+        .arg(size.to_string());
+    if let Some(f) = file {
+        cmd.arg(f);
+    }
+    let what = format!("{family} {scheme} {linear} {size}");
+    let text = stdout_of(cmd, exe, &what)?;
+    let line = text
+        .lines()
+        .rev()
+        .find(|l| l.starts_with('{'))
+        .unwrap_or("");
+    serde_json::from_str(line).map_err(|e| bad(format!("{what}: bad child output ({e}): {text}")))
+}
+
+/// The linear-solver variants of gradvi that the peer benchmark runs.
+pub fn linear_variants() -> Vec<&'static str> {
+    vec!["direct"]
+}
+
+/// Runs the peer benchmark and writes [`CSV`] (rows appended as they come).
+pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
+    let max_grid = std::env::var("GRADVI_BENCH_EX9_MAX_GRID")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(DEFAULT_MAX_GRID);
+    let csv = cfg.path(CSV);
+    let mut rows: Vec<PeerRow> = Vec::new();
+    let push = |row: PeerRow, rows: &mut Vec<PeerRow>| -> gradvi::Result<()> {
+        eprintln!(
+            "[bench]   {} {} {} {}: {} unknowns, NITER {} (+{} coarse), {:.2} s, {:.0} MiB, errors {:.3e} / {:.3e}",
+            row.family,
+            row.code,
+            row.scheme,
+            row.linear,
+            row.unknowns,
+            row.niter,
+            row.coarse_niter,
+            row.total_s,
+            row.peak_mib,
+            row.err_max,
+            row.err_mean
+        );
+        rows.push(row);
+        write_csv(&csv, rows)
+    };
+    let petsc = build_petsc(cfg);
+    if let Err(why) = &petsc {
+        eprintln!("[bench] warning: no PETSc rows: {why}");
+    }
+    for &g in EX9_GRIDS.iter().filter(|&&g| g <= max_grid) {
+        if let Ok(bin) = &petsc {
+            eprintln!("[bench] ex9 PETSc gs+mg, {g}² grid ...");
+            push(run_petsc(cfg, bin, g)?, &mut rows)?;
+        }
+        for scheme in [SchemeKind::P1, SchemeKind::Hmm] {
+            for linear in linear_variants() {
+                eprintln!("[bench] ex9 gradvi {scheme} {linear}, {g}² grid ...");
+                push(
+                    gradvi_child(exe, "ex9", scheme, linear, g, None)?,
+                    &mut rows,
+                )?;
+            }
+        }
+    }
+    for domain in DOMAINS {
+        for &lc in &DOMAIN_LC {
+            if 0.75 * 2.3 / (lc * lc) > cfg.max_cells as f64 {
+                continue; // about 2.3/lc² triangles per unit area, areas 0.75 to 0.97
+            }
+            let file = domain_mesh(cfg, domain, lc)?;
+            for scheme in [SchemeKind::Hmm, SchemeKind::P1] {
+                for linear in linear_variants() {
+                    eprintln!("[bench] {domain} (lc {lc}) gradvi {scheme} {linear} ...");
+                    let row = gradvi_child(exe, domain, scheme, linear, 0, Some(&file))?;
+                    push(row, &mut rows)?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The rows of [`CSV`] (empty if it does not exist).
+pub fn read_rows(cfg: &Config) -> gradvi::Result<Vec<PeerRow>> {
+    let csv = cfg.path(CSV);
+    if csv.exists() {
+        read_csv(&csv)
+    } else {
+        Ok(Vec::new())
+    }
+}
