@@ -5,6 +5,8 @@ mod common;
 mod cr;
 #[path = "unit/generators.rs"]
 mod generators;
+#[path = "unit/linear_solver.rs"]
+mod linear_solver;
 #[path = "unit/mesh_io.rs"]
 mod mesh_io;
 #[path = "unit/mesh_validity.rs"]

@@ -50,6 +50,7 @@ use std::process::{Command, Stdio};
 use std::time::Instant;
 
 pub mod peers;
+mod peers_report;
 mod report;
 pub use report::write_report;
 
@@ -334,6 +335,8 @@ pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
             Variant::NestedParallel => gradvi::linalg::FactorThreads::Global,
             _ => gradvi::linalg::FactorThreads::Sequential,
         },
+        // these variants measure the direct solver (the peer benchmark compares the two)
+        linear: gradvi::assembly::LinearSolver::Direct,
     };
     let opts = SolveOptions {
         system: system_options,

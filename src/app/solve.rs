@@ -62,6 +62,11 @@ pub struct SolveArgs {
     /// NITER).
     #[arg(long, value_enum, default_value_t = WarmStart::Nested)]
     warm_start: WarmStart,
+    /// Linear solver of the condensed systems: auto (direct below 200 000 condensed unknowns,
+    /// iterative above), direct (sparse Cholesky) or iterative (algebraic-multigrid
+    /// preconditioned conjugate gradients, memory linear in the size).
+    #[arg(long, value_enum, default_value_t = gradvi::assembly::LinearSolver::Auto)]
+    linear: gradvi::assembly::LinearSolver,
     /// Write the solution (u, active set, multiplier) to this VTU file.
     #[arg(long)]
     vtu: Option<PathBuf>,
@@ -170,13 +175,21 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         tol: a.tol,
         progress: Some(|l| {
             eprintln!(
-                "  solve {:>3}: active {} (+{}, -{}), violation {:.2e}, {:.2} s",
+                "  solve {:>3}: active {} (+{}, -{}), violation {:.2e}, {:.2} s (assembly {:.2}, factorisation/multigrid setup {:.2}, solve {:.2}{})",
                 l.step.solve,
                 l.step.active,
                 l.step.entered,
                 l.step.left,
                 l.step.violation,
-                l.timings.assemble + l.timings.factor + l.timings.solve
+                l.timings.assemble + l.timings.factor + l.timings.solve,
+                l.timings.assemble,
+                l.timings.factor,
+                l.timings.solve,
+                if l.timings.krylov > 0 {
+                    format!(", {} CG iterations", l.timings.krylov)
+                } else {
+                    String::new()
+                }
             )
         }),
         ..Default::default()
@@ -185,7 +198,10 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         active_set,
         warm_start: a.warm_start,
         fallback: a.fallback,
-        ..Default::default()
+        system: gradvi::assembly::SystemOptions {
+            linear: a.linear,
+            ..Default::default()
+        },
     };
     eprintln!(
         "solving {} with {} on {} cells ({} unknowns)...",

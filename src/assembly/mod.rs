@@ -101,7 +101,67 @@ pub struct SystemOptions {
     pub ordering: Ordering,
     /// Threads of the numeric factorisations (default: one; see [`FactorThreads`]).
     pub factor_threads: FactorThreads,
+    /// How the condensed systems are solved (default: chosen by size).
+    pub linear: LinearSolver,
 }
+
+/// How the condensed systems S u = c are solved.
+///
+/// - **Direct**: sparse Cholesky (faer), symbolic factorisation once, numeric factorisation
+///   per solve ([`crate::linalg::cholesky`]). Exact to round-off; its fill grows like
+///   N log N and its time like N^1.5 on 2D meshes.
+/// - **Iterative**: conjugate gradients preconditioned by smoothed-aggregation algebraic
+///   multigrid ([`crate::linalg::amg`], [`crate::linalg::pcg`]), the hierarchy rebuilt for
+///   each active set, started from the previous solution, to a relative residual of
+///   [`ITERATIVE_RTOL`]; memory O(N). The certificate of the final solution is computed the
+///   same way as for the direct solver, from the full system.
+/// - **Auto** (the default): iterative from [`AUTO_ITERATIVE_MIN`] condensed unknowns on,
+///   direct below (the crossover measured by `make bench`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum LinearSolver {
+    /// Direct below [`AUTO_ITERATIVE_MIN`] condensed unknowns, iterative from there on.
+    #[default]
+    Auto,
+    /// Sparse Cholesky.
+    Direct,
+    /// Multigrid-preconditioned conjugate gradients.
+    Iterative,
+}
+
+impl std::str::FromStr for LinearSolver {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        match s {
+            "auto" => Ok(LinearSolver::Auto),
+            "direct" => Ok(LinearSolver::Direct),
+            "iterative" => Ok(LinearSolver::Iterative),
+            _ => Err(crate::Error::InvalidData(format!(
+                "unknown linear solver '{s}' (expected auto, direct or iterative)"
+            ))),
+        }
+    }
+}
+
+impl std::fmt::Display for LinearSolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            LinearSolver::Auto => "auto",
+            LinearSolver::Direct => "direct",
+            LinearSolver::Iterative => "iterative",
+        })
+    }
+}
+
+/// [`LinearSolver::Auto`] solves iteratively from this many condensed unknowns on.
+pub const AUTO_ITERATIVE_MIN: usize = 200_000;
+
+/// Relative residual ‖c − S u‖₂ ≤ ITERATIVE_RTOL ‖c‖₂ at which the conjugate gradients stop.
+pub const ITERATIVE_RTOL: f64 = 1e-12;
+
+/// Iteration cap of the conjugate gradients (multigrid keeps them in the tens).
+pub const ITERATIVE_MAX_ITER: usize = 1000;
 
 /// The assembled discrete problem (see the module docs).
 pub struct DiscreteSystem<'a> {
@@ -113,6 +173,8 @@ pub struct DiscreteSystem<'a> {
     scratch: Mutex<(Vec<f64>, Vec<f64>)>,
     /// Buffer of [`DiscreteSystem::residual`], kept between calls.
     residual_scratch: Mutex<Vec<[f64; 2]>>,
+    /// The last skeleton solution, the initial guess of the next iterative solve.
+    last_solution: Mutex<Vec<f64>>,
     /// Time to build (data, local matrices, and the symbolic system when built here), seconds.
     pub setup_seconds: f64,
     /// The symbolic factorisation, seconds (0 when the symbolic system was given). It runs
@@ -159,6 +221,7 @@ impl<'a> DiscreteSystem<'a> {
             values,
             scratch: Mutex::new((Vec::new(), Vec::new())),
             residual_scratch: Mutex::new(Vec::new()),
+            last_solution: Mutex::new(Vec::new()),
             setup_seconds: 0.0,
             symbolic_seconds: 0.0,
         }
@@ -223,9 +286,14 @@ impl<'a> DiscreteSystem<'a> {
         let fx = |d: usize| -> Option<f64> { self.values.dirichlet[d].or(fixed[d]) };
         let (values, mut rhs) = self.assemble_condensed(fixed);
         let t1 = Instant::now();
-        let factor = self.sym.pattern.factor(&values)?;
-        let t2 = Instant::now();
-        factor.solve_in_place(&mut rhs);
+        let (t2, krylov) = if self.sym.pattern.has_factorisation() {
+            let factor = self.sym.pattern.factor(&values)?;
+            let t2 = Instant::now();
+            factor.solve_in_place(&mut rhs);
+            (t2, 0)
+        } else {
+            self.solve_iteratively(&values, &mut rhs)?
+        };
         let mut u = vec![0.0; self.n];
         u[..self.n_skel].copy_from_slice(&rhs);
         self.recover_interiors(&fx, &mut u);
@@ -241,8 +309,43 @@ impl<'a> DiscreteSystem<'a> {
                 assemble: (t1 - t0).as_secs_f64(),
                 factor: (t2 - t1).as_secs_f64(),
                 solve: (t3 - t2).as_secs_f64(),
+                krylov,
             },
         ))
+    }
+
+    /// Solves S x = c (S given by its lower-triangle `values`, c in `rhs`, overwritten by x)
+    /// by multigrid-preconditioned conjugate gradients from the previous solution; returns
+    /// when the multigrid setup ended and the iterations.
+    fn solve_iteratively(
+        &self,
+        values: &[f64],
+        rhs: &mut [f64],
+    ) -> crate::Result<(Instant, usize)> {
+        use crate::linalg::{Amg, AmgOptions, CsrMatrix, PcgOptions, pcg};
+        let (col_ptr, row_idx) = self.condensed_pattern();
+        let a = CsrMatrix::from_lower_csc(self.n_skel, col_ptr, row_idx, values)?;
+        let amg = Amg::new(&a, &AmgOptions::default())?;
+        let t2 = Instant::now();
+        let mut x = self
+            .last_solution
+            .lock()
+            .map(|mut b| std::mem::take(&mut *b))
+            .unwrap_or_default();
+        if x.len() != self.n_skel {
+            x = vec![0.0; self.n_skel];
+        }
+        let opts = PcgOptions {
+            rtol: ITERATIVE_RTOL,
+            atol: 0.0,
+            max_iter: ITERATIVE_MAX_ITER,
+        };
+        let report = pcg(&a, &amg, rhs, &mut x, &opts)?;
+        rhs.copy_from_slice(&x);
+        if let Ok(mut b) = self.last_solution.lock() {
+            *b = x;
+        }
+        Ok((t2, report.iterations))
     }
 
     /// Fills the interior unknowns of `u` from its skeleton values, cell by cell

@@ -14,7 +14,7 @@
 //! diagonal and zeros elsewhere), so neither the boundary partition nor the active set
 //! changes anything here.
 
-use super::{SystemOptions, cell_chunks};
+use super::{AUTO_ITERATIVE_MIN, LinearSolver, SystemOptions, cell_chunks};
 use crate::linalg::SpdPattern;
 use crate::scheme::GradientDiscretisation;
 use rayon::prelude::*;
@@ -192,17 +192,26 @@ impl<'a> SymbolicSystem<'a> {
         let n_skel = scheme.n_skeleton();
         let n = scheme.n_unknowns();
         let (col_ptr, row_idx) = condensed_pattern(&dof_map, n_skel)?;
+        let direct = match options.linear {
+            LinearSolver::Direct => true,
+            LinearSolver::Iterative => false,
+            LinearSolver::Auto => n_skel < AUTO_ITERATIVE_MIN,
+        };
         // the symbolic factorisation (sequential) runs beside the scatter maps
         let (symbolic, maps) = rayon::join(
             || {
                 let t = Instant::now();
-                SpdPattern::with_ordering(
-                    n_skel,
-                    col_ptr.clone(),
-                    row_idx.clone(),
-                    options.ordering,
-                )
-                .map(|p| {
+                let pattern = if direct {
+                    SpdPattern::with_ordering(
+                        n_skel,
+                        col_ptr.clone(),
+                        row_idx.clone(),
+                        options.ordering,
+                    )
+                } else {
+                    SpdPattern::without_factorisation(n_skel, col_ptr.clone(), row_idx.clone())
+                };
+                pattern.map(|p| {
                     (
                         p.with_threads(options.factor_threads),
                         t.elapsed().as_secs_f64(),

@@ -41,11 +41,13 @@ impl FactorThreads {
     }
 }
 
-/// A lower-triangular CSC sparsity pattern and its symbolic Cholesky factorisation.
+/// A lower-triangular CSC sparsity pattern and its symbolic Cholesky factorisation (absent
+/// for a pattern built by [`SpdPattern::without_factorisation`], whose matrices are solved
+/// iteratively).
 #[derive(Clone)]
 pub struct SpdPattern {
     pattern: SymbolicSparseColMat<usize>,
-    symbolic: Arc<SymbolicCholesky<usize>>,
+    symbolic: Option<Arc<SymbolicCholesky<usize>>>,
     pool: Pool,
     threads: FactorThreads,
 }
@@ -129,10 +131,28 @@ impl SpdPattern {
         let symbolic = symbolic_factorisation(&pattern, ordering)?;
         Ok(SpdPattern {
             pattern,
-            symbolic: Arc::new(symbolic),
+            symbolic: Some(Arc::new(symbolic)),
             pool: Pool::default(),
             threads: FactorThreads::default(),
         })
+    }
+    /// The pattern alone, without the symbolic analysis (for iterative solves): [`Self::factor`]
+    /// then fails and [`Self::factor_len`] is 0.
+    pub fn without_factorisation(
+        n: usize,
+        col_ptr: Vec<usize>,
+        row_idx: Vec<usize>,
+    ) -> crate::Result<Self> {
+        Ok(SpdPattern {
+            pattern: SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx),
+            symbolic: None,
+            pool: Pool::default(),
+            threads: FactorThreads::default(),
+        })
+    }
+    /// Whether the symbolic factorisation was computed.
+    pub fn has_factorisation(&self) -> bool {
+        self.symbolic.is_some()
     }
     /// Sets the threads of the numeric factorisations and solves.
     pub fn with_threads(mut self, threads: FactorThreads) -> Self {
@@ -149,7 +169,7 @@ impl SpdPattern {
     }
     /// Number of stored values of the Cholesky factor (its fill, supernodal blocks included).
     pub fn factor_len(&self) -> usize {
-        self.symbolic.len_val()
+        self.symbolic.as_ref().map_or(0, |s| s.len_val())
     }
     /// Column pointers.
     pub fn col_ptr(&self) -> &[usize] {
@@ -163,21 +183,23 @@ impl SpdPattern {
     /// reusing the symbolic analysis: the values of L with P A Pᵀ = L Lᵀ, computed
     /// supernode by supernode in the order of the elimination tree.
     pub fn factor(&self, values: &[f64]) -> crate::Result<SpdFactor> {
+        let Some(symbolic) = &self.symbolic else {
+            return Err(crate::Error::Linear(
+                "no symbolic factorisation: this pattern was built for iterative solves".into(),
+            ));
+        };
         let a = SparseColMatRef::new(self.pattern.as_ref(), values);
         let par = self.threads.par();
-        let len = self.symbolic.len_val();
+        let len = symbolic.len_val();
         let (mut l_values, kept) = match self.pool.lock() {
             Ok(mut p) => (std::mem::take(&mut p.0), p.1.take()),
             Err(_) => (Vec::new(), None),
         };
         l_values.clear();
         l_values.resize(len, 0.0);
-        let req = self
-            .symbolic
-            .factorize_numeric_llt_scratch::<f64>(par, Default::default());
+        let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
         let mut mem = scratch_for(kept, req)?;
-        let res = self
-            .symbolic
+        let res = symbolic
             .factorize_numeric_llt(
                 &mut l_values,
                 a,
@@ -200,7 +222,7 @@ impl SpdPattern {
             ))
         })?;
         Ok(SpdFactor {
-            symbolic: self.symbolic.clone(),
+            symbolic: symbolic.clone(),
             values: l_values,
             pool: self.pool.clone(),
             par,

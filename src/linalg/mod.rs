@@ -19,8 +19,14 @@
 //! minimum degree (the default) or a nested dissection by breadth-first level-set separators
 //! ([`nested_dissection`]), which needs no coordinates.
 
+pub mod amg;
 pub mod cholesky;
+pub mod csr;
 pub mod ordering;
+pub mod pcg;
 
+pub use amg::{Amg, AmgOptions, LevelSummary, Smoother};
 pub use cholesky::{FactorThreads, SpdFactor, SpdPattern};
+pub use csr::CsrMatrix;
 pub use ordering::{Ordering, nested_dissection};
+pub use pcg::{Identity, Jacobi, PcgOptions, PcgReport, Preconditioner, pcg};

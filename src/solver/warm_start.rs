@@ -93,6 +93,10 @@ pub struct WarmStartReport {
 /// Each coarse level has about 1/RATIO of the cells of the level below (H ≈ 4h).
 pub const RATIO: usize = 16;
 
+/// Unknowns per cell of HMM on a mesh of quadrilaterals or triangles (one per cell and about
+/// two per cell for the faces), to size the first coarse level by the fine unknowns.
+pub const HMM_UNKNOWNS_PER_CELL: usize = 3;
+
 /// A coarser level is made while it would have at least this many cells.
 pub const MIN_CELLS: usize = 256;
 
@@ -123,7 +127,7 @@ pub fn predict(
         .ok_or_else(|| "the problem has no barrier".to_string())?
         .kind;
     let fine = scheme.mesh();
-    let levels = hierarchy(fine)?;
+    let levels = hierarchy(fine, scheme.n_unknowns())?;
     // from the coarsest level to the finest coarse one, each warm-started by the one above
     let mut state: Option<CoarseState> = None;
     let mut solves = 0;
@@ -173,11 +177,15 @@ pub fn predict(
     Ok((predicted, report))
 }
 
-/// The coarse meshes, finest first: each agglomerates the one below into about 1/[`RATIO`]
+/// The coarse meshes, finest first: the first has about 1/[`RATIO`] of the fine unknowns
+/// (`unknowns`; HMM has about [`HMM_UNKNOWNS_PER_CELL`] unknowns per cell, so that is
+/// N/[`RATIO`] cells for an HMM fine mesh and fewer for P1 on triangles, which has about one
+/// unknown per two cells), each further one agglomerates the one below into about 1/[`RATIO`]
 /// of its cells, while that leaves at least [`MIN_CELLS`] cells (and the first at least 64).
-fn hierarchy(fine: &PolyMesh) -> Result<Vec<Agglomeration>, String> {
+fn hierarchy(fine: &PolyMesh, unknowns: usize) -> Result<Vec<Agglomeration>, String> {
     let area: f64 = (0..fine.n_cells()).map(|k| fine.measure(k)).sum();
-    if fine.n_cells() / RATIO < 64 {
+    let first = 2 * unknowns / (RATIO * HMM_UNKNOWNS_PER_CELL);
+    if first < 64 {
         return Err(format!(
             "the mesh ({} cells) is too coarse for a nested warm start",
             fine.n_cells()
@@ -186,7 +194,11 @@ fn hierarchy(fine: &PolyMesh) -> Result<Vec<Agglomeration>, String> {
     let mut levels: Vec<Agglomeration> = Vec::new();
     loop {
         let below = levels.last().map_or(fine, |a| &a.mesh);
-        let target = below.n_cells() / RATIO;
+        let target = if levels.is_empty() {
+            first
+        } else {
+            below.n_cells() / RATIO
+        };
         let size = (area / target as f64).sqrt();
         let agg = agglomerate(below, size)
             .map_err(|e| format!("agglomerating {} cells into {target}: {e}", below.n_cells()))?;

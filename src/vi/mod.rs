@@ -34,10 +34,13 @@ use crate::scheme::PointDof;
 pub struct SolveTimings {
     /// Assembly of the reduced system (condensation and scatter).
     pub assemble: f64,
-    /// Numeric factorisation.
+    /// Numeric factorisation (iterative solver: the multigrid setup).
     pub factor: f64,
-    /// Triangular solves and recovery of eliminated unknowns.
+    /// Triangular solves and recovery of eliminated unknowns (iterative solver: the
+    /// conjugate gradients).
     pub solve: f64,
+    /// Conjugate-gradient iterations (0 with the direct solver).
+    pub krylov: usize,
 }
 
 /// A strictly convex quadratic energy E(u) = ½uᵀMu − bᵀu (M symmetric positive definite on

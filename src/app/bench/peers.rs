@@ -126,10 +126,9 @@ fn errors(
 
 /// The solve options of a linear-solver variant.
 fn options(linear: &str) -> gradvi::Result<SolveOptions> {
-    match linear {
-        "direct" => Ok(SolveOptions::default()),
-        _ => Err(bad(format!("unknown linear solver '{linear}'"))),
-    }
+    let mut o = SolveOptions::default();
+    o.system.linear = linear.parse()?;
+    Ok(o)
 }
 
 /// Solves one gradvi case in this process (the body of a `--peer-child` process).
@@ -162,6 +161,26 @@ fn run_gradvi(
     if let Some(why) = sol.warm_start.as_ref().and_then(|w| w.skipped.as_ref()) {
         return Err(bad(format!("{family} {size}: no nested prediction: {why}")));
     }
+    if std::env::var_os("GRADVI_BENCH_LOG").is_some() {
+        let t = sol.timings;
+        eprintln!(
+            "[bench]     setup {:.3} (symbolic {:.3}), warm start {:.3}, assembly {:.3}, factor/setup {:.3}, solve {:.3}, total {:.3}",
+            t.setup, t.symbolic, t.warm_start, t.assemble, t.factor, t.solve, t.total
+        );
+        for l in &sol.result.log {
+            eprintln!(
+                "[bench]     solve {:>3}: active {:>8} (+{}, -{}), assembly {:.3}, factor/setup {:.3}, solve {:.3}, {} CG",
+                l.step.solve,
+                l.step.active,
+                l.step.entered,
+                l.step.left,
+                l.timings.assemble,
+                l.timings.factor,
+                l.timings.solve,
+                l.timings.krylov
+            );
+        }
+    }
     let (err_max, err_mean) = errors(scheme_obj.as_ref(), &problem, sol.u());
     let c = sol.result.certificate;
     let t = sol.timings;
@@ -175,7 +194,7 @@ fn run_gradvi(
         unknowns: sol.system.n_unknowns(),
         niter: sol.niter(),
         coarse_niter: sol.warm_start.as_ref().map_or(0, |w| w.coarse_solves),
-        krylov: 0,
+        krylov: sol.result.log.iter().map(|l| l.timings.krylov).sum(),
         total_s,
         coarse_s: t.warm_start,
         linear_s: t.factor + t.solve,
@@ -350,7 +369,7 @@ fn gradvi_child(
 
 /// The linear-solver variants of gradvi that the peer benchmark runs.
 pub fn linear_variants() -> Vec<&'static str> {
-    vec!["direct"]
+    vec!["direct", "iterative"]
 }
 
 /// Runs the peer benchmark and writes [`CSV`] (rows appended as they come).

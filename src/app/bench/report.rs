@@ -57,6 +57,12 @@ pub fn write_report(cfg: &Config) -> gradvi::Result<()> {
         .collect();
     let mut md = Doc::default();
     intro(&mut md);
+    super::peers_report::write(cfg, &mut md, &super::peers::read_rows(cfg)?)?;
+    md.section(
+        2,
+        "The scaling benchmark (Test 3 on the unit square, direct solver)",
+        "The sections below measure the direct solver (sparse Cholesky) with the cold and nested starts and two levers, and compare with dolfinx.",
+    );
     targets(&mut md, &rows, &gradvi);
     md.para("![total time against cells](figures/bench.png)");
     growth(&mut md, &all);

@@ -1,0 +1,357 @@
+//! The first sections of `BENCHMARKS.md` and `figures/bench_peers.png`, written from
+//! `replication/results/bench_peers.csv` only ([`super::peers`]): PETSc's ex9 side by side,
+//! the targets of the performance issue, and the "any domain" family.
+
+use super::Config;
+use super::peers::PeerRow;
+use crate::app::markdown::{Doc, NONE, Table, cells, fixed, met, seconds};
+use crate::app::plot::{LegendPosition, LineOptions, LineSeries, Marker, data_range, plot_panels};
+
+/// The figure of this part.
+pub const FIGURE: &str = "replication/figures/bench_peers.png";
+
+/// Least-squares slope of log y against log x.
+fn slope(pts: &[(f64, f64)]) -> Option<f64> {
+    if pts.len() < 2 {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let (lx, ly): (Vec<f64>, Vec<f64>) = pts.iter().map(|&(x, y)| (x.ln(), y.ln())).unzip();
+    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
+    let sxx: f64 = lx.iter().map(|x| (x - mx) * (x - mx)).sum();
+    let sxy: f64 = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+fn find<'a>(
+    rows: &'a [PeerRow],
+    code: &str,
+    scheme: &str,
+    linear: &str,
+    grid: usize,
+) -> Option<&'a PeerRow> {
+    rows.iter().find(|r| {
+        r.family == "ex9"
+            && r.code == code
+            && r.scheme == scheme
+            && r.linear == linear
+            && r.grid == grid
+    })
+}
+
+/// The fastest gradvi row of `scheme` at `grid` (over the linear solvers).
+fn best<'a>(rows: &'a [PeerRow], scheme: &str, grid: usize) -> Option<&'a PeerRow> {
+    rows.iter()
+        .filter(|r| r.family == "ex9" && r.code == "gradvi" && r.scheme == scheme && r.grid == grid)
+        .min_by(|a, b| a.total_s.total_cmp(&b.total_s))
+}
+
+/// Writes the sections into `md` and the figure (nothing when there are no rows).
+pub fn write(cfg: &Config, md: &mut Doc, rows: &[PeerRow]) -> gradvi::Result<()> {
+    if rows.is_empty() {
+        md.para(
+            "*The peer benchmark (`gradvi bench --peers`) has not been run: no `bench_peers.csv`.*",
+        );
+        return Ok(());
+    }
+    ex9_section(md, rows);
+    targets(md, rows);
+    md.para("![ex9 against PETSc and the any-domain family](figures/bench_peers.png)");
+    domains_section(md, rows);
+    figure(cfg, rows)
+}
+
+fn ex9_section(md: &mut Doc, rows: &[PeerRow]) {
+    md.section(
+        2,
+        "PETSc's obstacle example (ex9) side by side",
+        "Bueler's radial obstacle problem (`problems/ex9.toml`), solved in one run by PETSc's `snes/tutorials/ex9.c` (Debian's PETSc, built by `benches/petsc/build.sh`, run by `benches/petsc/run_ex9.sh` with `-snes_grid_sequence K -pc_type mg` from a 5 × 5 grid: Newton RSLS with grid sequencing and geometric multigrid, GMRES at relative tolerance 1e-5 inside Newton at 1e-8) and by gradvi with its defaults (nested start on agglomerated coarse meshes; linear solver as the column says). P1 runs on the G × G grid's squares cut into triangles, the same five-point discrete problem as ex9 with the same G² unknowns (boundary included); HMM on the (G − 1)² squares. Errors against the exact solution are computed as ex9 does: max and mean over all nodes (P1, PETSc) or cell centres (HMM). Time is the process's wall clock from mesh to certified solution (PETSc: the whole process); memory is the peak resident set. NITER: gradvi's fine solves (+ coarse solves), PETSc's Newton steps on the finest grid (+ on the coarser grids); Krylov: CG (gradvi) or GMRES (PETSc) iterations in all.",
+    );
+    let mut t = Table::new(
+        "G | code | scheme | linear | unknowns | time [s] | peak [MiB] | NITER (+coarse) | Krylov | max error | mean error | time / PETSc | memory / PETSc",
+        "rlllrrrrrrrrr",
+    );
+    let mut grids: Vec<usize> = rows
+        .iter()
+        .filter(|r| r.family == "ex9")
+        .map(|r| r.grid)
+        .collect();
+    grids.sort_unstable();
+    grids.dedup();
+    for g in grids {
+        let petsc = find(rows, "petsc", "fd", "gs+mg", g);
+        for r in rows.iter().filter(|r| r.family == "ex9" && r.grid == g) {
+            let ratio = |f: fn(&PeerRow) -> f64| match petsc {
+                Some(p) if r.code != "petsc" => fixed(f(r) / f(p), 2),
+                _ => NONE.into(),
+            };
+            t.row(cells![
+                g,
+                r.code,
+                r.scheme,
+                r.linear,
+                r.unknowns,
+                seconds(r.total_s),
+                fixed(r.peak_mib, 0),
+                format!("{} (+{})", r.niter, r.coarse_niter),
+                r.krylov,
+                format!("{:.4e}", r.err_max),
+                format!("{:.4e}", r.err_mean),
+                ratio(|r| r.total_s),
+                ratio(|r| r.peak_mib)
+            ]);
+        }
+    }
+    md.table(&t);
+    md.para("P1 and PETSc solve the same discrete problem, so their errors must agree to the digits of the solver tolerances: the table shows it at every size. HMM is a different discretisation (cell unknowns at centroids), with errors of the same order.");
+}
+
+fn targets(md: &mut Doc, rows: &[PeerRow]) {
+    md.section(2, "Targets of the performance issue", "Each verdict is computed from the rows of this run; 'not met' comes with the measured numbers.");
+    let mut t = Table::new("target | measured | verdict", "llr");
+    for (g, label) in [(1025, "1M"), (2049, "4M")] {
+        let (Some(p), Some(b)) = (find(rows, "petsc", "fd", "gs+mg", g), best(rows, "p1", g))
+        else {
+            t.row(cells![
+                format!("ex9 P1 at {label} unknowns: time and memory ≤ PETSc, errors no larger"),
+                "not run",
+                NONE
+            ]);
+            continue;
+        };
+        let ok = b.total_s <= p.total_s
+            && b.peak_mib <= p.peak_mib
+            && b.err_max <= p.err_max * (1.0 + 1e-3);
+        t.row(cells![
+            format!("ex9 P1 at {label} unknowns ({g}²): time and memory ≤ PETSc gs+mg, errors no larger"),
+            format!("gradvi P1 ({}) {:.2} s, {:.0} MiB, max error {:.4e}; PETSc {:.2} s, {:.0} MiB, {:.4e}", b.linear, b.total_s, b.peak_mib, b.err_max, p.total_s, p.peak_mib, p.err_max),
+            met(ok)
+        ]);
+    }
+    match (
+        find(rows, "petsc", "fd", "gs+mg", 1025),
+        best(rows, "hmm", 1025),
+    ) {
+        (Some(p), Some(h)) => t.row(cells![
+            "ex9 HMM on 1024² cells: time ≤ PETSc gs+mg at 1M unknowns",
+            format!(
+                "gradvi HMM ({}) {:.2} s; PETSc {:.2} s",
+                h.linear, h.total_s, p.total_s
+            ),
+            met(h.total_s <= p.total_s)
+        ]),
+        _ => t.row(cells![
+            "ex9 HMM on 1024² cells: time ≤ PETSc at 1M unknowns",
+            "not run",
+            NONE
+        ]),
+    }
+    let big = rows
+        .iter()
+        .any(|r| r.family == "ex9" && r.code == "gradvi" && r.grid == 4097);
+    t.row(cells![
+        "ex9 at 4097² (16.8M P1 unknowns) within 24 GiB",
+        if big {
+            "run (see the table)"
+        } else {
+            "not run: 4097² needs 33.5M triangles, above the mesh generators' cap of 2^24 cells"
+        },
+        met(big)
+    ]);
+    for scheme in ["hmm", "p1"] {
+        let d: Vec<&PeerRow> = rows
+            .iter()
+            .filter(|r| r.family != "ex9" && r.scheme == scheme)
+            .collect();
+        if d.is_empty() {
+            continue;
+        }
+        let max_niter = d.iter().map(|r| r.niter).max().unwrap_or(0);
+        let mut worst: Option<(f64, String)> = None;
+        for fam in ["lshape", "disk", "hole"] {
+            for linear in ["direct", "iterative"] {
+                let pts: Vec<(f64, f64)> = d
+                    .iter()
+                    .filter(|r| r.family == fam && r.linear == linear)
+                    .map(|r| (r.cells as f64, r.total_s))
+                    .collect();
+                if let Some(s) = slope(&pts)
+                    && worst.as_ref().is_none_or(|w| s > w.0)
+                {
+                    worst = Some((s, format!("{fam} {linear}")));
+                }
+            }
+        }
+        let (s, which) = worst.unwrap_or((f64::NAN, String::new()));
+        t.row(cells![
+            format!(
+                "any domain, {}: NITER ≤ 10 at every size, total time ≤ N^1.2",
+                scheme.to_uppercase()
+            ),
+            format!("NITER ≤ {max_niter}; steepest growth N^{s:.2} ({which})"),
+            met(max_niter <= 10 && s <= 1.2)
+        ]);
+    }
+    md.table(&t);
+}
+
+fn domains_section(md: &mut Doc, rows: &[PeerRow]) {
+    md.section(
+        2,
+        "Any domain: L-shape, disk, square with a hole",
+        "The paper's Test 3 data (C = −5) on gmsh meshes of `benches/domains/*.geo`, with the default nested start (coarse HMM solves on meshes agglomerated from the user's mesh, `mesh::agglomerate`) and both linear solvers. Growth: least-squares exponent of total time against cells over the sizes of the row's domain, scheme and solver.",
+    );
+    let mut t = Table::new(
+        "domain | scheme | linear | cells | unknowns | NITER (+coarse) | coarse [s] | linear [s] | total [s] | peak [MiB] | growth",
+        "llllrrrrrrr",
+    );
+    for fam in ["lshape", "disk", "hole"] {
+        for scheme in ["hmm", "p1"] {
+            for linear in ["direct", "iterative"] {
+                let mut d: Vec<&PeerRow> = rows
+                    .iter()
+                    .filter(|r| r.family == fam && r.scheme == scheme && r.linear == linear)
+                    .collect();
+                d.sort_by_key(|r| r.cells);
+                let pts: Vec<(f64, f64)> = d.iter().map(|r| (r.cells as f64, r.total_s)).collect();
+                let g = slope(&pts).map_or(NONE.to_string(), |s| format!("N^{s:.2}"));
+                for (i, r) in d.iter().enumerate() {
+                    t.row(cells![
+                        fam,
+                        scheme,
+                        linear,
+                        r.cells,
+                        r.unknowns,
+                        format!("{} (+{})", r.niter, r.coarse_niter),
+                        seconds(r.coarse_s),
+                        seconds(r.linear_s),
+                        seconds(r.total_s),
+                        fixed(r.peak_mib, 0),
+                        if i + 1 == d.len() {
+                            g.clone()
+                        } else {
+                            String::new()
+                        }
+                    ]);
+                }
+            }
+        }
+    }
+    md.table(&t);
+}
+
+fn style(code: &str, linear: &str) -> ([u8; 3], Marker) {
+    match (code, linear) {
+        ("petsc", _) => ([0, 0, 0], Marker::Cross),
+        (_, "direct") => ([31, 119, 180], Marker::Circle),
+        _ => ([214, 39, 40], Marker::Square),
+    }
+}
+
+fn figure(cfg: &Config, rows: &[PeerRow]) -> gradvi::Result<()> {
+    let mut charts = Vec::new();
+    for (scheme, title) in [
+        ("p1", "ex9: P1 (same problem as PETSc)"),
+        ("hmm", "ex9: HMM"),
+    ] {
+        let mut series = Vec::new();
+        for (code, linear) in [
+            ("petsc", "gs+mg"),
+            ("gradvi", "direct"),
+            ("gradvi", "iterative"),
+        ] {
+            let mut pts: Vec<[f64; 2]> = rows
+                .iter()
+                .filter(|r| {
+                    r.family == "ex9"
+                        && r.code == code
+                        && r.linear == linear
+                        && (code == "petsc" || r.scheme == scheme)
+                })
+                .map(|r| [r.unknowns as f64, r.total_s])
+                .collect();
+            pts.sort_by(|a, b| a[0].total_cmp(&b[0]));
+            if pts.is_empty() {
+                continue;
+            }
+            let (color, marker) = style(code, linear);
+            let label = if code == "petsc" {
+                "PETSc gs+mg".to_string()
+            } else {
+                format!("gradvi {linear}")
+            };
+            series.push(LineSeries {
+                color: Some(color),
+                marker,
+                ..LineSeries::new(&label, pts)
+            });
+        }
+        if !series.is_empty() {
+            charts.push((
+                series,
+                LineOptions {
+                    title: title.into(),
+                    x_label: "unknowns".into(),
+                    y_label: "total time [s]".into(),
+                    log_x: true,
+                    log_y: true,
+                    legend: Some(LegendPosition::UpperLeft),
+                    ..Default::default()
+                },
+            ));
+        }
+    }
+    for scheme in ["hmm", "p1"] {
+        let mut series = Vec::new();
+        for (i, fam) in ["lshape", "disk", "hole"].iter().enumerate() {
+            for linear in ["direct", "iterative"] {
+                let mut pts: Vec<[f64; 2]> = rows
+                    .iter()
+                    .filter(|r| r.family == *fam && r.scheme == scheme && r.linear == linear)
+                    .map(|r| [r.cells as f64, r.total_s])
+                    .collect();
+                pts.sort_by(|a, b| a[0].total_cmp(&b[0]));
+                if pts.is_empty() {
+                    continue;
+                }
+                let (color, _) = style("gradvi", linear);
+                let marker = [Marker::Circle, Marker::Square, Marker::Triangle][i];
+                series.push(LineSeries {
+                    color: Some(color),
+                    marker,
+                    ..LineSeries::new(&format!("{fam} {linear}"), pts)
+                });
+            }
+        }
+        if !series.is_empty() {
+            charts.push((
+                series,
+                LineOptions {
+                    title: format!("any domain: {} (Test 3)", scheme.to_uppercase()),
+                    x_label: "cells".into(),
+                    y_label: "total time [s]".into(),
+                    log_x: true,
+                    log_y: true,
+                    legend: Some(LegendPosition::UpperLeft),
+                    ..Default::default()
+                },
+            ));
+        }
+    }
+    if charts.is_empty() {
+        return Ok(());
+    }
+    for c in &mut charts {
+        let s = c.0.clone();
+        c.1.x_range = Some(data_range(&s, 0, true));
+        c.1.y_range = Some(data_range(&s, 1, true));
+    }
+    let rows_of_panels = charts.len().div_ceil(2) as u32;
+    plot_panels(
+        &cfg.path(FIGURE),
+        "PETSc ex9 side by side, and any domain",
+        (1200, 80 + 460 * rows_of_panels),
+        2,
+        &charts,
+    )
+}

@@ -1,0 +1,1608 @@
+//! Algebraic multigrid by smoothed aggregation (Vaněk, Mandel & Brezina 1996), a
+//! preconditioner for the conjugate gradients of [`super::pcg`] on the symmetric positive
+//! definite systems of the active-set solver.
+//!
+//! ## The hierarchy (setup, [`Amg::new`])
+//! From A₀ = A (n₀ × n₀), each level ℓ builds a prolongator P_ℓ (n_ℓ × n_{ℓ+1}) and the
+//! Galerkin operator A_{ℓ+1} = P_ℓᵀ A_ℓ P_ℓ, until n_ℓ ≤ `max_coarse`, where A_ℓ is factorised
+//! densely (A_ℓ = L Lᵀ). With D = diag(A_ℓ):
+//!
+//! 1. **Strength of connection**: j ≠ i is strongly connected to i when
+//!    a_ij ≠ 0 and |a_ij| ≥ θ √(a_ii a_jj) (symmetric in i and j). S is the strong part of A;
+//!    the *filtered* matrix A_F keeps the strong entries and lumps the weak ones into the
+//!    diagonal, d^F_i = a_ii − Σ_{j weak} a_ij (so A_F 1 = A 1: it keeps the constants' image).
+//!    θ = 0 keeps every nonzero (right for the isotropic M-matrices of P1 on Cartesian grids);
+//!    θ > 0 drops the weak direction of an anisotropic diffusion, so that aggregates follow the
+//!    strong one (semi-coarsening) and P does not smear across it.
+//! 2. **Aggregation** (greedy, three phases, in the order of the unknowns): (i) an unknown whose
+//!    strong neighbours are all free founds an aggregate with them; (ii) each unknown left
+//!    joins the aggregate of phase (i) it is most strongly connected to; (iii) whatever is
+//!    left founds aggregates with its free strong neighbours. An unknown with no strong
+//!    neighbour (*isolated*: the unit rows of fixed unknowns, or rows whose couplings are all
+//!    weak) belongs to no aggregate; the smoother alone corrects it, exactly so for a unit row.
+//! 3. **Tentative prolongator**: the constant near-null space restricted to each aggregate
+//!    𝒜_J, normalised: T_iJ = 1/√|𝒜_J| for i ∈ 𝒜_J, 0 else (orthonormal columns).
+//! 4. **Prolongator smoothing**: one damped Jacobi step on the filtered matrix,
+//!    P = (I − ω D_F⁻¹ A_F) T, ω = 4 / (3 ρ(D_F⁻¹ A_F)), with ρ bounded by Gershgorin,
+//!    ρ ≤ max_i (d^F_i + Σ_j |s_ij|) / d^F_i (= 2 for a zero-row-sum M-matrix, where it is
+//!    sharp). P's columns are then smooth, low-energy basis functions overlapping their
+//!    neighbours.
+//! 5. **Galerkin product** A_{ℓ+1} = Pᵀ A P, row by row: row J is
+//!    Σ_{i : p_iJ ≠ 0} p_iJ Σ_j a_ij P_j (rows i of Pᵀ, rows j of A, rows of P), accumulated
+//!    in a dense array of length n_{ℓ+1} with a list of the touched columns, one per thread.
+//!    This computes each product a_ij P_j once per column of row i of P (≈ 2–3 times) but never
+//!    stores A P: the flop count is the same as forming A P first, the memory traffic smaller.
+//!
+//! ## The cycle (one application of M⁻¹, [`Amg::apply`])
+//! A V(1,1)-cycle: on level ℓ with right-hand side b, from x = 0,
+//!
+//!   x ← S_ℓ(b) (pre-smoothing), r = b − A_ℓ x, x_c = cycle_{ℓ+1}(Pᵀ r), x ← x + P x_c,
+//!   x ← x + S_ℓ'(b − A_ℓ x) (post-smoothing),
+//!
+//! and x = A_L⁻¹ b on the coarsest level (two triangular solves). With a post-smoother the
+//! adjoint of the pre-smoother and both convergent in the A-norm, the cycle is a symmetric
+//! positive definite operator (a requirement of conjugate gradients).
+//!
+//! Smoothers ([`Smoother`]):
+//! - **Chebyshev** of degree k on D⁻¹A (the default, k = 2): x ← x + q(D⁻¹A) D⁻¹ r where
+//!   1 − λq(λ) is the Chebyshev polynomial of degree k on [λ_max/ratio, λ_max], scaled to 1 at 0;
+//!   it damps that interval (the oscillatory modes; the coarse grid takes the rest) uniformly.
+//!   λ_max is the Gershgorin bound max_i Σ_j |a_ij|/a_ii (an upper bound, as the polynomial
+//!   needs, and sharp for the M-matrices of these schemes), or on request a few Lanczos steps
+//!   (× 1.1, capped by Gershgorin). Pre and post are the same polynomial, which is symmetric
+//!   in the A-inner product; every step is a product with A, run on all cores.
+//! - **l1-Jacobi**: x ← x + D_1⁻¹ (b − A x) with (D_1)_ii = Σ_j |a_ij| (convergent for any SPD
+//!   A; weaker: a damping of about ½ on the 5-point stencil).
+//! - **l1-Gauss–Seidel** (hybrid; Baker, Falgout, Kolev & Yang 2011): the rows are cut into
+//!   blocks of consecutive rows (their size depends on n only, so the result does not depend
+//!   on the number of threads); Gauss–Seidel within a block, Jacobi across blocks, with the
+//!   diagonal increased by Σ_{j outside the block} |a_ij| (which makes it convergent for any
+//!   SPD A). Forward sweep before, backward sweep after the coarse correction (the adjoint).
+//!
+//! The choice of smoother and of θ was made by measurement (`examples/amg_poisson.rs`, release
+//! build, 2 cores); see [`AmgOptions::default`].
+
+use super::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
+use super::pcg::{Preconditioner, check_len, dot};
+use rayon::prelude::*;
+use std::sync::{Mutex, TryLockError};
+
+/// "No aggregate" / "no position".
+const NONE: u32 = u32::MAX;
+
+/// Largest coarsest level that is factorised densely; if coarsening stalls above it (rows
+/// with no strong connection everywhere), the last level is smoothed instead (see
+/// [`Amg::new`]).
+const DENSE_MAX: usize = 4000;
+
+/// The smoother of each level (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Smoother {
+    /// Chebyshev polynomial of D⁻¹A of the given degree (≥ 1) on [λ_max/ratio, λ_max].
+    Chebyshev {
+        /// Degree (number of products with A per application).
+        degree: usize,
+        /// λ_max over the lower end of the damped interval (> 1).
+        ratio: f64,
+    },
+    /// x ← x + D_1⁻¹ (b − A x), (D_1)_ii = Σ_j |a_ij|.
+    L1Jacobi,
+    /// Hybrid l1-Gauss–Seidel: forward before, backward after the coarse correction.
+    L1GaussSeidel,
+}
+
+/// Parameters of the multigrid hierarchy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AmgOptions {
+    /// θ of the strength of connection |a_ij| ≥ θ √(a_ii a_jj), in [0, 1).
+    pub strength_threshold: f64,
+    /// Coarsening stops once a level has at most this many unknowns (≤ 4000, as that level is
+    /// factorised densely).
+    pub max_coarse: usize,
+    /// At most this many levels (≥ 1), the fine one included.
+    pub max_levels: usize,
+    /// The smoother.
+    pub smoother: Smoother,
+    /// Lanczos steps estimating λ_max(D⁻¹A) for the Chebyshev smoother; 0 uses the Gershgorin
+    /// bound alone.
+    pub lanczos_steps: usize,
+    /// Smooth the prolongator with the filtered matrix A_F (weak entries lumped into the
+    /// diagonal) instead of A.
+    pub filter_prolongator: bool,
+}
+
+impl Default for AmgOptions {
+    /// The defaults, chosen by measurement (release build, 2 cores, 5-point Poisson 1024²,
+    /// PCG to 1e-10; `examples/amg_poisson.rs`): FIXME numbers.
+    fn default() -> Self {
+        AmgOptions {
+            strength_threshold: 0.08,
+            max_coarse: 1000,
+            max_levels: 25,
+            smoother: Smoother::Chebyshev {
+                degree: 2,
+                ratio: 30.0,
+            },
+            lanczos_steps: 0,
+            filter_prolongator: false,
+        }
+    }
+}
+
+impl AmgOptions {
+    fn check(&self) -> crate::Result<()> {
+        let bad = |msg: String| Err(crate::Error::Linear(format!("multigrid options: {msg}")));
+        if !(0.0..1.0).contains(&self.strength_threshold) {
+            return bad(format!(
+                "the strength threshold {} is not in [0, 1)",
+                self.strength_threshold
+            ));
+        }
+        if self.max_coarse == 0 || self.max_coarse > DENSE_MAX {
+            return bad(format!(
+                "max_coarse = {} is not in 1..={DENSE_MAX}",
+                self.max_coarse
+            ));
+        }
+        if self.max_levels == 0 {
+            return bad("max_levels must be at least 1".into());
+        }
+        if let Smoother::Chebyshev { degree, ratio } = self.smoother
+            && (degree == 0 || !(ratio > 1.0 && ratio.is_finite()))
+        {
+            return bad(format!(
+                "Chebyshev smoother of degree {degree} with ratio {ratio} (need degree ≥ 1, \
+                 ratio > 1)"
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Size of one level of the hierarchy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LevelSummary {
+    /// Unknowns.
+    pub n: usize,
+    /// Stored entries of A_ℓ.
+    pub nnz: usize,
+}
+
+/// The data of the smoother on one level.
+#[derive(Debug, Clone)]
+enum LevelSmoother {
+    Chebyshev {
+        inv_diag: Vec<f64>,
+        /// Lower and upper ends of the damped interval of the spectrum of D⁻¹A.
+        lo: f64,
+        hi: f64,
+        degree: usize,
+    },
+    L1Jacobi {
+        inv_l1: Vec<f64>,
+    },
+    L1GaussSeidel {
+        /// 1 / (a_ii + Σ_{j outside the block of i} |a_ij|).
+        inv_diag: Vec<f64>,
+        /// Rows per block.
+        block: usize,
+    },
+}
+
+/// The transfer between level ℓ and ℓ + 1: P and R = Pᵀ (stored, so that the restriction is a
+/// row-parallel product like the others).
+#[derive(Debug, Clone)]
+struct Transfer {
+    p: CsrMatrix,
+    r: CsrMatrix,
+}
+
+/// The solver of the coarsest level.
+#[derive(Debug, Clone)]
+enum CoarseSolve {
+    /// The Cholesky factor L (A_L = L Lᵀ), its lower triangle packed row after row.
+    Dense { n: usize, l: Vec<f64> },
+    /// Coarsening stalled above [`DENSE_MAX`]: the level is only smoothed.
+    Smooth,
+}
+
+/// Vectors of one level, kept between applications.
+#[derive(Debug, Clone, Default)]
+struct LevelWork {
+    /// Right-hand side and solution of this level (unused on the fine level: the caller's).
+    b: Vec<f64>,
+    x: Vec<f64>,
+    /// Residual and two smoother vectors.
+    r: Vec<f64>,
+    d0: Vec<f64>,
+    d1: Vec<f64>,
+}
+
+/// A smoothed-aggregation multigrid preconditioner for a symmetric positive definite matrix
+/// (see the module documentation). It borrows the fine matrix.
+#[derive(Debug)]
+pub struct Amg<'a> {
+    fine: &'a CsrMatrix,
+    /// A_1, …, A_L.
+    coarse_ops: Vec<CsrMatrix>,
+    /// Level ℓ → ℓ + 1, for ℓ = 0, …, L − 1.
+    transfers: Vec<Transfer>,
+    /// One per level (the coarsest included: used when it is not factorised).
+    smoothers: Vec<LevelSmoother>,
+    coarse: CoarseSolve,
+    work: Mutex<Vec<LevelWork>>,
+}
+
+impl<'a> Amg<'a> {
+    /// Builds the hierarchy of `a` (square, symmetric, positive definite; symmetry is the
+    /// caller's, e.g. [`CsrMatrix::from_lower_csc`]).
+    ///
+    /// Errors: a non-finite entry or a non-positive diagonal entry (naming the row), a missing
+    /// diagonal, invalid options, or a coarse operator that is not numerically positive
+    /// definite (then neither is `a`).
+    pub fn new(a: &'a CsrMatrix, opts: &AmgOptions) -> crate::Result<Self> {
+        opts.check()?;
+        validate(a)?;
+        let mut coarse_ops: Vec<CsrMatrix> = Vec::new();
+        let mut transfers = Vec::new();
+        let mut smoothers = Vec::new();
+        // the near-null space of the current level (the constants on the fine one)
+        let mut near_null = vec![1.0; a.n_rows()];
+        loop {
+            let level = coarse_ops.len();
+            let al = coarse_ops.last().unwrap_or(a);
+            let diag = al.diagonal();
+            if level > 0
+                && let Some(i) = diag.iter().position(|&d| !(d > 0.0 && d.is_finite()))
+            {
+                return Err(crate::Error::Linear(format!(
+                    "multigrid setup: the coarse operator of level {level} has the diagonal \
+                     entry {:e} at row {i}: the matrix is not positive definite",
+                    diag[i]
+                )));
+            }
+            smoothers.push(LevelSmoother::new(al, &diag, opts));
+            let n = al.n_rows();
+            if n <= opts.max_coarse || level + 1 >= opts.max_levels {
+                break;
+            }
+            let strong = strength(al, &diag, opts.strength_threshold);
+            let (agg, n_agg) = aggregate(al, &strong, &diag);
+            if std::env::var("AMG_DEBUG").is_ok() {
+                let iso = agg.iter().filter(|&&g| g == NONE).count();
+                let empty = (0..n).filter(|&i| strong.row(i).0.is_empty()).count();
+                eprintln!(
+                    "level {level}: n {n} nnz {} strong {} isolated {iso} empty {empty} n_agg {n_agg}",
+                    al.nnz(),
+                    strong.nnz()
+                );
+                if let Some(i) = (0..n).find(|&i| strong.row(i).0.is_empty()) {
+                    let (c, v) = al.row(i);
+                    let st: Vec<String> = c
+                        .iter()
+                        .zip(v)
+                        .map(|(&j, &x)| {
+                            format!(
+                                "{j}:{x:.3e}({:.3})",
+                                x / (diag[i] * diag[j as usize]).sqrt()
+                            )
+                        })
+                        .collect();
+                    eprintln!("  row {i}: {}", st.join(" "));
+                }
+            }
+            // stop when coarsening stalls (every row isolated, or barely any reduction)
+            if n_agg == 0 || n_agg as f64 > 0.85 * n as f64 {
+                break;
+            }
+            let filter = opts.filter_prolongator.then_some(&strong);
+            let (p, b_next) = smoothed_prolongator(al, filter, &diag, &agg, n_agg, &near_null);
+            near_null = b_next;
+            drop(strong);
+            let r = p.transpose();
+            let ac = galerkin(al, &p, &r);
+            transfers.push(Transfer { p, r });
+            coarse_ops.push(ac);
+        }
+        let last = coarse_ops.last().unwrap_or(a);
+        let coarse = if last.n_rows() <= DENSE_MAX {
+            dense_cholesky(last, coarse_ops.len())?
+        } else {
+            CoarseSolve::Smooth
+        };
+        let amg = Amg {
+            fine: a,
+            coarse_ops,
+            transfers,
+            smoothers,
+            coarse,
+            work: Mutex::new(Vec::new()),
+        };
+        let work = amg.new_work();
+        if let Ok(mut w) = amg.work.lock() {
+            *w = work;
+        }
+        Ok(amg)
+    }
+
+    /// Order of the fine matrix.
+    pub fn n(&self) -> usize {
+        self.fine.n_rows()
+    }
+
+    /// The operator of level ℓ.
+    fn op(&self, level: usize) -> &CsrMatrix {
+        if level == 0 {
+            self.fine
+        } else {
+            &self.coarse_ops[level - 1]
+        }
+    }
+
+    /// Number of levels (≥ 1).
+    pub fn n_levels(&self) -> usize {
+        self.coarse_ops.len() + 1
+    }
+
+    /// Unknowns and stored entries of each level, fine to coarse.
+    pub fn levels(&self) -> Vec<LevelSummary> {
+        (0..self.n_levels())
+            .map(|l| LevelSummary {
+                n: self.op(l).n_rows(),
+                nnz: self.op(l).nnz(),
+            })
+            .collect()
+    }
+
+    /// Operator complexity Σ_ℓ nnz(A_ℓ) / nnz(A₀).
+    pub fn operator_complexity(&self) -> f64 {
+        let total: usize = self.levels().iter().map(|l| l.nnz).sum();
+        total as f64 / self.fine.nnz().max(1) as f64
+    }
+
+    /// Whether the coarsest level is solved exactly (false when coarsening stalled above the
+    /// dense limit and that level is only smoothed).
+    pub fn coarsest_is_exact(&self) -> bool {
+        matches!(self.coarse, CoarseSolve::Dense { .. })
+    }
+
+    /// Bytes held by the hierarchy (coarse operators, transfers, smoother data, the coarsest
+    /// factor and the work vectors), the fine matrix excluded.
+    pub fn memory_bytes(&self) -> usize {
+        let f = std::mem::size_of::<f64>();
+        let ops: usize = self.coarse_ops.iter().map(|a| a.memory_bytes()).sum();
+        let tr: usize = self
+            .transfers
+            .iter()
+            .map(|t| t.p.memory_bytes() + t.r.memory_bytes())
+            .sum();
+        let sm: usize = self
+            .smoothers
+            .iter()
+            .map(|s| match s {
+                LevelSmoother::Chebyshev { inv_diag, .. } => inv_diag.len() * f,
+                LevelSmoother::L1Jacobi { inv_l1 } => inv_l1.len() * f,
+                LevelSmoother::L1GaussSeidel { inv_diag, .. } => inv_diag.len() * f,
+            })
+            .sum();
+        let co = match &self.coarse {
+            CoarseSolve::Dense { l, .. } => l.len() * f,
+            CoarseSolve::Smooth => 0,
+        };
+        let wk: usize = match self.work.lock() {
+            Ok(w) => w
+                .iter()
+                .map(|w| (w.b.len() + w.x.len() + w.r.len() + w.d0.len() + w.d1.len()) * f)
+                .sum(),
+            Err(_) => 0,
+        };
+        ops + tr + sm + co + wk
+    }
+
+    /// Fresh work vectors for every level.
+    fn new_work(&self) -> Vec<LevelWork> {
+        (0..self.n_levels())
+            .map(|l| {
+                let n = self.op(l).n_rows();
+                let (bx, dd) = (if l > 0 { n } else { 0 }, self.smoother_vectors(l));
+                LevelWork {
+                    b: vec![0.0; bx],
+                    x: vec![0.0; bx],
+                    r: vec![0.0; n],
+                    d0: vec![0.0; if dd >= 1 { n } else { 0 }],
+                    d1: vec![0.0; if dd >= 2 { n } else { 0 }],
+                }
+            })
+            .collect()
+    }
+
+    /// How many of the vectors d0, d1 the smoother of level ℓ uses.
+    fn smoother_vectors(&self, level: usize) -> usize {
+        match self.smoothers[level] {
+            LevelSmoother::Chebyshev { .. } => 2,
+            LevelSmoother::L1Jacobi { .. } => 0,
+            LevelSmoother::L1GaussSeidel { .. } => 1,
+        }
+    }
+
+    /// z = M⁻¹ r: one V(1,1)-cycle from z = 0.
+    pub fn apply(&self, r: &[f64], z: &mut [f64]) -> crate::Result<()> {
+        check_len("multigrid preconditioner", self.n(), r.len(), z.len())?;
+        match self.work.try_lock() {
+            Ok(mut w) => self.cycle(0, r, z, &mut w),
+            Err(TryLockError::Poisoned(p)) => self.cycle(0, r, z, &mut p.into_inner()),
+            // another thread is applying the same preconditioner: use fresh vectors
+            Err(TryLockError::WouldBlock) => self.cycle(0, r, z, &mut self.new_work()),
+        }
+        Ok(())
+    }
+
+    /// x = cycle_ℓ(b) (x is overwritten); `work[k]` holds the vectors of level ℓ + k.
+    fn cycle(&self, level: usize, b: &[f64], x: &mut [f64], work: &mut [LevelWork]) {
+        let Some((w, rest)) = work.split_first_mut() else {
+            return;
+        };
+        let a = self.op(level);
+        let sm = &self.smoothers[level];
+        if level + 1 == self.n_levels() {
+            match &self.coarse {
+                CoarseSolve::Dense { n, l } => dense_solve(*n, l, b, x),
+                CoarseSolve::Smooth => {
+                    sm.pre(a, b, x, w);
+                    sm.post(a, b, x, w);
+                }
+            }
+            return;
+        }
+        sm.pre(a, b, x, w);
+        let t = &self.transfers[level];
+        if let Some((next, _)) = rest.split_first_mut() {
+            let (mut nb, mut nx) = (std::mem::take(&mut next.b), std::mem::take(&mut next.x));
+            t.r.mul_to(&w.r, &mut nb);
+            self.cycle(level + 1, &nb, &mut nx, rest);
+            t.p.mul_add_to(&nx, x);
+            let next = &mut rest[0];
+            next.b = nb;
+            next.x = nx;
+        }
+        sm.post(a, b, x, w);
+    }
+}
+
+impl Preconditioner for Amg<'_> {
+    fn n(&self) -> usize {
+        Amg::n(self)
+    }
+    fn apply(&self, r: &[f64], z: &mut [f64]) -> crate::Result<()> {
+        Amg::apply(self, r, z)
+    }
+}
+
+/// Checks the fine matrix: square, finite, with a positive diagonal entry in every row. The
+/// first offending row (in order) is reported.
+fn validate(a: &CsrMatrix) -> crate::Result<()> {
+    let n = a.n_rows();
+    if a.n_cols() != n {
+        return Err(crate::Error::Linear(format!(
+            "multigrid: the matrix is {}×{}, not square",
+            n,
+            a.n_cols()
+        )));
+    }
+    let check_row = |i: usize| -> Option<String> {
+        let (cols, vals) = a.row(i);
+        if let Some(k) = vals.iter().position(|v| !v.is_finite()) {
+            return Some(format!(
+                "row {i} has the non-finite entry {} in column {}",
+                vals[k], cols[k]
+            ));
+        }
+        match cols.binary_search(&(i as u32)) {
+            Ok(p) if vals[p] > 0.0 => None,
+            Ok(p) => Some(format!(
+                "row {i} has the non-positive diagonal entry {:e}",
+                vals[p]
+            )),
+            Err(_) => Some(format!("row {i} has no diagonal entry")),
+        }
+    };
+    let bad = if a.nnz() < PAR_MIN_NNZ {
+        (0..n).find_map(check_row)
+    } else {
+        (0..n).into_par_iter().find_map_first(check_row)
+    };
+    match bad {
+        Some(msg) => Err(crate::Error::Linear(format!(
+            "multigrid: {msg} (the matrix must be symmetric positive definite)"
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// Builds a matrix row by row in parallel: `row(scratch, i, cols, vals)` appends the entries
+/// of row i (sorted by column) to `cols` and `vals`; `init` makes the per-thread scratch.
+fn build_rows<S, I, F>(n_rows: usize, n_cols: usize, init: I, row: F) -> CsrMatrix
+where
+    S: Send,
+    I: Fn() -> S + Sync + Send,
+    F: Fn(&mut S, usize, &mut Vec<u32>, &mut Vec<f64>) + Sync + Send,
+{
+    let n_chunks = n_rows.div_ceil(ROW_CHUNK);
+    let parts: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..n_chunks)
+        .into_par_iter()
+        .map_init(&init, |s, c| {
+            let (i0, i1) = (c * ROW_CHUNK, ((c + 1) * ROW_CHUNK).min(n_rows));
+            let mut lens = Vec::with_capacity(i1 - i0);
+            let mut cols = Vec::new();
+            let mut vals = Vec::new();
+            for i in i0..i1 {
+                let before = cols.len();
+                row(s, i, &mut cols, &mut vals);
+                lens.push(cols.len() - before);
+            }
+            (lens, cols, vals)
+        })
+        .collect();
+    let nnz: usize = parts.iter().map(|p| p.1.len()).sum();
+    let mut row_ptr = Vec::with_capacity(n_rows + 1);
+    row_ptr.push(0);
+    let mut col_idx = Vec::with_capacity(nnz);
+    let mut values = Vec::with_capacity(nnz);
+    let mut acc = 0;
+    for (lens, cols, vals) in parts {
+        for l in lens {
+            acc += l;
+            row_ptr.push(acc);
+        }
+        col_idx.extend_from_slice(&cols);
+        values.extend_from_slice(&vals);
+    }
+    CsrMatrix::from_parts(n_rows, n_cols, row_ptr, col_idx, values)
+}
+
+/// S: the strong off-diagonal entries of A, a_ij ≠ 0 with a_ij² ≥ θ² a_ii a_jj.
+fn strength(a: &CsrMatrix, diag: &[f64], theta: f64) -> CsrMatrix {
+    let t2 = theta * theta;
+    build_rows(
+        a.n_rows(),
+        a.n_cols(),
+        || (),
+        |_, i, cols, vals| {
+            let (ac, av) = a.row(i);
+            let di = diag[i];
+            for (&j, &v) in ac.iter().zip(av) {
+                let ju = j as usize;
+                if ju != i && v != 0.0 && v * v >= t2 * di * diag[ju] {
+                    cols.push(j);
+                    vals.push(v);
+                }
+            }
+        },
+    )
+}
+
+/// Greedy aggregation on the graph of S (see the module documentation): the aggregate of each
+/// unknown ([`NONE`] for an isolated one) and the number of aggregates.
+fn aggregate(a: &CsrMatrix, s: &CsrMatrix, diag: &[f64]) -> (Vec<u32>, usize) {
+    let n = s.n_rows();
+    let mut agg = vec![NONE; n];
+    let mut n_agg: u32 = 0;
+    // phase 1: roots whose strong neighbourhood is entirely free
+    for i in 0..n {
+        let (cols, _) = s.row(i);
+        if agg[i] != NONE || cols.is_empty() {
+            continue;
+        }
+        if cols.iter().all(|&j| agg[j as usize] == NONE) {
+            agg[i] = n_agg;
+            for &j in cols {
+                agg[j as usize] = n_agg;
+            }
+            n_agg += 1;
+        }
+    }
+    // phase 2: join the phase-1 aggregate of the strongest neighbour (aggregates numbered
+    // below n1 and assigned before this phase; a join made in this phase is not followed)
+    let in_phase1: Vec<bool> = agg.iter().map(|&g| g != NONE).collect();
+    for i in 0..n {
+        if agg[i] != NONE {
+            continue;
+        }
+        let (cols, vals) = s.row(i);
+        let mut best = (0.0, NONE);
+        for (&j, &v) in cols.iter().zip(vals) {
+            let ju = j as usize;
+            if in_phase1[ju] {
+                let w = v.abs() / diag[ju].sqrt();
+                if w > best.0 {
+                    best = (w, agg[ju]);
+                }
+            }
+        }
+        agg[i] = best.1;
+    }
+    // phase 3: whatever is left (with strong neighbours) founds aggregates with its free
+    // strong neighbours
+    for i in 0..n {
+        let (cols, _) = s.row(i);
+        if agg[i] != NONE || cols.is_empty() {
+            continue;
+        }
+        agg[i] = n_agg;
+        for &j in cols {
+            if agg[j as usize] == NONE {
+                agg[j as usize] = n_agg;
+            }
+        }
+        n_agg += 1;
+    }
+    // phase 4: an unknown with no strong neighbour but some coupling joins the aggregate it
+    // is most strongly coupled to (|a_ij| / √(a_jj), the row's own diagonal being common),
+    // or founds a singleton; only the decoupled rows (no nonzero off-diagonal entry) stay out
+    for i in 0..n {
+        if agg[i] != NONE {
+            continue;
+        }
+        let (cols, vals) = a.row(i);
+        let mut coupled = false;
+        let mut best = (0.0, NONE);
+        for (&j, &v) in cols.iter().zip(vals) {
+            let ju = j as usize;
+            if ju == i || v == 0.0 {
+                continue;
+            }
+            coupled = true;
+            let w = v.abs() / diag[ju].sqrt();
+            if agg[ju] != NONE && w > best.0 {
+                best = (w, agg[ju]);
+            }
+        }
+        if best.1 != NONE {
+            agg[i] = best.1;
+        } else if coupled {
+            agg[i] = n_agg;
+            n_agg += 1;
+        }
+    }
+    (agg, n_agg as usize)
+}
+
+/// P = (I − ω D⁻¹ M) T (see the module documentation) with M = A, or M = A_F when the strong
+/// part S of A is given as `filter`: row i is (1 − ω) T_i − (ω / d_i) Σ_{j≠i} m_ij T_j, for the
+/// near-null vector `b` of this level. Also returns the near-null vector of the next level.
+fn smoothed_prolongator(
+    a: &CsrMatrix,
+    filter: Option<&CsrMatrix>,
+    diag: &[f64],
+    agg: &[u32],
+    n_agg: usize,
+    b: &[f64],
+) -> (CsrMatrix, Vec<f64>) {
+    let n = a.n_rows();
+    // T_iJ = b_i / ‖b|𝒜_J‖ and the coarse near-null vector b^c_J = ‖b|𝒜_J‖ (so that T b^c = b
+    // on the aggregated unknowns: the QR factorisation of b restricted to each aggregate)
+    let mut b_coarse = vec![0.0; n_agg];
+    for (&g, &bi) in agg.iter().zip(b) {
+        if g != NONE {
+            b_coarse[g as usize] += bi * bi;
+        }
+    }
+    b_coarse.iter_mut().for_each(|v| *v = v.sqrt());
+    let t = |i: usize| -> f64 {
+        match agg[i] {
+            NONE => 0.0,
+            g => {
+                let nb = b_coarse[g as usize];
+                if nb > 0.0 { b[i] / nb } else { 0.0 }
+            }
+        }
+    };
+    // the smoothing matrix: A_F (strong entries, weak ones lumped into the diagonal) or A
+    let m = filter.unwrap_or(a);
+    let mut dsm = vec![0.0; n];
+    match filter {
+        // d^F_i = a_ii + Σ_{j≠i} a_ij − Σ_j s_ij (a_ii if lumping positive weak entries would
+        // leave it non-positive)
+        Some(s) => a.for_row_chunks(&mut dsm, |i0, chunk| {
+            for (k, d) in chunk.iter_mut().enumerate() {
+                let i = i0 + k;
+                let f = a.row(i).1.iter().sum::<f64>() - s.row(i).1.iter().sum::<f64>();
+                *d = if f > 1e-12 * diag[i] { f } else { diag[i] };
+            }
+        }),
+        None => dsm.copy_from_slice(diag),
+    }
+    // Gershgorin bound of ρ(D⁻¹ M): max_i 1 + Σ_{j≠i} |m_ij| / d_i
+    let rho = (0..n)
+        .into_par_iter()
+        .with_min_len(ROW_CHUNK)
+        .map(|i| {
+            let (mc, mv) = m.row(i);
+            let off: f64 = mc
+                .iter()
+                .zip(mv)
+                .filter(|(j, _)| **j as usize != i)
+                .map(|(_, v)| v.abs())
+                .sum();
+            1.0 + off / dsm[i]
+        })
+        .reduce(|| 1.0, f64::max);
+    let omega = 4.0 / (3.0 * rho);
+    let p = build_rows(
+        n,
+        n_agg,
+        || (),
+        |_, i, cols, vals| {
+            let start = cols.len();
+            let scale = omega / dsm[i];
+            let mut add = |g: u32, v: f64| {
+                if let Some(p) = cols[start..].iter().position(|&c| c == g) {
+                    vals[start + p] += v;
+                } else {
+                    cols.push(g);
+                    vals.push(v);
+                }
+            };
+            if agg[i] != NONE {
+                add(agg[i], (1.0 - omega) * t(i));
+            }
+            let (mc, mv) = m.row(i);
+            for (&j, &v) in mc.iter().zip(mv) {
+                let ju = j as usize;
+                let g = agg[ju];
+                if ju != i && g != NONE {
+                    add(g, -scale * v * t(ju));
+                }
+            }
+            sort_tail(cols, vals, start);
+        },
+    );
+    (p, b_coarse)
+}
+
+/// Sorts the entries `start..` of `cols` (and `vals` along) by column: an insertion sort, as
+/// rows hold a handful of entries.
+fn sort_tail(cols: &mut [u32], vals: &mut [f64], start: usize) {
+    for k in start + 1..cols.len() {
+        let (c, v) = (cols[k], vals[k]);
+        let mut m = k;
+        while m > start && cols[m - 1] > c {
+            cols[m] = cols[m - 1];
+            vals[m] = vals[m - 1];
+            m -= 1;
+        }
+        cols[m] = c;
+        vals[m] = v;
+    }
+}
+
+/// A dense accumulator of a sparse row: the values by column and the list of touched columns.
+struct Accumulator {
+    /// Position of each column in `cols`, or [`NONE`].
+    pos: Vec<u32>,
+    cols: Vec<u32>,
+    vals: Vec<f64>,
+}
+
+impl Accumulator {
+    fn new(n: usize) -> Self {
+        Accumulator {
+            pos: vec![NONE; n],
+            cols: Vec::new(),
+            vals: Vec::new(),
+        }
+    }
+    #[inline(always)]
+    fn add(&mut self, j: u32, v: f64) {
+        let p = self.pos[j as usize];
+        if p == NONE {
+            self.pos[j as usize] = self.cols.len() as u32;
+            self.cols.push(j);
+            self.vals.push(v);
+        } else {
+            self.vals[p as usize] += v;
+        }
+    }
+    /// Appends the row, sorted by column, and clears the accumulator.
+    fn drain_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) {
+        self.cols.sort_unstable();
+        for &c in &self.cols {
+            let p = self.pos[c as usize] as usize;
+            cols.push(c);
+            vals.push(self.vals[p]);
+            self.pos[c as usize] = NONE;
+        }
+        self.cols.clear();
+        self.vals.clear();
+    }
+}
+
+/// A_c = Pᵀ A P, row J = Σ_{i} r_Ji Σ_j a_ij P_j with R = Pᵀ.
+fn galerkin(a: &CsrMatrix, p: &CsrMatrix, r: &CsrMatrix) -> CsrMatrix {
+    let nc = p.n_cols();
+    build_rows(
+        nc,
+        nc,
+        || Accumulator::new(nc),
+        |acc, jrow, cols, vals| {
+            let (rc, rv) = r.row(jrow);
+            for (&i, &rji) in rc.iter().zip(rv) {
+                let (ac, av) = a.row(i as usize);
+                for (&j, &aij) in ac.iter().zip(av) {
+                    let w = rji * aij;
+                    let (pc, pv) = p.row(j as usize);
+                    for (&k, &pjk) in pc.iter().zip(pv) {
+                        acc.add(k, w * pjk);
+                    }
+                }
+            }
+            acc.drain_into(cols, vals);
+        },
+    )
+}
+
+/// The dense Cholesky factor of the coarsest operator (faer), packed.
+fn dense_cholesky(a: &CsrMatrix, level: usize) -> crate::Result<CoarseSolve> {
+    let n = a.n_rows();
+    if n == 0 {
+        return Ok(CoarseSolve::Dense { n, l: Vec::new() });
+    }
+    let mut m = faer::Mat::<f64>::zeros(n, n);
+    for i in 0..n {
+        let (cols, vals) = a.row(i);
+        for (&j, &v) in cols.iter().zip(vals) {
+            m[(i, j as usize)] = v;
+        }
+    }
+    let llt = m.llt(faer::Side::Lower).map_err(|e| {
+        crate::Error::Linear(format!(
+            "multigrid setup: the coarsest operator (level {level}, order {n}) is not \
+             numerically positive definite ({e:?}): neither is the matrix"
+        ))
+    })?;
+    let lf = llt.L();
+    let mut l = Vec::with_capacity(n * (n + 1) / 2);
+    for i in 0..n {
+        for j in 0..=i {
+            l.push(lf[(i, j)]);
+        }
+    }
+    Ok(CoarseSolve::Dense { n, l })
+}
+
+/// x = (L Lᵀ)⁻¹ b with L packed by rows: L y = b by rows, then Lᵀ x = y by columns of Lᵀ
+/// (rows of L), both reading L contiguously.
+fn dense_solve(n: usize, l: &[f64], b: &[f64], x: &mut [f64]) {
+    for i in 0..n {
+        let row = &l[i * (i + 1) / 2..(i + 1) * (i + 2) / 2];
+        let mut s = b[i];
+        for (lij, xj) in row[..i].iter().zip(&x[..i]) {
+            s -= lij * xj;
+        }
+        x[i] = s / row[i];
+    }
+    for i in (0..n).rev() {
+        let row = &l[i * (i + 1) / 2..(i + 1) * (i + 2) / 2];
+        let xi = x[i] / row[i];
+        x[i] = xi;
+        for (lij, xj) in row[..i].iter().zip(&mut x[..i]) {
+            *xj -= lij * xi;
+        }
+    }
+}
+
+/// Gershgorin bound of ρ(D⁻¹A): max_i Σ_j |a_ij| / a_ii.
+fn gershgorin(a: &CsrMatrix, diag: &[f64]) -> f64 {
+    (0..a.n_rows())
+        .into_par_iter()
+        .with_min_len(ROW_CHUNK)
+        .map(|i| a.row(i).1.iter().map(|v| v.abs()).sum::<f64>() / diag[i])
+        .reduce(|| 0.0, f64::max)
+}
+
+/// The largest Ritz value of `steps` Lanczos steps on D^{-1/2} A D^{-1/2} (similar to D⁻¹A),
+/// from a fixed pseudo-random start: a lower bound of λ_max(D⁻¹A), usually close.
+fn lanczos_lambda_max(a: &CsrMatrix, diag: &[f64], steps: usize) -> f64 {
+    let n = a.n_rows();
+    if n == 0 {
+        return 0.0;
+    }
+    let s: Vec<f64> = diag.iter().map(|d| 1.0 / d.sqrt()).collect();
+    // a deterministic start with components along every eigenvector (almost surely)
+    let mut v: Vec<f64> = (0..n as u64)
+        .map(|i| {
+            let h = (i.wrapping_add(1)).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11;
+            (h as f64 / (1u64 << 53) as f64) - 0.5
+        })
+        .collect();
+    let nv = dot(&v, &v).sqrt();
+    v.iter_mut().for_each(|x| *x /= nv);
+    let mut v_prev = vec![0.0; n];
+    let mut u = vec![0.0; n];
+    let mut w = vec![0.0; n];
+    let (mut alphas, mut betas) = (Vec::new(), Vec::new());
+    let mut beta = 0.0;
+    for _ in 0..steps.min(n) {
+        u.iter_mut()
+            .zip(&v)
+            .zip(&s)
+            .for_each(|((u, v), s)| *u = v * s);
+        a.mul_to(&u, &mut w);
+        w.iter_mut()
+            .zip(&s)
+            .zip(&v_prev)
+            .for_each(|((w, s), vp)| *w = *w * s - beta * vp);
+        let alpha = dot(&w, &v);
+        w.iter_mut().zip(&v).for_each(|(w, v)| *w -= alpha * v);
+        alphas.push(alpha);
+        beta = dot(&w, &w).sqrt();
+        if !(beta > 1e-12 * alpha.abs()) {
+            break;
+        }
+        betas.push(beta);
+        std::mem::swap(&mut v_prev, &mut v);
+        v.iter_mut().zip(&w).for_each(|(v, w)| *v = w / beta);
+    }
+    let k = alphas.len();
+    let t = nalgebra::DMatrix::from_fn(k, k, |i, j| {
+        if i == j {
+            alphas[i]
+        } else if i == j + 1 {
+            betas[j]
+        } else if j == i + 1 {
+            betas[i]
+        } else {
+            0.0
+        }
+    });
+    t.symmetric_eigenvalues()
+        .iter()
+        .copied()
+        .fold(0.0, f64::max)
+}
+
+impl LevelSmoother {
+    fn new(a: &CsrMatrix, diag: &[f64], opts: &AmgOptions) -> Self {
+        let n = a.n_rows();
+        match opts.smoother {
+            Smoother::Chebyshev { degree, ratio } => {
+                let g = gershgorin(a, diag);
+                let hi = if opts.lanczos_steps > 0 {
+                    (1.1 * lanczos_lambda_max(a, diag, opts.lanczos_steps)).min(g)
+                } else {
+                    g
+                };
+                LevelSmoother::Chebyshev {
+                    inv_diag: diag.iter().map(|d| 1.0 / d).collect(),
+                    lo: hi / ratio,
+                    hi,
+                    degree,
+                }
+            }
+            Smoother::L1Jacobi => {
+                let mut inv_l1 = vec![0.0; n];
+                a.for_row_chunks(&mut inv_l1, |i0, chunk| {
+                    for (k, v) in chunk.iter_mut().enumerate() {
+                        *v = 1.0 / a.row(i0 + k).1.iter().map(|x| x.abs()).sum::<f64>();
+                    }
+                });
+                LevelSmoother::L1Jacobi { inv_l1 }
+            }
+            Smoother::L1GaussSeidel => {
+                let block = gs_block(n);
+                let mut inv_diag = vec![0.0; n];
+                a.for_row_chunks(&mut inv_diag, |i0, chunk| {
+                    for (k, v) in chunk.iter_mut().enumerate() {
+                        let i = i0 + k;
+                        let (b0, b1) = ((i / block) * block, ((i / block + 1) * block).min(n));
+                        let (cols, vals) = a.row(i);
+                        let off: f64 = cols
+                            .iter()
+                            .zip(vals)
+                            .filter(|(j, _)| !(b0..b1).contains(&(**j as usize)))
+                            .map(|(_, x)| x.abs())
+                            .sum();
+                        *v = 1.0 / (diag[i] + off);
+                    }
+                });
+                LevelSmoother::L1GaussSeidel { inv_diag, block }
+            }
+        }
+    }
+
+    /// Pre-smoothing from x = 0: x ← S(b), leaving r = b − A x in `w.r`.
+    fn pre(&self, a: &CsrMatrix, b: &[f64], x: &mut [f64], w: &mut LevelWork) {
+        match self {
+            LevelSmoother::Chebyshev {
+                inv_diag,
+                lo,
+                hi,
+                degree,
+            } => {
+                chebyshev(a, inv_diag, *lo, *hi, *degree, b, x, w, true, true);
+            }
+            LevelSmoother::L1Jacobi { inv_l1 } => {
+                rows1(a, x, |i0, x| {
+                    for (k, xi) in x.iter_mut().enumerate() {
+                        *xi = b[i0 + k] * inv_l1[i0 + k];
+                    }
+                });
+                a.residual_to(b, x, &mut w.r);
+            }
+            LevelSmoother::L1GaussSeidel { inv_diag, block } => {
+                rows1(a, x, |_, x| x.fill(0.0));
+                gauss_seidel(a, inv_diag, *block, b, x, None, true);
+                a.residual_to(b, x, &mut w.r);
+            }
+        }
+    }
+
+    /// Post-smoothing: x ← x + S'(b − A x) (the adjoint of [`Self::pre`]).
+    fn post(&self, a: &CsrMatrix, b: &[f64], x: &mut [f64], w: &mut LevelWork) {
+        match self {
+            LevelSmoother::Chebyshev {
+                inv_diag,
+                lo,
+                hi,
+                degree,
+            } => {
+                chebyshev(a, inv_diag, *lo, *hi, *degree, b, x, w, false, false);
+            }
+            LevelSmoother::L1Jacobi { inv_l1 } => {
+                a.residual_to(b, x, &mut w.r);
+                let r: &[f64] = &w.r;
+                rows1(a, x, |i0, x| {
+                    for (k, xi) in x.iter_mut().enumerate() {
+                        *xi += r[i0 + k] * inv_l1[i0 + k];
+                    }
+                });
+            }
+            LevelSmoother::L1GaussSeidel { inv_diag, block } => {
+                let xr: &[f64] = x;
+                rows1(a, &mut w.d0, |i0, d| {
+                    d.copy_from_slice(&xr[i0..i0 + d.len()])
+                });
+                gauss_seidel(a, inv_diag, *block, b, x, Some(&w.d0), false);
+            }
+        }
+    }
+}
+
+/// Rows per block of the hybrid Gauss–Seidel: at least 16384, and at most 32 blocks (few block
+/// boundaries, where it degrades to Jacobi, and enough blocks to balance the threads).
+fn gs_block(n: usize) -> usize {
+    n.div_ceil(32).max(16384)
+}
+
+/// Runs `f(i0, u, v, w)` on matching chunks (rows i0..) of three vectors of length n, in
+/// parallel when the matrix `a` of the level is large enough.
+fn rows3<F>(a: &CsrMatrix, u: &mut [f64], v: &mut [f64], w: &mut [f64], f: F)
+where
+    F: Fn(usize, &mut [f64], &mut [f64], &mut [f64]) + Sync + Send,
+{
+    if a.nnz() < PAR_MIN_NNZ {
+        f(0, u, v, w);
+    } else {
+        u.par_chunks_mut(ROW_CHUNK)
+            .zip(v.par_chunks_mut(ROW_CHUNK))
+            .zip(w.par_chunks_mut(ROW_CHUNK))
+            .enumerate()
+            .for_each(|(c, ((u, v), w))| f(c * ROW_CHUNK, u, v, w));
+    }
+}
+
+/// As [`rows3`] with two vectors.
+fn rows2<F>(a: &CsrMatrix, u: &mut [f64], v: &mut [f64], f: F)
+where
+    F: Fn(usize, &mut [f64], &mut [f64]) + Sync + Send,
+{
+    if a.nnz() < PAR_MIN_NNZ {
+        f(0, u, v);
+    } else {
+        u.par_chunks_mut(ROW_CHUNK)
+            .zip(v.par_chunks_mut(ROW_CHUNK))
+            .enumerate()
+            .for_each(|(c, (u, v))| f(c * ROW_CHUNK, u, v));
+    }
+}
+
+/// As [`rows3`] with one vector.
+fn rows1<F>(a: &CsrMatrix, u: &mut [f64], f: F)
+where
+    F: Fn(usize, &mut [f64]) + Sync + Send,
+{
+    a.for_row_chunks(u, f);
+}
+
+/// Chebyshev smoothing x ← x + q(D⁻¹A) D⁻¹ (b − A x) (three-term recurrence: Saad,
+/// *Iterative methods for sparse linear systems*, Alg. 12.1). With θ = (hi + lo)/2,
+/// δ = (hi − lo)/2, σ = θ/δ, ρ₀ = 1/σ and r₀ = b − A x: d₀ = D⁻¹r₀/θ; then for k ≥ 1,
+/// r_k = r_{k−1} − A d_{k−1}, ρ_k = 1/(2σ − ρ_{k−1}), d_k = ρ_k ρ_{k−1} d_{k−1} + (2ρ_k/δ) D⁻¹ r_k;
+/// x ← x + d₀ + … + d_{degree−1}. `zero_start`: x = 0 on entry (so r₀ = b, no product).
+/// With `want_residual`, `w.r` = b − A x on exit. Each product with A is one fused sweep that
+/// also updates r, d and x.
+#[allow(clippy::too_many_arguments)]
+fn chebyshev(
+    a: &CsrMatrix,
+    inv_diag: &[f64],
+    lo: f64,
+    hi: f64,
+    degree: usize,
+    b: &[f64],
+    x: &mut [f64],
+    w: &mut LevelWork,
+    zero_start: bool,
+    want_residual: bool,
+) {
+    let theta = 0.5 * (hi + lo);
+    let delta = 0.5 * (hi - lo);
+    let sigma = theta / delta;
+    let mut rho = 1.0 / sigma;
+    let (r, d, dn) = (&mut w.r, &mut w.d0, &mut w.d1);
+    // r = b − A x, d₀ = D⁻¹ r / θ; x += d₀ now (zero start) or in the next sweep
+    let mut pending = false;
+    if zero_start {
+        rows3(a, r, d, x, |i0, r, d, x| {
+            for (k, ((ri, di), xi)) in r.iter_mut().zip(d.iter_mut()).zip(x.iter_mut()).enumerate()
+            {
+                let i = i0 + k;
+                *ri = b[i];
+                *di = b[i] * inv_diag[i] / theta;
+                *xi = *di;
+            }
+        });
+    } else {
+        let xr: &[f64] = x;
+        rows2(a, r, d, |i0, r, d| {
+            for (k, (ri, di)) in r.iter_mut().zip(d.iter_mut()).enumerate() {
+                let i = i0 + k;
+                *ri = b[i] - a.row_dot(i, xr);
+                *di = *ri * inv_diag[i] / theta;
+            }
+        });
+        pending = true;
+    }
+    for _ in 1..degree {
+        let rho_new = 1.0 / (2.0 * sigma - rho);
+        let (c1, c2) = (rho_new * rho, 2.0 * rho_new / delta);
+        // r −= A d; dn = c1 d + c2 D⁻¹ r; x += dn (+ d if pending)
+        let dr: &[f64] = d;
+        rows3(a, r, dn, x, |i0, r, dn, x| {
+            for (k, ((ri, dni), xi)) in r
+                .iter_mut()
+                .zip(dn.iter_mut())
+                .zip(x.iter_mut())
+                .enumerate()
+            {
+                let i = i0 + k;
+                *ri -= a.row_dot(i, dr);
+                *dni = c1 * dr[i] + c2 * inv_diag[i] * *ri;
+                *xi += if pending { *dni + dr[i] } else { *dni };
+            }
+        });
+        pending = false;
+        std::mem::swap(d, dn);
+        rho = rho_new;
+    }
+    let dr: &[f64] = d;
+    if pending {
+        rows1(a, x, |i0, x| {
+            for (k, xi) in x.iter_mut().enumerate() {
+                *xi += dr[i0 + k];
+            }
+        });
+    }
+    if want_residual {
+        // r −= A d
+        rows1(a, r, |i0, r| {
+            for (k, ri) in r.iter_mut().enumerate() {
+                *ri -= a.row_dot(i0 + k, dr);
+            }
+        });
+    }
+}
+
+/// One hybrid l1-Gauss–Seidel sweep on x (forward or backward within each block): row i is
+/// updated by x_i += (b_i − Σ_j a_ij x_j) / (a_ii + Σ_{j outside} |a_ij|), with the current
+/// values inside the block and `x_old` (the values before the sweep; None means zero) outside.
+fn gauss_seidel(
+    a: &CsrMatrix,
+    inv_diag: &[f64],
+    block: usize,
+    b: &[f64],
+    x: &mut [f64],
+    x_old: Option<&[f64]>,
+    forward: bool,
+) {
+    let sweep = |c: usize, xb: &mut [f64]| {
+        let i0 = c * block;
+        let i1 = i0 + xb.len();
+        let update = |xb: &mut [f64], i: usize| {
+            let (cols, vals) = a.row(i);
+            let mut s = b[i];
+            for (&j, &v) in cols.iter().zip(vals) {
+                let ju = j as usize;
+                if ju >= i0 && ju < i1 {
+                    s -= v * xb[ju - i0];
+                } else if let Some(xo) = x_old {
+                    s -= v * xo[ju];
+                }
+            }
+            xb[i - i0] += s * inv_diag[i];
+        };
+        if forward {
+            for i in i0..i1 {
+                update(xb, i);
+            }
+        } else {
+            for i in (i0..i1).rev() {
+                update(xb, i);
+            }
+        }
+    };
+    if a.nnz() < PAR_MIN_NNZ {
+        for (c, xb) in x.chunks_mut(block).enumerate() {
+            sweep(c, xb);
+        }
+    } else {
+        x.par_chunks_mut(block)
+            .enumerate()
+            .for_each(|(c, xb)| sweep(c, xb));
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::linalg::pcg::{PcgOptions, pcg};
+
+    /// −div(k∇u) on an m × m grid of unknowns with the 5-point stencil (homogeneous Dirichlet
+    /// conditions eliminated): couplings kx·h(k_p, k_q) in x and ky·h(k_p, k_q) in y, h the
+    /// harmonic mean; as the full CSR matrix.
+    pub(crate) fn grid(
+        m: usize,
+        kx: f64,
+        ky: f64,
+        coef: &dyn Fn(usize, usize) -> f64,
+    ) -> CsrMatrix {
+        let n = m * m;
+        let harm = |a: f64, b: f64| 2.0 * a * b / (a + b);
+        let mut col_ptr = vec![0];
+        let (mut row_idx, mut values) = (Vec::new(), Vec::new());
+        for j in 0..m {
+            for i in 0..m {
+                let c = coef(i, j);
+                let k = |ii: usize, jj: usize, inside: bool| {
+                    if inside { harm(c, coef(ii, jj)) } else { c }
+                };
+                let west = k(i.wrapping_sub(1), j, i > 0);
+                let east = k(i + 1, j, i + 1 < m);
+                let south = k(i, j.wrapping_sub(1), j > 0);
+                let north = k(i, j + 1, j + 1 < m);
+                row_idx.push(j * m + i);
+                values.push(kx * (west + east) + ky * (south + north));
+                if i + 1 < m {
+                    row_idx.push(j * m + i + 1);
+                    values.push(-kx * east);
+                }
+                if j + 1 < m {
+                    row_idx.push((j + 1) * m + i);
+                    values.push(-ky * north);
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        CsrMatrix::from_lower_csc(n, &col_ptr, &row_idx, &values).unwrap()
+    }
+
+    /// Fixes the unknowns for which `fixed` holds as the active-set solver does: their rows and
+    /// columns zeroed but for a unit diagonal.
+    pub(crate) fn fix(a: &CsrMatrix, fixed: &dyn Fn(usize) -> bool) -> CsrMatrix {
+        let mut vals = a.values().to_vec();
+        for i in 0..a.n_rows() {
+            for p in a.row_ptr()[i]..a.row_ptr()[i + 1] {
+                let j = a.col_idx()[p] as usize;
+                if fixed(i) || fixed(j) {
+                    vals[p] = if i == j { 1.0 } else { 0.0 };
+                }
+            }
+        }
+        CsrMatrix::new(
+            a.n_rows(),
+            a.n_cols(),
+            a.row_ptr().to_vec(),
+            a.col_idx().to_vec(),
+            vals,
+        )
+        .unwrap()
+    }
+
+    /// PCG iterations to ‖r‖ ≤ 1e-10 ‖b‖ with the multigrid preconditioner, for b = A x* with
+    /// x* containing all frequencies; also checks the true residual and the error.
+    fn iterations(a: &CsrMatrix, opts: &AmgOptions) -> usize {
+        let n = a.n_rows();
+        let xs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin() + 1.0).collect();
+        let mut b = vec![0.0; n];
+        a.spmv(&xs, &mut b).unwrap();
+        let amg = Amg::new(a, opts).unwrap();
+        let mut x = vec![0.0; n];
+        let rep = pcg(
+            a,
+            &amg,
+            &b,
+            &mut x,
+            &PcgOptions {
+                rtol: 1e-10,
+                atol: 0.0,
+                max_iter: 200,
+            },
+        )
+        .unwrap();
+        let bn = dot(&b, &b).sqrt();
+        assert!(rep.residual_norm <= 2e-10 * bn, "{rep:?}");
+        rep.iterations
+    }
+
+    #[test]
+    fn poisson_iterations_do_not_grow_with_the_grid() {
+        let opts = AmgOptions::default();
+        let counts: Vec<usize> = [64, 128, 256, 512]
+            .iter()
+            .map(|&m| iterations(&grid(m, 1.0, 1.0, &|_, _| 1.0), &opts))
+            .collect();
+        // measured: [12, 14, 15, 16]; bound ≤ 20, growth 64 → 512 at most 5
+        assert!(counts.iter().all(|&c| c <= 20), "{counts:?}");
+        assert!(counts[3] <= counts[0] + 5, "{counts:?}");
+    }
+
+    #[test]
+    fn anisotropic_and_jump_coefficients() {
+        let opts = AmgOptions::default();
+        // ε = 0.01 in x: measured [ , , ]; bound ≤ 25, growth ≤ 6
+        let aniso: Vec<usize> = [64, 128, 256]
+            .iter()
+            .map(|&m| iterations(&grid(m, 0.01, 1.0, &|_, _| 1.0), &opts))
+            .collect();
+        assert!(aniso.iter().all(|&c| c <= 25), "{aniso:?}");
+        assert!(aniso[2] <= aniso[0] + 6, "{aniso:?}");
+        // checkerboard 8 × 8 of 1 and 1000: measured [ , , ]; bound ≤ 30, growth ≤ 8
+        let jump: Vec<usize> = [64, 128, 256]
+            .iter()
+            .map(|&m| {
+                let k = move |i: usize, j: usize| {
+                    if (i * 8 / m + j * 8 / m) % 2 == 0 {
+                        1.0
+                    } else {
+                        1000.0
+                    }
+                };
+                iterations(&grid(m, 1.0, 1.0, &k), &opts)
+            })
+            .collect();
+        assert!(jump.iter().all(|&c| c <= 30), "{jump:?}");
+        assert!(jump[2] <= jump[0] + 8, "{jump:?}");
+    }
+
+    #[test]
+    fn fixed_unknowns_as_unit_rows() {
+        // a disc and a band of fixed unknowns, plus scattered single ones
+        let m = 200;
+        let fixed = |k: usize| {
+            let (i, j) = (k % m, k / m);
+            let (x, y) = (i as f64 / m as f64 - 0.5, j as f64 / m as f64 - 0.5);
+            x * x + y * y < 0.09 || (j == 20) || k % 97 == 0
+        };
+        let a = fix(&grid(m, 1.0, 1.0, &|_, _| 1.0), &fixed);
+        let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
+        // the fixed unknowns are in no aggregate: the first coarse level is smaller than the
+        // free unknowns / 3
+        let free = (0..m * m).filter(|&k| !fixed(k)).count();
+        assert!(amg.levels()[1].n < free / 3, "{:?}", amg.levels());
+        let c = iterations(&a, &AmgOptions::default());
+        // measured ; the bound of the Poisson test
+        assert!(c <= 20, "{c}");
+        // every unknown fixed: a diagonal matrix, no coarse level, one iteration
+        let all = fix(&grid(80, 1.0, 1.0, &|_, _| 1.0), &|_| true);
+        let amg = Amg::new(&all, &AmgOptions::default()).unwrap();
+        assert_eq!(amg.n_levels(), 1);
+        assert!(!amg.coarsest_is_exact());
+        assert!(iterations(&all, &AmgOptions::default()) <= 2);
+    }
+
+    #[test]
+    fn every_smoother_converges() {
+        let a = grid(100, 1.0, 1.0, &|_, _| 1.0);
+        for smoother in [
+            Smoother::Chebyshev {
+                degree: 1,
+                ratio: 30.0,
+            },
+            Smoother::Chebyshev {
+                degree: 3,
+                ratio: 20.0,
+            },
+            Smoother::L1Jacobi,
+            Smoother::L1GaussSeidel,
+        ] {
+            let opts = AmgOptions {
+                smoother,
+                max_coarse: 50,
+                lanczos_steps: 8,
+                ..AmgOptions::default()
+            };
+            let c = iterations(&a, &opts);
+            assert!(c <= 30, "{smoother:?}: {c}");
+        }
+        // the filtered prolongator and θ = 0
+        for opts in [
+            AmgOptions {
+                filter_prolongator: true,
+                ..AmgOptions::default()
+            },
+            AmgOptions {
+                strength_threshold: 0.0,
+                ..AmgOptions::default()
+            },
+        ] {
+            assert!(iterations(&a, &opts) <= 25);
+        }
+    }
+
+    #[test]
+    fn the_cycle_is_symmetric_positive_definite() {
+        let k = |i: usize, j: usize| if (i / 7 + j / 5) % 2 == 0 { 1.0 } else { 50.0 };
+        let a = grid(70, 1.0, 0.3, &k);
+        for smoother in [
+            Smoother::Chebyshev {
+                degree: 2,
+                ratio: 30.0,
+            },
+            Smoother::L1Jacobi,
+            Smoother::L1GaussSeidel,
+        ] {
+            let amg = Amg::new(
+                &a,
+                &AmgOptions {
+                    smoother,
+                    max_coarse: 40,
+                    ..AmgOptions::default()
+                },
+            )
+            .unwrap();
+            assert!(amg.n_levels() >= 3);
+            let n = a.n_rows();
+            let u: Vec<f64> = (0..n).map(|i| (i as f64 * 1.3).sin()).collect();
+            let v: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).cos() + 0.1).collect();
+            let (mut mu, mut mv) = (vec![0.0; n], vec![0.0; n]);
+            amg.apply(&u, &mut mu).unwrap();
+            amg.apply(&v, &mut mv).unwrap();
+            let (vmu, umv) = (dot(&v, &mu), dot(&u, &mv));
+            assert!(
+                (vmu - umv).abs() <= 1e-10 * vmu.abs().max(umv.abs()),
+                "{smoother:?}: {vmu} vs {umv}"
+            );
+            assert!(dot(&u, &mu) > 0.0 && dot(&v, &mv) > 0.0);
+            // deterministic and re-entrant: the same result twice
+            let mut again = vec![0.0; n];
+            amg.apply(&u, &mut again).unwrap();
+            assert_eq!(again, mu);
+        }
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        let a = grid(10, 1.0, 1.0, &|_, _| 1.0);
+        let opts = AmgOptions::default();
+        // a NaN entry off the diagonal, in row 13
+        let mut nan = a.clone();
+        let p = a.row_ptr()[13];
+        nan.values_mut()[p] = f64::NAN;
+        let e = Amg::new(&nan, &opts).unwrap_err().to_string();
+        assert!(e.contains("row 13") && e.contains("non-finite"), "{e}");
+        // an infinite diagonal entry
+        let mut inf = a.clone();
+        let d = a.row_ptr()[40] + a.row(40).0.iter().position(|&j| j == 40).unwrap();
+        inf.values_mut()[d] = f64::INFINITY;
+        assert!(
+            Amg::new(&inf, &opts)
+                .unwrap_err()
+                .to_string()
+                .contains("row 40")
+        );
+        // a zero and a negative diagonal entry
+        for v in [0.0, -1.0] {
+            let mut z = a.clone();
+            z.values_mut()[d] = v;
+            let e = Amg::new(&z, &opts).unwrap_err().to_string();
+            assert!(e.contains("row 40") && e.contains("non-positive"), "{e}");
+        }
+        // a missing diagonal entry
+        let nodiag = CsrMatrix::new(2, 2, vec![0, 1, 2], vec![1, 0], vec![1.0, 1.0]).unwrap();
+        assert!(Amg::new(&nodiag, &opts).is_err());
+        // not square
+        let rect = CsrMatrix::new(1, 2, vec![0, 1], vec![0], vec![1.0]).unwrap();
+        assert!(Amg::new(&rect, &opts).is_err());
+        // bad options
+        for o in [
+            AmgOptions {
+                strength_threshold: 1.5,
+                ..opts
+            },
+            AmgOptions {
+                strength_threshold: f64::NAN,
+                ..opts
+            },
+            AmgOptions {
+                max_coarse: 0,
+                ..opts
+            },
+            AmgOptions {
+                max_levels: 0,
+                ..opts
+            },
+            AmgOptions {
+                smoother: Smoother::Chebyshev {
+                    degree: 0,
+                    ratio: 30.0,
+                },
+                ..opts
+            },
+            AmgOptions {
+                smoother: Smoother::Chebyshev {
+                    degree: 2,
+                    ratio: 1.0,
+                },
+                ..opts
+            },
+        ] {
+            assert!(Amg::new(&a, &o).is_err(), "{o:?}");
+        }
+        // wrong vector lengths
+        let amg = Amg::new(&a, &opts).unwrap();
+        let mut z = vec![0.0; 99];
+        assert!(amg.apply(&[0.0; 100], &mut z).is_err());
+        // an indefinite matrix (positive diagonal): the coarsest factorisation fails, or CG
+        // breaks down; an error either way, never a panic
+        let mut indef = grid(8, 1.0, 1.0, &|_, _| 1.0);
+        for p in 0..indef.nnz() {
+            if indef.values()[p] < 0.0 {
+                indef.values_mut()[p] = -3.0;
+            }
+        }
+        let b = vec![1.0; 64];
+        let mut x = vec![0.0; 64];
+        let r = Amg::new(&indef, &opts)
+            .and_then(|m| pcg(&indef, &m, &b, &mut x, &PcgOptions::default()));
+        assert!(r.is_err());
+    }
+
+    #[test]
+    fn empty_and_tiny_matrices() {
+        let empty = CsrMatrix::new(0, 0, vec![0], vec![], vec![]).unwrap();
+        let amg = Amg::new(&empty, &AmgOptions::default()).unwrap();
+        assert_eq!(amg.n_levels(), 1);
+        let rep = pcg(&empty, &amg, &[], &mut [], &PcgOptions::default()).unwrap();
+        assert_eq!(rep.iterations, 0);
+        // 1 × 1: solved exactly by the coarsest factorisation
+        let one = CsrMatrix::new(1, 1, vec![0, 1], vec![0], vec![4.0]).unwrap();
+        let amg = Amg::new(&one, &AmgOptions::default()).unwrap();
+        let mut z = [0.0];
+        amg.apply(&[2.0], &mut z).unwrap();
+        assert!((z[0] - 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn hierarchy_summary() {
+        let a = grid(128, 1.0, 1.0, &|_, _| 1.0);
+        let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
+        let lv = amg.levels();
+        assert_eq!(lv[0].n, 128 * 128);
+        assert!(lv.last().unwrap().n <= AmgOptions::default().max_coarse);
+        // aggregates of about 3 × 3 unknowns
+        assert!(lv.windows(2).all(|w| w[1].n * 5 < w[0].n), "{lv:?}");
+        let oc = amg.operator_complexity();
+        assert!((1.0..1.6).contains(&oc), "{oc}");
+        assert!(amg.memory_bytes() < 3 * a.memory_bytes());
+        assert!(amg.coarsest_is_exact());
+    }
+}

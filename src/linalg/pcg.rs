@@ -1,0 +1,555 @@
+//! Preconditioned conjugate gradients for A x = b, A symmetric positive definite, with a
+//! symmetric positive definite preconditioner M ≈ A (e.g. the multigrid cycle of
+//! [`super::amg`]).
+//!
+//! From x₀, r₀ = b − A x₀, z₀ = M⁻¹ r₀, p₀ = z₀, each iteration k = 0, 1, … computes
+//!
+//!   q = A p_k,   α_k = (r_k·z_k) / (p_k·q),
+//!   x_{k+1} = x_k + α_k p_k,   r_{k+1} = r_k − α_k q,
+//!   z_{k+1} = M⁻¹ r_{k+1},   β_k = (r_{k+1}·z_{k+1}) / (r_k·z_k),   p_{k+1} = z_{k+1} + β_k p_k,
+//!
+//! and stops when ‖r_{k+1}‖₂ ≤ max(rtol ‖b‖₂, atol). x_k minimises the A-norm of the error over
+//! x₀ + span{z₀, (M⁻¹A) z₀, …}; for A and M SPD, p·q > 0 and r·z > 0 until convergence, so
+//! either failing (*breakdown*: A or M is not positive definite, or rounding has taken over)
+//! is an error, as are a non-finite residual and the iteration cap. The recursively updated
+//! r_k drifts from b − A x_k by rounding; the report gives the true residual, recomputed at
+//! the end.
+//!
+//! The vector operations run on all cores for long vectors, in fixed chunks; the partial sums
+//! of the dot products are added in chunk order, so results do not depend on the scheduling.
+
+use super::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
+use rayon::prelude::*;
+
+/// An approximate inverse z = M⁻¹ r of a symmetric positive definite M.
+pub trait Preconditioner {
+    /// Order of M.
+    fn n(&self) -> usize;
+    /// z = M⁻¹ r (`r` and `z` have [`Self::n`] entries, else an error).
+    fn apply(&self, r: &[f64], z: &mut [f64]) -> crate::Result<()>;
+}
+
+/// M = I: plain conjugate gradients.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Identity(pub usize);
+
+impl Preconditioner for Identity {
+    fn n(&self) -> usize {
+        self.0
+    }
+    fn apply(&self, r: &[f64], z: &mut [f64]) -> crate::Result<()> {
+        check_len("identity preconditioner", self.0, r.len(), z.len())?;
+        z.copy_from_slice(r);
+        Ok(())
+    }
+}
+
+/// M = diag(A) (Jacobi).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Jacobi {
+    inv_diag: Vec<f64>,
+}
+
+impl Jacobi {
+    /// The inverse diagonal of `a`; a diagonal entry that is not positive and finite is an
+    /// error naming its row.
+    pub fn new(a: &CsrMatrix) -> crate::Result<Self> {
+        let d = a.diagonal();
+        if let Some(i) = d.iter().position(|&v| !(v > 0.0 && v.is_finite())) {
+            return Err(crate::Error::Linear(format!(
+                "Jacobi preconditioner: diagonal entry {} at row {i} is not positive",
+                d[i]
+            )));
+        }
+        Ok(Jacobi {
+            inv_diag: d.iter().map(|v| 1.0 / v).collect(),
+        })
+    }
+}
+
+impl Preconditioner for Jacobi {
+    fn n(&self) -> usize {
+        self.inv_diag.len()
+    }
+    fn apply(&self, r: &[f64], z: &mut [f64]) -> crate::Result<()> {
+        check_len("Jacobi preconditioner", self.n(), r.len(), z.len())?;
+        zip_chunks2(z, r, &self.inv_diag, |z, r, d| {
+            for ((zi, ri), di) in z.iter_mut().zip(r).zip(d) {
+                *zi = ri * di;
+            }
+        });
+        Ok(())
+    }
+}
+
+/// The error of vectors whose lengths do not match the operator.
+pub(crate) fn check_len(what: &str, n: usize, r: usize, z: usize) -> crate::Result<()> {
+    if r != n || z != n {
+        return Err(crate::Error::Linear(format!(
+            "{what} of order {n} applied to vectors of lengths {r} and {z}"
+        )));
+    }
+    Ok(())
+}
+
+/// Stopping rule and iteration cap of [`pcg`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PcgOptions {
+    /// Relative tolerance: stop when ‖b − A x‖₂ ≤ rtol ‖b‖₂ (or ≤ atol).
+    pub rtol: f64,
+    /// Absolute tolerance on ‖b − A x‖₂.
+    pub atol: f64,
+    /// Iteration cap; reaching it is an error.
+    pub max_iter: usize,
+}
+
+impl Default for PcgOptions {
+    fn default() -> Self {
+        PcgOptions {
+            rtol: 1e-10,
+            atol: 0.0,
+            max_iter: 500,
+        }
+    }
+}
+
+/// What [`pcg`] did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PcgReport {
+    /// Iterations performed (products with A after the initial residual).
+    pub iterations: usize,
+    /// ‖b − A x‖₂ of the returned x, recomputed from scratch.
+    pub residual_norm: f64,
+    /// ‖b − A x₀‖₂ of the initial guess.
+    pub initial_residual_norm: f64,
+}
+
+/// Solves A x = b by preconditioned conjugate gradients (see the module documentation),
+/// starting from the `x` given and leaving the solution in it.
+///
+/// Errors: mismatched lengths, a non-finite residual (NaN or infinite data), a breakdown
+/// (pᵀAp ≤ 0 or rᵀM⁻¹r ≤ 0: A or M not positive definite), or no convergence within
+/// `max_iter` iterations; each names the iteration and the residual reached. On error `x` holds
+/// the last iterate.
+pub fn pcg<M: Preconditioner + ?Sized>(
+    a: &CsrMatrix,
+    m: &M,
+    b: &[f64],
+    x: &mut [f64],
+    opts: &PcgOptions,
+) -> crate::Result<PcgReport> {
+    let n = a.n_rows();
+    if a.n_cols() != n || b.len() != n || x.len() != n || m.n() != n {
+        return Err(crate::Error::Linear(format!(
+            "conjugate gradients: matrix {}×{}, preconditioner of order {}, b of length {}, x \
+             of length {}",
+            n,
+            a.n_cols(),
+            m.n(),
+            b.len(),
+            x.len()
+        )));
+    }
+    if !(opts.rtol >= 0.0 && opts.atol >= 0.0) {
+        return Err(crate::Error::Linear(format!(
+            "conjugate gradients: tolerances must be non-negative (rtol = {}, atol = {})",
+            opts.rtol, opts.atol
+        )));
+    }
+    let fail = |what: String, k: usize, res: f64| {
+        crate::Error::Linear(format!(
+            "conjugate gradients (order {n}): {what} at iteration {k}, residual norm {res:e}"
+        ))
+    };
+    let b_norm = dot(b, b).sqrt();
+    let tol = (opts.rtol * b_norm).max(opts.atol);
+    let mut r = vec![0.0; n];
+    a.residual_to(b, x, &mut r);
+    let r0 = dot(&r, &r).sqrt();
+    if !r0.is_finite() {
+        return Err(fail(
+            "non-finite initial residual (NaN or infinite data)".into(),
+            0,
+            r0,
+        ));
+    }
+    let mut report = PcgReport {
+        iterations: 0,
+        residual_norm: r0,
+        initial_residual_norm: r0,
+    };
+    if r0 <= tol {
+        return Ok(report);
+    }
+    let mut z = vec![0.0; n];
+    m.apply(&r, &mut z)?;
+    let mut rz = dot(&r, &z);
+    if !(rz > 0.0 && rz.is_finite()) {
+        return Err(fail(
+            format!("breakdown, rᵀM⁻¹r = {rz:e} (the preconditioner is not positive definite)"),
+            0,
+            r0,
+        ));
+    }
+    let mut p = z.clone();
+    let mut q = vec![0.0; n];
+    let mut r_norm = r0;
+    for k in 1..=opts.max_iter {
+        let pq = mul_dot(a, &p, &mut q);
+        if !(pq > 0.0 && pq.is_finite()) {
+            return Err(fail(
+                format!("breakdown, pᵀAp = {pq:e} (the matrix is not positive definite)"),
+                k,
+                r_norm,
+            ));
+        }
+        let alpha = rz / pq;
+        let rr = update_x_r(alpha, &p, &q, x, &mut r);
+        r_norm = rr.sqrt();
+        report.iterations = k;
+        if !r_norm.is_finite() {
+            return Err(fail("non-finite residual".into(), k, r_norm));
+        }
+        if r_norm <= tol {
+            a.residual_to(b, x, &mut r);
+            report.residual_norm = dot(&r, &r).sqrt();
+            return Ok(report);
+        }
+        m.apply(&r, &mut z)?;
+        let rz_new = dot(&r, &z);
+        if !(rz_new > 0.0 && rz_new.is_finite()) {
+            return Err(fail(
+                format!(
+                    "breakdown, rᵀM⁻¹r = {rz_new:e} (the preconditioner is not positive definite)"
+                ),
+                k,
+                r_norm,
+            ));
+        }
+        let beta = rz_new / rz;
+        rz = rz_new;
+        zip_chunks2(&mut p, &z, &z, |p, z, _| {
+            for (pi, zi) in p.iter_mut().zip(z) {
+                *pi = zi + beta * *pi;
+            }
+        });
+    }
+    a.residual_to(b, x, &mut r);
+    Err(fail(
+        format!(
+            "no convergence within {} iterations (target {tol:e}, true residual {:e})",
+            opts.max_iter,
+            dot(&r, &r).sqrt()
+        ),
+        opts.max_iter,
+        r_norm,
+    ))
+}
+
+/// Vectors shorter than this are handled on the calling thread.
+const PAR_MIN_LEN: usize = PAR_MIN_NNZ / 4;
+
+/// Runs `f` on matching chunks of `y`, `u` and `v` (all of the same length), in parallel for
+/// long vectors.
+pub(crate) fn zip_chunks2<F>(y: &mut [f64], u: &[f64], v: &[f64], f: F)
+where
+    F: Fn(&mut [f64], &[f64], &[f64]) + Sync + Send,
+{
+    debug_assert!(u.len() == y.len() && v.len() == y.len());
+    if y.len() < PAR_MIN_LEN {
+        f(y, u, v);
+    } else {
+        y.par_chunks_mut(ROW_CHUNK)
+            .zip(u.par_chunks(ROW_CHUNK))
+            .zip(v.par_chunks(ROW_CHUNK))
+            .for_each(|((y, u), v)| f(y, u, v));
+    }
+}
+
+/// Sums `f(c)` over the chunks c = 0, 1, … of `ROW_CHUNK` entries of a vector of length `n`,
+/// in chunk order (the same sum whatever the scheduling).
+fn chunk_sum<F>(n: usize, f: F) -> f64
+where
+    F: Fn(usize) -> f64 + Sync + Send,
+{
+    let chunks = n.div_ceil(ROW_CHUNK);
+    if n < PAR_MIN_LEN {
+        (0..chunks).map(f).sum()
+    } else {
+        let parts: Vec<f64> = (0..chunks).into_par_iter().map(f).collect();
+        parts.iter().sum()
+    }
+}
+
+/// u·v.
+pub(crate) fn dot(u: &[f64], v: &[f64]) -> f64 {
+    debug_assert_eq!(u.len(), v.len());
+    chunk_sum(u.len(), |c| {
+        let s = c * ROW_CHUNK;
+        let e = (s + ROW_CHUNK).min(u.len());
+        u[s..e].iter().zip(&v[s..e]).map(|(a, b)| a * b).sum()
+    })
+}
+
+/// q = A p, returning p·q (one sweep).
+fn mul_dot(a: &CsrMatrix, p: &[f64], q: &mut [f64]) -> f64 {
+    let n = q.len();
+    let part = |c: usize, qc: &mut [f64]| -> f64 {
+        let i0 = c * ROW_CHUNK;
+        let mut s = 0.0;
+        for (k, qi) in qc.iter_mut().enumerate() {
+            let i = i0 + k;
+            *qi = a.row_dot(i, p);
+            s += *qi * p[i];
+        }
+        s
+    };
+    if n < PAR_MIN_LEN {
+        q.chunks_mut(ROW_CHUNK)
+            .enumerate()
+            .map(|(c, qc)| part(c, qc))
+            .sum()
+    } else {
+        let parts: Vec<f64> = q
+            .par_chunks_mut(ROW_CHUNK)
+            .enumerate()
+            .map(|(c, qc)| part(c, qc))
+            .collect();
+        parts.iter().sum()
+    }
+}
+
+/// x += α p, r −= α q, returning r·r (one sweep).
+fn update_x_r(alpha: f64, p: &[f64], q: &[f64], x: &mut [f64], r: &mut [f64]) -> f64 {
+    let part = |(x, r, p, q): (&mut [f64], &mut [f64], &[f64], &[f64])| -> f64 {
+        let mut s = 0.0;
+        for (((xi, ri), pi), qi) in x.iter_mut().zip(r.iter_mut()).zip(p).zip(q) {
+            *xi += alpha * pi;
+            *ri -= alpha * qi;
+            s += *ri * *ri;
+        }
+        s
+    };
+    if x.len() < PAR_MIN_LEN {
+        x.chunks_mut(ROW_CHUNK)
+            .zip(r.chunks_mut(ROW_CHUNK))
+            .zip(p.chunks(ROW_CHUNK))
+            .zip(q.chunks(ROW_CHUNK))
+            .map(|(((x, r), p), q)| part((x, r, p, q)))
+            .sum()
+    } else {
+        let parts: Vec<f64> = x
+            .par_chunks_mut(ROW_CHUNK)
+            .zip(r.par_chunks_mut(ROW_CHUNK))
+            .zip(p.par_chunks(ROW_CHUNK))
+            .zip(q.par_chunks(ROW_CHUNK))
+            .map(|(((x, r), p), q)| part((x, r, p, q)))
+            .collect();
+        parts.iter().sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small SPD matrix (lower CSC → CSR): tridiag(−1, 4, −1) plus couplings i ↔ i + 5 of
+    /// −0.5 and a varying diagonal, n = 30; and its dense form.
+    fn small() -> (CsrMatrix, nalgebra::DMatrix<f64>) {
+        let n = 30;
+        let mut dense = nalgebra::DMatrix::<f64>::zeros(n, n);
+        let mut col_ptr = vec![0];
+        let (mut row_idx, mut values) = (vec![], vec![]);
+        for j in 0..n {
+            let mut push = |i: usize, v: f64| {
+                row_idx.push(i);
+                values.push(v);
+                dense[(i, j)] = v;
+                dense[(j, i)] = v;
+            };
+            push(j, 4.0 + (j % 3) as f64);
+            if j + 1 < n {
+                push(j + 1, -1.0);
+            }
+            if j + 5 < n {
+                push(j + 5, -0.5);
+            }
+            col_ptr.push(row_idx.len());
+        }
+        (
+            CsrMatrix::from_lower_csc(n, &col_ptr, &row_idx, &values).unwrap(),
+            dense,
+        )
+    }
+
+    #[test]
+    fn plain_and_jacobi_cg_match_a_dense_solve() {
+        let (a, dense) = small();
+        let n = a.n_rows();
+        let b: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
+        let exact = dense
+            .clone()
+            .cholesky()
+            .unwrap()
+            .solve(&nalgebra::DVector::from_column_slice(&b));
+        let opts = PcgOptions {
+            rtol: 1e-12,
+            atol: 0.0,
+            max_iter: 100,
+        };
+        let mut x = vec![0.0; n];
+        let rep = pcg(&a, &Identity(n), &b, &mut x, &opts).unwrap();
+        let bn = dot(&b, &b).sqrt();
+        assert!(rep.residual_norm <= 1e-12 * bn * 1.5, "{rep:?}");
+        assert!(rep.iterations > 1 && rep.iterations <= n);
+        let err = x
+            .iter()
+            .zip(exact.iter())
+            .map(|(u, v)| (u - v).abs())
+            .fold(0.0, f64::max);
+        assert!(err < 1e-11, "{err}");
+        // Jacobi, from a nonzero initial guess
+        let mut x = vec![1.0; n];
+        let rep = pcg(&a, &Jacobi::new(&a).unwrap(), &b, &mut x, &opts).unwrap();
+        assert!((rep.initial_residual_norm - dot(&b, &b).sqrt()).abs() > 0.1);
+        let err = x
+            .iter()
+            .zip(exact.iter())
+            .map(|(u, v)| (u - v).abs())
+            .fold(0.0, f64::max);
+        assert!(err < 1e-11, "{err}");
+        // an exact initial guess: no iteration
+        let mut x: Vec<f64> = exact.iter().copied().collect();
+        let rep = pcg(
+            &a,
+            &Identity(n),
+            &b,
+            &mut x,
+            &PcgOptions { rtol: 1e-8, ..opts },
+        )
+        .unwrap();
+        assert_eq!(rep.iterations, 0);
+        // the absolute tolerance alone
+        let mut x = vec![0.0; n];
+        let rep = pcg(
+            &a,
+            &Identity(n),
+            &b,
+            &mut x,
+            &PcgOptions {
+                rtol: 0.0,
+                atol: 1e-3,
+                max_iter: 100,
+            },
+        )
+        .unwrap();
+        assert!(
+            rep.residual_norm <= 1e-3 * 1.01 && rep.iterations < 20,
+            "{rep:?}"
+        );
+    }
+
+    #[test]
+    fn failures_are_errors() {
+        let (a, _) = small();
+        let n = a.n_rows();
+        let b = vec![1.0; n];
+        // too few iterations
+        let mut x = vec![0.0; n];
+        let e = pcg(
+            &a,
+            &Identity(n),
+            &b,
+            &mut x,
+            &PcgOptions {
+                rtol: 1e-12,
+                atol: 0.0,
+                max_iter: 2,
+            },
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("no convergence within 2 iterations"), "{e}");
+        // NaN in b or in x₀
+        let mut bad = b.clone();
+        bad[3] = f64::NAN;
+        assert!(pcg(&a, &Identity(n), &bad, &mut x, &PcgOptions::default()).is_err());
+        let mut x0 = vec![0.0; n];
+        x0[5] = f64::INFINITY;
+        assert!(pcg(&a, &Identity(n), &b, &mut x0, &PcgOptions::default()).is_err());
+        // an indefinite matrix: breakdown pᵀAp ≤ 0
+        let neg = CsrMatrix::new(
+            n,
+            n,
+            a.row_ptr().to_vec(),
+            a.col_idx().to_vec(),
+            a.values().iter().map(|v| -v).collect(),
+        )
+        .unwrap();
+        let mut x = vec![0.0; n];
+        let e = pcg(&neg, &Identity(n), &b, &mut x, &PcgOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("breakdown") && e.contains("iteration 1"), "{e}");
+        // a negative definite preconditioner: breakdown rᵀM⁻¹r ≤ 0
+        struct Minus(usize);
+        impl Preconditioner for Minus {
+            fn n(&self) -> usize {
+                self.0
+            }
+            fn apply(&self, r: &[f64], z: &mut [f64]) -> crate::Result<()> {
+                z.iter_mut().zip(r).for_each(|(z, r)| *z = -r);
+                Ok(())
+            }
+        }
+        let e = pcg(&a, &Minus(n), &b, &mut x, &PcgOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("preconditioner is not positive definite"), "{e}");
+        // mismatched lengths, negative tolerances
+        assert!(pcg(&a, &Identity(n), &b[1..], &mut x, &PcgOptions::default()).is_err());
+        assert!(pcg(&a, &Identity(n + 1), &b, &mut x, &PcgOptions::default()).is_err());
+        let neg_tol = PcgOptions {
+            rtol: -1.0,
+            ..PcgOptions::default()
+        };
+        assert!(pcg(&a, &Identity(n), &b, &mut x, &neg_tol).is_err());
+        // a non-positive diagonal for Jacobi
+        assert!(Jacobi::new(&neg).is_err());
+        assert!(Identity(3).apply(&[1.0; 3], &mut [0.0; 2]).is_err());
+    }
+
+    #[test]
+    fn long_vectors_take_the_parallel_path() {
+        // n above the sequential threshold: the chunked kernels agree with plain loops
+        let n = 3 * PAR_MIN_LEN + 17;
+        let u: Vec<f64> = (0..n).map(|i| (i as f64 * 0.1).sin()).collect();
+        let v: Vec<f64> = (0..n).map(|i| (i as f64 * 0.3).cos()).collect();
+        let plain: f64 = u.iter().zip(&v).map(|(a, b)| a * b).sum();
+        assert!((dot(&u, &v) - plain).abs() < 1e-9 * plain.abs().max(1.0));
+        // a diagonal matrix diag(1..n): CG converges in few iterations with Jacobi, in one
+        let a = CsrMatrix::new(
+            n,
+            n,
+            (0..=n).collect(),
+            (0..n as u32).collect(),
+            (0..n).map(|i| 1.0 + i as f64).collect(),
+        )
+        .unwrap();
+        let mut x = vec![0.0; n];
+        let rep = pcg(
+            &a,
+            &Jacobi::new(&a).unwrap(),
+            &u,
+            &mut x,
+            &PcgOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(rep.iterations, 1);
+        assert!(
+            x.iter()
+                .enumerate()
+                .all(|(i, xi)| (xi * (1.0 + i as f64) - u[i]).abs() < 1e-12)
+        );
+    }
+}

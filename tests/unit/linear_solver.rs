@@ -1,0 +1,113 @@
+//! The iterative linear solver (multigrid-preconditioned conjugate gradients) inside the
+//! active-set method: the same certified solution as the direct solver, on obstacle and
+//! Signorini problems, with HMM, P1 and CR, cold and nested; and the automatic choice.
+
+use crate::common::*;
+use gradvi::assembly::{AUTO_ITERATIVE_MIN, LinearSolver, SystemOptions};
+use gradvi::mesh::generate::{cartesian, cartesian_triangles, hexagonal};
+use gradvi::problem::*;
+use gradvi::scheme::*;
+use gradvi::solver::*;
+
+fn opts(linear: LinearSolver, warm_start: WarmStart) -> SolveOptions {
+    SolveOptions {
+        warm_start,
+        system: SystemOptions {
+            linear,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+/// Direct and iterative solves of `p`: both certified at 1e-10, the same active set, u equal
+/// to 1e-8 relative (the conjugate gradients stop at a relative residual of 1e-12), and the
+/// iterative one reports its Krylov iterations. Returns the total CG iterations.
+fn same_solution(s: &dyn GradientDiscretisation, p: &Problem, ws: WarmStart) -> usize {
+    let d = solve_problem(s, p, &opts(LinearSolver::Direct, ws)).unwrap();
+    let i = solve_problem(s, p, &opts(LinearSolver::Iterative, ws)).unwrap();
+    d.result.certificate.check(1e-10).unwrap();
+    i.result.certificate.check(1e-10).unwrap();
+    assert_eq!(d.result.active, i.result.active, "{} {}", p.name, s.name());
+    assert_eq!(d.niter(), i.niter(), "{} {}", p.name, s.name());
+    assert_close(
+        d.u(),
+        i.u(),
+        1e-8,
+        &format!("{} {} direct vs iterative", p.name, s.name()),
+    );
+    assert!(d.result.log.iter().all(|l| l.timings.krylov == 0));
+    let krylov: usize = i.result.log.iter().map(|l| l.timings.krylov).sum();
+    assert!(
+        krylov >= i.niter(),
+        "{krylov} CG iterations for {} solves",
+        i.niter()
+    );
+    assert_eq!(
+        i.system.factor_len(),
+        0,
+        "no Cholesky factor with the iterative solver"
+    );
+    krylov
+}
+
+#[test]
+fn iterative_gives_the_direct_solution() {
+    let mesh = cartesian(48, 48).unwrap();
+    let hmm = Hmm::new(&mesh);
+    same_solution(&hmm, &paper_test3(-20.0), WarmStart::Cold);
+    same_solution(&hmm, &paper_test1(), WarmStart::Cold);
+    let tri = cartesian_triangles(40, 40, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let p1 = P1::new(&tri).unwrap();
+    same_solution(&p1, &paper_test3(-10.0), WarmStart::Nested);
+    same_solution(&p1, &paper_test1(), WarmStart::Cold);
+    let cr = build(SchemeKind::Cr, &tri).unwrap();
+    same_solution(cr.as_ref(), &paper_test3(-10.0), WarmStart::Cold);
+    let hex = hexagonal(3).unwrap();
+    let hmm = Hmm::new(&hex);
+    same_solution(&hmm, &paper_test3(-10.0), WarmStart::Nested);
+}
+
+#[test]
+fn multigrid_iterations_stay_bounded_under_refinement() {
+    // Poisson-type obstacle problem with P1 on 32², 64², 128² grids: the CG iterations per
+    // solve must not grow like the condition number (h⁻², a factor 16 here); allow at most 2×
+    let per_solve = |n: usize| {
+        let tri = cartesian_triangles(n, n, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        let p1 = P1::new(&tri).unwrap();
+        let s = solve_problem(
+            &p1,
+            &paper_test3(-10.0),
+            &opts(LinearSolver::Iterative, WarmStart::Cold),
+        )
+        .unwrap();
+        s.result.certificate.check(1e-10).unwrap();
+        let k: usize = s.result.log.iter().map(|l| l.timings.krylov).sum();
+        k as f64 / s.niter() as f64
+    };
+    let (a, b) = (per_solve(32), per_solve(128));
+    assert!(
+        b <= 2.0 * a.max(5.0) && b <= 40.0,
+        "CG iterations per solve: {a} at 32², {b} at 128²"
+    );
+}
+
+#[test]
+fn auto_picks_direct_on_small_systems() {
+    let mesh = cartesian(16, 16).unwrap();
+    let hmm = Hmm::new(&mesh);
+    assert!(hmm.n_skeleton() < AUTO_ITERATIVE_MIN);
+    let s = solve_problem(
+        &hmm,
+        &paper_test3(-5.0),
+        &opts(LinearSolver::Auto, WarmStart::Cold),
+    )
+    .unwrap();
+    assert!(s.system.factor_len() > 0);
+    assert!(s.result.log.iter().all(|l| l.timings.krylov == 0));
+    assert_eq!(
+        "iterative".parse::<LinearSolver>().unwrap(),
+        LinearSolver::Iterative
+    );
+    assert!("gmres".parse::<LinearSolver>().is_err());
+}
