@@ -7,7 +7,7 @@ FVCA5_MESHES ?=
 PYTHON := /usr/bin/python3
 REFDIR := replication/results/reference
 
-.PHONY: all build test test-external fuzz lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench clean
+.PHONY: all build test test-external fuzz lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers clean
 
 all: build
 
@@ -73,10 +73,17 @@ crosscheck-coarse: build reference-deps
 	$(PYTHON) reference/solve.py --coarse --outdir /tmp/gradvi-reference-coarse
 	$(BIN) crosscheck --coarse --reference /tmp/gradvi-reference-coarse --out /tmp/gradvi-crosscheck-coarse
 
-## bench: scaling benchmark (HMM and P1, Test 3, 1e3 to 1e6 cells; dolfinx up to ~150k cells)
-##        -> replication/results/bench.csv and replication/BENCHMARKS.md
-bench: build reference-deps
+## bench: peer benchmark (PETSc ex9 side by side, any domain), then the scaling benchmark
+##        (HMM and P1, Test 3, 1e3 to 1e6 cells; dolfinx up to ~300k cells)
+##        -> replication/results/bench_peers.csv, bench.csv and replication/BENCHMARKS.md
+bench: bench-peers build reference-deps
 	$(CARGO) bench --bench scale
+
+## bench-peers: PETSc ex9 (installed and built from Debian's packages by benches/petsc/) next to
+##        gradvi at equal unknowns (grids up to GRADVI_BENCH_EX9_MAX_GRID, default 2049), and
+##        the L-shape/disk/hole family -> replication/results/bench_peers.csv, BENCHMARKS.md
+bench-peers: build
+	$(CARGO) bench --bench scale -- --peers
 
 clean:
 	$(CARGO) clean

@@ -399,11 +399,13 @@ def solve(
     keep_iterates: bool = False,
     ordering: str = "amd",
     factor_threads: str = "sequential",
+    linear: str = "auto",
 ) -> Solution:
     """Solves a problem on a mesh with a gradient scheme; returns a certified :class:`Solution`.
 
     Without a barrier this is one linear solve; with one, the monotony (primal–dual active-set)
-    algorithm of the paper, from an empty active set by default. Every solution is certified:
+    algorithm of the paper, started by default from an active set predicted by coarse solves
+    (``warm_start="cold"``: from an empty set, the paper's NITER). Every solution is certified:
     a solve whose certificate exceeds ``tol`` raises :class:`gradvi.CertificateError`.
 
     Example::
@@ -432,6 +434,9 @@ def solve(
         ordering: fill-reducing ordering of the Cholesky factorisation, ``"amd"`` or
             ``"nested-dissection"``.
         factor_threads: ``"sequential"`` or ``"global"`` (faer's parallel factorisation).
+        linear: linear solver, ``"auto"`` (direct below 200 000 condensed unknowns, iterative
+            above), ``"direct"`` (sparse Cholesky) or ``"iterative"`` (algebraic-multigrid
+            preconditioned conjugate gradients, memory linear in the size).
 
     Raises:
         GradviError: a subclass naming what went wrong: :class:`gradvi.InvalidDataError`
@@ -470,5 +475,6 @@ def solve(
         keep_iterates=bool(keep_iterates),
         ordering=str(ordering),
         factor_threads=str(factor_threads),
+        linear=str(linear),
     )
     return Solution(m, pb, r, seconds)

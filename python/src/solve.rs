@@ -323,7 +323,7 @@ fn json<'py, T: serde::Serialize>(py: Python<'py>, v: &T) -> PyResult<Bound<'py,
 /// there only: this function is called with every option).
 #[pyfunction]
 #[pyo3(signature = (mesh, problem, scheme, alpha, c, max_solves, tol, fallback, warm_start,
-    initial_active, keep_iterates, ordering, factor_threads))]
+    initial_active, keep_iterates, ordering, factor_threads, linear))]
 #[allow(clippy::too_many_arguments)]
 fn solve<'py>(
     py: Python<'py>,
@@ -340,6 +340,7 @@ fn solve<'py>(
     keep_iterates: bool,
     ordering: &str,
     factor_threads: &str,
+    linear: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let initial_active = initial_active.map(|a| a.as_array().to_vec());
     let options = || -> gradvi::Result<Options> {
@@ -347,6 +348,7 @@ fn solve<'py>(
         let system = SystemOptions {
             ordering: self::ordering(ordering)?,
             factor_threads: self::factor_threads(factor_threads)?,
+            linear: gradvi::assembly::LinearSolver::from_str(&linear.to_ascii_lowercase())?,
         };
         Ok(Options {
             kind: SchemeKind::from_str(scheme)?,

@@ -66,6 +66,7 @@ def test_bad_options(test3_mesh):
         ({"max_solves": 0}, "max_solves"),
         ({"warm_start": "hot"}, "warm start"),
         ({"ordering": "metis"}, "ordering"),
+        ({"linear": "gmres"}, "linear solver"),
         ({"alpha": -1.0}, "alpha"),
         ({"scheme": "p1", "alpha": 2.0}, "alpha"),
     ):

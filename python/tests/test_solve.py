@@ -60,7 +60,7 @@ def test_test3_equals_committed_results():
         assert mesh.n_cells == int(r["n_cells"])
         c = float(r["c"])
         pb = problems.setdefault(c, make_test3(c))
-        sol = gradvi.solve(mesh, pb, scheme=r["scheme"])
+        sol = gradvi.solve(mesh, pb, scheme=r["scheme"], warm_start="cold")  # the paper's NITER
         assert sol.certificate.ok(1e-10)
         assert sol.niter == int(r["niter"]), r
         assert sol.n_active == int(r["n_active"]), r
@@ -83,6 +83,15 @@ def test_nested_warm_start_gives_the_same_solution(root):
     s = gradvi.solve(mesh, arr, warm_start="nested")
     assert s.warm_start["skipped"]
     np.testing.assert_array_equal(s.u, cold.u)
+
+
+def test_iterative_linear_solver_gives_the_direct_solution(root):
+    mesh = gradvi.Mesh.read(root / "meshes" / "test3_3.msh")
+    d = gradvi.solve(mesh, make_test3(-5.0), linear="direct")
+    i = gradvi.solve(mesh, make_test3(-5.0), linear="iterative")
+    assert d.certificate.ok(1e-10) and i.certificate.ok(1e-10)
+    np.testing.assert_array_equal(i.active, d.active)
+    np.testing.assert_allclose(i.u, d.u, rtol=0, atol=1e-8 * np.abs(d.u).max())
 
 
 def test_solution_arrays_and_outputs(tmp_path, test3_mesh):

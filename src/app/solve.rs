@@ -185,8 +185,12 @@ pub fn run(a: &SolveArgs) -> Result<()> {
                 l.timings.assemble,
                 l.timings.factor,
                 l.timings.solve,
-                if l.timings.krylov > 0 {
-                    format!(", {} CG iterations", l.timings.krylov)
+                if l.timings.krylov > 0 || l.timings.inexact {
+                    format!(
+                        ", {} CG iterations{}",
+                        l.timings.krylov,
+                        if l.timings.inexact { ", inexact" } else { "" }
+                    )
                 } else {
                     String::new()
                 }

@@ -14,7 +14,8 @@
 //!    P1 with the default (nested) start: NITER and the growth of the total time.
 //!
 //! Every case runs in a child process, as in the scaling benchmark, so that peak memory is the
-//! case's own. Rows go to `replication/results/bench_peers.csv`; the report's first sections
+//! case's own. `GRADVI_BENCH_PEERS` (default `ex9,domains`) selects the parts; the rows of the
+//! other part are kept from the existing CSV. `GRADVI_BENCH_LOG=1` prints each solve's timings. Rows go to `replication/results/bench_peers.csv`; the report's first sections
 //! are written from it ([`super::report`]).
 
 use super::{Config, bad, io_err, peak_memory_mib, stdout_of};
@@ -69,17 +70,27 @@ pub struct PeerRow {
     /// Everything, from the mesh to the certified solution (PETSc: the process's wall clock).
     pub total_s: f64,
     /// The coarse solves of the warm start.
+    #[serde(deserialize_with = "nullable")]
     pub coarse_s: f64,
     /// Numeric factorisations or Krylov solves, all iterations.
+    #[serde(deserialize_with = "nullable")]
     pub linear_s: f64,
     /// Peak resident memory of the process, MiB.
     pub peak_mib: f64,
     /// Largest error against the exact solution (ex9).
+    #[serde(deserialize_with = "nullable")]
     pub err_max: f64,
     /// Mean error against the exact solution (ex9).
+    #[serde(deserialize_with = "nullable")]
     pub err_mean: f64,
     /// Largest scaled quantity of the certificate (NaN for PETSc).
+    #[serde(deserialize_with = "nullable")]
     pub certificate: f64,
+}
+
+/// An f64 that JSON writes as null when it is NaN.
+fn nullable<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 /// The ex9 problem of `problems/ex9.toml`.
@@ -379,7 +390,13 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
         .and_then(|v| v.trim().parse().ok())
         .unwrap_or(DEFAULT_MAX_GRID);
     let csv = cfg.path(CSV);
-    let mut rows: Vec<PeerRow> = Vec::new();
+    let parts = std::env::var("GRADVI_BENCH_PEERS").unwrap_or_else(|_| "ex9,domains".into());
+    let (do_ex9, do_domains) = (parts.contains("ex9"), parts.contains("domains"));
+    // rows of the parts not run this time are kept from the existing CSV
+    let mut rows: Vec<PeerRow> = read_rows(cfg)?
+        .into_iter()
+        .filter(|r| if r.family == "ex9" { !do_ex9 } else { !do_domains })
+        .collect();
     let push = |row: PeerRow, rows: &mut Vec<PeerRow>| -> gradvi::Result<()> {
         eprintln!(
             "[bench]   {} {} {} {}: {} unknowns, NITER {} (+{} coarse), {:.2} s, {:.0} MiB, errors {:.3e} / {:.3e}",
@@ -398,11 +415,15 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
         rows.push(row);
         write_csv(&csv, rows)
     };
-    let petsc = build_petsc(cfg);
-    if let Err(why) = &petsc {
+    let petsc = if do_ex9 {
+        build_petsc(cfg)
+    } else {
+        Err("not asked for".into())
+    };
+    if let (true, Err(why)) = (do_ex9, &petsc) {
         eprintln!("[bench] warning: no PETSc rows: {why}");
     }
-    for &g in EX9_GRIDS.iter().filter(|&&g| g <= max_grid) {
+    for &g in EX9_GRIDS.iter().filter(|&&g| do_ex9 && g <= max_grid) {
         if let Ok(bin) = &petsc {
             eprintln!("[bench] ex9 PETSc gs+mg, {g}² grid ...");
             push(run_petsc(cfg, bin, g)?, &mut rows)?;
@@ -417,7 +438,7 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
             }
         }
     }
-    for domain in DOMAINS {
+    for domain in DOMAINS.iter().filter(|_| do_domains) {
         for &lc in &DOMAIN_LC {
             if 0.75 * 2.3 / (lc * lc) > cfg.max_cells as f64 {
                 continue; // about 2.3/lc² triangles per unit area, areas 0.75 to 0.97
