@@ -8,7 +8,11 @@
 //! that of the matrix, and for the smaller sizes the time of a sparse Cholesky (faer, AMD;
 //! symbolic + numeric + solve) on the same matrix.
 
+use gradvi::assembly::{DiscreteSystem, SystemOptions};
 use gradvi::linalg::{Amg, AmgOptions, CsrMatrix, PcgOptions, Smoother, SpdPattern, pcg};
+use gradvi::mesh::generate::{cartesian, hexagonal_grid, kershaw};
+use gradvi::problem::{Problem, paper_test2};
+use gradvi::scheme::{GradientDiscretisation, Hmm, P1};
 use std::time::Instant;
 
 /// A symmetric matrix as its lower triangle in CSC form.
@@ -140,7 +144,10 @@ fn run(name: &str, l: &Lower, opts: &AmgOptions, cholesky: bool, reps: usize) {
         t_solve = t_solve.min(t.elapsed().as_secs_f64());
         let (iters, res) = match rep {
             Ok(r) => (r.iterations.to_string(), r.residual_norm / bn),
-            Err(e) => (format!("failed: {e}"), f64::NAN),
+            Err(e) => {
+                eprintln!("{name}: {e}");
+                (">max".to_string(), f64::NAN)
+            }
         };
         summary = Some((
             iters,
@@ -192,13 +199,72 @@ fn header() {
     );
 }
 
+/// The condensed matrix of `scheme` and `problem` as the active-set solver assembles it, with
+/// no unknown fixed but the Dirichlet ones.
+fn scheme_matrix(scheme: &dyn GradientDiscretisation, problem: &Problem) -> gradvi::Result<Lower> {
+    let sys = DiscreteSystem::new(scheme, problem, SystemOptions::default())?;
+    let (col_ptr, row_idx) = sys.condensed_pattern();
+    let (values, _) = sys.assemble_condensed(&vec![None; sys.n_unknowns()]);
+    Ok(Lower {
+        n: sys.n_condensed(),
+        col_ptr: col_ptr.to_vec(),
+        row_idx: row_idx.to_vec(),
+        values,
+    })
+}
+
+/// −div(A∇u) = 1 with A the anisotropic tensor of eigenvalues 1 and 1e-3 along axes turned by
+/// 30°, and Dirichlet conditions.
+fn rotated_anisotropy() -> Problem {
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let (l1, l2) = (1.0, 1e-3);
+    let a = [
+        [l1 * c * c + l2 * s * s, (l1 - l2) * c * s],
+        [(l1 - l2) * c * s, l1 * s * s + l2 * c * c],
+    ];
+    Problem::new("rotated-anisotropy", Box::new(|_| 1.0)).with_diffusion(Box::new(move |_| a))
+}
+
+/// The condensed matrices of the schemes on the generated and gmsh meshes.
+fn schemes(opts: &AmgOptions) -> gradvi::Result<()> {
+    type MeshFn = Box<dyn Fn() -> gradvi::Result<gradvi::mesh::PolyMesh>>;
+    let cases: [(&str, MeshFn); 4] = [
+        ("cartesian 512²", Box::new(|| cartesian(512, 512))),
+        ("cartesian 724²", Box::new(|| cartesian(724, 724))),
+        ("hexagonal 400", Box::new(|| hexagonal_grid(400))),
+        ("kershaw 30", Box::new(|| kershaw(30))),
+    ];
+    for (name, mesh) in &cases {
+        let mesh = mesh()?;
+        let hmm = Hmm::new(&mesh);
+        let small = mesh.n_cells() <= 300_000;
+        for (pname, problem) in [
+            ("test2", paper_test2()),
+            ("rot-aniso", rotated_anisotropy()),
+        ] {
+            let l = scheme_matrix(&hmm, &problem)?;
+            run(&format!("hmm {name} {pname}"), &l, opts, small, REPS);
+        }
+    }
+    let mesh = gradvi::mesh::io::read_mesh("meshes/test2tri_4.msh")?;
+    let p1 = P1::new(&mesh)?;
+    for (pname, problem) in [
+        ("test2", paper_test2()),
+        ("rot-aniso", rotated_anisotropy()),
+    ] {
+        let l = scheme_matrix(&p1, &problem)?;
+        run(&format!("p1 test2tri_4 {pname}"), &l, opts, true, REPS);
+    }
+    Ok(())
+}
+
 /// Repetitions of each measurement (the best is kept).
 const REPS: usize = 3;
 
 /// The checkerboard of 8 × 8 blocks with coefficients 1 and 1000 on an m × m grid.
 fn checkerboard(m: usize) -> impl Fn(usize, usize) -> f64 {
     move |i, j| {
-        if (i * 8 / m + j * 8 / m) % 2 == 0 {
+        if (i * 8 / m + j * 8 / m).is_multiple_of(2) {
             1.0
         } else {
             1000.0
@@ -229,9 +295,23 @@ fn kernels() {
     );
     for (name, smoother) in [
         (
+            "chebyshev 1",
+            Smoother::Chebyshev {
+                degree: 1,
+                ratio: 30.0,
+            },
+        ),
+        (
             "chebyshev 2",
             Smoother::Chebyshev {
                 degree: 2,
+                ratio: 30.0,
+            },
+        ),
+        (
+            "chebyshev 3",
+            Smoother::Chebyshev {
+                degree: 3,
                 ratio: 30.0,
             },
         ),
@@ -287,9 +367,30 @@ fn main() {
                 },
             ),
             (
-                "filtered P",
+                "theta_P 0",
                 AmgOptions {
-                    filter_prolongator: true,
+                    smoothing_threshold: 0.0,
+                    ..opts
+                },
+            ),
+            (
+                "theta_P 0.02",
+                AmgOptions {
+                    smoothing_threshold: 0.02,
+                    ..opts
+                },
+            ),
+            (
+                "theta_P 0.2",
+                AmgOptions {
+                    smoothing_threshold: 0.2,
+                    ..opts
+                },
+            ),
+            (
+                "theta_P 0.04",
+                AmgOptions {
+                    smoothing_threshold: 0.04,
                     ..opts
                 },
             ),
@@ -315,9 +416,9 @@ fn main() {
                 },
             ),
             (
-                "cheb 2 lanczos",
+                "gershgorin only",
                 AmgOptions {
-                    lanczos_steps: 10,
+                    spectral_steps: 0,
                     ..opts
                 },
             ),
@@ -358,6 +459,122 @@ fn main() {
             for (mname, l) in &mats {
                 run(&format!("{vname}/{mname}"), l, o, false, REPS);
             }
+        }
+        return;
+    }
+    if has("export") {
+        let mk = |mesh: gradvi::Result<gradvi::mesh::PolyMesh>, p: Problem| -> Lower {
+            let mesh = mesh.expect("mesh");
+            scheme_matrix(&Hmm::new(&mesh), &p).expect("matrix")
+        };
+        for (name, l) in [
+            ("cartrot", mk(cartesian(256, 256), rotated_anisotropy())),
+            ("kershaw", mk(kershaw(15), paper_test2())),
+            ("carttest2", mk(cartesian(256, 256), paper_test2())),
+        ] {
+            let mut out = Vec::new();
+            for v in [l.n as f64]
+                .iter()
+                .chain(
+                    l.col_ptr
+                        .iter()
+                        .map(|&c| c as f64)
+                        .collect::<Vec<_>>()
+                        .iter(),
+                )
+                .chain(
+                    l.row_idx
+                        .iter()
+                        .map(|&c| c as f64)
+                        .collect::<Vec<_>>()
+                        .iter(),
+                )
+                .chain(l.values.iter())
+            {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+            std::fs::write(format!("/tmp/{name}.bin"), out).expect("write");
+        }
+        return;
+    }
+    if has("schemes-sweep") {
+        header();
+        let mk = |mesh: gradvi::Result<gradvi::mesh::PolyMesh>, p: Problem| -> Lower {
+            let mesh = mesh.expect("mesh");
+            scheme_matrix(&Hmm::new(&mesh), &p).expect("matrix")
+        };
+        let mats = [
+            (
+                "hmm cart rot",
+                mk(cartesian(256, 256), rotated_anisotropy()),
+            ),
+            ("hmm kershaw test2", mk(kershaw(15), paper_test2())),
+            ("hmm hex rot", mk(hexagonal_grid(200), rotated_anisotropy())),
+        ];
+        let cheb = |degree, ratio| Smoother::Chebyshev { degree, ratio };
+        let variants: Vec<(&str, AmgOptions)> = vec![
+            ("default", opts),
+            (
+                "theta 0",
+                AmgOptions {
+                    strength_threshold: 0.0,
+                    ..opts
+                },
+            ),
+            (
+                "theta 0.02",
+                AmgOptions {
+                    strength_threshold: 0.02,
+                    ..opts
+                },
+            ),
+            (
+                "theta 0.25",
+                AmgOptions {
+                    strength_threshold: 0.25,
+                    ..opts
+                },
+            ),
+            (
+                "theta_P 0",
+                AmgOptions {
+                    smoothing_threshold: 0.0,
+                    ..opts
+                },
+            ),
+            (
+                "theta_P 0.2",
+                AmgOptions {
+                    smoothing_threshold: 0.2,
+                    ..opts
+                },
+            ),
+            (
+                "cheb 3",
+                AmgOptions {
+                    smoother: cheb(3, 30.0),
+                    ..opts
+                },
+            ),
+            (
+                "l1-jacobi",
+                AmgOptions {
+                    smoother: Smoother::L1Jacobi,
+                    ..opts
+                },
+            ),
+        ];
+        for (vname, o) in &variants {
+            for (mname, l) in &mats {
+                run(&format!("{vname}/{mname}"), l, o, false, 1);
+            }
+        }
+        return;
+    }
+    if has("schemes") {
+        header();
+        if let Err(e) = schemes(&opts) {
+            println!("schemes: {e}");
         }
         return;
     }

@@ -62,7 +62,7 @@ pub struct SolveArgs {
     /// NITER).
     #[arg(long, value_enum, default_value_t = WarmStart::Nested)]
     warm_start: WarmStart,
-    /// Linear solver of the condensed systems: auto (direct below 200 000 condensed unknowns,
+    /// Linear solver of the condensed systems: auto (direct below 250 000 condensed unknowns,
     /// iterative above), direct (sparse Cholesky) or iterative (algebraic-multigrid
     /// preconditioned conjugate gradients, memory linear in the size).
     #[arg(long, value_enum, default_value_t = gradvi::assembly::LinearSolver::Auto)]
@@ -185,12 +185,8 @@ pub fn run(a: &SolveArgs) -> Result<()> {
                 l.timings.assemble,
                 l.timings.factor,
                 l.timings.solve,
-                if l.timings.krylov > 0 || l.timings.inexact {
-                    format!(
-                        ", {} CG iterations{}",
-                        l.timings.krylov,
-                        if l.timings.inexact { ", inexact" } else { "" }
-                    )
+                if l.timings.krylov > 0 {
+                    format!(", {} CG iterations", l.timings.krylov)
                 } else {
                     String::new()
                 }

@@ -18,6 +18,11 @@
 //! P is chosen to keep the fill small ([`Ordering`], in [`ordering`]): faer's approximate
 //! minimum degree (the default) or a nested dissection by breadth-first level-set separators
 //! ([`nested_dissection`]), which needs no coordinates.
+//!
+//! For systems too large to factorise, the iterative path: the full symmetric matrix in CSR
+//! form ([`CsrMatrix::from_lower_csc`], in [`csr`]), a smoothed-aggregation multigrid
+//! preconditioner ([`Amg`], in [`amg`]) and preconditioned conjugate gradients ([`pcg()`], in
+//! [`pcg`](mod@pcg)); memory O(nnz).
 
 pub mod amg;
 pub mod cholesky;

@@ -104,16 +104,16 @@ fn labels_from_roots(parent: &mut [usize]) -> Vec<usize> {
     let n = parent.len();
     let mut id = vec![usize::MAX; n];
     let mut next = 0;
-    let mut label = vec![0; n];
-    for k in 0..n {
-        let r = find(parent, k);
-        if id[r] == usize::MAX {
-            id[r] = next;
-            next += 1;
-        }
-        label[k] = id[r];
-    }
-    label
+    (0..n)
+        .map(|k| {
+            let r = find(parent, k);
+            if id[r] == usize::MAX {
+                id[r] = next;
+                next += 1;
+            }
+            id[r]
+        })
+        .collect()
 }
 
 /// Step 1: connected components of the cells with the same (square, tag) key.
@@ -163,7 +163,7 @@ fn merge_small(fine: &PolyMesh, label: &mut Vec<usize>, min_area: f64) {
             iface.push((b, a, len));
         }
     }
-    iface.sort_by(|x, y| (x.0, x.1).cmp(&(y.0, y.1)));
+    iface.sort_by_key(|x| (x.0, x.1));
     let mut parent: Vec<usize> = (0..na).collect();
     let mut i = 0;
     while i < iface.len() {

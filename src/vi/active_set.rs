@@ -23,14 +23,6 @@
 //!    older active set, the iteration cycles: a typed error with the history. Otherwise solve
 //!    with A_{k+1} fixed and repeat.
 //!
-//! **Inexact steps** (when the energy supports them: an iterative linear solver, see
-//! [`QuadraticEnergy::supports_inexact`]): while the active set changes, the linear systems are
-//! solved to a loose tolerance only, as an inexact Newton method does (the active-set method is
-//! a semismooth Newton method). When a loose step gives A_{k+1} = A_k, or repeats an older
-//! active set, the iteration switches to exact solves for good and goes on by the rules
-//! above, so the stopping rule, the cycling test and the certificate are those of exact
-//! solves. NITER counts both kinds of solves; the log marks the inexact ones.
-//!
 //! Every returned solution carries a [`super::Certificate`]; above tolerance the solve is an
 //! error. Cycling and the iteration cap end the iteration with [`Outcome::Stalled`]; the solve
 //! driver decides whether to fall back to projected Gauss–Seidel.
@@ -186,14 +178,9 @@ pub fn run(
     let mut log: Vec<IterationLog> = Vec::new();
     let mut entered = active.iter().filter(|&&a| a).count();
     let mut left = 0;
-    let mut inexact = q.supports_inexact();
     loop {
         let fixed = cons.fixed(q.n_unknowns(), &active);
-        let (u, timings) = if inexact {
-            q.minimise_inexact(&fixed)?
-        } else {
-            q.minimise_with_fixed(&fixed)?
-        };
+        let (u, timings) = q.minimise_with_fixed(&fixed)?;
         if opts.keep_iterates {
             iterates.push(u.clone());
         }
@@ -213,14 +200,6 @@ pub fn run(
             report(line);
         }
         let next = next_active(cons, &u, &active, &ev, opts.c);
-        let repeats = history.iter().position(|h| *h == next);
-        if inexact && (next == active || repeats.is_some()) && log.len() < opts.max_solves {
-            // from here on exact solves; the same active set is solved again exactly
-            inexact = false;
-            entered = 0;
-            left = 0;
-            continue;
-        }
         if next == active {
             ev.certificate.check(opts.tol)?;
             return Ok(Outcome::Solved(VariationalSolution {
@@ -234,7 +213,7 @@ pub fn run(
                 iterates,
             }));
         }
-        let error = if let Some(rep) = repeats {
+        let error = if let Some(rep) = history.iter().position(|h| *h == next) {
             Some(SolverError::Cycling {
                 iteration: log.len(),
                 repeats: rep,

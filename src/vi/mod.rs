@@ -41,8 +41,6 @@ pub struct SolveTimings {
     pub solve: f64,
     /// Conjugate-gradient iterations (0 with the direct solver).
     pub krylov: usize,
-    /// The solve was approximate ([`QuadraticEnergy::minimise_inexact`]).
-    pub inexact: bool,
 }
 
 /// A strictly convex quadratic energy E(u) = ½uᵀMu − bᵀu (M symmetric positive definite on
@@ -59,17 +57,6 @@ pub trait QuadraticEnergy {
     /// fixed, i.e. the solution of the linear system with those rows replaced.
     fn minimise_with_fixed(&self, fixed: &[Option<f64>])
     -> crate::Result<(Vec<f64>, SolveTimings)>;
-    /// Whether [`Self::minimise_inexact`] is cheaper than [`Self::minimise_with_fixed`] (an
-    /// iterative linear solver): the active-set method then takes its intermediate steps with
-    /// approximate minimisers and certifies with exact ones.
-    fn supports_inexact(&self) -> bool {
-        false
-    }
-    /// An approximate minimiser (the linear system solved to a loose relative residual); by
-    /// default the exact one.
-    fn minimise_inexact(&self, fixed: &[Option<f64>]) -> crate::Result<(Vec<f64>, SolveTimings)> {
-        self.minimise_with_fixed(fixed)
-    }
     /// r = b − Mu and, for each entry, the scale |b_i| + Σ_j |M_ij u_j| against which it is
     /// small.
     fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>);

@@ -120,9 +120,9 @@ fn errors(
     };
     match scheme.dof_entity(0) {
         Entity::Vertex(_) => {
-            for d in 0..scheme.n_unknowns() {
+            for (d, &ud) in u.iter().enumerate() {
                 if let Entity::Vertex(v) = scheme.dof_entity(d) {
-                    add(u[d], mesh.vertex(v));
+                    add(ud, mesh.vertex(v));
                 }
             }
         }
@@ -395,7 +395,13 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
     // rows of the parts not run this time are kept from the existing CSV
     let mut rows: Vec<PeerRow> = read_rows(cfg)?
         .into_iter()
-        .filter(|r| if r.family == "ex9" { !do_ex9 } else { !do_domains })
+        .filter(|r| {
+            if r.family == "ex9" {
+                !do_ex9
+            } else {
+                !do_domains
+            }
+        })
         .collect();
     let push = |row: PeerRow, rows: &mut Vec<PeerRow>| -> gradvi::Result<()> {
         eprintln!(

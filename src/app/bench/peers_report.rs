@@ -319,7 +319,7 @@ fn figure(cfg: &Config, rows: &[PeerRow]) -> gradvi::Result<()> {
                 series.push(LineSeries {
                     color: Some(color),
                     marker,
-                    ..LineSeries::new(&format!("{fam} {linear}"), pts)
+                    ..LineSeries::new(format!("{fam} {linear}"), pts)
                 });
             }
         }
