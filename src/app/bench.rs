@@ -20,7 +20,7 @@
 //! - `cold`: the default options (the paper's monotony algorithm from A₀ = ∅, as in
 //!   [`gradvi::solver::solve_problem`]);
 //! - `nested`: the same algorithm with an initial active set predicted by a chain of coarse
-//!   Cartesian HMM solves ([`gradvi::solver::warm_start`], `--warm-start nested` of
+//!   HMM solves on agglomerated meshes ([`gradvi::solver::warm_start`], the default of
 //!   `gradvi solve`): the coarse solves cost a fraction of the fine one, and the fine
 //!   iteration starts next to its solution. The certificate is the same;
 //! - `nested-par`: `nested` with faer's parallel numeric factorisation instead of the
@@ -117,7 +117,7 @@ impl BenchFamily {
 pub enum Variant {
     /// Default options: active-set iteration from A₀ = ∅, sparse Cholesky.
     Cold,
-    /// Initial active set from coarse Cartesian HMM solves.
+    /// Initial active set from coarse HMM solves on agglomerated meshes.
     Nested,
     /// As `Nested`, with faer's parallel numeric factorisation
     /// ([`gradvi::linalg::FactorThreads::Global`]) instead of the sequential default.
