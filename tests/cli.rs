@@ -92,8 +92,8 @@ fn bad_arguments_give_a_nonzero_exit() {
 fn solve_prints_niter_and_writes_vtu_and_json() {
     let (vtu, json) = (tmp("u.vtu"), tmp("u.json"));
     let (ok, out, err) = gradvi(&words(&format!(
-        "solve --problem test3 --param C=-20 --mesh meshes/test3_1.msh --scheme hmm --vtu {} \
-         --json {}",
+        "solve --problem test3 --param C=-20 --mesh meshes/test3_1.msh --scheme hmm \
+         --warm-start cold --vtu {} --json {}",
         vtu.display(),
         json.display()
     )));

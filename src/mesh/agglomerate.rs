@@ -447,4 +447,42 @@ mod tests {
         }
         assert_eq!(seen.len(), agg.mesh.boundary_edges().len());
     }
+
+    #[test]
+    fn gmsh_meshes_keep_area_tags_and_boundary() {
+        // the two-material dam of problems/signorini-layers.toml (cell tags) and the L-shape
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
+        for name in ["dam.msh", "lshape.msh", "hole.msh"] {
+            let fine = crate::mesh::io::read_mesh(dir.join(name)).unwrap();
+            let area = total_area(&fine);
+            let size = (area / (fine.n_cells() / 16) as f64).sqrt();
+            let agg = agglomerate(&fine, size).unwrap();
+            let coarse = &agg.mesh;
+            assert!(
+                coarse.n_cells() * 4 < fine.n_cells(),
+                "{name}: {} cells",
+                coarse.n_cells()
+            );
+            assert!((total_area(coarse) - area).abs() < 1e-12 * area, "{name}");
+            // a coarse cell holds fine cells of one tag, and has that tag
+            for (k, &c) in agg.cell_of.iter().enumerate() {
+                assert_eq!(fine.cell_tag(k), coarse.cell_tag(c), "{name}: cell {k}");
+            }
+            // every boundary edge is kept, with its tag
+            for &e in fine.boundary_edges() {
+                let ce = agg.boundary_edge_of[e];
+                assert_eq!(fine.edge_tag(e), coarse.edge_tag(ce), "{name}: edge {e}");
+                assert_eq!(fine.edge_midpoint(e), coarse.edge_midpoint(ce));
+            }
+            assert_eq!(coarse.boundary_edges().len(), fine.boundary_edges().len());
+        }
+    }
+
+    #[test]
+    fn bad_size_is_an_error() {
+        let fine = cartesian_rect(4, 4, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        for size in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(agglomerate(&fine, size).is_err(), "{size}");
+        }
+    }
 }

@@ -8,7 +8,8 @@
 //!
 //! [`WarmStart::Nested`] (the default) bounds NITER instead: it solves the *same problem*
 //! (same A, f, boundary conditions and barrier) with HMM on a coarse polygonal mesh of the
-//! same domain with about N/[`RATIO`] cells, made by agglomerating the fine cells
+//! same domain with about (fine unknowns)/[`FIRST_LEVEL_UNKNOWNS_PER_CELL`] cells (N/8 for HMM
+//! on quadrilaterals, N/48 for P1 on triangles), made by agglomerating the fine cells
 //! ([`crate::mesh::agglomerate`]: any domain, any mesh, material interfaces and boundary
 //! edges kept), itself warm-started in the same way from a mesh [`RATIO`] times coarser while
 //! that one has at least [`MIN_CELLS`] cells, and starts the fine iteration from the predicted
@@ -28,7 +29,8 @@
 //! one of the cold iteration (the same discrete variational inequality has one solution); only
 //! NITER and the time differ. NITER then counts the fine solves only; the coarse ones are
 //! reported in [`WarmStartReport`]. When no coarse mesh can be made (a mesh with fewer than
-//! [`RATIO`] · 64 cells, or an agglomeration that fails validation) or a coarse solve fails, the
+//! 64 · [`FIRST_LEVEL_UNKNOWNS_PER_CELL`] unknowns, or an agglomeration that fails validation)
+//! or a coarse solve fails, the
 //! iteration starts cold and [`WarmStartReport::skipped`] says why.
 
 use crate::assembly::DiscreteSystem;
@@ -93,9 +95,12 @@ pub struct WarmStartReport {
 /// Each coarse level has about 1/RATIO of the cells of the level below (H ≈ 4h).
 pub const RATIO: usize = 16;
 
-/// Unknowns per cell of HMM on a mesh of quadrilaterals or triangles (one per cell and about
-/// two per cell for the faces), to size the first coarse level by the fine unknowns.
-pub const HMM_UNKNOWNS_PER_CELL: usize = 3;
+/// The first coarse level has about (fine unknowns) / FIRST_LEVEL_UNKNOWNS_PER_CELL cells.
+/// HMM has about 3 unknowns per cell, so that is N/8 cells for an HMM fine mesh; P1 on
+/// triangles has about one unknown per two cells, so N/48. Measured on ex9 with P1 at 1M
+/// unknowns: N/16 cells made the coarse HMM solves cost 5 s of 18; 48 unknowns per cell gave
+/// a coarser prediction and 6 fine solves instead of 5.
+pub const FIRST_LEVEL_UNKNOWNS_PER_CELL: usize = 24;
 
 /// A coarser level is made while it would have at least this many cells.
 pub const MIN_CELLS: usize = 256;
@@ -177,14 +182,13 @@ pub fn predict(
     Ok((predicted, report))
 }
 
-/// The coarse meshes, finest first: the first has about 1/[`RATIO`] of the fine unknowns
-/// (`unknowns`; HMM has about [`HMM_UNKNOWNS_PER_CELL`] unknowns per cell, so that is
-/// N/[`RATIO`] cells for an HMM fine mesh and fewer for P1 on triangles, which has about one
-/// unknown per two cells), each further one agglomerates the one below into about 1/[`RATIO`]
-/// of its cells, while that leaves at least [`MIN_CELLS`] cells (and the first at least 64).
+/// The coarse meshes, finest first: the first has about `unknowns` /
+/// [`FIRST_LEVEL_UNKNOWNS_PER_CELL`] cells, each further one agglomerates the one below into
+/// about 1/[`RATIO`] of its cells, while that leaves at least [`MIN_CELLS`] cells (and the
+/// first at least 64).
 fn hierarchy(fine: &PolyMesh, unknowns: usize) -> Result<Vec<Agglomeration>, String> {
     let area: f64 = (0..fine.n_cells()).map(|k| fine.measure(k)).sum();
-    let first = 2 * unknowns / (RATIO * HMM_UNKNOWNS_PER_CELL);
+    let first = unknowns / FIRST_LEVEL_UNKNOWNS_PER_CELL;
     if first < 64 {
         return Err(format!(
             "the mesh ({} cells) is too coarse for a nested warm start",

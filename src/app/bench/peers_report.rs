@@ -251,7 +251,11 @@ fn profile(md: &mut Doc, rows: &[PeerRow]) {
             seconds(solve),
             seconds(rest),
             seconds(r.total_s),
-            format!("{} ({:.1}%)", seconds(r.data_s), 100.0 * r.data_s / r.total_s)
+            format!(
+                "{} ({:.1}%)",
+                seconds(r.data_s),
+                100.0 * r.data_s / r.total_s
+            )
         ]);
     }
     md.table(&t);
