@@ -141,4 +141,4 @@ def test_options():
     ex9 = gradvi.solve(None, ROOT / "problems" / "ex9.toml")
     assert ex9.errors is not None and ex9.mesh.n_cells == 1024
     # a built-in name and a mesh path
-    assert gradvi.solve(str(ROOT / "meshes" / "test3_1.msh"), "test3").niter == 8
+    assert gradvi.solve(str(ROOT / "meshes" / "test3_1.msh"), "test3", warm_start="cold").niter == 8

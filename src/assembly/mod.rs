@@ -111,7 +111,7 @@ pub struct SystemOptions {
 ///   per solve ([`crate::linalg::cholesky`]). Exact to round-off; its fill grows like
 ///   N log N and its time like N^1.5 on 2D meshes.
 /// - **Iterative**: conjugate gradients preconditioned by smoothed-aggregation algebraic
-///   multigrid ([`crate::linalg::amg`], [`crate::linalg::pcg`]), the hierarchy rebuilt for
+///   multigrid ([`crate::linalg::amg`], [`mod@crate::linalg::pcg`]), the hierarchy rebuilt for
 ///   each active set, started from the previous solution, to a relative residual of
 ///   [`ITERATIVE_RTOL`]; memory O(N). (Measured and rejected: intermediate solves to a loose
 ///   tolerance, as inexact Newton methods do, took more active-set steps, each with its

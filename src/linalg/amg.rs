@@ -1,5 +1,5 @@
 //! Algebraic multigrid by smoothed aggregation (Vaněk, Mandel & Brezina 1996), a
-//! preconditioner for the conjugate gradients of [`super::pcg`] on the symmetric positive
+//! preconditioner for the conjugate gradients of [`mod@super::pcg`] on the symmetric positive
 //! definite systems of the active-set solver.
 //!
 //! ## The hierarchy (setup, [`Amg::new`])
