@@ -81,7 +81,8 @@
 //!    and barrier unknowns, the mesh [`scheme::Entity`] of each unknown); one file per scheme:
 //!    [`scheme::Hmm`], [`scheme::P1`], [`scheme::Cr`]; registered once in [`scheme::SchemeKind`].
 //! 3. [`problem`]: data A, f, Γ1/Γ2/Γ3, barriers; the paper's Tests 1–3.
-//! 4. [`linalg`] (sparse Cholesky with symbolic reuse, orderings) and [`vi`] (the algebraic
+//! 4. [`linalg`] (sparse Cholesky with symbolic reuse, orderings; algebraic multigrid and
+//!    conjugate gradients) and [`vi`] (the algebraic
 //!    variational-inequality algorithms over the [`vi::QuadraticEnergy`] trait: the monotony
 //!    active-set method, projected Gauss–Seidel, exhaustive enumeration, the certificate).
 //! 5. [`assembly`]: [`assembly::SymbolicSystem`] (dof map, condensed pattern, symbolic
