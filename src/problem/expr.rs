@@ -33,6 +33,18 @@
 //! do `min` and `max` (unlike `f64::min`), so that a NaN anywhere is seen by validation instead of
 //! silently choosing a branch.
 //!
+//! ## Why not an expression crate
+//! The crates that were considered: evalexpr is AGPL from version 12 on (excluded); fasteval
+//! (MIT) and meval (MIT/Unlicense) have had no release since 2020 and 2017; exmex (MIT/Apache,
+//! maintained) builds operators as unary or binary functions over one operand type, so
+//! conditions are numbers and `if(c, a, b)` is not a native construct. What this module must
+//! guarantee, and what none of them gives as such: conditions typed apart from numbers, with
+//! the character position of every error; NaN propagated through comparisons, `if`, `min`
+//! and `max` (a NaN must reach validation, not silently choose a branch); and the same
+//! floating-point operations, in the same order, as the Rust closures of the built-in
+//! problems, which the regression tests pin bit for bit through `problems/*.toml`. A crate
+//! would need a layer re-checking all three; the parser here is about as large as that layer.
+//!
 //! An [`Expr`] keeps its tree (for inlining definitions and folding) and the tree compiled to
 //! nested closures, one per node, with constant and variable operands of arithmetic inlined:
 //! [`Expr::eval`] calls them, allocating nothing, from any thread (`Send + Sync`). This runs
