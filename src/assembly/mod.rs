@@ -29,7 +29,7 @@ pub mod condense;
 pub mod symbolic;
 pub mod values;
 
-use crate::linalg::{FactorThreads, Ordering};
+use crate::linalg::{FactorThreads, Ordering, SpdPattern};
 use crate::problem::Problem;
 use crate::scheme::{GradientDiscretisation, PointDof};
 use crate::vi::{QuadraticEnergy, SolveTimings};
@@ -120,7 +120,10 @@ pub struct SystemOptions {
 ///   more CG iterations.) The certificate of the final solution is computed the
 ///   same way as for the direct solver, from the full system.
 /// - **Auto** (the default): iterative from [`AUTO_ITERATIVE_MIN`] condensed unknowns on,
-///   direct below (the crossover measured by `make bench`).
+///   direct below (the crossover measured by `make bench`); if the conjugate gradients fail
+///   (smoothed aggregation converges slowly on strongly distorted meshes with rotated
+///   anisotropy), the direct solver takes over for that solve and the following ones need
+///   no new symbolic factorisation.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
@@ -179,6 +182,8 @@ pub struct DiscreteSystem<'a> {
     residual_scratch: Mutex<Vec<[f64; 2]>>,
     /// The last skeleton solution, the initial guess of the next iterative solve.
     last_solution: Mutex<Vec<f64>>,
+    /// With [`LinearSolver::Auto`], the direct solver built when the iterative one fails.
+    direct_fallback: std::sync::OnceLock<crate::Result<SpdPattern>>,
     /// Time to build (data, local matrices, and the symbolic system when built here), seconds.
     pub setup_seconds: f64,
     /// The symbolic factorisation, seconds (0 when the symbolic system was given). It runs
@@ -226,6 +231,7 @@ impl<'a> DiscreteSystem<'a> {
             scratch: Mutex::new((Vec::new(), Vec::new())),
             residual_scratch: Mutex::new(Vec::new()),
             last_solution: Mutex::new(Vec::new()),
+            direct_fallback: std::sync::OnceLock::new(),
             setup_seconds: 0.0,
             symbolic_seconds: 0.0,
         }
@@ -296,7 +302,30 @@ impl<'a> DiscreteSystem<'a> {
             factor.solve_in_place(&mut rhs);
             (t2, 0)
         } else {
-            self.solve_iteratively(&values, &mut rhs)?
+            let c = rhs.clone();
+            match self.solve_iteratively(&values, &mut rhs) {
+                Ok(r) => r,
+                // Auto chose the iterative solver by size: when the conjugate gradients fail
+                // (no convergence on a hard matrix), the direct solver takes over
+                Err(_) if self.sym.options.linear == LinearSolver::Auto => {
+                    rhs = c;
+                    let (col_ptr, row_idx) = self.condensed_pattern();
+                    let pattern = self.direct_fallback.get_or_init(|| {
+                        SpdPattern::with_ordering(
+                            self.n_skel,
+                            col_ptr.to_vec(),
+                            row_idx.to_vec(),
+                            self.sym.options.ordering,
+                        )
+                    });
+                    let pattern = pattern.as_ref().map_err(|e| crate::Error::Linear(e.to_string()))?;
+                    let factor = pattern.factor(&values)?;
+                    let t2 = Instant::now();
+                    factor.solve_in_place(&mut rhs);
+                    (t2, 0)
+                }
+                Err(e) => return Err(e),
+            }
         };
         let mut u = vec![0.0; self.n];
         u[..self.n_skel].copy_from_slice(&rhs);

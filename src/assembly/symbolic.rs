@@ -165,6 +165,8 @@ pub struct SymbolicSystem<'a> {
     pub maps: ScatterMaps,
     /// Every cell has exactly one interior unknown (HMM): parallel recovery.
     pub single_interior: bool,
+    /// The options it was built with (the linear solver asked for, the ordering).
+    pub options: SystemOptions,
     /// Time of the symbolic factorisation, seconds.
     pub symbolic_seconds: f64,
     /// Time to build everything here, seconds.
@@ -230,6 +232,7 @@ impl<'a> SymbolicSystem<'a> {
             pattern,
             maps,
             single_interior,
+            options,
             symbolic_seconds,
             setup_seconds: t0.elapsed().as_secs_f64(),
         })
