@@ -122,8 +122,7 @@ pub struct SystemOptions {
 /// - **Auto** (the default): iterative from [`AUTO_ITERATIVE_MIN`] condensed unknowns on,
 ///   direct below (the crossover measured by `make bench`); if the conjugate gradients fail
 ///   (smoothed aggregation converges slowly on strongly distorted meshes with rotated
-///   anisotropy), the direct solver takes over for that solve and the following ones need
-///   no new symbolic factorisation.
+///   anisotropy), the direct solver takes over for that solve and the following ones.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
@@ -298,6 +297,12 @@ impl<'a> DiscreteSystem<'a> {
         let t1 = Instant::now();
         let (t2, krylov) = if self.sym.pattern.has_factorisation() {
             let factor = self.sym.pattern.factor(&values)?;
+            let t2 = Instant::now();
+            factor.solve_in_place(&mut rhs);
+            (t2, 0)
+        } else if let Some(Ok(pattern)) = self.direct_fallback.get() {
+            // the conjugate gradients failed on an earlier active set: stay direct
+            let factor = pattern.factor(&values)?;
             let t2 = Instant::now();
             factor.solve_in_place(&mut rhs);
             (t2, 0)
