@@ -323,7 +323,9 @@ impl<'a> DiscreteSystem<'a> {
                             self.sym.options.ordering,
                         )
                     });
-                    let pattern = pattern.as_ref().map_err(|e| crate::Error::Linear(e.to_string()))?;
+                    let pattern = pattern
+                        .as_ref()
+                        .map_err(|e| crate::Error::Linear(e.to_string()))?;
                     let factor = pattern.factor(&values)?;
                     let t2 = Instant::now();
                     factor.solve_in_place(&mut rhs);
