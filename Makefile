@@ -7,7 +7,7 @@ FVCA5_MESHES ?=
 PYTHON := /usr/bin/python3
 REFDIR := replication/results/reference
 
-.PHONY: all build test test-external fuzz lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers clean
+.PHONY: all build test test-external fuzz lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-amg clean
 
 all: build
 
@@ -78,6 +78,11 @@ crosscheck-coarse: build reference-deps
 ##        -> replication/results/bench_peers.csv, bench.csv and replication/BENCHMARKS.md
 bench: bench-peers build reference-deps
 	$(CARGO) bench --bench scale
+
+## bench-amg: multigrid-preconditioned CG against sparse Cholesky on model problems (the
+##        measurements behind linalg::amg's defaults; prints a table)
+bench-amg:
+	$(CARGO) bench --bench amg
 
 ## bench-peers: PETSc ex9 (installed and built from Debian's packages by benches/petsc/) next to
 ##        gradvi at equal unknowns (grids up to GRADVI_BENCH_EX9_MAX_GRID, default 2049), and

@@ -351,7 +351,7 @@ pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
     // a nested case must have been predicted, except on meshes too coarse to have a coarser
     // level (the row then measures the cold start, with 0 coarse solves)
     if let Some(why) = sol.warm_start.as_ref().and_then(|w| w.skipped.as_ref())
-        && !why.contains("too coarse")
+        && !gradvi::solver::warm_start::too_coarse(sol.system.n_unknowns())
     {
         return Err(bad(format!(
             "{}: no nested prediction: {why}",
@@ -524,10 +524,18 @@ pub fn gmsh_mesh(cfg: &Config, n: usize) -> gradvi::Result<PathBuf> {
         geo_path.display(),
         gmsh_lc(n)
     );
-    let tmp = dir.join(format!("test3_{n}.msh.part"));
+    run_gmsh(&geo_path, &msh_path, &[])?;
+    Ok(msh_path)
+}
+
+/// Meshes `geo` with gmsh (2D, one thread, msh 4.1) into `msh`, through a `.part` file renamed
+/// at the end, with `extra` arguments (e.g. `-setnumber lc 0.01`).
+pub fn run_gmsh(geo: &Path, msh: &Path, extra: &[String]) -> gradvi::Result<()> {
+    let tmp = msh.with_extension("msh.part");
     let status = Command::new("gmsh")
         .args(["-2", "-nt", "1", "-format", "msh41", "-v", "2"])
-        .arg(&geo_path)
+        .args(extra)
+        .arg(geo)
         .arg("-o")
         .arg(&tmp)
         .stdout(Stdio::null())
@@ -539,10 +547,9 @@ pub fn gmsh_mesh(cfg: &Config, n: usize) -> gradvi::Result<PathBuf> {
             )
         })?;
     if !status.success() {
-        return Err(io_err(&geo_path, format!("gmsh failed: {status}")));
+        return Err(io_err(geo, format!("gmsh failed: {status}")));
     }
-    std::fs::rename(&tmp, &msh_path).map_err(|e| io_err(&msh_path, e))?;
-    Ok(msh_path)
+    std::fs::rename(&tmp, msh).map_err(|e| io_err(msh, e))
 }
 
 /// The cases of a run, smallest first, within the caps of `cfg`. gmsh meshes are generated

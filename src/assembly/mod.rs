@@ -160,6 +160,19 @@ impl std::fmt::Display for LinearSolver {
     }
 }
 
+/// Cholesky factorisation of the condensed matrix (`values` on `pattern`) and solve of
+/// S x = c in place (`rhs`); returns when the factorisation ended and 0 Krylov iterations.
+fn solve_directly(
+    pattern: &SpdPattern,
+    values: &[f64],
+    rhs: &mut [f64],
+) -> crate::Result<(Instant, usize)> {
+    let factor = pattern.factor(values)?;
+    let t2 = Instant::now();
+    factor.solve_in_place(rhs);
+    Ok((t2, 0))
+}
+
 /// [`LinearSolver::Auto`] solves iteratively from this many condensed unknowns on.
 pub const AUTO_ITERATIVE_MIN: usize = 250_000;
 
@@ -295,44 +308,22 @@ impl<'a> DiscreteSystem<'a> {
         let fx = |d: usize| -> Option<f64> { self.values.dirichlet[d].or(fixed[d]) };
         let (values, mut rhs) = self.assemble_condensed(fixed);
         let t1 = Instant::now();
-        let (t2, krylov) = if self.sym.pattern.has_factorisation() {
-            let factor = self.sym.pattern.factor(&values)?;
-            let t2 = Instant::now();
-            factor.solve_in_place(&mut rhs);
-            (t2, 0)
-        } else if let Some(Ok(pattern)) = self.direct_fallback.get() {
-            // the conjugate gradients failed on an earlier active set: stay direct
-            let factor = pattern.factor(&values)?;
-            let t2 = Instant::now();
-            factor.solve_in_place(&mut rhs);
-            (t2, 0)
-        } else {
-            let c = rhs.clone();
-            match self.solve_iteratively(&values, &mut rhs) {
-                Ok(r) => r,
-                // Auto chose the iterative solver by size: when the conjugate gradients fail
-                // (no convergence on a hard matrix), the direct solver takes over
-                Err(_) if self.sym.options.linear == LinearSolver::Auto => {
-                    rhs = c;
-                    let (col_ptr, row_idx) = self.condensed_pattern();
-                    let pattern = self.direct_fallback.get_or_init(|| {
-                        SpdPattern::with_ordering(
-                            self.n_skel,
-                            col_ptr.to_vec(),
-                            row_idx.to_vec(),
-                            self.sym.options.ordering,
-                        )
-                    });
-                    let pattern = pattern
-                        .as_ref()
-                        .map_err(|e| crate::Error::Linear(e.to_string()))?;
-                    let factor = pattern.factor(&values)?;
-                    let t2 = Instant::now();
-                    factor.solve_in_place(&mut rhs);
-                    (t2, 0)
+        let (t2, krylov) = match self.direct_pattern() {
+            Some(pattern) => solve_directly(pattern, &values, &mut rhs)?,
+            None if self.sym.options.linear == LinearSolver::Auto => {
+                let c = rhs.clone();
+                match self.solve_iteratively(&values, &mut rhs) {
+                    Ok(r) => r,
+                    // Auto chose the iterative solver by size: when the conjugate gradients
+                    // fail (no convergence on a hard matrix), the direct solver takes over,
+                    // for this solve and the following ones
+                    Err(_) => {
+                        rhs = c;
+                        solve_directly(self.fallback_pattern()?, &values, &mut rhs)?
+                    }
                 }
-                Err(e) => return Err(e),
             }
+            None => self.solve_iteratively(&values, &mut rhs)?,
         };
         let mut u = vec![0.0; self.n];
         u[..self.n_skel].copy_from_slice(&rhs);
@@ -352,6 +343,31 @@ impl<'a> DiscreteSystem<'a> {
                 krylov,
             },
         ))
+    }
+
+    /// The symbolic factorisation to solve with: the symbolic system's, or the one built when
+    /// the iterative solver failed ([`LinearSolver::Auto`]); `None`: solve iteratively.
+    fn direct_pattern(&self) -> Option<&SpdPattern> {
+        if self.sym.pattern.has_factorisation() {
+            return Some(&self.sym.pattern);
+        }
+        self.direct_fallback.get().and_then(|p| p.as_ref().ok())
+    }
+
+    /// The symbolic factorisation of the condensed pattern, built on first use.
+    fn fallback_pattern(&self) -> crate::Result<&SpdPattern> {
+        let (col_ptr, row_idx) = self.condensed_pattern();
+        self.direct_fallback
+            .get_or_init(|| {
+                SpdPattern::with_ordering(
+                    self.n_skel,
+                    col_ptr.to_vec(),
+                    row_idx.to_vec(),
+                    self.sym.options.ordering,
+                )
+            })
+            .as_ref()
+            .map_err(|e| crate::Error::Linear(e.to_string()))
     }
 
     /// Solves S x = c (S given by its lower-triangle `values`, c in `rhs`, overwritten by x)

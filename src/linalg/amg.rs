@@ -25,7 +25,9 @@
 //! 4. **Prolongator smoothing**: one damped Jacobi step on the filtered matrix,
 //!    P = (I − ω D_F⁻¹ A_F) T, ω = 4 / (3 ρ(D_F⁻¹ A_F)), with ρ bounded by Gershgorin,
 //!    ρ ≤ max_i (d^F_i + Σ_j |s_ij|) / d^F_i (= 2 for a zero-row-sum M-matrix, where it is
-//!    sharp). P's columns are then smooth, low-energy basis functions overlapping their
+//!    sharp); on levels with positive off-diagonal entries, where that bound overestimates,
+//!    by a Lanczos estimate of λ_max(D⁻¹A) × 1.1 when smaller ([`AmgOptions::spectral_steps`]).
+//!    P's columns are then smooth, low-energy basis functions overlapping their
 //!    neighbours.
 //! 5. **Galerkin product** A_{ℓ+1} = Pᵀ A P, row by row: row J is
 //!    Σ_{i : p_iJ ≠ 0} p_iJ Σ_j a_ij P_j (rows i of Pᵀ, rows j of A, rows of P), accumulated
@@ -44,22 +46,23 @@
 //! positive definite operator (a requirement of conjugate gradients).
 //!
 //! Smoothers ([`Smoother`]):
-//! - **Chebyshev** of degree k on D⁻¹A (the default, k = 2): x ← x + q(D⁻¹A) D⁻¹ r where
+//! - **Chebyshev** of degree k on D⁻¹A: x ← x + q(D⁻¹A) D⁻¹ r where
 //!   1 − λq(λ) is the Chebyshev polynomial of degree k on [λ_max/ratio, λ_max], scaled to 1 at 0;
 //!   it damps that interval (the oscillatory modes; the coarse grid takes the rest) uniformly.
 //!   λ_max is the Gershgorin bound max_i Σ_j |a_ij|/a_ii (an upper bound, as the polynomial
-//!   needs, and sharp for the M-matrices of these schemes), or on request a few Lanczos steps
+//!   needs, and sharp for the M-matrices of these schemes), or with `spectral_steps` > 0 (the
+//!   default) a few Lanczos steps
 //!   (× 1.1, capped by Gershgorin). Pre and post are the same polynomial, which is symmetric
 //!   in the A-inner product; every step is a product with A, run on all cores.
 //! - **l1-Jacobi**: x ← x + D_1⁻¹ (b − A x) with (D_1)_ii = Σ_j |a_ij| (convergent for any SPD
 //!   A; weaker: a damping of about ½ on the 5-point stencil).
-//! - **l1-Gauss–Seidel** (hybrid; Baker, Falgout, Kolev & Yang 2011): the rows are cut into
+//! - **l1-Gauss–Seidel** (the default; hybrid; Baker, Falgout, Kolev & Yang 2011): the rows are cut into
 //!   blocks of consecutive rows (their size depends on n only, so the result does not depend
 //!   on the number of threads); Gauss–Seidel within a block, Jacobi across blocks, with the
 //!   diagonal increased by Σ_{j outside the block} |a_ij| (which makes it convergent for any
 //!   SPD A). Forward sweep before, backward sweep after the coarse correction (the adjoint).
 //!
-//! The choice of smoother and of θ was made by measurement (`examples/amg_poisson.rs`, release
+//! The choice of smoother and of θ was made by measurement (`benches/amg.rs`, `make bench-amg`, release
 //! build, 2 cores); see [`AmgOptions::default`].
 
 use super::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
@@ -115,7 +118,7 @@ pub struct AmgOptions {
 
 impl Default for AmgOptions {
     /// The defaults, chosen by measurement (release build, 2 cores, 1024² grids, PCG to 1e-10;
-    /// `examples/amg_poisson.rs`): θ = 0.08 (θ = 0 gave 73 and 51 iterations on the jump and
+    /// `benches/amg.rs`, `make bench-amg`): θ = 0.08 (θ = 0 gave 73 and 51 iterations on the jump and
     /// anisotropic problems instead of 19 and 15; θ = 0.25 gave 175 on Poisson instead of 17);
     /// l1 Gauss–Seidel, whose V(1,1) cycle cost 26 ms for 16 Poisson iterations, against
     /// 22 ms / 21 for Chebyshev of degree 1, 37 ms / 17 for degree 2 and 22 ms / 25 for l1
@@ -554,10 +557,12 @@ where
     CsrMatrix::from_parts(n_rows, n_cols, row_ptr, col_idx, values)
 }
 
-/// S: the strong off-diagonal entries of A, a_ij ≠ 0 with a_ij² ≥ θ² a_ii a_jj.
+/// S: the strong off-diagonal entries of A, a_ij ≠ 0 with a_ij² ≥ θ² a_ii a_jj, whatever
+/// their sign. (Counting only negative couplings as strong was measured to take fewer
+/// iterations on HMM matrices with positive couplings — distorted meshes, rotated anisotropy
+/// — but is not adopted: the benchmark of `make bench-peers` was run with this rule.)
 fn strength(a: &CsrMatrix, diag: &[f64], theta: f64) -> CsrMatrix {
     let t2 = theta * theta;
-    let signed = std::env::var("AMG_SIGNED").is_ok();
     build_rows(
         a.n_rows(),
         a.n_cols(),
@@ -567,8 +572,7 @@ fn strength(a: &CsrMatrix, diag: &[f64], theta: f64) -> CsrMatrix {
             let di = diag[i];
             for (&j, &v) in ac.iter().zip(av) {
                 let ju = j as usize;
-                let signed_ok = !signed || v < 0.0;
-                if ju != i && v != 0.0 && signed_ok && v * v >= t2 * di * diag[ju] {
+                if ju != i && v != 0.0 && v * v >= t2 * di * diag[ju] {
                     cols.push(j);
                     vals.push(v);
                 }

@@ -353,6 +353,14 @@ fn update_x_r(alpha: f64, p: &[f64], q: &[f64], x: &mut [f64], r: &mut [f64]) ->
 mod tests {
     use super::*;
 
+    /// max_i |a_i − b_i|.
+    fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+        a.iter()
+            .zip(b)
+            .map(|(u, v)| (u - v).abs())
+            .fold(0.0, f64::max)
+    }
+
     /// A small SPD matrix (lower CSC → CSR): tridiag(−1, 4, −1) plus couplings i ↔ i + 5 of
     /// −0.5 and a varying diagonal, n = 30; and its dense form.
     fn small() -> (CsrMatrix, nalgebra::DMatrix<f64>) {
@@ -402,21 +410,13 @@ mod tests {
         let bn = dot(&b, &b).sqrt();
         assert!(rep.residual_norm <= 1e-12 * bn * 1.5, "{rep:?}");
         assert!(rep.iterations > 1 && rep.iterations <= n);
-        let err = x
-            .iter()
-            .zip(exact.iter())
-            .map(|(u, v)| (u - v).abs())
-            .fold(0.0, f64::max);
+        let err = max_diff(&x, exact.as_slice());
         assert!(err < 1e-11, "{err}");
         // Jacobi, from a nonzero initial guess
         let mut x = vec![1.0; n];
         let rep = pcg(&a, &Jacobi::new(&a).unwrap(), &b, &mut x, &opts).unwrap();
         assert!((rep.initial_residual_norm - dot(&b, &b).sqrt()).abs() > 0.1);
-        let err = x
-            .iter()
-            .zip(exact.iter())
-            .map(|(u, v)| (u - v).abs())
-            .fold(0.0, f64::max);
+        let err = max_diff(&x, exact.as_slice());
         assert!(err < 1e-11, "{err}");
         // an exact initial guess: no iteration
         let mut x: Vec<f64> = exact.iter().copied().collect();

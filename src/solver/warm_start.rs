@@ -182,6 +182,12 @@ pub fn predict(
     Ok((predicted, report))
 }
 
+/// Whether a fine problem with this many unknowns is too small to have a coarse level (the
+/// first would have fewer than 64 cells): the nested start is then skipped.
+pub fn too_coarse(unknowns: usize) -> bool {
+    unknowns / FIRST_LEVEL_UNKNOWNS_PER_CELL < 64
+}
+
 /// The coarse meshes, finest first: the first has about `unknowns` /
 /// [`FIRST_LEVEL_UNKNOWNS_PER_CELL`] cells, each further one agglomerates the one below into
 /// about 1/[`RATIO`] of its cells, while that leaves at least [`MIN_CELLS`] cells (and the
@@ -189,7 +195,7 @@ pub fn predict(
 fn hierarchy(fine: &PolyMesh, unknowns: usize) -> Result<Vec<Agglomeration>, String> {
     let area: f64 = (0..fine.n_cells()).map(|k| fine.measure(k)).sum();
     let first = unknowns / FIRST_LEVEL_UNKNOWNS_PER_CELL;
-    if first < 64 {
+    if too_coarse(unknowns) {
         return Err(format!(
             "the mesh ({} cells) is too coarse for a nested warm start",
             fine.n_cells()

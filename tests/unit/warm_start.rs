@@ -107,10 +107,8 @@ fn nested_signorini_gives_the_cold_solution() {
     assert!(r.skipped.is_none() && r.predicted_active > 0, "{r:?}");
 }
 
-#[test]
-fn nested_works_on_any_domain() {
-    // an L-shaped domain: the 64 × 64 grid without its upper-right quarter
-    let full = cartesian(64, 64).unwrap();
+/// The L-shaped domain: `full`, a mesh of the unit square, without its upper-right quarter.
+fn l_shape(full: &PolyMesh) -> PolyMesh {
     let cells: Vec<Vec<usize>> = (0..full.n_cells())
         .filter(|&k| {
             let c = full.centroid(k);
@@ -119,23 +117,20 @@ fn nested_works_on_any_domain() {
         .map(|k| full.cell_vertices(k).to_vec())
         .collect();
     let (vertices, cells, _) = drop_unused_vertices(full.vertices(), &cells);
-    let mesh = PolyMesh::from_cells(vertices, cells).unwrap();
+    PolyMesh::from_cells(vertices, cells).unwrap()
+}
+
+#[test]
+fn nested_works_on_any_domain() {
+    // an L-shaped domain: the 64 × 64 grid without its upper-right quarter
+    let mesh = l_shape(&cartesian(64, 64).unwrap());
     let hmm = Hmm::new(&mesh);
     let (cold, nested, r) = compare(&hmm, &paper_test3(-5.0));
     assert!(r.skipped.is_none(), "{r:?}");
     assert_levels(&r, hmm.n_unknowns(), 1);
     assert!(nested < cold, "nested {nested} solves, cold {cold}");
     // P1 on the same L-shape cut into triangles (finer: P1 has one unknown per two cells)
-    let full = cartesian_triangles(96, 96, [0.0, 1.0], [0.0, 1.0]).unwrap();
-    let cells: Vec<Vec<usize>> = (0..full.n_cells())
-        .filter(|&k| {
-            let c = full.centroid(k);
-            !(c[0] > 0.5 && c[1] > 0.5)
-        })
-        .map(|k| full.cell_vertices(k).to_vec())
-        .collect();
-    let (vertices, cells, _) = drop_unused_vertices(full.vertices(), &cells);
-    let tri = PolyMesh::from_cells(vertices, cells).unwrap();
+    let tri = l_shape(&cartesian_triangles(96, 96, [0.0, 1.0], [0.0, 1.0]).unwrap());
     let p1 = P1::new(&tri).unwrap();
     let (cold, nested, r) = compare(&p1, &paper_test3(-5.0));
     assert!(r.skipped.is_none() && r.predicted_active > 0, "{r:?}");

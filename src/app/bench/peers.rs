@@ -388,30 +388,11 @@ fn domain_mesh(cfg: &Config, domain: &str, lc: f64) -> gradvi::Result<PathBuf> {
         return Ok(msh);
     }
     eprintln!("[bench] gmsh: meshing {} (lc {lc})", geo.display());
-    let tmp = dir.join(format!("{domain}_{lc}.msh.part"));
-    let status = Command::new("gmsh")
-        .args([
-            "-2",
-            "-nt",
-            "1",
-            "-format",
-            "msh41",
-            "-v",
-            "2",
-            "-setnumber",
-            "lc",
-        ])
-        .arg(lc.to_string())
-        .arg(&geo)
-        .arg("-o")
-        .arg(&tmp)
-        .stdout(Stdio::null())
-        .status()
-        .map_err(|e| io_err(Path::new("gmsh"), e))?;
-    if !status.success() {
-        return Err(io_err(&geo, format!("gmsh failed: {status}")));
-    }
-    std::fs::rename(&tmp, &msh).map_err(|e| io_err(&msh, e))?;
+    super::run_gmsh(
+        &geo,
+        &msh,
+        &["-setnumber".into(), "lc".into(), lc.to_string()],
+    )?;
     Ok(msh)
 }
 

@@ -5,7 +5,7 @@
 use super::Config;
 use super::peers::PeerRow;
 use crate::app::markdown::{Doc, NONE, Table, cells, fixed, met, seconds};
-use crate::app::plot::{LegendPosition, LineOptions, LineSeries, Marker, data_range, plot_panels};
+use crate::app::plot::{LineOptions, LineSeries, Marker, data_range, plot_panels};
 
 /// The figure of this part.
 pub const FIGURE: &str = "replication/figures/bench_peers.png";
@@ -355,15 +355,7 @@ fn figure(cfg: &Config, rows: &[PeerRow]) -> gradvi::Result<()> {
         if !series.is_empty() {
             charts.push((
                 series,
-                LineOptions {
-                    title: title.into(),
-                    x_label: "unknowns".into(),
-                    y_label: "total time [s]".into(),
-                    log_x: true,
-                    log_y: true,
-                    legend: Some(LegendPosition::UpperLeft),
-                    ..Default::default()
-                },
+                LineOptions::log_log(title, "unknowns", "total time [s]"),
             ));
         }
     }
@@ -392,15 +384,11 @@ fn figure(cfg: &Config, rows: &[PeerRow]) -> gradvi::Result<()> {
         if !series.is_empty() {
             charts.push((
                 series,
-                LineOptions {
-                    title: format!("any domain: {} (Test 3)", scheme.to_uppercase()),
-                    x_label: "cells".into(),
-                    y_label: "total time [s]".into(),
-                    log_x: true,
-                    log_y: true,
-                    legend: Some(LegendPosition::UpperLeft),
-                    ..Default::default()
-                },
+                LineOptions::log_log(
+                    format!("any domain: {} (Test 3)", scheme.to_uppercase()),
+                    "cells",
+                    "total time [s]",
+                ),
             ));
         }
     }

@@ -4,9 +4,7 @@
 
 use super::{BenchRow, C, CSV, Config, FIGURE, FIT_RANGE, P1_TARGET_MIN_CELLS, REPORT, bad};
 use crate::app::markdown::{Doc, NONE, Table, cells, fixed, list, met, seconds};
-use crate::app::plot::{
-    LegendPosition, LineOptions, LineSeries, Marker, data_range, palette, plot_panels,
-};
+use crate::app::plot::{LineOptions, LineSeries, Marker, data_range, palette, plot_panels};
 use crate::app::replication::records::read_csv;
 
 /// The rows of one series (code, scheme, variant, family) in order of cells, and its name.
@@ -157,15 +155,11 @@ fn figure(cfg: &Config, rows: &[BenchRow]) -> gradvi::Result<()> {
                 ..LineSeries::new("N^1.3 (target)", vec![[a, t], [x1, t * (x1 / a).powf(1.3)]])
             });
         }
-        let opts = LineOptions {
-            title: format!("{} on {family} meshes", scheme.to_uppercase()),
-            x_label: "cells".into(),
-            y_label: "total time [s]".into(),
-            log_x: true,
-            log_y: true,
-            legend: Some(LegendPosition::UpperLeft),
-            ..Default::default()
-        };
+        let opts = LineOptions::log_log(
+            format!("{} on {family} meshes", scheme.to_uppercase()),
+            "cells",
+            "total time [s]",
+        );
         charts.push((series, opts));
     }
     if charts.is_empty() {

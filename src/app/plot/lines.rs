@@ -113,6 +113,21 @@ pub struct LineOptions {
     pub y_range: Option<(f64, f64)>,
 }
 
+impl LineOptions {
+    /// Log–log axes with a legend in the upper left (time against size).
+    pub fn log_log(title: impl Into<String>, x_label: &str, y_label: &str) -> Self {
+        LineOptions {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            log_x: true,
+            log_y: true,
+            legend: Some(LegendPosition::UpperLeft),
+            ..Default::default()
+        }
+    }
+}
+
 impl Default for LineOptions {
     fn default() -> Self {
         Self {

@@ -28,19 +28,7 @@ pub fn cartesian(nx: usize, ny: usize) -> Result<PolyMesh> {
 /// `[0,1] × [0,0.1]`). Requires nx, ny ≥ 1, finite bounds with `x[0] < x[1]`, `y[0] < y[1]`,
 /// and at most [`MAX_CELLS`](super::MAX_CELLS) cells; otherwise [`Error::InvalidData`].
 pub fn cartesian_rect(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<PolyMesh> {
-    if nx == 0 || ny == 0 {
-        return Err(Error::InvalidData(format!(
-            "a Cartesian mesh needs at least one cell per direction (got {nx} × {ny})"
-        )));
-    }
-    for (name, r) in [("x", x), ("y", y)] {
-        if !(r[0].is_finite() && r[1].is_finite() && r[0] < r[1]) {
-            return Err(Error::InvalidData(format!(
-                "invalid {name} range [{}, {}] for a Cartesian mesh (need finite bounds, lower < upper)",
-                r[0], r[1]
-            )));
-        }
-    }
+    check_grid(nx, ny, x, y)?;
     let what = format!("a {nx} × {ny} Cartesian mesh");
     check_cell_count(&what, nx.checked_mul(ny))?;
     check_memory(&what, counts(nx, ny), memory_budget())?;
@@ -56,31 +44,14 @@ pub fn cartesian_rect(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<
 /// couplings cancel), the discretisation of PETSc's obstacle example `snes/tutorials/ex9.c`.
 /// Same requirements as [`cartesian_rect`], with 2·nx·ny ≤ [`MAX_CELLS`](super::MAX_CELLS).
 pub fn cartesian_triangles(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<PolyMesh> {
-    if nx == 0 || ny == 0 {
-        return Err(Error::InvalidData(format!(
-            "a Cartesian mesh needs at least one cell per direction (got {nx} × {ny})"
-        )));
-    }
-    for (name, r) in [("x", x), ("y", y)] {
-        if !(r[0].is_finite() && r[1].is_finite() && r[0] < r[1]) {
-            return Err(Error::InvalidData(format!(
-                "invalid {name} range [{}, {}] for a Cartesian mesh (need finite bounds, lower < upper)",
-                r[0], r[1]
-            )));
-        }
-    }
+    check_grid(nx, ny, x, y)?;
     let what = format!("a {nx} × {ny} triangulated Cartesian mesh");
     check_cell_count(&what, nx.checked_mul(ny).and_then(|c| c.checked_mul(2)))?;
     let c = counts(nx, ny).and_then(|[c, _, v, e]| {
         Some([c.checked_mul(2)?, c.checked_mul(6)?, v, e.checked_add(c)?])
     });
     check_memory(&what, c, memory_budget())?;
-    let xs: Vec<f64> = (0..=nx).map(|i| grid_coord(x[0], x[1], i, nx)).collect();
-    let mut vertices = Vec::with_capacity((nx + 1) * (ny + 1));
-    for j in 0..=ny {
-        let yj = grid_coord(y[0], y[1], j, ny);
-        vertices.extend(xs.iter().map(|&xi| [xi, yj]));
-    }
+    let vertices = grid_vertices(nx, ny, x, y);
     let v = |i: usize, j: usize| j * (nx + 1) + i;
     let mut cell_verts = Vec::with_capacity(6 * nx * ny);
     for j in 0..ny {
@@ -102,6 +73,36 @@ pub(crate) fn counts(nx: usize, ny: usize) -> Counts {
     Some([cells, cells.checked_mul(4)?, nx1.checked_mul(ny1)?, edges])
 }
 
+/// At least one cell per direction, finite bounds with lower < upper; else
+/// [`Error::InvalidData`].
+fn check_grid(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<()> {
+    if nx == 0 || ny == 0 {
+        return Err(Error::InvalidData(format!(
+            "a Cartesian mesh needs at least one cell per direction (got {nx} × {ny})"
+        )));
+    }
+    for (name, r) in [("x", x), ("y", y)] {
+        if !(r[0].is_finite() && r[1].is_finite() && r[0] < r[1]) {
+            return Err(Error::InvalidData(format!(
+                "invalid {name} range [{}, {}] for a Cartesian mesh (need finite bounds, lower < upper)",
+                r[0], r[1]
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The (nx+1)(ny+1) grid vertices, numbered as in the module docs.
+fn grid_vertices(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Vec<Point> {
+    let xs: Vec<f64> = (0..=nx).map(|i| grid_coord(x[0], x[1], i, nx)).collect();
+    let mut vertices = Vec::with_capacity((nx + 1) * (ny + 1));
+    for j in 0..=ny {
+        let yj = grid_coord(y[0], y[1], j, ny);
+        vertices.extend(xs.iter().map(|&xi| [xi, yj]));
+    }
+    vertices
+}
+
 /// Coordinate `i` of `n` equal steps on `[a, b]`, exactly `b` for `i = n`.
 fn grid_coord(a: f64, b: f64, i: usize, n: usize) -> f64 {
     if i == n {
@@ -113,12 +114,7 @@ fn grid_coord(a: f64, b: f64, i: usize, n: usize) -> f64 {
 
 /// Vertices and cells of the nx × ny grid (arguments already validated).
 fn cartesian_data(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> (Vec<Point>, Vec<Vec<usize>>) {
-    let xs: Vec<f64> = (0..=nx).map(|i| grid_coord(x[0], x[1], i, nx)).collect();
-    let mut vertices = Vec::with_capacity((nx + 1) * (ny + 1));
-    for j in 0..=ny {
-        let yj = grid_coord(y[0], y[1], j, ny);
-        vertices.extend(xs.iter().map(|&xi| [xi, yj]));
-    }
+    let vertices = grid_vertices(nx, ny, x, y);
     let v = |i: usize, j: usize| j * (nx + 1) + i;
     let mut cells = Vec::with_capacity(nx * ny);
     for j in 0..ny {

@@ -1,5 +1,6 @@
 //! Smoothed-aggregation multigrid + conjugate gradients against sparse Cholesky on model
-//! problems: `cargo run --release --example amg_poisson [-- quick]`.
+//! problems: `make bench-amg` (`cargo bench --bench amg`; arguments after `--`: `quick`,
+//! `kernels`, `sweep`, `schemes`, `schemes-sweep`).
 //!
 //! For each matrix (5-point Poisson on n × n grids, the 7-point P1 stencil of a triangulated
 //! grid, an anisotropic and a jump-coefficient diffusion, one with fixed unknowns as the
@@ -459,41 +460,6 @@ fn main() {
             for (mname, l) in &mats {
                 run(&format!("{vname}/{mname}"), l, o, false, REPS);
             }
-        }
-        return;
-    }
-    if has("export") {
-        let mk = |mesh: gradvi::Result<gradvi::mesh::PolyMesh>, p: Problem| -> Lower {
-            let mesh = mesh.expect("mesh");
-            scheme_matrix(&Hmm::new(&mesh), &p).expect("matrix")
-        };
-        for (name, l) in [
-            ("cartrot", mk(cartesian(256, 256), rotated_anisotropy())),
-            ("kershaw", mk(kershaw(15), paper_test2())),
-            ("carttest2", mk(cartesian(256, 256), paper_test2())),
-        ] {
-            let mut out = Vec::new();
-            for v in [l.n as f64]
-                .iter()
-                .chain(
-                    l.col_ptr
-                        .iter()
-                        .map(|&c| c as f64)
-                        .collect::<Vec<_>>()
-                        .iter(),
-                )
-                .chain(
-                    l.row_idx
-                        .iter()
-                        .map(|&c| c as f64)
-                        .collect::<Vec<_>>()
-                        .iter(),
-                )
-                .chain(l.values.iter())
-            {
-                out.extend_from_slice(&v.to_le_bytes());
-            }
-            std::fs::write(format!("/tmp/{name}.bin"), out).expect("write");
         }
         return;
     }
