@@ -73,6 +73,12 @@ fn split_by_ranges<'b, T>(
     slices
 }
 
+/// The position of unknown `g` among the unknowns `d` of a cell where it appears.
+#[inline]
+fn local_index(d: &[usize], g: usize) -> usize {
+    d.iter().position(|&x| x == g).unwrap_or(0)
+}
+
 /// The value of each fixed unknown (Dirichlet, or fixed by the caller), NaN for a free one
 /// (the data and the barriers are finite).
 struct FixedValues(Vec<f64>);
@@ -190,8 +196,6 @@ pub struct DiscreteSystem<'a> {
     n: usize,
     /// Buffers of [`DiscreteSystem::assemble_condensed`], kept between calls.
     scratch: Mutex<(Vec<f64>, Vec<f64>)>,
-    /// Buffer of [`DiscreteSystem::residual`], kept between calls.
-    residual_scratch: Mutex<Vec<[f64; 2]>>,
     /// The last skeleton solution, the initial guess of the next iterative solve.
     last_solution: Mutex<Vec<f64>>,
     /// With [`LinearSolver::Auto`], the direct solver built when the iterative one fails.
@@ -241,7 +245,6 @@ impl<'a> DiscreteSystem<'a> {
             sym,
             values,
             scratch: Mutex::new((Vec::new(), Vec::new())),
-            residual_scratch: Mutex::new(Vec::new()),
             last_solution: Mutex::new(Vec::new()),
             direct_fallback: std::sync::OnceLock::new(),
             setup_seconds: 0.0,
@@ -454,10 +457,22 @@ impl<'a> DiscreteSystem<'a> {
             .lock()
             .map(|mut b| std::mem::take(&mut *b))
             .unwrap_or_default();
-        sbuf.resize(self.sym.maps.pos.items.len(), 0.0);
+        let no_interior = self.sym.no_interior;
+        // without interior unknowns S_K = M_K, laid out like the local matrices: no copy
+        let blocks = if no_interior {
+            0
+        } else {
+            self.sym.maps.block_ptr.last().copied().unwrap_or(0)
+        };
+        sbuf.resize(blocks, 0.0);
         gbuf.resize(self.sym.dof_map.dofs.len(), 0.0);
         self.condense_cells(&fixed, &mut sbuf, &mut gbuf);
-        let values = self.gather_matrix(&fixed, &sbuf);
+        let blocks: &[f64] = if no_interior {
+            &self.values.mats
+        } else {
+            &sbuf
+        };
+        let values = self.gather_matrix(&fixed, blocks);
         let rhs = self.gather_rhs(&fixed, &gbuf);
         if let Ok(mut b) = self.scratch.lock() {
             *b = (sbuf, gbuf);
@@ -465,22 +480,51 @@ impl<'a> DiscreteSystem<'a> {
         (values, rhs)
     }
 
-    /// Condenses every cell, in parallel: cell k's p×p block S_K at `pos.ptr[k]` in `sbuf`,
+    /// Condenses every cell, in parallel: cell k's p×p block S_K at `block_ptr[k]` in `sbuf`
+    /// (not written when no cell has interior unknowns: `sbuf` is then empty and S_K = M_K),
     /// and its right-hand side g_K − S_K P_K u_F (its condensed load minus the columns of its
     /// fixed skeleton unknowns) at the positions of its skeleton unknowns in `gbuf` (laid out
     /// like `dofs`).
     fn condense_cells(&self, fixed: &FixedValues, sbuf: &mut [f64], gbuf: &mut [f64]) {
-        let (pos_ptr, dof_ptr) = (&self.sym.maps.pos.ptr, &self.sym.dof_map.dof_ptr);
+        let dof_ptr = &self.sym.dof_map.dof_ptr;
         let ranges = cell_chunks(self.sym.scheme().mesh().n_cells());
-        let s_slices = split_by_ranges(sbuf, &ranges, pos_ptr);
         let g_slices = split_by_ranges(gbuf, &ranges, dof_ptr);
+        if self.sym.no_interior {
+            let tasks: Vec<_> = ranges.into_iter().zip(g_slices).collect();
+            tasks.into_par_iter().for_each(|((c0, c1), g)| {
+                for k in c0..c1 {
+                    let go = dof_ptr[k] - dof_ptr[c0];
+                    self.cell_rhs(k, fixed, &mut g[go..]);
+                }
+            });
+            return;
+        }
+        let block_ptr = &self.sym.maps.block_ptr;
+        let s_slices = split_by_ranges(sbuf, &ranges, block_ptr);
         let tasks: Vec<_> = ranges.into_iter().zip(s_slices).zip(g_slices).collect();
         tasks.into_par_iter().for_each(|(((c0, c1), s), g)| {
             for k in c0..c1 {
-                let (so, go) = (pos_ptr[k] - pos_ptr[c0], dof_ptr[k] - dof_ptr[c0]);
+                let (so, go) = (block_ptr[k] - block_ptr[c0], dof_ptr[k] - dof_ptr[c0]);
                 self.condense_cell(k, fixed, &mut s[so..], &mut g[go..]);
             }
         });
+    }
+
+    /// The right-hand side b_K − M_K P_K u_F of a cell without interior unknowns into the
+    /// first entries of `g` (what [`Self::condense_cell`] computes when S_K = M_K).
+    fn cell_rhs(&self, k: usize, fixed: &FixedValues, g: &mut [f64]) {
+        let cell = self.local(k);
+        let (d, m) = (cell.dofs, cell.matrix);
+        let p = d.len();
+        let gk = &mut g[..p];
+        gk.copy_from_slice(cell.load);
+        for bcol in 0..p {
+            if let Some(vj) = fixed.get(d[bcol]) {
+                for arow in 0..p {
+                    gk[arow] -= m[arow + bcol * p] * vj;
+                }
+            }
+        }
     }
 
     /// Condenses cell k: its block S_K into the first p² entries of `s`, and its right-hand
@@ -506,9 +550,10 @@ impl<'a> DiscreteSystem<'a> {
 
     /// The values of the condensed matrix, gathered entry by entry (column by column in
     /// parallel): entry q is the sum of its sources `src.list(q)` in
-    /// `sbuf`, listed in cell order (the order of a sequential scatter, whatever the number of
+    /// `blocks` (the condensed blocks, or the local matrices when they coincide), listed in cell
+    /// order (the order of a sequential scatter, whatever the number of
     /// threads); zero in the rows and columns of fixed unknowns, whose diagonal is 1.
-    fn gather_matrix(&self, fixed: &FixedValues, sbuf: &[f64]) -> Vec<f64> {
+    fn gather_matrix(&self, fixed: &FixedValues, blocks: &[f64]) -> Vec<f64> {
         let (col_ptr, row_idx) = (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx());
         let src = &self.sym.maps.src;
         let is_fixed: Vec<bool> = (0..self.n_skel)
@@ -531,7 +576,7 @@ impl<'a> DiscreteSystem<'a> {
                     } else {
                         let mut v = 0.0;
                         for &i in src.list(q) {
-                            v += sbuf[i as usize];
+                            v += blocks[i as usize];
                         }
                         v
                     };
@@ -555,8 +600,10 @@ impl<'a> DiscreteSystem<'a> {
                     Some(v) => v,
                     None => {
                         let mut acc = self.values.neumann_load[gi];
-                        for &qd in inc.list(gi) {
-                            acc += gbuf[qd as usize];
+                        for &k in inc.list(gi) {
+                            let k = k as usize;
+                            let (d, _) = self.sym.dof_map.cell(k);
+                            acc += gbuf[self.sym.dof_map.dof_ptr[k] + local_index(d, gi)];
                         }
                         acc
                     }
@@ -569,17 +616,12 @@ impl<'a> DiscreteSystem<'a> {
     /// scale |b_i| + Σ_j |M_ij u_j| against which it is small. On Dirichlet unknowns r is the
     /// reaction, not a balance; on constrained unknowns it is the multiplier (up to sign).
     ///
-    /// M u = Σ_K P_Kᵀ M_K P_K u: the local products are computed cell by cell in parallel,
-    /// then each row gathers its contributions in cell order (independent of the threads).
+    /// M u = Σ_K P_Kᵀ M_K P_K u, gathered row by row in parallel: row i visits the cells where
+    /// unknown i appears (`inc`, ascending) and takes there the row of M_K u_K, so the sums
+    /// run in the order of a sequential scatter (independent of the threads) and nothing per
+    /// cell is stored.
     pub fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>) {
-        let mut local = self
-            .residual_scratch
-            .lock()
-            .map(|mut b| std::mem::take(&mut *b))
-            .unwrap_or_default();
-        self.local_products(u, &mut local);
         let inc = &self.sym.maps.inc;
-        // row by row
         let mut r = vec![0.0; self.n];
         let mut scale = vec![0.0; self.n];
         r.par_iter_mut()
@@ -589,45 +631,23 @@ impl<'a> DiscreteSystem<'a> {
             .for_each(|(gi, (ri, si))| {
                 let mut a = self.values.load[gi];
                 let mut b = a.abs();
-                for &q in inc.list(gi) {
-                    a -= local[q as usize][0];
-                    b += local[q as usize][1];
+                for &k in inc.list(gi) {
+                    let cell = self.local(k as usize);
+                    let (d, m) = (cell.dofs, cell.matrix);
+                    let (nl, i) = (d.len(), local_index(d, gi));
+                    let (mut mu, mut abs) = (0.0, 0.0);
+                    for (j, &gj) in d.iter().enumerate() {
+                        let v = m[i + j * nl] * u[gj];
+                        mu += v;
+                        abs += v.abs();
+                    }
+                    a -= mu;
+                    b += abs;
                 }
                 *ri = a;
                 *si = b;
             });
-        if let Ok(mut b) = self.residual_scratch.lock() {
-            *b = local;
-        }
         (r, scale)
-    }
-
-    /// Cell by cell, in parallel: [(M_K u_K)_i, Σ_j |(M_K)_ij u_j|] at the position of local
-    /// entry i in `local` (laid out like `dofs`; resized and overwritten).
-    fn local_products(&self, u: &[f64], local: &mut Vec<[f64; 2]>) {
-        let dof_ptr = &self.sym.dof_map.dof_ptr;
-        local.clear();
-        local.resize(self.sym.dof_map.dofs.len(), [0.0f64; 2]);
-        let ranges = cell_chunks(self.sym.scheme().mesh().n_cells());
-        let slices = split_by_ranges(local, &ranges, dof_ptr);
-        let tasks: Vec<_> = ranges.into_iter().zip(slices).collect();
-        tasks.into_par_iter().for_each(|((c0, c1), out)| {
-            let base = dof_ptr[c0];
-            for k in c0..c1 {
-                let cell = self.local(k);
-                let (d, m) = (cell.dofs, cell.matrix);
-                let nl = d.len();
-                let o = &mut out[dof_ptr[k] - base..dof_ptr[k + 1] - base];
-                for (j, &gj) in d.iter().enumerate() {
-                    let uj = u[gj];
-                    for (i, oi) in o.iter_mut().enumerate() {
-                        let v = m[i + j * nl] * uj;
-                        oi[0] += v;
-                        oi[1] += v.abs();
-                    }
-                }
-            }
-        });
     }
 
     /// The discrete energy ½ uᵀMu − bᵀu (the VI solution minimises it over the convex set).

@@ -4,17 +4,17 @@
 //! - the dof map: the unknowns of each cell, interior first ([`DofMap`]);
 //! - the pattern of the condensed (skeleton) matrix, lower triangle, with a diagonal entry for
 //!   every skeleton unknown, and its symbolic Cholesky factorisation ([`SpdPattern`]);
-//! - the scatter maps: where each local skeleton entry lands in the condensed values
-//!   (`pos`), the local entries that land on each condensed entry (`src`, in cell order), and
-//!   where each unknown appears in the local blocks (`inc`, in cell order). The last two let
-//!   the values be *gathered* entry by entry in parallel, with sums in the order of a
-//!   sequential scatter, so results do not depend on the number of threads.
+//! - the gather maps: the local skeleton entries that land on each condensed entry (`src`, in
+//!   cell order; built from where each local entry lands, which is not kept), and the cells
+//!   where each unknown appears (`inc`, ascending). They let the values be
+//!   *gathered* entry by entry in parallel, with sums in the order of a sequential scatter, so
+//!   results do not depend on the number of threads.
 //!
 //! Dirichlet and active unknowns keep their rows and columns in the pattern (with a unit
 //! diagonal and zeros elsewhere), so neither the boundary partition nor the active set
 //! changes anything here.
 
-use super::{AUTO_ITERATIVE_MIN, LinearSolver, SystemOptions, cell_chunks};
+use super::{AUTO_ITERATIVE_MIN, LinearSolver, SystemOptions, cell_chunks, chunks};
 use crate::linalg::SpdPattern;
 use crate::scheme::GradientDiscretisation;
 use rayon::prelude::*;
@@ -145,12 +145,13 @@ impl<T> Ragged<T> {
 /// The scatter and gather maps of the module docs.
 #[derive(Debug, Clone)]
 pub struct ScatterMaps {
-    /// Per cell, the position in the condensed values of each entry of its p×p skeleton block
-    /// (column-major; lower triangle, `u32::MAX` for upper entries).
-    pub pos: Ragged<u32>,
-    /// Per condensed entry, the indices in `pos.items` of the local entries landing on it.
+    /// Offsets of the cells' p×p skeleton blocks (column-major) in a buffer of local blocks,
+    /// one per cell plus one.
+    pub block_ptr: Vec<usize>,
+    /// Per condensed entry, the indices in that buffer of the local entries landing on it
+    /// (lower triangle only).
     pub src: Ragged<u32>,
-    /// Per unknown, its positions in [`DofMap::dofs`], cells ascending.
+    /// Per unknown, the cells where it appears, ascending.
     pub inc: Ragged<u32>,
 }
 
@@ -165,6 +166,9 @@ pub struct SymbolicSystem<'a> {
     pub maps: ScatterMaps,
     /// Every cell has exactly one interior unknown (HMM): parallel recovery.
     pub single_interior: bool,
+    /// No cell has interior unknowns (P1, CR): the skeleton blocks are the local matrices,
+    /// laid out alike, and are gathered from them without a copy.
+    pub no_interior: bool,
     /// The options it was built with (the linear solver asked for, the ordering).
     pub options: SystemOptions,
     /// Time of the symbolic factorisation, seconds.
@@ -193,7 +197,12 @@ impl<'a> SymbolicSystem<'a> {
         let t0 = Instant::now();
         let n_skel = scheme.n_skeleton();
         let n = scheme.n_unknowns();
-        let (col_ptr, row_idx) = condensed_pattern(&dof_map, n_skel)?;
+        if dof_map.dofs.len() >= u32::MAX as usize {
+            return Err(crate::Error::Linear("more than 2^32 local unknowns".into()));
+        }
+        // unknown -> the cells where it appears, ascending
+        let inc = incidence(&dof_map, n);
+        let (col_ptr, row_idx) = condensed_pattern(&dof_map, n_skel, &inc)?;
         let direct = match options.linear {
             LinearSolver::Direct => true,
             LinearSolver::Iterative => false,
@@ -220,18 +229,20 @@ impl<'a> SymbolicSystem<'a> {
                     )
                 })
             },
-            || scatter_maps(&dof_map, n, &col_ptr, &row_idx),
+            || scatter_maps(&dof_map, inc, &col_ptr, &row_idx),
         );
         let (pattern, symbolic_seconds) = symbolic?;
         let maps = maps?;
         check_numeric_memory(&pattern, &maps, n)?;
         let single_interior = dof_map.n_int.iter().all(|&ni| ni == 1);
+        let no_interior = dof_map.n_int.iter().all(|&ni| ni == 0);
         Ok(SymbolicSystem {
             scheme,
             dof_map,
             pattern,
             maps,
             single_interior,
+            no_interior,
             options,
             symbolic_seconds,
             setup_seconds: t0.elapsed().as_secs_f64(),
@@ -262,7 +273,7 @@ fn check_numeric_memory(pattern: &SpdPattern, maps: &ScatterMaps, n: usize) -> c
     };
     let bytes = 8 * (pattern.factor_len() as u64)
         + 8 * (pattern.nnz() as u64)
-        + 8 * (maps.pos.items.len() as u64)
+        + 8 * (maps.block_ptr.last().copied().unwrap_or(0) as u64)
         + 24 * (maps.inc.items.len() as u64)
         + 8 * 6 * (n as u64);
     if bytes > available {
@@ -278,32 +289,67 @@ fn check_numeric_memory(pattern: &SpdPattern, maps: &ScatterMaps, n: usize) -> c
     Ok(())
 }
 
-/// The lower-triangular CSC pattern (column pointers, row indices) of the condensed matrix.
-fn condensed_pattern(dm: &DofMap, n_skel: usize) -> crate::Result<(Vec<usize>, Vec<usize>)> {
-    let mut pairs: Vec<(usize, usize)> = Vec::new();
-    for k in 0..dm.n_cells() {
-        let sk = dm.skeleton(k);
-        for &i in sk {
-            for &j in sk {
-                if i >= j {
-                    pairs.push((j, i)); // (column, row)
-                }
+/// For each of the `n` unknowns, the cells where it appears, ascending (a counting sort of the
+/// positions of `dofs`, each stored as its cell).
+fn incidence(dm: &DofMap, n: usize) -> Ragged<u32> {
+    let mut cell_of = vec![0u32; dm.dofs.len()];
+    let ranges = cell_chunks(dm.n_cells());
+    let slices = super::split_by_ranges(&mut cell_of, &ranges, &dm.dof_ptr);
+    ranges
+        .into_par_iter()
+        .zip(slices)
+        .for_each(|((c0, c1), out)| {
+            let base = dm.dof_ptr[c0];
+            for k in c0..c1 {
+                out[dm.dof_ptr[k] - base..dm.dof_ptr[k + 1] - base].fill(k as u32);
             }
+        });
+    let (ptr, items) =
+        crate::mesh::buckets::counting_sort(n, dm.dofs.iter().map(|&d| Some(d)), |i| cell_of[i]);
+    Ragged { ptr, items }
+}
+
+/// The lower-triangular CSC pattern (column pointers, row indices) of the condensed matrix:
+/// column c holds c itself (every unknown has a diagonal, even if isolated) and the skeleton
+/// unknowns r > c of the cells where c appears (`inc`), sorted. Columns are built in parallel chunks.
+fn condensed_pattern(
+    dm: &DofMap,
+    n_skel: usize,
+    inc: &Ragged<u32>,
+) -> crate::Result<(Vec<usize>, Vec<usize>)> {
+    let columns: Vec<(Vec<usize>, Vec<usize>)> = chunks(n_skel, 1 << 14)
+        .into_par_iter()
+        .map(|(c0, c1)| {
+            let (mut counts, mut rows) = (Vec::with_capacity(c1 - c0), Vec::new());
+            for c in c0..c1 {
+                let start = rows.len();
+                rows.push(c);
+                for &k in inc.list(c) {
+                    let k = k as usize;
+                    rows.extend(dm.skeleton(k).iter().copied().filter(|&r| r > c));
+                }
+                rows[start..].sort_unstable();
+                let mut w = start;
+                for i in start..rows.len() {
+                    if i == start || rows[i] != rows[w - 1] {
+                        rows[w] = rows[i];
+                        w += 1;
+                    }
+                }
+                rows.truncate(w);
+                counts.push(w - start);
+            }
+            (counts, rows)
+        })
+        .collect();
+    let mut col_ptr = Vec::with_capacity(n_skel + 1);
+    col_ptr.push(0);
+    let mut row_idx = Vec::with_capacity(columns.iter().map(|c| c.1.len()).sum());
+    for (counts, rows) in columns {
+        for n in counts {
+            col_ptr.push(col_ptr.last().copied().unwrap_or(0) + n);
         }
-    }
-    for d in 0..n_skel {
-        pairs.push((d, d)); // every unknown has a diagonal, even if isolated
-    }
-    pairs.par_sort_unstable();
-    pairs.dedup();
-    let mut col_ptr = vec![0usize; n_skel + 1];
-    let mut row_idx = Vec::with_capacity(pairs.len());
-    for &(c, r) in &pairs {
-        col_ptr[c + 1] += 1;
-        row_idx.push(r);
-    }
-    for c in 0..n_skel {
-        col_ptr[c + 1] += col_ptr[c];
+        row_idx.extend_from_slice(&rows);
     }
     if row_idx.len() >= u32::MAX as usize {
         return Err(crate::Error::Linear(
@@ -326,7 +372,7 @@ fn counting_sort(
 /// The scatter and gather maps (see the module docs).
 fn scatter_maps(
     dm: &DofMap,
-    n: usize,
+    inc: Ragged<u32>,
     col_ptr: &[usize],
     row_idx: &[usize],
 ) -> crate::Result<ScatterMaps> {
@@ -361,18 +407,13 @@ fn scatter_maps(
             out
         })
         .collect();
-    // unknown -> positions in `dofs`, cells ascending
-    let inc = counting_sort(n, dm.dofs.iter().map(|&d| Some(d)));
     // condensed entry -> the local entries landing on it, in cell order
     let src = counting_sort(
         row_idx.len(),
         pos.iter().map(|&q| (q != u32::MAX).then_some(q as usize)),
     );
     Ok(ScatterMaps {
-        pos: Ragged {
-            ptr: pos_ptr,
-            items: pos,
-        },
+        block_ptr: pos_ptr,
         src,
         inc,
     })
