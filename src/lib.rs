@@ -25,8 +25,8 @@
 //! | x_K | centroid of K | [`mesh::PolyMesh::centroid`] |
 //! | h_K, h | diameter of K, max over cells | [`mesh::PolyMesh::diameter`], [`mesh::PolyMesh::h`] |
 //! | \|σ\|, x_σ | length and midpoint of σ | [`mesh::PolyMesh::edge_measure`], [`mesh::PolyMesh::edge_midpoint`] |
-//! | n_{K,σ} | outward unit normal to K on σ | [`mesh::PolyMesh::cell_normals`] |
-//! | d_{K,σ} | (x_σ − x_K)·n_{K,σ} > 0 | [`mesh::PolyMesh::cell_dists`] |
+//! | n_{K,σ} | outward unit normal to K on σ | [`mesh::PolyMesh::cell_normal`] |
+//! | d_{K,σ} | (x_σ − x_K)·n_{K,σ} > 0 | [`mesh::PolyMesh::cell_dist`] |
 //! | X_D | the discrete unknowns | [`scheme::GradientDiscretisation::n_unknowns`] |
 //! | Π_D u | function reconstruction (HMM: u_K on K; P1: the interpolant) | [`scheme::GradientDiscretisation::cell_values`] |
 //! | ∇_D u | gradient reconstruction (HMM: ∇_K u + stabilisation on co(σ, x_K)) | [`scheme::GradientDiscretisation::local_matrix`], [`scheme::GradientDiscretisation::cell_gradients`] |

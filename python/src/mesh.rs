@@ -269,8 +269,10 @@ impl PyMesh {
         for k in 0..nc {
             conn.extend(m.cell_vertices(k).iter().map(|&v| v as i64));
             cedges.extend(m.cell_edges(k).iter().map(|&e| e as i64));
-            normals.extend(m.cell_normals(k).iter().copied());
-            dists.extend_from_slice(m.cell_dists(k));
+            for (n, dk) in m.cell_normals_dists(k) {
+                normals.push(n);
+                dists.push(dk);
+            }
             offsets.push(conn.len() as i64);
         }
         d.set_item("cell_offsets", vec_array(py, offsets))?;

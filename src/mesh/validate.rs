@@ -51,7 +51,7 @@
 
 use super::predicates::{lex, orient, segments_meet, segments_overlap_from};
 use super::sweep::{self, Sweep};
-use super::{NO_CELL, Point, dist, polygon_area_centroid, sub};
+use super::{NO_CELL, Point, dist, polygon_area_centroid, side_normal_dist, sub};
 use crate::error::MeshError;
 use std::cmp::Ordering;
 
@@ -64,15 +64,13 @@ const SMALL_CELL: usize = 16;
 
 const NONE: usize = usize::MAX;
 
-/// Cached geometry of the cells, as checks 2–5 compute it.
+/// Cached geometry of the cells, as checks 2–5 compute it. The per-side quantities n_{K,σ} and
+/// d_{K,σ} are not kept: the mesh recomputes them on demand ([`side_normal_dist`]), and check 9
+/// only needs them one side at a time.
 pub(crate) struct CellGeometry {
     pub(crate) area: Vec<f64>,
     pub(crate) centroid: Vec<Point>,
     pub(crate) diameter: Vec<f64>,
-    /// Outward unit normals, one per cell side (indexed like the cell vertex lists).
-    pub(crate) normals: Vec<Point>,
-    /// d_{K,σ}, one per cell side.
-    pub(crate) dists: Vec<f64>,
     /// The first cell that is not strictly star-shaped (check 9, reported after checks 5–8).
     pub(crate) not_star_shaped: Option<MeshError>,
 }
@@ -96,8 +94,6 @@ pub(crate) fn cell_geometry(
         area: Vec::with_capacity(nc),
         centroid: Vec::with_capacity(nc),
         diameter: Vec::with_capacity(nc),
-        normals: Vec::with_capacity(cell_verts.len()),
-        dists: Vec::with_capacity(cell_verts.len()),
         not_star_shaped: None,
     };
     let mut used = vec![false; nv];
@@ -120,7 +116,9 @@ pub(crate) fn cell_geometry(
             cell_verts[s..e].reverse();
             pts.reverse();
         }
-        side_geometry(k, &pts, centroid, diam, &mut g);
+        if g.not_star_shaped.is_none() {
+            g.not_star_shaped = check_star_shaped(k, &pts, centroid, diam).err();
+        }
         g.area.push(area.abs());
         g.centroid.push(centroid);
         g.diameter.push(diam);
@@ -161,29 +159,23 @@ fn check_cell_vertices(k: usize, c: &[usize], nv: usize) -> Result<(), MeshError
     }
 }
 
-/// The outward normals and d_{K,σ} of the counter-clockwise cell `k` with corners `pts`; the
-/// first side with d_{K,σ} ≤ 10⁻¹² h_K is recorded in `g.not_star_shaped`.
-fn side_geometry(k: usize, pts: &[Point], centroid: Point, diam: f64, g: &mut CellGeometry) {
+/// Check 9 for the counter-clockwise cell `k` with corners `pts` and centroid x_K: the first
+/// side with d_{K,σ} ≤ 10⁻¹² h_K, as [`MeshError::NotStarShaped`]. d_{K,σ} is computed by
+/// [`side_normal_dist`], exactly as [`PolyMesh::cell_dist`](super::PolyMesh::cell_dist) later
+/// computes it from the stored vertices and centroid (the same bits).
+fn check_star_shaped(k: usize, pts: &[Point], centroid: Point, diam: f64) -> Result<(), MeshError> {
     let n = pts.len();
     for i in 0..n {
-        let (p, q) = (pts[i], pts[(i + 1) % n]);
-        let t = sub(q, p);
-        let len = (t[0] * t[0] + t[1] * t[1]).sqrt();
-        // counter-clockwise cell: outward normal is the tangent rotated by −90°
-        let nrm = [t[1] / len, -t[0] / len];
-        // x_σ, the same bits as edge_midpoint[e] (floating-point addition commutes)
-        let xs = [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
-        let d = (xs[0] - centroid[0]) * nrm[0] + (xs[1] - centroid[1]) * nrm[1];
-        if !(d > 1e-12 * diam) && g.not_star_shaped.is_none() {
-            g.not_star_shaped = Some(MeshError::NotStarShaped {
+        let (_, d) = side_normal_dist(pts[i], pts[(i + 1) % n], centroid);
+        if !(d > 1e-12 * diam) {
+            return Err(MeshError::NotStarShaped {
                 cell: k,
                 local_edge: i,
                 dist: d,
             });
         }
-        g.normals.push(nrm);
-        g.dists.push(d);
     }
+    Ok(())
 }
 
 /// A vertex listed twice in `c`: of those, the one listed first (check 3).

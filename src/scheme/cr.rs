@@ -80,11 +80,11 @@ impl super::triangle::TriangleScheme for Cr<'_> {
     fn basis_gradients(&self, k: usize) -> [Point; 3] {
         let m = self.mesh;
         let area = m.measure(k);
-        let normals = m.cell_normals(k);
         let mut g = [[0.0; 2]; 3];
         for (i, &e) in m.cell_edges(k).iter().enumerate() {
             let s = m.edge_measure(e) / area;
-            g[i] = [s * normals[i][0], s * normals[i][1]];
+            let nrm = m.cell_normal(k, i);
+            g[i] = [s * nrm[0], s * nrm[1]];
         }
         g
     }

@@ -18,8 +18,66 @@
 //! boundary datum g enters as |σ| g(x_σ), and Dirichlet values are imposed at x_σ.
 
 use super::{GradientDiscretisation, PointDof, Tensor};
-use crate::mesh::{Point, PolyMesh};
+use crate::mesh::{CellComplex, Point, PolyMesh};
 use nalgebra::{DMatrix, DVector};
+
+/// The matrix W of the module docs for cell `k` of a cell–face complex of any dimension D, with
+/// the constant tensor `a` = A_K and stabilisation parameter `alpha` (size n_σ × n_σ, local
+/// faces in the order of [`CellComplex::cell_faces`]).
+///
+/// Nothing here depends on D: G is D × n_σ, X is n_σ × D, and the only geometry read is
+/// |K|, x_K, |σ|, x_σ, n_{K,σ} and d_{K,σ}. The 2-D scheme ([`Hmm`]) calls it on a
+/// [`PolyMesh`]; the tests also run it on a 3-D mesh of boxes (the patch test: affine
+/// solutions reproduced exactly), which is all a 3-D mesh type will need from this file.
+pub fn local_form<const D: usize, M: CellComplex<D> + ?Sized>(
+    mesh: &M,
+    k: usize,
+    a: &[[f64; D]; D],
+    alpha: f64,
+) -> DMatrix<f64> {
+    let faces = mesh.cell_faces(k);
+    let n = faces.len();
+    let vol = mesh.cell_measure(k);
+    let xk = mesh.cell_centre(k);
+    let mut g = DMatrix::<f64>::zeros(D, n);
+    let mut x = DMatrix::<f64>::zeros(n, D);
+    let mut bdiag = DVector::<f64>::zeros(n);
+    for (i, &f) in faces.iter().enumerate() {
+        let len = mesh.face_measure(f);
+        let (nrm, dist) = mesh.cell_face_normal_dist(k, i);
+        let xs = mesh.face_centre(f);
+        for r in 0..D {
+            g[(r, i)] = len * nrm[r] / vol;
+            x[(i, r)] = xs[r] - xk[r];
+        }
+        // A_K n·n, summed in the order n_0 (A n)_0 + n_1 (A n)_1 + …
+        let mut ann = 0.0;
+        for r in 0..D {
+            let mut an = 0.0;
+            for c in 0..D {
+                an += a[r][c] * nrm[c];
+            }
+            ann += nrm[r] * an;
+        }
+        bdiag[i] = alpha * alpha * len * ann / dist;
+    }
+    let ag = DMatrix::from_fn(D, n, |r, c| {
+        let mut v = 0.0;
+        for j in 0..D {
+            v += a[r][j] * g[(j, c)];
+        }
+        v
+    });
+    let consistency = g.transpose() * ag * vol;
+    let r = DMatrix::<f64>::identity(n, n) - &x * &g;
+    let mut br = r.clone();
+    for i in 0..n {
+        for j in 0..n {
+            br[(i, j)] *= bdiag[i];
+        }
+    }
+    consistency + r.transpose() * br
+}
 
 /// HMM on a polygonal mesh.
 #[derive(Debug, Clone)]
@@ -46,43 +104,10 @@ impl<'a> Hmm<'a> {
     pub fn cell_dof(&self, k: usize) -> usize {
         self.mesh.n_edges() + k
     }
-    /// The matrix W of the module docs for cell `k` (size n_σ × n_σ).
+    /// The matrix W of the module docs for cell `k` (size n_σ × n_σ): [`local_form`] on this
+    /// polygonal mesh.
     pub fn w_matrix(&self, k: usize, a: &Tensor) -> DMatrix<f64> {
-        let m = self.mesh;
-        let edges = m.cell_edges(k);
-        let n = edges.len();
-        let area = m.measure(k);
-        let xk = m.centroid(k);
-        let normals = m.cell_normals(k);
-        let dists = m.cell_dists(k);
-        let mut g = DMatrix::<f64>::zeros(2, n);
-        let mut x = DMatrix::<f64>::zeros(n, 2);
-        let mut bdiag = DVector::<f64>::zeros(n);
-        for (i, &e) in edges.iter().enumerate() {
-            let len = m.edge_measure(e);
-            let nrm = normals[i];
-            g[(0, i)] = len * nrm[0] / area;
-            g[(1, i)] = len * nrm[1] / area;
-            let xs = m.edge_midpoint(e);
-            x[(i, 0)] = xs[0] - xk[0];
-            x[(i, 1)] = xs[1] - xk[1];
-            let ann = nrm[0] * (a[0][0] * nrm[0] + a[0][1] * nrm[1])
-                + nrm[1] * (a[1][0] * nrm[0] + a[1][1] * nrm[1]);
-            bdiag[i] = self.alpha * self.alpha * len * ann / dists[i];
-        }
-        let amat = nalgebra::Matrix2::new(a[0][0], a[0][1], a[1][0], a[1][1]);
-        let ag = DMatrix::from_fn(2, n, |r, c| {
-            amat[(r, 0)] * g[(0, c)] + amat[(r, 1)] * g[(1, c)]
-        });
-        let consistency = g.transpose() * ag * area;
-        let r = DMatrix::<f64>::identity(n, n) - &x * &g;
-        let mut br = r.clone();
-        for i in 0..n {
-            for j in 0..n {
-                br[(i, j)] *= bdiag[i];
-            }
-        }
-        consistency + r.transpose() * br
+        local_form::<2, PolyMesh>(self.mesh, k, a, self.alpha)
     }
     /// The fluxes F_{K,σ}(u) of cell `k` (one per local edge), for the full unknown vector `u`.
     pub fn fluxes(&self, k: usize, a: &Tensor, u: &[f64]) -> Vec<f64> {
@@ -174,10 +199,10 @@ impl GradientDiscretisation for Hmm<'_> {
             .map(|k| {
                 let uk = u[self.cell_dof(k)];
                 let mut g = [0.0; 2];
-                for (i, &e) in m.cell_edges(k).iter().enumerate() {
+                for (&e, (nrm, _)) in m.cell_edges(k).iter().zip(m.cell_normals_dists(k)) {
                     let w = m.edge_measure(e) * (u[e] - uk);
-                    g[0] += w * m.cell_normals(k)[i][0];
-                    g[1] += w * m.cell_normals(k)[i][1];
+                    g[0] += w * nrm[0];
+                    g[1] += w * nrm[1];
                 }
                 [g[0] / m.measure(k), g[1] / m.measure(k)]
             })
@@ -239,10 +264,259 @@ mod tests {
         // fluxes: F_{K,σ} = −A∇u·n_{K,σ}
         let f = s.fluxes(0, &a, &u);
         for (i, fi) in f.iter().enumerate() {
-            let n = m.cell_normals(0)[i];
+            let n = m.cell_normal(0, i);
             let an = (a[0][0] * grad[0] + a[0][1] * grad[1]) * n[0]
                 + (a[1][0] * grad[0] + a[1][1] * grad[1]) * n[1];
             assert!((fi + an).abs() < 1e-12, "{fi} vs {}", -an);
+        }
+    }
+}
+
+/// HMM in three dimensions: [`local_form`] on a mesh of boxes (hexahedra with rectangular
+/// faces), the patch test of a 3-D scheme.
+#[cfg(test)]
+mod tests_3d {
+    use super::local_form;
+    use crate::mesh::NO_CELL;
+    use crate::mesh::complex::{CellComplex, Vector};
+    use nalgebra::{DMatrix, DVector};
+
+    /// The boxes of the tensor grid with node coordinates `nodes[0..3]` (strictly increasing).
+    /// Faces: those normal to x, then y, then z; local faces of a cell: −x, +x, −y, +y, −z, +z.
+    struct Boxes {
+        nodes: [Vec<f64>; 3],
+        cell_faces: Vec<[usize; 6]>,
+        /// Per face: its normal axis, its lower corner index (i, j, k) and its cells.
+        faces: Vec<(usize, [usize; 3], [usize; 2])>,
+    }
+
+    impl Boxes {
+        fn new(nodes: [Vec<f64>; 3]) -> Self {
+            let n = [nodes[0].len() - 1, nodes[1].len() - 1, nodes[2].len() - 1];
+            let cell = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
+            let mut faces = Vec::new();
+            let mut face_id = std::collections::HashMap::new();
+            for axis in 0..3 {
+                let mut m = n;
+                m[axis] += 1;
+                for k in 0..m[2] {
+                    for j in 0..m[1] {
+                        for i in 0..m[0] {
+                            let c = [i, j, k];
+                            let mut lo = c;
+                            let below = (c[axis] > 0).then(|| {
+                                lo[axis] -= 1;
+                                cell(lo[0], lo[1], lo[2])
+                            });
+                            let above = (c[axis] < n[axis]).then(|| cell(i, j, k));
+                            let cells = match (below, above) {
+                                (Some(b), Some(a)) => [b, a],
+                                (Some(b), None) => [b, NO_CELL],
+                                (None, Some(a)) => [a, NO_CELL],
+                                (None, None) => unreachable!("a face has a cell"),
+                            };
+                            face_id.insert((axis, c), faces.len());
+                            faces.push((axis, c, cells));
+                        }
+                    }
+                }
+            }
+            let mut cell_faces = vec![[0; 6]; n[0] * n[1] * n[2]];
+            for k in 0..n[2] {
+                for j in 0..n[1] {
+                    for i in 0..n[0] {
+                        let mut f = [0; 6];
+                        for axis in 0..3 {
+                            let mut c = [i, j, k];
+                            f[2 * axis] = face_id[&(axis, c)];
+                            c[axis] += 1;
+                            f[2 * axis + 1] = face_id[&(axis, c)];
+                        }
+                        cell_faces[cell(i, j, k)] = f;
+                    }
+                }
+            }
+            Boxes {
+                nodes,
+                cell_faces,
+                faces,
+            }
+        }
+        fn n(&self) -> [usize; 3] {
+            [0, 1, 2].map(|a| self.nodes[a].len() - 1)
+        }
+        fn cell_index(&self, k: usize) -> [usize; 3] {
+            let n = self.n();
+            [k % n[0], (k / n[0]) % n[1], k / (n[0] * n[1])]
+        }
+        fn width(&self, axis: usize, i: usize) -> f64 {
+            self.nodes[axis][i + 1] - self.nodes[axis][i]
+        }
+        fn mid(&self, axis: usize, i: usize) -> f64 {
+            0.5 * (self.nodes[axis][i] + self.nodes[axis][i + 1])
+        }
+    }
+
+    impl CellComplex<3> for Boxes {
+        fn n_cells(&self) -> usize {
+            self.cell_faces.len()
+        }
+        fn n_faces(&self) -> usize {
+            self.faces.len()
+        }
+        fn cell_faces(&self, k: usize) -> &[usize] {
+            &self.cell_faces[k]
+        }
+        fn face_cells(&self, f: usize) -> [usize; 2] {
+            self.faces[f].2
+        }
+        fn cell_measure(&self, k: usize) -> f64 {
+            let c = self.cell_index(k);
+            (0..3).map(|a| self.width(a, c[a])).product()
+        }
+        fn cell_centre(&self, k: usize) -> Vector<3> {
+            let c = self.cell_index(k);
+            [0, 1, 2].map(|a| self.mid(a, c[a]))
+        }
+        fn face_measure(&self, f: usize) -> f64 {
+            let (axis, c, _) = self.faces[f];
+            (0..3)
+                .filter(|&a| a != axis)
+                .map(|a| self.width(a, c[a]))
+                .product()
+        }
+        fn face_centre(&self, f: usize) -> Vector<3> {
+            let (axis, c, _) = self.faces[f];
+            [0, 1, 2].map(|a| {
+                if a == axis {
+                    self.nodes[a][c[a]]
+                } else {
+                    self.mid(a, c[a])
+                }
+            })
+        }
+        fn cell_face_normal_dist(&self, k: usize, i: usize) -> (Vector<3>, f64) {
+            let (axis, sign) = (i / 2, if i.is_multiple_of(2) { -1.0 } else { 1.0 });
+            let mut nrm = [0.0; 3];
+            nrm[axis] = sign;
+            (nrm, 0.5 * self.width(axis, self.cell_index(k)[axis]))
+        }
+    }
+
+    fn graded_boxes() -> Boxes {
+        Boxes::new([
+            vec![0.0, 0.1, 0.45, 1.0],
+            vec![-1.0, -0.2, 0.3, 0.5],
+            vec![0.0, 0.6, 0.7, 1.3],
+        ])
+    }
+
+    const A: [[f64; 3]; 3] = [[3.0, 0.5, 0.2], [0.5, 2.0, 0.3], [0.2, 0.3, 1.0]];
+
+    fn affine(p: Vector<3>) -> f64 {
+        1.0 + 2.0 * p[0] - p[1] + 0.5 * p[2]
+    }
+
+    #[test]
+    fn the_boxes_satisfy_the_identities_of_a_cell_complex() {
+        // Σ_σ |σ| n_{K,σ} = 0 and Σ_σ |σ| d_{K,σ} = 3 |K|
+        let m = graded_boxes();
+        assert_eq!((m.n_cells(), m.n_faces()), (27, 108));
+        for k in 0..m.n_cells() {
+            let (mut s, mut vol) = ([0.0; 3], 0.0);
+            for (i, &f) in m.cell_faces(k).iter().enumerate() {
+                let (nrm, d) = m.cell_face_normal_dist(k, i);
+                for r in 0..3 {
+                    s[r] += m.face_measure(f) * nrm[r];
+                }
+                vol += m.face_measure(f) * d;
+                assert!(m.face_cells(f).contains(&k));
+            }
+            assert!(s.iter().all(|v| v.abs() < 1e-15), "{s:?}");
+            assert!((vol - 3.0 * m.cell_measure(k)).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn the_local_form_is_consistent_in_three_dimensions() {
+        // W is symmetric, and for u affine W δ(u) = |K| Gᵀ A ∇u (the stabilisation vanishes):
+        // the fluxes are −A∇u·n_{K,σ} exactly
+        let m = graded_boxes();
+        let grad = [2.0, -1.0, 0.5];
+        for k in 0..m.n_cells() {
+            let w = local_form(&m, k, &A, 1.0);
+            assert!((&w - w.transpose()).amax() < 1e-13);
+            let xk = m.cell_centre(k);
+            let faces = m.cell_faces(k);
+            let delta = DVector::from_iterator(
+                6,
+                faces.iter().map(|&f| affine(m.face_centre(f)) - affine(xk)),
+            );
+            let wd = &w * delta;
+            for (i, &f) in faces.iter().enumerate() {
+                let nrm = m.cell_face_normal(k, i);
+                let flux: f64 = (0..3)
+                    .map(|r| nrm[r] * (0..3).map(|c| A[r][c] * grad[c]).sum::<f64>())
+                    .sum();
+                // |σ| F_{K,σ} = −(W δ)_σ and F_{K,σ} = −A∇u·n
+                assert!((wd[i] - m.face_measure(f) * flux).abs() < 1e-12, "{k} {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn affine_solutions_are_reproduced_exactly_in_three_dimensions() {
+        // −div(A∇u) = 0 with u affine on the boundary faces: the discrete solution is the
+        // affine function at every x_K and x_σ (the patch test), assembled densely here
+        let m = graded_boxes();
+        let (nf, nc) = (m.n_faces(), m.n_cells());
+        let n = nf + nc;
+        let mut mat = DMatrix::<f64>::zeros(n, n);
+        for k in 0..nc {
+            let w = local_form(&m, k, &A, 1.0);
+            let faces = m.cell_faces(k);
+            // local matrix Cᵀ W C on [u_K, u_σ…] with C = [−1 | I]
+            let dofs: Vec<usize> = std::iter::once(nf + k)
+                .chain(faces.iter().copied())
+                .collect();
+            let mut c = DMatrix::<f64>::zeros(6, 7);
+            for i in 0..6 {
+                c[(i, 0)] = -1.0;
+                c[(i, i + 1)] = 1.0;
+            }
+            let local = c.transpose() * w * c;
+            for (a, &ga) in dofs.iter().enumerate() {
+                for (b, &gb) in dofs.iter().enumerate() {
+                    mat[(ga, gb)] += local[(a, b)];
+                }
+            }
+        }
+        let exact: Vec<f64> = (0..nf)
+            .map(|f| affine(m.face_centre(f)))
+            .chain((0..nc).map(|k| affine(m.cell_centre(k))))
+            .collect();
+        let boundary: Vec<bool> = (0..n)
+            .map(|d| d < nf && m.face_cells(d)[1] == NO_CELL)
+            .collect();
+        let free: Vec<usize> = (0..n).filter(|&d| !boundary[d]).collect();
+        let mut sys = DMatrix::<f64>::zeros(free.len(), free.len());
+        let mut rhs = DVector::<f64>::zeros(free.len());
+        for (a, &ga) in free.iter().enumerate() {
+            for (b, &gb) in free.iter().enumerate() {
+                sys[(a, b)] = mat[(ga, gb)];
+            }
+            for d in (0..n).filter(|&d| boundary[d]) {
+                rhs[a] -= mat[(ga, d)] * exact[d];
+            }
+        }
+        let u = sys.cholesky().expect("SPD").solve(&rhs);
+        for (a, &ga) in free.iter().enumerate() {
+            assert!(
+                (u[a] - exact[ga]).abs() < 1e-10,
+                "{ga}: {} vs {}",
+                u[a],
+                exact[ga]
+            );
         }
     }
 }

@@ -334,7 +334,7 @@ fn hmm_on_cartesian_with_identity_is_the_two_point_scheme() {
         b[k] = mesh.measure(k) * f(mesh.centroid(k));
         for (i, &e) in mesh.cell_edges(k).iter().enumerate() {
             let [c0, c1] = mesh.edge_cells(e);
-            let dk = mesh.cell_dists(k)[i];
+            let dk = mesh.cell_dist(k, i);
             if mesh.is_boundary_edge(e) {
                 a[(k, k)] += mesh.edge_measure(e) / dk;
             } else {
@@ -362,7 +362,7 @@ fn hmm_on_cartesian_with_identity_is_the_two_point_scheme() {
             for j in 0..4 {
                 let e = mesh.cell_edges(k)[i];
                 let expect = if i == j {
-                    mesh.edge_measure(e) / mesh.cell_dists(k)[i]
+                    mesh.edge_measure(e) / mesh.cell_dist(k, i)
                 } else {
                     0.0
                 };

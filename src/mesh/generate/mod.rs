@@ -27,9 +27,9 @@
 //! | Kershaw | `mesh4_1_k`: 17k × 17k quadrangles, 17k edges on x=0 | 289 k² | 240 (16.6 M cells) |
 //!
 //! The largest levels come from the cap [`MAX_CELLS`] = 2^24 cells; the memory budget may stop
-//! earlier. Estimated peaks ([`Family::memory_estimate`]): Cartesian level 9 (1 M cells) 0.5 GB,
-//! level 10 2.0 GB, level 11 8.2 GB; hexagonal level 8 (1.6 M cells) 1.2 GB, level 9 5.0 GB;
-//! Kershaw level 100 (2.9 M cells) 1.4 GB, level 240 8.1 GB (1 GB = 10⁹ bytes; 8 GiB = 8.6 GB).
+//! earlier. Estimated peaks ([`Family::memory_estimate`]): Cartesian level 9 (1 M cells) 0.4 GB,
+//! level 10 1.6 GB, level 11 6.6 GB; hexagonal level 8 (1.6 M cells) 1.0 GB, level 9 4.0 GB;
+//! Kershaw level 100 (2.9 M cells) 1.1 GB, level 240 6.5 GB (1 GB = 10⁹ bytes; 8 GiB = 8.6 GB).
 
 pub mod cartesian;
 pub mod hexagonal;
@@ -346,7 +346,7 @@ mod tests {
                 gb(Family::Kershaw, 100),
                 gb(Family::Kershaw, 240)
             ],
-            [0.5, 2.0, 8.2, 1.2, 5.0, 1.4, 8.1]
+            [0.4, 1.6, 6.6, 1.0, 4.0, 1.1, 6.5]
         );
     }
 }
