@@ -1,6 +1,6 @@
 //! Smoothed-aggregation multigrid + conjugate gradients against sparse Cholesky on model
 //! problems: `make bench-amg` (`cargo bench --bench amg`; arguments after `--`: `quick`,
-//! `kernels`, `sweep`, `schemes`, `schemes-sweep`).
+//! `kernels`, `sweep`, `schemes`, `schemes-sweep`, `setup`).
 //!
 //! For each matrix (5-point Poisson on n × n grids, the 7-point P1 stencil of a triangulated
 //! grid, an anisotropic and a jump-coefficient diffusion, one with fixed unknowns as the
@@ -11,7 +11,9 @@
 
 use gradvi::assembly::{DiscreteSystem, SystemOptions};
 use gradvi::linalg::{Amg, AmgOptions, CsrMatrix, PcgOptions, Smoother, SpdPattern, pcg};
-use gradvi::mesh::generate::{cartesian, hexagonal_grid, kershaw};
+use gradvi::mesh::generate::{
+    cartesian, cartesian_rect, cartesian_triangles, hexagonal_grid, kershaw,
+};
 use gradvi::problem::{Problem, paper_test2};
 use gradvi::scheme::{GradientDiscretisation, Hmm, P1};
 use std::time::Instant;
@@ -535,6 +537,26 @@ fn main() {
                 run(&format!("{vname}/{mname}"), l, o, false, 1);
             }
         }
+        return;
+    }
+    if has("setup") {
+        // the matrices of the obstacle problems' active-set steps: the P1 stencil with a
+        // disc of fixed unknowns (unit rows), 1024²; best of 7
+        header();
+        let mut l = grid(1024, 1.0, 1.0, &one, true);
+        fix_disc(&mut l, 1024);
+        run("p1-7pt fixed disc 1024²", &l, &opts, false, 7);
+        // the condensed matrices of ex9's discretisations at 1025² nodes (no contact set)
+        let laplace = || Problem::new("laplace", Box::new(|_| 1.0));
+        let tri = cartesian_triangles(1024, 1024, [-2.0, 2.0], [-2.0, 2.0]).expect("mesh");
+        let l = scheme_matrix(&P1::new(&tri).expect("p1"), &laplace()).expect("matrix");
+        drop(tri);
+        run("ex9 p1 1025²", &l, &opts, false, 7);
+        drop(l);
+        let rect = cartesian_rect(1024, 1024, [-2.0, 2.0], [-2.0, 2.0]).expect("mesh");
+        let l = scheme_matrix(&Hmm::new(&rect), &laplace()).expect("matrix");
+        drop(rect);
+        run("ex9 hmm 1024²", &l, &opts, false, 7);
         return;
     }
     if has("schemes") {

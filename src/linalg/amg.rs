@@ -29,11 +29,22 @@
 //!    by a Lanczos estimate of λ_max(D⁻¹A) × 1.1 when smaller ([`AmgOptions::spectral_steps`]).
 //!    P's columns are then smooth, low-energy basis functions overlapping their
 //!    neighbours.
-//! 5. **Galerkin product** A_{ℓ+1} = Pᵀ A P, row by row: row J is
-//!    Σ_{i : p_iJ ≠ 0} p_iJ Σ_j a_ij P_j (rows i of Pᵀ, rows j of A, rows of P), accumulated
-//!    in a dense array of length n_{ℓ+1} with a list of the touched columns, one per thread.
-//!    This computes each product a_ij P_j once per column of row i of P (≈ 2–3 times) but never
-//!    stores A P: the flop count is the same as forming A P first, the memory traffic smaller.
+//! 5. **Galerkin product** A_{ℓ+1} = Pᵀ A P in two row-parallel products, each row
+//!    accumulated in a dense array of length n_{ℓ+1} with a list of the touched columns (one
+//!    per thread): first A P, row i = Σ_{j : a_ij ≠ 0} a_ij P_j, then row J of Pᵀ (A P) =
+//!    Σ_{i : p_iJ ≠ 0} p_iJ (A P)_i (rows of R = Pᵀ). Entries a_ij stored as zeros (the
+//!    diagonal couplings of P1 on right triangles, the zeroed couplings of unit rows) are
+//!    skipped. Forming A P (a transient of about nnz(P) × 2 entries, freed at once) costs
+//!    Σ_i nnz(A_i) nnz(P_j) + Σ_i nnz(P_i) nnz((AP)_i) products; the fused product used
+//!    before, row J = Σ_i p_iJ Σ_j a_ij P_j without storing A P, redid each a_ij P_j once per
+//!    entry of row i of P (≈ 2.5 times). Measured on the ex9 P1 matrix (1M unknowns, 2 cores,
+//!    loaded machine, noisy): level-0 product ≈ 175–370 ms fused, ≈ 250–275 ms fused skipping
+//!    zeros, ≈ 190–200 ms in two products; whole setup (best of 7, `make bench-amg -- setup`)
+//!    0.55–0.62 s → 0.24–0.30 s on P1, 0.86 → 0.63 s on HMM (2M unknowns). Dropping the zero
+//!    products also removes entries of the coarse operators (hierarchy 147.5 → 141 MiB).
+//!
+//! The strength of connection is a flag per stored entry of A_ℓ (not a copy of the strong
+//! part), filled in parallel; the aggregation reads A_ℓ through it.
 //!
 //! ## The cycle (one application of M⁻¹, [`Amg::apply`])
 //! A V(1,1)-cycle: on level ℓ with right-hand side b, from x = 0,
@@ -540,63 +551,132 @@ where
             (lens, cols, vals)
         })
         .collect();
-    let nnz: usize = parts.iter().map(|p| p.1.len()).sum();
-    let mut row_ptr = Vec::with_capacity(n_rows + 1);
-    row_ptr.push(0);
-    let mut col_idx = Vec::with_capacity(nnz);
-    let mut values = Vec::with_capacity(nnz);
-    let mut acc = 0;
-    for (lens, cols, vals) in parts {
-        for l in lens {
+    // concatenate the chunks in parallel: the offsets of each chunk's rows and entries first
+    let mut starts = Vec::with_capacity(parts.len() + 1);
+    starts.push(0usize);
+    for p in &parts {
+        starts.push(starts[starts.len() - 1] + p.1.len());
+    }
+    let nnz = starts[parts.len()];
+    let mut row_ptr = vec![0usize; n_rows + 1];
+    let mut col_idx = vec![0u32; nnz];
+    let mut values = vec![0.0f64; nnz];
+    row_ptr[n_rows] = nnz;
+    // (the chunk's lengths, columns and values; its parts of row_ptr, col_idx, values; the
+    // offset of its first entry)
+    type Piece<'p> = (
+        &'p (Vec<usize>, Vec<u32>, Vec<f64>),
+        &'p mut [usize],
+        &'p mut [u32],
+        &'p mut [f64],
+        usize,
+    );
+    let mut pieces: Vec<Piece> = Vec::with_capacity(parts.len());
+    let (mut rp, mut ci, mut va) = (&mut row_ptr[..n_rows], &mut col_idx[..], &mut values[..]);
+    for (p, &start) in parts.iter().zip(&starts) {
+        let (r0, r1) = std::mem::take(&mut rp).split_at_mut(p.0.len());
+        let (c0, c1) = std::mem::take(&mut ci).split_at_mut(p.1.len());
+        let (v0, v1) = std::mem::take(&mut va).split_at_mut(p.2.len());
+        pieces.push((p, r0, c0, v0, start));
+        (rp, ci, va) = (r1, c1, v1);
+    }
+    let fill = |((lens, cols, vals), r, c, v, start): Piece| {
+        let mut acc = start;
+        for (rk, &l) in r.iter_mut().zip(lens) {
+            *rk = acc;
             acc += l;
-            row_ptr.push(acc);
         }
-        col_idx.extend_from_slice(&cols);
-        values.extend_from_slice(&vals);
+        c.copy_from_slice(cols);
+        v.copy_from_slice(vals);
+    };
+    if nnz < PAR_MIN_NNZ {
+        pieces.into_iter().for_each(fill);
+    } else {
+        pieces.into_par_iter().for_each(fill);
     }
     CsrMatrix::from_parts(n_rows, n_cols, row_ptr, col_idx, values)
 }
 
-/// S: the strong off-diagonal entries of A, a_ij ≠ 0 with a_ij² ≥ θ² a_ii a_jj, whatever
-/// their sign. (Counting only negative couplings as strong was measured to take fewer
-/// iterations on HMM matrices with positive couplings — distorted meshes, rotated anisotropy
-/// — but is not adopted: the benchmark of `make bench-peers` was run with this rule.)
-fn strength(a: &CsrMatrix, diag: &[f64], theta: f64) -> CsrMatrix {
+/// The strong off-diagonal entries of A, a_ij ≠ 0 with a_ij² ≥ θ² a_ii a_jj, whatever their
+/// sign, as a flag per stored entry of A (in the order of its values). (Counting only negative
+/// couplings as strong was measured to take fewer iterations on HMM matrices with positive
+/// couplings — distorted meshes, rotated anisotropy — but is not adopted: the benchmark of
+/// `make bench-peers` was run with this rule.)
+fn strength(a: &CsrMatrix, diag: &[f64], theta: f64) -> Vec<bool> {
     let t2 = theta * theta;
-    build_rows(
-        a.n_rows(),
-        a.n_cols(),
-        || (),
-        |_, i, cols, vals| {
-            let (ac, av) = a.row(i);
+    let mut strong = vec![false; a.nnz()];
+    let rp = a.row_ptr();
+    let fill = |i0: usize, flags: &mut [bool]| {
+        let base = rp[i0];
+        let mut i = i0;
+        while base + flags.len() > rp[i] {
             let di = diag[i];
-            for (&j, &v) in ac.iter().zip(av) {
-                let ju = j as usize;
-                if ju != i && v != 0.0 && v * v >= t2 * di * diag[ju] {
-                    cols.push(j);
-                    vals.push(v);
-                }
+            let (cols, vals) = a.row(i);
+            let f = &mut flags[rp[i] - base..rp[i + 1] - base];
+            for ((f, &j), &v) in f.iter_mut().zip(cols).zip(vals) {
+                let j = j as usize;
+                *f = j != i && v != 0.0 && v * v >= t2 * di * diag[j];
             }
-        },
-    )
+            i += 1;
+        }
+    };
+    for_entry_chunks(a, &mut strong, fill);
+    strong
 }
 
-/// Greedy aggregation on the graph of S (see the module documentation): the aggregate of each
-/// unknown ([`NONE`] for an isolated one) and the number of aggregates.
-fn aggregate(a: &CsrMatrix, s: &CsrMatrix, diag: &[f64]) -> (Vec<u32>, usize) {
-    let n = s.n_rows();
+/// Runs `f(i0, part)` on the parts of a per-entry array `x` of `a` that hold rows
+/// `i0..i0 + ROW_CHUNK` (in parallel when `a` is large).
+fn for_entry_chunks<T: Send, F>(a: &CsrMatrix, x: &mut [T], f: F)
+where
+    F: Fn(usize, &mut [T]) + Sync + Send,
+{
+    let n = a.n_rows();
+    let rp = a.row_ptr();
+    if a.nnz() < PAR_MIN_NNZ {
+        if n > 0 {
+            f(0, x);
+        }
+        return;
+    }
+    let mut parts = Vec::with_capacity(n.div_ceil(ROW_CHUNK));
+    let mut rest = x;
+    for i0 in (0..n).step_by(ROW_CHUNK) {
+        let i1 = (i0 + ROW_CHUNK).min(n);
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut(rp[i1] - rp[i0]);
+        parts.push((i0, head));
+        rest = tail;
+    }
+    parts.into_par_iter().for_each(|(i0, part)| f(i0, part));
+}
+
+/// Greedy aggregation on the graph of the strong entries `strong` of A (see the module
+/// documentation): the aggregate of each unknown ([`NONE`] for an isolated one) and the
+/// number of aggregates.
+fn aggregate(a: &CsrMatrix, strong: &[bool], diag: &[f64]) -> (Vec<u32>, usize) {
+    let n = a.n_rows();
+    let rp = a.row_ptr();
+    // the strong entries (column, value) of row i
+    let srow = |i: usize| {
+        let r = rp[i]..rp[i + 1];
+        a.col_idx()[r.clone()]
+            .iter()
+            .zip(&a.values()[r.clone()])
+            .zip(&strong[r])
+            .filter(|(_, s)| **s)
+            .map(|((&j, &v), _)| (j as usize, v))
+    };
+    let has_strong = |i: usize| strong[rp[i]..rp[i + 1]].contains(&true);
     let mut agg = vec![NONE; n];
     let mut n_agg: u32 = 0;
     // phase 1: roots whose strong neighbourhood is entirely free
     for i in 0..n {
-        let (cols, _) = s.row(i);
-        if agg[i] != NONE || cols.is_empty() {
+        if agg[i] != NONE || !has_strong(i) {
             continue;
         }
-        if cols.iter().all(|&j| agg[j as usize] == NONE) {
+        if srow(i).all(|(j, _)| agg[j] == NONE) {
             agg[i] = n_agg;
-            for &j in cols {
-                agg[j as usize] = n_agg;
+            for (j, _) in srow(i) {
+                agg[j] = n_agg;
             }
             n_agg += 1;
         }
@@ -608,14 +688,12 @@ fn aggregate(a: &CsrMatrix, s: &CsrMatrix, diag: &[f64]) -> (Vec<u32>, usize) {
         if agg[i] != NONE {
             continue;
         }
-        let (cols, vals) = s.row(i);
         let mut best = (0.0, NONE);
-        for (&j, &v) in cols.iter().zip(vals) {
-            let ju = j as usize;
-            if in_phase1[ju] {
-                let w = v.abs() / diag[ju].sqrt();
+        for (j, v) in srow(i) {
+            if in_phase1[j] {
+                let w = v.abs() / diag[j].sqrt();
                 if w > best.0 {
-                    best = (w, agg[ju]);
+                    best = (w, agg[j]);
                 }
             }
         }
@@ -624,14 +702,13 @@ fn aggregate(a: &CsrMatrix, s: &CsrMatrix, diag: &[f64]) -> (Vec<u32>, usize) {
     // phase 3: whatever is left (with strong neighbours) founds aggregates with its free
     // strong neighbours
     for i in 0..n {
-        let (cols, _) = s.row(i);
-        if agg[i] != NONE || cols.is_empty() {
+        if agg[i] != NONE || !has_strong(i) {
             continue;
         }
         agg[i] = n_agg;
-        for &j in cols {
-            if agg[j as usize] == NONE {
-                agg[j as usize] = n_agg;
+        for (j, _) in srow(i) {
+            if agg[j] == NONE {
+                agg[j] = n_agg;
             }
         }
         n_agg += 1;
@@ -819,6 +896,16 @@ impl Accumulator {
             self.vals[p as usize] += v;
         }
     }
+    /// Appends the row in the order of first touch and clears the accumulator.
+    fn drain_unsorted_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) {
+        for &c in &self.cols {
+            self.pos[c as usize] = NONE;
+        }
+        cols.extend_from_slice(&self.cols);
+        vals.extend_from_slice(&self.vals);
+        self.cols.clear();
+        self.vals.clear();
+    }
     /// Appends the row, sorted by column, and clears the accumulator.
     fn drain_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) {
         self.cols.sort_unstable();
@@ -833,9 +920,29 @@ impl Accumulator {
     }
 }
 
-/// A_c = Pᵀ A P, row J = Σ_{i} r_Ji Σ_j a_ij P_j with R = Pᵀ.
+/// A_c = Pᵀ A P in two row-parallel products (see the module documentation): A P, row i =
+/// Σ_{j : a_ij ≠ 0} a_ij P_j (its columns left in the order they are met: only read below),
+/// then row J of A_c = Σ_i r_Ji (A P)_i with R = Pᵀ.
 fn galerkin(a: &CsrMatrix, p: &CsrMatrix, r: &CsrMatrix) -> CsrMatrix {
     let nc = p.n_cols();
+    let ap = build_rows(
+        a.n_rows(),
+        nc,
+        || Accumulator::new(nc),
+        |acc, i, cols, vals| {
+            let (ac, av) = a.row(i);
+            for (&j, &aij) in ac.iter().zip(av) {
+                if aij == 0.0 {
+                    continue;
+                }
+                let (pc, pv) = p.row(j as usize);
+                for (&k, &pjk) in pc.iter().zip(pv) {
+                    acc.add(k, aij * pjk);
+                }
+            }
+            acc.drain_unsorted_into(cols, vals);
+        },
+    );
     build_rows(
         nc,
         nc,
@@ -843,13 +950,9 @@ fn galerkin(a: &CsrMatrix, p: &CsrMatrix, r: &CsrMatrix) -> CsrMatrix {
         |acc, jrow, cols, vals| {
             let (rc, rv) = r.row(jrow);
             for (&i, &rji) in rc.iter().zip(rv) {
-                let (ac, av) = a.row(i as usize);
-                for (&j, &aij) in ac.iter().zip(av) {
-                    let w = rji * aij;
-                    let (pc, pv) = p.row(j as usize);
-                    for (&k, &pjk) in pc.iter().zip(pv) {
-                        acc.add(k, w * pjk);
-                    }
+                let (pc, pv) = ap.row(i as usize);
+                for (&k, &v) in pc.iter().zip(pv) {
+                    acc.add(k, rji * v);
                 }
             }
             acc.drain_into(cols, vals);

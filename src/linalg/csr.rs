@@ -19,6 +19,10 @@
 //! there by the columns before it, so row j is completed by copying column j, and the entries
 //! of column j below the diagonal are scattered to their rows. Because the columns are visited
 //! in increasing order, each row receives its left entries already sorted.
+//!
+//! Large matrices are expanded in parallel instead, by chunks of rows: the left part of rows
+//! r0..r1 comes from the columns j < r1 whose last row reaches r0, scanned in increasing j
+//! (so again sorted), once to count and once to fill the chunk's own part of the arrays.
 
 use rayon::prelude::*;
 
@@ -29,6 +33,10 @@ pub(crate) const ROW_CHUNK: usize = 4096;
 /// Below this many stored entries a product runs on the calling thread (spreading it costs
 /// more than it saves).
 pub(crate) const PAR_MIN_NNZ: usize = 60_000;
+
+/// Rows per chunk of the parallel [`CsrMatrix::from_lower_csc`] (large against the band of
+/// grid numberings, which each chunk scans again).
+const CSC_CHUNK: usize = 16384;
 
 /// A sparse matrix in compressed sparse row form, with sorted column indices.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -112,10 +120,13 @@ impl CsrMatrix {
     /// [`crate::assembly::DiscreteSystem::condensed_pattern`] and `assemble_condensed` produce
     /// it. See the module documentation for the sweep.
     ///
-    /// The sweep is sequential: each column scatters its entries to rows further down, whose
-    /// positions depend on every column before. Measured (release, 5-point stencil): 40–60 ms
-    /// at 1024² (3 M stored entries, 5 M in the result) against about 0.4 s for the multigrid
-    /// setup that follows, 0.25 s at 2048² against 1.7 s; not worth a parallel transposition.
+    /// For large matrices (at least 32768 rows) the checks and the sweep run in parallel,
+    /// by chunks of rows, each gathering the left parts of its rows from the columns that reach
+    /// it (see `from_lower_csc_par`); the result is the same (the entries are only moved). When
+    /// the band is so wide that the chunks would rescan more than 4 n columns, the sequential
+    /// sweep is used. Measured (release, 2 cores, on a loaded machine, single timings of
+    /// `make bench-amg -- setup`): ex9 P1 at 1025² (7.3 M entries) 48–49 ms sequential against
+    /// 40–73 ms, HMM at 1024² 113–115 against 92–94 ms: a modest gain, bounded by memory traffic.
     pub fn from_lower_csc(
         n: usize,
         col_ptr: &[usize],
@@ -142,40 +153,58 @@ impl CsrMatrix {
                 values.len()
             )));
         }
-        // left[i] = number of entries (i, j), j < i
-        let mut left = vec![0usize; n];
-        for j in 0..n {
+        // check the columns (in parallel for large matrices; the first bad column is reported)
+        let check = |j: usize| -> Option<String> {
             let (s, e) = (col_ptr[j], col_ptr[j + 1]);
             if e < s || e > row_idx.len() {
-                return Err(structure_error(format!(
-                    "column pointers decrease or overrun at column {j}"
-                )));
+                return Some(format!("column pointers decrease or overrun at column {j}"));
             }
             let rows = &row_idx[s..e];
             if rows.windows(2).any(|w| w[0] >= w[1]) {
-                return Err(structure_error(format!(
+                return Some(format!(
                     "the row indices of column {j} are not strictly increasing"
-                )));
+                ));
             }
             if let Some(&r) = rows.first()
                 && r < j
             {
-                return Err(structure_error(format!(
+                return Some(format!(
                     "column {j} has the entry ({r}, {j}) above the diagonal: the lower triangle \
                      is expected"
-                )));
+                ));
             }
             if let Some(&r) = rows.last()
                 && r >= n
             {
-                return Err(structure_error(format!(
-                    "column {j} has row {r}, but the order is {n}"
-                )));
+                return Some(format!("column {j} has row {r}, but the order is {n}"));
             }
-            for &r in rows {
-                if r != j {
-                    left[r] += 1;
-                }
+            None
+        };
+        let parallel = row_idx.len() >= PAR_MIN_NNZ && n >= 2 * CSC_CHUNK;
+        let bad = if parallel {
+            (0..n)
+                .into_par_iter()
+                .with_min_len(ROW_CHUNK)
+                .find_map_first(check)
+        } else {
+            (0..n).find_map(check)
+        };
+        if let Some(msg) = bad {
+            return Err(structure_error(msg));
+        }
+        if parallel && let Some(a) = Self::from_lower_csc_par(n, col_ptr, row_idx, values) {
+            return Ok(a);
+        }
+        // left[i] = number of entries (i, j), j < i
+        let mut left = vec![0usize; n];
+        for &r in row_idx {
+            left[r] += 1;
+        }
+        // (the diagonal entries were counted: remove them)
+        for j in 0..n {
+            let (s, e) = (col_ptr[j], col_ptr[j + 1]);
+            if s < e && row_idx[s] == j {
+                left[j] -= 1;
             }
         }
         let mut row_ptr = Vec::with_capacity(n + 1);
@@ -211,6 +240,117 @@ impl CsrMatrix {
             }
         }
         Ok(CsrMatrix {
+            n_rows: n,
+            n_cols: n,
+            row_ptr,
+            col_idx,
+            values: vals,
+        })
+    }
+
+    /// The parallel sweep of [`Self::from_lower_csc`] (a checked structure): the rows are cut
+    /// into chunks of [`CSC_CHUNK`]; the left part of the rows r0..r1 of a chunk comes from the
+    /// columns j < r1 whose last row reaches r0, i.e. from the first such column on (found
+    /// from the running maximum of the last rows). Each chunk counts its rows, then (after a
+    /// prefix sum) fills its own part of the arrays, scanning those columns twice. `None` when
+    /// the columns to scan exceed 4 n in all (a wide band: the sequential sweep is cheaper).
+    fn from_lower_csc_par(
+        n: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        values: &[f64],
+    ) -> Option<Self> {
+        // reach[j] = max_{j' ≤ j} (last row of column j'), running maximum
+        let mut reach = vec![0usize; n];
+        let mut m = 0;
+        for (j, r) in reach.iter_mut().enumerate() {
+            let (s, e) = (col_ptr[j], col_ptr[j + 1]);
+            if e > s {
+                m = m.max(row_idx[e - 1]);
+            }
+            *r = m.max(j);
+        }
+        let n_chunks = n.div_ceil(CSC_CHUNK);
+        let first: Vec<usize> = (0..n_chunks)
+            .map(|c| reach.partition_point(|&r| r < c * CSC_CHUNK))
+            .collect();
+        drop(reach);
+        let scanned: usize = (0..n_chunks)
+            .map(|c| ((c + 1) * CSC_CHUNK).min(n) - first[c])
+            .sum();
+        if scanned > 4 * n {
+            return None;
+        }
+        // the entries (r, j), r0 ≤ r < r1, of the columns j < r1 from `first` on, below the
+        // diagonal, in increasing j: f(r, j, v)
+        let scan = |c: usize, f: &mut dyn FnMut(usize, usize, f64)| {
+            let (r0, r1) = (c * CSC_CHUNK, ((c + 1) * CSC_CHUNK).min(n));
+            for j in first[c]..r1 {
+                let (s, e) = (col_ptr[j], col_ptr[j + 1]);
+                let rows = &row_idx[s..e];
+                let lo = rows.partition_point(|&r| r < r0.max(j + 1));
+                for (&r, &v) in rows[lo..].iter().zip(&values[s + lo..e]) {
+                    if r >= r1 {
+                        break;
+                    }
+                    f(r, j, v);
+                }
+            }
+        };
+        // row lengths, then pointers
+        let mut row_ptr = vec![0usize; n + 1];
+        row_ptr[1..]
+            .par_chunks_mut(CSC_CHUNK)
+            .enumerate()
+            .for_each(|(c, lens)| {
+                let r0 = c * CSC_CHUNK;
+                for (k, l) in lens.iter_mut().enumerate() {
+                    *l = col_ptr[r0 + k + 1] - col_ptr[r0 + k];
+                }
+                scan(c, &mut |r, _, _| lens[r - r0] += 1);
+            });
+        for i in 0..n {
+            row_ptr[i + 1] += row_ptr[i];
+        }
+        let nnz = row_ptr[n];
+        let mut col_idx = vec![0u32; nnz];
+        let mut vals = vec![0.0f64; nnz];
+        let mut pieces = Vec::with_capacity(n_chunks);
+        let (mut ci, mut va) = (&mut col_idx[..], &mut vals[..]);
+        for c in 0..n_chunks {
+            let len = row_ptr[((c + 1) * CSC_CHUNK).min(n)] - row_ptr[c * CSC_CHUNK];
+            let (c0, c1) = std::mem::take(&mut ci).split_at_mut(len);
+            let (v0, v1) = std::mem::take(&mut va).split_at_mut(len);
+            pieces.push((c, c0, v0));
+            (ci, va) = (c1, v1);
+        }
+        let rp = &row_ptr;
+        pieces
+            .into_par_iter()
+            .for_each_init(Vec::new, |next, (c, cols, vs)| {
+                let (r0, r1) = (c * CSC_CHUNK, ((c + 1) * CSC_CHUNK).min(n));
+                let base = rp[r0];
+                next.clear();
+                next.extend_from_slice(&rp[r0..r1]);
+                next.iter_mut().for_each(|p| *p -= base);
+                scan(c, &mut |r, j, v| {
+                    let p = &mut next[r - r0];
+                    cols[*p] = j as u32;
+                    vs[*p] = v;
+                    *p += 1;
+                });
+                // then each row's column (the diagonal and the right part)
+                for (k, &p) in next.iter().enumerate() {
+                    let j = r0 + k;
+                    let (s, e) = (col_ptr[j], col_ptr[j + 1]);
+                    debug_assert_eq!(p + (e - s), rp[j + 1] - base);
+                    for (q, (&r, &v)) in row_idx[s..e].iter().zip(&values[s..e]).enumerate() {
+                        cols[p + q] = r as u32;
+                        vs[p + q] = v;
+                    }
+                }
+            });
+        Some(CsrMatrix {
             n_rows: n,
             n_cols: n,
             row_ptr,
@@ -456,5 +596,67 @@ mod tests {
         assert!(CsrMatrix::new(2, 2, vec![0, 1, 2], vec![0, 2], vec![1.0, 1.0]).is_err());
         assert!(CsrMatrix::new(1, 2, vec![0, 2], vec![1, 0], vec![1.0, 1.0]).is_err());
         assert!(CsrMatrix::new(1, 2, vec![0, 2], vec![0, 1], vec![1.0, 1.0]).is_ok());
+    }
+
+    /// The lower CSC of an n × n symmetric matrix with the couplings (i, i + d) for d in
+    /// `offsets` (where i + d < n), some of them missing, and a diagonal.
+    fn banded(n: usize, offsets: &[usize]) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
+        let (mut cp, mut ri, mut v) = (vec![0], Vec::new(), Vec::new());
+        for j in 0..n {
+            ri.push(j);
+            v.push(10.0 + j as f64);
+            for &d in offsets {
+                if j + d < n && (j * 7 + d) % 5 != 0 {
+                    ri.push(j + d);
+                    v.push(-(j as f64) - d as f64 * 1e-6);
+                }
+            }
+            cp.push(ri.len());
+        }
+        (cp, ri, v)
+    }
+
+    /// The full matrix by sorting the triplets (i, j, v) of both triangles.
+    fn expand_naively(n: usize, cp: &[usize], ri: &[usize], v: &[f64]) -> CsrMatrix {
+        let mut t = Vec::new();
+        for j in 0..n {
+            for p in cp[j]..cp[j + 1] {
+                t.push((ri[p], j, v[p]));
+                if ri[p] != j {
+                    t.push((j, ri[p], v[p]));
+                }
+            }
+        }
+        t.sort_by_key(|&(i, j, _)| (i, j));
+        let mut row_ptr = vec![0; n + 1];
+        for &(i, _, _) in &t {
+            row_ptr[i + 1] += 1;
+        }
+        for i in 0..n {
+            row_ptr[i + 1] += row_ptr[i];
+        }
+        let col_idx = t.iter().map(|&(_, j, _)| j as u32).collect();
+        let values = t.iter().map(|&(_, _, v)| v).collect();
+        CsrMatrix::new(n, n, row_ptr, col_idx, values).unwrap()
+    }
+
+    #[test]
+    fn the_parallel_expansion_matches_the_sequential_one() {
+        let n = 9 * CSC_CHUNK + 123;
+        // a grid-like band (taken in parallel), then a wide one (the sequential fallback)
+        for offsets in [vec![1, 2, 300, 301], vec![1, 40_000, n - 1]] {
+            let (cp, ri, v) = banded(n, &offsets);
+            let a = CsrMatrix::from_lower_csc(n, &cp, &ri, &v).unwrap();
+            assert_eq!(a, expand_naively(n, &cp, &ri, &v), "{offsets:?}");
+            assert_eq!(a.transpose(), a);
+        }
+        // an error in a late column is found by the parallel check
+        let (cp, mut ri, v) = banded(n, &[1, 2]);
+        let p = cp[n - 10];
+        ri.swap(p, p + 1);
+        let e = CsrMatrix::from_lower_csc(n, &cp, &ri, &v)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(&format!("column {}", n - 10)), "{e}");
     }
 }
