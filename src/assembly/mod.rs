@@ -326,7 +326,13 @@ impl<'a> DiscreteSystem<'a> {
                     }
                 }
             }
-            None => self.solve_iteratively(&values, &mut rhs)?,
+            None => {
+                // the lower triangle is not needed once stored by rows: freed before the
+                // multigrid hierarchy is built
+                let a = self.csr(&values)?;
+                drop(values);
+                self.solve_csr(a, &mut rhs)?
+            }
         };
         let mut u = vec![0.0; self.n];
         u[..self.n_skel].copy_from_slice(&rhs);
@@ -381,9 +387,22 @@ impl<'a> DiscreteSystem<'a> {
         values: &[f64],
         rhs: &mut [f64],
     ) -> crate::Result<(Instant, usize)> {
-        use crate::linalg::{Amg, AmgOptions, CsrMatrix, PcgOptions, pcg};
+        self.solve_csr(self.csr(values)?, rhs)
+    }
+
+    /// The condensed matrix with lower-triangle `values`, both triangles stored by rows.
+    fn csr(&self, values: &[f64]) -> crate::Result<crate::linalg::CsrMatrix> {
         let (col_ptr, row_idx) = self.condensed_pattern();
-        let a = CsrMatrix::from_lower_csc(self.n_skel, col_ptr, row_idx, values)?;
+        crate::linalg::CsrMatrix::from_lower_csc(self.n_skel, col_ptr, row_idx, values)
+    }
+
+    /// [`Self::solve_iteratively`] on the matrix `a` already stored by rows.
+    fn solve_csr(
+        &self,
+        a: crate::linalg::CsrMatrix,
+        rhs: &mut [f64],
+    ) -> crate::Result<(Instant, usize)> {
+        use crate::linalg::{Amg, AmgOptions, PcgOptions, pcg};
         let amg = Amg::new(&a, &AmgOptions::default())?;
         let t2 = Instant::now();
         let mut x = self
