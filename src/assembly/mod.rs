@@ -354,6 +354,17 @@ impl<'a> DiscreteSystem<'a> {
         ))
     }
 
+    /// The skeleton unknowns the next iterative solve starts from (ignored by the direct
+    /// solver, and if its length is not the number of skeleton unknowns); afterwards each
+    /// iterative solve starts from the previous solution.
+    pub fn set_initial_guess(&self, guess: Vec<f64>) {
+        if guess.len() == self.n_skel
+            && let Ok(mut b) = self.last_solution.lock()
+        {
+            *b = guess;
+        }
+    }
+
     /// The symbolic factorisation to solve with: the symbolic system's, or the one built when
     /// the iterative solver failed ([`LinearSolver::Auto`]); `None`: solve iteratively.
     fn direct_pattern(&self) -> Option<&SpdPattern> {

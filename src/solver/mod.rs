@@ -153,7 +153,10 @@ fn warm_start(
     }
     let t = Instant::now();
     match warm_start::predict(system.scheme(), problem, cons) {
-        Ok((a, r)) => (Some(a), Some(r)),
+        Ok(p) => {
+            system.set_initial_guess(p.guess);
+            (Some(p.active), Some(p.report))
+        }
         Err(reason) => (
             None,
             Some(WarmStartReport {

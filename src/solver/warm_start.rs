@@ -124,7 +124,7 @@ pub fn predict(
     scheme: &dyn GradientDiscretisation,
     problem: &Problem,
     cons: &Constraints,
-) -> Result<(Vec<bool>, WarmStartReport), String> {
+) -> Result<Prediction, String> {
     let t0 = Instant::now();
     let kind = problem
         .constraint
@@ -135,6 +135,7 @@ pub fn predict(
     let levels = hierarchy(fine, scheme.n_unknowns())?;
     // from the coarsest level to the finest coarse one, each warm-started by the one above
     let mut state: Option<CoarseState> = None;
+    let mut finest_values: Vec<f64> = Vec::new();
     let mut solves = 0;
     for l in (0..levels.len()).rev() {
         let mesh = &levels[l].mesh;
@@ -146,7 +147,7 @@ pub fn predict(
             .ok_or_else(|| "the problem has no barrier".to_string())?;
         let initial = state
             .as_ref()
-            .map(|s| map_down(s, &levels[l + 1], &hmm, &c, kind));
+            .map(|s| map_down(s, &levels[l + 1], &hmm, &c, kind, None));
         let opts = super::SolveOptions {
             active_set: ActiveSetOptions {
                 initial_active: initial,
@@ -157,6 +158,7 @@ pub fn predict(
         };
         let sol = super::solve_system(system, problem, &opts, Instant::now()).map_err(fail)?;
         solves += sol.niter();
+        finest_values = hmm.cell_values(sol.u());
         let mut s = CoarseState {
             cell: vec![false; mesh.n_cells()],
             edge: vec![false; mesh.n_edges()],
@@ -171,15 +173,67 @@ pub fn predict(
         state = Some(s);
     }
     let state = state.ok_or_else(|| "no coarse level".to_string())?;
-    let predicted = map_down(&state, &levels[0], scheme, cons, kind);
+    let needs_vertices =
+        (0..scheme.n_unknowns()).any(|d| matches!(scheme.dof_entity(d), Entity::Vertex(_)));
+    let incidence = needs_vertices.then(|| VertexIncidence::new(fine));
+    let active = map_down(&state, &levels[0], scheme, cons, kind, incidence.as_ref());
+    let guess = prolong(&finest_values, &levels[0], scheme, incidence.as_ref());
     let report = WarmStartReport {
         levels: levels.iter().map(|a| a.mesh.n_cells()).collect(),
         coarse_solves: solves,
-        predicted_active: predicted.iter().filter(|&&a| a).count(),
+        predicted_active: active.iter().filter(|&&a| a).count(),
         seconds: t0.elapsed().as_secs_f64(),
         skipped: None,
     };
-    Ok((predicted, report))
+    Ok(Prediction {
+        active,
+        guess,
+        report,
+    })
+}
+
+/// What the coarse solves predict on the fine problem.
+#[derive(Debug, Clone)]
+pub struct Prediction {
+    /// The predicted active set, on the constrained unknowns.
+    pub active: Vec<bool>,
+    /// A first guess of the skeleton unknowns (the first iterative solve starts from it): the
+    /// finest coarse solution Π_D u, constant on each coarse cell, averaged over the coarse
+    /// cells around each fine unknown.
+    pub guess: Vec<f64>,
+    /// What was done.
+    pub report: WarmStartReport,
+}
+
+/// The coarse cell values `values` (on the coarse mesh of `agg`) carried to the skeleton
+/// unknowns of `scheme` (on its fine mesh): each unknown takes the mean over the fine cells
+/// around its entity (the cell, the one or two cells of an edge, the cells of a vertex) of
+/// the value of their coarse cell.
+fn prolong(
+    values: &[f64],
+    agg: &Agglomeration,
+    scheme: &dyn GradientDiscretisation,
+    incidence: Option<&VertexIncidence>,
+) -> Vec<f64> {
+    let fine = scheme.mesh();
+    let of = |k: usize| values.get(agg.cell_of[k]).copied().unwrap_or(0.0);
+    let mean = |cells: &[usize]| {
+        if cells.is_empty() {
+            0.0
+        } else {
+            cells.iter().map(|&k| of(k)).sum::<f64>() / cells.len() as f64
+        }
+    };
+    (0..scheme.n_skeleton())
+        .map(|d| match scheme.dof_entity(d) {
+            Entity::Cell(k) => of(k),
+            Entity::Edge(e) => match fine.edge_cells(e) {
+                [a, NO_CELL] => of(a),
+                [a, b] => 0.5 * (of(a) + of(b)),
+            },
+            Entity::Vertex(v) => incidence.map_or(0.0, |i| mean(i.cells(v))),
+        })
+        .collect()
 }
 
 /// Whether a fine problem with this many unknowns is too small to have a coarse level (the
@@ -235,14 +289,10 @@ fn map_down(
     scheme: &dyn GradientDiscretisation,
     cons: &Constraints,
     kind: ConstraintKind,
+    incidence: Option<&VertexIncidence>,
 ) -> Vec<bool> {
     let fine = scheme.mesh();
     let coarse = &agg.mesh;
-    let needs_vertices = cons
-        .dofs
-        .iter()
-        .any(|d| matches!(scheme.dof_entity(d.dof), Entity::Vertex(_)));
-    let incidence = needs_vertices.then(|| VertexIncidence::new(fine));
     let mut cells = Vec::new();
     let mut edges = Vec::new();
     cons.dofs
@@ -261,7 +311,7 @@ fn map_down(
                     edges.push(e);
                 }
                 Entity::Vertex(v) => {
-                    if let Some(inc) = &incidence {
+                    if let Some(inc) = incidence {
                         cells.extend_from_slice(inc.cells(v));
                         edges.extend_from_slice(inc.boundary_edges(v));
                     }

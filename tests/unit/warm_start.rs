@@ -154,6 +154,35 @@ fn nested_works_on_any_domain() {
     }
 }
 
+/// The guess the prediction carries is the coarse solution on the fine unknowns: within a
+/// coarse-mesh error of the fine solution, far closer than the zero start, for P1 (vertex
+/// unknowns) and HMM (edge unknowns); its length is the number of skeleton unknowns.
+#[test]
+fn the_prediction_carries_a_first_guess() {
+    use gradvi::assembly::DiscreteSystem;
+    let p = paper_test3(-5.0);
+    let tri = cartesian_triangles(96, 96, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let quads = cartesian(96, 96).unwrap();
+    let p1 = P1::new(&tri).unwrap();
+    let hmm = Hmm::new(&quads);
+    for scheme in [&p1 as &dyn GradientDiscretisation, &hmm] {
+        let system = DiscreteSystem::new(scheme, &p, Default::default()).unwrap();
+        let cons = constraints::build(&system, &p).unwrap().unwrap();
+        let pred = warm_start::predict(scheme, &p, &cons).unwrap();
+        assert_eq!(pred.guess.len(), scheme.n_skeleton());
+        let fine = solve_problem(scheme, &p, &opts(WarmStart::Cold)).unwrap();
+        let u = &fine.u()[..scheme.n_skeleton()];
+        let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
+        let err = norm(&mut u.iter().zip(&pred.guess).map(|(a, b)| a - b));
+        let size = norm(&mut u.iter().copied());
+        assert!(
+            err < 0.1 * size,
+            "{}: |guess - u| = {err:.3e}, |u| = {size:.3e}",
+            scheme.name()
+        );
+    }
+}
+
 #[test]
 fn nested_on_a_coarse_mesh_starts_cold_and_says_why() {
     let small = cartesian(12, 12).unwrap();
