@@ -27,8 +27,12 @@ pub(crate) fn counting_sort<T: Copy + Default>(
     (ptr, items)
 }
 
-/// The points keyed by `key` of each coordinate, `(key(x), key(y), index)`, sorted.
-pub(crate) fn sorted_point_keys<K: Ord>(
+/// From this many items on, [`sorted_point_keys`] sorts in parallel.
+const PARALLEL_SORT: usize = 1 << 15;
+
+/// The points keyed by `key` of each coordinate, `(key(x), key(y), index)`, sorted (in parallel
+/// for many points: the items are distinct, so the order is that of a sequential sort).
+pub(crate) fn sorted_point_keys<K: Ord + Send>(
     pts: &[super::Point],
     key: impl Fn(f64) -> K,
 ) -> Vec<(K, K, usize)> {
@@ -37,6 +41,11 @@ pub(crate) fn sorted_point_keys<K: Ord>(
         .enumerate()
         .map(|(i, p)| (key(p[0]), key(p[1]), i))
         .collect();
-    keyed.sort_unstable();
+    if keyed.len() >= PARALLEL_SORT {
+        use rayon::slice::ParallelSliceMut;
+        keyed.par_sort_unstable();
+    } else {
+        keyed.sort_unstable();
+    }
     keyed
 }

@@ -58,6 +58,7 @@ pub use complex::CellComplex;
 pub use validate::MAX_CELL_VERTICES;
 
 use crate::error::MeshError;
+use rayon::prelude::*;
 
 /// Marker for "no cell" in [`PolyMesh::edge_cells`] (the second cell of a boundary edge).
 pub const NO_CELL: usize = usize::MAX;
@@ -229,32 +230,32 @@ impl PolyMesh {
         if cell_ptr.len() < 2 {
             return Err(MeshError::Empty);
         }
-        // checks 1–5 of `validate`, and the cell geometry
-        let cells = validate::cell_geometry(&vertices, &cell_ptr, &mut cell_verts)?;
-        validate::check_duplicate_vertices(&vertices)?;
+        // checks 1–5 of `validate` and the cell geometry, while the vertices are sorted for
+        // checks 6 and 11 (the errors are reported in the order of the checks)
+        let (cells, (duplicates, order)) = rayon::join(
+            || validate::cell_geometry(&vertices, &cell_ptr, &mut cell_verts),
+            || {
+                rayon::join(
+                    || validate::check_duplicate_vertices(&vertices),
+                    || sweep::SweepOrder::new(&vertices),
+                )
+            },
+        );
+        let cells = cells?;
+        duplicates?;
 
-        // --- edges, numbered in (min, max) vertex order
+        // --- edges, numbered in (min, max) vertex order (check 7), and check 8 meanwhile
+        let (built, simple) = rayon::join(
+            || build_edges(nv, &cell_ptr, &cell_verts),
+            || validate::check_simple_cells(&vertices, &cell_ptr, &cell_verts),
+        );
         let Edges {
             edges,
             edge_cells,
             cell_edges,
-        } = build_edges(nv, &cell_ptr, &cell_verts)?;
+        } = built?;
+        simple?;
         let ne = edges.len();
-        let edge_length: Vec<f64> = edges
-            .iter()
-            .map(|&[a, b]| dist(vertices[a], vertices[b]))
-            .collect();
-        let edge_midpoint: Vec<Point> = edges
-            .iter()
-            .map(|&[a, b]| {
-                [
-                    0.5 * (vertices[a][0] + vertices[b][0]),
-                    0.5 * (vertices[a][1] + vertices[b][1]),
-                ]
-            })
-            .collect();
-
-        validate::check_simple_cells(&vertices, &cell_ptr, &cell_verts)?;
         // star-shapedness with respect to the centroid (d_{K,σ} > 0, computed above)
         if let Some(err) = cells.not_star_shaped {
             return Err(err);
@@ -279,8 +280,24 @@ impl PolyMesh {
                 cell_area: &cells.area,
             },
             &boundary,
+            order,
         )?;
         drop(boundary);
+
+        // the edge geometry, once the sweep's arrays are freed (a lower peak of memory)
+        let edge_length: Vec<f64> = edges
+            .par_iter()
+            .map(|&[a, b]| dist(vertices[a], vertices[b]))
+            .collect();
+        let edge_midpoint: Vec<Point> = edges
+            .par_iter()
+            .map(|&[a, b]| {
+                [
+                    0.5 * (vertices[a][0] + vertices[b][0]),
+                    0.5 * (vertices[a][1] + vertices[b][1]),
+                ]
+            })
+            .collect();
 
         let edge_tags = vec![0i32; ne];
         let cell_tags = vec![0i32; cells.area.len()];
@@ -580,8 +597,9 @@ struct Edges {
     cell_edges: Vec<usize>,
 }
 
-/// Unsigned index type of the scratch arrays of [`build_edges`].
-trait EdgeIndex: Copy + Ord + Default {
+/// Unsigned index type of the scratch arrays of [`build_edges`] and of the sweep's events
+/// (`u32` when the values fit: half the memory traffic and footprint of `usize`).
+pub(crate) trait EdgeIndex: Copy + Ord + Default {
     /// `v` as `Self`; [`build_edges`] only calls it with values that fit.
     fn from_usize(v: usize) -> Self;
     fn to_usize(self) -> usize;

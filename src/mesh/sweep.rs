@@ -30,8 +30,8 @@
 //! segments at the vertex excluded). The mesh checks use it to tell whether a boundary loop lies
 //! inside a cell ([`super::validate`]).
 
-use super::Point;
 use super::predicates::{orient, segments_meet, segments_overlap_from};
+use super::{EdgeIndex as Index, Point};
 use std::cmp::Ordering;
 
 /// An active segment: its end points in sweep order, their ranks in that order and its index
@@ -316,27 +316,38 @@ fn sort_key(x: f64) -> u64 {
 /// The input renumbered in sweep order, so that the sweep reads its arrays (nearly) in order
 /// instead of jumping around the vertex numbering: vertices by rank, segments by the rank of
 /// their left end.
-struct Events {
+struct Events<I> {
     /// The points in sweep order.
     pts: Vec<Point>,
     /// The rank of every vertex in the sweep order.
     rank: Vec<usize>,
     /// (rank of the left end, rank of the right end, index in the input) of every segment,
     /// by left end; `segs[start_ptr[r]..start_ptr[r + 1]]` start at rank r.
-    segs: Vec<(usize, usize, usize)>,
+    segs: Vec<(I, I, I)>,
     start_ptr: Vec<usize>,
     /// CSR by the rank of the right end: positions in `segs` of the segments ending there.
     end_ptr: Vec<usize>,
-    ends: Vec<usize>,
+    ends: Vec<I>,
 }
 
 /// A CSR of `0..keys.len()` by key (`n` keys), in increasing order within each key.
-fn csr(keys: impl Iterator<Item = usize> + Clone, n: usize) -> (Vec<usize>, Vec<usize>) {
-    super::buckets::counting_sort(n, keys.map(Some), |i| i)
+fn csr<I: Index>(keys: impl Iterator<Item = usize> + Clone, n: usize) -> (Vec<usize>, Vec<I>) {
+    super::buckets::counting_sort(n, keys.map(Some), I::from_usize)
 }
 
-impl Events {
-    fn new(pts: &[Point], segs: &[[usize; 2]]) -> Events {
+/// The vertices in sweep order: the part of [`Events`] that depends on the points alone, so
+/// that the mesh checks can compute it while they build the edges ([`first_collision_in`]).
+pub(crate) struct SweepOrder {
+    /// The points in sweep order.
+    pts: Vec<Point>,
+    /// The rank of every vertex in the sweep order.
+    rank: Vec<usize>,
+}
+
+impl SweepOrder {
+    /// Sorts `pts` in sweep order (in parallel for many points: the keys are distinct, so the
+    /// order is the same).
+    pub(crate) fn new(pts: &[Point]) -> SweepOrder {
         let n = pts.len();
         let keyed = super::buckets::sorted_point_keys(pts, sort_key);
         let mut rank = vec![0usize; n];
@@ -345,21 +356,39 @@ impl Events {
             rank[v] = r;
             sorted_pts.push(pts[v]);
         }
-        drop(keyed);
+        SweepOrder {
+            pts: sorted_pts,
+            rank,
+        }
+    }
+}
+
+impl<I: Index> Events<I> {
+    fn new(order: SweepOrder, segs: &[[usize; 2]]) -> Events<I> {
+        let SweepOrder {
+            pts: sorted_pts,
+            rank,
+        } = order;
+        let n = sorted_pts.len();
         let ranked = segs.iter().map(|&[a, b]| {
             let (ra, rb) = (rank[a], rank[b]);
             (ra.min(rb), ra.max(rb))
         });
         let (start_ptr, by_left) = csr(ranked.clone().map(|(l, _)| l), n);
-        let segs: Vec<(usize, usize, usize)> = by_left
+        let segs: Vec<(I, I, I)> = by_left
             .into_iter()
-            .map(|i| {
+            .map(|i: I| {
+                let i = i.to_usize();
                 let [a, b] = segs[i];
                 let (ra, rb) = (rank[a], rank[b]);
-                (ra.min(rb), ra.max(rb), i)
+                (
+                    I::from_usize(ra.min(rb)),
+                    I::from_usize(ra.max(rb)),
+                    I::from_usize(i),
+                )
             })
             .collect();
-        let (end_ptr, ends) = csr(segs.iter().map(|s| s.1), n);
+        let (end_ptr, ends) = csr(segs.iter().map(|s| s.1.to_usize()), n);
         Events {
             pts: sorted_pts,
             rank,
@@ -373,6 +402,7 @@ impl Events {
     /// The active segment for `segs[j]`.
     fn active(&self, j: usize) -> Active {
         let (l, r, _) = self.segs[j];
+        let (l, r) = (l.to_usize(), r.to_usize());
         Active {
             left: self.pts[l],
             right: self.pts[r],
@@ -406,9 +436,27 @@ fn collide(s: &Active, t: &Active) -> bool {
 /// segment must join two distinct points. O((n + q) log n) for n points and segments and q
 /// queries (expected, over the priorities of the treap, whatever the input).
 pub(crate) fn first_collision(pts: &[Point], segs: &[[usize; 2]], queries: &[usize]) -> Sweep {
-    let ev = Events::new(pts, segs);
+    first_collision_in(SweepOrder::new(pts), segs, queries)
+}
+
+/// [`first_collision`] on the points sorted beforehand by [`SweepOrder::new`].
+pub(crate) fn first_collision_in(
+    order: SweepOrder,
+    segs: &[[usize; 2]],
+    queries: &[usize],
+) -> Sweep {
+    // the event arrays hold ranks and segment indices: `u32` when they fit (half the memory)
+    if u32::try_from(segs.len().max(order.pts.len())).is_ok() {
+        sweep_events(Events::<u32>::new(order, segs), queries)
+    } else {
+        sweep_events(Events::<usize>::new(order, segs), queries)
+    }
+}
+
+/// The sweep of [`first_collision`] over its events.
+fn sweep_events<I: Index>(ev: Events<I>, queries: &[usize]) -> Sweep {
     let collision = |i: usize, j: usize| {
-        let (a, b) = (ev.segs[i].2, ev.segs[j].2);
+        let (a, b) = (ev.segs[i].2.to_usize(), ev.segs[j].2.to_usize());
         Sweep::Collision(a.min(b), a.max(b))
     };
     // the queries by rank, last first, with their positions in `queries`
@@ -429,11 +477,11 @@ pub(crate) fn first_collision(pts: &[Point], segs: &[[usize; 2]], queries: &[usi
         // earlier); once they are gone, `below_r` and `above_r` are the neighbours of r
         let (mut below_r, mut above_r) = (NIL, NIL);
         for &j in ending {
-            (below_r, above_r) = list.remove_nodes(j);
+            (below_r, above_r) = list.remove_nodes(j.to_usize());
         }
         while pending.last().is_some_and(|&(q, _)| q == r) {
             let (_, k) = pending.pop().expect("not empty");
-            below[k] = list.below(&probe).map(|j| ev.segs[j].2);
+            below[k] = list.below(&probe).map(|j| ev.segs[j].2.to_usize());
         }
         let starts = ev.start_ptr[r]..ev.start_ptr[r + 1];
         if starts.is_empty() {

@@ -513,9 +513,14 @@ impl Topology<'_> {
 
 /// Checks 11 and 12 (see the module docs): no two edges meet except at a common vertex, and
 /// every boundary loop lies in a cell exactly if it is a hole.
-pub(crate) fn check_no_overlap(t: &Topology, boundary: &Boundary) -> Result<(), MeshError> {
+/// `order` is [`t.vertices`](Topology::vertices) in sweep order ([`sweep::SweepOrder::new`]).
+pub(crate) fn check_no_overlap(
+    t: &Topology,
+    boundary: &Boundary,
+    order: sweep::SweepOrder,
+) -> Result<(), MeshError> {
     let queries: Vec<usize> = boundary.loops.iter().map(|l| l.lowest).collect();
-    let below = match sweep::first_collision(t.vertices, t.edges, &queries) {
+    let below = match sweep::first_collision_in(order, t.edges, &queries) {
         Sweep::Collision(e, f) => {
             return Err(MeshError::CrossingEdges {
                 edges: [t.edges[e], t.edges[f]],
