@@ -76,7 +76,8 @@
 //! Each layer uses only the layers above it in this list (no cycles):
 //! 1. [`mesh`]: [`mesh::PolyMesh`] (flat arrays, cached geometry, validation), readers
 //!    ([`mesh::io`]: gmsh 4.1/2.2, FVCA5 typ1/typ2), writers (VTU, typ2), generators
-//!    ([`mesh::generate`]: Cartesian, hexagonal = FVCA5 `hexa1_k`, Kershaw = `mesh4_1_k`),
+//!    ([`mesh::generate`]: Cartesian, hexagonal = FVCA5 `hexa1_k`, Kershaw = `mesh4_1_k`,
+//!    triangulated Cartesian),
 //!    coarse meshes by agglomeration ([`mesh::agglomerate`]), and the dimension-generic
 //!    cell–face complex a scheme reads ([`mesh::CellComplex`], see "Dimension" in [`mesh`]).
 //! 2. [`scheme`]: the [`scheme::GradientDiscretisation`] trait (local matrix, local load, trace

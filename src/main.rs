@@ -50,10 +50,11 @@ enum MeshCommand {
     },
     /// Generate a mesh of the unit square and write it (.typ2 or .vtu, by extension).
     Generate {
-        /// cartesian, hexagonal or kershaw.
+        /// cartesian, hexagonal, kershaw or triangles.
         family: String,
         /// Level (hexagonal k: the FVCA5 hexa1_k mesh; kershaw k: mesh4_1_k; cartesian k:
-        /// 2^(k+1) × 2^(k+1) squares).
+        /// 2^(k+1) × 2^(k+1) squares; triangles k: those squares, each cut into two triangles
+        /// by its diagonal from lower left to upper right).
         #[arg(long)]
         level: usize,
         /// Output file (.typ2 or .vtu).

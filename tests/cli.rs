@@ -205,3 +205,154 @@ fn problem_names_keep_the_sign_of_their_parameters() {
         assert!(out.contains(name), "{out}");
     }
 }
+
+/// Runs `gradvi solve ARGS --json J` and returns the JSON summary (panics if the solve fails).
+fn solve_json(args: &str, name: &str) -> serde_json::Value {
+    let json = tmp(name);
+    let line = format!("solve {args} --json {}", json.display());
+    let (ok, _, err) = gradvi(&words(&line));
+    assert!(ok, "{line}: {err}");
+    let j = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    std::fs::remove_file(json).ok();
+    j
+}
+
+/// problems/ex9.toml generates `cartesian`, level 4, on `domain = [-2, 2, -2, 2]`: --level
+/// alone changes the level, --generate the family (and --level the level), both keeping the
+/// domain; the JSON output records the mesh used. Before, `--level` alone was refused, and
+/// `--generate cartesian --level 5` meshed the unit square, where the Dirichlet data
+/// −A ln r + B is infinite at the corner (0, 0).
+#[test]
+fn overriding_a_generated_mesh_keeps_its_domain() {
+    let on = "on [-2, 2]x[-2, 2]";
+    // h of the unit-square mesh: the diagonal of a square of side 1/n, or (Kershaw level 1)
+    // the FVCA5 value
+    let square = |n: f64| std::f64::consts::SQRT_2 / n;
+    for (args, mesh, cells, h_unit) in [
+        (
+            "--level 5",
+            format!("cartesian level 5 {on}"),
+            64 * 64,
+            square(64.0),
+        ),
+        (
+            "--generate cartesian --level 5",
+            format!("cartesian level 5 {on}"),
+            64 * 64,
+            square(64.0),
+        ),
+        (
+            "--generate triangles --scheme p1",
+            format!("triangles level 4 {on}"),
+            2 * 32 * 32,
+            square(32.0),
+        ),
+        (
+            "--generate triangles --level 3 --scheme p1",
+            format!("triangles level 3 {on}"),
+            2 * 16 * 16,
+            square(16.0),
+        ),
+        (
+            "--generate kershaw --level 1",
+            format!("kershaw level 1 {on}"),
+            289,
+            0.3288,
+        ),
+    ] {
+        let j = solve_json(&format!("problems/ex9.toml {args}"), "override.json");
+        assert_eq!(j["mesh"], mesh.as_str(), "{args}");
+        assert_eq!(j["n_cells"], cells, "{args}");
+        assert!(
+            j["certificate"]["max_violation"].as_f64().unwrap() <= 1e-10,
+            "{args}"
+        );
+        // the mesh is on [-2, 2]²: h is 4 times that of the unit-square mesh
+        let h = j["h"].as_f64().unwrap();
+        assert!((h - 4.0 * h_unit).abs() <= 1e-3 * h, "{args}: h = {h}");
+    }
+    // without overrides, the file's mesh
+    let j = solve_json("problems/ex9.toml", "file-mesh.json");
+    assert_eq!(j["mesh"], format!("cartesian level 4 {on}").as_str());
+}
+
+/// --mesh replaces the problem file's mesh entirely: the file's `domain` is not applied.
+#[test]
+fn a_mesh_file_replaces_a_generated_mesh_and_its_domain() {
+    let problem = tmp("strip.toml");
+    std::fs::write(
+        &problem,
+        "name = \"strip\"\n[mesh]\ngenerate = \"cartesian\"\nlevel = 2\ndomain = [0, 4, 0, 1]\n\
+         [source]\nf = 1\n",
+    )
+    .unwrap();
+    let p = problem.display();
+    let j = solve_json(&format!("{p}"), "strip.json");
+    assert_eq!(j["mesh"], "cartesian level 2 on [0, 4]x[0, 1]");
+    assert!((j["h"].as_f64().unwrap() - (0.5f64.powi(2) + 0.125f64.powi(2)).sqrt()).abs() < 1e-12);
+    let j = solve_json(&format!("{p} --mesh meshes/test3_1.msh"), "strip-file.json");
+    assert_eq!(j["mesh"], "meshes/test3_1.msh");
+    assert_eq!(j["n_cells"], 856);
+    // the h of test3_1.msh on the unit square (`gradvi mesh info`: 0.060867), not stretched
+    assert!(
+        (j["h"].as_f64().unwrap() - 0.060867).abs() < 1e-6,
+        "{}",
+        j["h"]
+    );
+    // --level with --mesh has nothing to apply to
+    let (ok, _, err) = gradvi(&words(&format!(
+        "solve {p} --mesh meshes/test3_1.msh --level 3"
+    )));
+    assert!(!ok && err.contains("--generate"), "{err}");
+    std::fs::remove_file(problem).ok();
+}
+
+/// --level without --generate when the problem file's mesh is a file, or when it has none;
+/// --generate without --level when there is no level to keep: one clear line each.
+#[test]
+fn a_level_with_nothing_to_apply_to_is_refused() {
+    for (line, needles) in [
+        (
+            "solve problems/lshape-obstacle.toml --level 3",
+            ["--level needs --generate", "lshape.msh"],
+        ),
+        (
+            "solve --problem test3 --level 3",
+            ["--level needs --generate", "has no [mesh]"],
+        ),
+        (
+            "solve --problem test3 --generate cartesian",
+            ["--generate cartesian needs --level", "test3.toml"],
+        ),
+    ] {
+        let (ok, _, err) = gradvi(&words(line));
+        assert!(!ok, "{line} succeeded");
+        assert_eq!(err.trim_end().lines().count(), 1, "{line}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{line}: {err}");
+        }
+    }
+}
+
+/// The `triangles` family from the command line; an unknown family lists all four; P1 on a
+/// generated quadrangle mesh says how to get triangles.
+#[test]
+fn the_triangles_family_and_the_list_of_families() {
+    let path = tmp("t.typ2");
+    let p = path.to_str().unwrap();
+    let (ok, _, err) = gradvi(&["mesh", "generate", "triangles", "--level", "2", "-o", p]);
+    assert!(ok, "{err}");
+    let (ok, out, _) = gradvi(&["mesh", "info", p]);
+    assert!(ok && out.contains("cells by sides  3:128"), "{out}");
+    std::fs::remove_file(&path).ok();
+    let all = "\"cartesian\", \"hexagonal\", \"kershaw\" or \"triangles\"";
+    for line in [
+        format!("mesh generate octagonal --level 1 -o {p}"),
+        "solve problems/ex9.toml --generate octagonal".into(),
+    ] {
+        let (ok, _, err) = gradvi(&words(&line));
+        assert!(!ok && err.contains(all), "{line}: {err}");
+    }
+    let (ok, _, err) = gradvi(&words("solve problems/ex9.toml --scheme p1"));
+    assert!(!ok && err.contains("--generate triangles"), "{err}");
+}

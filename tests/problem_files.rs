@@ -572,3 +572,52 @@ fn gmsh22_cells_carry_their_physical_tag() {
         assert_eq!(mesh.cell_tag(k), 10, "cell {k}");
     }
 }
+
+/// P1 needs triangles: ex9 on the generated `triangles` family, keeping the file's domain
+/// (what `gradvi solve problems/ex9.toml --generate triangles --scheme p1` does). The mapped
+/// mesh is exactly `cartesian_triangles(32, 32, [-2, 2], [-2, 2])`; P1 there is the five-point
+/// Laplacian of PETSc's ex9 at the vertices.
+#[test]
+fn example_ex9_with_p1_on_generated_triangles() {
+    use gradvi::mesh::generate::{Family, cartesian_triangles};
+    let pf = file::load(problems().join("ex9.toml"), &[]).unwrap();
+    let Some(MeshSpec::Generated { level, domain, .. }) = pf.mesh.clone() else {
+        panic!("ex9 generates its mesh: {:?}", pf.mesh);
+    };
+    assert_eq!((level, domain), (4, Some([-2.0, 2.0, -2.0, 2.0])));
+    let spec = MeshSpec::Generated {
+        family: Family::Triangles,
+        level,
+        domain,
+    };
+    assert_eq!(spec.to_string(), "triangles level 4 on [-2, 2]x[-2, 2]");
+    let mesh = spec.build().unwrap();
+    let reference = cartesian_triangles(32, 32, [-2.0, 2.0], [-2.0, 2.0]).unwrap();
+    assert_eq!(mesh.vertices(), reference.vertices());
+    assert_eq!(mesh.n_cells(), 2 * 32 * 32);
+    for k in 0..mesh.n_cells() {
+        assert_eq!(
+            mesh.cell_vertices(k),
+            reference.cell_vertices(k),
+            "cell {k}"
+        );
+    }
+    pf.check_against_mesh(&mesh).unwrap();
+    let p = pf.problem();
+    let s = P1::new(&mesh).unwrap();
+    let sol = solve(&s, &p);
+    assert!(sol.result.certificate.check(1e-10).is_ok());
+    let ex = p.exact.as_ref().unwrap();
+    let e = relative_errors(&s, sol.u(), &ex.u, &ex.grad);
+    let a: f64 = 0.697965148223374;
+    let area = std::f64::consts::PI * a * a;
+    println!(
+        "ex9 P1 triangles level 4: NITER {}, e_u {:.4e}, e_grad {:.4e}, contact {:.4} (πa² = {area:.4})",
+        sol.niter(),
+        e.l2_u,
+        e.l2_grad,
+        contact(&sol)
+    );
+    assert!(close(e.l2_u, 5.3948e-3, 1e-3), "{}", e.l2_u);
+    assert!(e.l2_grad < 0.05, "{}", e.l2_grad);
+}

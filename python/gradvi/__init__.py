@@ -48,7 +48,7 @@ from ._solve import SCHEMES, Certificate, IterationLog, Solution, solve
 __version__ = _rust_version
 
 #: Mesh families of :meth:`Mesh.generate`.
-FAMILIES = ("cartesian", "hexagonal", "kershaw")
+FAMILIES = ("cartesian", "hexagonal", "kershaw", "triangles")
 #: Problems of :meth:`Problem.builtin`.
 BUILTIN_PROBLEMS = ("test1", "test2", "test3", "fvca5-1.1")
 

@@ -179,7 +179,9 @@ class Mesh:
         cls, family: str, level: int, domain: Optional[Sequence[float]] = None
     ) -> "Mesh":
         """A mesh of a built-in family of the unit square: ``"cartesian"`` (level k: 2^(k+1)
-        squares per side), ``"hexagonal"`` (FVCA5 ``hexa1_k``), ``"kershaw"`` (``mesh4_1_k``).
+        squares per side), ``"hexagonal"`` (FVCA5 ``hexa1_k``), ``"kershaw"`` (``mesh4_1_k``),
+        ``"triangles"`` (the Cartesian squares of level k, each cut into two triangles by its
+        diagonal from lower left to upper right: a mesh for P1 and CR).
         ``domain = (x0, x1, y0, y1)`` maps it affinely onto that rectangle."""
         if int(level) < 1:
             raise InvalidDataError(f"mesh levels start at 1, got {level}")

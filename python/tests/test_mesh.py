@@ -65,8 +65,11 @@ def test_mixed_polygons_from_lists():
 
 
 def test_generators_and_domain():
-    for fam, level, cells in (("cartesian", 1, 16), ("hexagonal", 1, 121), ("kershaw", 1, 289)):
+    for fam, level, cells in (("cartesian", 1, 16), ("hexagonal", 1, 121), ("kershaw", 1, 289), ("triangles", 1, 32)):
         assert gradvi.Mesh.generate(fam, level).n_cells == cells
+    assert set(gradvi.FAMILIES) == {"cartesian", "hexagonal", "kershaw", "triangles"}
+    t = gradvi.Mesh.generate("triangles", 2, domain=(-2, 2, -2, 2))
+    assert t.is_triangular and t.n_cells == 128 and t.bounding_box == (-2.0, -2.0, 2.0, 2.0)
     m = gradvi.Mesh.generate("cartesian", 2, domain=(-2, 2, -1, 3))
     assert m.bounding_box == (-2.0, -1.0, 2.0, 3.0)
     assert m.measures.sum() == pytest.approx(16.0)

@@ -6,7 +6,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::Family;
-use gradvi::mesh::io::{read_mesh, write_vtu};
+use gradvi::mesh::io::write_vtu;
 use gradvi::post::fields::EntityFields;
 use gradvi::problem::file;
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with};
@@ -29,13 +29,17 @@ pub struct SolveArgs {
     /// Problem parameter name=value (repeatable), e.g. --param C=-10 for test3.
     #[arg(long = "param", value_parser = parse_param)]
     params: Vec<(String, f64)>,
-    /// Mesh file (.msh, .typ1, .typ2).
+    /// Mesh file (.msh, .typ1, .typ2); replaces the problem file's [mesh] entirely (its
+    /// `domain` is not applied).
     #[arg(long, conflicts_with = "generate")]
     mesh: Option<PathBuf>,
-    /// Generate the mesh instead: cartesian, hexagonal or kershaw (with --level).
-    #[arg(long, requires = "level")]
+    /// Generate the mesh instead: cartesian, hexagonal, kershaw or triangles (the Cartesian
+    /// squares cut by a diagonal, for P1). Keeps the problem file's `domain`, and its `level`
+    /// unless --level is given.
+    #[arg(long)]
     generate: Option<String>,
-    /// Level of the generated mesh (only with --generate).
+    /// Level of the generated mesh: with --generate, or alone to change the level of the
+    /// problem file's generated mesh (same family and domain).
     #[arg(long)]
     level: Option<usize>,
     /// The scheme (default: the problem file's `scheme`, else hmm).
@@ -105,7 +109,7 @@ fn check_options(a: &SolveArgs) -> Result<()> {
     if !(a.c > 0.0 && a.c.is_finite()) {
         bail!("--c must be positive and finite, got {}", a.c);
     }
-    if a.level.is_some() && a.generate.is_none() {
+    if a.level.is_some() && a.mesh.is_some() {
         bail!("--level is only meaningful with --generate (the mesh comes from --mesh)");
     }
     if a.max_solves == 0 {
@@ -147,6 +151,92 @@ fn check_paths(a: &SolveArgs, pf: &file::ProblemFile) -> Result<()> {
     check_distinct(&inputs, &outputs)
 }
 
+/// The mesh of a solve: the problem file's `[mesh]` (`file_mesh`, read from `problem`) with
+/// the command line's `--mesh`, `--generate` and `--level` applied.
+///
+/// | command line | file: `generate` F, `level` L, `domain` D | file: `file` M₀ | no `[mesh]` |
+/// |---|---|---|---|
+/// | — | F level L on D | M₀ | error |
+/// | `--mesh M` | M (D is not applied) | M | M |
+/// | `--generate G` | G level L on D | error (no level) | error (no level) |
+/// | `--generate G --level K` | G level K on D | G level K | G level K |
+/// | `--level K` | F level K on D | error (a file has no level) | error |
+///
+/// The level is checked against the family here, so that an error says where it came from.
+/// `--mesh` with `--level` or `--generate` is an error (also refused earlier, by
+/// `check_options` and by clap).
+fn resolve_mesh(
+    mesh: Option<&Path>,
+    generate: Option<&str>,
+    level: Option<usize>,
+    file_mesh: Option<&file::MeshSpec>,
+    problem: &Path,
+) -> Result<file::MeshSpec> {
+    use file::MeshSpec;
+    // the family, level and domain of the problem file's mesh, when it is generated
+    let generated = match file_mesh {
+        Some(&MeshSpec::Generated {
+            family,
+            level,
+            domain,
+        }) => Some((family, level, domain)),
+        _ => None,
+    };
+    let (family, level, domain, origin) = match (mesh, generate, level) {
+        (Some(_), _, Some(_)) => {
+            bail!("--level is only meaningful with --generate (the mesh comes from --mesh)")
+        }
+        (Some(_), Some(_), None) => bail!("give --mesh FILE or --generate FAMILY, not both"),
+        (Some(m), None, None) => return Ok(MeshSpec::File(m.to_path_buf())),
+        (None, Some(g), level) => {
+            let family: Family = g.parse().context("--generate")?;
+            let domain = generated.and_then(|(_, _, d)| d);
+            match (level, generated) {
+                (Some(k), _) => (family, k, domain, "--level".to_string()),
+                (None, Some((_, l, _))) => (
+                    family,
+                    l,
+                    domain,
+                    format!("the level of the [mesh] of {}", problem.display()),
+                ),
+                (None, None) => bail!(
+                    "--generate {g} needs --level: {} has no generated [mesh] whose level \
+                     could be kept",
+                    problem.display()
+                ),
+            }
+        }
+        (None, None, Some(k)) => match (generated, file_mesh) {
+            (Some((family, _, domain)), _) => (family, k, domain, "--level".to_string()),
+            (None, Some(MeshSpec::File(m))) => bail!(
+                "--level needs --generate FAMILY: the mesh of {} is the file {}, which has no \
+                 level",
+                problem.display(),
+                m.display()
+            ),
+            (None, _) => bail!(
+                "--level needs --generate FAMILY: {} has no [mesh]",
+                problem.display()
+            ),
+        },
+        (None, None, None) => match file_mesh {
+            Some(spec) => return Ok(spec.clone()),
+            None => bail!(
+                "give --mesh FILE or --generate FAMILY --level K ({} has no [mesh])",
+                problem.display()
+            ),
+        },
+    };
+    family
+        .check_level(level)
+        .with_context(|| format!("the level {level} ({origin}) of the {family} mesh"))?;
+    Ok(MeshSpec::Generated {
+        family,
+        level,
+        domain,
+    })
+}
+
 /// `gradvi solve`.
 pub fn run(a: &SolveArgs) -> Result<()> {
     check_options(a)?;
@@ -156,19 +246,30 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         (None, None) => bail!("give a problem file or --problem NAME"),
     };
     check_paths(a, &pf)?;
-    let (mesh, mesh_desc) = match (&a.mesh, &a.generate, &pf.mesh) {
-        (Some(f), None, _) => (read_mesh(f)?, f.display().to_string()),
-        (None, Some(fam), _) => {
-            let level = a.level.unwrap_or(1);
-            (generate(fam, level)?, format!("{fam} level {level}"))
-        }
-        (None, None, Some(spec)) => (spec.build()?, spec.to_string()),
-        _ => bail!("give --mesh FILE or --generate FAMILY --level K (the problem has no [mesh])"),
-    };
+    let spec = resolve_mesh(
+        a.mesh.as_deref(),
+        a.generate.as_deref(),
+        a.level,
+        pf.mesh.as_ref(),
+        &pf.path,
+    )?;
+    // the resolved mesh, as the JSON output records it
+    let mesh_desc = spec.to_string();
+    let mesh = spec.build()?;
     pf.check_against_mesh(&mesh)?;
     let problem = pf.problem();
     let kind = a.scheme.or(pf.scheme).unwrap_or(SchemeKind::Hmm);
-    let scheme = build_with(kind, &mesh, &SchemeOptions { alpha: a.alpha })?;
+    let scheme = build_with(kind, &mesh, &SchemeOptions { alpha: a.alpha }).map_err(|e| {
+        let e = anyhow::Error::from(e);
+        // the triangle schemes on a polygonal mesh: say how to get a triangle mesh
+        if matches!(kind, SchemeKind::P1 | SchemeKind::Cr) && !mesh.is_triangular() {
+            e.context(format!(
+                "the {kind} scheme on {mesh_desc} (a generated triangle mesh: --generate triangles)"
+            ))
+        } else {
+            e
+        }
+    })?;
     let active_set = ActiveSetOptions {
         c: a.c,
         max_solves: a.max_solves,
@@ -351,4 +452,145 @@ fn write_solution_vtu(
     let cd: Vec<(&str, &[f64])> = cell_data.iter().map(|(n, v)| (*n, v.as_slice())).collect();
     write_vtu(path, scheme.mesh(), &pd, &cd)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use file::MeshSpec;
+
+    const PROBLEM: &str = "problems/ex9.toml";
+
+    /// `[mesh] generate = "cartesian", level = 4, domain = [-2, 2, -2, 2]`, as in ex9.toml.
+    fn ex9_mesh() -> MeshSpec {
+        MeshSpec::Generated {
+            family: Family::Cartesian,
+            level: 4,
+            domain: Some([-2.0, 2.0, -2.0, 2.0]),
+        }
+    }
+
+    fn resolve(
+        mesh: Option<&str>,
+        generate: Option<&str>,
+        level: Option<usize>,
+        file_mesh: Option<&MeshSpec>,
+    ) -> Result<MeshSpec> {
+        resolve_mesh(
+            mesh.map(Path::new),
+            generate,
+            level,
+            file_mesh,
+            Path::new(PROBLEM),
+        )
+    }
+
+    fn generated(family: Family, level: usize, domain: Option<[f64; 4]>) -> MeshSpec {
+        MeshSpec::Generated {
+            family,
+            level,
+            domain,
+        }
+    }
+
+    #[test]
+    fn a_generated_file_mesh_keeps_its_domain_under_overrides() {
+        let file = ex9_mesh();
+        let d = Some([-2.0, 2.0, -2.0, 2.0]);
+        let cases = [
+            // nothing: the file's mesh
+            (None, None, file.clone()),
+            // --level alone: the file's family and domain
+            (None, Some(8), generated(Family::Cartesian, 8, d)),
+            // --generate alone: the file's level and domain
+            (Some("triangles"), None, generated(Family::Triangles, 4, d)),
+            // both: the file's domain
+            (Some("kershaw"), Some(2), generated(Family::Kershaw, 2, d)),
+        ];
+        for (g, level, expected) in cases {
+            let spec = resolve(None, g, level, Some(&file)).unwrap();
+            assert_eq!(spec, expected, "--generate {g:?} --level {level:?}");
+        }
+        assert_eq!(
+            resolve(None, None, Some(8), Some(&file))
+                .unwrap()
+                .to_string(),
+            "cartesian level 8 on [-2, 2]x[-2, 2]"
+        );
+    }
+
+    #[test]
+    fn a_mesh_file_replaces_the_files_mesh_and_its_domain() {
+        let spec = resolve(Some("m.msh"), None, None, Some(&ex9_mesh())).unwrap();
+        assert_eq!(spec, MeshSpec::File(PathBuf::from("m.msh")));
+        let e = resolve(Some("m.msh"), None, Some(3), Some(&ex9_mesh())).unwrap_err();
+        assert!(format!("{e:#}").contains("--generate"), "{e:#}");
+        let e = resolve(Some("m.msh"), Some("cartesian"), None, None).unwrap_err();
+        assert!(format!("{e:#}").contains("not both"), "{e:#}");
+    }
+
+    #[test]
+    fn a_level_without_a_generated_mesh_to_apply_to_is_an_error() {
+        let file = MeshSpec::File(PathBuf::from("problems/lshape.msh"));
+        let e = format!(
+            "{:#}",
+            resolve(None, None, Some(3), Some(&file)).unwrap_err()
+        );
+        assert!(
+            e.contains("--level needs --generate") && e.contains("lshape.msh"),
+            "{e}"
+        );
+        let e = format!("{:#}", resolve(None, None, Some(3), None).unwrap_err());
+        assert!(
+            e.contains("--level needs --generate") && e.contains(PROBLEM),
+            "{e}"
+        );
+        // --generate without --level, and no level to keep
+        for file_mesh in [Some(&file), None] {
+            let e = format!(
+                "{:#}",
+                resolve(None, Some("cartesian"), None, file_mesh).unwrap_err()
+            );
+            assert!(e.contains("needs --level"), "{e}");
+        }
+        // with --level, a mesh file in the problem file is simply replaced (unit square)
+        assert_eq!(
+            resolve(None, Some("triangles"), Some(2), Some(&file)).unwrap(),
+            generated(Family::Triangles, 2, None)
+        );
+        let e = format!("{:#}", resolve(None, None, None, None).unwrap_err());
+        assert!(e.contains("has no [mesh]"), "{e}");
+    }
+
+    #[test]
+    fn bad_families_and_levels_say_where_they_came_from() {
+        let file = ex9_mesh();
+        let e = format!(
+            "{:#}",
+            resolve(None, Some("octagonal"), None, Some(&file)).unwrap_err()
+        );
+        assert!(
+            e.starts_with("--generate: ")
+                && e.contains("unknown mesh family \"octagonal\"")
+                && e.contains("\"cartesian\", \"hexagonal\", \"kershaw\" or \"triangles\""),
+            "{e}"
+        );
+        let e = format!(
+            "{:#}",
+            resolve(None, None, Some(12), Some(&file)).unwrap_err()
+        );
+        assert!(
+            e.contains("(--level)") && e.contains("levels go from 1 to 11"),
+            "{e}"
+        );
+        let big = generated(Family::Cartesian, 11, None);
+        let e = format!(
+            "{:#}",
+            resolve(None, Some("hexagonal"), None, Some(&big)).unwrap_err()
+        );
+        assert!(
+            e.contains("the level of the [mesh] of") && e.contains("levels go from 1 to 9"),
+            "{e}"
+        );
+    }
 }

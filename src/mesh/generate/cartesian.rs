@@ -43,14 +43,13 @@ pub fn cartesian_rect(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<
 /// f = 0 gives the five-point finite-difference Laplacian at the vertices (the diagonal
 /// couplings cancel), the discretisation of PETSc's obstacle example `snes/tutorials/ex9.c`.
 /// Same requirements as [`cartesian_rect`], with 2·nx·ny ≤ [`MAX_CELLS`](super::MAX_CELLS).
+/// On \[0,1\]² with nx = ny = 2^(k+1), this is level k of the `triangles` family
+/// ([`Family::Triangles`](super::Family::Triangles)).
 pub fn cartesian_triangles(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<PolyMesh> {
     check_grid(nx, ny, x, y)?;
     let what = format!("a {nx} × {ny} triangulated Cartesian mesh");
     check_cell_count(&what, nx.checked_mul(ny).and_then(|c| c.checked_mul(2)))?;
-    let c = counts(nx, ny).and_then(|[c, _, v, e]| {
-        Some([c.checked_mul(2)?, c.checked_mul(6)?, v, e.checked_add(c)?])
-    });
-    check_memory(&what, c, memory_budget())?;
+    check_memory(&what, triangle_counts(nx, ny), memory_budget())?;
     let vertices = grid_vertices(nx, ny, x, y);
     let v = |i: usize, j: usize| j * (nx + 1) + i;
     let mut cell_verts = Vec::with_capacity(6 * nx * ny);
@@ -71,6 +70,19 @@ pub(crate) fn counts(nx: usize, ny: usize) -> Counts {
     let cells = nx.checked_mul(ny)?;
     let edges = nx.checked_mul(ny1)?.checked_add(ny.checked_mul(nx1)?)?;
     Some([cells, cells.checked_mul(4)?, nx1.checked_mul(ny1)?, edges])
+}
+
+/// Cells, cell sides, vertices and edges of the triangulated nx × ny mesh
+/// ([`cartesian_triangles`]): twice the squares, three sides each, the same vertices, and one
+/// more edge (the diagonal) per square.
+pub(crate) fn triangle_counts(nx: usize, ny: usize) -> Counts {
+    let [squares, _, vertices, edges] = counts(nx, ny)?;
+    Some([
+        squares.checked_mul(2)?,
+        squares.checked_mul(6)?,
+        vertices,
+        edges.checked_add(squares)?,
+    ])
 }
 
 /// At least one cell per direction, finite bounds with lower < upper; else

@@ -3,6 +3,7 @@
 //! | generator | cells | reproduces |
 //! |---|---|---|
 //! | [`cartesian()`], [`cartesian_rect`] | nx × ny rectangles | FVCA5 `mesh2_k` (level k = 2^(k+1) squares per side), `cartNxN` |
+//! | [`cartesian_triangles`] | 2·nx·ny triangles (each square cut by its diagonal (i,j)–(i+1,j+1)) | the grid of PETSc's `snes/tutorials/ex9.c` (P1 = five-point Laplacian) |
 //! | [`hexagonal()`] (level ≥ 1), [`hexagonal_grid`] (any n) | (n+1)² mostly hexagonal cells, n = 10·2^(level−1) | HArDCore2D / FVCA5 `hexa1_1` … `hexa1_5` exactly (same vertices in the same order, same cells) |
 //! | [`kershaw()`] (level ≥ 1) | (17·level)² quadrangles | FVCA5 `mesh4_1_1` … `mesh4_1_6` (Kershaw meshes), vertices in the same order to 6e-11 |
 //!
@@ -16,20 +17,22 @@
 //! memory if less); [`Family::generate_within`] takes a smaller budget, for callers that need
 //! memory for more than the mesh.
 //!
-//! [`Family`] names the three families for the command line (`"cartesian"`, `"hexagonal"`,
-//! `"kershaw"`), generates a level ([`Family::generate`]) and predicts its size without building
-//! it ([`Family::cells_at_level`]). Levels per family:
+//! [`Family`] names the four families for the command line (`"cartesian"`, `"hexagonal"`,
+//! `"kershaw"`, `"triangles"`), generates a level ([`Family::generate`]) and predicts its size
+//! without building it ([`Family::cells_at_level`]). Levels per family:
 //!
 //! | family | level k | cells | largest level |
 //! |---|---|---|---|
 //! | Cartesian | n = 2^(k+1) squares per side (like FVCA5 `mesh2_k`: level 1 = 4×4, level 5 = 64×64) | 4^(k+1) | 11 (4096²) |
 //! | Hexagonal | `hexa1_k`: n = 10·2^(k−1) lattice steps per side, 20·2^(k−1) edges on x=0 | (n+1)² (121, 441, 1681, …) | 9 (6.6 M cells) |
 //! | Kershaw | `mesh4_1_k`: 17k × 17k quadrangles, 17k edges on x=0 | 289 k² | 240 (16.6 M cells) |
+//! | Triangles | the Cartesian grid of level k, each square cut by its diagonal from lower left to upper right ([`cartesian_triangles`]) | 2·4^(k+1) | 10 (2·2048², 8.4 M cells) |
 //!
 //! The largest levels come from the cap [`MAX_CELLS`] = 2^24 cells; the memory budget may stop
 //! earlier. Estimated peaks ([`Family::memory_estimate`]): Cartesian level 9 (1 M cells) 0.4 GB,
 //! level 10 1.6 GB, level 11 6.6 GB; hexagonal level 8 (1.6 M cells) 1.0 GB, level 9 4.0 GB;
-//! Kershaw level 100 (2.9 M cells) 1.1 GB, level 240 6.5 GB (1 GB = 10⁹ bytes; 8 GiB = 8.6 GB).
+//! Kershaw level 100 (2.9 M cells) 1.1 GB, level 240 6.5 GB; triangles level 9 (2.1 M cells)
+//! 0.6 GB, level 10 2.4 GB (1 GB = 10⁹ bytes; 8 GiB = 8.6 GB).
 
 pub mod cartesian;
 pub mod hexagonal;
@@ -83,11 +86,20 @@ pub enum Family {
     Hexagonal,
     /// Kershaw quadrangles on \[0,1\]²; level k reproduces `mesh4_1_k` (17k × 17k cells).
     Kershaw,
+    /// The Cartesian grid of level k on \[0,1\]² with every square cut into two triangles by
+    /// its diagonal (i,j)–(i+1,j+1) ([`cartesian_triangles`]): 2 · 2^(k+1) × 2^(k+1) cells, the
+    /// triangle mesh the P1 scheme needs.
+    Triangles,
 }
 
 impl Family {
-    /// The three families, in this order: Cartesian, Hexagonal, Kershaw.
-    pub const ALL: [Family; 3] = [Family::Cartesian, Family::Hexagonal, Family::Kershaw];
+    /// The four families, in this order: Cartesian, Hexagonal, Kershaw, Triangles.
+    pub const ALL: [Family; 4] = [
+        Family::Cartesian,
+        Family::Hexagonal,
+        Family::Kershaw,
+        Family::Triangles,
+    ];
 
     /// The lowercase name accepted by [`Family::from_str`].
     pub fn name(self) -> &'static str {
@@ -95,6 +107,7 @@ impl Family {
             Family::Cartesian => "cartesian",
             Family::Hexagonal => "hexagonal",
             Family::Kershaw => "kershaw",
+            Family::Triangles => "triangles",
         }
     }
 
@@ -121,11 +134,15 @@ impl Family {
                 let n = level.checked_mul(kershaw::COARSE_N)?;
                 n.checked_mul(n)
             }
+            Family::Triangles => {
+                let n = cartesian_level_n(level)?;
+                n.checked_mul(n)?.checked_mul(2)
+            }
         }
     }
 
     /// The largest level whose mesh has at most [`MAX_CELLS`] cells
-    /// (Cartesian 11, Hexagonal 9, Kershaw 240).
+    /// (Cartesian 11, Hexagonal 9, Kershaw 240, Triangles 10).
     pub fn max_level(self) -> usize {
         let mut level = 1;
         while self
@@ -165,6 +182,10 @@ impl Family {
             }
             Family::Hexagonal => hexagonal::counts(hexagonal::level_n(level)?),
             Family::Kershaw => kershaw::counts(level),
+            Family::Triangles => {
+                let n = cartesian_level_n(level)?;
+                cartesian::triangle_counts(n, n)
+            }
         }
     }
 
@@ -199,6 +220,10 @@ impl Family {
             }
             Family::Hexagonal => hexagonal(level),
             Family::Kershaw => kershaw(level),
+            Family::Triangles => {
+                let n = cartesian_level_n(level).expect("checked by check_level");
+                cartesian_triangles(n, n, [0.0, 1.0], [0.0, 1.0])
+            }
         }
     }
 }
@@ -207,6 +232,19 @@ impl Family {
 fn cartesian_level_n(level: usize) -> Option<usize> {
     let shift = u32::try_from(level.checked_add(1)?).ok()?;
     1usize.checked_shl(shift)
+}
+
+/// The names of [`Family::ALL`], quoted, for messages: `"cartesian", "hexagonal", "kershaw"
+/// or "triangles"`.
+fn family_list() -> String {
+    let names: Vec<String> = Family::ALL
+        .iter()
+        .map(|f| format!("{:?}", f.name()))
+        .collect();
+    match names.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => names.concat(),
+    }
 }
 
 impl fmt::Display for Family {
@@ -218,8 +256,8 @@ impl fmt::Display for Family {
 impl FromStr for Family {
     type Err = Error;
 
-    /// Parses `"cartesian"`, `"hexagonal"` or `"kershaw"` (case-insensitive, surrounding
-    /// blanks ignored).
+    /// Parses `"cartesian"`, `"hexagonal"`, `"kershaw"` or `"triangles"` (case-insensitive,
+    /// surrounding blanks ignored); the error for any other name lists the families.
     fn from_str(s: &str) -> Result<Self> {
         let t = s.trim();
         Family::ALL
@@ -227,7 +265,8 @@ impl FromStr for Family {
             .find(|f| f.name().eq_ignore_ascii_case(t))
             .ok_or_else(|| {
                 Error::InvalidData(format!(
-                    "unknown mesh family {s:?}: expected \"cartesian\", \"hexagonal\" or \"kershaw\""
+                    "unknown mesh family {s:?}: expected one of {}",
+                    family_list()
                 ))
             })
     }
@@ -250,11 +289,53 @@ mod tests {
             assert_eq!(f.to_string(), f.name());
         }
         assert_eq!(" Kershaw ".parse::<Family>().unwrap(), Family::Kershaw);
+        assert_eq!("TRIANGLES".parse::<Family>().unwrap(), Family::Triangles);
+        assert_eq!(Family::Triangles.name(), "triangles");
         let e = "hexa".parse::<Family>().unwrap_err();
         assert!(
             matches!(e, Error::InvalidData(ref m) if m.contains("hexagonal")),
             "{e}"
         );
+    }
+
+    #[test]
+    fn an_unknown_family_lists_all_four() {
+        match "octagonal".parse::<Family>() {
+            Err(Error::InvalidData(m)) => {
+                assert_eq!(
+                    m,
+                    "unknown mesh family \"octagonal\": expected one of \"cartesian\", \
+                     \"hexagonal\", \"kershaw\" or \"triangles\""
+                );
+                for f in Family::ALL {
+                    assert!(m.contains(&format!("\"{f}\"")), "{m}");
+                }
+            }
+            r => panic!("{r:?}"),
+        }
+    }
+
+    #[test]
+    fn triangles_are_the_triangulated_cartesian_grid() {
+        for level in 1..=4 {
+            let m = Family::Triangles.generate(level).unwrap();
+            let n = 1 << (level + 1);
+            let reference = cartesian_triangles(n, n, [0.0, 1.0], [0.0, 1.0]).unwrap();
+            assert!(m.is_triangular(), "level {level}");
+            assert_eq!(m.vertices(), reference.vertices(), "level {level}");
+            for k in 0..m.n_cells() {
+                assert_eq!(m.cell_vertices(k), reference.cell_vertices(k));
+            }
+            // the same vertices as the Cartesian mesh of the same level, twice its cells
+            let squares = Family::Cartesian.generate(level).unwrap();
+            assert_eq!(m.vertices(), squares.vertices());
+            assert_eq!(m.n_cells(), 2 * squares.n_cells());
+            assert_eq!(m.n_edges(), squares.n_edges() + squares.n_cells());
+            assert!((total_area(&m) - 1.0).abs() < 1e-12);
+        }
+        assert_eq!(Family::Triangles.cells_at_level(1), 32);
+        assert_eq!(Family::Triangles.cells_at_level(4), 2 * 32 * 32);
+        assert_eq!(Family::Triangles.cells_at_level(10), 2 * 2048 * 2048);
     }
 
     #[test]
@@ -278,6 +359,7 @@ mod tests {
         assert_eq!(Family::Cartesian.max_level(), 11);
         assert_eq!(Family::Hexagonal.max_level(), 9);
         assert_eq!(Family::Kershaw.max_level(), 240);
+        assert_eq!(Family::Triangles.max_level(), 10);
         for f in Family::ALL {
             let max = f.max_level();
             for level in [0, max + 1, max + 2, 64, 65, 1000, usize::MAX] {
@@ -300,6 +382,8 @@ mod tests {
         assert!(Family::Cartesian.check_level(12).is_err());
         assert!(Family::Hexagonal.check_level(12).is_err());
         assert!(Family::Kershaw.check_level(13).is_ok());
+        assert!(Family::Triangles.check_level(10).is_ok());
+        assert!(Family::Triangles.check_level(11).is_err());
     }
 
     #[test]
@@ -309,7 +393,8 @@ mod tests {
             Some([m.n_cells(), sides, m.n_vertices(), m.n_edges()].map(|x| x as u64))
         };
         for f in Family::ALL {
-            for level in 1..=2 {
+            let levels = if f == Family::Triangles { 1..=4 } else { 1..=2 };
+            for level in levels {
                 assert_eq!(
                     f.counts(level),
                     count(&f.generate(level).unwrap()),
@@ -331,6 +416,10 @@ mod tests {
                 cartesian::counts(nx, ny),
                 count(&cartesian(nx, ny).unwrap())
             );
+            assert_eq!(
+                cartesian::triangle_counts(nx, ny),
+                count(&cartesian_triangles(nx, ny, [0.0, 1.0], [0.0, 1.0]).unwrap())
+            );
         }
         for n in 1..5 {
             assert_eq!(hexagonal::counts(n), count(&hexagonal_grid(n).unwrap()));
@@ -344,9 +433,11 @@ mod tests {
                 gb(Family::Hexagonal, 8),
                 gb(Family::Hexagonal, 9),
                 gb(Family::Kershaw, 100),
-                gb(Family::Kershaw, 240)
+                gb(Family::Kershaw, 240),
+                gb(Family::Triangles, 9),
+                gb(Family::Triangles, 10)
             ],
-            [0.4, 1.6, 6.6, 1.0, 4.0, 1.1, 6.5]
+            [0.4, 1.6, 6.6, 1.0, 4.0, 1.1, 6.5, 0.6, 2.4]
         );
     }
 }
