@@ -159,10 +159,27 @@ fn main() -> std::process::ExitCode {
     match run(Cli::parse()) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", one_line(&e));
             std::process::ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes on one line, each cause once: the library's errors show their
+/// cause in their own message (so that they read whole alone, e.g. from Python), which
+/// anyhow's `{:#}` would repeat ("x.msh: No such file …: No such file …").
+fn one_line(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string();
+        if line.is_empty() {
+            line = c;
+        } else if !line.contains(&c) {
+            line.push_str(": ");
+            line.push_str(&c);
+        }
+    }
+    line
 }
 
 /// One malloc arena for all threads (glibc), unless `MALLOC_ARENA_MAX` says otherwise.

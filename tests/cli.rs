@@ -192,6 +192,15 @@ fn a_user_error_is_one_line_whatever_rust_backtrace_says() {
         err.starts_with("error: ") && err.contains("no/such/file.msh"),
         "{err}"
     );
+    // the cause once (the library's message already holds it; `{:#}` repeated it)
+    for args in [
+        "mesh info no/such/file.msh",
+        "solve --problem test1 --mesh no/such/file.msh",
+    ] {
+        let (ok, _, err) = gradvi(&words(args));
+        assert!(!ok);
+        assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
+    }
 }
 
 #[test]
