@@ -86,8 +86,9 @@ bench-amg:
 
 ## bench-peers: PETSc ex9 (installed and built from Debian's packages by benches/petsc/) next to
 ##        gradvi at equal unknowns (grids up to GRADVI_BENCH_EX9_MAX_GRID, default 2049), and
-##        the L-shape/disk/hole family -> replication/results/bench_peers.csv, BENCHMARKS.md
-bench-peers: build
+##        the L-shape/disk/hole family (meshed by gmsh: reference-deps installs it)
+##        -> replication/results/bench_peers.csv, BENCHMARKS.md
+bench-peers: build reference-deps
 	$(CARGO) bench --bench scale -- --peers
 
 clean:
