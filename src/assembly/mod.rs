@@ -487,48 +487,35 @@ impl<'a> DiscreteSystem<'a> {
             .lock()
             .map(|mut b| std::mem::take(&mut *b))
             .unwrap_or_default();
-        let no_interior = self.sym.no_interior;
-        // without interior unknowns S_K = M_K, laid out like the local matrices: no copy
-        let blocks = if no_interior {
-            0
+        // without interior unknowns S_K = M_K, laid out like the local matrices, and the
+        // cells' right-hand sides are computed where they are gathered: no buffer at all
+        let (values, rhs) = if self.sym.no_interior {
+            let values = self.gather_matrix(&fixed, &self.values.mats);
+            let rhs = self.gather_rhs(&fixed, |k, i| self.cell_rhs(k, i, &fixed));
+            (values, rhs)
         } else {
-            self.sym.maps.block_ptr.last().copied().unwrap_or(0)
+            sbuf.resize(self.sym.maps.block_ptr.last().copied().unwrap_or(0), 0.0);
+            gbuf.resize(self.sym.dof_map.dofs.len(), 0.0);
+            self.condense_cells(&fixed, &mut sbuf, &mut gbuf);
+            let values = self.gather_matrix(&fixed, &sbuf);
+            let dof_ptr = &self.sym.dof_map.dof_ptr;
+            let rhs = self.gather_rhs(&fixed, |k, i| gbuf[dof_ptr[k] + i]);
+            (values, rhs)
         };
-        sbuf.resize(blocks, 0.0);
-        gbuf.resize(self.sym.dof_map.dofs.len(), 0.0);
-        self.condense_cells(&fixed, &mut sbuf, &mut gbuf);
-        let blocks: &[f64] = if no_interior {
-            &self.values.mats
-        } else {
-            &sbuf
-        };
-        let values = self.gather_matrix(&fixed, blocks);
-        let rhs = self.gather_rhs(&fixed, &gbuf);
         if let Ok(mut b) = self.scratch.lock() {
             *b = (sbuf, gbuf);
         }
         (values, rhs)
     }
 
-    /// Condenses every cell, in parallel: cell k's p×p block S_K at `block_ptr[k]` in `sbuf`
-    /// (not written when no cell has interior unknowns: `sbuf` is then empty and S_K = M_K),
-    /// and its right-hand side g_K − S_K P_K u_F (its condensed load minus the columns of its
-    /// fixed skeleton unknowns) at the positions of its skeleton unknowns in `gbuf` (laid out
-    /// like `dofs`).
+    /// Condenses every cell (some with interior unknowns), in parallel: cell k's p×p block
+    /// S_K at `block_ptr[k]` in `sbuf`, and its right-hand side g_K − S_K P_K u_F (its
+    /// condensed load minus the columns of its fixed skeleton unknowns) at the positions of
+    /// its skeleton unknowns in `gbuf` (laid out like `dofs`).
     fn condense_cells(&self, fixed: &FixedValues, sbuf: &mut [f64], gbuf: &mut [f64]) {
         let dof_ptr = &self.sym.dof_map.dof_ptr;
         let ranges = cell_chunks(self.sym.scheme().mesh().n_cells());
         let g_slices = split_by_ranges(gbuf, &ranges, dof_ptr);
-        if self.sym.no_interior {
-            let tasks: Vec<_> = ranges.into_iter().zip(g_slices).collect();
-            tasks.into_par_iter().for_each(|((c0, c1), g)| {
-                for k in c0..c1 {
-                    let go = dof_ptr[k] - dof_ptr[c0];
-                    self.cell_rhs(k, fixed, &mut g[go..]);
-                }
-            });
-            return;
-        }
         let block_ptr = &self.sym.maps.block_ptr;
         let s_slices = split_by_ranges(sbuf, &ranges, block_ptr);
         let tasks: Vec<_> = ranges.into_iter().zip(s_slices).zip(g_slices).collect();
@@ -540,21 +527,20 @@ impl<'a> DiscreteSystem<'a> {
         });
     }
 
-    /// The right-hand side b_K − M_K P_K u_F of a cell without interior unknowns into the
-    /// first entries of `g` (what [`Self::condense_cell`] computes when S_K = M_K).
-    fn cell_rhs(&self, k: usize, fixed: &FixedValues, g: &mut [f64]) {
+    /// Entry i of the right-hand side b_K − M_K P_K u_F of cell k without interior unknowns
+    /// (what [`Self::condense_cell`] computes when S_K = M_K, in the same order of
+    /// operations: the load, then the fixed columns one after the other).
+    fn cell_rhs(&self, k: usize, i: usize, fixed: &FixedValues) -> f64 {
         let cell = self.local(k);
         let (d, m) = (cell.dofs, cell.matrix);
         let p = d.len();
-        let gk = &mut g[..p];
-        gk.copy_from_slice(cell.load);
-        for bcol in 0..p {
-            if let Some(vj) = fixed.get(d[bcol]) {
-                for arow in 0..p {
-                    gk[arow] -= m[arow + bcol * p] * vj;
-                }
+        let mut g = cell.load[i];
+        for (bcol, &dj) in d.iter().enumerate() {
+            if let Some(vj) = fixed.get(dj) {
+                g -= m[i + bcol * p] * vj;
             }
         }
+        g
     }
 
     /// Condenses cell k: its block S_K into the first p² entries of `s`, and its right-hand
@@ -617,9 +603,13 @@ impl<'a> DiscreteSystem<'a> {
     }
 
     /// The right-hand side of the condensed system, gathered row by row: the Neumann load plus
-    /// the cells' contributions `inc.list(i)` in `gbuf` (in cell order);
-    /// the value on fixed rows.
-    fn gather_rhs(&self, fixed: &FixedValues, gbuf: &[f64]) -> Vec<f64> {
+    /// the contributions `cell_value(k, local index)` of the cells k of `inc.list(i)` (in cell
+    /// order); the value on fixed rows.
+    fn gather_rhs(
+        &self,
+        fixed: &FixedValues,
+        cell_value: impl Fn(usize, usize) -> f64 + Sync,
+    ) -> Vec<f64> {
         let inc = &self.sym.maps.inc;
         let mut rhs = vec![0.0; self.n_skel];
         rhs.par_iter_mut()
@@ -633,7 +623,7 @@ impl<'a> DiscreteSystem<'a> {
                         for &k in inc.list(gi) {
                             let k = k as usize;
                             let (d, _) = self.sym.dof_map.cell(k);
-                            acc += gbuf[self.sym.dof_map.dof_ptr[k] + local_index(d, gi)];
+                            acc += cell_value(k, local_index(d, gi));
                         }
                         acc
                     }
