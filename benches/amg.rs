@@ -334,6 +334,71 @@ fn kernels() {
     }
 }
 
+/// The multigrid variants measured by the sweeps, by name: "default", "theta X" (strength
+/// threshold), "theta_P X" (prolongator-smoothing threshold), "cheb D" or "cheb D rR"
+/// (Chebyshev of degree D on [λ/R, λ], R = 30 unless given), "gershgorin only" (no Lanczos
+/// steps), "l1-jacobi", "l1-gs", "coarse N" (largest coarse level). An unknown name is
+/// reported and left out.
+fn variants(opts: &AmgOptions, names: &[&'static str]) -> Vec<(&'static str, AmgOptions)> {
+    let one = |name: &str| -> Option<AmgOptions> {
+        let o = *opts;
+        let words: Vec<&str> = name.split_whitespace().collect();
+        let num = |i: usize| words.get(i).and_then(|w| w.parse::<f64>().ok());
+        Some(match words.as_slice() {
+            ["default"] => o,
+            ["theta", _] => AmgOptions {
+                strength_threshold: num(1)?,
+                ..o
+            },
+            ["theta_P", _] => AmgOptions {
+                smoothing_threshold: num(1)?,
+                ..o
+            },
+            ["cheb", d, rest @ ..] => {
+                let ratio = match rest {
+                    [] => 30.0,
+                    [r] => r.strip_prefix('r')?.parse().ok()?,
+                    _ => return None,
+                };
+                AmgOptions {
+                    smoother: Smoother::Chebyshev {
+                        degree: d.parse().ok()?,
+                        ratio,
+                    },
+                    ..o
+                }
+            }
+            ["gershgorin", "only"] => AmgOptions {
+                spectral_steps: 0,
+                ..o
+            },
+            ["l1-jacobi"] => AmgOptions {
+                smoother: Smoother::L1Jacobi,
+                ..o
+            },
+            ["l1-gs"] => AmgOptions {
+                smoother: Smoother::L1GaussSeidel,
+                ..o
+            },
+            ["coarse", n] => AmgOptions {
+                max_coarse: n.parse().ok()?,
+                ..o
+            },
+            _ => return None,
+        })
+    };
+    names
+        .iter()
+        .filter_map(|&n| match one(n) {
+            Some(o) => Some((n, o)),
+            None => {
+                println!("unknown variant {n:?}: left out");
+                None
+            }
+        })
+        .collect()
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let has = |w: &str| args.iter().any(|a| a == w);
@@ -352,108 +417,26 @@ fn main() {
             ("aniso", grid(m, 0.01, 1.0, &one, false)),
             ("jump", grid(m, 1.0, 1.0, &checkerboard(m), false)),
         ];
-        let cheb = |degree, ratio| Smoother::Chebyshev { degree, ratio };
-        let variants: Vec<(&str, AmgOptions)> = vec![
-            ("default", opts),
-            (
+        let variants = variants(
+            &opts,
+            &[
+                "default",
                 "theta 0",
-                AmgOptions {
-                    strength_threshold: 0.0,
-                    ..opts
-                },
-            ),
-            (
                 "theta 0.25",
-                AmgOptions {
-                    strength_threshold: 0.25,
-                    ..opts
-                },
-            ),
-            (
                 "theta_P 0",
-                AmgOptions {
-                    smoothing_threshold: 0.0,
-                    ..opts
-                },
-            ),
-            (
                 "theta_P 0.02",
-                AmgOptions {
-                    smoothing_threshold: 0.02,
-                    ..opts
-                },
-            ),
-            (
                 "theta_P 0.2",
-                AmgOptions {
-                    smoothing_threshold: 0.2,
-                    ..opts
-                },
-            ),
-            (
                 "theta_P 0.04",
-                AmgOptions {
-                    smoothing_threshold: 0.04,
-                    ..opts
-                },
-            ),
-            (
                 "cheb 1",
-                AmgOptions {
-                    smoother: cheb(1, 30.0),
-                    ..opts
-                },
-            ),
-            (
                 "cheb 3",
-                AmgOptions {
-                    smoother: cheb(3, 30.0),
-                    ..opts
-                },
-            ),
-            (
                 "cheb 2 r10",
-                AmgOptions {
-                    smoother: cheb(2, 10.0),
-                    ..opts
-                },
-            ),
-            (
                 "gershgorin only",
-                AmgOptions {
-                    spectral_steps: 0,
-                    ..opts
-                },
-            ),
-            (
                 "l1-jacobi",
-                AmgOptions {
-                    smoother: Smoother::L1Jacobi,
-                    ..opts
-                },
-            ),
-            (
                 "l1-gs",
-                AmgOptions {
-                    smoother: Smoother::L1GaussSeidel,
-                    ..opts
-                },
-            ),
-            (
                 "coarse 300",
-                AmgOptions {
-                    max_coarse: 300,
-                    ..opts
-                },
-            ),
-            (
                 "coarse 3000",
-                AmgOptions {
-                    max_coarse: 3000,
-                    ..opts
-                },
-            ),
-        ];
+            ],
+        );
         let only: Vec<&String> = args.iter().skip(2).collect();
         for (vname, o) in &variants {
             if !only.is_empty() && !only.iter().any(|w| w.as_str() == *vname) {
@@ -479,59 +462,19 @@ fn main() {
             ("hmm kershaw test2", mk(kershaw(15), paper_test2())),
             ("hmm hex rot", mk(hexagonal_grid(200), rotated_anisotropy())),
         ];
-        let cheb = |degree, ratio| Smoother::Chebyshev { degree, ratio };
-        let variants: Vec<(&str, AmgOptions)> = vec![
-            ("default", opts),
-            (
+        let variants = variants(
+            &opts,
+            &[
+                "default",
                 "theta 0",
-                AmgOptions {
-                    strength_threshold: 0.0,
-                    ..opts
-                },
-            ),
-            (
                 "theta 0.02",
-                AmgOptions {
-                    strength_threshold: 0.02,
-                    ..opts
-                },
-            ),
-            (
                 "theta 0.25",
-                AmgOptions {
-                    strength_threshold: 0.25,
-                    ..opts
-                },
-            ),
-            (
                 "theta_P 0",
-                AmgOptions {
-                    smoothing_threshold: 0.0,
-                    ..opts
-                },
-            ),
-            (
                 "theta_P 0.2",
-                AmgOptions {
-                    smoothing_threshold: 0.2,
-                    ..opts
-                },
-            ),
-            (
                 "cheb 3",
-                AmgOptions {
-                    smoother: cheb(3, 30.0),
-                    ..opts
-                },
-            ),
-            (
                 "l1-jacobi",
-                AmgOptions {
-                    smoother: Smoother::L1Jacobi,
-                    ..opts
-                },
-            ),
-        ];
+            ],
+        );
         for (vname, o) in &variants {
             for (mname, l) in &mats {
                 run(&format!("{vname}/{mname}"), l, o, false, 1);

@@ -1129,17 +1129,24 @@ impl LevelSmoother {
         }
     }
 
+    /// The Chebyshev smoother's step ([`chebyshev`]): as pre-smoother (from x = 0, leaving
+    /// the residual in `w.r`) or as post-smoother; nothing for the other smoothers.
+    fn chebyshev(&self, a: &CsrMatrix, b: &[f64], x: &mut [f64], w: &mut LevelWork, pre: bool) {
+        if let LevelSmoother::Chebyshev {
+            inv_diag,
+            lo,
+            hi,
+            degree,
+        } = self
+        {
+            chebyshev(a, inv_diag, *lo, *hi, *degree, b, x, w, pre, pre);
+        }
+    }
+
     /// Pre-smoothing from x = 0: x ← S(b), leaving r = b − A x in `w.r`.
     fn pre(&self, a: &CsrMatrix, b: &[f64], x: &mut [f64], w: &mut LevelWork) {
         match self {
-            LevelSmoother::Chebyshev {
-                inv_diag,
-                lo,
-                hi,
-                degree,
-            } => {
-                chebyshev(a, inv_diag, *lo, *hi, *degree, b, x, w, true, true);
-            }
+            LevelSmoother::Chebyshev { .. } => self.chebyshev(a, b, x, w, true),
             LevelSmoother::L1Jacobi { inv_l1 } => {
                 rows1(a, x, |i0, x| {
                     for (k, xi) in x.iter_mut().enumerate() {
@@ -1158,14 +1165,7 @@ impl LevelSmoother {
     /// Post-smoothing: x ← x + S'(b − A x) (the adjoint of [`Self::pre`]).
     fn post(&self, a: &CsrMatrix, b: &[f64], x: &mut [f64], w: &mut LevelWork) {
         match self {
-            LevelSmoother::Chebyshev {
-                inv_diag,
-                lo,
-                hi,
-                degree,
-            } => {
-                chebyshev(a, inv_diag, *lo, *hi, *degree, b, x, w, false, false);
-            }
+            LevelSmoother::Chebyshev { .. } => self.chebyshev(a, b, x, w, false),
             LevelSmoother::L1Jacobi { inv_l1 } => {
                 a.residual_to(b, x, &mut w.r);
                 let r: &[f64] = &w.r;
