@@ -190,7 +190,7 @@ fn one_line(e: &anyhow::Error) -> String {
 /// `gradvi solve problems/ex9.toml --scheme p1 --generate triangles --level 9` (1M unknowns,
 /// 2 cores, three runs each): peak resident memory 1505–1568 MB with glibc's default, 1366–1378
 /// MB with one arena, 1393–1450 MB with two; total time 6.9–7.9 s and 6.7–7.3 s (unchanged
-/// within the noise: the solver allocates its large vectors outside the parallel loops). The
+/// within the noise). The
 /// benchmark's cases run this binary, so they measure the same setting. (Also measured:
 /// mimalloc, 1636–1679 MB; a fixed mmap threshold of 128 kB, 1323–1341 MB but 30% slower
 /// from the page faults of fresh mappings.)

@@ -485,6 +485,19 @@ mod tests {
         )
     }
 
+    /// The error of a resolution that must fail, with its causes.
+    fn error(
+        mesh: Option<&str>,
+        generate: Option<&str>,
+        level: Option<usize>,
+        file_mesh: Option<&MeshSpec>,
+    ) -> String {
+        format!(
+            "{:#}",
+            resolve(mesh, generate, level, file_mesh).unwrap_err()
+        )
+    }
+
     fn generated(family: Family, level: usize, domain: Option<[f64; 4]>) -> MeshSpec {
         MeshSpec::Generated {
             family,
@@ -523,34 +536,28 @@ mod tests {
     fn a_mesh_file_replaces_the_files_mesh_and_its_domain() {
         let spec = resolve(Some("m.msh"), None, None, Some(&ex9_mesh())).unwrap();
         assert_eq!(spec, MeshSpec::File(PathBuf::from("m.msh")));
-        let e = resolve(Some("m.msh"), None, Some(3), Some(&ex9_mesh())).unwrap_err();
-        assert!(format!("{e:#}").contains("--generate"), "{e:#}");
-        let e = resolve(Some("m.msh"), Some("cartesian"), None, None).unwrap_err();
-        assert!(format!("{e:#}").contains("not both"), "{e:#}");
+        let e = error(Some("m.msh"), None, Some(3), Some(&ex9_mesh()));
+        assert!(e.contains("--generate"), "{e}");
+        let e = error(Some("m.msh"), Some("cartesian"), None, None);
+        assert!(e.contains("not both"), "{e}");
     }
 
     #[test]
     fn a_level_without_a_generated_mesh_to_apply_to_is_an_error() {
         let file = MeshSpec::File(PathBuf::from("problems/lshape.msh"));
-        let e = format!(
-            "{:#}",
-            resolve(None, None, Some(3), Some(&file)).unwrap_err()
-        );
+        let e = error(None, None, Some(3), Some(&file));
         assert!(
             e.contains("--level needs --generate") && e.contains("lshape.msh"),
             "{e}"
         );
-        let e = format!("{:#}", resolve(None, None, Some(3), None).unwrap_err());
+        let e = error(None, None, Some(3), None);
         assert!(
             e.contains("--level needs --generate") && e.contains(PROBLEM),
             "{e}"
         );
         // --generate without --level, and no level to keep
         for file_mesh in [Some(&file), None] {
-            let e = format!(
-                "{:#}",
-                resolve(None, Some("cartesian"), None, file_mesh).unwrap_err()
-            );
+            let e = error(None, Some("cartesian"), None, file_mesh);
             assert!(e.contains("needs --level"), "{e}");
         }
         // with --level, a mesh file in the problem file is simply replaced (unit square)
@@ -558,36 +565,27 @@ mod tests {
             resolve(None, Some("triangles"), Some(2), Some(&file)).unwrap(),
             generated(Family::Triangles, 2, None)
         );
-        let e = format!("{:#}", resolve(None, None, None, None).unwrap_err());
+        let e = error(None, None, None, None);
         assert!(e.contains("has no [mesh]"), "{e}");
     }
 
     #[test]
     fn bad_families_and_levels_say_where_they_came_from() {
         let file = ex9_mesh();
-        let e = format!(
-            "{:#}",
-            resolve(None, Some("octagonal"), None, Some(&file)).unwrap_err()
-        );
+        let e = error(None, Some("octagonal"), None, Some(&file));
         assert!(
             e.starts_with("--generate: ")
                 && e.contains("unknown mesh family \"octagonal\"")
                 && e.contains("\"cartesian\", \"hexagonal\", \"kershaw\" or \"triangles\""),
             "{e}"
         );
-        let e = format!(
-            "{:#}",
-            resolve(None, None, Some(12), Some(&file)).unwrap_err()
-        );
+        let e = error(None, None, Some(12), Some(&file));
         assert!(
             e.contains("(--level)") && e.contains("levels go from 1 to 11"),
             "{e}"
         );
         let big = generated(Family::Cartesian, 11, None);
-        let e = format!(
-            "{:#}",
-            resolve(None, Some("hexagonal"), None, Some(&big)).unwrap_err()
-        );
+        let e = error(None, Some("hexagonal"), None, Some(&big));
         assert!(
             e.contains("the level of the [mesh] of") && e.contains("levels go from 1 to 9"),
             "{e}"
