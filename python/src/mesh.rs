@@ -5,7 +5,6 @@ use crate::guard;
 use gradvi::mesh::generate::{Family, cartesian_rect};
 use gradvi::mesh::io::{read_mesh, read_msh, write_typ2, write_vtu};
 use gradvi::mesh::{NO_CELL, Point, PolyMesh};
-use gradvi::problem::file::map_unit_square;
 use gradvi::scheme::Cr;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -188,10 +187,9 @@ impl PyMesh {
             check_rect(d)?;
         }
         guard(py, move || {
-            let m = fam.generate(level)?;
             Ok(PyMesh::new(match domain {
-                None => m,
-                Some(d) => map_unit_square(&m, d)?,
+                None => fam.generate(level)?,
+                Some(d) => fam.generate_on(level, d)?,
             }))
         })
     }

@@ -404,7 +404,10 @@ impl<'a> DiscreteSystem<'a> {
     /// The condensed matrix with lower-triangle `values`, both triangles stored by rows.
     fn csr(&self, values: &[f64]) -> crate::Result<crate::linalg::CsrMatrix> {
         let (col_ptr, row_idx) = self.condensed_pattern();
-        crate::linalg::CsrMatrix::from_lower_csc(self.n_skel, col_ptr, row_idx, values)
+        let mut a =
+            crate::linalg::CsrMatrix::from_lower_csc(self.n_skel, col_ptr, row_idx, values)?;
+        a.drop_zeros();
+        Ok(a)
     }
 
     /// [`Self::solve_iteratively`] on the matrix `a` already stored by rows.

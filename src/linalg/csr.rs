@@ -380,6 +380,36 @@ impl CsrMatrix {
         }
     }
 
+    /// Removes the stored off-diagonal entries whose value is exactly zero (diagonal entries
+    /// are kept), in place; the arrays shrink to fit. The condensed matrices store many: the
+    /// couplings of the fixed unknowns (unit rows and columns, zeroed by the active set) and
+    /// structurally present couplings that cancel (P1 on right triangles couples the two
+    /// acute vertices by cot 90° = 0, so the grids of `cartesian_triangles` store 7 entries
+    /// per row for a 5-point operator). A dropped entry adds an exact `0 · x_j` to a sum, so
+    /// every product, sweep and multigrid setup gives the same bits with or without it (for
+    /// finite x); only the memory traffic, which bounds their speed, shrinks.
+    pub fn drop_zeros(&mut self) {
+        let mut w = 0;
+        let mut start = 0;
+        for i in 0..self.n_rows {
+            let end = self.row_ptr[i + 1];
+            for p in start..end {
+                let (j, v) = (self.col_idx[p], self.values[p]);
+                if v != 0.0 || j as usize == i {
+                    self.col_idx[w] = j;
+                    self.values[w] = v;
+                    w += 1;
+                }
+            }
+            start = end;
+            self.row_ptr[i + 1] = w;
+        }
+        self.col_idx.truncate(w);
+        self.col_idx.shrink_to_fit();
+        self.values.truncate(w);
+        self.values.shrink_to_fit();
+    }
+
     /// Number of rows.
     pub fn n_rows(&self) -> usize {
         self.n_rows
@@ -580,6 +610,31 @@ mod tests {
         assert_eq!(y, vec![6.0, 17.0, 22.0]);
         assert_eq!(a.transpose(), a);
         assert!(a.spmv(&[1.0], &mut y).is_err());
+    }
+
+    #[test]
+    fn dropping_zeros_keeps_the_products_and_the_diagonal() {
+        // lower triangle of a 4 × 4 matrix with stored zeros: a zero diagonal entry (kept),
+        // zero couplings (dropped)
+        let cp = vec![0, 3, 5, 7, 8];
+        let ri = vec![0, 1, 3, 1, 2, 2, 3, 3];
+        let v = vec![4.0, 0.0, -1.0, 0.0, -0.0, 3.0, 0.0, 2.0];
+        let a = CsrMatrix::from_lower_csc(4, &cp, &ri, &v).unwrap();
+        let mut b = a.clone();
+        b.drop_zeros();
+        assert_eq!(b.row_ptr(), &[0, 2, 3, 4, 6]);
+        assert_eq!(b.col_idx(), &[0, 3, 1, 2, 0, 3]);
+        assert_eq!(b.values(), &[4.0, -1.0, 0.0, 3.0, -1.0, 2.0]);
+        assert_eq!(b.diagonal(), a.diagonal());
+        let x = [0.3, -1.7, 2.5, 1e-3];
+        let (mut ya, mut yb) = ([0.0; 4], [0.0; 4]);
+        a.spmv(&x, &mut ya).unwrap();
+        b.spmv(&x, &mut yb).unwrap();
+        assert_eq!(ya.map(f64::to_bits), yb.map(f64::to_bits));
+        // nothing to drop: unchanged
+        let mut c = b.clone();
+        c.drop_zeros();
+        assert_eq!(c, b);
     }
 
     #[test]

@@ -1,8 +1,11 @@
 //! How much memory building a mesh may take, so that a request too large for the machine is
 //! refused up front with an error giving the estimate, instead of aborting on allocation.
 //!
-//! * [`memory_budget`]: the smaller of [`DEFAULT_MEMORY_BUDGET`] (8 GiB) and the memory the
-//!   kernel reports as available (`MemAvailable` in `/proc/meminfo`, where it exists).
+//! * [`memory_budget`]: the memory the kernel reports as available (`MemAvailable` in
+//!   `/proc/meminfo`), or less if the control group of the process limits it (a container:
+//!   `/proc/meminfo` then shows the host's memory); [`DEFAULT_MEMORY_BUDGET`] (8 GiB) where
+//!   neither is known. (It was capped at 8 GiB before; PETSc ex9's 4097² grid, 33.6M triangles,
+//!   needs an estimated 9.5 GB for its mesh, and its whole P1 solve 19 GB, on a 24 GiB machine.)
 //! * [`mesh_bytes`]: the peak memory of building and validating a [`PolyMesh`](super::PolyMesh)
 //!   with given numbers of cells, cell sides, vertices and edges. The generators compare it with
 //!   the budget before allocating anything ([`check_budget`]); a caller that needs memory for
@@ -14,7 +17,8 @@
 
 use crate::error::MeshError;
 
-/// The memory budget when the machine has at least that much available: 8 GiB.
+/// The memory budget where neither the available memory nor a control-group limit is known:
+/// 8 GiB.
 pub const DEFAULT_MEMORY_BUDGET: u64 = 8 << 30;
 
 /// The memory the kernel reports as available (`MemAvailable` of `/proc/meminfo`), in bytes;
@@ -26,9 +30,36 @@ pub fn available_memory() -> Option<u64> {
     kib.checked_mul(1024)
 }
 
-/// The memory a mesh may take: [`DEFAULT_MEMORY_BUDGET`], or the available memory if smaller.
+/// What the memory limit of the process's control group still allows (limit less usage):
+/// cgroup v2 (`/sys/fs/cgroup/memory.max` and `memory.current`) or v1
+/// (`/sys/fs/cgroup/memory/memory.limit_in_bytes` and `memory.usage_in_bytes`). `None` when
+/// there is no limit (v2 `max`, or a v1 limit beyond 2^60 bytes) or the files cannot be read.
+pub fn cgroup_remaining() -> Option<u64> {
+    let read = |p: &str| std::fs::read_to_string(p).ok();
+    let num = |t: String| t.trim().parse::<u64>().ok();
+    let (limit, usage) = match read("/sys/fs/cgroup/memory.max") {
+        Some(t) => (
+            num(t)?,
+            read("/sys/fs/cgroup/memory.current").and_then(num)?,
+        ),
+        None => (
+            read("/sys/fs/cgroup/memory/memory.limit_in_bytes").and_then(num)?,
+            read("/sys/fs/cgroup/memory/memory.usage_in_bytes").and_then(num)?,
+        ),
+    };
+    (limit < 1 << 60).then(|| limit.saturating_sub(usage))
+}
+
+/// The memory a mesh may take: the available memory ([`available_memory`]), or what the
+/// control group's limit leaves ([`cgroup_remaining`]) if smaller; [`DEFAULT_MEMORY_BUDGET`]
+/// where neither is known.
 pub fn memory_budget() -> u64 {
-    available_memory().map_or(DEFAULT_MEMORY_BUDGET, |a| a.min(DEFAULT_MEMORY_BUDGET))
+    match (available_memory(), cgroup_remaining()) {
+        (Some(a), Some(c)) => a.min(c),
+        (Some(a), None) => a,
+        (None, Some(c)) => c,
+        (None, None) => DEFAULT_MEMORY_BUDGET,
+    }
 }
 
 /// The largest mesh file the readers accept: a quarter of [`memory_budget`].
@@ -102,7 +133,13 @@ mod tests {
     #[test]
     fn budget_and_formatting() {
         let b = memory_budget();
-        assert!(b > 0 && b <= DEFAULT_MEMORY_BUDGET);
+        assert!(b > 0);
+        if let Some(a) = available_memory() {
+            assert!(b <= a);
+        }
+        if let Some(c) = cgroup_remaining() {
+            assert!(b <= c);
+        }
         assert_eq!(max_file_bytes(), b / 4);
         assert_eq!(human_bytes(512), "512 B");
         assert_eq!(human_bytes(3 << 20), "3.0 MiB");

@@ -467,13 +467,10 @@ impl MeshSpec {
                 family,
                 level,
                 domain,
-            } => {
-                let m = family.generate(*level)?;
-                match domain {
-                    None => Ok(m),
-                    Some(d) => map_unit_square(&m, *d),
-                }
-            }
+            } => match domain {
+                None => family.generate(*level),
+                Some(d) => family.generate_on(*level, *d),
+            },
         }
     }
 }
@@ -495,25 +492,6 @@ impl fmt::Display for MeshSpec {
             }
         }
     }
-}
-
-/// The mesh `m` of the unit square mapped onto \[x0, x1\] × \[y0, y1\] by
-/// (x, y) ↦ (x0 + (x1 − x0) x, y0 + (y1 − y0) y). Boundary tags are not kept.
-pub fn map_unit_square(m: &PolyMesh, [x0, x1, y0, y1]: [f64; 4]) -> Result<PolyMesh> {
-    if !(x1 > x0 && y1 > y0 && [x0, x1, y0, y1].iter().all(|v| v.is_finite())) {
-        return Err(Error::InvalidData(format!(
-            "the domain [{x0}, {x1}]x[{y0}, {y1}] is not a finite rectangle with x0 < x1, y0 < y1"
-        )));
-    }
-    let v = m
-        .vertices()
-        .iter()
-        .map(|p| [x0 + (x1 - x0) * p[0], y0 + (y1 - y0) * p[1]])
-        .collect();
-    let cells = (0..m.n_cells())
-        .map(|k| m.cell_vertices(k).to_vec())
-        .collect();
-    Ok(PolyMesh::from_cells(v, cells)?)
 }
 
 /// A loaded, checked problem file. Build the [`Problem`] with [`ProblemFile::problem`] after

@@ -22,6 +22,7 @@ use super::{Config, bad, io_err, peak_memory_mib, stdout_of};
 use crate::app::replication::records::{read_csv, write_csv};
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{cartesian_rect, cartesian_triangles};
+use gradvi::mesh::budget::human_bytes;
 use gradvi::mesh::io::read_mesh;
 use gradvi::problem::{Problem, paper_test3};
 use gradvi::scheme::{Entity, SchemeKind};
@@ -36,8 +37,30 @@ pub const CSV: &str = "replication/results/bench_peers.csv";
 /// Grids G (G × G nodes) of the ex9 comparison; `GRADVI_BENCH_EX9_MAX_GRID` caps them
 /// (default [`DEFAULT_MAX_GRID`]).
 pub const EX9_GRIDS: [usize; 5] = [257, 513, 1025, 2049, 4097];
-/// Default cap on G (4097 needs 14 GiB for PETSc alone).
-pub const DEFAULT_MAX_GRID: usize = 2049;
+/// Default cap on G: all grids. The largest, 4097² (16.8M unknowns), runs only where the
+/// memory available is at least [`BIG_GRID_MEMORY`], and there only PETSc and gradvi P1 with
+/// the iterative solver: the other variants would not fit in 24 GiB (at 2049² P1 direct peaked
+/// at 7.2 GiB and HMM iterative, on 4 times fewer cells than HMM at 4097², at 7.1 GiB;
+/// both grow about 4-fold per level).
+pub const DEFAULT_MAX_GRID: usize = 4097;
+/// The grid from which only gradvi P1 iterative runs beside PETSc.
+pub const BIG_GRID: usize = 4097;
+/// The memory available needed to run [`BIG_GRID`]: 21 GiB (measured peaks: gradvi P1
+/// iterative 18.2 GiB; PETSc about 14 GiB, four times its 2049² peak).
+pub const BIG_GRID_MEMORY: u64 = 21 << 30;
+
+/// The gradvi variants (scheme, linear solver) run on the ex9 grid G (see [`BIG_GRID`]).
+pub fn ex9_variants(g: usize) -> Vec<(SchemeKind, &'static str)> {
+    let all = [SchemeKind::P1, SchemeKind::Hmm]
+        .into_iter()
+        .flat_map(|s| linear_variants().into_iter().map(move |l| (s, l)));
+    if g >= BIG_GRID {
+        all.filter(|&(s, l)| s == SchemeKind::P1 && l == "iterative")
+            .collect()
+    } else {
+        all.collect()
+    }
+}
 /// The domains of the "any domain" family (`benches/domains/NAME.geo`).
 pub const DOMAINS: [&str; 3] = ["lshape", "disk", "hole"];
 /// gmsh characteristic lengths of the domain meshes (about 11k, 44k, 177k and 700k cells on
@@ -473,18 +496,25 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
         eprintln!("[bench] warning: no PETSc rows: {why}");
     }
     for &g in EX9_GRIDS.iter().filter(|&&g| do_ex9 && g <= max_grid) {
+        let available = gradvi::mesh::budget::memory_budget();
+        if g >= BIG_GRID && available < BIG_GRID_MEMORY {
+            eprintln!(
+                "[bench] warning: ex9 {g}² skipped: {} available, it needs {}",
+                human_bytes(available),
+                human_bytes(BIG_GRID_MEMORY)
+            );
+            continue;
+        }
         if let Ok(bin) = &petsc {
             eprintln!("[bench] ex9 PETSc gs+mg, {g}² grid ...");
             push(run_petsc(cfg, bin, g)?, &mut rows)?;
         }
-        for scheme in [SchemeKind::P1, SchemeKind::Hmm] {
-            for linear in linear_variants() {
-                eprintln!("[bench] ex9 gradvi {scheme} {linear}, {g}² grid ...");
-                push(
-                    gradvi_child(exe, "ex9", scheme, linear, g, None)?,
-                    &mut rows,
-                )?;
-            }
+        for (scheme, linear) in ex9_variants(g) {
+            eprintln!("[bench] ex9 gradvi {scheme} {linear}, {g}² grid ...");
+            push(
+                gradvi_child(exe, "ex9", scheme, linear, g, None)?,
+                &mut rows,
+            )?;
         }
     }
     for domain in DOMAINS.iter().filter(|_| do_domains) {

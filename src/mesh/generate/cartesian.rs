@@ -198,7 +198,7 @@ mod tests {
             cartesian_rect(2, 2, [1.0, 0.0], [0.0, 1.0]),
             cartesian_rect(2, 2, [0.0, 1.0], [0.0, f64::NAN]),
             cartesian_rect(2, 2, [0.0, 0.0], [0.0, 1.0]),
-            cartesian(1 << 13, 1 << 12),
+            cartesian(1 << 13, 1 << 14),
             cartesian(usize::MAX, 2),
         ] {
             assert!(matches!(r, Err(Error::InvalidData(_))), "{r:?}");

@@ -70,7 +70,7 @@ pub(crate) fn level_n(level: usize) -> Option<usize> {
 }
 
 /// The mesh `hexa1_level`: n = 10·2^(level−1), (n+1)² cells (121, 441, 1681, 6561, 25921, …).
-/// Level 0 and levels above [`Family::max_level`](super::Family::max_level) (9) give
+/// Level 0 and levels above [`Family::max_level`](super::Family::max_level) (10) give
 /// [`Error::InvalidData`].
 pub fn hexagonal(level: usize) -> Result<PolyMesh> {
     super::Family::Hexagonal.check_level(level)?;
@@ -370,10 +370,10 @@ mod tests {
         assert_eq!(level_n(64), None);
         for r in [
             hexagonal(0),
-            hexagonal(10),
+            hexagonal(11),
             hexagonal(usize::MAX),
             hexagonal_grid(0),
-            hexagonal_grid(5000),
+            hexagonal_grid(9000),
         ] {
             assert!(matches!(r, Err(Error::InvalidData(_))), "{r:?}");
         }

@@ -79,7 +79,7 @@ fn amplitude(i: usize) -> f64 {
 }
 
 /// The mesh `mesh4_1_level`: (17·level)² quadrangles. Level 0 and levels above
-/// [`Family::max_level`](super::Family::max_level) (240) give
+/// [`Family::max_level`](super::Family::max_level) (481) give
 /// [`Error::InvalidData`](crate::Error::InvalidData).
 pub fn kershaw(level: usize) -> Result<PolyMesh> {
     super::Family::Kershaw.check_level(level)?;
@@ -232,7 +232,7 @@ mod tests {
 
     #[test]
     fn invalid_levels_are_errors() {
-        for r in [kershaw(0), kershaw(241), kershaw(usize::MAX)] {
+        for r in [kershaw(0), kershaw(482), kershaw(usize::MAX)] {
             assert!(matches!(r, Err(Error::InvalidData(_))), "{r:?}");
         }
     }
