@@ -18,7 +18,7 @@ use nalgebra::{DMatrix, DVector, Dyn, linalg::Cholesky};
 pub struct CellSystem<'c> {
     /// The global indices of the local unknowns: the interior ones I first, then the skeleton
     /// ones S.
-    pub dofs: &'c [usize],
+    pub dofs: &'c [u32],
     /// The number of interior unknowns |I|.
     pub n_interior: usize,
     /// The local matrix M_K, column-major, in the order of `dofs`.
@@ -31,7 +31,7 @@ impl CellSystem<'_> {
     /// The free interior unknowns R = I \ F (local indices).
     fn free_interior(&self, fx: &dyn Fn(usize) -> Option<f64>) -> Vec<usize> {
         (0..self.n_interior)
-            .filter(|&i| fx(self.dofs[i]).is_none())
+            .filter(|&i| fx(self.dofs[i] as usize).is_none())
             .collect()
     }
 
@@ -85,7 +85,7 @@ fn eliminate_cell_unknown(
     let (d, m, b) = (cell.dofs, cell.matrix, cell.load);
     let (nl, ni) = (d.len(), 1);
     let p = nl - ni;
-    match fx(d[0]) {
+    match fx(d[0] as usize) {
         Some(v) => {
             for arow in 0..p {
                 g[arow] -= m[ni + arow] * v;
@@ -119,7 +119,9 @@ fn eliminate_interior(
     let nl = d.len();
     let p = nl - ni;
     let free = cell.free_interior(fx);
-    let fixed: Vec<(usize, f64)> = (0..ni).filter_map(|i| fx(d[i]).map(|v| (i, v))).collect();
+    let fixed: Vec<(usize, f64)> = (0..ni)
+        .filter_map(|i| fx(d[i] as usize).map(|v| (i, v)))
+        .collect();
     let mut br: Vec<f64> = free.iter().map(|&i| b[i]).collect();
     for &(j, v) in &fixed {
         for arow in 0..p {
@@ -152,12 +154,12 @@ fn eliminate_interior(
 pub fn interior_value(cell: &CellSystem, fx: &dyn Fn(usize) -> Option<f64>, u: &[f64]) -> f64 {
     let (d, m, b) = (cell.dofs, cell.matrix, cell.load);
     let nl = d.len();
-    match fx(d[0]) {
+    match fx(d[0] as usize) {
         Some(v) => v,
         None => {
             let mut r = b[0];
             for j in 1..nl {
-                r -= m[j * nl] * u[d[j]];
+                r -= m[j * nl] * u[d[j] as usize];
             }
             r / m[0]
         }
@@ -170,13 +172,13 @@ pub fn recover_interior(cell: &CellSystem, fx: &dyn Fn(usize) -> Option<f64>, u:
     let (d, ni, m, b) = (cell.dofs, cell.n_interior, cell.matrix, cell.load);
     let nl = d.len();
     if ni == 1 {
-        u[d[0]] = interior_value(cell, fx, u);
+        u[d[0] as usize] = interior_value(cell, fx, u);
         return;
     }
     let free = cell.free_interior(fx);
     for i in 0..ni {
-        if let Some(v) = fx(d[i]) {
-            u[d[i]] = v;
+        if let Some(v) = fx(d[i] as usize) {
+            u[d[i] as usize] = v;
         }
     }
     if free.is_empty() {
@@ -188,14 +190,14 @@ pub fn recover_interior(cell: &CellSystem, fx: &dyn Fn(usize) -> Option<f64>, u:
         let mut v = b[i];
         for j in 0..nl {
             if !free.contains(&j) {
-                v -= m[i + j * nl] * u[d[j]];
+                v -= m[i + j * nl] * u[d[j] as usize];
             }
         }
         v
     });
     let x = cell.free_block_cholesky(&free).solve(&rhs);
     for (a, &i) in free.iter().enumerate() {
-        u[d[i]] = x[a];
+        u[d[i] as usize] = x[a];
     }
 }
 
@@ -210,7 +212,7 @@ mod tests {
         let nl = ni + p;
         let m = spd(nl, seed);
         let b = DVector::from_fn(nl, |i, _| 1.0 + i as f64 * 0.25);
-        let d: Vec<usize> = (0..nl).collect();
+        let d: Vec<u32> = (0..nl as u32).collect();
         let fixed_val = |i: usize| 0.5 - 0.1 * i as f64;
         let fx = |i: usize| fixed_interior.contains(&i).then(|| fixed_val(i));
         let mut s = vec![0.0; p * p];

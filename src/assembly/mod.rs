@@ -75,8 +75,8 @@ fn split_by_ranges<'b, T>(
 
 /// The position of unknown `g` among the unknowns `d` of a cell where it appears.
 #[inline]
-fn local_index(d: &[usize], g: usize) -> usize {
-    d.iter().position(|&x| x == g).unwrap_or(0)
+fn local_index(d: &[u32], g: usize) -> usize {
+    d.iter().position(|&x| x as usize == g).unwrap_or(0)
 }
 
 /// The value of each fixed unknown (Dirichlet, or fixed by the caller), NaN for a free one
@@ -450,7 +450,7 @@ impl<'a> DiscreteSystem<'a> {
                 .into_par_iter()
                 .map(|k| {
                     let cell = self.local(k);
-                    (cell.dofs[0], interior_value(&cell, fx, u))
+                    (cell.dofs[0] as usize, interior_value(&cell, fx, u))
                 })
                 .collect();
             for (dof, v) in interior {
@@ -539,7 +539,7 @@ impl<'a> DiscreteSystem<'a> {
         let p = d.len();
         let mut g = cell.load[i];
         for (bcol, &dj) in d.iter().enumerate() {
-            if let Some(vj) = fixed.get(dj) {
+            if let Some(vj) = fixed.get(dj as usize) {
                 g -= m[i + bcol * p] * vj;
             }
         }
@@ -559,7 +559,7 @@ impl<'a> DiscreteSystem<'a> {
         condense(&cell, &fx, sk, gk);
         // g_K −= S_K P_K u_F, column by column
         for bcol in 0..p {
-            if let Some(vj) = fx(d[ni + bcol]) {
+            if let Some(vj) = fx(d[ni + bcol] as usize) {
                 for arow in 0..p {
                     gk[arow] -= sk[arow + bcol * p] * vj;
                 }
@@ -660,7 +660,7 @@ impl<'a> DiscreteSystem<'a> {
                     let (nl, i) = (d.len(), local_index(d, gi));
                     let (mut mu, mut abs) = (0.0, 0.0);
                     for (j, &gj) in d.iter().enumerate() {
-                        let v = m[i + j * nl] * u[gj];
+                        let v = m[i + j * nl] * u[gj as usize];
                         mu += v;
                         abs += v.abs();
                     }
@@ -695,7 +695,7 @@ impl<'a> DiscreteSystem<'a> {
             let nl = d.len();
             for (j, &gj) in d.iter().enumerate() {
                 for (i, &gi) in d.iter().enumerate() {
-                    t.push((gi, gj, m[i + j * nl]));
+                    t.push((gi as usize, gj as usize, m[i + j * nl]));
                 }
             }
         }

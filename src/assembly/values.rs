@@ -51,7 +51,7 @@ impl ProblemValues {
         let n = scheme.n_unknowns();
         let mut load = vec![0.0; n];
         for (i, &d) in dm.dofs.iter().enumerate() {
-            load[d] += loads[i];
+            load[d as usize] += loads[i];
         }
         let mut values = ProblemValues {
             mat_ptr,

@@ -35,9 +35,9 @@ pub fn analyse(system: &DiscreteSystem, cons: Option<&Constraints>) -> crate::Re
     for k in 0..dm.n_cells() {
         let (d, _) = dm.cell(k);
         if let Some((&first, rest)) = d.split_first() {
-            let a = find(&mut parent, first);
+            let a = find(&mut parent, first as usize);
             for &x in rest {
-                let b = find(&mut parent, x);
+                let b = find(&mut parent, x as usize);
                 if a != b {
                     parent[b] = a;
                 }
@@ -61,7 +61,7 @@ pub fn analyse(system: &DiscreteSystem, cons: Option<&Constraints>) -> crate::Re
     }
     let first_cell = |r: usize| {
         (0..dm.n_cells())
-            .find(|&k| dm.cell(k).0.first().is_some_and(|&d| root[d] == r))
+            .find(|&k| dm.cell(k).0.first().is_some_and(|&d| root[d as usize] == r))
             .unwrap_or(0)
     };
     for r in (0..n).filter(|&i| root[i] == i && !anchored[i]) {

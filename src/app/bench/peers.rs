@@ -21,8 +21,8 @@
 use super::{Config, bad, io_err, peak_memory_mib, stdout_of};
 use crate::app::replication::records::{read_csv, write_csv};
 use gradvi::mesh::PolyMesh;
-use gradvi::mesh::generate::{cartesian_rect, cartesian_triangles};
 use gradvi::mesh::budget::human_bytes;
+use gradvi::mesh::generate::{cartesian_rect, cartesian_triangles};
 use gradvi::mesh::io::read_mesh;
 use gradvi::problem::{Problem, paper_test3};
 use gradvi::scheme::{Entity, SchemeKind};
