@@ -193,6 +193,14 @@ pub enum MeshError {
         /// The signed distance from the centroid to the edge line.
         dist: f64,
     },
+    /// More vertices or cells than the 32-bit ids of the edge arrays can number.
+    #[error("the mesh has {count} {what}: at most 2^32 - 2 are supported")]
+    TooManyEntities {
+        /// "vertices" or "cells".
+        what: &'static str,
+        /// How many there are.
+        count: usize,
+    },
     /// The boundary is not a union of simple closed polygons (hanging nodes, pinched vertices).
     #[error("non-conforming mesh: {0}")]
     NonConforming(String),

@@ -80,8 +80,9 @@ pub fn max_file_bytes() -> u64 {
 /// lists, treap handles). Measured peaks (resident memory) were 85–95% of this estimate when
 /// it counted 40 bytes per side for the stored normals and distances; without them the
 /// measured saving is exactly those 24 bytes per side. Since then the mesh stores neither the
-/// edge lengths nor the midpoints (24 bytes per edge, computed on demand) and the sweep's
-/// events are 32-bit where they fit; the estimate still counts them, as margin: measured
+/// edge lengths nor the midpoints (24 bytes per edge, computed on demand), its edge end points
+/// and cells are 32-bit (16 bytes less per edge) and the sweep's events are 32-bit where they
+/// fit; the estimate still counts the old sizes, as margin: measured
 /// peaks of `gradvi mesh generate` (output file included) are now 70–74% of it (Cartesian
 /// level 9, triangles level 9, hexagonal level 8), and reading and validating a 1M-cell typ2
 /// file (text and parsing included) 92%.
