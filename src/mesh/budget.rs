@@ -73,7 +73,7 @@ pub fn max_file_bytes() -> u64 {
 /// The peak is reached during the overlap check (the sweep of
 /// [`validate`](super::validate)), when the arrays of [`PolyMesh`](super::PolyMesh) are all
 /// built: 16 bytes per vertex (coordinates), 40 per cell (CSR offset, area, centroid,
-/// diameter), 16 per cell side (vertex, edge; n_{K,σ} and d_{K,σ} are computed on demand)
+/// diameter; the diameter is no longer stored, computed on demand), 16 per cell side (vertex, edge; n_{K,σ} and d_{K,σ} are computed on demand)
 /// and 56 per edge (end points,
 /// cells, length, midpoint, tag); and the sweep adds 72 bytes per vertex (sort keys, ranks,
 /// sorted points, event offsets, boundary links) and 44 per edge (renumbered segments, event
