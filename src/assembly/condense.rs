@@ -13,6 +13,50 @@
 
 use nalgebra::{DMatrix, DVector, Dyn, linalg::Cholesky};
 
+/// Entries of the lower triangle of an n × n matrix: n(n + 1)/2.
+#[inline]
+pub fn packed_len(n: usize) -> usize {
+    n * (n + 1) / 2
+}
+
+/// The position of entry (i, j), i ≥ j, of an n × n symmetric matrix stored as its lower
+/// triangle column by column (column j holds rows j..n): j(2n − j + 1)/2 + (i − j).
+#[inline]
+pub fn packed_index(n: usize, i: usize, j: usize) -> usize {
+    debug_assert!(j <= i && i < n);
+    j * (2 * n - j + 1) / 2 + (i - j)
+}
+
+/// A symmetric local matrix, stored as its lower triangle column by column (see
+/// [`packed_index`]): the local matrices of the schemes are symmetric, and this takes
+/// n(n + 1)/2 numbers instead of n² (a P1 triangle 6 instead of 9, an HMM quadrilateral with
+/// its cell unknown 15 instead of 25). The upper entries read the lower ones, so a local
+/// matrix whose two triangles differ in the last bits (rounding) is used as its lower half
+/// everywhere, as the condensed matrix always did.
+#[derive(Debug, Clone, Copy)]
+pub struct SymMatrix<'c> {
+    /// The order n.
+    pub n: usize,
+    /// The n(n + 1)/2 entries of the lower triangle.
+    pub lower: &'c [f64],
+}
+
+impl SymMatrix<'_> {
+    /// Entry (i, j).
+    #[inline]
+    pub fn at(&self, i: usize, j: usize) -> f64 {
+        let (i, j) = if i >= j { (i, j) } else { (j, i) };
+        self.lower[packed_index(self.n, i, j)]
+    }
+}
+
+/// Appends the lower triangle of the n × n column-major matrix `m` to `out`, column by column.
+pub fn pack_lower(n: usize, m: &[f64], out: &mut Vec<f64>) {
+    for j in 0..n {
+        out.extend_from_slice(&m[j * n + j..(j + 1) * n]);
+    }
+}
+
 /// The local system of one cell: M_K u_K = b_K in the cell's unknowns.
 #[derive(Debug, Clone, Copy)]
 pub struct CellSystem<'c> {
@@ -21,8 +65,8 @@ pub struct CellSystem<'c> {
     pub dofs: &'c [u32],
     /// The number of interior unknowns |I|.
     pub n_interior: usize,
-    /// The local matrix M_K, column-major, in the order of `dofs`.
-    pub matrix: &'c [f64],
+    /// The local matrix M_K (symmetric, packed), in the order of `dofs`.
+    pub matrix: SymMatrix<'c>,
     /// The local load b_K, in the order of `dofs`.
     pub load: &'c [f64],
 }
@@ -37,8 +81,8 @@ impl CellSystem<'_> {
 
     /// The Cholesky factorisation of M_RR, the block of the free interior unknowns `free`.
     fn free_block_cholesky(&self, free: &[usize]) -> Cholesky<f64, Dyn> {
-        let (m, nl, r) = (self.matrix, self.dofs.len(), free.len());
-        DMatrix::from_fn(r, r, |a, c| m[free[a] + free[c] * nl])
+        let (m, r) = (self.matrix, free.len());
+        DMatrix::from_fn(r, r, |a, c| m.at(free[a], free[c]))
             .cholesky()
             .expect("interior block of an SPD local matrix is SPD")
     }
@@ -63,7 +107,7 @@ pub fn condense(
     // S_K = M_SS and g_K = b_S before the elimination
     for bcol in 0..p {
         for arow in 0..p {
-            s[arow + bcol * p] = m[(ni + arow) + (ni + bcol) * nl];
+            s[arow + bcol * p] = m.at(ni + arow, ni + bcol);
         }
     }
     g.copy_from_slice(&b[ni..]);
@@ -88,19 +132,19 @@ fn eliminate_cell_unknown(
     match fx(d[0] as usize) {
         Some(v) => {
             for arow in 0..p {
-                g[arow] -= m[ni + arow] * v;
+                g[arow] -= m.at(ni + arow, 0) * v;
             }
         }
         None => {
-            let mkk = m[0];
+            let mkk = m.at(0, 0);
             for bcol in 0..p {
-                let mkb = m[(ni + bcol) * nl];
+                let mkb = m.at(0, ni + bcol);
                 for arow in 0..p {
-                    s[arow + bcol * p] -= m[ni + arow] * mkb / mkk;
+                    s[arow + bcol * p] -= m.at(ni + arow, 0) * mkb / mkk;
                 }
             }
             for arow in 0..p {
-                g[arow] -= m[ni + arow] * b[0] / mkk;
+                g[arow] -= m.at(ni + arow, 0) * b[0] / mkk;
             }
         }
     }
@@ -125,17 +169,17 @@ fn eliminate_interior(
     let mut br: Vec<f64> = free.iter().map(|&i| b[i]).collect();
     for &(j, v) in &fixed {
         for arow in 0..p {
-            g[arow] -= m[(ni + arow) + j * nl] * v;
+            g[arow] -= m.at(ni + arow, j) * v;
         }
         for (q, &i) in free.iter().enumerate() {
-            br[q] -= m[i + j * nl] * v;
+            br[q] -= m.at(i, j) * v;
         }
     }
     if free.is_empty() {
         return;
     }
     let r = free.len();
-    let msr = DMatrix::from_fn(p, r, |a, c| m[(ni + a) + free[c] * nl]);
+    let msr = DMatrix::from_fn(p, r, |a, c| m.at(ni + a, free[c]));
     let chol = cell.free_block_cholesky(&free);
     let x = chol.solve(&msr.transpose()); // M_RR⁻¹ M_RS
     let y = chol.solve(&DVector::from_vec(br)); // M_RR⁻¹ b_R'
@@ -159,9 +203,9 @@ pub fn interior_value(cell: &CellSystem, fx: &dyn Fn(usize) -> Option<f64>, u: &
         None => {
             let mut r = b[0];
             for j in 1..nl {
-                r -= m[j * nl] * u[d[j] as usize];
+                r -= m.at(0, j) * u[d[j] as usize];
             }
-            r / m[0]
+            r / m.at(0, 0)
         }
     }
 }
@@ -190,7 +234,7 @@ pub fn recover_interior(cell: &CellSystem, fx: &dyn Fn(usize) -> Option<f64>, u:
         let mut v = b[i];
         for j in 0..nl {
             if !free.contains(&j) {
-                v -= m[i + j * nl] * u[d[j] as usize];
+                v -= m.at(i, j) * u[d[j] as usize];
             }
         }
         v
@@ -213,6 +257,8 @@ mod tests {
         let m = spd(nl, seed);
         let b = DVector::from_fn(nl, |i, _| 1.0 + i as f64 * 0.25);
         let d: Vec<u32> = (0..nl as u32).collect();
+        let mut packed = Vec::new();
+        pack_lower(nl, m.as_slice(), &mut packed);
         let fixed_val = |i: usize| 0.5 - 0.1 * i as f64;
         let fx = |i: usize| fixed_interior.contains(&i).then(|| fixed_val(i));
         let mut s = vec![0.0; p * p];
@@ -220,7 +266,10 @@ mod tests {
         let cell = CellSystem {
             dofs: &d,
             n_interior: ni,
-            matrix: m.as_slice(),
+            matrix: SymMatrix {
+                n: nl,
+                lower: &packed,
+            },
             load: b.as_slice(),
         };
         condense(&cell, &fx, &mut s, &mut g);
@@ -271,6 +320,28 @@ mod tests {
                 .all(|(a, b)| (a - b).abs() < 1e-10),
             "u = {u:?}, the full solve gives {uref}"
         );
+    }
+
+    #[test]
+    fn packed_storage_reads_both_triangles() {
+        for n in 1..6 {
+            let m = spd(n, 10 + n as u64);
+            let mut packed = Vec::new();
+            pack_lower(n, m.as_slice(), &mut packed);
+            assert_eq!(packed.len(), packed_len(n));
+            let sym = SymMatrix { n, lower: &packed };
+            let mut seen = vec![false; packed_len(n)];
+            for j in 0..n {
+                for i in j..n {
+                    let q = packed_index(n, i, j);
+                    assert!(!seen[q], "n {n}: ({i}, {j}) at {q} twice");
+                    seen[q] = true;
+                    assert_eq!(sym.at(i, j), m[(i, j)]);
+                    assert_eq!(sym.at(j, i), m[(i, j)]);
+                }
+            }
+            assert!(seen.iter().all(|&s| s));
+        }
     }
 
     #[test]

@@ -33,7 +33,7 @@ use crate::linalg::{FactorThreads, Ordering, SpdPattern};
 use crate::problem::Problem;
 use crate::scheme::{GradientDiscretisation, PointDof};
 use crate::vi::{QuadraticEnergy, SolveTimings};
-use condense::{CellSystem, condense, interior_value, recover_interior};
+use condense::{CellSystem, SymMatrix, condense, interior_value, recover_interior};
 use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -299,7 +299,10 @@ impl<'a> DiscreteSystem<'a> {
         CellSystem {
             dofs: d,
             n_interior: ni,
-            matrix: &v.mats[v.mat_ptr[k]..v.mat_ptr[k + 1]],
+            matrix: SymMatrix {
+                n: d.len(),
+                lower: &v.mats[v.mat_ptr[k]..v.mat_ptr[k + 1]],
+            },
             load: &v.loads[r],
         }
     }
@@ -523,9 +526,10 @@ impl<'a> DiscreteSystem<'a> {
         let s_slices = split_by_ranges(sbuf, &ranges, block_ptr);
         let tasks: Vec<_> = ranges.into_iter().zip(s_slices).zip(g_slices).collect();
         tasks.into_par_iter().for_each(|(((c0, c1), s), g)| {
+            let mut full = Vec::new();
             for k in c0..c1 {
                 let (so, go) = (block_ptr[k] - block_ptr[c0], dof_ptr[k] - dof_ptr[c0]);
-                self.condense_cell(k, fixed, &mut s[so..], &mut g[go..]);
+                self.condense_cell(k, fixed, &mut full, &mut s[so..], &mut g[go..]);
             }
         });
     }
@@ -536,25 +540,33 @@ impl<'a> DiscreteSystem<'a> {
     fn cell_rhs(&self, k: usize, i: usize, fixed: &FixedValues) -> f64 {
         let cell = self.local(k);
         let (d, m) = (cell.dofs, cell.matrix);
-        let p = d.len();
         let mut g = cell.load[i];
         for (bcol, &dj) in d.iter().enumerate() {
             if let Some(vj) = fixed.get(dj as usize) {
-                g -= m[i + bcol * p] * vj;
+                g -= m.at(i, bcol) * vj;
             }
         }
         g
     }
 
-    /// Condenses cell k: its block S_K into the first p² entries of `s`, and its right-hand
-    /// side g_K − S_K P_K u_F into `g` after its `ni` interior entries (the cell's stretch of
-    /// a buffer laid out like `dofs` starts at `g`).
-    fn condense_cell(&self, k: usize, fixed: &FixedValues, s: &mut [f64], g: &mut [f64]) {
+    /// Condenses cell k: its block S_K, packed ([`condense::packed_index`]), into the first p(p + 1)/2
+    /// entries of `s`, and its right-hand side g_K − S_K P_K u_F into `g` after its `ni`
+    /// interior entries (the cell's stretch of a buffer laid out like `dofs` starts at `g`).
+    /// `full` is scratch for the whole p × p block.
+    fn condense_cell(
+        &self,
+        k: usize,
+        fixed: &FixedValues,
+        full: &mut Vec<f64>,
+        s: &mut [f64],
+        g: &mut [f64],
+    ) {
         let fx = |d: usize| fixed.get(d);
         let cell = self.local(k);
         let (d, ni) = (cell.dofs, cell.n_interior);
         let p = d.len() - ni;
-        let sk = &mut s[..p * p];
+        full.resize(p * p, 0.0);
+        let sk = &mut full[..];
         let gk = &mut g[ni..ni + p];
         condense(&cell, &fx, sk, gk);
         // g_K −= S_K P_K u_F, column by column
@@ -564,6 +576,13 @@ impl<'a> DiscreteSystem<'a> {
                     gk[arow] -= sk[arow + bcol * p] * vj;
                 }
             }
+        }
+        // S_K's lower triangle, column by column
+        let mut w = 0;
+        for j in 0..p {
+            let col = &sk[j * p + j..(j + 1) * p];
+            s[w..w + col.len()].copy_from_slice(col);
+            w += col.len();
         }
     }
 
@@ -657,10 +676,10 @@ impl<'a> DiscreteSystem<'a> {
                 for &k in inc.list(gi) {
                     let cell = self.local(k as usize);
                     let (d, m) = (cell.dofs, cell.matrix);
-                    let (nl, i) = (d.len(), local_index(d, gi));
+                    let i = local_index(d, gi);
                     let (mut mu, mut abs) = (0.0, 0.0);
                     for (j, &gj) in d.iter().enumerate() {
-                        let v = m[i + j * nl] * u[gj as usize];
+                        let v = m.at(i, j) * u[gj as usize];
                         mu += v;
                         abs += v.abs();
                     }
@@ -692,10 +711,9 @@ impl<'a> DiscreteSystem<'a> {
         for k in 0..self.sym.scheme().mesh().n_cells() {
             let cell = self.local(k);
             let (d, m) = (cell.dofs, cell.matrix);
-            let nl = d.len();
             for (j, &gj) in d.iter().enumerate() {
                 for (i, &gi) in d.iter().enumerate() {
-                    t.push((gi as usize, gj as usize, m[i + j * nl]));
+                    t.push((gi as usize, gj as usize, m.at(i, j)));
                 }
             }
         }

@@ -171,11 +171,12 @@ impl<T> Ragged<T> {
 /// The scatter and gather maps of the module docs.
 #[derive(Debug, Clone)]
 pub struct ScatterMaps {
-    /// Offsets of the cells' p×p skeleton blocks (column-major) in a buffer of local blocks,
-    /// one per cell plus one.
+    /// Offsets of the cells' p×p skeleton blocks, symmetric and stored as their lower
+    /// triangles (p(p + 1)/2 entries, [`super::condense::packed_index`]), in a buffer of local
+    /// blocks, one per cell plus one.
     pub block_ptr: Vec<usize>,
     /// Per condensed entry, the indices in that buffer of the local entries landing on it
-    /// (lower triangle only).
+    /// (each local entry (a, b), a ≥ b, lands on the entry (max, min) of its two unknowns).
     pub src: Ragged<u32>,
     /// Per unknown, the cells where it appears, ascending.
     pub inc: Ragged<u32>,
@@ -418,26 +419,25 @@ fn scatter_maps(
     pos_ptr.push(0);
     for k in 0..nc {
         let p = dm.skeleton(k).len();
-        pos_ptr.push(pos_ptr[k] + p * p);
+        pos_ptr.push(pos_ptr[k] + super::condense::packed_len(p));
     }
     if pos_ptr[nc] >= u32::MAX as usize || dm.dofs.len() >= u32::MAX as usize {
         return Err(crate::Error::Linear(
             "more than 2^32 local skeleton entries".into(),
         ));
     }
+    // the packed lower triangle of each block (column b, rows a ≥ b, local indices): the
+    // entry lands on the condensed entry (max, min) of its two unknowns
     let pos: Vec<u32> = cell_chunks(nc)
         .into_par_iter()
         .flat_map_iter(|(c0, c1)| {
             let mut out = Vec::with_capacity(pos_ptr[c1] - pos_ptr[c0]);
             for k in c0..c1 {
                 let sk = dm.skeleton(k);
-                for &j in sk {
-                    for &i in sk {
-                        out.push(if i >= j {
-                            find(i as usize, j as usize)
-                        } else {
-                            u32::MAX
-                        });
+                for (b, &j) in sk.iter().enumerate() {
+                    for &i in &sk[b..] {
+                        let (i, j) = (i as usize, j as usize);
+                        out.push(find(i.max(j), i.min(j)));
                     }
                 }
             }
@@ -445,10 +445,7 @@ fn scatter_maps(
         })
         .collect();
     // condensed entry -> the local entries landing on it, in cell order
-    let src = counting_sort(
-        row_idx.len(),
-        pos.iter().map(|&q| (q != u32::MAX).then_some(q as usize)),
-    )?;
+    let src = counting_sort(row_idx.len(), pos.iter().map(|&q| Some(q as usize)))?;
     Ok(ScatterMaps {
         block_ptr: pos_ptr,
         src,

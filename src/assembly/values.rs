@@ -16,7 +16,8 @@ use rayon::prelude::*;
 pub struct ProblemValues {
     /// Offsets into `mats`, one per cell plus one.
     pub mat_ptr: Vec<usize>,
-    /// The local matrices, column-major, in the order of the cell's unknowns.
+    /// The local matrices (symmetric), their lower triangles column by column
+    /// ([`super::condense::packed_index`]), in the order of the cell's unknowns.
     pub mats: Vec<f64>,
     /// The local loads, laid out like [`DofMap::dofs`].
     pub loads: Vec<f64>,
@@ -155,8 +156,9 @@ fn local_data(
                         "the source term f is not finite in cell {k} (x_K = {xk:?})"
                     ));
                 }
-                out.mats.extend_from_slice(m.as_slice());
-                out.mat_len.push(m.len());
+                // symmetric: the lower triangle only
+                super::condense::pack_lower(m.nrows(), m.as_slice(), &mut out.mats);
+                out.mat_len.push(super::condense::packed_len(m.nrows()));
                 out.loads.extend(b.iter());
             }
             out
