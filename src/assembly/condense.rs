@@ -131,8 +131,8 @@ fn eliminate_cell_unknown(
     let p = nl - ni;
     match fx(d[0] as usize) {
         Some(v) => {
-            for arow in 0..p {
-                g[arow] -= m.at(ni + arow, 0) * v;
+            for (arow, ga) in g.iter_mut().enumerate().take(p) {
+                *ga -= m.at(ni + arow, 0) * v;
             }
         }
         None => {
@@ -143,8 +143,8 @@ fn eliminate_cell_unknown(
                     s[arow + bcol * p] -= m.at(ni + arow, 0) * mkb / mkk;
                 }
             }
-            for arow in 0..p {
-                g[arow] -= m.at(ni + arow, 0) * b[0] / mkk;
+            for (arow, ga) in g.iter_mut().enumerate().take(p) {
+                *ga -= m.at(ni + arow, 0) * b[0] / mkk;
             }
         }
     }
@@ -168,8 +168,8 @@ fn eliminate_interior(
         .collect();
     let mut br: Vec<f64> = free.iter().map(|&i| b[i]).collect();
     for &(j, v) in &fixed {
-        for arow in 0..p {
-            g[arow] -= m.at(ni + arow, j) * v;
+        for (arow, ga) in g.iter_mut().enumerate().take(p) {
+            *ga -= m.at(ni + arow, j) * v;
         }
         for (q, &i) in free.iter().enumerate() {
             br[q] -= m.at(i, j) * v;
