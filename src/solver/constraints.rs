@@ -3,9 +3,11 @@
 //! a(x_σ), nodal values), and the check that the discrete convex set is not empty.
 
 use crate::assembly::DiscreteSystem;
+use crate::mesh::Point;
 use crate::problem::{ConstraintKind, Problem, check_finite};
 use crate::scheme::PointDof;
 use crate::vi::Constraints;
+use rayon::prelude::*;
 
 /// Builds the barrier of `problem` on the unknowns of the system, checking the data and the
 /// non-emptiness of the discrete convex set.
@@ -44,12 +46,17 @@ pub fn build(system: &DiscreteSystem, problem: &Problem) -> crate::Result<Option
             checks.extend(candidates.iter().filter(|t| dir[t.dof].is_some()));
         }
     }
+    // the message is formatted only for a non-finite value
+    let finite = |g: f64, p: Point| -> crate::Result<f64> {
+        if g.is_finite() {
+            Ok(g)
+        } else {
+            check_finite(g, &format!("the barrier at {p:?}"))
+        }
+    };
     for t in &checks {
         let v = dir[t.dof].unwrap_or(0.0);
-        let g = check_finite(
-            (c.barrier)(t.point),
-            &format!("the barrier at {:?}", t.point),
-        )?;
+        let g = finite((c.barrier)(t.point), t.point)?;
         if s * (v - g) > 1e-12 * (1.0 + g.abs()) {
             return Err(crate::Error::Infeasible(format!(
                 "the Dirichlet value {v} at {:?} is {} the barrier {g}: the discrete convex set is empty",
@@ -58,22 +65,72 @@ pub fn build(system: &DiscreteSystem, problem: &Problem) -> crate::Result<Option
             )));
         }
     }
-    let mut dofs = Vec::new();
-    let mut barrier = Vec::new();
-    for pd in candidates {
-        if dir[pd.dof].is_some() {
-            continue;
-        }
-        let g = check_finite(
-            (c.barrier)(pd.point),
-            &format!("the barrier at {:?}", pd.point),
-        )?;
-        dofs.push(pd);
-        barrier.push(g);
+    // the barrier at the unknowns off the Dirichlet boundary, evaluated in parallel; the first
+    // non-finite value in their order is reported
+    let dofs: Vec<PointDof> = candidates
+        .into_iter()
+        .filter(|pd| dir[pd.dof].is_none())
+        .collect();
+    let barrier: Vec<f64> = dofs
+        .par_iter()
+        .with_min_len(4096)
+        .map(|pd| (c.barrier)(pd.point))
+        .collect();
+    for (pd, &g) in dofs.iter().zip(&barrier) {
+        finite(g, pd.point)?;
     }
     Ok(Some(Constraints {
         dofs,
         barrier,
         side: c.side,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::problem::Side;
+
+    /// The barrier is evaluated at every constrained unknown; the first non-finite value (in
+    /// the unknowns' order) is an error naming its point, a finite barrier gives one value per
+    /// unknown off the Dirichlet boundary.
+    #[test]
+    fn barrier_values_and_the_first_non_finite_one() {
+        let mesh = crate::mesh::generate::cartesian(8, 8).unwrap();
+        let scheme = crate::scheme::Hmm::new(&mesh);
+        let system = |p: &Problem| DiscreteSystem::new(&scheme, p, Default::default()).unwrap();
+        let base = || crate::problem::paper_test3(-5.0);
+        let p = base().with_constraint(
+            ConstraintKind::Obstacle,
+            Side::Upper,
+            Box::new(|x: Point| x[0] + 2.0 * x[1]),
+        );
+        let c = build(&system(&p), &p).unwrap().unwrap();
+        assert_eq!(c.dofs.len(), mesh.n_cells());
+        for (pd, &g) in c.dofs.iter().zip(&c.barrier) {
+            assert_eq!(g, pd.point[0] + 2.0 * pd.point[1]);
+        }
+        // NaN on the boundary: found by the check against the Dirichlet data
+        let p = base().with_constraint(
+            ConstraintKind::Obstacle,
+            Side::Upper,
+            Box::new(|x: Point| (0.5 - x[0]).sqrt()),
+        );
+        let e = build(&system(&p), &p).unwrap_err().to_string();
+        assert!(e.contains("the barrier at [0.5625, 0.0] is NaN"), "{e}");
+        // NaN inside (0.3, 0.7)² only: the first cell there, in cell order, is named
+        let p = base().with_constraint(
+            ConstraintKind::Obstacle,
+            Side::Upper,
+            Box::new(|x: Point| {
+                if (x[0] - 0.5).abs() < 0.2 && (x[1] - 0.5).abs() < 0.2 {
+                    f64::NAN
+                } else {
+                    1.0
+                }
+            }),
+        );
+        let e = build(&system(&p), &p).unwrap_err().to_string();
+        assert!(e.contains("the barrier at [0.3125, 0.3125] is NaN"), "{e}");
+    }
 }
