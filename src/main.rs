@@ -193,7 +193,12 @@ fn one_line(e: &anyhow::Error) -> String {
 /// within the noise). The
 /// benchmark's cases run this binary, so they measure the same setting. (Also measured:
 /// mimalloc, 1636–1679 MB; a fixed mmap threshold of 128 kB, 1323–1341 MB but 30% slower
-/// from the page faults of fresh mappings.)
+/// from the page faults of fresh mappings.) Those faults remain the cost of the large arrays
+/// each active-set step allocates and frees (above glibc's 32 MB mmap limit they are always
+/// fresh mappings): at 4M unknowns the kernel's page zeroing (`clear_page_erms`) is 15% of
+/// the profile. No mmap at all (`MALLOC_MMAP_MAX_=0`, no trimming) was 12–20% faster at 1M
+/// unknowns but raised the peak from 1041–1043 to 1256–1257 MB (two runs each, a loaded
+/// machine); reusing those arrays across steps is the remedy that keeps both.
 fn limit_malloc_arenas() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     if std::env::var_os("MALLOC_ARENA_MAX").is_none() {
