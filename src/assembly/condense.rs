@@ -31,8 +31,10 @@ pub fn packed_index(n: usize, i: usize, j: usize) -> usize {
 /// [`packed_index`]): the local matrices of the schemes are symmetric, and this takes
 /// n(n + 1)/2 numbers instead of n² (a P1 triangle 6 instead of 9, an HMM quadrilateral with
 /// its cell unknown 15 instead of 25). The upper entries read the lower ones, so a local
-/// matrix whose two triangles differ in the last bits (rounding) is used as its lower half
-/// everywhere, as the condensed matrix always did.
+/// matrix whose two triangles differ in the last bits (rounding: HMM's W, P1 with an
+/// anisotropic A) is used as its lower half everywhere. (With full storage, each condensed
+/// entry read whichever local triangle the global numbering pointed to; the change moved
+/// results at round-off level only.)
 #[derive(Debug, Clone, Copy)]
 pub struct SymMatrix<'c> {
     /// The order n.
@@ -50,10 +52,14 @@ impl SymMatrix<'_> {
     }
 }
 
-/// Appends the lower triangle of the n × n column-major matrix `m` to `out`, column by column.
-pub fn pack_lower(n: usize, m: &[f64], out: &mut Vec<f64>) {
+/// Writes the lower triangle of the n × n column-major matrix `m`, column by column, into the
+/// first n(n + 1)/2 entries of `out`.
+pub fn pack_lower(n: usize, m: &[f64], out: &mut [f64]) {
+    let mut w = 0;
     for j in 0..n {
-        out.extend_from_slice(&m[j * n + j..(j + 1) * n]);
+        let col = &m[j * n + j..(j + 1) * n];
+        out[w..w + col.len()].copy_from_slice(col);
+        w += col.len();
     }
 }
 
@@ -257,7 +263,7 @@ mod tests {
         let m = spd(nl, seed);
         let b = DVector::from_fn(nl, |i, _| 1.0 + i as f64 * 0.25);
         let d: Vec<u32> = (0..nl as u32).collect();
-        let mut packed = Vec::new();
+        let mut packed = vec![0.0; packed_len(nl)];
         pack_lower(nl, m.as_slice(), &mut packed);
         let fixed_val = |i: usize| 0.5 - 0.1 * i as f64;
         let fx = |i: usize| fixed_interior.contains(&i).then(|| fixed_val(i));
@@ -326,10 +332,12 @@ mod tests {
     fn packed_storage_reads_both_triangles() {
         for n in 1..6 {
             let m = spd(n, 10 + n as u64);
-            let mut packed = Vec::new();
+            let mut packed = vec![f64::NAN; packed_len(n) + 1];
             pack_lower(n, m.as_slice(), &mut packed);
-            assert_eq!(packed.len(), packed_len(n));
-            let sym = SymMatrix { n, lower: &packed };
+            // exactly n(n + 1)/2 entries written
+            assert!(packed[packed_len(n)].is_nan());
+            let packed = &packed[..packed_len(n)];
+            let sym = SymMatrix { n, lower: packed };
             let mut seen = vec![false; packed_len(n)];
             for j in 0..n {
                 for i in j..n {

@@ -577,13 +577,7 @@ impl<'a> DiscreteSystem<'a> {
                 }
             }
         }
-        // S_K's lower triangle, column by column
-        let mut w = 0;
-        for j in 0..p {
-            let col = &sk[j * p + j..(j + 1) * p];
-            s[w..w + col.len()].copy_from_slice(col);
-            w += col.len();
-        }
+        condense::pack_lower(p, sk, s);
     }
 
     /// The values of the condensed matrix, gathered entry by entry (column by column in

@@ -157,8 +157,11 @@ fn local_data(
                     ));
                 }
                 // symmetric: the lower triangle only
-                super::condense::pack_lower(m.nrows(), m.as_slice(), &mut out.mats);
-                out.mat_len.push(super::condense::packed_len(m.nrows()));
+                let (n, start) = (m.nrows(), out.mats.len());
+                let len = super::condense::packed_len(n);
+                out.mats.resize(start + len, 0.0);
+                super::condense::pack_lower(n, m.as_slice(), &mut out.mats[start..]);
+                out.mat_len.push(len);
                 out.loads.extend(b.iter());
             }
             out

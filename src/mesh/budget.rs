@@ -73,9 +73,9 @@ pub fn max_file_bytes() -> u64 {
 /// The peak is reached during the overlap check (the sweep of
 /// [`validate`](super::validate)), when the arrays of [`PolyMesh`](super::PolyMesh) are all
 /// built: 16 bytes per vertex (coordinates), 40 per cell (CSR offset, area, centroid,
-/// diameter; the diameter is no longer stored, computed on demand), 16 per cell side (vertex, edge; n_{K,σ} and d_{K,σ} are computed on demand)
-/// and 56 per edge (end points,
-/// cells, length, midpoint, tag); and the sweep adds 72 bytes per vertex (sort keys, ranks,
+/// diameter: present during the check, not kept by the mesh), 16 per cell side (vertex,
+/// edge; n_{K,σ} and d_{K,σ} are computed on demand) and 56 per edge (end points, cells,
+/// length, midpoint, tag); and the sweep adds 72 bytes per vertex (sort keys, ranks,
 /// sorted points, event offsets, boundary links) and 44 per edge (renumbered segments, event
 /// lists, treap handles). Measured peaks (resident memory) were 85–95% of this estimate when
 /// it counted 40 bytes per side for the stored normals and distances; without them the
