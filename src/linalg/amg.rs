@@ -246,7 +246,8 @@ struct LevelWork {
 /// (see the module documentation). It borrows the fine matrix.
 #[derive(Debug)]
 pub struct Amg<'a> {
-    fine: &'a CsrMatrix,
+    /// A₀, borrowed ([`Amg::new`]) or owned ([`Amg::owning`]).
+    fine: std::borrow::Cow<'a, CsrMatrix>,
     /// A_1, …, A_L.
     coarse_ops: Vec<CsrMatrix>,
     /// Level ℓ → ℓ + 1, for ℓ = 0, …, L − 1.
@@ -319,7 +320,7 @@ impl<'a> Amg<'a> {
             CoarseSolve::Smooth
         };
         let amg = Amg {
-            fine: a,
+            fine: std::borrow::Cow::Borrowed(a),
             coarse_ops,
             transfers,
             smoothers,
@@ -333,6 +334,33 @@ impl<'a> Amg<'a> {
         Ok(amg)
     }
 
+    /// [`Amg::new`] keeping `a` (for a hierarchy that outlives the caller's borrow, e.g. kept
+    /// to continue a solve later); [`Amg::matrix`] gives it back.
+    pub fn owning(a: CsrMatrix, opts: &AmgOptions) -> crate::Result<Amg<'static>> {
+        let amg = Amg::new(&a, opts)?;
+        let Amg {
+            coarse_ops,
+            transfers,
+            smoothers,
+            coarse,
+            work,
+            ..
+        } = amg;
+        Ok(Amg {
+            fine: std::borrow::Cow::Owned(a),
+            coarse_ops,
+            transfers,
+            smoothers,
+            coarse,
+            work,
+        })
+    }
+
+    /// The fine matrix A₀.
+    pub fn matrix(&self) -> &CsrMatrix {
+        &self.fine
+    }
+
     /// Order of the fine matrix.
     pub fn n(&self) -> usize {
         self.fine.n_rows()
@@ -341,7 +369,7 @@ impl<'a> Amg<'a> {
     /// The operator of level ℓ.
     fn op(&self, level: usize) -> &CsrMatrix {
         if level == 0 {
-            self.fine
+            &self.fine
         } else {
             &self.coarse_ops[level - 1]
         }

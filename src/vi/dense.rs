@@ -70,6 +70,52 @@ impl QuadraticEnergy for Dense {
     }
 }
 
+/// [`Dense`] with inexact screening solves: [`QuadraticEnergy::screen_with_fixed`] returns the
+/// exact minimiser plus `error` · (−1)^i on the free unknowns (marked inexact), and
+/// [`QuadraticEnergy::refine`] the exact one; counts the refinements.
+pub struct Screening {
+    pub exact: Dense,
+    pub error: f64,
+    pub refinements: std::cell::Cell<usize>,
+}
+
+impl QuadraticEnergy for Screening {
+    fn n_unknowns(&self) -> usize {
+        self.exact.n_unknowns()
+    }
+    fn dirichlet(&self) -> &[Option<f64>] {
+        self.exact.dirichlet()
+    }
+    fn load(&self) -> &[f64] {
+        self.exact.load()
+    }
+    fn minimise_with_fixed(
+        &self,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        self.exact.minimise_with_fixed(fixed)
+    }
+    fn screen_with_fixed(&self, fixed: &[Option<f64>]) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        let (mut u, t) = self.exact.minimise_with_fixed(fixed)?;
+        for (i, ui) in u.iter_mut().enumerate() {
+            if fixed[i].is_none() && self.exact.dir[i].is_none() {
+                *ui += if i % 2 == 0 { self.error } else { -self.error };
+            }
+        }
+        Ok((u, SolveTimings { inexact: true, ..t }))
+    }
+    fn refine(&self, fixed: &[Option<f64>]) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+        self.refinements.set(self.refinements.get() + 1);
+        self.exact.minimise_with_fixed(fixed).map(Some)
+    }
+    fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        self.exact.residual(u)
+    }
+    fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
+        self.exact.matrix_triplets()
+    }
+}
+
 /// Constraints s(u_j − g_j) ≤ 0 on every unknown, with unit measures.
 pub fn all_constrained(n: usize, barrier: Vec<f64>, side: Side) -> Constraints {
     Constraints {
@@ -83,6 +129,15 @@ pub fn all_constrained(n: usize, barrier: Vec<f64>, side: Side) -> Constraints {
         barrier,
         side,
     }
+}
+
+/// The 1D Laplacian tridiag(−1, 2, −1) of size n (an M-matrix).
+pub fn laplacian_1d(n: usize) -> DMatrix<f64> {
+    DMatrix::from_fn(n, n, |i, j| match i.abs_diff(j) {
+        0 => 2.0,
+        1 => -1.0,
+        _ => 0.0,
+    })
 }
 
 /// A deterministic SPD matrix (full, diagonally shifted) of size n.

@@ -41,6 +41,23 @@ pub struct SolveTimings {
     pub solve: f64,
     /// Conjugate-gradient iterations (0 with the direct solver).
     pub krylov: usize,
+    /// The solve stopped at the screening tolerance of
+    /// [`QuadraticEnergy::screen_with_fixed`], not at full accuracy.
+    pub inexact: bool,
+}
+
+impl SolveTimings {
+    /// The timings of a solve followed by its continuation `more` (times and iterations
+    /// added; exact if the continuation is).
+    pub fn then(self, more: SolveTimings) -> SolveTimings {
+        SolveTimings {
+            assemble: self.assemble + more.assemble,
+            factor: self.factor + more.factor,
+            solve: self.solve + more.solve,
+            krylov: self.krylov + more.krylov,
+            inexact: more.inexact,
+        }
+    }
 }
 
 /// A strictly convex quadratic energy E(u) = ½uᵀMu − bᵀu (M symmetric positive definite on
@@ -57,6 +74,20 @@ pub trait QuadraticEnergy {
     /// fixed, i.e. the solution of the linear system with those rows replaced.
     fn minimise_with_fixed(&self, fixed: &[Option<f64>])
     -> crate::Result<(Vec<f64>, SolveTimings)>;
+    /// [`Self::minimise_with_fixed`] accurate enough to decide the next active set: an
+    /// iterative solver may stop at a looser residual, and then sets
+    /// [`SolveTimings::inexact`] (the active-set solver calls [`Self::refine`] before it
+    /// stops or declares a cycle on such an iterate). Default: the full solve.
+    fn screen_with_fixed(&self, fixed: &[Option<f64>]) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        self.minimise_with_fixed(fixed)
+    }
+    /// Continues the last solve, an inexact [`Self::screen_with_fixed`] with the same
+    /// `fixed`, to full accuracy; `None` when there is nothing to continue (the caller keeps
+    /// its iterate). Default: `None`.
+    fn refine(&self, fixed: &[Option<f64>]) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+        let _ = fixed;
+        Ok(None)
+    }
     /// r = b − Mu and, for each entry, the scale |b_i| + Σ_j |M_ij u_j| against which it is
     /// small.
     fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>);

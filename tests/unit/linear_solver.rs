@@ -111,3 +111,61 @@ fn auto_picks_direct_on_small_systems() {
     );
     assert!("gmres".parse::<LinearSolver>().is_err());
 }
+
+/// A screening solve stops early and is continued by `refine` with its hierarchy to the
+/// full solve's answer; nothing is left to refine after that, after a direct solve, or after
+/// a full solve; refining with other fixed unknowns is an error.
+#[test]
+fn screening_solves_are_refined_to_the_full_solution() {
+    use gradvi::assembly::DiscreteSystem;
+    let tri = cartesian_triangles(64, 64, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let p1 = P1::new(&tri).unwrap();
+    let p = paper_test3(-10.0);
+    let system = |linear| {
+        DiscreteSystem::new(
+            &p1,
+            &p,
+            SystemOptions {
+                linear,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    };
+    let n = p1.n_unknowns();
+    // the unknowns of the left half fixed at 0.01
+    let fixed: Vec<Option<f64>> = (0..n).map(|i| (i % 64 < 32).then_some(0.01)).collect();
+    let full = system(LinearSolver::Iterative);
+    let (reference, t) = full.solve(&fixed).unwrap();
+    assert!(!t.inexact);
+    assert!(full.refine(&fixed).unwrap().is_none());
+
+    let it = system(LinearSolver::Iterative);
+    let (screened, t) = it.screen(&fixed).unwrap();
+    assert!(t.inexact && t.krylov > 0);
+    let other: Vec<Option<f64>> = fixed.iter().map(|f| f.map(|v| v + 1.0)).collect();
+    assert!(it.refine(&other).is_err());
+    // the mismatch consumed the kept solve: screen again
+    let (_, t) = it.screen(&fixed).unwrap();
+    assert!(t.inexact);
+    let (refined, more) = it
+        .refine(&fixed)
+        .unwrap()
+        .expect("an inexact solve to refine");
+    assert!(!more.inexact && more.krylov > 0 && more.factor == 0.0);
+    let gap = |a: &[f64]| {
+        a.iter()
+            .zip(&reference)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    };
+    assert!(gap(&screened) > 1e-12, "the screening solve stopped early");
+    assert!(gap(&refined) < 1e-10, "refined: {:e}", gap(&refined));
+    assert!(it.refine(&fixed).unwrap().is_none());
+
+    let direct = system(LinearSolver::Direct);
+    let (u, t) = direct.screen(&fixed).unwrap();
+    assert!(!t.inexact);
+    assert!(gap(&u) < 1e-10);
+    assert!(direct.refine(&fixed).unwrap().is_none());
+}
