@@ -294,7 +294,20 @@ pub fn run(a: &SolveArgs) -> Result<()> {
                 } else {
                     String::new()
                 }
-            )
+            );
+            if let Some(la) = l.look_ahead {
+                eprintln!(
+                    "             look-ahead: {} unknowns, {} local solves, {}, {:.2} s",
+                    la.patch,
+                    la.solves,
+                    if la.converged {
+                        "converged"
+                    } else {
+                        "not converged"
+                    },
+                    la.seconds
+                );
+            }
         }),
         ..Default::default()
     };
@@ -373,8 +386,8 @@ pub fn run(a: &SolveArgs) -> Result<()> {
     }
     let t = sol.timings;
     println!(
-        "timings [s]     mesh {mesh_seconds:.3}, setup {:.3} (symbolic {:.3}), warm start {:.3}, assembly {:.3}, factorisation {:.3}, solves {:.3}, total {:.3} (mesh excluded)",
-        t.setup, t.symbolic, t.warm_start, t.assemble, t.factor, t.solve, t.total
+        "timings [s]     mesh {mesh_seconds:.3}, setup {:.3} (symbolic {:.3}), warm start {:.3}, assembly {:.3}, factorisation {:.3}, solves {:.3}, look-ahead {:.3}, total {:.3} (mesh excluded)",
+        t.setup, t.symbolic, t.warm_start, t.assemble, t.factor, t.solve, t.look_ahead, t.total
     );
     if let Some(path) = &a.vtu {
         atomic(path, |tmp| write_solution_vtu(tmp, scheme.as_ref(), &sol))?;

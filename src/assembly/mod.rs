@@ -828,6 +828,26 @@ impl<'a> DiscreteSystem<'a> {
         (r, scale)
     }
 
+    /// The entries (i, j, (M_K)_ij) of the rows i ∈ `rows` of the full matrix, cell by cell
+    /// (repeated (i, j) sum), through the cells of each unknown.
+    pub fn row_entries(&self, rows: &[usize]) -> Vec<(usize, usize, f64)> {
+        let inc = &self.sym.maps.inc;
+        let mut t = Vec::new();
+        for &gi in rows {
+            for &k in inc.list(gi) {
+                let cell = self.local(k as usize);
+                let (d, m) = (cell.dofs, cell.matrix);
+                let i = local_index(d, gi);
+                t.extend(
+                    d.iter()
+                        .enumerate()
+                        .map(|(j, &gj)| (gi, gj as usize, m.at(i, j))),
+                );
+            }
+        }
+        t
+    }
+
     /// The discrete energy ½ uᵀMu − bᵀu (the VI solution minimises it over the convex set).
     pub fn energy(&self, u: &[f64]) -> f64 {
         let (r, _) = self.residual(u);
@@ -885,5 +905,8 @@ impl QuadraticEnergy for DiscreteSystem<'_> {
     }
     fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
         self.full_matrix_triplets()
+    }
+    fn row_entries(&self, rows: &[usize]) -> Option<Vec<(usize, usize, f64)>> {
+        Some(DiscreteSystem::row_entries(self, rows))
     }
 }

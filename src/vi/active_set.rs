@@ -43,6 +43,7 @@
 //! driver decides whether to fall back to projected Gauss–Seidel.
 
 use super::certificate::{Evaluation, evaluate};
+use super::look_ahead::{LookAheadOptions, Thresholds, look_ahead};
 use super::{
     Constraints, IterationLog, IterationStep, Method, QuadraticEnergy, VariationalSolution,
 };
@@ -72,6 +73,9 @@ pub struct ActiveSetOptions {
     /// ([`QuadraticEnergy::screen_with_fixed`]), the last one refined. Changes nothing with a
     /// direct solver, which is always exact.
     pub screening: bool,
+    /// Propose each next active set after a look-ahead on a patch around its changes
+    /// ([`super::look_ahead`]; `None`, the default: the paper's algorithm).
+    pub look_ahead: Option<LookAheadOptions>,
 }
 
 impl Default for ActiveSetOptions {
@@ -84,6 +88,7 @@ impl Default for ActiveSetOptions {
             keep_iterates: false,
             progress: None,
             screening: true,
+            look_ahead: None,
         }
     }
 }
@@ -144,6 +149,15 @@ fn initial_active(cons: &Constraints, opts: &ActiveSetOptions) -> crate::Result<
     }
 }
 
+/// The round-off thresholds of the rule, from the scales of the evaluation `ev`.
+fn thresholds(ev: &Evaluation, c: f64) -> Thresholds {
+    Thresholds {
+        scale_r: ev.scale_r,
+        scale_u: ev.scale_u,
+        c,
+    }
+}
+
 /// The next active set (Herbin's rule, step 2 of the module docs), with round-off thresholds
 /// taken from the scales of the evaluation of the current iterate.
 fn next_active(
@@ -154,26 +168,16 @@ fn next_active(
     c: f64,
 ) -> Vec<bool> {
     let s = cons.side.sign();
+    let thr = thresholds(ev, c);
     (0..cons.dofs.len())
         .map(|j| {
             let pd = &cons.dofs[j];
-            let l = if active[j] { ev.multiplier[j] } else { 0.0 };
-            let gap = if active[j] {
-                0.0
+            let (l, gap) = if active[j] {
+                (ev.multiplier[j], 0.0)
             } else {
-                s * (u[pd.dof] - cons.barrier[j])
+                (0.0, s * (u[pd.dof] - cons.barrier[j]))
             };
-            let score = l / pd.measure + c * gap;
-            // round-off thresholds, one per term: an active unknown stays if its multiplier
-            // exceeds round-off of the residual, an inactive one enters if its violation exceeds
-            // round-off of u (a single threshold mixing both would grow like 1/m_j on fine
-            // meshes and let violations through)
-            let thr = if active[j] {
-                1e-13 * ev.scale_r / pd.measure
-            } else {
-                c * 1e-13 * ev.scale_u
-            };
-            score > thr
+            thr.stays_active(active[j], l, gap, pd.measure)
         })
         .collect()
 }
@@ -225,6 +229,21 @@ pub fn run(
         if opts.keep_iterates {
             iterates.push(u.clone());
         }
+        let mut look = None;
+        if let Some(la) = &opts.look_ahead
+            && next != active
+        {
+            let mut proposal = next.clone();
+            let thr = thresholds(&ev, opts.c);
+            look = look_ahead(q, cons, &u, &active, &mut proposal, thr, la)?;
+            // a proposal that would end the iteration or close a cycle is not taken
+            if look.is_some_and(|r| r.converged)
+                && proposal != active
+                && !history.contains(&proposal)
+            {
+                next = proposal;
+            }
+        }
         log.push(IterationLog {
             step: IterationStep {
                 solve: log.len() + 1,
@@ -235,6 +254,7 @@ pub fn run(
                 residual: ev.certificate.balance_residual,
             },
             timings,
+            look_ahead: look,
         });
         if let (Some(report), Some(line)) = (opts.progress, log.last()) {
             report(line);

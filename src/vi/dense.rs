@@ -68,6 +68,16 @@ impl QuadraticEnergy for Dense {
             .map(|(i, j)| (i, j, self.m[(i, j)]))
             .collect()
     }
+    fn row_entries(&self, rows: &[usize]) -> Option<Vec<(usize, usize, f64)>> {
+        let n = self.b.len();
+        Some(
+            rows.iter()
+                .flat_map(|&i| (0..n).map(move |j| (i, j)))
+                .filter(|&(i, j)| self.m[(i, j)] != 0.0)
+                .map(|(i, j)| (i, j, self.m[(i, j)]))
+                .collect(),
+        )
+    }
 }
 
 /// [`Dense`] with inexact screening solves: [`QuadraticEnergy::screen_with_fixed`] returns the

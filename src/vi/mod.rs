@@ -9,6 +9,7 @@
 //! small dense systems in the tests.
 //!
 //! - [`active_set`]: the monotony (primal–dual active set) algorithm, with cycle detection;
+//! - [`look_ahead`]: its next steps near the free boundary, by local solves on a patch;
 //! - [`pgs`]: projected Gauss–Seidel, slow and robust (a fallback and an independent reference);
 //! - [`exhaustive`]: enumeration of the active sets, the reference for small problems;
 //! - [`certificate`]: the evidence that a vector solves the inequality.
@@ -21,6 +22,7 @@ pub mod certificate;
 #[cfg(test)]
 pub(crate) mod dense;
 pub mod exhaustive;
+pub mod look_ahead;
 pub mod pgs;
 
 pub use active_set::ActiveSetOptions;
@@ -93,6 +95,12 @@ pub trait QuadraticEnergy {
     fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>);
     /// The entries (i, j, M_ij) of M, possibly with repeated (i, j) to be summed.
     fn matrix_triplets(&self) -> Vec<(usize, usize, f64)>;
+    /// The entries (i, j, M_ij) of the rows i ∈ `rows` of M (repeated (i, j) to be summed),
+    /// for the [`look_ahead`]; `None` (the default) if the energy cannot give single rows.
+    fn row_entries(&self, rows: &[usize]) -> Option<Vec<(usize, usize, f64)>> {
+        let _ = rows;
+        None
+    }
 }
 
 /// The barrier, on the unknowns it acts on.
@@ -147,6 +155,9 @@ pub struct IterationLog {
     pub step: IterationStep,
     /// Timings of the solve.
     pub timings: SolveTimings,
+    /// The look-ahead made after the solve, if any ([`look_ahead`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub look_ahead: Option<look_ahead::LookAheadReport>,
 }
 
 /// How a solution was obtained.
@@ -202,6 +213,7 @@ pub fn solve_unconstrained(
                 residual: ev.certificate.balance_residual,
             },
             timings,
+            look_ahead: None,
         }],
         u,
         multiplier: vec![],

@@ -205,6 +205,7 @@ fn certified_solution(
                 residual: cert.balance_residual,
             },
             timings: SolveTimings::default(),
+            look_ahead: None,
         }],
         certificate: cert,
         method: Method::ProjectedGaussSeidel,

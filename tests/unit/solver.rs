@@ -376,3 +376,39 @@ fn hmm_on_cartesian_with_identity_is_the_two_point_scheme() {
     }
     let _: &PolyMesh = &mesh;
 }
+
+/// The rows of M that the look-ahead reads (`row_entries`, through the cells of each unknown)
+/// are those of the whole matrix (`full_matrix_triplets`), on HMM (interior unknowns) and P1.
+#[test]
+fn row_entries_are_the_rows_of_the_full_matrix() {
+    use std::collections::BTreeMap;
+    let quads = gradvi::mesh::generate::cartesian(6, 5).unwrap();
+    let tri = gradvi::mesh::generate::cartesian_triangles(5, 6, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let hmm = Hmm::new(&quads);
+    let p1 = P1::new(&tri).unwrap();
+    for scheme in [&hmm as &dyn GradientDiscretisation, &p1] {
+        let sys = DiscreteSystem::new(scheme, &paper_test1(), Default::default()).unwrap();
+        let n = sys.n_unknowns();
+        let sum = |t: Vec<(usize, usize, f64)>| {
+            let mut m = BTreeMap::new();
+            for (i, j, v) in t {
+                *m.entry((i, j)).or_insert(0.0) += v;
+            }
+            m
+        };
+        let rows: Vec<usize> = (0..n).filter(|i| i % 3 == 1).collect();
+        let full: BTreeMap<_, _> = sum(sys.full_matrix_triplets())
+            .into_iter()
+            .filter(|((i, _), _)| i % 3 == 1)
+            .collect();
+        let got = sum(sys.row_entries(&rows));
+        assert_eq!(
+            full.keys().collect::<Vec<_>>(),
+            got.keys().collect::<Vec<_>>()
+        );
+        for (k, v) in &full {
+            assert!((v - got[k]).abs() <= 1e-14 * v.abs().max(1.0), "{k:?}");
+        }
+        assert!(sys.row_entries(&[]).is_empty());
+    }
+}
