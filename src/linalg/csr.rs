@@ -538,6 +538,22 @@ impl CsrMatrix {
         });
     }
 
+    /// y = Aᵀ x (lengths are the caller's invariant), by scattering the rows of A in order:
+    /// y_j = Σ_i a_ij x_i added in increasing i, the order of the rows of [`Self::transpose`],
+    /// so the result is bit-identical to `self.transpose().mul_to(x, y)` without storing the
+    /// transpose. Sequential (scattered writes).
+    pub(crate) fn mul_transpose_to(&self, x: &[f64], y: &mut [f64]) {
+        debug_assert_eq!(x.len(), self.n_rows);
+        debug_assert_eq!(y.len(), self.n_cols);
+        y.fill(0.0);
+        for (i, &xi) in x.iter().enumerate() {
+            let (cols, vals) = self.row(i);
+            for (&j, &v) in cols.iter().zip(vals) {
+                y[j as usize] += v * xi;
+            }
+        }
+    }
+
     /// r = b − A x (lengths are the caller's invariant).
     pub(crate) fn residual_to(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
         debug_assert_eq!(x.len(), self.n_cols);
@@ -610,6 +626,34 @@ mod tests {
         assert_eq!(y, vec![6.0, 17.0, 22.0]);
         assert_eq!(a.transpose(), a);
         assert!(a.spmv(&[1.0], &mut y).is_err());
+    }
+
+    /// Aᵀx by scattering the rows equals the product with the stored transpose, bit for bit,
+    /// on a rectangular matrix with several entries per column.
+    #[test]
+    fn transposed_product_is_the_product_with_the_transpose() {
+        let (m, n) = (40, 9);
+        let mut row_ptr = vec![0];
+        let (mut cols, mut vals) = (Vec::new(), Vec::new());
+        for i in 0..m {
+            for j in 0..n {
+                if (i * 7 + j * 3) % 5 < 2 {
+                    cols.push(j as u32);
+                    vals.push(((i * n + j) as f64 * 0.37).sin());
+                }
+            }
+            row_ptr.push(cols.len());
+        }
+        let a = CsrMatrix::new(m, n, row_ptr, cols, vals).unwrap();
+        let x: Vec<f64> = (0..m).map(|i| (i as f64 * 1.3).cos()).collect();
+        let (mut y, mut z) = (vec![f64::NAN; n], vec![0.0; n]);
+        a.mul_transpose_to(&x, &mut y);
+        a.transpose().mul_to(&x, &mut z);
+        assert_eq!(
+            y.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            z.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+        assert!(y.iter().all(|v| *v != 0.0));
     }
 
     #[test]
