@@ -254,12 +254,13 @@ impl<'a> DiscreteSystem<'a> {
         options: SystemOptions,
     ) -> crate::Result<Self> {
         let t0 = Instant::now();
-        let dof_map = DofMap::new(scheme)?;
+        let dof_map = Arc::new(DofMap::new(scheme)?);
         dof_map.check_setup_memory()?;
         let (values, sym) = rayon::join(
             || ProblemValues::evaluate(scheme, &dof_map, problem),
-            || SymbolicSystem::with_dof_map(scheme, dof_map.clone(), options),
+            || SymbolicSystem::with_dof_map(scheme, Arc::clone(&dof_map), options),
         );
+        drop(dof_map);
         let sym = Arc::new(sym?);
         let symbolic_seconds = sym.symbolic_seconds;
         let mut s = Self::from_parts(sym, values?);
