@@ -193,14 +193,24 @@ pub const ITERATIVE_RTOL: f64 = 1e-12;
 /// Iteration cap of the conjugate gradients (multigrid keeps them in the tens).
 pub const ITERATIVE_MAX_ITER: usize = 1000;
 
-/// Relative residual at which a screening solve ([`DiscreteSystem::screen`]) of the active-set
-/// iteration stops: accurate enough to decide the next active set, the last solve then
+/// A screening solve ([`DiscreteSystem::screen`]) of the active-set iteration stops once its
+/// residual is below SCREENING_RTOL ‖c‖ *and* below [`SCREENING_REDUCTION`] times the residual
+/// it started from: accurate enough to decide the next active set, the last solve then
 /// refined to [`ITERATIVE_RTOL`] ([`DiscreteSystem::refine`]). Measured on ex9 with P1 at 1M
-/// unknowns (the prediction's 96549 active unknowns, then 101624, 101055, 100787, 100757):
-/// 10⁻⁶ misjudged 5 unknowns, freed in the fourth solve and taken back in a sixth; 10⁻⁸ and
-/// 10⁻¹⁰ gave the active sets of full solves, with 7, 3, 3, 3, 1 and 10, 6, 6, 5, 3 CG
-/// iterations against 13, 9, 9, 8, 6 to 10⁻¹².
+/// unknowns (the prediction's 96549 active unknowns, then 101624, 101055, 100787, 100757,
+/// without look-ahead): 10⁻⁶ ‖c‖ alone misjudged 5 unknowns, freed in the fourth solve and
+/// taken back in a sixth; 10⁻⁸ and 10⁻¹⁰ gave the active sets of full solves, with 7, 3, 3,
+/// 3, 1 and 10, 6, 6, 5, 3 CG iterations against 13, 9, 9, 8, 6 to 10⁻¹².
 pub const SCREENING_RTOL: f64 = 1e-8;
+
+/// The reduction of its initial residual a screening solve must reach besides
+/// [`SCREENING_RTOL`]. After a change of the active set, the previous solution already meets
+/// 10⁻⁸ ‖c‖ (the change is local, ‖c‖ holds all the data), so that bound alone let solves stop
+/// after 0 CG iterations, on the previous solution, and misjudge the unknowns near the
+/// change: ex9 at 2048² cells took 5 HMM solves instead of 3 (+12/−6, +5/−27), and 6 P1
+/// solves instead of 3 at 4097² nodes. With a reduction of 10⁻⁴ (10⁻³ measured the same) both
+/// take 3.
+pub const SCREENING_REDUCTION: f64 = 1e-4;
 
 /// The last screening solve, kept until the next solve for [`DiscreteSystem::refine`].
 struct Screened {
@@ -566,13 +576,24 @@ impl<'a> DiscreteSystem<'a> {
         rtol: f64,
     ) -> crate::Result<(usize, bool)> {
         use crate::linalg::{PcgOptions, pcg};
-        let opts = PcgOptions {
-            rtol,
-            atol: 0.0,
-            max_iter: ITERATIVE_MAX_ITER,
+        let c_norm = c.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let opts = if rtol > ITERATIVE_RTOL {
+            // screening: the residual reduced by SCREENING_REDUCTION from where this solve
+            // starts, and at most rtol ‖c‖ (never below the full target)
+            let r0 = amg.matrix().residual_norm(c, x);
+            PcgOptions {
+                rtol: ITERATIVE_RTOL,
+                atol: (SCREENING_REDUCTION * r0).min(rtol * c_norm),
+                max_iter: ITERATIVE_MAX_ITER,
+            }
+        } else {
+            PcgOptions {
+                rtol,
+                atol: 0.0,
+                max_iter: ITERATIVE_MAX_ITER,
+            }
         };
         let report = pcg(amg.matrix(), amg, c, x, &opts)?;
-        let c_norm = c.iter().map(|v| v * v).sum::<f64>().sqrt();
         Ok((
             report.iterations,
             report.residual_norm > ITERATIVE_RTOL * c_norm,

@@ -554,6 +554,29 @@ impl CsrMatrix {
         }
     }
 
+    /// ‖b − A x‖₂ without storing the residual; partial sums over fixed chunks of rows, added
+    /// in order (the result does not depend on the threads).
+    pub(crate) fn residual_norm(&self, b: &[f64], x: &[f64]) -> f64 {
+        let part = |i0: usize, i1: usize| -> f64 {
+            (i0..i1)
+                .map(|i| {
+                    let d = b[i] - self.row_dot(i, x);
+                    d * d
+                })
+                .sum()
+        };
+        let n = self.n_rows;
+        let parts: Vec<f64> = if self.nnz() < PAR_MIN_NNZ {
+            vec![part(0, n)]
+        } else {
+            (0..n.div_ceil(ROW_CHUNK))
+                .into_par_iter()
+                .map(|c| part(c * ROW_CHUNK, ((c + 1) * ROW_CHUNK).min(n)))
+                .collect()
+        };
+        parts.iter().sum::<f64>().sqrt()
+    }
+
     /// r = b − A x (lengths are the caller's invariant).
     pub(crate) fn residual_to(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
         debug_assert_eq!(x.len(), self.n_cols);
@@ -626,6 +649,19 @@ mod tests {
         assert_eq!(y, vec![6.0, 17.0, 22.0]);
         assert_eq!(a.transpose(), a);
         assert!(a.spmv(&[1.0], &mut y).is_err());
+    }
+
+    /// The residual norm without a residual vector is the norm of the residual.
+    #[test]
+    fn residual_norm_is_the_norm_of_the_residual() {
+        let (cp, ri, v) = lower();
+        let a = CsrMatrix::from_lower_csc(3, &cp, &ri, &v).unwrap();
+        let (b, x) = ([1.0, -2.0, 0.5], [0.3, 0.1, -0.7]);
+        let mut r = [0.0; 3];
+        a.residual_to(&b, &x, &mut r);
+        let expected = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!((a.residual_norm(&b, &x) - expected).abs() <= 1e-15 * expected);
+        assert!(expected > 0.1);
     }
 
     /// Aᵀx by scattering the rows equals the product with the stored transpose, bit for bit,

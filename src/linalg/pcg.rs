@@ -192,10 +192,12 @@ pub fn pcg<M: Preconditioner + ?Sized>(
         ));
     }
     let mut p = z.clone();
-    let mut q = vec![0.0; n];
     let mut r_norm = r0;
+    // q = A p lives in z's storage: q is dead once r is updated, before z = M⁻¹ r is written
+    // (one vector fewer)
     for k in 1..=opts.max_iter {
-        let pq = mul_dot(a, &p, &mut q);
+        let q = &mut z;
+        let pq = mul_dot(a, &p, q);
         if !(pq > 0.0 && pq.is_finite()) {
             return Err(fail(
                 format!("breakdown, pᵀAp = {pq:e} (the matrix is not positive definite)"),
@@ -204,7 +206,7 @@ pub fn pcg<M: Preconditioner + ?Sized>(
             ));
         }
         let alpha = rz / pq;
-        let rr = update_x_r(alpha, &p, &q, x, &mut r);
+        let rr = update_x_r(alpha, &p, q, x, &mut r);
         r_norm = rr.sqrt();
         report.iterations = k;
         if !r_norm.is_finite() {
