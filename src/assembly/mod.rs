@@ -207,9 +207,9 @@ pub const SCREENING_RTOL: f64 = 1e-8;
 /// [`SCREENING_RTOL`]. After a change of the active set, the previous solution already meets
 /// 10⁻⁸ ‖c‖ (the change is local, ‖c‖ holds all the data), so that bound alone let solves stop
 /// after 0 CG iterations, on the previous solution, and misjudge the unknowns near the
-/// change: ex9 at 2048² cells took 5 HMM solves instead of 3 (+12/−6, +5/−27), and 6 P1
-/// solves instead of 3 at 4097² nodes. With a reduction of 10⁻⁴ (10⁻³ measured the same) both
-/// take 3.
+/// change: ex9 took 5 HMM solves at 2048² cells (+12/−6, +5/−27 after the third) and 6 P1
+/// solves at 4097² nodes (+392/−4, +4/−390). With a reduction of 10⁻⁴ they take 3 and 4
+/// (10⁻³ measured the same on HMM).
 pub const SCREENING_REDUCTION: f64 = 1e-4;
 
 /// The last screening solve, kept until the next solve for [`DiscreteSystem::refine`].
