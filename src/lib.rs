@@ -87,13 +87,15 @@
 //! 4. [`linalg`] (sparse Cholesky with symbolic reuse, orderings; algebraic multigrid and
 //!    conjugate gradients) and [`vi`] (the algebraic
 //!    variational-inequality algorithms over the [`vi::QuadraticEnergy`] trait: the monotony
-//!    active-set method, projected Gauss–Seidel, exhaustive enumeration, the certificate).
+//!    active-set method and its look-ahead on patches, projected Gauss–Seidel, exhaustive
+//!    enumeration, the certificate).
 //! 5. [`assembly`]: [`assembly::SymbolicSystem`] (dof map, condensed pattern, symbolic
 //!    factorisation, scatter maps; built once per scheme) and [`assembly::DiscreteSystem`]
 //!    (values per problem, refilled per active set; static condensation), which implements
 //!    [`vi::QuadraticEnergy`].
 //! 6. [`solver`]: the driver: builds the constraints, decides the warm start
-//!    ([`solver::warm_start`]) and the fallback, returns a certified [`solver::Solution`].
+//!    ([`solver::warm_start`]), the look-ahead and the fallback, returns a certified
+//!    [`solver::Solution`].
 //! 7. [`post`]: errors, orders, fitted slopes, contact-zone metrics, fields on mesh entities.
 //!
 //! The applications (command line, replication of the paper, cross-check with dolfinx,

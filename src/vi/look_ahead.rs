@@ -152,7 +152,12 @@ pub fn look_ahead(
     let mut act: Vec<bool> = local.cons.iter().map(|&(_, j)| next[j]).collect();
     let mut history = vec![act.clone()];
     while report.solves < opts.max_solves {
-        let x = local.solve(cons, &act)?;
+        // a local problem need not be positive definite (a patch over a part of the domain
+        // that only its barrier anchors, all of it free): then nothing is proposed
+        let x = match local.solve(cons, &act) {
+            Ok(x) if x.iter().all(|v| v.is_finite()) => x,
+            _ => break,
+        };
         report.solves += 1;
         let r = local.residual(&x);
         let new: Vec<bool> = local
@@ -460,6 +465,40 @@ mod tests {
                 .is_none()
         );
         assert_eq!(next, rule);
+    }
+
+    /// A singular local problem (a Neumann patch with its barrier freed) proposes nothing and
+    /// is not an error.
+    #[test]
+    fn a_singular_local_problem_proposes_nothing() {
+        let n = 6;
+        let mut m = laplacian_1d(n);
+        m[(0, 0)] = 1.0;
+        m[(n - 1, n - 1)] = 1.0; // pure Neumann: singular, constants in the kernel
+        let q = Dense {
+            m,
+            b: vec![0.1; n],
+            dir: vec![None; n],
+        };
+        let cons = all_constrained(n, vec![0.5; n], Side::Upper);
+        let active = vec![true; n];
+        let u = vec![0.5; n];
+        let mut next = vec![false; n];
+        let thr = Thresholds {
+            scale_r: 1.0,
+            scale_u: 1.0,
+            c: 1.0,
+        };
+        let opts = LookAheadOptions {
+            layers: n,
+            max_fraction: 1.0,
+            ..Default::default()
+        };
+        let rep = look_ahead(&q, &cons, &u, &active, &mut next, thr, &opts)
+            .unwrap()
+            .unwrap();
+        assert!(!rep.converged, "{rep:?}");
+        assert_eq!(next, vec![false; n]);
     }
 
     /// The active-set method with look-ahead: the same solution and certificate as without,
