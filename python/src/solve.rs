@@ -361,6 +361,8 @@ fn solve<'py>(
                     initial_active,
                     keep_iterates,
                     progress: None,
+                    // screening on, look-ahead as the driver decides (with the nested start)
+                    ..Default::default()
                 },
                 warm_start: WarmStart::from_str(&warm_start.to_ascii_lowercase())?,
                 fallback,
