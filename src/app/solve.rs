@@ -61,9 +61,9 @@ pub struct SolveArgs {
     #[arg(long)]
     fallback: bool,
     /// Start of the active-set iteration: nested (the default: an active set predicted by
-    /// coarse HMM solves of the same problem on agglomerated meshes of the domain; same
-    /// solution, far fewer solves on fine meshes) or cold (A₀ = ∅, the paper's algorithm and
-    /// NITER).
+    /// coarse HMM solves of the same problem on agglomerated meshes of the domain, and each
+    /// next active set looked ahead by local solves near its changes; same solution, far fewer
+    /// solves on fine meshes) or cold (A₀ = ∅, no look-ahead: the paper's algorithm and NITER).
     #[arg(long, value_enum, default_value_t = WarmStart::Nested)]
     warm_start: WarmStart,
     /// Linear solver of the condensed systems: auto (direct below 250 000 condensed unknowns,

@@ -61,7 +61,8 @@ pub enum WarmStart {
     /// replication uses it).
     Cold,
     /// From an active set predicted by nested coarse HMM solves on agglomerated meshes of
-    /// the domain (see the module docs). The default.
+    /// the domain (see the module docs), the iteration looking ahead
+    /// ([`crate::vi::look_ahead`]). The default.
     #[default]
     Nested,
 }
