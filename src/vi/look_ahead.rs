@@ -25,9 +25,9 @@
 //! equal to A_k or to an earlier active set (which would end the iteration or close a cycle
 //! without a global decision).
 //!
-//! Cost: `layers` + 1 calls of [`QuadraticEnergy::row_entries`] on the growing patch, and per
-//! local solve a Cholesky factorisation of order |P| — small against a global solve when the
-//! changes are confined to a band along the free boundary, as after a warm start. Patches
+//! Cost: each row of the patch read once ([`QuadraticEnergy::row_entries`], layer by layer),
+//! and per local solve a Cholesky factorisation of order |P| — small against a global solve
+//! when the changes are confined to a band along the free boundary, as after a warm start. Patches
 //! above [`LookAheadOptions::max_fraction`] of the unknowns are not tried.
 
 use super::{Constraints, QuadraticEnergy};
@@ -131,19 +131,16 @@ pub fn look_ahead(
     if seeds.is_empty() {
         return Ok(None);
     }
-    let Some(patch) = grow_patch(
+    let Some((patch, entries)) = grow_patch(
         q,
         dirichlet,
         seeds,
         opts.layers,
         opts.max_fraction * n as f64,
-    )?
-    else {
+    ) else {
         return Ok(None);
     };
-    let Some(local) = LocalProblem::new(q, cons, u, &patch)? else {
-        return Ok(None);
-    };
+    let local = LocalProblem::new(q, cons, u, &patch, entries)?;
     let mut report = LookAheadReport {
         patch: patch.len(),
         ..Default::default()
@@ -190,28 +187,36 @@ pub fn look_ahead(
     Ok(Some(report))
 }
 
-/// The unknowns within `layers` graph steps of `seeds` (sorted), Dirichlet unknowns excluded;
-/// `None` when there are more than `max` or the energy cannot give rows.
+/// Entries (i, j, M_ij) of rows of M.
+type Entries = Vec<(usize, usize, f64)>;
+
+/// The unknowns within `layers` graph steps of `seeds` (sorted), Dirichlet unknowns excluded,
+/// and the entries of their rows of M (each row read once, as its layer is reached); `None`
+/// when there are more than `max` or the energy cannot give rows.
 fn grow_patch(
     q: &dyn QuadraticEnergy,
     dirichlet: &[Option<f64>],
     seeds: Vec<usize>,
     layers: usize,
     max: f64,
-) -> crate::Result<Option<Vec<usize>>> {
+) -> Option<(Vec<usize>, Entries)> {
     let mut inside: std::collections::HashSet<usize> = seeds.iter().copied().collect();
     let mut frontier = seeds;
-    for _ in 0..layers {
-        let Some(entries) = q.row_entries(&frontier) else {
-            return Ok(None);
-        };
-        frontier = entries
-            .iter()
-            .map(|&(_, j, _)| j)
-            .filter(|&j| dirichlet[j].is_none() && inside.insert(j))
-            .collect();
+    let mut entries = Vec::new();
+    for layer in 0..=layers {
+        let rows = q.row_entries(&frontier)?;
+        if layer < layers {
+            frontier = rows
+                .iter()
+                .map(|&(_, j, _)| j)
+                .filter(|&j| dirichlet[j].is_none() && inside.insert(j))
+                .collect();
+        } else {
+            frontier.clear();
+        }
+        entries.extend(rows);
         if inside.len() as f64 > max {
-            return Ok(None);
+            return None;
         }
         if frontier.is_empty() {
             break;
@@ -219,7 +224,7 @@ fn grow_patch(
     }
     let mut patch: Vec<usize> = inside.into_iter().collect();
     patch.sort_unstable();
-    Ok(Some(patch))
+    Some((patch, entries))
 }
 
 /// M_PP (lower triangle, by columns), the right-hand side b_P − M_{P,P^c} u_{P^c}, and the
@@ -240,10 +245,8 @@ impl LocalProblem {
         cons: &Constraints,
         u: &[f64],
         patch: &[usize],
-    ) -> crate::Result<Option<Self>> {
-        let Some(entries) = q.row_entries(patch) else {
-            return Ok(None);
-        };
+        entries: Entries,
+    ) -> crate::Result<Self> {
         let local: HashMap<usize, usize> = patch.iter().enumerate().map(|(l, &g)| (g, l)).collect();
         let p = patch.len();
         let b = q.load();
@@ -282,12 +285,12 @@ impl LocalProblem {
             .enumerate()
             .filter_map(|(j, pd)| local.get(&pd.dof).map(|&l| (l, j)))
             .collect();
-        Ok(Some(LocalProblem {
+        Ok(LocalProblem {
             pattern,
             values,
             rhs,
             cons,
-        }))
+        })
     }
 
     /// The local solution with the constrained unknowns `act` (indexed like `self.cons`)
