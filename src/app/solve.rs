@@ -279,7 +279,7 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         tol: a.tol,
         progress: Some(|l| {
             eprintln!(
-                "  solve {:>3}: active {} (+{}, -{}), violation {:.2e}, {:.2} s (assembly {:.2}, factorisation/multigrid setup {:.2}, solve {:.2}{})",
+                "  solve {:>3}: active {} (+{}, -{}), violation {:.2e}, {:.2} s (assembly {:.2}, {} {:.2}, solve {:.2}{})",
                 l.step.solve,
                 l.step.active,
                 l.step.entered,
@@ -287,6 +287,11 @@ pub fn run(a: &SolveArgs) -> Result<()> {
                 l.step.violation,
                 l.timings.assemble + l.timings.factor + l.timings.solve,
                 l.timings.assemble,
+                if l.timings.reused {
+                    "multigrid reused"
+                } else {
+                    "factorisation/multigrid setup"
+                },
                 l.timings.factor,
                 l.timings.solve,
                 if l.timings.krylov > 0 {

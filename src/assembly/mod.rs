@@ -26,6 +26,7 @@
 //! kept between solves.
 
 pub mod condense;
+pub mod offsets;
 pub mod symbolic;
 pub mod values;
 
@@ -56,17 +57,17 @@ fn chunks(n: usize, size: usize) -> Vec<(usize, usize)> {
         .collect()
 }
 
-/// Splits a buffer laid out by `ptr` (entity e owns `ptr[e]..ptr[e + 1]`, relative to
-/// `ptr[ranges[0].0]`) into the consecutive slices of the entity `ranges`, so that each
+/// Splits a buffer laid out by the offsets `ptr` (entity e owns `ptr(e)..ptr(e + 1)`, relative to
+/// `ptr(ranges[0].0)`) into the consecutive slices of the entity `ranges`, so that each
 /// parallel task writes its own slice.
 fn split_by_ranges<'b, T>(
     mut buf: &'b mut [T],
     ranges: &[(usize, usize)],
-    ptr: &[usize],
+    ptr: impl Fn(usize) -> usize,
 ) -> Vec<&'b mut [T]> {
     let mut slices = Vec::with_capacity(ranges.len());
     for &(c0, c1) in ranges {
-        let (here, next) = std::mem::take(&mut buf).split_at_mut(ptr[c1] - ptr[c0]);
+        let (here, next) = std::mem::take(&mut buf).split_at_mut(ptr(c1) - ptr(c0));
         buf = next;
         slices.push(here);
     }
@@ -177,11 +178,11 @@ fn solve_directly(
     pattern: &SpdPattern,
     values: &[f64],
     rhs: &mut [f64],
-) -> crate::Result<(Instant, usize, bool)> {
+) -> crate::Result<(Instant, PcgOutcome)> {
     let factor = pattern.factor(values)?;
     let t2 = Instant::now();
     factor.solve_in_place(rhs);
-    Ok((t2, 0, false))
+    Ok((t2, PcgOutcome::default()))
 }
 
 /// [`LinearSolver::Auto`] solves iteratively from this many condensed unknowns on.
@@ -212,14 +213,99 @@ pub const SCREENING_RTOL: f64 = 1e-8;
 /// (10⁻³ measured the same on HMM).
 pub const SCREENING_REDUCTION: f64 = 1e-4;
 
-/// The last screening solve, kept until the next solve for [`DiscreteSystem::refine`].
-struct Screened {
-    /// The multigrid hierarchy of the condensed matrix (which it owns).
+/// Consecutive iterative solves of a [`DiscreteSystem`] share their multigrid hierarchy's
+/// coarse levels. The active-set iteration changes the condensed matrix only in the rows and
+/// columns of the unknowns whose status changed, and after the first solves these are few:
+/// the coarse levels built for an earlier matrix (the fine level and its smoother always take
+/// the new matrix, [`crate::linalg::CoarseHierarchy`]) precondition the new one about as well,
+/// and save a whole setup. A hierarchy is reused only if at most [`REUSE_MAX_CHANGED`] of
+/// the unknowns changed status since the matrix it was built for, and while conjugate
+/// gradients with it converge at most this factor slower (in mean residual reduction per
+/// iteration) than with it fresh; otherwise the next solve builds a new one.
+pub const REUSE_MAX_SLOWDOWN: f64 = 3.0;
+
+/// The largest fraction of the unknowns that may have changed status (fixed or free) since
+/// the matrix a hierarchy was built for, for it to be reused ([`REUSE_MAX_SLOWDOWN`]).
+/// Measured on ex9 at 1M unknowns (2 cores): a P1 hierarchy reused after 0.48% of the
+/// unknowns changed needed 10 CG iterations where a new one needed 5, and 14 instead of 7 in
+/// the next solve; an HMM hierarchy after 0.043% needed 8, as a new one did, and saved 1 s of
+/// setup per solve. The unknowns freed since, in particular, were decoupled (unit rows) in
+/// the matrix the coarse levels were built from, and have no coarse basis function.
+pub const REUSE_MAX_CHANGED: f64 = 1e-3;
+
+/// The multigrid hierarchy of the last iterative solve, kept until the next solve: to continue
+/// that solve ([`DiscreteSystem::refine`]) when it was a screening solve that stopped early,
+/// and to precondition the next solve's matrix.
+struct KeptHierarchy {
+    /// The hierarchy (it owns the condensed matrix of that solve).
     amg: crate::linalg::Amg<'static>,
-    /// The right-hand side c of S x = c.
-    rhs: Vec<f64>,
+    /// For a screening solve that stopped early: the right-hand side c of S x = c and the
     /// [`fingerprint`] of the fixed unknowns.
-    fixed: u64,
+    screened: Option<(Vec<f64>, u64)>,
+    /// ln of the mean residual reduction per CG iteration of the first solve with this
+    /// hierarchy (negative; `None` if it took no iteration).
+    fresh_rate: Option<f64>,
+    /// The last solve with it converged more than [`REUSE_MAX_SLOWDOWN`] times slower than
+    /// that: build a fresh hierarchy for the next solve.
+    stale: bool,
+    /// The fixed unknowns (Dirichlet or fixed by the caller) of the matrix it was built for,
+    /// one bit per unknown.
+    fixed_mask: Vec<u64>,
+}
+
+/// One bit per unknown: set where the unknown is fixed (Dirichlet, or by `fixed`).
+fn fixed_mask(dirichlet: &[Option<f64>], fixed: &[Option<f64>]) -> Vec<u64> {
+    let mut mask = vec![0u64; dirichlet.len().div_ceil(64)];
+    for (i, (d, f)) in dirichlet.iter().zip(fixed).enumerate() {
+        if d.is_some() || f.is_some() {
+            mask[i / 64] |= 1 << (i % 64);
+        }
+    }
+    mask
+}
+
+/// Where the hierarchy of the next iterative solve comes from.
+enum NextHierarchy {
+    /// The coarse levels of the last one, with its [`KeptHierarchy::fresh_rate`] and
+    /// [`KeptHierarchy::fixed_mask`].
+    Reuse {
+        coarse: crate::linalg::CoarseHierarchy,
+        fresh_rate: Option<f64>,
+        built_for: Vec<u64>,
+    },
+    /// A new one, for the matrix with these fixed unknowns.
+    New { fixed_mask: Vec<u64> },
+}
+
+/// A multigrid hierarchy in use: new, or the coarse levels of an earlier one.
+struct Hierarchy {
+    amg: crate::linalg::Amg<'static>,
+    /// See [`KeptHierarchy::fresh_rate`].
+    fresh_rate: Option<f64>,
+    /// Built for an earlier matrix (its coarse levels).
+    reused: bool,
+    /// See [`KeptHierarchy::fixed_mask`].
+    fixed_mask: Vec<u64>,
+}
+
+/// Number of unknowns whose bit differs.
+fn changed(a: &[u64], b: &[u64]) -> usize {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x ^ y).count_ones() as usize)
+        .sum()
+}
+
+/// What one run of conjugate gradients did (all zero or false: a direct solve).
+#[derive(Default)]
+struct PcgOutcome {
+    iterations: usize,
+    /// The residual is above [`ITERATIVE_RTOL`] ‖c‖ (a screening solve that stopped early).
+    inexact: bool,
+    /// ln of the mean residual reduction per iteration (`None` without iterations).
+    rate: Option<f64>,
+    /// Preconditioned with the coarse levels of an earlier hierarchy.
+    reused: bool,
 }
 
 /// A hash of the fixed unknowns and their values (to check that a refinement continues the
@@ -245,8 +331,8 @@ pub struct DiscreteSystem<'a> {
     scratch: Mutex<(Vec<f64>, Vec<f64>)>,
     /// The last skeleton solution, the initial guess of the next iterative solve.
     last_solution: Mutex<Vec<f64>>,
-    /// The last solve if it was a screening solve that stopped early.
-    screened: Mutex<Option<Screened>>,
+    /// The multigrid hierarchy of the last iterative solve.
+    kept: Mutex<Option<KeptHierarchy>>,
     /// With [`LinearSolver::Auto`], the direct solver built when the iterative one fails.
     direct_fallback: std::sync::OnceLock<crate::Result<SpdPattern>>,
     /// Time to build (data, local matrices, and the symbolic system when built here), seconds.
@@ -296,7 +382,7 @@ impl<'a> DiscreteSystem<'a> {
             values,
             scratch: Mutex::new((Vec::new(), Vec::new())),
             last_solution: Mutex::new(Vec::new()),
-            screened: Mutex::new(None),
+            kept: Mutex::new(None),
             direct_fallback: std::sync::OnceLock::new(),
             setup_seconds: 0.0,
             symbolic_seconds: 0.0,
@@ -345,14 +431,14 @@ impl<'a> DiscreteSystem<'a> {
     /// matrix and load.
     fn local(&self, k: usize) -> CellSystem<'_> {
         let (d, ni) = self.sym.dof_map.cell(k);
-        let r = self.sym.dof_map.dof_ptr[k]..self.sym.dof_map.dof_ptr[k + 1];
+        let r = self.sym.dof_map.dof_ptr.range(k);
         let v = &self.values;
         CellSystem {
             dofs: d,
             n_interior: ni,
             matrix: SymMatrix {
                 n: d.len(),
-                lower: &v.mats[v.mat_ptr[k]..v.mat_ptr[k + 1]],
+                lower: &v.mats[v.mat_ptr.range(k)],
             },
             load: &v.loads[r],
         }
@@ -375,33 +461,55 @@ impl<'a> DiscreteSystem<'a> {
     /// [`ITERATIVE_RTOL`] with its multigrid hierarchy; `None` if that solve was exact (or
     /// another solve came since). `fixed` differing from that solve's is an error.
     pub fn refine(&self, fixed: &[Option<f64>]) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
-        let Some(kept) = self.screened.lock().ok().and_then(|mut s| s.take()) else {
-            return Ok(None);
+        let kept = {
+            let Ok(mut guard) = self.kept.lock() else {
+                return Ok(None);
+            };
+            match guard.take() {
+                Some(k) if k.screened.is_some() => k,
+                other => {
+                    *guard = other;
+                    return Ok(None);
+                }
+            }
         };
-        if kept.fixed != fingerprint(fixed) {
+        let KeptHierarchy {
+            amg,
+            screened,
+            fresh_rate,
+            fixed_mask,
+            ..
+        } = kept;
+        let (rhs, print) = screened.unwrap_or_default();
+        if print != fingerprint(fixed) {
             return Err(crate::Error::InvalidData(
                 "refine: the fixed unknowns differ from those of the screening solve".into(),
             ));
         }
         let t0 = Instant::now();
         let mut x = self.take_initial_guess();
-        match self.pcg(&kept.amg, &kept.rhs, &mut x, ITERATIVE_RTOL) {
-            Ok((krylov, _)) => {
-                drop(kept);
+        // the hierarchy's rate is known: a refinement is not judged against it
+        let hier = Hierarchy {
+            amg,
+            fresh_rate,
+            reused: false,
+            fixed_mask,
+        };
+        match self.run_pcg(hier, &rhs, &mut x, ITERATIVE_RTOL, fixed) {
+            Ok(out) => {
                 let u = self.complete(fixed, &x)?;
                 self.keep_solution(x);
                 Ok(Some((
                     u,
                     SolveTimings {
                         solve: t0.elapsed().as_secs_f64(),
-                        krylov,
+                        krylov: out.iterations,
                         ..Default::default()
                     },
                 )))
             }
             // as in a solve: with Auto, the direct solver takes over
             Err(_) if self.sym.options.linear == LinearSolver::Auto => {
-                drop(kept);
                 self.fallback_pattern()?;
                 self.solve(fixed).map(Some)
             }
@@ -415,20 +523,36 @@ impl<'a> DiscreteSystem<'a> {
         fixed: &[Option<f64>],
         rtol: f64,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
-        // a screening solve not refined is given up: freed before the next system is built
-        if let Ok(mut s) = self.screened.lock() {
-            drop(s.take());
-        }
+        // the last hierarchy: its coarse levels are reused unless they went stale or too many
+        // unknowns changed status since; its matrix (and a screening solve not refined) are
+        // freed before the next system is built
+        let mask = fixed_mask(&self.values.dirichlet, fixed);
+        let max_changed = (REUSE_MAX_CHANGED * self.n as f64) as usize;
+        let reuse = self
+            .kept
+            .lock()
+            .ok()
+            .and_then(|mut k| k.take())
+            .filter(|k| !k.stale && changed(&k.fixed_mask, &mask) <= max_changed)
+            .and_then(|k| {
+                let (fresh_rate, built_for) = (k.fresh_rate, k.fixed_mask);
+                k.amg.into_coarse().map(|coarse| NextHierarchy::Reuse {
+                    coarse,
+                    fresh_rate,
+                    built_for,
+                })
+            })
+            .unwrap_or(NextHierarchy::New { fixed_mask: mask });
         let t0 = Instant::now();
         let (values, mut rhs) = self.assemble_condensed(fixed);
         let t1 = Instant::now();
-        let (t2, krylov, inexact) = match self.direct_pattern() {
+        let (t2, out) = match self.direct_pattern() {
             Some(pattern) => solve_directly(pattern, &values, &mut rhs)?,
             None if self.sym.options.linear == LinearSolver::Auto => {
                 let c = rhs.clone();
                 let it = self
                     .csr(&values)
-                    .and_then(|a| self.solve_csr(a, &mut rhs, rtol, fixed));
+                    .and_then(|a| self.solve_csr(a, &mut rhs, rtol, fixed, reuse));
                 match it {
                     Ok(r) => r,
                     // Auto chose the iterative solver by size: when the conjugate gradients
@@ -445,7 +569,7 @@ impl<'a> DiscreteSystem<'a> {
                 // multigrid hierarchy is built
                 let a = self.csr(&values)?;
                 drop(values);
-                self.solve_csr(a, &mut rhs, rtol, fixed)?
+                self.solve_csr(a, &mut rhs, rtol, fixed, reuse)?
             }
         };
         let u = self.complete(fixed, &rhs)?;
@@ -456,8 +580,9 @@ impl<'a> DiscreteSystem<'a> {
                 assemble: (t1 - t0).as_secs_f64(),
                 factor: (t2 - t1).as_secs_f64(),
                 solve: (t3 - t2).as_secs_f64(),
-                krylov,
-                inexact,
+                krylov: out.iterations,
+                inexact: out.inexact,
+                reused: out.reused,
             },
         ))
     }
@@ -524,31 +649,90 @@ impl<'a> DiscreteSystem<'a> {
 
     /// Solves S x = c (S stored by rows in `a`, c in `rhs`, overwritten by x) by
     /// multigrid-preconditioned conjugate gradients from the previous solution, to the
-    /// relative residual `rtol`; returns when the multigrid setup ended, the iterations, and
-    /// whether x is short of [`ITERATIVE_RTOL`] (then the system is kept for
-    /// [`Self::refine`], with the fingerprint of `fixed`).
+    /// relative residual `rtol`, with the hierarchy `next` says; returns when the
+    /// multigrid setup ended and what the conjugate gradients did (x short of
+    /// [`ITERATIVE_RTOL`]: the system is kept for [`Self::refine`], with the fingerprint of
+    /// `fixed`).
     fn solve_csr(
         &self,
         a: crate::linalg::CsrMatrix,
         rhs: &mut [f64],
         rtol: f64,
         fixed: &[Option<f64>],
-    ) -> crate::Result<(Instant, usize, bool)> {
+        next: NextHierarchy,
+    ) -> crate::Result<(Instant, PcgOutcome)> {
         use crate::linalg::{Amg, AmgOptions};
-        let amg = Amg::owning(a, &AmgOptions::default())?;
+        let opts = AmgOptions::default();
+        let hier = match next {
+            NextHierarchy::Reuse {
+                coarse,
+                fresh_rate,
+                built_for,
+            } => Hierarchy {
+                amg: coarse.with_fine(a, &opts)?,
+                fresh_rate,
+                reused: true,
+                fixed_mask: built_for,
+            },
+            NextHierarchy::New { fixed_mask } => Hierarchy {
+                amg: Amg::owning(a, &opts)?,
+                fresh_rate: None,
+                reused: false,
+                fixed_mask,
+            },
+        };
         let t2 = Instant::now();
         let mut x = self.take_initial_guess();
-        let (iterations, inexact) = self.pcg(&amg, rhs, &mut x, rtol)?;
-        if inexact && let Ok(mut s) = self.screened.lock() {
-            *s = Some(Screened {
-                amg,
-                rhs: rhs.to_vec(),
-                fixed: fingerprint(fixed),
-            });
-        }
+        let out = self.run_pcg(hier, rhs, &mut x, rtol, fixed)?;
         rhs.copy_from_slice(&x);
         self.keep_solution(x);
-        Ok((t2, iterations, inexact))
+        Ok((t2, out))
+    }
+
+    /// [`Self::pcg`] with the hierarchy `hier`, which is then kept for
+    /// the next solve (with c and the fingerprint of `fixed` if the solve stopped early). A
+    /// reused hierarchy that fails is replaced by a new one, once; one that converged more
+    /// than [`REUSE_MAX_SLOWDOWN`] times slower than when fresh is marked stale.
+    fn run_pcg(
+        &self,
+        hier: Hierarchy,
+        c: &[f64],
+        x: &mut [f64],
+        rtol: f64,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<PcgOutcome> {
+        let Hierarchy {
+            mut amg,
+            mut fresh_rate,
+            mut reused,
+            mut fixed_mask,
+        } = hier;
+        let mut out = match self.pcg(&amg, c, x, rtol) {
+            Ok(out) => out,
+            Err(_) if reused => {
+                let opts = crate::linalg::AmgOptions::default();
+                amg = crate::linalg::Amg::owning(amg.into_matrix(), &opts)?;
+                (fresh_rate, reused) = (None, false);
+                fixed_mask = self::fixed_mask(&self.values.dirichlet, fixed);
+                self.pcg(&amg, c, x, rtol)?
+            }
+            Err(e) => return Err(e),
+        };
+        out.reused = reused;
+        let stale = match (reused, out.rate, fresh_rate) {
+            (true, Some(r), Some(f)) => r > f / REUSE_MAX_SLOWDOWN,
+            _ => false,
+        };
+        if let Ok(mut k) = self.kept.lock() {
+            *k = Some(KeptHierarchy {
+                amg,
+                screened: out.inexact.then(|| (c.to_vec(), fingerprint(fixed))),
+                fresh_rate: fresh_rate.or(out.rate),
+                stale,
+                fixed_mask,
+            });
+        }
+        Ok(out)
     }
 
     /// The initial guess of an iterative solve: the last solution, or zero.
@@ -566,15 +750,15 @@ impl<'a> DiscreteSystem<'a> {
     }
 
     /// Conjugate gradients on S x = c (S the fine matrix of `amg`) from `x` to the relative
-    /// residual `rtol`; returns the iterations and whether the true residual
-    /// is above [`ITERATIVE_RTOL`] ‖c‖.
+    /// residual `rtol`: the iterations, whether the true residual is above
+    /// [`ITERATIVE_RTOL`] ‖c‖, and the mean reduction per iteration.
     fn pcg(
         &self,
         amg: &crate::linalg::Amg,
         c: &[f64],
         x: &mut [f64],
         rtol: f64,
-    ) -> crate::Result<(usize, bool)> {
+    ) -> crate::Result<PcgOutcome> {
         use crate::linalg::{PcgOptions, pcg};
         let c_norm = c.iter().map(|v| v * v).sum::<f64>().sqrt();
         let opts = if rtol > ITERATIVE_RTOL {
@@ -594,10 +778,19 @@ impl<'a> DiscreteSystem<'a> {
             }
         };
         let report = pcg(amg.matrix(), amg, c, x, &opts)?;
-        Ok((
-            report.iterations,
-            report.residual_norm > ITERATIVE_RTOL * c_norm,
-        ))
+        let rate = (report.iterations > 0
+            && report.residual_norm > 0.0
+            && report.initial_residual_norm > 0.0)
+            .then(|| {
+                (report.residual_norm / report.initial_residual_norm).ln()
+                    / report.iterations as f64
+            });
+        Ok(PcgOutcome {
+            iterations: report.iterations,
+            inexact: report.residual_norm > ITERATIVE_RTOL * c_norm,
+            rate,
+            reused: false,
+        })
     }
 
     /// Keeps `x` as the initial guess of the next iterative solve.
@@ -664,12 +857,12 @@ impl<'a> DiscreteSystem<'a> {
             let rhs = self.gather_rhs(&fixed, |k, i| self.cell_rhs(k, i, &fixed));
             (values, rhs)
         } else {
-            sbuf.resize(self.sym.maps.block_ptr.last().copied().unwrap_or(0), 0.0);
+            sbuf.resize(self.sym.maps.block_ptr.total(), 0.0);
             gbuf.resize(self.sym.dof_map.dofs.len(), 0.0);
             self.condense_cells(&fixed, &mut sbuf, &mut gbuf);
             let values = self.gather_matrix(&fixed, &sbuf);
             let dof_ptr = &self.sym.dof_map.dof_ptr;
-            let rhs = self.gather_rhs(&fixed, |k, i| gbuf[dof_ptr[k] + i]);
+            let rhs = self.gather_rhs(&fixed, |k, i| gbuf[dof_ptr.at(k) + i]);
             (values, rhs)
         };
         if let Ok(mut b) = self.scratch.lock() {
@@ -685,14 +878,17 @@ impl<'a> DiscreteSystem<'a> {
     fn condense_cells(&self, fixed: &FixedValues, sbuf: &mut [f64], gbuf: &mut [f64]) {
         let dof_ptr = &self.sym.dof_map.dof_ptr;
         let ranges = cell_chunks(self.sym.scheme().mesh().n_cells());
-        let g_slices = split_by_ranges(gbuf, &ranges, dof_ptr);
+        let g_slices = split_by_ranges(gbuf, &ranges, |k| dof_ptr.at(k));
         let block_ptr = &self.sym.maps.block_ptr;
-        let s_slices = split_by_ranges(sbuf, &ranges, block_ptr);
+        let s_slices = split_by_ranges(sbuf, &ranges, |k| block_ptr.at(k));
         let tasks: Vec<_> = ranges.into_iter().zip(s_slices).zip(g_slices).collect();
         tasks.into_par_iter().for_each(|(((c0, c1), s), g)| {
             let mut full = Vec::new();
             for k in c0..c1 {
-                let (so, go) = (block_ptr[k] - block_ptr[c0], dof_ptr[k] - dof_ptr[c0]);
+                let (so, go) = (
+                    block_ptr.at(k) - block_ptr.at(c0),
+                    dof_ptr.at(k) - dof_ptr.at(c0),
+                );
                 self.condense_cell(k, fixed, &mut full, &mut s[so..], &mut g[go..]);
             }
         });
@@ -759,7 +955,7 @@ impl<'a> DiscreteSystem<'a> {
             .collect();
         let mut values = vec![0.0; self.sym.pattern.nnz()];
         let ranges = chunks(self.n_skel, CHUNK * 4);
-        let slices = split_by_ranges(&mut values, &ranges, col_ptr);
+        let slices = split_by_ranges(&mut values, &ranges, |k| col_ptr[k]);
         let tasks: Vec<_> = ranges.into_iter().zip(slices).collect();
         tasks.into_par_iter().for_each(|((c0, c1), out)| {
             let base = col_ptr[c0];
@@ -922,6 +1118,11 @@ impl QuadraticEnergy for DiscreteSystem<'_> {
         DiscreteSystem::refine(self, fixed)
     }
 
+    fn release(&self) {
+        if let Ok(mut k) = self.kept.lock() {
+            drop(k.take());
+        }
+    }
     fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>) {
         DiscreteSystem::residual(self, u)
     }

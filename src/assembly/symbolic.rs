@@ -14,6 +14,7 @@
 //! diagonal and zeros elsewhere), so neither the boundary partition nor the active set
 //! changes anything here.
 
+use super::offsets::Offsets;
 use super::{AUTO_ITERATIVE_MIN, LinearSolver, SystemOptions, cell_chunks, chunks};
 use crate::linalg::SpdPattern;
 use crate::scheme::GradientDiscretisation;
@@ -26,7 +27,7 @@ use std::time::Instant;
 #[derive(Debug, Clone)]
 pub struct DofMap {
     /// Offsets into `dofs`, one per cell plus one.
-    pub dof_ptr: Vec<usize>,
+    pub dof_ptr: Offsets,
     /// The unknowns of the cells, concatenated (32-bit: [`DofMap::new`] checks that the
     /// scheme has fewer than 2^32 unknowns).
     pub dofs: Vec<u32>,
@@ -67,14 +68,10 @@ impl DofMap {
             })
             .collect();
         let chunks = chunks?;
-        let mut dof_ptr = Vec::with_capacity(nc + 1);
-        dof_ptr.push(0);
-        let mut dofs = Vec::with_capacity(chunks.iter().map(|c| c.1.len()).sum());
+        let dof_ptr = Offsets::from_lengths(chunks.iter().flat_map(|c| c.0.iter().copied()))?;
+        let mut dofs = Vec::with_capacity(dof_ptr.total());
         let mut n_int = Vec::with_capacity(nc);
-        for (len, all, ni) in chunks {
-            for l in len {
-                dof_ptr.push(dof_ptr.last().copied().unwrap_or(0) + l);
-            }
+        for (_, all, ni) in chunks {
             dofs.extend_from_slice(&all);
             n_int.extend_from_slice(&ni);
         }
@@ -92,10 +89,7 @@ impl DofMap {
 
     /// The unknowns of cell k and its number of interior unknowns.
     pub fn cell(&self, k: usize) -> (&[u32], usize) {
-        (
-            &self.dofs[self.dof_ptr[k]..self.dof_ptr[k + 1]],
-            self.n_int[k] as usize,
-        )
+        (&self.dofs[self.dof_ptr.range(k)], self.n_int[k] as usize)
     }
 
     /// Estimated peak memory, in bytes, of building the symbolic system and the values on
@@ -105,7 +99,7 @@ impl DofMap {
     pub fn setup_bytes(&self) -> u64 {
         let entries: u64 = (0..self.n_cells())
             .map(|k| {
-                let l = (self.dof_ptr[k + 1] - self.dof_ptr[k]) as u64;
+                let l = self.dof_ptr.range(k).len() as u64;
                 l * l
             })
             .sum();
@@ -130,7 +124,7 @@ impl DofMap {
 
     /// The skeleton unknowns of cell k.
     fn skeleton(&self, k: usize) -> &[u32] {
-        &self.dofs[self.dof_ptr[k] + self.n_int[k] as usize..self.dof_ptr[k + 1]]
+        &self.dofs[self.dof_ptr.at(k) + self.n_int[k] as usize..self.dof_ptr.at(k + 1)]
     }
 }
 
@@ -175,7 +169,7 @@ pub struct ScatterMaps {
     /// Offsets of the cells' p×p skeleton blocks, symmetric and stored as their lower
     /// triangles (p(p + 1)/2 entries, [`super::condense::packed_index`]), in a buffer of local
     /// blocks, one per cell plus one.
-    pub block_ptr: Vec<usize>,
+    pub block_ptr: Offsets,
     /// Per condensed entry, the indices in that buffer of the local entries landing on it
     /// (each local entry (a, b), a ≥ b, lands on the entry (max, min) of its two unknowns).
     pub src: Ragged<u32>,
@@ -306,7 +300,7 @@ fn check_numeric_memory(pattern: &SpdPattern, maps: &ScatterMaps, n: usize) -> c
     };
     let bytes = 8 * (pattern.factor_len() as u64)
         + 8 * (pattern.nnz() as u64)
-        + 8 * (maps.block_ptr.last().copied().unwrap_or(0) as u64)
+        + 8 * (maps.block_ptr.total() as u64)
         + 24 * (maps.inc.items.len() as u64)
         + 8 * 6 * (n as u64);
     if bytes > available {
@@ -327,14 +321,14 @@ fn check_numeric_memory(pattern: &SpdPattern, maps: &ScatterMaps, n: usize) -> c
 fn incidence(dm: &DofMap, n: usize) -> crate::Result<Ragged<u32>> {
     let mut cell_of = vec![0u32; dm.dofs.len()];
     let ranges = cell_chunks(dm.n_cells());
-    let slices = super::split_by_ranges(&mut cell_of, &ranges, &dm.dof_ptr);
+    let slices = super::split_by_ranges(&mut cell_of, &ranges, |k| dm.dof_ptr.at(k));
     ranges
         .into_par_iter()
         .zip(slices)
         .for_each(|((c0, c1), out)| {
-            let base = dm.dof_ptr[c0];
+            let base = dm.dof_ptr.at(c0);
             for k in c0..c1 {
-                out[dm.dof_ptr[k] - base..dm.dof_ptr[k + 1] - base].fill(k as u32);
+                out[dm.dof_ptr.at(k) - base..dm.dof_ptr.at(k + 1) - base].fill(k as u32);
             }
         });
     let (ptr, items) =
@@ -421,13 +415,9 @@ fn scatter_maps(
         let s = &row_idx[col_ptr[c]..col_ptr[c + 1]];
         (col_ptr[c] + s.binary_search(&r).expect("entry is in the pattern")) as u32
     };
-    let mut pos_ptr = Vec::with_capacity(nc + 1);
-    pos_ptr.push(0);
-    for k in 0..nc {
-        let p = dm.skeleton(k).len();
-        pos_ptr.push(pos_ptr[k] + super::condense::packed_len(p));
-    }
-    if pos_ptr[nc] >= u32::MAX as usize || dm.dofs.len() >= u32::MAX as usize {
+    let pos_ptr =
+        Offsets::from_lengths((0..nc).map(|k| super::condense::packed_len(dm.skeleton(k).len())))?;
+    if dm.dofs.len() >= u32::MAX as usize {
         return Err(crate::Error::Linear(
             "more than 2^32 local skeleton entries".into(),
         ));
@@ -437,7 +427,7 @@ fn scatter_maps(
     let pos: Vec<u32> = cell_chunks(nc)
         .into_par_iter()
         .flat_map_iter(|(c0, c1)| {
-            let mut out = Vec::with_capacity(pos_ptr[c1] - pos_ptr[c0]);
+            let mut out = Vec::with_capacity(pos_ptr.at(c1) - pos_ptr.at(c0));
             for k in c0..c1 {
                 let sk = dm.skeleton(k);
                 for (b, &j) in sk.iter().enumerate() {

@@ -4,6 +4,7 @@
 //! part ([`super::symbolic`]) is shared.
 
 use super::cell_chunks;
+use super::offsets::Offsets;
 use super::symbolic::DofMap;
 use crate::mesh::Point;
 use crate::problem::{BoundaryKind, Problem, check_finite, check_tensor};
@@ -15,7 +16,7 @@ use rayon::prelude::*;
 #[derive(Debug, Clone)]
 pub struct ProblemValues {
     /// Offsets into `mats`, one per cell plus one.
-    pub mat_ptr: Vec<usize>,
+    pub mat_ptr: Offsets,
     /// The local matrices (symmetric), their lower triangles column by column
     /// ([`super::condense::packed_index`]), in the order of the cell's unknowns.
     pub mats: Vec<f64>,
@@ -130,7 +131,7 @@ impl ProblemValues {
 fn local_data(
     scheme: &dyn GradientDiscretisation,
     problem: &Problem,
-) -> crate::Result<(Vec<usize>, Vec<f64>, Vec<f64>)> {
+) -> crate::Result<(Offsets, Vec<f64>, Vec<f64>)> {
     let mesh = scheme.mesh();
     let nc = mesh.n_cells();
     let chunks: Vec<LocalChunk> = cell_chunks(nc)
@@ -167,23 +168,19 @@ fn local_data(
             out
         })
         .collect();
-    let bad_source = chunks.iter().find_map(|c| c.bad_source.clone());
-    let mut mat_ptr = Vec::with_capacity(nc + 1);
-    mat_ptr.push(0);
-    let mut mats = Vec::with_capacity(chunks.iter().map(|c| c.mats.len()).sum());
+    let mut chunks = chunks;
+    if let Some(e) = chunks.iter_mut().find_map(|c| c.bad_tensor.take()) {
+        return Err(e);
+    }
+    if let Some(msg) = chunks.iter().find_map(|c| c.bad_source.clone()) {
+        return Err(crate::Error::InvalidData(msg));
+    }
+    let mat_ptr = Offsets::from_lengths(chunks.iter().flat_map(|c| c.mat_len.iter().copied()))?;
+    let mut mats = Vec::with_capacity(mat_ptr.total());
     let mut loads = Vec::with_capacity(chunks.iter().map(|c| c.loads.len()).sum());
-    for mut c in chunks {
-        if let Some(e) = c.bad_tensor.take() {
-            return Err(e);
-        }
-        for &l in &c.mat_len {
-            mat_ptr.push(mat_ptr.last().copied().unwrap_or(0) + l);
-        }
+    for c in chunks {
         mats.extend_from_slice(&c.mats);
         loads.extend_from_slice(&c.loads);
-    }
-    if let Some(msg) = bad_source {
-        return Err(crate::Error::InvalidData(msg));
     }
     Ok((mat_ptr, mats, loads))
 }

@@ -30,7 +30,7 @@ pub mod csr;
 pub mod ordering;
 pub mod pcg;
 
-pub use amg::{Amg, AmgOptions, LevelSummary, Smoother};
+pub use amg::{Amg, AmgOptions, CoarseHierarchy, LevelSummary, Smoother};
 pub use cholesky::{FactorThreads, SpdFactor, SpdPattern};
 pub use csr::CsrMatrix;
 pub use ordering::{Ordering, nested_dissection};

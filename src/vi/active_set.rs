@@ -260,6 +260,7 @@ pub fn run(
             report(line);
         }
         if next == active {
+            q.release();
             ev.certificate.check(opts.tol)?;
             return Ok(Outcome::Solved(VariationalSolution {
                 u,
@@ -296,6 +297,7 @@ pub fn run(
             None
         };
         if let Some(error) = error {
+            q.release();
             return Ok(Outcome::Stalled(Stalled { error, log }));
         }
         entered = (0..m).filter(|&j| next[j] && !active[j]).count();

@@ -46,6 +46,9 @@ pub struct SolveTimings {
     /// The solve stopped at the screening tolerance of
     /// [`QuadraticEnergy::screen_with_fixed`], not at full accuracy.
     pub inexact: bool,
+    /// The iterative solver preconditioned with the coarse levels of an earlier solve's
+    /// multigrid hierarchy instead of building one.
+    pub reused: bool,
 }
 
 impl SolveTimings {
@@ -58,6 +61,7 @@ impl SolveTimings {
             solve: self.solve + more.solve,
             krylov: self.krylov + more.krylov,
             inexact: more.inexact,
+            reused: self.reused,
         }
     }
 }
@@ -90,6 +94,9 @@ pub trait QuadraticEnergy {
         let _ = fixed;
         Ok(None)
     }
+    /// The iteration is over: free what is kept from one solve to the next (a multigrid
+    /// hierarchy, for instance). Default: nothing.
+    fn release(&self) {}
     /// r = b − Mu and, for each entry, the scale |b_i| + Σ_j |M_ij u_j| against which it is
     /// small.
     fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>);

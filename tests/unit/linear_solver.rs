@@ -172,3 +172,59 @@ fn screening_solves_are_refined_to_the_full_solution() {
     assert!(gap(&u) < 1e-10);
     assert!(direct.refine(&fixed).unwrap().is_none());
 }
+
+/// Consecutive iterative solves reuse the coarse levels of the previous multigrid hierarchy
+/// when at most `REUSE_MAX_CHANGED` of the unknowns changed status since the matrix it was
+/// built for (counted from that matrix, over several solves), and build a new one otherwise
+/// or after `release`; the solutions are those of fresh systems.
+#[test]
+fn multigrid_hierarchies_are_reused_when_few_unknowns_change() {
+    use gradvi::assembly::{DiscreteSystem, REUSE_MAX_CHANGED};
+    use gradvi::vi::QuadraticEnergy;
+    let tri = cartesian_triangles(128, 128, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let p1 = P1::new(&tri).unwrap();
+    let p = paper_test3(-10.0);
+    let system = || {
+        DiscreteSystem::new(
+            &p1,
+            &p,
+            SystemOptions {
+                linear: LinearSolver::Iterative,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    };
+    let n = p1.n_unknowns();
+    let max = (REUSE_MAX_CHANGED * n as f64) as usize;
+    assert!(max >= 4, "{n} unknowns allow {max} changes");
+    // the unknowns below index `k` fixed at 0.01
+    let fixed =
+        |k: usize| -> Vec<Option<f64>> { (0..n).map(|i| (i < k).then_some(0.01)).collect() };
+    let k0 = n / 2;
+    let it = system();
+    let check = |k: usize, reused: bool| {
+        let (u, t) = it.solve(&fixed(k)).unwrap();
+        assert_eq!(t.reused, reused, "k = {k}");
+        let (reference, t) = system().solve(&fixed(k)).unwrap();
+        assert!(!t.reused);
+        let gap = u
+            .iter()
+            .zip(&reference)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        assert!(gap < 1e-10, "k = {k}: {gap:e}");
+    };
+    check(k0, false);
+    // a few more fixed, then a few fewer: reused, the changes counted from the first matrix
+    check(k0 + max / 2, true);
+    check(k0 + max, true);
+    // one more than the bound from the first matrix: a new hierarchy
+    check(k0 + max + 1, false);
+    check(k0 + max + 1 - max / 2, true);
+    // many changes: a new hierarchy
+    check(k0 + 20 * max, false);
+    // after the iteration is over, nothing is kept
+    it.release();
+    check(k0 + 20 * max, false);
+}
