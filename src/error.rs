@@ -193,10 +193,11 @@ pub enum MeshError {
         /// The signed distance from the centroid to the edge line.
         dist: f64,
     },
-    /// More vertices or cells than the 32-bit ids of the edge arrays can number.
+    /// More vertices, cells, cell sides (entries of the cell vertex lists) or edges than the
+    /// 32-bit ids and offsets of the mesh arrays can number.
     #[error("the mesh has {count} {what}: at most 2^32 - 2 are supported")]
     TooManyEntities {
-        /// "vertices" or "cells".
+        /// "vertices", "cells", "cell sides" or "edges".
         what: &'static str,
         /// How many there are.
         count: usize,

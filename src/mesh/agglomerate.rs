@@ -244,7 +244,7 @@ fn corners(fine: &PolyMesh, label: &[usize], dissolved: &[bool]) -> Vec<bool> {
     for (k, &d) in dissolved.iter().enumerate() {
         if d {
             for &v in fine.cell_vertices(k) {
-                corner[v] = true;
+                corner[v as usize] = true;
             }
         }
     }
@@ -266,10 +266,11 @@ fn polygons(fine: &PolyMesh, label: &[usize], corner: &[bool]) -> Vec<Option<Vec
         size[label[k]] += 1;
         let (vs, es) = (fine.cell_vertices(k), fine.cell_edges(k));
         for (i, &e) in es.iter().enumerate() {
-            let [c0, c1] = fine.edge_cells(e);
+            let [c0, c1] = fine.edge_cells(e as usize);
             let other = if c0 == k { c1 } else { c0 };
             if other == NO_CELL || label[other] != label[k] {
-                half.push((label[k], vs[i], vs[(i + 1) % vs.len()]));
+                let (from, to) = (vs[i], vs[(i + 1) % vs.len()]);
+                half.push((label[k], from as usize, to as usize));
             }
         }
     }

@@ -5,7 +5,8 @@
 //!   `/proc/meminfo`), or less if the control group of the process limits it (a container:
 //!   `/proc/meminfo` then shows the host's memory); [`DEFAULT_MEMORY_BUDGET`] (8 GiB) where
 //!   neither is known. (It was capped at 8 GiB before; PETSc ex9's 4097² grid, 33.6M triangles,
-//!   needs an estimated 9.5 GB for its mesh, and its whole P1 solve 19 GB, on a 24 GiB machine.)
+//!   needed an estimated 9.5 GB for its mesh (8.5 GB since the cell arrays are 32-bit), and its
+//!   whole P1 solve 19 GB, on a 24 GiB machine.)
 //! * [`mesh_bytes`]: the peak memory of building and validating a [`PolyMesh`](super::PolyMesh)
 //!   with given numbers of cells, cell sides, vertices and edges. The generators compare it with
 //!   the budget before allocating anything ([`check_budget`]); a caller that needs memory for
@@ -72,24 +73,26 @@ pub fn max_file_bytes() -> u64 {
 ///
 /// The peak is reached during the overlap check (the sweep of
 /// [`validate`](super::validate)), when the arrays of [`PolyMesh`](super::PolyMesh) are all
-/// built: 16 bytes per vertex (coordinates), 40 per cell (CSR offset, area, centroid,
-/// diameter: present during the check, not kept by the mesh), 16 per cell side (vertex,
-/// edge; n_{K,σ} and d_{K,σ} are computed on demand) and 56 per edge (end points, cells,
-/// length, midpoint, tag); and the sweep adds 72 bytes per vertex (sort keys, ranks,
-/// sorted points, event offsets, boundary links) and 44 per edge (renumbered segments, event
-/// lists, treap handles). Measured peaks (resident memory) were 85–95% of this estimate when
-/// it counted 40 bytes per side for the stored normals and distances; without them the
-/// measured saving is exactly those 24 bytes per side. Since then the mesh stores neither the
-/// edge lengths nor the midpoints (24 bytes per edge, computed on demand), its edge end points
-/// and cells are 32-bit (16 bytes less per edge) and the sweep's events are 32-bit where they
-/// fit; the estimate still counts the old sizes, as margin: measured
-/// peaks of `gradvi mesh generate` (output file included) are now 70–74% of it (Cartesian
-/// level 9, triangles level 9, hexagonal level 8), and reading and validating a 1M-cell typ2
-/// file (text and parsing included) 92%.
+/// built: 16 bytes per vertex (coordinates), 36 per cell (32-bit CSR offset, area, centroid,
+/// and the diameter, present during the check, not kept by the mesh), 8 per cell side (32-bit
+/// vertex and edge ids, compacted from `usize` before the check; n_{K,σ} and d_{K,σ} are
+/// computed on demand) and 56 per edge (end points, cells, length, midpoint, tag); and the
+/// sweep adds 72 bytes per vertex (sort keys, ranks, sorted points, event offsets, boundary
+/// links) and 44 per edge (renumbered segments, event lists, treap handles). Measured peaks
+/// (resident memory) were 85–95% of this estimate when it counted 40 bytes per side for the
+/// stored normals and distances; without them the measured saving is exactly those 24 bytes
+/// per side. Since then the mesh stores neither the edge lengths nor the midpoints (24 bytes
+/// per edge, computed on demand), its edge end points and cells are 32-bit (16 bytes less per
+/// edge) and the sweep's events are 32-bit where they fit; the estimate still counts the old
+/// edge sizes, as margin. Its cell arrays (offsets, vertex and edge ids) are 32-bit too, and
+/// counted so (4 bytes per cell and 8 per side less than with `usize`): measured peaks of
+/// `gradvi mesh generate` (output file included) are 67–73% of the estimate (Cartesian level 9
+/// 72%, triangles level 9 73%, hexagonal level 8 67%), and reading and validating a 1M-cell
+/// typ2 file (Cartesian level 9, text and parsing included) 93%.
 pub fn mesh_bytes(cells: u64, sides: u64, vertices: u64, edges: u64) -> u64 {
     let per_vertex = 16 + 72;
-    let per_cell = 40;
-    let per_side = 16;
+    let per_cell = 36;
+    let per_side = 8;
     let per_edge = 56 + 44;
     cells
         .saturating_mul(per_cell)

@@ -37,8 +37,10 @@ pub trait CellComplex<const D: usize>: Sync {
     fn n_cells(&self) -> usize;
     /// Number of faces (edges in 2-D).
     fn n_faces(&self) -> usize;
-    /// The faces of cell `k`, in its local order (local face i is `cell_faces(k)[i]`).
-    fn cell_faces(&self, k: usize) -> &[usize];
+    /// The faces of cell `k`, in its local order (local face i is `cell_faces(k)[i]`), as 32-bit
+    /// ids, the storage of [`PolyMesh`] (a mesh implementing this trait has fewer than
+    /// `u32::MAX` faces); `f as usize` is the id the other methods take.
+    fn cell_faces(&self, k: usize) -> &[u32];
     /// The cells on either side of face `f`; the second is [`super::NO_CELL`] on the boundary.
     fn face_cells(&self, f: usize) -> [usize; 2];
     /// |K|.
@@ -70,7 +72,7 @@ impl CellComplex<2> for PolyMesh {
     fn n_faces(&self) -> usize {
         self.n_edges()
     }
-    fn cell_faces(&self, k: usize) -> &[usize] {
+    fn cell_faces(&self, k: usize) -> &[u32] {
         self.cell_edges(k)
     }
     fn face_cells(&self, f: usize) -> [usize; 2] {

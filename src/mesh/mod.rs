@@ -69,12 +69,15 @@ pub type Point = [f64; 2];
 #[derive(Debug, Clone)]
 pub struct PolyMesh {
     vertices: Vec<Point>,
-    /// CSR offsets into `cell_verts` and `cell_edges`.
-    cell_ptr: Vec<usize>,
-    /// Counter-clockwise vertex ids of every cell.
-    cell_verts: Vec<usize>,
-    /// Local edge i of cell K joins local vertices i and i+1 (cyclically).
-    cell_edges: Vec<usize>,
+    /// CSR offsets into `cell_verts` and `cell_edges`, 32-bit: the number of cell sides (entries
+    /// of the cell vertex lists) is below `u32::MAX` (checked when building).
+    cell_ptr: Vec<u32>,
+    /// Counter-clockwise vertex ids of every cell, 32-bit like [`PolyMesh::cell_vertices`]
+    /// returns them (4 bytes less per cell side than `usize`).
+    cell_verts: Vec<u32>,
+    /// Local edge i of cell K joins local vertices i and i+1 (cyclically); 32-bit (there are no
+    /// more edges than cell sides).
+    cell_edges: Vec<u32>,
     /// Edge end points (smaller vertex id first), 32-bit: vertex ids are below `u32::MAX`
     /// (checked when building). 8 bytes less per edge: 25 MB per million edges.
     edges: Vec<[u32; 2]>,
@@ -100,6 +103,29 @@ fn sub(a: Point, b: Point) -> Point {
 fn dist(a: Point, b: Point) -> f64 {
     let d = sub(a, b);
     (d[0] * d[0] + d[1] * d[1]).sqrt()
+}
+
+/// [`MeshError::TooManyEntities`] unless the mesh's ids fit in its 32-bit arrays: vertex and cell
+/// ids in the edge arrays (`u32::MAX` marking "no cell"), offsets into the cell arrays (up to the
+/// number of cell sides) and edge ids in `cell_edges` (there are no more edges than cell sides).
+fn check_counts(vertices: usize, cells: usize, sides: usize) -> Result<(), MeshError> {
+    for (what, count) in [
+        ("vertices", vertices),
+        ("cells", cells),
+        ("cell sides", sides),
+    ] {
+        if count >= u32::MAX as usize {
+            return Err(MeshError::TooManyEntities { what, count });
+        }
+    }
+    Ok(())
+}
+
+/// `v` as 32-bit values (all below `u32::MAX`, which the caller has checked), in a new array of
+/// exactly that length; `v` is freed.
+fn to_u32(v: Vec<usize>) -> Vec<u32> {
+    debug_assert!(v.iter().all(|&x| x < u32::MAX as usize));
+    v.iter().map(|&x| x as u32).collect()
 }
 
 /// n_{K,σ} and d_{K,σ} of the side from corner `p` to corner `q` of a counter-clockwise cell
@@ -212,9 +238,12 @@ impl PolyMesh {
     /// As [`PolyMesh::from_cells`] (no tags), with the cells stored flat: cell `k` lists the
     /// vertices `cell_verts[cell_ptr[k]..cell_ptr[k + 1]]`. `cell_ptr` must start at 0, be
     /// non-decreasing and end at `cell_verts.len()` (the caller builds it; the cell contents are
-    /// validated exactly as by [`PolyMesh::from_cells`], in the same order, with the same errors).
-    /// `cell_verts` becomes the mesh's own storage (clockwise cells are reversed in place), so
-    /// readers avoid one small allocation per cell.
+    /// validated exactly as by [`PolyMesh::from_cells`], in the same order, with the same errors;
+    /// [`MeshError::TooManyEntities`] if there are `u32::MAX` vertices, cells or cell sides or
+    /// more). Clockwise cells are reversed in place in `cell_verts`, which the checks and the
+    /// edge numbering read as `usize`; the mesh then keeps 32-bit copies of `cell_ptr` and
+    /// `cell_verts`, made (and the `usize` arrays freed) before the overlap check, the peak of
+    /// the construction. Readers pass flat cells to avoid one small allocation per cell.
     pub(crate) fn from_flat_cells(
         vertices: Vec<Point>,
         cell_ptr: Vec<usize>,
@@ -230,12 +259,7 @@ impl PolyMesh {
         if cell_ptr.len() < 2 {
             return Err(MeshError::Empty);
         }
-        // ids are stored as u32 in the edge arrays, u32::MAX marking "no cell"
-        for (what, count) in [("vertices", nv), ("cells", cell_ptr.len() - 1)] {
-            if count >= u32::MAX as usize {
-                return Err(MeshError::TooManyEntities { what, count });
-            }
-        }
+        check_counts(nv, cell_ptr.len() - 1, cell_verts.len())?;
         // checks 1–5 of `validate` and the cell geometry, while the vertices are sorted for
         // checks 6 and 11 (the errors are reported in the order of the checks)
         let (cells, (duplicates, order)) = rayon::join(
@@ -262,10 +286,21 @@ impl PolyMesh {
         } = built?;
         simple?;
         let ne = edges.len();
+        // not reached (every edge is a side of some cell), but the ids must fit in `cell_edges`
+        if ne >= u32::MAX as usize {
+            return Err(MeshError::TooManyEntities {
+                what: "edges",
+                count: ne,
+            });
+        }
         // star-shapedness with respect to the centroid (d_{K,σ} > 0, computed above)
         if let Some(err) = cells.not_star_shaped {
             return Err(err);
         }
+        // compact storage of the cells (ids and offsets below u32::MAX, checked above), before
+        // the overlap check, the peak of the construction; the usize arrays are freed
+        let cell_ptr = to_u32(cell_ptr);
+        let cell_verts = to_u32(cell_verts);
 
         let boundary_edges: Vec<usize> = (0..ne).filter(|&e| edge_cells[e][1] == NO_CELL).collect();
         let boundary = validate::boundary_loops(
@@ -290,7 +325,8 @@ impl PolyMesh {
         )?;
         drop(boundary);
 
-        // compact storage (ids below u32::MAX, checked above); the usize arrays are freed
+        // compact storage of the edges (ids below u32::MAX, checked above); the usize arrays
+        // are freed
         let edges: Vec<[u32; 2]> = edges.iter().map(|e| e.map(|v| v as u32)).collect();
         let edge_cells: Vec<[u32; 2]> = edge_cells
             .iter()
@@ -395,13 +431,22 @@ impl PolyMesh {
     pub fn vertex(&self, v: usize) -> Point {
         self.vertices[v]
     }
-    /// Counter-clockwise vertex ids of cell `k`.
-    pub fn cell_vertices(&self, k: usize) -> &[usize] {
-        &self.cell_verts[self.cell_ptr[k]..self.cell_ptr[k + 1]]
+    /// The range of cell `k` in `cell_verts` and `cell_edges`.
+    #[inline]
+    fn cell_range(&self, k: usize) -> std::ops::Range<usize> {
+        self.cell_ptr[k] as usize..self.cell_ptr[k + 1] as usize
     }
-    /// Edges of cell `k`; local edge i joins local vertices i and i+1.
-    pub fn cell_edges(&self, k: usize) -> &[usize] {
-        &self.cell_edges[self.cell_ptr[k]..self.cell_ptr[k + 1]]
+    /// Counter-clockwise vertex ids of cell `k`, 32-bit (the mesh stores them so; vertex ids are
+    /// below `u32::MAX`): `v as usize` is the id of [`PolyMesh::vertex`].
+    #[inline]
+    pub fn cell_vertices(&self, k: usize) -> &[u32] {
+        &self.cell_verts[self.cell_range(k)]
+    }
+    /// Edges of cell `k`, 32-bit like [`PolyMesh::cell_vertices`]; local edge i joins local
+    /// vertices i and i+1.
+    #[inline]
+    pub fn cell_edges(&self, k: usize) -> &[u32] {
+        &self.cell_edges[self.cell_range(k)]
     }
     /// The two end points of local edge `i` of cell `k` (local vertices i and i+1, cyclically),
     /// in counter-clockwise order.
@@ -409,7 +454,7 @@ impl PolyMesh {
     fn cell_side_points(&self, k: usize, i: usize) -> (Point, Point) {
         let c = self.cell_vertices(k);
         let j = if i + 1 < c.len() { i + 1 } else { 0 };
-        (self.vertices[c[i]], self.vertices[c[j]])
+        (self.vertices[c[i] as usize], self.vertices[c[j] as usize])
     }
     /// The outward unit normal n_{K,σ} and the distance d_{K,σ} = (x_σ − x_K)·n_{K,σ} > 0 of
     /// local edge `i` of cell `k` (joining local vertices i and i+1), computed from the vertices
@@ -439,9 +484,9 @@ impl PolyMesh {
         let xk = self.cell_centroid[k];
         let n = c.len();
         // each corner is read once: the end of side i is the start of side i+1
-        let mut p = self.vertices[c[0]];
+        let mut p = self.vertices[c[0] as usize];
         (0..n).map(move |i| {
-            let q = self.vertices[c[if i + 1 < n { i + 1 } else { 0 }]];
+            let q = self.vertices[c[if i + 1 < n { i + 1 } else { 0 }] as usize];
             let side = side_normal_dist(p, q, xk);
             p = q;
             side
@@ -485,7 +530,7 @@ impl PolyMesh {
         let pts: Vec<Point> = self
             .cell_vertices(k)
             .iter()
-            .map(|&v| self.vertices[v])
+            .map(|&v| self.vertices[v as usize])
             .collect();
         validate::diameter(&pts)
     }
@@ -540,7 +585,7 @@ impl PolyMesh {
         let nv = self.n_vertices();
         let mut ptr = vec![0usize; nv + 1];
         for &v in &self.cell_verts {
-            ptr[v + 1] += 1;
+            ptr[v as usize + 1] += 1;
         }
         for i in 0..nv {
             ptr[i + 1] += ptr[i];
@@ -549,6 +594,7 @@ impl PolyMesh {
         let mut ids = vec![0usize; self.cell_verts.len()];
         for k in 0..self.n_cells() {
             for &v in self.cell_vertices(k) {
+                let v = v as usize;
                 ids[fill[v]] = k;
                 fill[v] += 1;
             }
@@ -558,10 +604,11 @@ impl PolyMesh {
 }
 
 /// The edges of a mesh whose cells are stored flat (`cell_ptr`, `cell_verts`, as in
-/// [`PolyMesh`]; every cell has at least 3 vertices, all below `nv`), numbered in increasing
-/// order of their (smaller vertex, larger vertex) pair, or the first [`MeshError::BadEdge`] in
-/// that order: an edge shared by more than two cells, or two cells that traverse an edge in the
-/// same direction.
+/// [`PolyMesh`] but `usize`; every cell has at least 3 vertices, all below `nv`, and there are
+/// fewer than `u32::MAX` cell sides, so that the edge ids fit in the 32-bit `cell_edges`),
+/// numbered in increasing order of their (smaller vertex, larger vertex) pair, or the first
+/// [`MeshError::BadEdge`] in that order: an edge shared by more than two cells, or two cells
+/// that traverse an edge in the same direction.
 ///
 /// Algorithm, linear apart from sorting a handful of items per vertex:
 /// 1. every cell side (half-edge, identified by its slot in `cell_verts`) is put into the bucket
@@ -599,8 +646,9 @@ struct Edges {
     edges: Vec<[usize; 2]>,
     /// The cells on either side of each edge (`[K, NO_CELL]` on the boundary).
     edge_cells: Vec<[usize; 2]>,
-    /// The edge of each cell side (indexed like `cell_verts`).
-    cell_edges: Vec<usize>,
+    /// The edge of each cell side (indexed like `cell_verts`), 32-bit as [`PolyMesh`] keeps it
+    /// (there are no more edges than cell sides, fewer than `u32::MAX`).
+    cell_edges: Vec<u32>,
 }
 
 /// Unsigned index type of the scratch arrays of [`build_edges`] and of the sweep's events
@@ -637,6 +685,7 @@ fn build_edges_with<I: EdgeIndex>(
     cell_verts: &[usize],
 ) -> Result<Edges, MeshError> {
     let n_half = cell_verts.len();
+    debug_assert!(n_half < u32::MAX as usize, "checked by from_flat_cells");
     let nc = cell_ptr.len().saturating_sub(1);
     // the side in `slot` of cell k (slots s..e) joins cell_verts[slot] to cell_verts[next(slot)]
     let next = |slot: usize, s: usize, e: usize| if slot + 1 < e { slot + 1 } else { s };
@@ -686,7 +735,8 @@ fn build_edges_with<I: EdgeIndex>(
     // 3. runs of equal (smaller, larger) vertex pairs are the edges
     let mut edges = Vec::with_capacity(ne);
     let mut edge_cells = Vec::with_capacity(ne);
-    let mut cell_edges = vec![0usize; n_half];
+    // edge ids are below the number of sides (each edge has a side), so below u32::MAX
+    let mut cell_edges = vec![0u32; n_half];
     for lo in 0..nv {
         let bucket = &half[start[lo].to_usize()..start[lo + 1].to_usize()];
         let mut i = 0;
@@ -695,7 +745,7 @@ fn build_edges_with<I: EdgeIndex>(
             let (hi, code, k) = (hi.to_usize(), code.to_usize(), k.to_usize());
             let e = edges.len();
             edges.push([lo, hi]);
-            cell_edges[code / 2] = e;
+            cell_edges[code / 2] = e as u32;
             let mut cells_of_edge = [k, NO_CELL];
             let mut j = i + 1;
             while j < bucket.len() && bucket[j].0.to_usize() == hi {
@@ -717,7 +767,7 @@ fn build_edges_with<I: EdgeIndex>(
                     });
                 }
                 cells_of_edge[1] = k2;
-                cell_edges[code2 / 2] = e;
+                cell_edges[code2 / 2] = e as u32;
                 j += 1;
             }
             edge_cells.push(cells_of_edge);
@@ -806,6 +856,7 @@ mod tests {
             let mut s = [0.0, 0.0];
             let mut vol = 0.0;
             for (i, &e) in m.cell_edges(k).iter().enumerate() {
+                let e = e as usize;
                 let (n, d) = m.cell_normal_dist(k, i);
                 assert_eq!(n, m.cell_normal(k, i));
                 assert_eq!(d, m.cell_dist(k, i));
@@ -831,6 +882,7 @@ mod tests {
                 assert_eq!(sides.len(), m.cell_edges(k).len());
                 let xk = m.centroid(k);
                 for (i, &e) in m.cell_edges(k).iter().enumerate() {
+                    let e = e as usize;
                     let (n, d) = sides[i];
                     assert_eq!((n, d), m.cell_normal_dist(k, i));
                     assert_eq!((n, d), (m.cell_normal(k, i), m.cell_dist(k, i)));
@@ -856,13 +908,13 @@ mod tests {
         for k in 0..m.n_cells() {
             let c = m.cell_vertices(k);
             for i in 0..c.len() {
-                let (a, b) = (c[i], c[(i + 1) % c.len()]);
-                sides.push(((a.min(b), a.max(b)), m.cell_ptr[k] + i, k));
+                let (a, b) = (c[i] as usize, c[(i + 1) % c.len()] as usize);
+                sides.push(((a.min(b), a.max(b)), m.cell_range(k).start + i, k));
             }
         }
         sides.sort_by_key(|s| s.0);
         let (mut edges, mut edge_cells) = (Vec::<[usize; 2]>::new(), Vec::<[usize; 2]>::new());
-        let mut cell_edges = vec![usize::MAX; sides.len()];
+        let mut cell_edges = vec![u32::MAX; sides.len()];
         for (key, slot, k) in sides {
             if edges.last() == Some(&[key.0, key.1]) {
                 edge_cells.last_mut().unwrap()[1] = k;
@@ -870,7 +922,7 @@ mod tests {
                 edges.push([key.0, key.1]);
                 edge_cells.push([k, NO_CELL]);
             }
-            cell_edges[slot] = edges.len() - 1;
+            cell_edges[slot] = (edges.len() - 1) as u32;
         }
         Edges {
             edges,
@@ -896,9 +948,12 @@ mod tests {
             }
             assert_eq!(m.cell_edges, reference.cell_edges);
             assert!(m.edges.windows(2).all(|w| w[0] < w[1]) && m.edges.iter().all(|e| e[0] < e[1]));
-            // both index widths of the bucket arrays give the same result
-            let wide = build_edges_with::<usize>(m.n_vertices(), &m.cell_ptr, &m.cell_verts);
-            let narrow = build_edges_with::<u32>(m.n_vertices(), &m.cell_ptr, &m.cell_verts);
+            // both index widths of the bucket arrays give the same result, from the cells as
+            // `from_flat_cells` receives them (usize)
+            let widen = |v: &[u32]| v.iter().map(|&x| x as usize).collect::<Vec<usize>>();
+            let (ptr, verts) = (widen(&m.cell_ptr), widen(&m.cell_verts));
+            let wide = build_edges_with::<usize>(m.n_vertices(), &ptr, &verts);
+            let narrow = build_edges_with::<u32>(m.n_vertices(), &ptr, &verts);
             assert_eq!(wide, narrow);
             assert_eq!(wide, Ok(reference));
             // the boundary edges are sorted by vertex pair, which set_boundary_tags relies on
@@ -1005,6 +1060,39 @@ mod tests {
             PolyMesh::from_cells(d, vec![vec![0, 1, 2], vec![3, 2, 1]]),
             Err(MeshError::DuplicateVertex { .. }) | Err(MeshError::BadEdge { .. })
         ));
+    }
+
+    #[test]
+    fn counts_beyond_the_32_bit_arrays_are_rejected() {
+        let max = u32::MAX as usize;
+        assert_eq!(check_counts(max - 1, max - 1, max - 1), Ok(()));
+        for (counts, what) in [
+            ([max, 1, 3], "vertices"),
+            ([3, max, 3], "cells"),
+            ([3, 1, max], "cell sides"),
+        ] {
+            assert_eq!(
+                check_counts(counts[0], counts[1], counts[2]),
+                Err(MeshError::TooManyEntities { what, count: max })
+            );
+        }
+        // the first in that order is reported
+        let e = check_counts(max, max, max).unwrap_err();
+        assert_eq!(
+            e,
+            MeshError::TooManyEntities {
+                what: "vertices",
+                count: max
+            }
+        );
+        assert_eq!(
+            MeshError::TooManyEntities {
+                what: "cell sides",
+                count: max
+            }
+            .to_string(),
+            format!("the mesh has {max} cell sides: at most 2^32 - 2 are supported")
+        );
     }
 
     #[test]

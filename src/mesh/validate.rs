@@ -397,22 +397,23 @@ pub(crate) struct Boundary {
 /// area. A hanging node (a cell side that is split in its neighbours but not in the cell itself)
 /// shows up as a zero-area loop; a pinched vertex as a vertex with two outgoing boundary edges.
 /// O(n): the orientation of every boundary edge is read off the cell sides in one pass.
+/// The cell arrays are the mesh's 32-bit ones.
 pub(crate) fn boundary_loops(
     vertices: &[Point],
     edges: &[[usize; 2]],
-    cell_verts: &[usize],
-    cell_ptr: &[usize],
-    cell_edges: &[usize],
+    cell_verts: &[u32],
+    cell_ptr: &[u32],
+    cell_edges: &[u32],
     boundary_edges: &[usize],
 ) -> Result<Boundary, MeshError> {
     // whether each edge is traversed from its smaller to its larger vertex by (the last of) its
     // cells; for a boundary edge, by its only cell
     let mut forward = vec![false; edges.len()];
     for k in 0..cell_ptr.len().saturating_sub(1) {
-        let (s, t) = (cell_ptr[k], cell_ptr[k + 1]);
+        let (s, t) = (cell_ptr[k] as usize, cell_ptr[k + 1] as usize);
         for slot in s..t {
             let next = if slot + 1 < t { slot + 1 } else { s };
-            forward[cell_edges[slot]] = cell_verts[slot] < cell_verts[next];
+            forward[cell_edges[slot] as usize] = cell_verts[slot] < cell_verts[next];
         }
     }
     let mut next = vec![NONE; vertices.len()];
@@ -481,11 +482,11 @@ fn trace_loops(vertices: &[Point], next: &[usize]) -> Result<Vec<BoundaryLoop>, 
     Ok(loops)
 }
 
-/// The mesh arrays checks 11 and 12 read.
+/// The mesh arrays checks 11 and 12 read (the cell arrays are the mesh's 32-bit ones).
 pub(crate) struct Topology<'a> {
     pub(crate) vertices: &'a [Point],
-    pub(crate) cell_ptr: &'a [usize],
-    pub(crate) cell_verts: &'a [usize],
+    pub(crate) cell_ptr: &'a [u32],
+    pub(crate) cell_verts: &'a [u32],
     pub(crate) edges: &'a [[usize; 2]],
     pub(crate) edge_cells: &'a [[usize; 2]],
     pub(crate) cell_area: &'a [f64],
@@ -505,9 +506,13 @@ impl Topology<'_> {
         if k1 == NO_CELL {
             return (boundary.next[l] == r).then_some(k0);
         }
-        let c = &self.cell_verts[self.cell_ptr[k0]..self.cell_ptr[k0 + 1]];
-        let i = c.iter().position(|&v| v == l)?;
-        Some(if c[(i + 1) % c.len()] == r { k0 } else { k1 })
+        let c = &self.cell_verts[self.cell_ptr[k0] as usize..self.cell_ptr[k0 + 1] as usize];
+        let i = c.iter().position(|&v| v as usize == l)?;
+        Some(if c[(i + 1) % c.len()] as usize == r {
+            k0
+        } else {
+            k1
+        })
     }
 }
 

@@ -43,7 +43,7 @@ impl EntityFields {
         let mesh = scheme.mesh();
         self.edge.as_ref().map(|e| {
             (0..mesh.n_cells())
-                .map(|k| mesh.cell_edges(k).iter().map(|&s| e[s]).sum())
+                .map(|k| mesh.cell_edges(k).iter().map(|&s| e[s as usize]).sum())
                 .collect()
         })
     }

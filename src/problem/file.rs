@@ -1356,7 +1356,10 @@ impl ProblemFile {
         if !d.source.is_empty() {
             let f = select(&d.source, xk, mesh.cell_tag(k)).ok_or_else(|| uncovered("source"))?;
             let piecewise = d.source.iter().any(|p| p.cond.is_some());
-            let verts = mesh.cell_vertices(k).iter().map(|&v| mesh.vertex(v));
+            let verts = mesh
+                .cell_vertices(k)
+                .iter()
+                .map(|&v| mesh.vertex(v as usize));
             let n = if piecewise { usize::MAX } else { 0 };
             for p in std::iter::once(xk).chain(verts.take(n)) {
                 self.finite(f, p, &place)?;

@@ -68,7 +68,8 @@ impl<'a> Cr<'a> {
     pub fn sub_centroid(&self, k: usize, i: usize) -> Point {
         let m = self.mesh;
         let v = m.cell_vertices(k);
-        let (a, b, xk) = (m.vertex(v[i]), m.vertex(v[(i + 1) % 3]), m.centroid(k));
+        let (a, b) = (v[i] as usize, v[(i + 1) % 3] as usize);
+        let (a, b, xk) = (m.vertex(a), m.vertex(b), m.centroid(k));
         [(a[0] + b[0] + xk[0]) / 3.0, (a[1] + b[1] + xk[1]) / 3.0]
     }
 }
@@ -82,7 +83,7 @@ impl super::triangle::TriangleScheme for Cr<'_> {
         let area = m.measure(k);
         let mut g = [[0.0; 2]; 3];
         for (i, &e) in m.cell_edges(k).iter().enumerate() {
-            let s = m.edge_measure(e) / area;
+            let s = m.edge_measure(e as usize) / area;
             let nrm = m.cell_normal(k, i);
             g[i] = [s * nrm[0], s * nrm[1]];
         }
@@ -103,9 +104,11 @@ impl super::triangle::TriangleScheme for Cr<'_> {
             let (v, e, area) = (m.cell_vertices(k), m.cell_edges(k), m.measure(k));
             for j in 0..3 {
                 // local vertex j lies on local edges j and j−1, opposite local edge j+1
-                let value = u[e[j]] + u[e[(j + 2) % 3]] - u[e[(j + 1) % 3]];
-                sum[v[j]] += area * value;
-                weight[v[j]] += area;
+                let value =
+                    u[e[j] as usize] + u[e[(j + 2) % 3] as usize] - u[e[(j + 1) % 3] as usize];
+                let vj = v[j] as usize;
+                sum[vj] += area * value;
+                weight[vj] += area;
             }
         }
         sum.iter().zip(&weight).map(|(s, w)| s / w).collect()
@@ -198,7 +201,7 @@ mod tests {
             let xk = m.centroid(k);
             for i in 0..3 {
                 // ∫_{D_{K,σ}} f for f affine: |D_{K,σ}| times the mean of f at its vertices
-                let (a, c) = (m.vertex(v[i]), m.vertex(v[(i + 1) % 3]));
+                let (a, c) = (m.vertex(v[i] as usize), m.vertex(v[(i + 1) % 3] as usize));
                 let exact = m.measure(k) / 3.0 * (affine(a) + affine(c) + affine(xk)) / 3.0;
                 assert!(
                     (b[i] - exact).abs() < 1e-14,

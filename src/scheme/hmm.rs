@@ -43,6 +43,7 @@ pub fn local_form<const D: usize, M: CellComplex<D> + ?Sized>(
     let mut x = DMatrix::<f64>::zeros(n, D);
     let mut bdiag = DVector::<f64>::zeros(n);
     for (i, &f) in faces.iter().enumerate() {
+        let f = f as usize;
         let len = mesh.face_measure(f);
         let (nrm, dist) = mesh.cell_face_normal_dist(k, i);
         let xs = mesh.face_centre(f);
@@ -114,12 +115,12 @@ impl<'a> Hmm<'a> {
         let w = self.w_matrix(k, a);
         let uk = u[self.cell_dof(k)];
         let edges = self.mesh.cell_edges(k);
-        let delta = DVector::from_iterator(edges.len(), edges.iter().map(|&e| u[e] - uk));
+        let delta = DVector::from_iterator(edges.len(), edges.iter().map(|&e| u[e as usize] - uk));
         let wd = w * delta;
         edges
             .iter()
             .enumerate()
-            .map(|(i, &e)| -wd[i] / self.mesh.edge_measure(e))
+            .map(|(i, &e)| -wd[i] / self.mesh.edge_measure(e as usize))
             .collect()
     }
 }
@@ -151,7 +152,7 @@ impl GradientDiscretisation for Hmm<'_> {
     fn local_dofs(&self, k: usize, dofs: &mut Vec<usize>) {
         dofs.clear();
         dofs.push(self.cell_dof(k));
-        dofs.extend_from_slice(self.mesh.cell_edges(k));
+        dofs.extend(self.mesh.cell_edges(k).iter().map(|&e| e as usize));
     }
     fn local_matrix(&self, k: usize, a: &Tensor, m: &mut DMatrix<f64>) {
         let w = self.w_matrix(k, a);
@@ -200,6 +201,7 @@ impl GradientDiscretisation for Hmm<'_> {
                 let uk = u[self.cell_dof(k)];
                 let mut g = [0.0; 2];
                 for (&e, (nrm, _)) in m.cell_edges(k).iter().zip(m.cell_normals_dists(k)) {
+                    let e = e as usize;
                     let w = m.edge_measure(e) * (u[e] - uk);
                     g[0] += w * nrm[0];
                     g[1] += w * nrm[1];
@@ -285,7 +287,8 @@ mod tests_3d {
     /// Faces: those normal to x, then y, then z; local faces of a cell: −x, +x, −y, +y, −z, +z.
     struct Boxes {
         nodes: [Vec<f64>; 3],
-        cell_faces: Vec<[usize; 6]>,
+        /// 32-bit face ids, as [`CellComplex::cell_faces`] returns them.
+        cell_faces: Vec<[u32; 6]>,
         /// Per face: its normal axis, its lower corner index (i, j, k) and its cells.
         faces: Vec<(usize, [usize; 3], [usize; 2])>,
     }
@@ -328,9 +331,9 @@ mod tests_3d {
                         let mut f = [0; 6];
                         for axis in 0..3 {
                             let mut c = [i, j, k];
-                            f[2 * axis] = face_id[&(axis, c)];
+                            f[2 * axis] = face_id[&(axis, c)] as u32;
                             c[axis] += 1;
-                            f[2 * axis + 1] = face_id[&(axis, c)];
+                            f[2 * axis + 1] = face_id[&(axis, c)] as u32;
                         }
                         cell_faces[cell(i, j, k)] = f;
                     }
@@ -364,7 +367,7 @@ mod tests_3d {
         fn n_faces(&self) -> usize {
             self.faces.len()
         }
-        fn cell_faces(&self, k: usize) -> &[usize] {
+        fn cell_faces(&self, k: usize) -> &[u32] {
             &self.cell_faces[k]
         }
         fn face_cells(&self, f: usize) -> [usize; 2] {
@@ -425,6 +428,7 @@ mod tests_3d {
         for k in 0..m.n_cells() {
             let (mut s, mut vol) = ([0.0; 3], 0.0);
             for (i, &f) in m.cell_faces(k).iter().enumerate() {
+                let f = f as usize;
                 let (nrm, d) = m.cell_face_normal_dist(k, i);
                 for r in 0..3 {
                     s[r] += m.face_measure(f) * nrm[r];
@@ -450,10 +454,13 @@ mod tests_3d {
             let faces = m.cell_faces(k);
             let delta = DVector::from_iterator(
                 6,
-                faces.iter().map(|&f| affine(m.face_centre(f)) - affine(xk)),
+                faces
+                    .iter()
+                    .map(|&f| affine(m.face_centre(f as usize)) - affine(xk)),
             );
             let wd = &w * delta;
             for (i, &f) in faces.iter().enumerate() {
+                let f = f as usize;
                 let nrm = m.cell_face_normal(k, i);
                 let flux: f64 = (0..3)
                     .map(|r| nrm[r] * (0..3).map(|c| A[r][c] * grad[c]).sum::<f64>())
@@ -477,7 +484,7 @@ mod tests_3d {
             let faces = m.cell_faces(k);
             // local matrix Cᵀ W C on [u_K, u_σ…] with C = [−1 | I]
             let dofs: Vec<usize> = std::iter::once(nf + k)
-                .chain(faces.iter().copied())
+                .chain(faces.iter().map(|&f| f as usize))
                 .collect();
             let mut c = DMatrix::<f64>::zeros(6, 7);
             for i in 0..6 {

@@ -42,7 +42,7 @@ impl super::triangle::TriangleScheme for P1<'_> {
     /// The gradients of the three barycentric functions λ_i of triangle `k`.
     fn basis_gradients(&self, k: usize) -> [Point; 3] {
         let v = self.mesh.cell_vertices(k);
-        let p: Vec<Point> = v.iter().map(|&i| self.mesh.vertex(i)).collect();
+        let p: Vec<Point> = v.iter().map(|&i| self.mesh.vertex(i as usize)).collect();
         let twice_area =
             (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
         let mut g = [[0.0; 2]; 3];
@@ -56,7 +56,7 @@ impl super::triangle::TriangleScheme for P1<'_> {
     }
     fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>) {
         let v = self.mesh.cell_vertices(k);
-        let fv: Vec<f64> = v.iter().map(|&i| f(self.mesh.vertex(i))).collect();
+        let fv: Vec<f64> = v.iter().map(|&i| f(self.mesh.vertex(i as usize))).collect();
         let s = fv[0] + fv[1] + fv[2];
         let area = self.mesh.measure(k);
         *b = DVector::from_fn(3, |i, _| area / 12.0 * (s + fv[i]));

@@ -23,8 +23,8 @@ impl TriangleUnknowns {
             TriangleUnknowns::Edges => mesh.n_edges(),
         }
     }
-    /// The three unknowns of triangle `k`, in local order.
-    fn of_cell(self, mesh: &PolyMesh, k: usize) -> &[usize] {
+    /// The three unknowns of triangle `k`, in local order (32-bit, as the mesh stores them).
+    fn of_cell(self, mesh: &PolyMesh, k: usize) -> &[u32] {
         match self {
             TriangleUnknowns::Vertices => mesh.cell_vertices(k),
             TriangleUnknowns::Edges => mesh.cell_edges(k),
@@ -96,7 +96,8 @@ impl<T: TriangleScheme> GradientDiscretisation for T {
     }
     fn local_dofs(&self, k: usize, dofs: &mut Vec<usize>) {
         dofs.clear();
-        dofs.extend_from_slice(T::UNKNOWNS.of_cell(TriangleScheme::mesh(self), k));
+        let unknowns = T::UNKNOWNS.of_cell(TriangleScheme::mesh(self), k);
+        dofs.extend(unknowns.iter().map(|&i| i as usize));
     }
     fn local_matrix(&self, k: usize, a: &Tensor, m: &mut DMatrix<f64>) {
         let g = self.basis_gradients(k);
@@ -123,7 +124,7 @@ impl<T: TriangleScheme> GradientDiscretisation for T {
         let mut meas = vec![0.0; on.count(m)];
         for k in 0..m.n_cells() {
             for &i in on.of_cell(m, k) {
-                meas[i] += m.measure(k) / 3.0;
+                meas[i as usize] += m.measure(k) / 3.0;
             }
         }
         meas.iter()
@@ -138,7 +139,7 @@ impl<T: TriangleScheme> GradientDiscretisation for T {
     fn cell_values(&self, u: &[f64]) -> Vec<f64> {
         let (m, on) = (TriangleScheme::mesh(self), T::UNKNOWNS);
         (0..m.n_cells())
-            .map(|k| on.of_cell(m, k).iter().map(|&i| u[i]).sum::<f64>() / 3.0)
+            .map(|k| on.of_cell(m, k).iter().map(|&i| u[i as usize]).sum::<f64>() / 3.0)
             .collect()
     }
     fn cell_gradients(&self, u: &[f64]) -> Vec<Point> {
@@ -148,6 +149,7 @@ impl<T: TriangleScheme> GradientDiscretisation for T {
                 let g = self.basis_gradients(k);
                 let mut r = [0.0; 2];
                 for (i, &d) in on.of_cell(m, k).iter().enumerate() {
+                    let d = d as usize;
                     r[0] += u[d] * g[i][0];
                     r[1] += u[d] * g[i][1];
                 }

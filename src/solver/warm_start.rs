@@ -358,6 +358,7 @@ fn active_inside(s: &CoarseState, coarse: &PolyMesh, k: usize, p: Point) -> bool
     }
     let reach = EROSION * coarse.measure(k).sqrt();
     coarse.cell_edges(k).iter().all(|&e| {
+        let e = e as usize;
         let [a, b] = coarse.edge_cells(e);
         let other = if a == k { b } else { a };
         other == NO_CELL || s.cell[other] || {

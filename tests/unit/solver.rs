@@ -333,6 +333,7 @@ fn hmm_on_cartesian_with_identity_is_the_two_point_scheme() {
     for k in 0..nc {
         b[k] = mesh.measure(k) * f(mesh.centroid(k));
         for (i, &e) in mesh.cell_edges(k).iter().enumerate() {
+            let e = e as usize;
             let [c0, c1] = mesh.edge_cells(e);
             let dk = mesh.cell_dist(k, i);
             if mesh.is_boundary_edge(e) {
@@ -360,7 +361,7 @@ fn hmm_on_cartesian_with_identity_is_the_two_point_scheme() {
         let w = s.w_matrix(k, &[[1.0, 0.0], [0.0, 1.0]]);
         for i in 0..4 {
             for j in 0..4 {
-                let e = mesh.cell_edges(k)[i];
+                let e = mesh.cell_edges(k)[i] as usize;
                 let expect = if i == j {
                     mesh.edge_measure(e) / mesh.cell_dist(k, i)
                 } else {

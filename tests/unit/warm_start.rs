@@ -114,7 +114,7 @@ fn l_shape(full: &PolyMesh) -> PolyMesh {
             let c = full.centroid(k);
             !(c[0] > 0.5 && c[1] > 0.5)
         })
-        .map(|k| full.cell_vertices(k).to_vec())
+        .map(|k| full.cell_vertices(k).iter().map(|&v| v as usize).collect())
         .collect();
     let (vertices, cells, _) = drop_unused_vertices(full.vertices(), &cells);
     PolyMesh::from_cells(vertices, cells).unwrap()

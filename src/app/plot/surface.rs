@@ -70,14 +70,15 @@ pub fn vertex_surface(mesh: &PolyMesh, values: &[f64]) -> Surface {
     for k in 0..mesh.n_cells() {
         let cv = mesh.cell_vertices(k);
         if let [a, b, c] = *cv {
-            triangles.push(([a, b, c], 0b111));
+            triangles.push(([a as usize, b as usize, c as usize], 0b111));
             continue;
         }
         let x = mesh.centroid(k);
-        let z = cv.iter().map(|&v| values[v]).sum::<f64>() / cv.len() as f64;
+        let z = cv.iter().map(|&v| values[v as usize]).sum::<f64>() / cv.len() as f64;
         points.push([x[0], x[1], z]);
         for i in 0..cv.len() {
-            triangles.push(([cv[i], cv[(i + 1) % cv.len()], points.len() - 1], 1));
+            let (a, b) = (cv[i] as usize, cv[(i + 1) % cv.len()] as usize);
+            triangles.push(([a, b, points.len() - 1], 1));
         }
     }
     Surface { points, triangles }

@@ -75,7 +75,7 @@ pub fn test2_polygonal(cfg: &Config) -> gradvi::Result<Vec<(String, NamedMesh)>>
     let k2 = kershaw(2)?;
     let swapped: Vec<[f64; 2]> = k2.vertices().iter().map(|p| [p[1], p[0]]).collect();
     let cells: Vec<Vec<usize>> = (0..k2.n_cells())
-        .map(|k| k2.cell_vertices(k).to_vec())
+        .map(|k| k2.cell_vertices(k).iter().map(|&v| v as usize).collect())
         .collect();
     v.push((
         "kershaw-transposed".to_string(),

@@ -30,10 +30,10 @@
 //!
 //! The largest levels come from the cap [`MAX_CELLS`] = 2^26 cells; the memory budget (the
 //! available memory) stops earlier on most machines. Estimated peaks ([`Family::memory_estimate`]): Cartesian level 9 (1 M cells) 0.4 GB,
-//! level 10 1.6 GB, level 11 6.6 GB; hexagonal level 8 (1.6 M cells) 1.0 GB, level 9 4.0 GB;
-//! Kershaw level 100 (2.9 M cells) 1.1 GB, level 240 6.5 GB; triangles level 9 (2.1 M cells)
-//! 0.6 GB, level 10 2.4 GB, level 11 9.5 GB (measured peak of the ex9 solve's mesh phase: 6.2 GB)
-//! (1 GB = 10⁹ bytes).
+//! level 10 1.5 GB, level 11 6.0 GB; hexagonal level 8 (1.6 M cells) 0.9 GB, level 9 3.7 GB;
+//! Kershaw level 100 (2.9 M cells) 1.0 GB, level 240 5.9 GB; triangles level 9 (2.1 M cells)
+//! 0.5 GB, level 10 2.1 GB, level 11 8.5 GB (measured peak of the ex9 solve's mesh phase: 6.2 GB,
+//! before the cell arrays were 32-bit) (1 GB = 10⁹ bytes).
 
 pub mod cartesian;
 pub mod hexagonal;
@@ -276,9 +276,9 @@ pub fn map_unit_square(m: &PolyMesh, domain: [f64; 4]) -> Result<PolyMesh> {
         .collect();
     let mut cell_ptr = Vec::with_capacity(m.n_cells() + 1);
     cell_ptr.push(0);
-    let mut cell_verts = Vec::new();
+    let mut cell_verts: Vec<usize> = Vec::new();
     for k in 0..m.n_cells() {
-        cell_verts.extend_from_slice(m.cell_vertices(k));
+        cell_verts.extend(m.cell_vertices(k).iter().map(|&v| v as usize));
         cell_ptr.push(cell_verts.len());
     }
     Ok(PolyMesh::from_flat_cells(v, cell_ptr, cell_verts)?)
@@ -534,7 +534,7 @@ mod tests {
                 gb(Family::Triangles, 9),
                 gb(Family::Triangles, 10)
             ],
-            [0.4, 1.6, 6.6, 1.0, 4.0, 1.1, 6.5, 0.6, 2.4]
+            [0.4, 1.5, 6.0, 0.9, 3.7, 1.0, 5.9, 0.5, 2.1]
         );
     }
 }
