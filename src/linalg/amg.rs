@@ -30,18 +30,19 @@
 //!    P's columns are then smooth, low-energy basis functions overlapping their
 //!    neighbours.
 //! 5. **Galerkin product** A_{ℓ+1} = Pᵀ A P in two row-parallel products, each row
-//!    accumulated in a dense array of length n_{ℓ+1} with a list of the touched columns (one
-//!    per thread): first A P, row i = Σ_{j : a_ij ≠ 0} a_ij P_j, then row J of Pᵀ (A P) =
-//!    Σ_{i : p_iJ ≠ 0} p_iJ (A P)_i (rows of R = Pᵀ). Entries a_ij stored as zeros (the
-//!    diagonal couplings of P1 on right triangles, the zeroed couplings of unit rows) are
-//!    skipped. Forming A P (a transient of about nnz(P) × 2 entries, freed at once) costs
-//!    Σ_i nnz(A_i) nnz(P_j) + Σ_i nnz(P_i) nnz((AP)_i) products; the fused product used
-//!    before, row J = Σ_i p_iJ Σ_j a_ij P_j without storing A P, redid each a_ij P_j once per
-//!    entry of row i of P (≈ 2.5 times). Measured on the ex9 P1 matrix (1M unknowns, 2 cores,
-//!    loaded machine, noisy): level-0 product ≈ 175–370 ms fused, ≈ 250–275 ms fused skipping
-//!    zeros, ≈ 190–200 ms in two products; whole setup (best of 7, `make bench-amg -- setup`)
-//!    0.55–0.62 s → 0.24–0.30 s on P1, 0.86 → 0.63 s on HMM (2M unknowns). Dropping the zero
-//!    products also removes entries of the coarse operators (hierarchy 147.5 → 141 MiB).
+//!    accumulated in a dense array with a list of the touched columns (one per thread):
+//!    first R A with R = Pᵀ, row J = Σ_{i : r_Ji ≠ 0} r_Ji A_i (= ((A P)ᵀ)_J, A symmetric),
+//!    then R is freed and row J of A_{ℓ+1} = Σ_k (R A)_Jk P_k. Entries a_ij stored as zeros
+//!    (the diagonal couplings of P1 on right triangles, the zeroed couplings of unit rows)
+//!    are skipped. The transient R A has as many entries as A P; forming it instead of A P
+//!    lets R go before the second product (on the ex9 P1 matrix at 1M unknowns, the peak of
+//!    the setup 20–30 MiB lower; the order of the sums, not the products, differs).
+//!    Measured before on the same matrix (2 cores, noisy): the fused product without a
+//!    transient, row J = Σ_i p_iJ Σ_j a_ij P_j, redid each a_ij P_j once per entry of row i
+//!    of P (≈ 2.5 times) and took ≈ 250–275 ms against ≈ 190–200 ms in two products; whole
+//!    setup (best of 7, `make bench-amg -- setup`) 0.55–0.62 s → 0.24–0.30 s on P1,
+//!    0.86 → 0.63 s on HMM (2M unknowns). Dropping the zero products also removes entries of
+//!    the coarse operators (hierarchy 147.5 → 141 MiB).
 //!
 //! The strength of connection is a flag per stored entry of A_ℓ (not a copy of the strong
 //! part), filled in parallel; the aggregation reads A_ℓ through it.
@@ -303,9 +304,7 @@ impl<'a> Amg<'a> {
                 opts.spectral_steps,
             );
             near_null = b_next;
-            let r = p.transpose();
-            let ac = galerkin(al, &p, &r);
-            drop(r);
+            let ac = galerkin(al, &p, p.transpose());
             transfers.push(Transfer { p });
             coarse_ops.push(ac);
         }
@@ -347,7 +346,17 @@ impl<'a> Amg<'a> {
     /// fine matrix later ([`CoarseHierarchy::with_fine`]); `None` for a one-level hierarchy,
     /// whose only operator is the fine matrix (factorised: nothing to reuse).
     pub fn into_coarse(self) -> Option<CoarseHierarchy> {
-        (!self.h.coarse_ops.is_empty()).then_some(self.h)
+        if self.h.coarse_ops.is_empty() {
+            return None;
+        }
+        // the fine level's smoother data and work vectors are rebuilt by `with_fine`: freed
+        // now (24 bytes per fine unknown less while the next matrix is assembled)
+        let mut h = self.h;
+        h.smoothers[0] = LevelSmoother::L1Jacobi { inv_l1: Vec::new() };
+        if let Ok(mut w) = h.work.lock() {
+            w[0] = LevelWork::default();
+        }
+        Some(h)
     }
 
     /// The fine matrix A₀, given back (a copy if it was borrowed).
@@ -945,42 +954,38 @@ impl Accumulator {
     }
 }
 
-/// A_c = Pᵀ A P in two row-parallel products (see the module documentation): A P, row i =
-/// Σ_{j : a_ij ≠ 0} a_ij P_j (its columns left in the order they are met: only read below),
-/// then row J of A_c = Σ_i r_Ji (A P)_i with R = Pᵀ.
-fn galerkin(a: &CsrMatrix, p: &CsrMatrix, r: &CsrMatrix) -> CsrMatrix {
-    let nc = p.n_cols();
-    let ap = build_rows(
-        a.n_rows(),
-        nc,
-        || Accumulator::new(nc),
-        |acc, i, cols, vals| {
-            let (ac, av) = a.row(i);
-            for (&j, &aij) in ac.iter().zip(av) {
-                if aij == 0.0 {
-                    continue;
-                }
-                let (pc, pv) = p.row(j as usize);
-                for (&k, &pjk) in pc.iter().zip(pv) {
-                    acc.add(k, aij * pjk);
-                }
-            }
-            acc.drain_unsorted_into(cols, vals);
-        },
-    );
+/// A_c = Pᵀ A P in two row-parallel products (see the module documentation): R A with
+/// R = Pᵀ, row J = Σ_{i : r_Ji ≠ 0} r_Ji A_i (its columns left in the order they are met: only
+/// read below), R freed, then row J of A_c = Σ_k (R A)_Jk P_k.
+fn galerkin(a: &CsrMatrix, p: &CsrMatrix, r: CsrMatrix) -> CsrMatrix {
+    let ra = product(&r, a, false);
+    drop(r);
+    product(&ra, p, true)
+}
+
+/// The sparse product L M, row J = Σ_k l_Jk M_k, zero entries of M skipped; each row's
+/// columns sorted if `sorted`, else in the order they are met.
+fn product(l: &CsrMatrix, m: &CsrMatrix, sorted: bool) -> CsrMatrix {
+    let n = m.n_cols();
     build_rows(
-        nc,
-        nc,
-        || Accumulator::new(nc),
-        |acc, jrow, cols, vals| {
-            let (rc, rv) = r.row(jrow);
-            for (&i, &rji) in rc.iter().zip(rv) {
-                let (pc, pv) = ap.row(i as usize);
-                for (&k, &v) in pc.iter().zip(pv) {
-                    acc.add(k, rji * v);
+        l.n_rows(),
+        n,
+        || Accumulator::new(n),
+        |acc, row, cols, vals| {
+            let (lc, lv) = l.row(row);
+            for (&k, &lk) in lc.iter().zip(lv) {
+                let (mc, mv) = m.row(k as usize);
+                for (&j, &mkj) in mc.iter().zip(mv) {
+                    if mkj != 0.0 {
+                        acc.add(j, lk * mkj);
+                    }
                 }
             }
-            acc.drain_into(cols, vals);
+            if sorted {
+                acc.drain_into(cols, vals);
+            } else {
+                acc.drain_unsorted_into(cols, vals);
+            }
         },
     )
 }
@@ -1123,7 +1128,8 @@ pub struct CoarseHierarchy {
     n: usize,
     coarse_ops: Vec<CsrMatrix>,
     transfers: Vec<Transfer>,
-    /// Every level's; the fine level's is replaced by [`CoarseHierarchy::with_fine`].
+    /// Every level's; the fine level's is empty (freed by [`Amg::into_coarse`]) until
+    /// [`CoarseHierarchy::with_fine`] builds it for the new matrix.
     smoothers: Vec<LevelSmoother>,
     coarse: CoarseSolve,
     work: Mutex<Vec<LevelWork>>,
@@ -1548,30 +1554,9 @@ pub(crate) mod tests {
         .unwrap()
     }
 
-    /// PCG iterations to ‖r‖ ≤ 1e-10 ‖b‖ with the multigrid preconditioner, for b = A x* with
-    /// x* containing all frequencies; also checks the true residual and the error.
+    /// [`iterations_with`] a new hierarchy of `a`.
     fn iterations(a: &CsrMatrix, opts: &AmgOptions) -> usize {
-        let n = a.n_rows();
-        let xs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin() + 1.0).collect();
-        let mut b = vec![0.0; n];
-        a.spmv(&xs, &mut b).unwrap();
-        let amg = Amg::new(a, opts).unwrap();
-        let mut x = vec![0.0; n];
-        let rep = pcg(
-            a,
-            &amg,
-            &b,
-            &mut x,
-            &PcgOptions {
-                rtol: 1e-10,
-                atol: 0.0,
-                max_iter: 200,
-            },
-        )
-        .unwrap();
-        let bn = dot(&b, &b).sqrt();
-        assert!(rep.residual_norm <= 2e-10 * bn, "{rep:?}");
-        rep.iterations
+        iterations_with(a, &Amg::new(a, opts).unwrap())
     }
 
     #[test]
@@ -1642,8 +1627,8 @@ pub(crate) mod tests {
         assert!(iterations(&all, &AmgOptions::default()) <= 2);
     }
 
-    /// PCG iterations to 1e-10 on a x = b (b from a smooth-plus-oscillatory x*) with `amg`,
-    /// checking the true residual.
+    /// PCG iterations to ‖r‖ ≤ 1e-10 ‖b‖ with the preconditioner `amg`, for b = A x* with x*
+    /// containing all frequencies; also checks the true residual.
     fn iterations_with(a: &CsrMatrix, amg: &Amg) -> usize {
         let n = a.n_rows();
         let xs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin() + 1.0).collect();
