@@ -429,6 +429,7 @@ impl<'a> DiscreteSystem<'a> {
 
     /// The local system of cell k: its unknowns, its number of interior unknowns, its local
     /// matrix and load.
+    #[inline]
     fn local(&self, k: usize) -> CellSystem<'_> {
         let (d, ni) = self.sym.dof_map.cell(k);
         let r = self.sym.dof_map.dof_ptr.range(k);

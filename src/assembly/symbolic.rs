@@ -88,6 +88,7 @@ impl DofMap {
     }
 
     /// The unknowns of cell k and its number of interior unknowns.
+    #[inline]
     pub fn cell(&self, k: usize) -> (&[u32], usize) {
         (&self.dofs[self.dof_ptr.range(k)], self.n_int[k] as usize)
     }
