@@ -33,17 +33,23 @@
 //! do `min` and `max` (unlike `f64::min`), so that a NaN anywhere is seen by validation instead of
 //! silently choosing a branch.
 //!
-//! ## Why not an expression crate
-//! The crates that were considered: evalexpr is AGPL from version 12 on (excluded); fasteval
-//! (MIT) and meval (MIT/Unlicense) have had no release since 2020 and 2017; exmex (MIT/Apache,
-//! maintained) builds operators as unary or binary functions over one operand type, so
-//! conditions are numbers and `if(c, a, b)` is not a native construct. What this module must
-//! guarantee, and what none of them gives as such: conditions typed apart from numbers, with
-//! the character position of every error; NaN propagated through comparisons, `if`, `min`
-//! and `max` (a NaN must reach validation, not silently choose a branch); and the same
-//! floating-point operations, in the same order, as the Rust closures of the built-in
-//! problems, which the regression tests pin bit for bit through `problems/*.toml`. A crate
-//! would need a layer re-checking all three; the parser here is about as large as that layer.
+//! ## Parsing: pest, with the grammar in `expr.pest`
+//! The text is parsed by [pest](https://pest.rs) (MIT/Apache-2.0, maintained) from the grammar
+//! `src/problem/expr.pest`, which fixes the precedence above; pest reports syntax errors at the
+//! furthest position it reached, with what it expected there. This module turns pest's tree into
+//! a typed tree: it resolves names, checks types (with the position of the offending operand),
+//! inlines definitions, folds constants and compiles the result for evaluation.
+//!
+//! Evaluation is this module's, not an expression crate's. The maintained, permissively licensed
+//! evaluator, exmex (MIT/Apache-2.0; evalexpr is AGPL from 12.0 on, fasteval and meval have had
+//! no release since 2020 and 2017), was tried on this language (exmex 0.20, `parse::<f64>`):
+//! `-x^2` at x = 3 gives +9 (unary minus binds tighter than `^`), `2^3^2` gives 64 (`^` is
+//! left-associative), `1e-10*x` is a parse error, `min(x, y, 3)` is a parse error, and its errors
+//! carry no position. Its value type for conditions (`a if c else b`) makes a comparison with a
+//! NaN operand false, so a NaN silently chooses a branch. A user's `-x^2` silently meaning x² is
+//! a wrong answer with exit status 0, which this project does not allow; so the grammar is
+//! pest's, and the semantics (the table above, NaN propagation, the floating-point operations
+//! of the built-in problems bit for bit) are written and tested here.
 //!
 //! An [`Expr`] keeps its tree (for inlining definitions and folding) and the tree compiled to
 //! nested closures, one per node, with constant and variable operands of arithmetic inlined:
@@ -593,17 +599,7 @@ impl Expr {
         scope: &Scope,
         expected: Option<Kind>,
     ) -> Result<Expr, ExprError> {
-        let tokens = lex(source)?;
-        let mut p = Parser {
-            tokens: &tokens,
-            at: 0,
-            scope,
-            end: source.chars().count() + 1,
-        };
-        let (root, kind, pos) = p.or()?;
-        if let Some(t) = tokens.get(p.at) {
-            return Err(syntax(t.pos, format!("unexpected {}", t.tok)));
-        }
+        let (root, kind, pos) = parse_tree(source, scope)?;
         if let Some(e) = expected {
             expect_kind(e, kind, pos)?;
         }
@@ -671,31 +667,23 @@ impl Expr {
 }
 
 // ------------------------------------------------------------------------------------------
-// Lexer
+// Parser: pest parses with the grammar of `expr.pest`; `Builder` turns the parse tree into a
+// typed tree, resolving names and folding constants. Each build returns the node, its type and
+// the 1-based character position where it starts.
 
-#[derive(Debug, Clone, PartialEq)]
-enum Tok {
-    Num(f64),
-    Ident(String),
-    /// Operators and punctuation: + - * / ^ ( ) , < <= > >= == != ! && ||
-    Op(&'static str),
+/// The pest parser of `expr.pest` and its rules (the enum `Rule`, generated, one variant per
+/// rule of the grammar).
+mod grammar {
+    #![allow(missing_docs)]
+    #[derive(pest_derive::Parser)]
+    #[grammar = "problem/expr.pest"]
+    pub(super) struct Grammar;
 }
+use grammar::{Grammar, Rule};
 
-impl fmt::Display for Tok {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Tok::Num(v) => write!(f, "number {v}"),
-            Tok::Ident(s) => write!(f, "'{s}'"),
-            Tok::Op(s) => write!(f, "'{s}'"),
-        }
-    }
-}
+type Pair<'i> = pest::iterators::Pair<'i, Rule>;
 
-struct Token {
-    tok: Tok,
-    /// 1-based character position.
-    pos: usize,
-}
+type Parsed = Result<(Node, Kind, usize), ExprError>;
 
 fn syntax(pos: usize, msg: String) -> ExprError {
     ExprError {
@@ -704,97 +692,63 @@ fn syntax(pos: usize, msg: String) -> ExprError {
     }
 }
 
-const OPS: [&str; 18] = [
-    "**", "<=", ">=", "==", "!=", "&&", "||", "+", "-", "*", "/", "^", "(", ")", ",", "<", ">", "!",
-];
-
-fn lex(src: &str) -> Result<Vec<Token>, ExprError> {
-    let chars: Vec<char> = src.chars().collect();
-    let mut out = Vec::new();
-    let mut i = 0;
-    while i < chars.len() {
-        let c = chars[i];
-        let pos = i + 1;
-        if c.is_whitespace() {
-            i += 1;
-        } else if c.is_ascii_digit()
-            || (c == '.' && chars.get(i + 1).is_some_and(char::is_ascii_digit))
-        {
-            let (v, n) = lex_number(&chars[i..], pos)?;
-            out.push(Token {
-                tok: Tok::Num(v),
-                pos,
-            });
-            i += n;
-        } else if c.is_ascii_alphabetic() || c == '_' {
-            let n = chars[i..]
-                .iter()
-                .take_while(|c| c.is_ascii_alphanumeric() || **c == '_')
-                .count();
-            let s: String = chars[i..i + n].iter().collect();
-            out.push(Token {
-                tok: Tok::Ident(s),
-                pos,
-            });
-            i += n;
-        } else {
-            let op = OPS.iter().find(|op| {
-                op.chars()
-                    .enumerate()
-                    .all(|(j, oc)| chars.get(i + j) == Some(&oc))
-            });
-            let Some(op) = op else {
-                return Err(syntax(pos, format!("unexpected character '{c}'")));
-            };
-            let op = if *op == "**" { "^" } else { op };
-            out.push(Token {
-                tok: Tok::Op(op),
-                pos,
-            });
-            i += if op == "^" && chars[i] == '*' {
-                2
-            } else {
-                op.len()
-            };
-        }
-    }
-    Ok(out)
+/// 1-based character position of the byte offset `byte` of `src`.
+fn char_position(src: &str, byte: usize) -> usize {
+    src.get(..byte).map_or(byte, |s| s.chars().count()) + 1
 }
 
-/// A decimal number `digits[.digits][(e|E)[+|-]digits]` at the start of `c`; returns its value
-/// and length.
-fn lex_number(c: &[char], pos: usize) -> Result<(f64, usize), ExprError> {
-    let digits = |from: usize| c[from..].iter().take_while(|c| c.is_ascii_digit()).count();
-    let mut n = digits(0);
-    if c.get(n) == Some(&'.') {
-        n += 1 + digits(n + 1);
-    }
-    if matches!(c.get(n), Some('e' | 'E')) {
-        let sign = usize::from(matches!(c.get(n + 1), Some('+' | '-')));
-        let d = digits(n + 1 + sign);
-        if d == 0 {
-            return Err(syntax(pos, "malformed exponent in number".into()));
+/// A pest error as an [`ExprError`]: what the grammar expected at the furthest position it
+/// reached, and what it found there.
+fn syntax_error(src: &str, e: &pest::error::Error<Rule>) -> ExprError {
+    use pest::error::{ErrorVariant, InputLocation};
+    let byte = match e.location {
+        InputLocation::Pos(p) => p,
+        InputLocation::Span((s, _)) => s,
+    };
+    let found = match src.get(byte..).and_then(|s| s.chars().next()) {
+        Some(c) => format!("'{c}'"),
+        None => "the end of the expression".into(),
+    };
+    let expected = match &e.variant {
+        ErrorVariant::ParsingError { positives, .. } => {
+            let mut what: Vec<&str> = positives.iter().map(|r| describe(*r)).collect();
+            what.dedup();
+            let mut seen = Vec::new();
+            what.retain(|w| {
+                !seen.contains(w) && {
+                    seen.push(*w);
+                    true
+                }
+            });
+            match what.split_last() {
+                Some((last, [])) => last.to_string(),
+                Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+                None => "something else".into(),
+            }
         }
-        n += 1 + sign + d;
-    }
-    let s: String = c[..n].iter().collect();
-    s.parse::<f64>()
-        .map(|v| (v, n))
-        .map_err(|_| syntax(pos, format!("malformed number '{s}'")))
+        ErrorVariant::CustomError { message } => message.clone(),
+    };
+    syntax(
+        char_position(src, byte),
+        format!("expected {expected}, found {found}"),
+    )
 }
 
-// ------------------------------------------------------------------------------------------
-// Parser: recursive descent, one function per precedence level; each returns the node, its
-// type and the position where it starts.
-
-type Parsed = Result<(Node, Kind, usize), ExprError>;
-
-struct Parser<'a> {
-    tokens: &'a [Token],
-    at: usize,
-    scope: &'a Scope,
-    /// Position just past the end (for "unexpected end").
-    end: usize,
+/// What a grammar rule is, for error messages.
+fn describe(r: Rule) -> &'static str {
+    match r {
+        Rule::EOI => "the end of the expression",
+        Rule::open => "'('",
+        Rule::close => "')'",
+        Rule::comma => "','",
+        Rule::or_op
+        | Rule::and_op
+        | Rule::cmp_op
+        | Rule::sum_op
+        | Rule::product_op
+        | Rule::pow_op => "an operator",
+        _ => "a number, a name or '('",
+    }
 }
 
 fn expect_kind(expected: Kind, found: Kind, pos: usize) -> Result<(), ExprError> {
@@ -822,92 +776,112 @@ fn b(n: Node) -> Box<Node> {
     Box::new(n)
 }
 
-impl Parser<'_> {
-    fn peek(&self) -> Option<&Tok> {
-        self.tokens.get(self.at).map(|t| &t.tok)
-    }
+/// The longest expression accepted, in characters: it bounds the depth of the tree (a chain
+/// of n operators is n deep), which the recursive folding, compilation and evaluation walk.
+pub const MAX_LENGTH: usize = 4096;
+/// The deepest nesting of parentheses accepted: it bounds the recursion of the parser.
+pub const MAX_NESTING: usize = 64;
 
-    fn pos(&self) -> usize {
-        self.tokens.get(self.at).map_or(self.end, |t| t.pos)
+/// An error if `source` is longer than [`MAX_LENGTH`] or nests parentheses deeper than
+/// [`MAX_NESTING`] (so that no input can exhaust the stack).
+fn check_size(source: &str) -> Result<(), ExprError> {
+    let n = source.chars().count();
+    if n > MAX_LENGTH {
+        return Err(syntax(
+            MAX_LENGTH + 1,
+            format!("the expression has {n} characters, more than the {MAX_LENGTH} accepted"),
+        ));
     }
-
-    /// Consumes the operator `op` (or the keyword `op`) if it comes next.
-    fn eat(&mut self, ops: &[&str]) -> Option<&'static str> {
-        let found = match self.peek() {
-            Some(Tok::Op(o)) => ops.iter().find(|x| *x == o).map(|_| *o),
-            Some(Tok::Ident(w)) => match w.as_str() {
-                "and" if ops.contains(&"&&") => Some("&&"),
-                "or" if ops.contains(&"||") => Some("||"),
-                "not" if ops.contains(&"!") => Some("!"),
-                _ => None,
-            },
-            _ => None,
-        };
-        if found.is_some() {
-            self.at += 1;
+    let mut depth = 0usize;
+    for (i, c) in source.chars().enumerate() {
+        match c {
+            '(' => depth += 1,
+            ')' => depth = depth.saturating_sub(1),
+            _ => {}
         }
-        found
-    }
-
-    fn expect(&mut self, op: &'static str) -> Result<(), ExprError> {
-        if self.eat(&[op]).is_some() {
-            return Ok(());
+        if depth > MAX_NESTING {
+            return Err(syntax(
+                i + 1,
+                format!("parentheses nested more than {MAX_NESTING} deep"),
+            ));
         }
-        let found = match self.tokens.get(self.at) {
-            Some(t) => t.tok.to_string(),
-            None => "the end of the expression".into(),
-        };
-        Err(syntax(
-            self.pos(),
-            format!("expected '{op}', found {found}"),
-        ))
+    }
+    Ok(())
+}
+
+/// Parses `source` in `scope` into a typed tree.
+fn parse_tree(source: &str, scope: &Scope) -> Parsed {
+    use pest::Parser as _;
+    check_size(source)?;
+    let mut pairs =
+        Grammar::parse(Rule::expression, source).map_err(|e| syntax_error(source, &e))?;
+    let top = pairs.next().and_then(|p| p.into_inner().next());
+    let Some(top) = top else {
+        return Err(syntax(1, "empty expression".into()));
+    };
+    Builder { scope, source }.build(top)
+}
+
+/// Builds typed trees from pest pairs.
+struct Builder<'a> {
+    scope: &'a Scope,
+    source: &'a str,
+}
+
+impl Builder<'_> {
+    /// The first operand of `it`, built.
+    fn first(&self, it: &mut pest::iterators::Pairs<Rule>) -> Parsed {
+        let first = it
+            .next()
+            .ok_or_else(|| syntax(1, "missing operand".into()))?;
+        self.build(first)
     }
 
-    fn or(&mut self) -> Parsed {
-        self.logical("||", Self::and, Node::Or)
+    fn pos(&self, p: &Pair) -> usize {
+        char_position(self.source, p.as_span().start())
     }
 
-    fn and(&mut self) -> Parsed {
-        self.logical("&&", Self::not, Node::And)
+    fn build(&self, p: Pair) -> Parsed {
+        match p.as_rule() {
+            Rule::disjunction => self.logical(p, Node::Or),
+            Rule::conjunction => self.logical(p, Node::And),
+            Rule::negation => {
+                self.prefixed(p, Kind::Condition, false, |_, a| Node::Not(b(a)).folded())
+            }
+            Rule::comparison => self.comparison(p),
+            Rule::sum | Rule::product => self.arithmetic(p),
+            Rule::signed => self.prefixed(p, Kind::Number, true, |op, a| match op {
+                "-" => Node::Neg(b(a)).folded(),
+                _ => a,
+            }),
+            Rule::power => self.power(p),
+            Rule::primary => self.primary(p),
+            r => Err(syntax(self.pos(&p), format!("unexpected {r:?}"))),
+        }
     }
 
-    /// `operand (op operand)*`, left-associative, for a logical operator `op` whose operands
-    /// (parsed by `operand`) are conditions.
-    fn logical(
-        &mut self,
-        op: &'static str,
-        operand: fn(&mut Self) -> Parsed,
-        node: fn(Box<Node>, Box<Node>) -> Node,
-    ) -> Parsed {
-        let (mut a, k, pos) = operand(self)?;
-        while self.eat(&[op]).is_some() {
-            let p = self.pos();
+    /// `operand (op operand)*`, left-associative, for a logical operator whose operands are
+    /// conditions.
+    fn logical(&self, p: Pair, node: fn(Box<Node>, Box<Node>) -> Node) -> Parsed {
+        let mut it = p.into_inner();
+        let (mut a, k, pos) = self.first(&mut it)?;
+        while let (Some(_op), Some(operand)) = (it.next(), it.next()) {
             expect_kind(Kind::Condition, k, pos)?;
-            let (c, kc, _) = operand(self)?;
-            expect_kind(Kind::Condition, kc, p)?;
+            let (c, kc, pc) = self.build(operand)?;
+            expect_kind(Kind::Condition, kc, pc)?;
             a = node(b(a), b(c)).folded();
         }
         Ok((a, k, pos))
     }
 
-    fn not(&mut self) -> Parsed {
-        let pos = self.pos();
-        if self.eat(&["!"]).is_some() {
-            let p = self.pos();
-            let (a, k, _) = self.not()?;
-            expect_kind(Kind::Condition, k, p)?;
-            return Ok((Node::Not(b(a)).folded(), Kind::Condition, pos));
-        }
-        self.comparison()
-    }
-
-    fn comparison(&mut self) -> Parsed {
-        let (a, k, pos) = self.sum()?;
-        let op = match self.eat(&["<", "<=", ">", ">=", "==", "!="]) {
-            Some(op) => op,
-            None => return Ok((a, k, pos)),
+    /// `sum (cmp sum)?`; a second comparison operator is an error.
+    fn comparison(&self, p: Pair) -> Parsed {
+        let mut it = p.into_inner();
+        let (a, k, pos) = self.first(&mut it)?;
+        let (Some(op), Some(second)) = (it.next(), it.next()) else {
+            return Ok((a, k, pos));
         };
-        let cmp = match op {
+        let cmp = match op.as_str() {
             "<" => Cmp::Lt,
             "<=" => Cmp::Le,
             ">" => Cmp::Gt,
@@ -916,70 +890,80 @@ impl Parser<'_> {
             _ => Cmp::Ne,
         };
         expect_kind(Kind::Number, k, pos)?;
-        let p = self.pos();
-        let (c, kc, _) = self.sum()?;
-        expect_kind(Kind::Number, kc, p)?;
-        if let Some(Tok::Op(o @ ("<" | "<=" | ">" | ">=" | "==" | "!="))) = self.peek() {
+        let (c, kc, pc) = self.build(second)?;
+        expect_kind(Kind::Number, kc, pc)?;
+        if let Some(chained) = it.next() {
             return Err(syntax(
-                self.pos(),
-                format!("comparisons cannot be chained ('{o}'): use 'and'"),
+                self.pos(&chained),
+                format!(
+                    "comparisons cannot be chained ('{}'): use 'and'",
+                    chained.as_str()
+                ),
             ));
         }
         Ok((Node::Cmp(cmp, b(a), b(c)).folded(), Kind::Condition, pos))
     }
 
-    /// Left-associative binary levels on numbers.
-    fn binary(&mut self, ops: &[&str], next: fn(&mut Self) -> Parsed, f: fn(&str) -> F2) -> Parsed {
-        let (mut a, k, pos) = next(self)?;
-        while let Some(op) = self.eat(ops) {
+    /// Left-associative `+ -` or `* /` on numbers.
+    fn arithmetic(&self, p: Pair) -> Parsed {
+        let mut it = p.into_inner();
+        let (mut a, k, pos) = self.first(&mut it)?;
+        while let (Some(op), Some(operand)) = (it.next(), it.next()) {
             expect_kind(Kind::Number, k, pos)?;
-            let p = self.pos();
-            let (c, kc, _) = next(self)?;
-            expect_kind(Kind::Number, kc, p)?;
-            a = Node::Call2(f(op), b(a), b(c)).folded();
+            let (c, kc, pc) = self.build(operand)?;
+            expect_kind(Kind::Number, kc, pc)?;
+            let f = match op.as_str() {
+                "+" => F2::Add,
+                "-" => F2::Sub,
+                "*" => F2::Mul,
+                _ => F2::Div,
+            };
+            a = Node::Call2(f, b(a), b(c)).folded();
         }
         Ok((a, k, pos))
     }
 
-    fn sum(&mut self) -> Parsed {
-        self.binary(&["+", "-"], Self::product, |op| {
-            if op == "+" { F2::Add } else { F2::Sub }
-        })
-    }
-
-    fn product(&mut self) -> Parsed {
-        self.binary(&["*", "/"], Self::unary, |op| {
-            if op == "*" { F2::Mul } else { F2::Div }
-        })
-    }
-
-    fn unary(&mut self) -> Parsed {
-        let pos = self.pos();
-        match self.eat(&["-", "+"]) {
-            Some(op) => {
-                let (a, k, _) = self.unary()?;
-                expect_kind(Kind::Number, k, pos)?;
-                let n = if op == "-" {
-                    Node::Neg(b(a)).folded()
-                } else {
-                    a
-                };
-                Ok((n, Kind::Number, pos))
+    /// `op* operand` for the prefix operators `not` (`negation`) and signs (`signed`): they
+    /// apply from the innermost (last) out, to an operand of type `needs`; a type error is
+    /// reported at the operand, or at the last operator if `at_operator`.
+    fn prefixed(
+        &self,
+        p: Pair,
+        needs: Kind,
+        at_operator: bool,
+        apply: fn(&str, Node) -> Node,
+    ) -> Parsed {
+        let pos = self.pos(&p);
+        let mut ops = Vec::new();
+        let mut operand = None;
+        for q in p.into_inner() {
+            match q.as_rule() {
+                Rule::not_op | Rule::sign => ops.push((q.as_str(), self.pos(&q))),
+                _ => operand = Some(q),
             }
-            None => self.power(),
         }
+        let operand = operand.ok_or_else(|| syntax(pos, "missing operand".into()))?;
+        let (mut a, k, pc) = self.build(operand)?;
+        let Some(&(_, last)) = ops.last() else {
+            return Ok((a, k, pc));
+        };
+        expect_kind(needs, k, if at_operator { last } else { pc })?;
+        for &(op, _) in ops.iter().rev() {
+            a = apply(op, a);
+        }
+        Ok((a, needs, pos))
     }
 
-    fn power(&mut self) -> Parsed {
-        let (a, k, pos) = self.primary()?;
-        if self.eat(&["^"]).is_none() {
+    /// `primary (^ signed)?`; an integer constant exponent becomes `powi`.
+    fn power(&self, p: Pair) -> Parsed {
+        let mut it = p.into_inner();
+        let (a, k, pos) = self.first(&mut it)?;
+        let (Some(_op), Some(exponent)) = (it.next(), it.next()) else {
             return Ok((a, k, pos));
-        }
+        };
         expect_kind(Kind::Number, k, pos)?;
-        let p = self.pos();
-        // right-associative; the exponent may carry a sign: 2^-x^2 = 2^(-(x^2))
-        let (e, ke, _) = self.unary()?;
-        expect_kind(Kind::Number, ke, p)?;
+        let (e, ke, pe) = self.build(exponent)?;
+        expect_kind(Kind::Number, ke, pe)?;
         let node = match e {
             Node::Const(n) if n.fract() == 0.0 && n.abs() <= 1024.0 => Node::PowI(b(a), n as i32),
             e => Node::Call2(F2::Pow, b(a), b(e)),
@@ -987,29 +971,38 @@ impl Parser<'_> {
         Ok((node.folded(), Kind::Number, pos))
     }
 
-    fn primary(&mut self) -> Parsed {
-        let pos = self.pos();
-        let Some(tok) = self.peek().cloned() else {
-            return Err(syntax(pos, "unexpected end of the expression".into()));
-        };
-        self.at += 1;
-        match tok {
-            Tok::Num(v) => Ok((Node::Const(v), Kind::Number, pos)),
-            Tok::Op("(") => {
-                let (a, k, _) = self.or()?;
-                self.expect(")")?;
+    /// A number, a call, a name or a parenthesised expression (which starts at its '(').
+    fn primary(&self, p: Pair) -> Parsed {
+        let pos = self.pos(&p);
+        let mut it = p.into_inner();
+        let q = it
+            .next()
+            .ok_or_else(|| syntax(pos, "missing operand".into()))?;
+        match q.as_rule() {
+            Rule::number => {
+                let s = q.as_str();
+                let v = s
+                    .parse::<f64>()
+                    .map_err(|_| syntax(pos, format!("malformed number '{s}'")))?;
+                Ok((Node::Const(v), Kind::Number, pos))
+            }
+            Rule::malformed => Err(syntax(
+                pos,
+                format!("malformed exponent in number '{}'", q.as_str()),
+            )),
+            Rule::name => self.name(q.as_str(), pos),
+            Rule::call => self.call(q, pos),
+            _ => {
+                let inner = it
+                    .next()
+                    .ok_or_else(|| syntax(pos, "missing operand".into()))?;
+                let (a, k, _) = self.build(inner)?;
                 Ok((a, k, pos))
             }
-            Tok::Ident(name) if self.peek() == Some(&Tok::Op("(")) => {
-                self.at += 1;
-                self.call(&name, pos)
-            }
-            Tok::Ident(name) => self.name(&name, pos),
-            Tok::Op(o) => Err(syntax(pos, format!("unexpected '{o}'"))),
         }
     }
 
-    fn name(&mut self, name: &str, pos: usize) -> Parsed {
+    fn name(&self, name: &str, pos: usize) -> Parsed {
         match self.scope.names.get(name) {
             Some(Binding::Var(i)) => Ok((Node::Var(*i), Kind::Number, pos)),
             Some(Binding::Value(n, k)) => Ok((n.clone(), *k, pos)),
@@ -1023,31 +1016,9 @@ impl Parser<'_> {
         }
     }
 
-    /// The arguments of a call, after its '(' : (node, type, position) of each.
-    fn arguments(&mut self) -> Result<Vec<(Node, Kind, usize)>, ExprError> {
-        let mut args = Vec::new();
-        if self.eat(&[")"]).is_some() {
-            return Ok(args);
-        }
-        loop {
-            args.push(self.or()?);
-            if self.eat(&[")"]).is_some() {
-                return Ok(args);
-            }
-            if self.eat(&[","]).is_none() {
-                let found = match self.tokens.get(self.at) {
-                    Some(t) => t.tok.to_string(),
-                    None => "the end of the expression".into(),
-                };
-                return Err(syntax(
-                    self.pos(),
-                    format!("expected ',' or ')', found {found}"),
-                ));
-            }
-        }
-    }
-
-    fn call(&mut self, name: &str, pos: usize) -> Parsed {
+    fn call(&self, p: Pair, pos: usize) -> Parsed {
+        let mut it = p.into_inner();
+        let name = it.next().map(|n| n.as_str()).unwrap_or_default();
         let (f1, f2) = (F1::from_name(name), fun2(name));
         if f1.is_none() && f2.is_none() && name != "if" {
             return Err(ExprError {
@@ -1055,7 +1026,10 @@ impl Parser<'_> {
                 kind: ExprErrorKind::UnknownFunction(name.to_string()),
             });
         }
-        let args = self.arguments()?;
+        let args = it
+            .filter(|q| !matches!(q.as_rule(), Rule::open | Rule::close | Rule::comma))
+            .map(|q| self.build(q))
+            .collect::<Result<Vec<_>, _>>()?;
         let found = args.len();
         let arity = |expected: &'static str| ExprError {
             position: pos,
@@ -1244,6 +1218,30 @@ mod tests {
         assert_eq!(err("").position, 1);
         assert_eq!(err("x y").position, 3);
         assert!(err("x y").to_string().contains("at character 3"));
+        assert_eq!(err("1e+").position, 1);
+        assert!(err("1e+").to_string().contains("malformed exponent"));
+        assert!(
+            err("(x + 1")
+                .to_string()
+                .contains("expected an operator or ')'")
+        );
+        assert!(err("x $ 2").to_string().contains("found '$'"));
+        assert_eq!(err("x < 1 andy").position, 7);
+        assert_eq!(err("x or").position, 5);
+        assert_eq!(err("not x").position, 5);
+        assert_eq!(err("1 + and").position, 5);
+        assert_eq!(err("é + 1").position, 1);
+        // sizes that could exhaust the stack are refused, with a position
+        let deep = format!("{}x{}", "(".repeat(100), ")".repeat(100));
+        assert_eq!(err(&deep).position, MAX_NESTING + 1);
+        assert_eq!(err(&"-x".repeat(3000)).position, MAX_LENGTH + 1);
+        let nested = format!("{}x{}", "(".repeat(MAX_NESTING), ")".repeat(MAX_NESTING));
+        assert!(Expr::parse(&nested, &xy()).is_ok());
+        let chain = format!("x{}", " + x".repeat((MAX_LENGTH - 1) / 4));
+        let e = Expr::parse(&chain, &xy()).unwrap();
+        assert_eq!(e.eval(&[1.0, 0.0]), (1 + (MAX_LENGTH - 1) / 4) as f64);
+        let signs = format!("{}x", "-".repeat(MAX_LENGTH - 1));
+        assert_eq!(Expr::parse(&signs, &xy()).unwrap().eval(&[1.0, 0.0]), -1.0);
         let c = Expr::parse_condition("x + 1", &xy()).unwrap_err();
         assert!(
             c.to_string()
