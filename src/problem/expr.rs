@@ -336,6 +336,26 @@ impl Node {
         }
     }
 
+    /// The depth of the tree (a leaf is 1), computed without recursion.
+    fn depth(&self) -> usize {
+        let mut deepest = 0;
+        let mut stack = vec![(self, 1)];
+        while let Some((n, d)) = stack.pop() {
+            deepest = deepest.max(d);
+            match n {
+                Node::Const(_) | Node::Var(_) => {}
+                Node::Neg(a) | Node::Not(a) | Node::Call1(_, a) | Node::PowI(a, _) => {
+                    stack.push((a, d + 1))
+                }
+                Node::Call2(_, a, b) | Node::Cmp(_, a, b) | Node::And(a, b) | Node::Or(a, b) => {
+                    stack.extend([(&**a, d + 1), (&**b, d + 1)])
+                }
+                Node::If(c, a, b) => stack.extend([(&**c, d + 1), (&**a, d + 1), (&**b, d + 1)]),
+            }
+        }
+        deepest
+    }
+
     fn is_constant(&self) -> bool {
         match self {
             Node::Const(_) => true,
@@ -782,6 +802,10 @@ pub const MAX_LENGTH: usize = 4096;
 /// The deepest nesting of parentheses accepted: it bounds the recursion of the parser.
 pub const MAX_NESTING: usize = 64;
 
+/// The deepest tree accepted, definitions inlined: it bounds the recursion of compilation and
+/// evaluation (a definition used in a definition adds its depth).
+pub const MAX_DEPTH: usize = 2048;
+
 /// An error if `source` is longer than [`MAX_LENGTH`] or nests parentheses deeper than
 /// [`MAX_NESTING`] (so that no input can exhaust the stack).
 fn check_size(source: &str) -> Result<(), ExprError> {
@@ -819,7 +843,18 @@ fn parse_tree(source: &str, scope: &Scope) -> Parsed {
     let Some(top) = top else {
         return Err(syntax(1, "empty expression".into()));
     };
-    Builder { scope, source }.build(top)
+    let (root, kind, pos) = Builder { scope, source }.build(top)?;
+    let depth = root.depth();
+    if depth > MAX_DEPTH {
+        return Err(syntax(
+            1,
+            format!(
+                "the expression is {depth} operations deep (definitions inlined), more than \
+                 the {MAX_DEPTH} accepted"
+            ),
+        ));
+    }
+    Ok((root, kind, pos))
 }
 
 /// Builds typed trees from pest pairs.
@@ -1240,7 +1275,19 @@ mod tests {
         let chain = format!("x{}", " + x".repeat((MAX_LENGTH - 1) / 4));
         let e = Expr::parse(&chain, &xy()).unwrap();
         assert_eq!(e.eval(&[1.0, 0.0]), (1 + (MAX_LENGTH - 1) / 4) as f64);
-        let signs = format!("{}x", "-".repeat(MAX_LENGTH - 1));
+        // a definition used in a definition adds its depth
+        let mut s = xy();
+        let mut def = String::from("x");
+        for k in 0..4 {
+            let e = Expr::parse(&format!("{def}{}", " + x".repeat(600)), &s);
+            if k < 3 {
+                s.define(&format!("d{k}"), &e.unwrap()).unwrap();
+                def = format!("d{k}");
+            } else {
+                assert!(e.unwrap_err().to_string().contains("more than the 2048"));
+            }
+        }
+        let signs = format!("{}x", "-".repeat(MAX_DEPTH - 1));
         assert_eq!(Expr::parse(&signs, &xy()).unwrap().eval(&[1.0, 0.0]), -1.0);
         let c = Expr::parse_condition("x + 1", &xy()).unwrap_err();
         assert!(
