@@ -30,7 +30,7 @@
 //! | X_D | the discrete unknowns | [`scheme::GradientDiscretisation::n_unknowns`] |
 //! | Π_D u | function reconstruction (HMM: u_K on K; P1: the interpolant) | [`scheme::GradientDiscretisation::cell_values`] |
 //! | ∇_D u | gradient reconstruction (HMM: ∇_K u + stabilisation on co(σ, x_K)) | [`scheme::GradientDiscretisation::local_matrix`], [`scheme::GradientDiscretisation::cell_gradients`] |
-//! | T_D u | trace reconstruction (HMM: u_σ on σ; P1: the trace) | [`scheme::GradientDiscretisation::edge_trace_dofs`] |
+//! | T_D u | trace reconstruction (HMM: u_σ on σ; P1: the trace) | [`scheme::GradientDiscretisation::face_trace_dofs`] |
 //! | ∇_K u | (1/\|K\|) Σ_σ \|σ\| (u_σ − u_K) n_{K,σ} | [`scheme::hmm`] |
 //! | R_{K,σ}(u) | u_σ − u_K − ∇_K u·(x_σ − x_K) | [`scheme::hmm`] |
 //! | B_K | α² diag(\|σ\| A_K n_{K,σ}·n_{K,σ} / d_{K,σ}) | [`scheme::Hmm::w_matrix`] |

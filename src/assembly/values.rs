@@ -82,7 +82,7 @@ impl ProblemValues {
         for &e in mesh.boundary_edges() {
             let xs = mesh.edge_midpoint(e);
             let kind = (problem.boundary)(xs, mesh.edge_tag(e));
-            scheme.edge_trace_dofs(e, &mut tr);
+            scheme.face_trace_dofs(e, &mut tr);
             match kind {
                 BoundaryKind::Dirichlet => {
                     for t in &tr {

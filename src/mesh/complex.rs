@@ -65,6 +65,27 @@ pub trait CellComplex<const D: usize>: Sync {
     }
 }
 
+/// A mesh with vertices, for output: cell values averaged at the vertices (the vertex values
+/// of a scheme whose unknowns live on cells and faces, for plots and VTU files).
+pub trait VertexAverage {
+    /// At each vertex, the average of the cell values `cv` of the cells around it, weighted by
+    /// their measures.
+    fn cell_average_at_vertices(&self, cv: &[f64]) -> Vec<f64>;
+}
+
+impl VertexAverage for PolyMesh {
+    fn cell_average_at_vertices(&self, cv: &[f64]) -> Vec<f64> {
+        let (ptr, ids) = self.vertex_cells();
+        (0..self.n_vertices())
+            .map(|v| {
+                let cells = &ids[ptr[v]..ptr[v + 1]];
+                let w: f64 = cells.iter().map(|&k| self.measure(k)).sum();
+                cells.iter().map(|&k| self.measure(k) * cv[k]).sum::<f64>() / w
+            })
+            .collect()
+    }
+}
+
 impl CellComplex<2> for PolyMesh {
     fn n_cells(&self) -> usize {
         PolyMesh::n_cells(self)

@@ -37,12 +37,18 @@
 //! local form ([`crate::scheme::hmm::local_form`]) is written against it and tested on a 3-D
 //! mesh of boxes (the patch test). The assembler, the active-set and projected Gauss–Seidel
 //! solvers and the linear algebra never read coordinates (they see unknowns, local matrices
-//! and a quadratic energy). What is still 2-D outside this module: the point and tensor types
-//! of the problem data and of [`GradientDiscretisation`](crate::scheme::GradientDiscretisation)
-//! (`[f64; 2]`, `[[f64; 2]; 2]`), the trait's `mesh()` (a `PolyMesh`, used for tags, boundary
-//! edges and output), P1 and Crouzeix–Raviart (triangles), the VTU writer (polygons) and the
-//! expression variables (x, y). A 3-D mesh type implements `CellComplex<3>`; the scheme trait
-//! then gains the dimension as a const parameter in those signatures.
+//! and a quadratic energy). The scheme trait
+//! [`GradientDiscretisation<M, D>`](crate::scheme::GradientDiscretisation) is generic over the
+//! mesh type `M: CellComplex<D>` and the dimension (points and gradients `[f64; D]`, tensors
+//! `[[f64; D]; D]`), with defaults `PolyMesh` and 2; its tests implement it in 3-D (HMM on
+//! boxes, `scheme/hmm.rs`) and solve a 3-D patch test through it. What is still 2-D above the
+//! scheme layer: the problem data (closures of `[f64; 2]`, 2×2 tensors, the expression
+//! variables x and y), the assembler's boundary conditions and data evaluation (instantiated
+//! at `PolyMesh`: cell tags, boundary edges and their tags, edge midpoints), P1 and
+//! Crouzeix–Raviart (triangles), the warm start (planar agglomeration) and the VTU writer
+//! (polygons). A 3-D mesh type implements `CellComplex<3>` plus those tags and boundary faces;
+//! the problem and the assembler then gain the dimension as a const parameter, as the scheme
+//! trait has.
 
 pub mod agglomerate;
 pub(crate) mod buckets;

@@ -93,7 +93,7 @@ impl super::triangle::TriangleScheme for Cr<'_> {
         let third = self.mesh.measure(k) / 3.0;
         *b = DVector::from_fn(3, |i, _| third * f(self.sub_centroid(k, i)));
     }
-    fn edge_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
+    fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
         super::edge_unknown_trace(self.mesh, e, out);
     }
     fn vertex_values(&self, u: &[f64]) -> Vec<f64> {
@@ -231,7 +231,7 @@ mod tests {
         }
         let mut tr = Vec::new();
         let e = m.boundary_edges()[0];
-        s.edge_trace_dofs(e, &mut tr);
+        s.face_trace_dofs(e, &mut tr);
         assert_eq!(
             tr,
             vec![PointDof {

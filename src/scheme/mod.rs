@@ -23,47 +23,59 @@ pub mod hmm;
 pub mod p1;
 mod triangle;
 
-use crate::mesh::{Point, PolyMesh};
+use crate::mesh::PolyMesh;
+use crate::mesh::complex::{CellComplex, Vector};
 use nalgebra::{DMatrix, DVector};
 
 pub use cr::Cr;
 pub use hmm::Hmm;
 pub use p1::P1;
 
-/// A 2×2 diffusion tensor (row-major), symmetric positive definite.
-pub type Tensor = [[f64; 2]; 2];
+/// A D×D diffusion tensor (row-major), symmetric positive definite; 2×2 unless said.
+pub type Tensor<const D: usize = 2> = [[f64; D]; D];
 
 /// An unknown on which a barrier acts or a boundary value is imposed: the unknown, the point
 /// where data is evaluated (x_K, x_σ or a vertex) and the measure it carries (|K|, |σ|, or the
 /// lumped measure of a vertex).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PointDof {
+pub struct PointDof<const D: usize = 2> {
     /// Global unknown index.
     pub dof: usize,
     /// Where data (barrier, Dirichlet value) is evaluated.
-    pub point: Point,
+    pub point: Vector<D>,
     /// Measure attached to the unknown (used to scale multipliers).
     pub measure: f64,
 }
 
-/// The mesh entity an unknown lives on (its value is attached to that vertex, edge or cell, for
+/// The mesh entity an unknown lives on (its value is attached to that vertex, face or cell, for
 /// output and post-processing).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
 pub enum Entity {
     /// A mesh vertex.
     Vertex(usize),
-    /// A mesh edge (face).
+    /// A mesh face: an edge in 2-D (the name of the 2-D meshes this crate reads), a polygon
+    /// in 3-D.
     Edge(usize),
     /// A mesh cell.
     Cell(usize),
 }
 
 /// The interface every gradient discretisation implements. See the module docs.
-pub trait GradientDiscretisation: Sync {
+///
+/// A scheme is defined on a mesh type `M` of dimension `D`; both default to the planar
+/// polygonal meshes of this crate (`PolyMesh`, D = 2), on which every registered scheme and
+/// everything above this layer (assembly, solvers, outputs) works today. Nothing in the
+/// trait assumes D = 2: points and gradients are `Vector<D>`, tensors `Tensor<D>`, and the
+/// mesh is any [`CellComplex<D>`] (cells, faces, measures, centres, normals). Its tests
+/// implement it in 3-D (HMM on boxes, solved by a small dense assembly: see `hmm.rs`).
+pub trait GradientDiscretisation<M: ?Sized = PolyMesh, const D: usize = 2>: Sync
+where
+    M: CellComplex<D>,
+{
     /// Short name ("hmm", "p1").
     fn name(&self) -> &'static str;
     /// The mesh.
-    fn mesh(&self) -> &PolyMesh;
+    fn mesh(&self) -> &M;
     /// Number of skeleton unknowns (numbered first).
     fn n_skeleton(&self) -> usize;
     /// Number of interior (statically condensed) unknowns.
@@ -72,7 +84,7 @@ pub trait GradientDiscretisation: Sync {
     fn n_unknowns(&self) -> usize {
         self.n_skeleton() + self.n_interior()
     }
-    /// The mesh entity of unknown `dof` (HMM: edges then cells; P1: vertices).
+    /// The mesh entity of unknown `dof` (HMM: faces then cells; P1: vertices).
     fn dof_entity(&self, dof: usize) -> Entity;
     /// Number of interior unknowns of cell `k` (they come first in [`Self::local_dofs`]).
     fn n_local_interior(&self, k: usize) -> usize;
@@ -80,34 +92,24 @@ pub trait GradientDiscretisation: Sync {
     fn local_dofs(&self, k: usize, dofs: &mut Vec<usize>);
     /// Local matrix of cell `k` for the constant tensor `a` = A_K, in the order of `local_dofs`.
     /// `m` is resized as needed.
-    fn local_matrix(&self, k: usize, a: &Tensor, m: &mut DMatrix<f64>);
+    fn local_matrix(&self, k: usize, a: &Tensor<D>, m: &mut DMatrix<f64>);
     /// Local load ∫_K f Π_D v (with the scheme's quadrature), in the order of `local_dofs`.
-    fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>);
-    /// The unknowns carrying the trace T_D on boundary edge `e`, with the point where boundary
-    /// data is evaluated and the weight of each in ∫_σ g T_D v (the scheme's quadrature on σ,
-    /// with g evaluated at x_σ). Clears and fills `out`.
-    fn edge_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>);
+    fn local_load(&self, k: usize, f: &dyn Fn(Vector<D>) -> f64, b: &mut DVector<f64>);
+    /// The unknowns carrying the trace T_D on boundary face `e` (an edge in 2-D), with the
+    /// point where boundary data is evaluated and the weight of each in ∫_σ g T_D v (the
+    /// scheme's quadrature on σ, with g evaluated at x_σ). Clears and fills `out`.
+    fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof<D>>);
     /// The unknowns on which an obstacle barrier acts (HMM: cells; P1: vertices), with their
     /// points and measures. Unknowns that turn out to be Dirichlet are removed by the caller.
-    fn obstacle_dofs(&self) -> Vec<PointDof>;
+    fn obstacle_dofs(&self) -> Vec<PointDof<D>>;
     /// Π_D u evaluated at the cell centroids x_K.
     fn cell_values(&self, u: &[f64]) -> Vec<f64>;
     /// A cell-wise gradient: HMM the consistent gradient ∇_K u, P1 the exact (constant) gradient.
-    fn cell_gradients(&self, u: &[f64]) -> Vec<Point>;
+    fn cell_gradients(&self, u: &[f64]) -> Vec<Vector<D>>;
     /// Values at the mesh vertices for plotting and VTU output (P1: the nodal values; HMM:
-    /// area-weighted averages of the adjacent cell values).
-    fn vertex_values(&self, u: &[f64]) -> Vec<f64> {
-        let mesh = self.mesh();
-        let cv = self.cell_values(u);
-        let (ptr, ids) = mesh.vertex_cells();
-        (0..mesh.n_vertices())
-            .map(|v| {
-                let cells = &ids[ptr[v]..ptr[v + 1]];
-                let w: f64 = cells.iter().map(|&k| mesh.measure(k)).sum();
-                cells.iter().map(|&k| mesh.measure(k) * cv[k]).sum::<f64>() / w
-            })
-            .collect()
-    }
+    /// measure-weighted averages of the adjacent cell values,
+    /// [`VertexAverage`](crate::mesh::complex::VertexAverage)).
+    fn vertex_values(&self, u: &[f64]) -> Vec<f64>;
 }
 
 /// The trace of the schemes with one unknown per edge, numbered like the edges (HMM,

@@ -61,7 +61,7 @@ impl super::triangle::TriangleScheme for P1<'_> {
         let area = self.mesh.measure(k);
         *b = DVector::from_fn(3, |i, _| area / 12.0 * (s + fv[i]));
     }
-    fn edge_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
+    fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
         out.clear();
         let half = 0.5 * self.mesh.edge_measure(e);
         for v in self.mesh.edge_vertices(e) {

@@ -67,8 +67,8 @@ pub(super) trait TriangleScheme: Sync {
     fn basis_gradients(&self, k: usize) -> [Point; 3];
     /// [`GradientDiscretisation::local_load`].
     fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>);
-    /// [`GradientDiscretisation::edge_trace_dofs`].
-    fn edge_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>);
+    /// [`GradientDiscretisation::face_trace_dofs`].
+    fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>);
     /// [`GradientDiscretisation::vertex_values`].
     fn vertex_values(&self, u: &[f64]) -> Vec<f64>;
     /// The mesh (triangles only).
@@ -116,8 +116,8 @@ impl<T: TriangleScheme> GradientDiscretisation for T {
     fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>) {
         TriangleScheme::local_load(self, k, f, b)
     }
-    fn edge_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
-        TriangleScheme::edge_trace_dofs(self, e, out)
+    fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
+        TriangleScheme::face_trace_dofs(self, e, out)
     }
     fn obstacle_dofs(&self) -> Vec<PointDof> {
         let (m, on) = (TriangleScheme::mesh(self), T::UNKNOWNS);

@@ -38,7 +38,7 @@ pub fn build(system: &DiscreteSystem, problem: &Problem) -> crate::Result<Option
     match c.kind {
         ConstraintKind::Obstacle => {
             for &e in mesh.boundary_edges() {
-                scheme.edge_trace_dofs(e, &mut tr);
+                scheme.face_trace_dofs(e, &mut tr);
                 checks.extend(tr.iter().filter(|t| dir[t.dof].is_some()));
             }
         }
