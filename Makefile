@@ -7,7 +7,7 @@ FVCA5_MESHES ?=
 PYTHON := /usr/bin/python3
 REFDIR := replication/results/reference
 
-.PHONY: all build test test-external fuzz lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-amg clean
+.PHONY: all build test test-external fuzz lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-amg bench-baseline clean
 
 all: build
 
@@ -78,6 +78,20 @@ crosscheck-coarse: build reference-deps
 ##        -> replication/results/bench_peers.csv, bench.csv and replication/BENCHMARKS.md
 bench: bench-peers build reference-deps
 	$(CARGO) bench --bench scale
+
+## bench-baseline: BASE=REV (default a825ec9) builds revision REV in target/baseline (through a
+##        temporary git worktree) and runs every gradvi case of the two benchmarks with both
+##        builds, alternately, 3 times each (GRADVI_BENCH_REPEAT), comparing medians in the same
+##        run; scaling cases: GRADVI_BENCH_VARIANTS (default nested), GRADVI_BENCH_MAX_CELLS;
+##        ex9 up to GRADVI_BENCH_EX9_MAX_GRID (default 1025)
+##        -> replication/results/bench_baseline.csv and replication/REGRESSION.md
+BASE ?= a825ec9
+bench-baseline: build
+	rm -rf target/baseline-src && git worktree prune
+	git worktree add --detach target/baseline-src $(BASE)
+	$(CARGO) build --release --manifest-path target/baseline-src/Cargo.toml --target-dir target/baseline --bin gradvi
+	git worktree remove --force target/baseline-src
+	$(CARGO) bench --bench scale -- --baseline target/baseline/release/gradvi --baseline-rev $(BASE)
 
 ## bench-amg: multigrid-preconditioned CG against sparse Cholesky on model problems (the
 ##        measurements behind linalg::amg's defaults; prints a table)

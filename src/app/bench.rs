@@ -35,7 +35,9 @@
 //! `GRADVI_BENCH_MERGE=1` keeps the rows of the existing CSV that the run does not redo (the
 //! report then says that its rows come from several runs).
 //! Arguments: `--report-only` rewrites the report from the existing CSV; `--child FAMILY
-//! SCHEME VARIANT SIZE [FILE]` runs one case and prints its row as JSON.
+//! SCHEME VARIANT SIZE [FILE]` runs one case and prints its row as JSON; `--baseline EXE
+//! [--baseline-rev REV]` compares every gradvi case with the earlier build EXE in the same run
+//! ([`baseline`]).
 
 use crate::app::replication::records::{read_csv, write_csv};
 use gradvi::mesh::PolyMesh;
@@ -49,6 +51,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
+pub mod baseline;
 pub mod peers;
 mod peers_report;
 mod report;
@@ -731,12 +734,28 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
     if let Some(i) = args.iter().position(|a| a == "--peer-child") {
         return peers::child_main(&args[i + 1..], root);
     }
-    let cfg = Config::from_env(root)?;
+    let mut cfg = Config::from_env(root)?;
     if args.iter().any(|a| a == "--report-only") {
         return write_report(&cfg);
     }
     let t0 = Instant::now();
     let exe = std::env::current_exe().map_err(|e| io_err(Path::new("current_exe"), e))?;
+    if let Some(i) = args.iter().position(|a| a == "--baseline") {
+        let base = args
+            .get(i + 1)
+            .ok_or_else(|| bad("--baseline needs the path of the earlier gradvi".into()))?;
+        let rev = match args.iter().position(|a| a == "--baseline-rev") {
+            Some(j) => args
+                .get(j + 1)
+                .ok_or_else(|| bad("--baseline-rev needs a revision".into()))?
+                .clone(),
+            None => base.clone(),
+        };
+        if std::env::var_os("GRADVI_BENCH_VARIANTS").is_none() {
+            cfg.variants = vec![Variant::Nested];
+        }
+        return baseline::run(&cfg, &exe, Path::new(base), &rev);
+    }
     if args.iter().any(|a| a == "--peers") {
         peers::run(&cfg, &exe)?;
         return write_report(&cfg);

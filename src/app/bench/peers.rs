@@ -517,7 +517,29 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
             )?;
         }
     }
-    for domain in DOMAINS.iter().filter(|_| do_domains) {
+    let domains = if do_domains {
+        domain_cases(cfg)?
+    } else {
+        Vec::new()
+    };
+    for (domain, scheme, linear, file) in domains {
+        eprintln!(
+            "[bench] {domain} ({}) gradvi {scheme} {linear} ...",
+            file.display()
+        );
+        let row = gradvi_child(exe, domain, scheme, linear, 0, Some(&file))?;
+        push(row, &mut rows)?;
+    }
+    Ok(())
+}
+
+/// The gradvi cases of the any-domain part: (domain, scheme, linear solver, mesh file), the
+/// meshes written by gmsh when missing, those above the cell cap of `cfg` left out.
+fn domain_cases(
+    cfg: &Config,
+) -> gradvi::Result<Vec<(&'static str, SchemeKind, &'static str, PathBuf)>> {
+    let mut out = Vec::new();
+    for domain in DOMAINS {
         for &lc in &DOMAIN_LC {
             if 0.75 * 2.3 / (lc * lc) > cfg.max_cells as f64 {
                 continue; // about 2.3/lc² triangles per unit area, areas 0.75 to 0.97
@@ -525,14 +547,31 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
             let file = domain_mesh(cfg, domain, lc)?;
             for scheme in [SchemeKind::Hmm, SchemeKind::P1] {
                 for linear in linear_variants() {
-                    eprintln!("[bench] {domain} (lc {lc}) gradvi {scheme} {linear} ...");
-                    let row = gradvi_child(exe, domain, scheme, linear, 0, Some(&file))?;
-                    push(row, &mut rows)?;
+                    out.push((domain, scheme, linear, file.clone()));
                 }
             }
         }
     }
-    Ok(())
+    Ok(out)
+}
+
+/// A gradvi case of this benchmark: family, scheme, linear solver, size (the ex9 grid; 0 for a
+/// domain) and mesh file (domains).
+pub type GradviCase = (String, SchemeKind, &'static str, usize, Option<PathBuf>);
+
+/// Every gradvi case of this benchmark (ex9 up to the grid `max_grid`, then the domains), for
+/// the regression check ([`super::baseline`]).
+pub fn gradvi_cases(cfg: &Config, max_grid: usize) -> gradvi::Result<Vec<GradviCase>> {
+    let mut out: Vec<GradviCase> = Vec::new();
+    for &g in EX9_GRIDS.iter().filter(|&&g| g <= max_grid) {
+        for (scheme, linear) in ex9_variants(g) {
+            out.push(("ex9".into(), scheme, linear, g, None));
+        }
+    }
+    for (domain, scheme, linear, file) in domain_cases(cfg)? {
+        out.push((domain.into(), scheme, linear, 0, Some(file)));
+    }
+    Ok(out)
 }
 
 /// The rows of [`CSV`] (empty if it does not exist).

@@ -1,0 +1,373 @@
+//! Regression check against an earlier build, measured in the same run
+//! (`make bench-baseline BASE=REV`, or `gradvi bench --baseline EXE [--baseline-rev REV]`).
+//!
+//! Run-to-run noise on the benchmark machine is about ±10%, so two benchmark runs on different
+//! days cannot show that a change did not slow a case down. Here every gradvi case of the two
+//! benchmarks (the scaling cases of [`super::plan`], and the gradvi cases of the peer
+//! benchmark: ex9 up to `GRADVI_BENCH_EX9_MAX_GRID`, default [`DEFAULT_EX9_MAX_GRID`], and the
+//! any-domain meshes) runs as a child process of the current executable and of EXE (the
+//! `gradvi` binary of the earlier revision), alternately (which one runs first alternates from
+//! case to case and repeat to repeat), `GRADVI_BENCH_REPEAT` times each (default
+//! [`DEFAULT_REPEAT`]); the medians are compared. The scaling cases use the variants of
+//! `GRADVI_BENCH_VARIANTS`, here `nested` (the default of `gradvi solve`) unless set, since the
+//! cold variant alone takes 25 minutes per pass.
+//!
+//! A case the earlier build cannot run (a benchmark it did not have yet, or an error) is
+//! listed with its reason, not hidden. Rows go to [`CSV`] as they come; the report is
+//! [`REPORT`], with the verdict: a case regresses when its median time is more than
+//! [`MAX_SLOWDOWN`] times the earlier build's and more than [`MIN_SLOWDOWN_S`] longer, or its
+//! peak memory more than [`MAX_MEMORY`] times; the NITER of both builds are shown beside.
+
+use super::{Config, bad, peers, plan, stdout_of};
+use crate::app::markdown::{Doc, Table, fixed, met};
+use crate::app::replication::records::{read_csv, write_csv};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::process::Command;
+
+/// The CSV of the comparison.
+pub const CSV: &str = "replication/results/bench_baseline.csv";
+/// Its report.
+pub const REPORT: &str = "replication/REGRESSION.md";
+/// Runs of each build per case (medians are compared).
+pub const DEFAULT_REPEAT: usize = 3;
+/// Largest ex9 grid of the comparison, unless `GRADVI_BENCH_EX9_MAX_GRID` says otherwise.
+pub const DEFAULT_EX9_MAX_GRID: usize = 1025;
+/// A case regresses in time above this ratio of medians (the machine's run-to-run noise).
+pub const MAX_SLOWDOWN: f64 = 1.10;
+/// ... and by more than this many seconds (below it, process start and timer noise dominate).
+pub const MIN_SLOWDOWN_S: f64 = 0.05;
+/// A case regresses in memory above this ratio of peaks.
+pub const MAX_MEMORY: f64 = 1.05;
+
+/// One case measured with both builds.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct BaselineRow {
+    /// scale or peers.
+    pub bench: String,
+    /// The case (family, size, scheme, variant or linear solver).
+    pub case: String,
+    /// The earlier build (its revision, or the path of its executable).
+    pub baseline: String,
+    /// Median total time of the current build, s.
+    pub new_s: f64,
+    /// Median total time of the earlier build, s (NaN if it could not run the case).
+    pub base_s: f64,
+    /// Peak memory of the current build, MiB (largest over the repeats).
+    pub new_mib: f64,
+    /// Peak memory of the earlier build, MiB.
+    pub base_mib: f64,
+    /// NITER of the current build.
+    pub new_niter: usize,
+    /// NITER of the earlier build (0 if it could not run the case).
+    pub base_niter: usize,
+    /// Why the earlier build could not run the case (empty if it did).
+    pub note: String,
+}
+
+/// A child process to run with both builds: its arguments after the executable.
+struct Job {
+    bench: &'static str,
+    case: String,
+    args: Vec<String>,
+}
+
+/// The jobs: the scaling cases, then the gradvi cases of the peer benchmark.
+fn jobs(cfg: &Config) -> gradvi::Result<Vec<Job>> {
+    let mut out: Vec<Job> = plan(cfg)?
+        .iter()
+        .map(|c| Job {
+            bench: "scale",
+            case: c.label(),
+            args: c.child_args(),
+        })
+        .collect();
+    let max_grid = std::env::var("GRADVI_BENCH_EX9_MAX_GRID")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(DEFAULT_EX9_MAX_GRID);
+    for (family, scheme, linear, size, file) in peers::gradvi_cases(cfg, max_grid)? {
+        let mut args = vec!["bench".to_string(), "--peer-child".to_string()];
+        args.extend([family.clone(), scheme.to_string(), linear.to_string()]);
+        args.push(size.to_string());
+        let mut case = format!("{family} {scheme} {linear}");
+        if let Some(f) = &file {
+            args.push(f.display().to_string());
+            let stem = f.file_stem().unwrap_or_default().to_string_lossy();
+            case = format!("{case} {stem}");
+        } else {
+            case = format!("{case} {size}²");
+        }
+        out.push(Job {
+            bench: "peers",
+            case,
+            args,
+        });
+    }
+    Ok(out)
+}
+
+/// What a child reports that is compared: total time, peak memory, NITER.
+#[derive(Debug, Clone, Copy)]
+struct Sample {
+    total_s: f64,
+    peak_mib: f64,
+    niter: usize,
+}
+
+/// Runs `args` with `exe` from the repository root and reads its JSON row.
+fn sample(cfg: &Config, exe: &Path, args: &[String]) -> gradvi::Result<Sample> {
+    let mut cmd = Command::new(exe);
+    cmd.args(args).current_dir(&cfg.root);
+    let text = stdout_of(cmd, exe, &args.join(" "))?;
+    let line = text
+        .lines()
+        .rev()
+        .find(|l| l.starts_with('{'))
+        .unwrap_or("");
+    let v: serde_json::Value = serde_json::from_str(line)
+        .map_err(|e| bad(format!("{}: bad child output ({e})", args.join(" "))))?;
+    let num = |k: &str| v.get(k).and_then(serde_json::Value::as_f64);
+    match (num("total_s"), num("peak_mib"), num("niter")) {
+        (Some(total_s), Some(peak_mib), Some(niter)) => Ok(Sample {
+            total_s,
+            peak_mib,
+            niter: niter as usize,
+        }),
+        _ => Err(bad(format!(
+            "{}: no total_s, peak_mib or niter",
+            args.join(" ")
+        ))),
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// The row of one job from its samples (`base` is `Err(why)` if the earlier build failed).
+fn row(job: &Job, baseline: &str, new: &[Sample], base: Result<&[Sample], String>) -> BaselineRow {
+    let peak = |s: &[Sample]| s.iter().map(|x| x.peak_mib).fold(f64::NAN, f64::max);
+    let (base_s, base_mib, base_niter, note) = match base {
+        Ok(b) => (
+            median(b.iter().map(|x| x.total_s).collect()),
+            peak(b),
+            b.last().map_or(0, |x| x.niter),
+            String::new(),
+        ),
+        Err(why) => (f64::NAN, f64::NAN, 0, why),
+    };
+    BaselineRow {
+        bench: job.bench.into(),
+        case: job.case.clone(),
+        baseline: baseline.into(),
+        new_s: median(new.iter().map(|x| x.total_s).collect()),
+        base_s,
+        new_mib: peak(new),
+        base_mib,
+        new_niter: new.last().map_or(0, |x| x.niter),
+        base_niter,
+        note,
+    }
+}
+
+/// Runs the comparison of the current executable `exe` with `base` (named `baseline` in the
+/// report), writing [`CSV`] as rows come and then [`REPORT`].
+pub fn run(cfg: &Config, exe: &Path, base: &Path, baseline: &str) -> gradvi::Result<()> {
+    if !base.is_file() {
+        return Err(bad(format!(
+            "the baseline executable {} does not exist",
+            base.display()
+        )));
+    }
+    let repeat = match std::env::var("GRADVI_BENCH_REPEAT") {
+        Ok(v) => v
+            .trim()
+            .parse::<usize>()
+            .ok()
+            .filter(|&r| (1..=20).contains(&r))
+            .ok_or_else(|| bad(format!("GRADVI_BENCH_REPEAT must be 1 to 20, got '{v}'")))?,
+        Err(_) => DEFAULT_REPEAT,
+    };
+    let jobs = jobs(cfg)?;
+    eprintln!(
+        "[bench] regression check: {} cases, {repeat} runs of each build, against {baseline}",
+        jobs.len()
+    );
+    let mut rows = Vec::new();
+    for (i, job) in jobs.iter().enumerate() {
+        eprintln!(
+            "[bench] ({}/{}) {} {} ...",
+            i + 1,
+            jobs.len(),
+            job.bench,
+            job.case
+        );
+        let (mut new, mut old) = (Vec::new(), Vec::new());
+        let mut base_error = None;
+        for r in 0..repeat {
+            let base_first = (i + r) % 2 == 0;
+            for first in [true, false] {
+                if first == base_first {
+                    if base_error.is_none() {
+                        match sample(cfg, base, &job.args) {
+                            Ok(s) => old.push(s),
+                            Err(e) => base_error = Some(e.to_string()),
+                        }
+                    }
+                } else {
+                    new.push(sample(cfg, exe, &job.args)?);
+                }
+            }
+        }
+        let base_result = match base_error {
+            Some(why) => Err(why),
+            None => Ok(old.as_slice()),
+        };
+        let row = row(job, baseline, &new, base_result);
+        eprintln!(
+            "[bench]   new {:.3} s / {:.0} MiB, {baseline} {:.3} s / {:.0} MiB (ratio {:.2}){}",
+            row.new_s,
+            row.new_mib,
+            row.base_s,
+            row.base_mib,
+            row.new_s / row.base_s,
+            if row.note.is_empty() {
+                String::new()
+            } else {
+                format!(" — earlier build failed: {}", row.note)
+            }
+        );
+        rows.push(row);
+        write_csv(&cfg.path(CSV), &rows)?;
+    }
+    write_report(cfg)
+}
+
+/// Whether a row regresses in time and in memory (`None` if the earlier build did not run it).
+fn regresses(r: &BaselineRow) -> Option<(bool, bool)> {
+    (r.base_s.is_finite() && r.base_s > 0.0).then_some((
+        r.new_s > MAX_SLOWDOWN * r.base_s && r.new_s - r.base_s > MIN_SLOWDOWN_S,
+        r.new_mib > MAX_MEMORY * r.base_mib,
+    ))
+}
+
+/// Writes [`REPORT`] from [`CSV`].
+pub fn write_report(cfg: &Config) -> gradvi::Result<()> {
+    let rows: Vec<BaselineRow> = read_csv(&cfg.path(CSV))?;
+    let baseline = rows.first().map_or("?", |r| r.baseline.as_str());
+    let mut md = Doc::default();
+    md.heading(1, format!("Regression check against {baseline}"));
+    md.para(format!(
+        "Written by `make bench-baseline BASE={baseline}` from `{CSV}`. Every case ran as a \
+         child process of the current build and of the earlier one, alternately, and the medians \
+         of their total times are compared in the same run (`src/app/bench/baseline.rs`). A case \
+         regresses when its median time exceeds {MAX_SLOWDOWN} times the earlier build's (this \
+         machine's run-to-run noise is about ±10%) and by more than {MIN_SLOWDOWN_S} s, or its \
+         peak memory exceeds {MAX_MEMORY} times the earlier build's."
+    ));
+    let compared: Vec<(&BaselineRow, (bool, bool))> = rows
+        .iter()
+        .filter_map(|r| regresses(r).map(|g| (r, g)))
+        .collect();
+    let slow: Vec<&BaselineRow> = compared.iter().filter(|(_, g)| g.0).map(|p| p.0).collect();
+    let heavy: Vec<&BaselineRow> = compared.iter().filter(|(_, g)| g.1).map(|p| p.0).collect();
+    let ratios: Vec<f64> = compared.iter().map(|(r, _)| r.new_s / r.base_s).collect();
+    let geo = (ratios.iter().map(|x| x.ln()).sum::<f64>() / ratios.len().max(1) as f64).exp();
+    let mut t = Table::new("check | measured | verdict", "lll");
+    t.row(vec![
+        format!("time ≤ {MAX_SLOWDOWN} × earlier build, every case"),
+        format!(
+            "{} of {} cases above; ratios {} to {}, geometric mean {}",
+            slow.len(),
+            compared.len(),
+            fixed(ratios.iter().copied().fold(f64::NAN, f64::min), 2),
+            fixed(ratios.iter().copied().fold(f64::NAN, f64::max), 2),
+            fixed(geo, 2)
+        ),
+        met(slow.is_empty() && !compared.is_empty()).into(),
+    ]);
+    t.row(vec![
+        format!("peak memory ≤ {MAX_MEMORY} × earlier build, every case"),
+        format!("{} of {} cases above", heavy.len(), compared.len()),
+        met(heavy.is_empty() && !compared.is_empty()).into(),
+    ]);
+    md.heading(2, "Verdict");
+    md.table(&t);
+    let skipped = rows.len() - compared.len();
+    if skipped > 0 {
+        md.para(format!(
+            "{skipped} cases could not be run by the earlier build (reasons in the table below) \
+             and are not in the verdict."
+        ));
+    }
+    md.heading(2, "All cases");
+    let mut t = Table::new(
+        "bench | case | new s | earlier s | ratio | new MiB | earlier MiB | NITER new / earlier | note",
+        "llrrrrrcl",
+    );
+    for r in &rows {
+        t.row(vec![
+            r.bench.clone(),
+            r.case.clone(),
+            fixed(r.new_s, 3),
+            fixed(r.base_s, 3),
+            fixed(r.new_s / r.base_s, 2),
+            fixed(r.new_mib, 0),
+            fixed(r.base_mib, 0),
+            format!("{} / {}", r.new_niter, r.base_niter),
+            r.note.lines().next().unwrap_or("").to_string(),
+        ]);
+    }
+    md.table(&t);
+    md.write(&cfg.path(REPORT))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn job() -> Job {
+        Job {
+            bench: "scale",
+            case: "c".into(),
+            args: vec![],
+        }
+    }
+
+    fn s(t: f64, m: f64) -> Sample {
+        Sample {
+            total_s: t,
+            peak_mib: m,
+            niter: 3,
+        }
+    }
+
+    #[test]
+    fn medians_ratios_and_verdicts() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 2.5);
+        let new = [s(1.0, 100.0), s(1.3, 101.0), s(1.2, 99.0)];
+        let old = [s(1.0, 100.0), s(1.05, 100.0), s(2.0, 100.0)];
+        // 15% slower but by 0.015 s only: noise, not a regression
+        let tiny = row(&job(), "abc", &[s(0.115, 9.0)], Ok(&[s(0.1, 9.0)]));
+        assert_eq!(regresses(&tiny), Some((false, false)));
+        let r = row(&job(), "abc", &new, Ok(&old));
+        assert_eq!(
+            (r.new_s, r.base_s, r.new_mib, r.base_mib),
+            (1.2, 1.05, 101.0, 100.0)
+        );
+        // 1.2 / 1.05 = 1.14 > 1.10: slower; 101 / 100 ≤ 1.05: memory kept
+        assert_eq!(regresses(&r), Some((true, false)));
+        let fast = row(&job(), "abc", &old, Ok(&new));
+        assert_eq!(regresses(&fast), Some((false, false)));
+        let failed = row(&job(), "abc", &new, Err("unknown --peer-child".into()));
+        assert_eq!(regresses(&failed), None);
+        assert!(failed.base_s.is_nan() && failed.note.contains("peer-child"));
+    }
+}
