@@ -705,6 +705,13 @@ type Pair<'i> = pest::iterators::Pair<'i, Rule>;
 
 type Parsed = Result<(Node, Kind, usize), ExprError>;
 
+/// What [`Builder::head`] returns.
+type Head<'i> = (
+    (Node, Kind, usize),
+    Option<(Pair<'i>, Pair<'i>)>,
+    pest::iterators::Pairs<'i, Rule>,
+);
+
 fn syntax(pos: usize, msg: String) -> ExprError {
     ExprError {
         position: pos,
@@ -872,19 +879,41 @@ impl Builder<'_> {
         self.build(first)
     }
 
+    /// For `operand (op operand)…` rules (comparison, power): the first operand built, the
+    /// operator and operand after it if any, and the pairs that follow.
+    fn head<'i>(&self, p: Pair<'i>) -> Result<Head<'i>, ExprError> {
+        let mut it = p.into_inner();
+        let first = self.first(&mut it)?;
+        let next = match (it.next(), it.next()) {
+            (Some(op), Some(operand)) => Some((op, operand)),
+            _ => None,
+        };
+        Ok((first, next, it))
+    }
+
     fn pos(&self, p: &Pair) -> usize {
         char_position(self.source, p.as_span().start())
     }
 
     fn build(&self, p: Pair) -> Parsed {
         match p.as_rule() {
-            Rule::disjunction => self.logical(p, Node::Or),
-            Rule::conjunction => self.logical(p, Node::And),
+            Rule::disjunction => self.left_fold(p, Kind::Condition, |_, a, c| Node::Or(b(a), b(c))),
+            Rule::conjunction => {
+                self.left_fold(p, Kind::Condition, |_, a, c| Node::And(b(a), b(c)))
+            }
             Rule::negation => {
                 self.prefixed(p, Kind::Condition, false, |_, a| Node::Not(b(a)).folded())
             }
             Rule::comparison => self.comparison(p),
-            Rule::sum | Rule::product => self.arithmetic(p),
+            Rule::sum | Rule::product => self.left_fold(p, Kind::Number, |op, a, c| {
+                let f = match op {
+                    "+" => F2::Add,
+                    "-" => F2::Sub,
+                    "*" => F2::Mul,
+                    _ => F2::Div,
+                };
+                Node::Call2(f, b(a), b(c))
+            }),
             Rule::signed => self.prefixed(p, Kind::Number, true, |op, a| match op {
                 "-" => Node::Neg(b(a)).folded(),
                 _ => a,
@@ -895,25 +924,24 @@ impl Builder<'_> {
         }
     }
 
-    /// `operand (op operand)*`, left-associative, for a logical operator whose operands are
-    /// conditions.
-    fn logical(&self, p: Pair, node: fn(Box<Node>, Box<Node>) -> Node) -> Parsed {
+    /// `operand (op operand)*`, left-associative, on operands of type `kind` (logical
+    /// operators on conditions, `+ -` and `* /` on numbers); `combine(op, a, c)` is the node.
+    fn left_fold(&self, p: Pair, kind: Kind, combine: fn(&str, Node, Node) -> Node) -> Parsed {
         let mut it = p.into_inner();
         let (mut a, k, pos) = self.first(&mut it)?;
-        while let (Some(_op), Some(operand)) = (it.next(), it.next()) {
-            expect_kind(Kind::Condition, k, pos)?;
+        while let (Some(op), Some(operand)) = (it.next(), it.next()) {
+            expect_kind(kind, k, pos)?;
             let (c, kc, pc) = self.build(operand)?;
-            expect_kind(Kind::Condition, kc, pc)?;
-            a = node(b(a), b(c)).folded();
+            expect_kind(kind, kc, pc)?;
+            a = combine(op.as_str(), a, c).folded();
         }
         Ok((a, k, pos))
     }
 
     /// `sum (cmp sum)?`; a second comparison operator is an error.
     fn comparison(&self, p: Pair) -> Parsed {
-        let mut it = p.into_inner();
-        let (a, k, pos) = self.first(&mut it)?;
-        let (Some(op), Some(second)) = (it.next(), it.next()) else {
+        let ((a, k, pos), next, mut it) = self.head(p)?;
+        let Some((op, second)) = next else {
             return Ok((a, k, pos));
         };
         let cmp = match op.as_str() {
@@ -937,25 +965,6 @@ impl Builder<'_> {
             ));
         }
         Ok((Node::Cmp(cmp, b(a), b(c)).folded(), Kind::Condition, pos))
-    }
-
-    /// Left-associative `+ -` or `* /` on numbers.
-    fn arithmetic(&self, p: Pair) -> Parsed {
-        let mut it = p.into_inner();
-        let (mut a, k, pos) = self.first(&mut it)?;
-        while let (Some(op), Some(operand)) = (it.next(), it.next()) {
-            expect_kind(Kind::Number, k, pos)?;
-            let (c, kc, pc) = self.build(operand)?;
-            expect_kind(Kind::Number, kc, pc)?;
-            let f = match op.as_str() {
-                "+" => F2::Add,
-                "-" => F2::Sub,
-                "*" => F2::Mul,
-                _ => F2::Div,
-            };
-            a = Node::Call2(f, b(a), b(c)).folded();
-        }
-        Ok((a, k, pos))
     }
 
     /// `op* operand` for the prefix operators `not` (`negation`) and signs (`signed`): they
@@ -991,9 +1000,8 @@ impl Builder<'_> {
 
     /// `primary (^ signed)?`; an integer constant exponent becomes `powi`.
     fn power(&self, p: Pair) -> Parsed {
-        let mut it = p.into_inner();
-        let (a, k, pos) = self.first(&mut it)?;
-        let (Some(_op), Some(exponent)) = (it.next(), it.next()) else {
+        let ((a, k, pos), next, _) = self.head(p)?;
+        let Some((_op, exponent)) = next else {
             return Ok((a, k, pos));
         };
         expect_kind(Kind::Number, k, pos)?;
