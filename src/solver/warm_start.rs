@@ -393,21 +393,7 @@ fn vertex_obstacle(
             _ => None,
         })
         .collect();
-    let mut ptr = vec![0usize; nv + 1];
-    for &v in vertex.iter().flatten() {
-        ptr[v + 1] += 1;
-    }
-    for v in 0..nv {
-        ptr[v + 1] += ptr[v];
-    }
-    let mut fill = ptr.clone();
-    let mut at = vec![0usize; ptr[nv]];
-    for (j, v) in vertex.iter().enumerate() {
-        if let Some(v) = *v {
-            at[fill[v]] = j;
-            fill[v] += 1;
-        }
-    }
+    let (ptr, at) = crate::mesh::buckets::counting_sort(nv, vertex.iter().copied(), |j| j);
     // per unknown: no cell seen yet, all cells seen so far pass, or one fails
     const UNSEEN: u8 = 0;
     const PASS: u8 = 1;
