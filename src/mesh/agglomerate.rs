@@ -26,16 +26,28 @@
 //!    add up to 2π (so the polygon is simple). An aggregate that fails is *dissolved*: its fine
 //!    cells become coarse cells of their own, with all their vertices as corners. This can only
 //!    add corners to neighbours, and is repeated until no aggregate fails; a fine cell alone is
-//!    always admissible, so it terminates.
+//!    always admissible, so it terminates. A repetition checks again only the aggregates with a
+//!    vertex that became a corner, and the new one-cell ones: the polygon of an aggregate
+//!    depends on nothing but its fine cells and the corners among their vertices.
 //! 4. The coarse mesh is then built and validated like any input mesh
 //!    ([`PolyMesh::from_cells_tagged`]: conformity, no overlap, star-shapedness), in
 //!    O(n log n). A failure there (two straightened chords crossing) is returned as an error: the
 //!    caller then does without coarse meshes.
 //!
 //! Cost: linear in the fine mesh apart from sorting the half-edges of each aggregate.
+//!
+//! ## Parallelism
+//! The passes over all fine edges (which cells to join in step 1, the interfaces of small
+//! aggregates in step 1, in edge order) and over all aggregates (the boundary loop and checks
+//! of step 3, each aggregate on its own from the fine cells of its bucket) run on every core
+//! (rayon); what depends on an order (the unions, the first-appearance numbering, the sums of
+//! areas and interface lengths) stays sequential, in the order above. Each parallel result is
+//! collected in index order and is a function of its index alone, so the coarse meshes do not
+//! depend on the number of threads (the tests check them against the sequential definition).
 
 use super::{NO_CELL, Point, PolyMesh, polygon_area_centroid};
 use crate::error::MeshError;
+use rayon::prelude::*;
 
 /// Marker for "no coarse edge" in [`Agglomeration::boundary_edge_of`] (interior fine edges).
 pub const NO_EDGE: usize = usize::MAX;
@@ -46,6 +58,9 @@ pub const MIN_DIST_RATIO: f64 = 0.1;
 
 /// Aggregates smaller than this fraction of H² are merged into a neighbour.
 const SMALL_FRACTION: f64 = 0.25;
+
+/// Least number of items (fine edges, aggregates) of one parallel task.
+const MIN_TASK: usize = 1 << 12;
 
 /// Rounds of dissolution before giving up (each dissolves at least one aggregate; in practice
 /// one or two rounds suffice).
@@ -75,15 +90,26 @@ pub fn agglomerate(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshErro
     let mut label = initial_aggregates(fine, size);
     merge_small(fine, &mut label, SMALL_FRACTION * size * size);
     let mut dissolved = vec![false; fine.n_cells()];
+    let mut previous: Option<Previous> = None;
     for _ in 0..MAX_ROUNDS {
         let corner = corners(fine, &label, &dissolved);
-        let polys = polygons(fine, &label, &corner);
+        let polys = polygons(fine, &label, &corner, previous.take());
         let failed: Vec<bool> = polys.iter().map(Option::is_none).collect();
         if !failed.contains(&true) {
-            return build(fine, &label, &corner, polys, &dissolved);
+            return build(fine, label, &corner, polys, &dissolved);
         }
         dissolve(&mut label, &mut dissolved, &failed);
-        label = renumber(&label);
+        let id = renumber(&mut label);
+        // the aggregates that were kept, under their new labels
+        let mut old_of = vec![usize::MAX; label.iter().max().map_or(0, |m| m + 1)];
+        for (a, _) in failed.iter().enumerate().filter(|(_, f)| !**f) {
+            old_of[id[a]] = a;
+        }
+        previous = Some(Previous {
+            corner,
+            polys,
+            old_of,
+        });
     }
     Err(MeshError::NonConforming(format!(
         "agglomeration did not settle in {MAX_ROUNDS} rounds"
@@ -116,52 +142,95 @@ fn labels_from_roots(parent: &mut [usize]) -> Vec<usize> {
         .collect()
 }
 
+/// ⌊x⌋ as an integer: exactly `x.floor() as i64` (saturating, NaN → 0), without the call to
+/// libm's `floor` that the baseline x86-64 target makes.
+#[inline]
+fn floor_i64(x: f64) -> i64 {
+    let t = x as i64; // rounds towards zero, saturating
+    if (t as f64) > x {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
+}
+
+/// Dense labels 0.. of the components of a union–find forest whose roots are the least
+/// elements of their components and where `parent[i] ≤ i` (in order of first appearance, as
+/// [`labels_from_roots`] numbers them): one pass, as the parent of i is labelled before i.
+fn labels_from_least_roots(parent: &[usize]) -> Vec<usize> {
+    let mut label = Vec::with_capacity(parent.len());
+    let mut next = 0;
+    for (i, &p) in parent.iter().enumerate() {
+        if p == i {
+            label.push(next);
+            next += 1;
+        } else {
+            let l = label[p];
+            label.push(l);
+        }
+    }
+    label
+}
+
 /// Step 1: connected components of the cells with the same (square, tag) key.
 fn initial_aggregates(fine: &PolyMesh, size: f64) -> Vec<usize> {
     let bb = fine.bounding_box();
     let key = |k: usize| {
         let c = fine.centroid(k);
         (
-            ((c[0] - bb[0]) / size).floor() as i64,
-            ((c[1] - bb[1]) / size).floor() as i64,
+            floor_i64((c[0] - bb[0]) / size),
+            floor_i64((c[1] - bb[1]) / size),
             fine.cell_tag(k),
         )
     };
-    let keys: Vec<_> = (0..fine.n_cells()).map(key).collect();
+    // whether each edge joins two cells of one key (in parallel), then the unions in edge order
+    let joins: Vec<bool> = (0..fine.n_edges())
+        .into_par_iter()
+        .with_min_len(MIN_TASK)
+        .map(|e| {
+            let [a, b] = fine.edge_cells(e);
+            b != NO_CELL && key(a) == key(b)
+        })
+        .collect();
     let mut parent: Vec<usize> = (0..fine.n_cells()).collect();
-    for e in 0..fine.n_edges() {
+    for (e, _) in joins.iter().enumerate().filter(|(_, j)| **j) {
         let [a, b] = fine.edge_cells(e);
-        if b != NO_CELL && keys[a] == keys[b] {
-            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-            if ra != rb {
-                parent[ra.max(rb)] = ra.min(rb);
-            }
+        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+        if ra != rb {
+            parent[ra.max(rb)] = ra.min(rb);
         }
     }
-    labels_from_roots(&mut parent)
+    // the unions link the larger root to the smaller one and path halving only lowers parents
+    labels_from_least_roots(&parent)
 }
 
 /// Merges the aggregates of area below `min_area` into the neighbour of the same tag with the
 /// longest common interface (one pass, in label order).
-fn merge_small(fine: &PolyMesh, label: &mut Vec<usize>, min_area: f64) {
+fn merge_small(fine: &PolyMesh, label: &mut [usize], min_area: f64) {
     let na = label.iter().max().map_or(0, |m| m + 1);
     let mut area = vec![0.0; na];
     for (k, &a) in label.iter().enumerate() {
         area[a] += fine.measure(k);
     }
-    // interfaces (a, b, length) between aggregates of the same tag, both directions
-    let mut iface: Vec<(usize, usize, f64)> = Vec::new();
-    for e in 0..fine.n_edges() {
-        let [k, l] = fine.edge_cells(e);
-        if l == NO_CELL || fine.cell_tag(k) != fine.cell_tag(l) {
-            continue;
-        }
-        let (a, b) = (label[k], label[l]);
-        if a != b && (area[a] < min_area || area[b] < min_area) {
-            let len = fine.edge_measure(e);
-            iface.push((a, b, len));
-            iface.push((b, a, len));
-        }
+    // interfaces (a, b, length) between aggregates of the same tag, in edge order (found in
+    // parallel), then both directions
+    let small: Vec<(usize, usize, f64)> = (0..fine.n_edges())
+        .into_par_iter()
+        .with_min_len(MIN_TASK)
+        .filter_map(|e| {
+            let [k, l] = fine.edge_cells(e);
+            if l == NO_CELL || fine.cell_tag(k) != fine.cell_tag(l) {
+                return None;
+            }
+            let (a, b) = (label[k], label[l]);
+            (a != b && (area[a] < min_area || area[b] < min_area))
+                .then(|| (a, b, fine.edge_measure(e)))
+        })
+        .collect();
+    let mut iface: Vec<(usize, usize, f64)> = Vec::with_capacity(2 * small.len());
+    for &(a, b, len) in &small {
+        iface.push((a, b, len));
+        iface.push((b, a, len));
     }
     iface.sort_by_key(|x| (x.0, x.1));
     let mut parent: Vec<usize> = (0..na).collect();
@@ -189,28 +258,34 @@ fn merge_small(fine: &PolyMesh, label: &mut Vec<usize>, min_area: f64) {
             }
         }
     }
+    // label ← renumber(agg ∘ label), in one pass
     let agg = labels_from_roots(&mut parent);
+    let mut id = vec![usize::MAX; na];
+    let mut next = 0;
     for l in label.iter_mut() {
-        *l = agg[*l];
+        let a = agg[*l];
+        if id[a] == usize::MAX {
+            id[a] = next;
+            next += 1;
+        }
+        *l = id[a];
     }
-    *label = renumber(label);
 }
 
-/// Dense labels in order of first appearance.
-fn renumber(label: &[usize]) -> Vec<usize> {
+/// Renumbers `label` densely in order of first appearance; returns the new label of each old
+/// one (`usize::MAX` for those that do not appear).
+fn renumber(label: &mut [usize]) -> Vec<usize> {
     let na = label.iter().max().map_or(0, |m| m + 1);
     let mut id = vec![usize::MAX; na];
     let mut next = 0;
-    label
-        .iter()
-        .map(|&a| {
-            if id[a] == usize::MAX {
-                id[a] = next;
-                next += 1;
-            }
-            id[a]
-        })
-        .collect()
+    for a in label.iter_mut() {
+        if id[*a] == usize::MAX {
+            id[*a] = next;
+            next += 1;
+        }
+        *a = id[*a];
+    }
+    id
 }
 
 /// Gives each fine cell of the aggregates `a` with `failed[a]` a label of its own (fresh labels
@@ -254,58 +329,98 @@ fn corners(fine: &PolyMesh, label: &[usize], dissolved: &[bool]) -> Vec<bool> {
     corner
 }
 
+/// The fine cells of each aggregate, in increasing order (CSR: offsets, cell ids, which fit
+/// in 32 bits as the mesh stores them so).
+fn buckets(label: &[usize], na: usize) -> (Vec<usize>, Vec<u32>) {
+    super::buckets::counting_sort(na, label.iter().map(|&a| Some(a)), |k| k as u32)
+}
+
+/// What a round of [`polygons`] found, for the next round after a dissolution.
+struct Previous {
+    /// The corners of that round.
+    corner: Vec<bool>,
+    /// Its polygons, under its labels.
+    polys: Vec<Option<Vec<usize>>>,
+    /// The label in that round of each aggregate kept since (`usize::MAX` for the fine cells
+    /// dissolved since).
+    old_of: Vec<usize>,
+}
+
 /// Step 3: for each aggregate, its corners in counter-clockwise order, or `None` if its
 /// straightened polygon is not admissible (several boundary loops, a pinch, fewer than three
 /// corners, or not star-shaped with margin). Aggregates of one cell are always admissible.
-fn polygons(fine: &PolyMesh, label: &[usize], corner: &[bool]) -> Vec<Option<Vec<usize>>> {
+/// The aggregates are traced in parallel, each from the fine cells of its bucket.
+///
+/// After a dissolution (`previous`), an aggregate that was kept has the same fine cells, and
+/// its polygon depends only on them and on the corner flags of their vertices (dissolving only
+/// adds corners, at the vertices of the dissolved cells): if none of these flags changed, its
+/// polygon is the previous one and is not traced again.
+fn polygons(
+    fine: &PolyMesh,
+    label: &[usize],
+    corner: &[bool],
+    previous: Option<Previous>,
+) -> Vec<Option<Vec<usize>>> {
     let na = label.iter().max().map_or(0, |m| m + 1);
-    // boundary half-edges (aggregate, from, to), counter-clockwise for their aggregate
-    let mut half: Vec<(usize, usize, usize)> = Vec::new();
-    let mut size = vec![0usize; na];
-    for k in 0..fine.n_cells() {
-        size[label[k]] += 1;
-        let (vs, es) = (fine.cell_vertices(k), fine.cell_edges(k));
-        for (i, &e) in es.iter().enumerate() {
-            let [c0, c1] = fine.edge_cells(e as usize);
-            let other = if c0 == k { c1 } else { c0 };
-            if other == NO_CELL || label[other] != label[k] {
-                let (from, to) = (vs[i], vs[(i + 1) % vs.len()]);
-                half.push((label[k], from as usize, to as usize));
+    let (ptr, cells) = buckets(label, na);
+    // Err(old label) for a polygon to take from the previous round
+    let traced: Vec<Result<Option<Vec<usize>>, usize>> = (0..na)
+        .into_par_iter()
+        .with_min_len(MIN_TASK / 16)
+        .map_init(Vec::new, |half, a| {
+            let members = &cells[ptr[a]..ptr[a + 1]];
+            if let Some(p) = &previous
+                && let Some(old) = p.old_of.get(a).copied().filter(|&o| o != usize::MAX)
+                && members.iter().all(|&k| {
+                    fine.cell_vertices(k as usize)
+                        .iter()
+                        .all(|&v| corner[v as usize] == p.corner[v as usize])
+                })
+            {
+                return Err(old);
             }
-        }
-    }
-    half.sort_unstable();
-    let mut out = vec![None; na];
-    let mut start = 0;
-    while start < half.len() {
-        let a = half[start].0;
-        let mut end = start;
-        while end < half.len() && half[end].0 == a {
-            end += 1;
-        }
-        out[a] = trace(fine, &half[start..end], corner, size[a] == 1);
-        start = end;
-    }
-    out
+            // boundary half-edges (from, to) of aggregate a, counter-clockwise for it
+            half.clear();
+            for &k in members {
+                let k = k as usize;
+                let (vs, es) = (fine.cell_vertices(k), fine.cell_edges(k));
+                for (i, &e) in es.iter().enumerate() {
+                    let [c0, c1] = fine.edge_cells(e as usize);
+                    let other = if c0 == k { c1 } else { c0 };
+                    if other == NO_CELL || label[other] != a {
+                        let (from, to) = (vs[i], vs[(i + 1) % vs.len()]);
+                        half.push((from as usize, to as usize));
+                    }
+                }
+            }
+            half.sort_unstable();
+            Ok(trace(fine, half, corner, members.len() == 1))
+        })
+        .collect();
+    let mut kept = previous.map(|p| p.polys).unwrap_or_default();
+    traced
+        .into_iter()
+        .map(|t| t.unwrap_or_else(|old| std::mem::take(&mut kept[old])))
+        .collect()
 }
 
-/// The corners of one aggregate's boundary loop (its half-edges sorted by start vertex), or
-/// `None` if it is not admissible.
+/// The corners of one aggregate's boundary loop (its half-edges (from, to) sorted), or `None`
+/// if it is not admissible.
 fn trace(
     fine: &PolyMesh,
-    half: &[(usize, usize, usize)],
+    half: &[(usize, usize)],
     corner: &[bool],
     single: bool,
 ) -> Option<Vec<usize>> {
-    if half.windows(2).any(|w| w[0].1 == w[1].1) {
+    if half.windows(2).any(|w| w[0].0 == w[1].0) {
         return None; // two half-edges leave one vertex: a pinch
     }
     let next = |v: usize| -> Option<usize> {
-        half.binary_search_by(|h| h.1.cmp(&v))
+        half.binary_search_by(|h| h.0.cmp(&v))
             .ok()
-            .map(|i| half[i].2)
+            .map(|i| half[i].1)
     };
-    let start = half.iter().map(|h| h.1).find(|&v| corner[v])?;
+    let start = half.iter().map(|h| h.0).find(|&v| corner[v])?;
     let mut poly = vec![start];
     let mut v = next(start)?;
     let mut steps = 1;
@@ -357,7 +472,7 @@ fn admissible(p: &[Point]) -> bool {
 /// Step 4: the coarse mesh from the admissible polygons.
 fn build(
     fine: &PolyMesh,
-    label: &[usize],
+    label: Vec<usize>,
     corner: &[bool],
     polys: Vec<Option<Vec<usize>>>,
     dissolved: &[bool],
@@ -371,7 +486,8 @@ fn build(
         }
     }
     let cells: Vec<Vec<usize>> = polys
-        .into_iter()
+        .into_par_iter()
+        .with_min_len(MIN_TASK / 16)
         .map(|p| p.unwrap_or_default().into_iter().map(|v| id[v]).collect())
         .collect();
     let tagged: Vec<(usize, usize, i32)> = fine
@@ -406,7 +522,7 @@ fn build(
     }
     Ok(Agglomeration {
         mesh,
-        cell_of: label.to_vec(),
+        cell_of: label,
         boundary_edge_of,
         dissolved_cells: dissolved.iter().filter(|&&d| d).count(),
     })
@@ -476,6 +592,141 @@ mod tests {
                 assert_eq!(fine.edge_midpoint(e), coarse.edge_midpoint(ce));
             }
             assert_eq!(coarse.boundary_edges().len(), fine.boundary_edges().len());
+        }
+    }
+
+    /// A fingerprint of every part of an agglomeration, bit for bit (FNV-1a over the labels,
+    /// the boundary map, the coarse vertices' bits, cells, edges and tags).
+    fn fingerprint(a: &Agglomeration) -> u64 {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |x: u64| {
+            for byte in x.to_le_bytes() {
+                h = (h ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        a.cell_of.iter().for_each(|&c| eat(c as u64));
+        a.boundary_edge_of.iter().for_each(|&e| eat(e as u64));
+        eat(a.dissolved_cells as u64);
+        let m = &a.mesh;
+        for v in m.vertices() {
+            eat(v[0].to_bits());
+            eat(v[1].to_bits());
+        }
+        for k in 0..m.n_cells() {
+            eat(m.cell_vertices(k).len() as u64);
+            m.cell_vertices(k).iter().for_each(|&v| eat(u64::from(v)));
+            m.cell_edges(k).iter().for_each(|&e| eat(u64::from(e)));
+            eat(m.cell_tag(k) as u64);
+        }
+        for e in 0..m.n_edges() {
+            m.edge_vertices(e).iter().for_each(|&v| eat(v as u64));
+            m.edge_cells(e).iter().for_each(|&c| eat(c as u64));
+            eat(m.edge_tag(e) as u64);
+        }
+        h
+    }
+
+    /// Fingerprints of the agglomerations of [`agglomeration_does_not_depend_on_threads`]'s
+    /// cases, computed with the sequential implementation this one replaced (a825ec9): the
+    /// parallel passes and the reuse of polygons across rounds changed nothing.
+    const SEQUENTIAL_FINGERPRINTS: [u64; 21] = [
+        0x25644aaa565376d3,
+        0x5513ac939f6b8fbd,
+        0xcb6c5c77cf0dbf3b,
+        0xd304a56b039c1731,
+        0xf3052c290c8ac82a,
+        0xc3548d28edf42a2e,
+        0x297d73cce314784f,
+        0xa515823bca22620d,
+        0x624d0663259e1db7,
+        0x052b185452770dde,
+        0x1f1ef03b161c1cfe,
+        0x4819ce5c37478b1a,
+        0x75cf25bd8ed5fd5c,
+        0x3ed81432eb82ea64,
+        0x0d88128ce11d010a,
+        0xa8c9975141e2d55c,
+        0xacc97e3edf4afdec,
+        0x5853b4a692912dee,
+        0xb5e23fceec4c7343,
+        0x5afe6f3b54ccf0bf,
+        0x02dd51382c4571d2,
+    ];
+
+    #[test]
+    fn agglomeration_does_not_depend_on_threads() {
+        use crate::mesh::generate::cartesian_triangles;
+        // the ex9 meshes (triangulated grids: some aggregates along the diagonals fail and are
+        // dissolved, so later rounds reuse polygons), a Cartesian grid and the gmsh meshes
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
+        let mut cases = vec![
+            cartesian_triangles(256, 256, [-2.0, 2.0], [-2.0, 2.0]).unwrap(),
+            cartesian_triangles(200, 120, [0.0, 1.0], [0.0, 0.7]).unwrap(),
+            cartesian_rect(300, 300, [0.0, 1.0], [0.0, 1.0]).unwrap(),
+        ];
+        // a polygonal mesh: the next level of the warm start agglomerates an agglomeration
+        let size = (16.0 / (cases[0].n_cells() / 16) as f64).sqrt();
+        let coarse = agglomerate(&cases[0], size).unwrap().mesh;
+        cases.push(coarse);
+        for name in ["dam.msh", "lshape.msh", "hole.msh"] {
+            cases.push(crate::mesh::io::read_mesh(dir.join(name)).unwrap());
+        }
+        let pools: Vec<_> = [1, 2, 3]
+            .iter()
+            .map(|&t| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .unwrap()
+            })
+            .collect();
+        let mut dissolved = 0;
+        let mut pinned = SEQUENTIAL_FINGERPRINTS.iter();
+        for (c, fine) in cases.iter().enumerate() {
+            let area = total_area(fine);
+            // the fine cells per coarse cell of the warm start's levels (HMM, P1, and above)
+            for per_cell in [8, 16, 48] {
+                let size = (area / (fine.n_cells() / per_cell) as f64).sqrt();
+                let want = pinned.next().copied();
+                for (t, pool) in pools.iter().enumerate() {
+                    let got = pool.install(|| agglomerate(fine, size)).unwrap();
+                    let what = format!("case {c}, size {size}, {} threads", t + 1);
+                    assert_eq!(Some(fingerprint(&got)), want, "{what}");
+                    dissolved += got.dissolved_cells;
+                }
+            }
+        }
+        assert!(dissolved > 0, "no case dissolves an aggregate");
+    }
+
+    #[test]
+    fn floor_is_libm_floor() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            1.0 - f64::EPSILON,
+            -1.0 + f64::EPSILON / 2.0,
+            2f64.powi(52) + 0.5,
+            -(2f64.powi(52)) - 1.5,
+            2f64.powi(53) + 2.0,
+            2f64.powi(63),
+            -(2f64.powi(63)),
+            -(2f64.powi(63)) * (1.0 + f64::EPSILON),
+            1e300,
+            -1e300,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        xs.extend((-2000..2000).map(|i| i as f64 * 0.37));
+        for x in xs {
+            assert_eq!(floor_i64(x), x.floor() as i64, "{x}");
         }
     }
 

@@ -230,12 +230,27 @@ fn prolong(
 ) -> Vec<f64> {
     let fine = scheme.mesh();
     let of = |k: usize| values.get(agg.cell_of[k]).copied().unwrap_or(0.0);
-    let mean = |cells: &[usize]| {
-        if cells.is_empty() {
-            0.0
-        } else {
-            cells.iter().map(|&k| of(k)).sum::<f64>() / cells.len() as f64
+    // the mean around each vertex, by one pass over the cells: each sum adds the values of
+    // the cells in increasing order from the starting value of `Sum`, as summing a gathered
+    // list of the vertex's cells would
+    let vertex_mean: Vec<f64> = match incidence {
+        Some(_) => {
+            let zero: f64 = std::iter::empty::<f64>().sum();
+            let mut sum = vec![zero; fine.n_vertices()];
+            let mut count = vec![0u32; fine.n_vertices()];
+            for k in 0..fine.n_cells() {
+                let x = of(k);
+                for &v in fine.cell_vertices(k) {
+                    sum[v as usize] += x;
+                    count[v as usize] += 1;
+                }
+            }
+            sum.iter()
+                .zip(&count)
+                .map(|(&s, &n)| if n == 0 { 0.0 } else { s / n as f64 })
+                .collect()
         }
+        None => Vec::new(),
     };
     (0..scheme.n_skeleton())
         .map(|d| match scheme.dof_entity(d) {
@@ -244,7 +259,7 @@ fn prolong(
                 [a, NO_CELL] => of(a),
                 [a, b] => 0.5 * (of(a) + of(b)),
             },
-            Entity::Vertex(v) => incidence.map_or(0.0, |i| mean(i.cells(v))),
+            Entity::Vertex(v) => vertex_mean.get(v).copied().unwrap_or(0.0),
         })
         .collect()
 }
@@ -306,11 +321,16 @@ fn map_down(
 ) -> Vec<bool> {
     let fine = scheme.mesh();
     let coarse = &agg.mesh;
+    let at_vertices = match (kind, incidence) {
+        (ConstraintKind::Obstacle, Some(_)) => vertex_obstacle(s, agg, scheme, cons),
+        _ => Vec::new(),
+    };
     let mut cells = Vec::new();
     let mut edges = Vec::new();
     cons.dofs
         .iter()
-        .map(|d| {
+        .enumerate()
+        .map(|(j, d)| {
             cells.clear();
             edges.clear();
             match scheme.dof_entity(d.dof) {
@@ -325,8 +345,10 @@ fn map_down(
                 }
                 Entity::Vertex(v) => {
                     if let Some(inc) = incidence {
-                        cells.extend_from_slice(inc.cells(v));
                         edges.extend_from_slice(inc.boundary_edges(v));
+                        if kind == ConstraintKind::Obstacle {
+                            return at_vertices[j];
+                        }
                     }
                 }
             }
@@ -348,6 +370,51 @@ fn map_down(
             }
         })
         .collect()
+}
+
+/// For the obstacle, whether each constrained unknown at a vertex is predicted active: all the
+/// fine cells around its vertex are [`active_inside`] (and there is one), found by one pass
+/// over the fine cells rather than by gathering the cells of each vertex (`false` for the
+/// unknowns not at a vertex).
+fn vertex_obstacle(
+    s: &CoarseState,
+    agg: &Agglomeration,
+    scheme: &dyn GradientDiscretisation,
+    cons: &Constraints,
+) -> Vec<bool> {
+    let fine = scheme.mesh();
+    let nv = fine.n_vertices();
+    // the constrained unknowns at each vertex (CSR)
+    let vertex: Vec<Option<usize>> = cons
+        .dofs
+        .iter()
+        .map(|d| match scheme.dof_entity(d.dof) {
+            Entity::Vertex(v) => Some(v),
+            _ => None,
+        })
+        .collect();
+    let (ptr, at) = crate::mesh::buckets::counting_sort(nv, vertex.iter().copied(), |j| j);
+    // per unknown: no cell seen yet, all cells seen so far pass, or one fails
+    const UNSEEN: u8 = 0;
+    const PASS: u8 = 1;
+    const FAIL: u8 = 2;
+    let mut state = vec![UNSEEN; cons.dofs.len()];
+    for k in 0..fine.n_cells() {
+        let c = agg.cell_of[k];
+        for &v in fine.cell_vertices(k) {
+            let v = v as usize;
+            for &j in &at[ptr[v]..ptr[v + 1]] {
+                if state[j] != FAIL {
+                    state[j] = if active_inside(s, &agg.mesh, c, cons.dofs[j].point) {
+                        PASS
+                    } else {
+                        FAIL
+                    };
+                }
+            }
+        }
+    }
+    state.into_iter().map(|x| x == PASS).collect()
 }
 
 /// Whether coarse cell `k` is active and `p` is at least [`EROSION`] · √|K| away from each of
@@ -380,17 +447,15 @@ fn segment_distance(p: Point, a: Point, b: Point) -> f64 {
     (q[0] - t * d[0]).hypot(q[1] - t * d[1])
 }
 
-/// The cells and boundary edges around each vertex of a mesh (for vertex unknowns).
+/// The boundary edges around each vertex of a mesh (for vertex unknowns; the cells around
+/// the vertices are visited by passes over the cells, [`vertex_obstacle`] and [`prolong`]).
 struct VertexIncidence {
-    cell_ptr: Vec<usize>,
-    cell_ids: Vec<usize>,
     /// Up to two boundary edges per vertex (NO_CELL-padded).
     boundary: Vec<[usize; 2]>,
 }
 
 impl VertexIncidence {
     fn new(mesh: &PolyMesh) -> Self {
-        let (cell_ptr, cell_ids) = mesh.vertex_cells();
         let mut boundary = vec![[NO_CELL; 2]; mesh.n_vertices()];
         for &e in mesh.boundary_edges() {
             for v in mesh.edge_vertices(e) {
@@ -402,18 +467,86 @@ impl VertexIncidence {
                 }
             }
         }
-        VertexIncidence {
-            cell_ptr,
-            cell_ids,
-            boundary,
-        }
-    }
-    fn cells(&self, v: usize) -> &[usize] {
-        &self.cell_ids[self.cell_ptr[v]..self.cell_ptr[v + 1]]
+        VertexIncidence { boundary }
     }
     fn boundary_edges(&self, v: usize) -> &[usize] {
         let b = &self.boundary[v];
         let n = b.iter().take_while(|&&e| e != NO_CELL).count();
         &b[..n]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::cartesian_triangles;
+    use crate::scheme::{P1, PointDof};
+
+    /// The passes over the cells of [`prolong`] and [`vertex_obstacle`] give exactly what
+    /// gathering the cells of each vertex (their definition) gives.
+    #[test]
+    fn vertex_passes_are_the_gathered_definitions() {
+        let fine = cartesian_triangles(64, 48, [-2.0, 2.0], [-1.5, 1.5]).unwrap();
+        let scheme = P1::new(&fine).unwrap();
+        let agg = agglomerate(&fine, 0.3).unwrap();
+        let coarse = &agg.mesh;
+        // a coarse contact zone (a disc) and coarse values
+        let s = CoarseState {
+            cell: (0..coarse.n_cells())
+                .map(|k| {
+                    let c = coarse.centroid(k);
+                    c[0] * c[0] + c[1] * c[1] < 1.0
+                })
+                .collect(),
+            edge: vec![false; coarse.n_edges()],
+        };
+        assert!(s.cell.iter().any(|&a| a) && !s.cell.iter().all(|&a| a));
+        let values: Vec<f64> = (0..coarse.n_cells())
+            .map(|k| (k as f64 * 0.731).sin())
+            .collect();
+        let incidence = VertexIncidence::new(&fine);
+        let (ptr, ids) = fine.vertex_cells();
+        let cells = |v: usize| &ids[ptr[v]..ptr[v + 1]];
+        let guess = prolong(&values, &agg, &scheme, Some(&incidence));
+        assert_eq!(guess.len(), scheme.n_skeleton());
+        let mut dofs = Vec::new();
+        for (d, g) in guess.iter().enumerate() {
+            if let Entity::Vertex(v) = scheme.dof_entity(d) {
+                let c = cells(v);
+                let want = c.iter().map(|&k| values[agg.cell_of[k]]).sum::<f64>() / c.len() as f64;
+                assert_eq!(g.to_bits(), want.to_bits(), "vertex {v}");
+                dofs.push(PointDof {
+                    dof: d,
+                    point: fine.vertex(v),
+                    measure: 1.0,
+                });
+            }
+        }
+        let cons = Constraints {
+            barrier: vec![0.0; dofs.len()],
+            dofs,
+            side: crate::problem::Side::Upper,
+        };
+        let active = map_down(
+            &s,
+            &agg,
+            &scheme,
+            &cons,
+            ConstraintKind::Obstacle,
+            Some(&incidence),
+        );
+        let mut n = 0;
+        for (j, d) in cons.dofs.iter().enumerate() {
+            let Entity::Vertex(v) = scheme.dof_entity(d.dof) else {
+                unreachable!()
+            };
+            let c = cells(v);
+            let want = !c.is_empty()
+                && c.iter()
+                    .all(|&k| active_inside(&s, coarse, agg.cell_of[k], d.point));
+            assert_eq!(active[j], want, "vertex {v}");
+            n += usize::from(want);
+        }
+        assert!(n > 0 && n < cons.dofs.len(), "{n} predicted active");
     }
 }
