@@ -53,6 +53,78 @@ fn structure_error(msg: String) -> crate::Error {
     crate::Error::Linear(format!("invalid sparse matrix: {msg}"))
 }
 
+/// Checks a lower-triangular CSC matrix of order `n` (see [`CsrMatrix::from_lower_csc`]):
+/// pointers, strictly increasing rows in each column, nothing above the diagonal or beyond
+/// the order; the first bad column in order is the error. Returns whether the matrix is large
+/// enough for the parallel sweep (the checks then also ran in parallel).
+fn check_lower_csc(
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+    values: &[f64],
+) -> crate::Result<bool> {
+    if n > u32::MAX as usize {
+        return Err(structure_error(format!(
+            "order {n}: column indices are 32-bit"
+        )));
+    }
+    if col_ptr.len() != n + 1
+        || col_ptr[0] != 0
+        || col_ptr[n] != row_idx.len()
+        || row_idx.len() != values.len()
+    {
+        return Err(structure_error(format!(
+            "lower CSC of order {n}: {} column pointers (from {:?} to {:?}), {} row indices, \
+             {} values",
+            col_ptr.len(),
+            col_ptr.first(),
+            col_ptr.last(),
+            row_idx.len(),
+            values.len()
+        )));
+    }
+    // check the columns (in parallel for large matrices; the first bad column is reported)
+    let check = |j: usize| -> Option<String> {
+        let (s, e) = (col_ptr[j], col_ptr[j + 1]);
+        if e < s || e > row_idx.len() {
+            return Some(format!("column pointers decrease or overrun at column {j}"));
+        }
+        let rows = &row_idx[s..e];
+        if rows.windows(2).any(|w| w[0] >= w[1]) {
+            return Some(format!(
+                "the row indices of column {j} are not strictly increasing"
+            ));
+        }
+        if let Some(&r) = rows.first()
+            && r < j
+        {
+            return Some(format!(
+                "column {j} has the entry ({r}, {j}) above the diagonal: the lower triangle \
+                 is expected"
+            ));
+        }
+        if let Some(&r) = rows.last()
+            && r >= n
+        {
+            return Some(format!("column {j} has row {r}, but the order is {n}"));
+        }
+        None
+    };
+    let parallel = row_idx.len() >= PAR_MIN_NNZ && n >= 2 * CSC_CHUNK;
+    let bad = if parallel {
+        (0..n)
+            .into_par_iter()
+            .with_min_len(ROW_CHUNK)
+            .find_map_first(check)
+    } else {
+        (0..n).find_map(check)
+    };
+    if let Some(msg) = bad {
+        return Err(structure_error(msg));
+    }
+    Ok(parallel)
+}
+
 impl CsrMatrix {
     /// A matrix from its CSR arrays, checked: `row_ptr` has `n_rows + 1` nondecreasing entries
     /// from 0 to `col_idx.len() == values.len()`, and the column indices of each row are
@@ -133,65 +205,7 @@ impl CsrMatrix {
         row_idx: &[usize],
         values: &[f64],
     ) -> crate::Result<Self> {
-        if n > u32::MAX as usize {
-            return Err(structure_error(format!(
-                "order {n}: column indices are 32-bit"
-            )));
-        }
-        if col_ptr.len() != n + 1
-            || col_ptr[0] != 0
-            || col_ptr[n] != row_idx.len()
-            || row_idx.len() != values.len()
-        {
-            return Err(structure_error(format!(
-                "lower CSC of order {n}: {} column pointers (from {:?} to {:?}), {} row indices, \
-                 {} values",
-                col_ptr.len(),
-                col_ptr.first(),
-                col_ptr.last(),
-                row_idx.len(),
-                values.len()
-            )));
-        }
-        // check the columns (in parallel for large matrices; the first bad column is reported)
-        let check = |j: usize| -> Option<String> {
-            let (s, e) = (col_ptr[j], col_ptr[j + 1]);
-            if e < s || e > row_idx.len() {
-                return Some(format!("column pointers decrease or overrun at column {j}"));
-            }
-            let rows = &row_idx[s..e];
-            if rows.windows(2).any(|w| w[0] >= w[1]) {
-                return Some(format!(
-                    "the row indices of column {j} are not strictly increasing"
-                ));
-            }
-            if let Some(&r) = rows.first()
-                && r < j
-            {
-                return Some(format!(
-                    "column {j} has the entry ({r}, {j}) above the diagonal: the lower triangle \
-                     is expected"
-                ));
-            }
-            if let Some(&r) = rows.last()
-                && r >= n
-            {
-                return Some(format!("column {j} has row {r}, but the order is {n}"));
-            }
-            None
-        };
-        let parallel = row_idx.len() >= PAR_MIN_NNZ && n >= 2 * CSC_CHUNK;
-        let bad = if parallel {
-            (0..n)
-                .into_par_iter()
-                .with_min_len(ROW_CHUNK)
-                .find_map_first(check)
-        } else {
-            (0..n).find_map(check)
-        };
-        if let Some(msg) = bad {
-            return Err(structure_error(msg));
-        }
+        let parallel = check_lower_csc(n, col_ptr, row_idx, values)?;
         if parallel && let Some(a) = Self::from_lower_csc_par(n, col_ptr, row_idx, values) {
             return Ok(a);
         }

@@ -124,6 +124,35 @@ pub struct PcgReport {
     pub initial_residual_norm: f64,
 }
 
+/// The sizes of A, M, b and x agree and the tolerances are non-negative.
+fn check_inputs(
+    a: &CsrMatrix,
+    m_order: usize,
+    b: &[f64],
+    x: &[f64],
+    opts: &PcgOptions,
+) -> crate::Result<()> {
+    let n = a.n_rows();
+    if a.n_cols() != n || b.len() != n || x.len() != n || m_order != n {
+        return Err(crate::Error::Linear(format!(
+            "conjugate gradients: matrix {}×{}, preconditioner of order {}, b of length {}, x \
+             of length {}",
+            n,
+            a.n_cols(),
+            m_order,
+            b.len(),
+            x.len()
+        )));
+    }
+    if !(opts.rtol >= 0.0 && opts.atol >= 0.0) {
+        return Err(crate::Error::Linear(format!(
+            "conjugate gradients: tolerances must be non-negative (rtol = {}, atol = {})",
+            opts.rtol, opts.atol
+        )));
+    }
+    Ok(())
+}
+
 /// Solves A x = b by preconditioned conjugate gradients (see the module documentation),
 /// starting from the `x` given and leaving the solution in it.
 ///
@@ -138,24 +167,8 @@ pub fn pcg<M: Preconditioner + ?Sized>(
     x: &mut [f64],
     opts: &PcgOptions,
 ) -> crate::Result<PcgReport> {
+    check_inputs(a, m.n(), b, x, opts)?;
     let n = a.n_rows();
-    if a.n_cols() != n || b.len() != n || x.len() != n || m.n() != n {
-        return Err(crate::Error::Linear(format!(
-            "conjugate gradients: matrix {}×{}, preconditioner of order {}, b of length {}, x \
-             of length {}",
-            n,
-            a.n_cols(),
-            m.n(),
-            b.len(),
-            x.len()
-        )));
-    }
-    if !(opts.rtol >= 0.0 && opts.atol >= 0.0) {
-        return Err(crate::Error::Linear(format!(
-            "conjugate gradients: tolerances must be non-negative (rtol = {}, atol = {})",
-            opts.rtol, opts.atol
-        )));
-    }
     let fail = |what: String, k: usize, res: f64| {
         crate::Error::Linear(format!(
             "conjugate gradients (order {n}): {what} at iteration {k}, residual norm {res:e}"

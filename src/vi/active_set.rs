@@ -43,9 +43,10 @@
 //! driver decides whether to fall back to projected Gauss–Seidel.
 
 use super::certificate::{Evaluation, evaluate};
-use super::look_ahead::{LookAheadOptions, Thresholds, look_ahead};
+use super::look_ahead::{LookAheadOptions, LookAheadReport, Thresholds, look_ahead};
 use super::{
-    Constraints, IterationLog, IterationStep, Method, QuadraticEnergy, VariationalSolution,
+    Constraints, IterationLog, IterationStep, Method, QuadraticEnergy, SolveTimings,
+    VariationalSolution,
 };
 use crate::error::SolverError;
 
@@ -190,6 +191,88 @@ fn sizes(history: &[Vec<bool>]) -> Vec<usize> {
         .collect()
 }
 
+/// One global solve with the unknowns `active` fixed at their barriers: the iterate, its
+/// timings, its evaluation and the active set the rule proposes next. An inexact (screened)
+/// iterate that would end the iteration or close a cycle (`next` equal to `active` or in
+/// `history`) is first refined to full accuracy, so that those decisions are taken on an
+/// exact one.
+fn solve_step(
+    q: &dyn QuadraticEnergy,
+    cons: &Constraints,
+    active: &[bool],
+    history: &[Vec<bool>],
+    screening: bool,
+    c: f64,
+) -> crate::Result<(Vec<f64>, SolveTimings, Evaluation, Vec<bool>)> {
+    let fixed = cons.fixed(q.n_unknowns(), active);
+    let (mut u, mut timings) = if screening {
+        q.screen_with_fixed(&fixed)?
+    } else {
+        q.minimise_with_fixed(&fixed)?
+    };
+    let mut ev = evaluate(q, Some(cons), &u, active);
+    let mut next = next_active(cons, &u, active, &ev, c);
+    if timings.inexact
+        && (next == active || history.contains(&next))
+        && let Some((v, more)) = q.refine(&fixed)?
+    {
+        u = v;
+        timings = timings.then(more);
+        ev = evaluate(q, Some(cons), &u, active);
+        next = next_active(cons, &u, active, &ev, c);
+    }
+    Ok((u, timings, ev, next))
+}
+
+/// The look-ahead after a solve that proposes `next` ≠ `active` (see [`look_ahead`]): its
+/// report, and its refined proposal if the local iterations converged and it differs from
+/// `active` (the caller still rejects one that would close a cycle).
+fn refine_proposal(
+    q: &dyn QuadraticEnergy,
+    cons: &Constraints,
+    u: &[f64],
+    active: &[bool],
+    next: &[bool],
+    ev: &Evaluation,
+    opts: &ActiveSetOptions,
+) -> crate::Result<(Option<LookAheadReport>, Option<Vec<bool>>)> {
+    let Some(la) = &opts.look_ahead else {
+        return Ok((None, None));
+    };
+    if next == active {
+        return Ok((None, None));
+    }
+    let mut proposal = next.to_vec();
+    let thr = thresholds(ev, opts.c);
+    let look = look_ahead(q, cons, u, active, &mut proposal, thr, la)?;
+    let taken = look.is_some_and(|r| r.converged) && proposal != active;
+    Ok((look, taken.then_some(proposal)))
+}
+
+/// Why the iteration stops without a solution after `solves` solves: a cycle (`next` repeats
+/// an earlier active set) or the solve budget; `None` to go on.
+fn stall(
+    history: &[Vec<bool>],
+    repeat: Option<usize>,
+    solves: usize,
+    max_solves: usize,
+) -> Option<SolverError> {
+    if let Some(rep) = repeat {
+        Some(SolverError::Cycling {
+            iteration: solves,
+            repeats: rep,
+            history: sizes(history),
+        })
+    } else if solves >= max_solves {
+        Some(SolverError::MaxIterations {
+            iterations: solves,
+            history: sizes(history),
+        })
+    } else {
+        None
+    }
+}
+
 /// Runs the active-set method (see module docs) and says whether it converged.
 pub fn run(
     q: &dyn QuadraticEnergy,
@@ -207,42 +290,17 @@ pub fn run(
     // whether an iterate since the last restart of the cycle test was inexact
     let mut inexact_seen = false;
     loop {
-        let fixed = cons.fixed(q.n_unknowns(), &active);
-        let (mut u, mut timings) = if screening {
-            q.screen_with_fixed(&fixed)?
-        } else {
-            q.minimise_with_fixed(&fixed)?
-        };
+        let (u, timings, ev, mut next) = solve_step(q, cons, &active, &history, screening, opts.c)?;
         inexact_seen |= timings.inexact;
-        let mut ev = evaluate(q, Some(cons), &u, &active);
-        let mut next = next_active(cons, &u, &active, &ev, opts.c);
-        // an inexact iterate may end the iteration or close a cycle: decide on the exact one
-        if timings.inexact
-            && (next == active || history.contains(&next))
-            && let Some((v, more)) = q.refine(&fixed)?
-        {
-            u = v;
-            timings = timings.then(more);
-            ev = evaluate(q, Some(cons), &u, &active);
-            next = next_active(cons, &u, &active, &ev, opts.c);
-        }
         if opts.keep_iterates {
             iterates.push(u.clone());
         }
-        let mut look = None;
-        if let Some(la) = &opts.look_ahead
-            && next != active
+        let (look, proposal) = refine_proposal(q, cons, &u, &active, &next, &ev, opts)?;
+        // a proposal that would close a cycle is not taken
+        if let Some(p) = proposal
+            && !history.contains(&p)
         {
-            let mut proposal = next.clone();
-            let thr = thresholds(&ev, opts.c);
-            look = look_ahead(q, cons, &u, &active, &mut proposal, thr, la)?;
-            // a proposal that would end the iteration or close a cycle is not taken
-            if look.is_some_and(|r| r.converged)
-                && proposal != active
-                && !history.contains(&proposal)
-            {
-                next = proposal;
-            }
+            next = p;
         }
         log.push(IterationLog {
             step: IterationStep {
@@ -282,21 +340,7 @@ pub fn run(
             history = vec![active.clone()];
             repeat = None;
         }
-        let error = if let Some(rep) = repeat {
-            Some(SolverError::Cycling {
-                iteration: log.len(),
-                repeats: rep,
-                history: sizes(&history),
-            })
-        } else if log.len() >= opts.max_solves {
-            Some(SolverError::MaxIterations {
-                iterations: log.len(),
-                history: sizes(&history),
-            })
-        } else {
-            None
-        };
-        if let Some(error) = error {
+        if let Some(error) = stall(&history, repeat, log.len(), opts.max_solves) {
             q.release();
             return Ok(Outcome::Stalled(Stalled { error, log }));
         }

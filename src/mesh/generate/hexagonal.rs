@@ -184,9 +184,9 @@ fn sin_2pi(i: usize, n: usize) -> f64 {
     }
 }
 
-/// Vertices and cells of the n × n construction, in the file numbering.
-fn hexagonal_data(n: usize) -> (Vec<Point>, Vec<Vec<usize>>) {
-    let num = Numbering { n };
+/// The vertices of the n × n construction, in the file numbering.
+fn hexagonal_vertices(num: &Numbering) -> Vec<Point> {
+    let n = num.n;
     let nf = n as f64;
     let coord = |i: usize| i as f64 / nf;
     let s: Vec<f64> = (0..=n).map(|i| sin_2pi(i, n)).collect();
@@ -218,85 +218,97 @@ fn hexagonal_data(n: usize) -> (Vec<Point>, Vec<Vec<usize>>) {
         vertices[num.node(n, k + 1)] = [1.0, coord(k + 1)];
         vertices[num.node(k, n)] = [coord(k), 1.0];
     }
+    vertices
+}
 
+/// The vertices of the cell around node (i, j) of the n × n construction (0 ≤ i, j ≤ n),
+/// counter-clockwise, in the file numbering.
+fn hexagonal_cell(num: &Numbering, i: usize, j: usize) -> Vec<usize> {
+    let n = num.n;
     let (l, u) = (|i, j| num.lower(i, j), |i, j| num.upper(i, j));
-    let cell = |i: usize, j: usize| -> Vec<usize> {
-        use Side::*;
-        let (bottom, top, left, right) = (j == 0, j == n, i == 0, i == n);
-        match (bottom, top, left, right) {
-            (false, false, false, false) => {
-                let mut ring = vec![
-                    l(i - 1, j - 1),
-                    u(i, j - 1),
-                    l(i, j),
-                    u(i, j),
-                    l(i - 1, j),
-                    u(i - 1, j - 1),
-                ];
-                let first = (0..6).min_by_key(|&r| ring[r]).expect("six vertices");
-                ring.rotate_left(first);
-                ring
-            }
-            (true, _, true, _) => vec![
-                l(0, 0),
-                u(0, 0),
-                num.mid(Left, 0),
-                num.node(0, 0),
-                num.mid(Bottom, 0),
-            ],
-            (true, _, _, true) => vec![
-                l(n - 1, 0),
-                num.mid(Bottom, n - 1),
-                num.node(n, 0),
-                num.mid(Right, 0),
-            ],
-            (_, true, _, true) => vec![
-                u(n - 1, n - 1),
-                l(n - 1, n - 1),
-                num.mid(Right, n - 1),
-                num.node(n, n),
-                num.mid(Top, n - 1),
-            ],
-            (_, true, true, _) => vec![
-                u(0, n - 1),
-                num.mid(Top, 0),
-                num.node(0, n),
-                num.mid(Left, n - 1),
-            ],
-            (true, ..) => vec![
-                l(i, 0),
-                u(i, 0),
-                l(i - 1, 0),
-                num.mid(Bottom, i - 1),
-                num.node(i, 0),
-                num.mid(Bottom, i),
-            ],
-            (_, true, ..) => vec![
-                u(i - 1, n - 1),
-                l(i - 1, n - 1),
-                u(i, n - 1),
-                num.mid(Top, i),
-                num.node(i, n),
-                num.mid(Top, i - 1),
-            ],
-            (_, _, true, _) => vec![
-                u(0, j - 1),
-                l(0, j),
-                u(0, j),
-                num.mid(Left, j),
-                num.node(0, j),
-                num.mid(Left, j - 1),
-            ],
-            (_, _, _, true) => vec![
-                l(n - 1, j),
-                u(n - 1, j - 1),
-                l(n - 1, j - 1),
-                num.mid(Right, j - 1),
-                num.node(n, j),
-                num.mid(Right, j),
-            ],
+
+    use Side::*;
+    let (bottom, top, left, right) = (j == 0, j == n, i == 0, i == n);
+    match (bottom, top, left, right) {
+        (false, false, false, false) => {
+            let mut ring = vec![
+                l(i - 1, j - 1),
+                u(i, j - 1),
+                l(i, j),
+                u(i, j),
+                l(i - 1, j),
+                u(i - 1, j - 1),
+            ];
+            let first = (0..6).min_by_key(|&r| ring[r]).expect("six vertices");
+            ring.rotate_left(first);
+            ring
         }
-    };
+        (true, _, true, _) => vec![
+            l(0, 0),
+            u(0, 0),
+            num.mid(Left, 0),
+            num.node(0, 0),
+            num.mid(Bottom, 0),
+        ],
+        (true, _, _, true) => vec![
+            l(n - 1, 0),
+            num.mid(Bottom, n - 1),
+            num.node(n, 0),
+            num.mid(Right, 0),
+        ],
+        (_, true, _, true) => vec![
+            u(n - 1, n - 1),
+            l(n - 1, n - 1),
+            num.mid(Right, n - 1),
+            num.node(n, n),
+            num.mid(Top, n - 1),
+        ],
+        (_, true, true, _) => vec![
+            u(0, n - 1),
+            num.mid(Top, 0),
+            num.node(0, n),
+            num.mid(Left, n - 1),
+        ],
+        (true, ..) => vec![
+            l(i, 0),
+            u(i, 0),
+            l(i - 1, 0),
+            num.mid(Bottom, i - 1),
+            num.node(i, 0),
+            num.mid(Bottom, i),
+        ],
+        (_, true, ..) => vec![
+            u(i - 1, n - 1),
+            l(i - 1, n - 1),
+            u(i, n - 1),
+            num.mid(Top, i),
+            num.node(i, n),
+            num.mid(Top, i - 1),
+        ],
+        (_, _, true, _) => vec![
+            u(0, j - 1),
+            l(0, j),
+            u(0, j),
+            num.mid(Left, j),
+            num.node(0, j),
+            num.mid(Left, j - 1),
+        ],
+        (_, _, _, true) => vec![
+            l(n - 1, j),
+            u(n - 1, j - 1),
+            l(n - 1, j - 1),
+            num.mid(Right, j - 1),
+            num.node(n, j),
+            num.mid(Right, j),
+        ],
+    }
+}
+
+/// Vertices and cells of the n × n construction, in the file numbering.
+fn hexagonal_data(n: usize) -> (Vec<Point>, Vec<Vec<usize>>) {
+    let num = Numbering { n };
+    let vertices = hexagonal_vertices(&num);
+    let cell = |i: usize, j: usize| hexagonal_cell(&num, i, j);
     let mut cells = Vec::with_capacity((n + 1) * (n + 1));
     for m in 0..=n {
         for j in 0..=m {
