@@ -736,6 +736,9 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
     }
     let mut cfg = Config::from_env(root)?;
     if args.iter().any(|a| a == "--report-only") {
+        if cfg.path(baseline::CSV).exists() {
+            baseline::write_report(&cfg)?;
+        }
         return write_report(&cfg);
     }
     let t0 = Instant::now();

@@ -257,6 +257,57 @@ fn regresses(r: &BaselineRow) -> Option<(bool, bool)> {
     ))
 }
 
+/// The verdict of a comparison: cases compared, those slower and heavier, the time ratios.
+struct Summary {
+    compared: usize,
+    slow: usize,
+    heavy: usize,
+    min: f64,
+    max: f64,
+    geometric_mean: f64,
+}
+
+fn summarise(rows: &[BaselineRow]) -> Summary {
+    let verdicts: Vec<(f64, (bool, bool))> = rows
+        .iter()
+        .filter_map(|r| regresses(r).map(|g| (r.new_s / r.base_s, g)))
+        .collect();
+    let n = verdicts.len();
+    let log_sum: f64 = verdicts.iter().map(|(x, _)| x.ln()).sum();
+    Summary {
+        compared: n,
+        slow: verdicts.iter().filter(|(_, g)| g.0).count(),
+        heavy: verdicts.iter().filter(|(_, g)| g.1).count(),
+        min: verdicts.iter().map(|v| v.0).fold(f64::NAN, f64::min),
+        max: verdicts.iter().map(|v| v.0).fold(f64::NAN, f64::max),
+        geometric_mean: (log_sum / n.max(1) as f64).exp(),
+    }
+}
+
+/// The row of the peer report's targets for "no regression of the existing benchmark rows",
+/// from [`CSV`] (`None` if the comparison has not been run).
+pub fn target_row(cfg: &Config) -> Option<[String; 3]> {
+    let rows: Vec<BaselineRow> = read_csv(&cfg.path(CSV)).ok()?;
+    let s = summarise(&rows);
+    let rev = &rows.first()?.baseline;
+    Some([
+        format!(
+            "no regression of the existing benchmark rows (same-run check against {rev}, `{REPORT}`)"
+        ),
+        format!(
+            "{} of {} cases slower than {MAX_SLOWDOWN}×, {} above {MAX_MEMORY}× memory; time \
+             ratios {} to {}, geometric mean {}",
+            s.slow,
+            s.compared,
+            s.heavy,
+            fixed(s.min, 2),
+            fixed(s.max, 2),
+            fixed(s.geometric_mean, 2)
+        ),
+        met(s.compared > 0 && s.slow == 0 && s.heavy == 0).into(),
+    ])
+}
+
 /// Writes [`REPORT`] from [`CSV`].
 pub fn write_report(cfg: &Config) -> gradvi::Result<()> {
     let rows: Vec<BaselineRow> = read_csv(&cfg.path(CSV))?;
@@ -271,35 +322,28 @@ pub fn write_report(cfg: &Config) -> gradvi::Result<()> {
          machine's run-to-run noise is about ±10%) and by more than {MIN_SLOWDOWN_S} s, or its \
          peak memory exceeds {MAX_MEMORY} times the earlier build's."
     ));
-    let compared: Vec<(&BaselineRow, (bool, bool))> = rows
-        .iter()
-        .filter_map(|r| regresses(r).map(|g| (r, g)))
-        .collect();
-    let slow: Vec<&BaselineRow> = compared.iter().filter(|(_, g)| g.0).map(|p| p.0).collect();
-    let heavy: Vec<&BaselineRow> = compared.iter().filter(|(_, g)| g.1).map(|p| p.0).collect();
-    let ratios: Vec<f64> = compared.iter().map(|(r, _)| r.new_s / r.base_s).collect();
-    let geo = (ratios.iter().map(|x| x.ln()).sum::<f64>() / ratios.len().max(1) as f64).exp();
+    let s = summarise(&rows);
     let mut t = Table::new("check | measured | verdict", "lll");
     t.row(vec![
         format!("time ≤ {MAX_SLOWDOWN} × earlier build, every case"),
         format!(
             "{} of {} cases above; ratios {} to {}, geometric mean {}",
-            slow.len(),
-            compared.len(),
-            fixed(ratios.iter().copied().fold(f64::NAN, f64::min), 2),
-            fixed(ratios.iter().copied().fold(f64::NAN, f64::max), 2),
-            fixed(geo, 2)
+            s.slow,
+            s.compared,
+            fixed(s.min, 2),
+            fixed(s.max, 2),
+            fixed(s.geometric_mean, 2)
         ),
-        met(slow.is_empty() && !compared.is_empty()).into(),
+        met(s.slow == 0 && s.compared > 0).into(),
     ]);
     t.row(vec![
         format!("peak memory ≤ {MAX_MEMORY} × earlier build, every case"),
-        format!("{} of {} cases above", heavy.len(), compared.len()),
-        met(heavy.is_empty() && !compared.is_empty()).into(),
+        format!("{} of {} cases above", s.heavy, s.compared),
+        met(s.heavy == 0 && s.compared > 0).into(),
     ]);
     md.heading(2, "Verdict");
     md.table(&t);
-    let skipped = rows.len() - compared.len();
+    let skipped = rows.len() - s.compared;
     if skipped > 0 {
         md.para(format!(
             "{skipped} cases could not be run by the earlier build (reasons in the table below) \
@@ -369,5 +413,9 @@ mod tests {
         let failed = row(&job(), "abc", &new, Err("unknown --peer-child".into()));
         assert_eq!(regresses(&failed), None);
         assert!(failed.base_s.is_nan() && failed.note.contains("peer-child"));
+        // the summary counts the compared cases only
+        let sum = summarise(&[r, fast, failed, tiny]);
+        assert_eq!((sum.compared, sum.slow, sum.heavy), (3, 1, 0));
+        assert!(sum.min < 1.0 && sum.max > 1.1 && sum.geometric_mean > 0.0);
     }
 }
