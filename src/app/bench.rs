@@ -619,18 +619,20 @@ fn stdout_of(mut cmd: Command, exe: &Path, what: &str) -> gradvi::Result<String>
 pub fn run_child(exe: &Path, case: &Case) -> gradvi::Result<BenchRow> {
     let mut cmd = Command::new(exe);
     cmd.args(case.child_args());
-    let text = stdout_of(cmd, exe, &format!("case {}", case.label()))?;
+    let what = format!("case {}", case.label());
+    let text = stdout_of(cmd, exe, &what)?;
+    json_row(&text, &format!("{what}: bad child output"))
+}
+
+/// The JSON object a process printed last on its standard output `text`, parsed; an error
+/// starting with `what` otherwise.
+fn json_row<T: serde::de::DeserializeOwned>(text: &str, what: &str) -> gradvi::Result<T> {
     let line = text
         .lines()
         .rev()
         .find(|l| l.starts_with('{'))
         .unwrap_or("");
-    serde_json::from_str(line).map_err(|e| {
-        bad(format!(
-            "case {}: bad child output ({e}): {text}",
-            case.label()
-        ))
-    })
+    serde_json::from_str(line).map_err(|e| bad(format!("{what} ({e}): {text}")))
 }
 
 /// Whether `python` can import dolfinx and gmsh.

@@ -738,15 +738,13 @@ fn syntax_error(src: &str, e: &pest::error::Error<Rule>) -> ExprError {
     };
     let expected = match &e.variant {
         ErrorVariant::ParsingError { positives, .. } => {
-            let mut what: Vec<&str> = positives.iter().map(|r| describe(*r)).collect();
-            what.dedup();
-            let mut seen = Vec::new();
-            what.retain(|w| {
-                !seen.contains(w) && {
-                    seen.push(*w);
-                    true
+            // each description once, in the order pest gives the rules
+            let mut what: Vec<&str> = Vec::new();
+            for w in positives.iter().map(|r| describe(*r)) {
+                if !what.contains(&w) {
+                    what.push(w);
                 }
-            });
+            }
             match what.split_last() {
                 Some((last, [])) => last.to_string(),
                 Some((last, rest)) => format!("{} or {last}", rest.join(", ")),

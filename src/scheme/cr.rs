@@ -94,7 +94,7 @@ impl super::triangle::TriangleScheme for Cr<'_> {
         *b = DVector::from_fn(3, |i, _| third * f(self.sub_centroid(k, i)));
     }
     fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
-        super::edge_unknown_trace(self.mesh, e, out);
+        super::face_unknown_trace(self.mesh, e, out);
     }
     fn vertex_values(&self, u: &[f64]) -> Vec<f64> {
         let m = self.mesh;

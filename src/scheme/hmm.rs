@@ -189,13 +189,7 @@ impl<M: CellComplex<D> + VertexAverage + ?Sized, const D: usize> GradientDiscret
         b[0] = self.mesh.cell_measure(k) * f(self.mesh.cell_centre(k));
     }
     fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof<D>>) {
-        // T_D v = v_σ: boundary face σ carries its own unknown, at x_σ, with weight |σ|
-        out.clear();
-        out.push(PointDof {
-            dof: e,
-            point: self.mesh.face_centre(e),
-            measure: self.mesh.face_measure(e),
-        });
+        super::face_unknown_trace(self.mesh, e, out);
     }
     fn obstacle_dofs(&self) -> Vec<PointDof<D>> {
         (0..self.mesh.n_cells())

@@ -112,15 +112,19 @@ where
     fn vertex_values(&self, u: &[f64]) -> Vec<f64>;
 }
 
-/// The trace of the schemes with one unknown per edge, numbered like the edges (HMM,
-/// Crouzeix–Raviart): T_D v = v_σ on σ, so boundary edge `e` carries its own unknown, at x_σ,
+/// The trace of the schemes with one unknown per face, numbered like the faces (HMM,
+/// Crouzeix–Raviart): T_D v = v_σ on σ, so boundary face `e` carries its own unknown, at x_σ,
 /// with weight |σ|.
-fn edge_unknown_trace(mesh: &PolyMesh, e: usize, out: &mut Vec<PointDof>) {
+fn face_unknown_trace<M: CellComplex<D> + ?Sized, const D: usize>(
+    mesh: &M,
+    e: usize,
+    out: &mut Vec<PointDof<D>>,
+) {
     out.clear();
     out.push(PointDof {
         dof: e,
-        point: mesh.edge_midpoint(e),
-        measure: mesh.edge_measure(e),
+        point: mesh.face_centre(e),
+        measure: mesh.face_measure(e),
     });
 }
 

@@ -18,7 +18,7 @@
 //! [`MAX_SLOWDOWN`] times the earlier build's and more than [`MIN_SLOWDOWN_S`] longer, or its
 //! peak memory more than [`MAX_MEMORY`] times; the NITER of both builds are shown beside.
 
-use super::{Config, bad, peers, plan, stdout_of};
+use super::{Config, bad, json_row, peers, plan, stdout_of};
 use crate::app::markdown::{Doc, Table, fixed, met};
 use crate::app::replication::records::{read_csv, write_csv};
 use serde::{Deserialize, Serialize};
@@ -87,21 +87,17 @@ fn jobs(cfg: &Config) -> gradvi::Result<Vec<Job>> {
         .and_then(|v| v.trim().parse().ok())
         .unwrap_or(DEFAULT_EX9_MAX_GRID);
     for (family, scheme, linear, size, file) in peers::gradvi_cases(cfg, max_grid)? {
-        let mut args = vec!["bench".to_string(), "--peer-child".to_string()];
-        args.extend([family.clone(), scheme.to_string(), linear.to_string()]);
-        args.push(size.to_string());
-        let mut case = format!("{family} {scheme} {linear}");
-        if let Some(f) = &file {
-            args.push(f.display().to_string());
-            let stem = f.file_stem().unwrap_or_default().to_string_lossy();
-            case = format!("{case} {stem}");
-        } else {
-            case = format!("{case} {size}²");
-        }
+        let case = match &file {
+            Some(f) => format!(
+                "{family} {scheme} {linear} {}",
+                f.file_stem().unwrap_or_default().to_string_lossy()
+            ),
+            None => format!("{family} {scheme} {linear} {size}²"),
+        };
         out.push(Job {
             bench: "peers",
             case,
-            args,
+            args: peers::child_args(&family, scheme, linear, size, file.as_deref()),
         });
     }
     Ok(out)
@@ -119,14 +115,9 @@ struct Sample {
 fn sample(cfg: &Config, exe: &Path, args: &[String]) -> gradvi::Result<Sample> {
     let mut cmd = Command::new(exe);
     cmd.args(args).current_dir(&cfg.root);
-    let text = stdout_of(cmd, exe, &args.join(" "))?;
-    let line = text
-        .lines()
-        .rev()
-        .find(|l| l.starts_with('{'))
-        .unwrap_or("");
-    let v: serde_json::Value = serde_json::from_str(line)
-        .map_err(|e| bad(format!("{}: bad child output ({e})", args.join(" "))))?;
+    let what = args.join(" ");
+    let text = stdout_of(cmd, exe, &what)?;
+    let v: serde_json::Value = json_row(&text, &format!("{what}: bad child output"))?;
     let num = |k: &str| v.get(k).and_then(serde_json::Value::as_f64);
     match (num("total_s"), num("peak_mib"), num("niter")) {
         (Some(total_s), Some(peak_mib), Some(niter)) => Ok(Sample {

@@ -18,7 +18,7 @@
 //! other part are kept from the existing CSV. `GRADVI_BENCH_LOG=1` prints each solve's timings. Rows go to `replication/results/bench_peers.csv`; the report's first sections
 //! are written from it ([`super::report`]).
 
-use super::{Config, bad, io_err, peak_memory_mib, stdout_of};
+use super::{Config, bad, io_err, json_row, peak_memory_mib, stdout_of};
 use crate::app::replication::records::{read_csv, write_csv};
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::budget::human_bytes;
@@ -341,13 +341,7 @@ fn run_petsc(cfg: &Config, bin: &Path, grid: usize) -> gradvi::Result<PeerRow> {
         err_max: f64,
         err_mean: f64,
     }
-    let line = text
-        .lines()
-        .rev()
-        .find(|l| l.starts_with('{'))
-        .unwrap_or("");
-    let r: Ex9 = serde_json::from_str(line)
-        .map_err(|e| bad(format!("PETSc ex9 at {grid}: bad output ({e}): {text}")))?;
+    let r: Ex9 = json_row(&text, &format!("PETSc ex9 at {grid}: bad output"))?;
     Ok(PeerRow {
         family: "ex9".into(),
         code: "petsc".into(),
@@ -429,19 +423,25 @@ fn gradvi_child(
     file: Option<&Path>,
 ) -> gradvi::Result<PeerRow> {
     let mut cmd = Command::new(exe);
-    cmd.args(["bench", "--peer-child", family, &scheme.to_string(), linear])
-        .arg(size.to_string());
-    if let Some(f) = file {
-        cmd.arg(f);
-    }
+    cmd.args(child_args(family, scheme, linear, size, file));
     let what = format!("{family} {scheme} {linear} {size}");
     let text = stdout_of(cmd, exe, &what)?;
-    let line = text
-        .lines()
-        .rev()
-        .find(|l| l.starts_with('{'))
-        .unwrap_or("");
-    serde_json::from_str(line).map_err(|e| bad(format!("{what}: bad child output ({e}): {text}")))
+    json_row(&text, &format!("{what}: bad child output"))
+}
+
+/// The arguments of `gradvi` that run one gradvi case of this benchmark in a child process.
+pub fn child_args(
+    family: &str,
+    scheme: SchemeKind,
+    linear: &str,
+    size: usize,
+    file: Option<&Path>,
+) -> Vec<String> {
+    let mut args = vec!["bench".to_string(), "--peer-child".to_string()];
+    args.extend([family.to_string(), scheme.to_string(), linear.to_string()]);
+    args.push(size.to_string());
+    args.extend(file.map(|f| f.display().to_string()));
+    args
 }
 
 /// The linear-solver variants of gradvi that the peer benchmark runs.
@@ -495,16 +495,7 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
     if let (true, Err(why)) = (do_ex9, &petsc) {
         eprintln!("[bench] warning: no PETSc rows: {why}");
     }
-    for &g in EX9_GRIDS.iter().filter(|&&g| do_ex9 && g <= max_grid) {
-        let available = gradvi::mesh::budget::memory_budget();
-        if g >= BIG_GRID && available < BIG_GRID_MEMORY {
-            eprintln!(
-                "[bench] warning: ex9 {g}² skipped: {} available, it needs {}",
-                human_bytes(available),
-                human_bytes(BIG_GRID_MEMORY)
-            );
-            continue;
-        }
+    for g in ex9_grids(if do_ex9 { max_grid } else { 0 }) {
         if let Ok(bin) = &petsc {
             eprintln!("[bench] ex9 PETSc gs+mg, {g}² grid ...");
             push(run_petsc(cfg, bin, g)?, &mut rows)?;
@@ -531,6 +522,27 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
         push(row, &mut rows)?;
     }
     Ok(())
+}
+
+/// The ex9 grids up to `max_grid` that fit in the memory available ([`BIG_GRID`] needs
+/// [`BIG_GRID_MEMORY`]; a grid left out is said on stderr).
+fn ex9_grids(max_grid: usize) -> Vec<usize> {
+    let available = gradvi::mesh::budget::memory_budget();
+    EX9_GRIDS
+        .into_iter()
+        .filter(|&g| g <= max_grid)
+        .filter(|&g| {
+            let fits = g < BIG_GRID || available >= BIG_GRID_MEMORY;
+            if !fits {
+                eprintln!(
+                    "[bench] warning: ex9 {g}² skipped: {} available, it needs {}",
+                    human_bytes(available),
+                    human_bytes(BIG_GRID_MEMORY)
+                );
+            }
+            fits
+        })
+        .collect()
 }
 
 /// The gradvi cases of the any-domain part: (domain, scheme, linear solver, mesh file), the
@@ -563,7 +575,7 @@ pub type GradviCase = (String, SchemeKind, &'static str, usize, Option<PathBuf>)
 /// the regression check ([`super::baseline`]).
 pub fn gradvi_cases(cfg: &Config, max_grid: usize) -> gradvi::Result<Vec<GradviCase>> {
     let mut out: Vec<GradviCase> = Vec::new();
-    for &g in EX9_GRIDS.iter().filter(|&&g| g <= max_grid) {
+    for g in ex9_grids(max_grid) {
         for (scheme, linear) in ex9_variants(g) {
             out.push(("ex9".into(), scheme, linear, g, None));
         }
