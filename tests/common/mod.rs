@@ -81,7 +81,11 @@ pub const ANISOTROPIC: Tensor = [[1.5, 0.5], [0.5, 1.5]];
 /// The patch test: ū = 1 + 2x − 3y (f = 0) with A = [`ANISOTROPIC`], Dirichlet on the left and
 /// bottom sides, the Neumann flux A∇ū·n on the right and top sides.
 pub fn affine_problem() -> Problem {
-    let a = ANISOTROPIC;
+    affine_problem_with(ANISOTROPIC)
+}
+
+/// [`affine_problem`] with the tensor `a`.
+pub fn affine_problem_with(a: Tensor) -> Problem {
     let g = [2.0, -3.0];
     let flux = [
         a[0][0] * g[0] + a[0][1] * g[1],
