@@ -253,7 +253,30 @@ impl PolyMesh {
     pub(crate) fn from_flat_cells(
         vertices: Vec<Point>,
         cell_ptr: Vec<usize>,
+        cell_verts: Vec<usize>,
+    ) -> Result<Self, MeshError> {
+        Self::build_flat(vertices, cell_ptr, cell_verts, true)
+    }
+
+    /// As [`PolyMesh::from_flat_cells`] for the cells of a tensor-product grid whose
+    /// coordinates increase strictly along both directions (the caller checks them; the
+    /// Cartesian generators): such cells tile their rectangle by construction, so the sweep for
+    /// crossing edges and overlapping cells (checks 11 and 12, O(N log N) and sequential: 1.5 s
+    /// of the 3 s taken by a 2048² triangulated grid) is not run; every other check is.
+    pub(crate) fn from_tensor_grid_cells(
+        vertices: Vec<Point>,
+        cell_ptr: Vec<usize>,
+        cell_verts: Vec<usize>,
+    ) -> Result<Self, MeshError> {
+        Self::build_flat(vertices, cell_ptr, cell_verts, false)
+    }
+
+    /// [`PolyMesh::from_flat_cells`], with the overlap sweep if `sweep`.
+    fn build_flat(
+        vertices: Vec<Point>,
+        cell_ptr: Vec<usize>,
         mut cell_verts: Vec<usize>,
+        sweep: bool,
     ) -> Result<Self, MeshError> {
         debug_assert!(
             cell_ptr.first() == Some(&0)
@@ -273,7 +296,7 @@ impl PolyMesh {
             || {
                 rayon::join(
                     || validate::check_duplicate_vertices(&vertices),
-                    || sweep::SweepOrder::new(&vertices),
+                    || sweep.then(|| sweep::SweepOrder::new(&vertices)),
                 )
             },
         );
@@ -317,18 +340,20 @@ impl PolyMesh {
             &cell_edges,
             &boundary_edges,
         )?;
-        validate::check_no_overlap(
-            &validate::Topology {
-                vertices: &vertices,
-                cell_ptr: &cell_ptr,
-                cell_verts: &cell_verts,
-                edges: &edges,
-                edge_cells: &edge_cells,
-                cell_area: &cells.area,
-            },
-            &boundary,
-            order,
-        )?;
+        if let Some(order) = order {
+            validate::check_no_overlap(
+                &validate::Topology {
+                    vertices: &vertices,
+                    cell_ptr: &cell_ptr,
+                    cell_verts: &cell_verts,
+                    edges: &edges,
+                    edge_cells: &edge_cells,
+                    cell_area: &cells.area,
+                },
+                &boundary,
+                order,
+            )?;
+        }
         drop(boundary);
 
         // compact storage of the edges (ids below u32::MAX, checked above); the usize arrays

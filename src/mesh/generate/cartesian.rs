@@ -32,8 +32,18 @@ pub fn cartesian_rect(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<
     let what = format!("a {nx} × {ny} Cartesian mesh");
     check_cell_count(&what, nx.checked_mul(ny))?;
     check_memory(&what, counts(nx, ny), memory_budget())?;
-    let (vertices, cells) = cartesian_data(nx, ny, x, y);
-    Ok(PolyMesh::from_cells(vertices, cells)?)
+    let vertices = grid_vertices(nx, ny, x, y)?;
+    let v = |i: usize, j: usize| j * (nx + 1) + i;
+    let mut cell_verts = Vec::with_capacity(4 * nx * ny);
+    for j in 0..ny {
+        for i in 0..nx {
+            cell_verts.extend([v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)]);
+        }
+    }
+    let cell_ptr: Vec<usize> = (0..=nx * ny).map(|k| 4 * k).collect();
+    Ok(PolyMesh::from_tensor_grid_cells(
+        vertices, cell_ptr, cell_verts,
+    )?)
 }
 
 /// The nx × ny grid of the rectangle `[x[0], x[1]] × [y[0], y[1]]` with every square cut into
@@ -50,7 +60,7 @@ pub fn cartesian_triangles(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Re
     let what = format!("a {nx} × {ny} triangulated Cartesian mesh");
     check_cell_count(&what, nx.checked_mul(ny).and_then(|c| c.checked_mul(2)))?;
     check_memory(&what, triangle_counts(nx, ny), memory_budget())?;
-    let vertices = grid_vertices(nx, ny, x, y);
+    let vertices = grid_vertices(nx, ny, x, y)?;
     let v = |i: usize, j: usize| j * (nx + 1) + i;
     let mut cell_verts = Vec::with_capacity(6 * nx * ny);
     for j in 0..ny {
@@ -60,7 +70,9 @@ pub fn cartesian_triangles(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Re
         }
     }
     let cell_ptr: Vec<usize> = (0..=2 * nx * ny).map(|k| 3 * k).collect();
-    Ok(PolyMesh::from_flat_cells(vertices, cell_ptr, cell_verts)?)
+    Ok(PolyMesh::from_tensor_grid_cells(
+        vertices, cell_ptr, cell_verts,
+    )?)
 }
 
 /// Cells, cell sides, vertices and edges of the nx × ny mesh.
@@ -105,14 +117,31 @@ fn check_grid(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<()> {
 }
 
 /// The (nx+1)(ny+1) grid vertices, numbered as in the module docs.
-fn grid_vertices(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Vec<Point> {
+/// The coordinates must increase strictly along each direction (an error names the first
+/// that does not: the range is too narrow for that many cells in floating point): the cells of
+/// such a tensor grid tile the rectangle by construction, which is what
+/// [`PolyMesh::from_tensor_grid_cells`] requires.
+fn grid_vertices(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<Vec<Point>> {
     let xs: Vec<f64> = (0..=nx).map(|i| grid_coord(x[0], x[1], i, nx)).collect();
+    let ys: Vec<f64> = (0..=ny).map(|j| grid_coord(y[0], y[1], j, ny)).collect();
+    for (name, c) in [("x", &xs), ("y", &ys)] {
+        if let Some(i) = c.windows(2).position(|w| !(w[0] < w[1])) {
+            return Err(Error::InvalidData(format!(
+                "the {name} coordinates of a Cartesian mesh do not increase strictly: lines {i} \
+                 and {} are both at {} ({} cells are too many for the range [{}, {}])",
+                i + 1,
+                c[i + 1],
+                c.len() - 1,
+                c[0],
+                c[c.len() - 1]
+            )));
+        }
+    }
     let mut vertices = Vec::with_capacity((nx + 1) * (ny + 1));
-    for j in 0..=ny {
-        let yj = grid_coord(y[0], y[1], j, ny);
+    for &yj in &ys {
         vertices.extend(xs.iter().map(|&xi| [xi, yj]));
     }
-    vertices
+    Ok(vertices)
 }
 
 /// Coordinate `i` of `n` equal steps on `[a, b]`, exactly `b` for `i = n`.
@@ -122,19 +151,6 @@ fn grid_coord(a: f64, b: f64, i: usize, n: usize) -> f64 {
     } else {
         a + (b - a) * (i as f64 / n as f64)
     }
-}
-
-/// Vertices and cells of the nx × ny grid (arguments already validated).
-fn cartesian_data(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> (Vec<Point>, Vec<Vec<usize>>) {
-    let vertices = grid_vertices(nx, ny, x, y);
-    let v = |i: usize, j: usize| j * (nx + 1) + i;
-    let mut cells = Vec::with_capacity(nx * ny);
-    for j in 0..ny {
-        for i in 0..nx {
-            cells.push(vec![v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)]);
-        }
-    }
-    (vertices, cells)
 }
 
 #[cfg(test)]
@@ -200,8 +216,41 @@ mod tests {
             cartesian_rect(2, 2, [0.0, 0.0], [0.0, 1.0]),
             cartesian(1 << 13, 1 << 14),
             cartesian(usize::MAX, 2),
+            // 1000 steps of a range of 4 ulps: coordinates that do not increase strictly
+            cartesian_rect(1000, 2, [1.0, 1.0 + 4.0 * f64::EPSILON], [0.0, 1.0]),
+            cartesian_triangles(2, 1000, [0.0, 1.0], [1.0, 1.0 + 4.0 * f64::EPSILON]),
         ] {
             assert!(matches!(r, Err(Error::InvalidData(_))), "{r:?}");
+        }
+    }
+
+    /// The generators skip the overlap sweep (`PolyMesh::from_tensor_grid_cells`): the same
+    /// cells pass the full validation, with the same mesh.
+    #[test]
+    fn tensor_grids_pass_the_full_validation() {
+        for (nx, ny, x, y) in [
+            (1, 1, [0.0, 1.0], [0.0, 1.0]),
+            (7, 3, [-2.0, 2.0], [0.1, 0.3]),
+            (30, 45, [0.0, 1.0], [0.0, 1.0]),
+        ] {
+            for m in [
+                cartesian_rect(nx, ny, x, y).unwrap(),
+                cartesian_triangles(nx, ny, x, y).unwrap(),
+            ] {
+                let v: Vec<Point> = (0..m.n_vertices()).map(|i| m.vertex(i)).collect();
+                let cells: Vec<Vec<usize>> = (0..m.n_cells())
+                    .map(|k| m.cell_vertices(k).iter().map(|&i| i as usize).collect())
+                    .collect();
+                let full = PolyMesh::from_cells(v, cells).unwrap();
+                assert_eq!(full.n_edges(), m.n_edges());
+                for e in 0..m.n_edges() {
+                    assert_eq!(full.edge_cells(e), m.edge_cells(e));
+                }
+                for k in 0..m.n_cells() {
+                    assert_eq!(full.cell_edges(k), m.cell_edges(k));
+                    assert_eq!(full.centroid(k), m.centroid(k));
+                }
+            }
         }
     }
 }
