@@ -71,6 +71,15 @@ pub const NO_CELL: usize = usize::MAX;
 /// A 2D point or vector.
 pub type Point = [f64; 2];
 
+/// Whether [`PolyMesh::from_flat_cells`] sweeps for crossing edges and overlapping cells.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Overlap {
+    /// Sweep (any input).
+    Sweep,
+    /// Not: the cells of a tensor-product grid with strictly increasing coordinates.
+    ByConstruction,
+}
+
 /// A conforming polygonal mesh with cached geometry. See the module docs.
 #[derive(Debug, Clone)]
 pub struct PolyMesh {
@@ -236,7 +245,7 @@ impl PolyMesh {
             cell_ptr.push(cell_verts.len());
         }
         drop(cells);
-        let mut mesh = Self::from_flat_cells(vertices, cell_ptr, cell_verts)?;
+        let mut mesh = Self::from_flat_cells(vertices, cell_ptr, cell_verts, Overlap::Sweep)?;
         mesh.set_boundary_tags(tagged_edges, NonBoundaryTag::Reject)?;
         Ok(mesh)
     }
@@ -250,33 +259,17 @@ impl PolyMesh {
     /// edge numbering read as `usize`; the mesh then keeps 32-bit copies of `cell_ptr` and
     /// `cell_verts`, made (and the `usize` arrays freed) before the overlap check, the peak of
     /// the construction. Readers pass flat cells to avoid one small allocation per cell.
+    ///
+    /// `overlap` says whether the sweep for crossing edges and overlapping cells (checks 11
+    /// and 12, O(N log N) and sequential) runs: [`Overlap::ByConstruction`] only for the cells
+    /// of a tensor-product grid whose coordinates increase strictly along both directions (the
+    /// Cartesian generators check them), which tile their rectangle by construction (the sweep
+    /// was 1.5 s of the 3 s taken by a 2048² triangulated grid); every other check runs.
     pub(crate) fn from_flat_cells(
         vertices: Vec<Point>,
         cell_ptr: Vec<usize>,
-        cell_verts: Vec<usize>,
-    ) -> Result<Self, MeshError> {
-        Self::build_flat(vertices, cell_ptr, cell_verts, true)
-    }
-
-    /// As [`PolyMesh::from_flat_cells`] for the cells of a tensor-product grid whose
-    /// coordinates increase strictly along both directions (the caller checks them; the
-    /// Cartesian generators): such cells tile their rectangle by construction, so the sweep for
-    /// crossing edges and overlapping cells (checks 11 and 12, O(N log N) and sequential: 1.5 s
-    /// of the 3 s taken by a 2048² triangulated grid) is not run; every other check is.
-    pub(crate) fn from_tensor_grid_cells(
-        vertices: Vec<Point>,
-        cell_ptr: Vec<usize>,
-        cell_verts: Vec<usize>,
-    ) -> Result<Self, MeshError> {
-        Self::build_flat(vertices, cell_ptr, cell_verts, false)
-    }
-
-    /// [`PolyMesh::from_flat_cells`], with the overlap sweep if `sweep`.
-    fn build_flat(
-        vertices: Vec<Point>,
-        cell_ptr: Vec<usize>,
         mut cell_verts: Vec<usize>,
-        sweep: bool,
+        overlap: Overlap,
     ) -> Result<Self, MeshError> {
         debug_assert!(
             cell_ptr.first() == Some(&0)
@@ -296,7 +289,7 @@ impl PolyMesh {
             || {
                 rayon::join(
                     || validate::check_duplicate_vertices(&vertices),
-                    || sweep.then(|| sweep::SweepOrder::new(&vertices)),
+                    || (overlap == Overlap::Sweep).then(|| sweep::SweepOrder::new(&vertices)),
                 )
             },
         );

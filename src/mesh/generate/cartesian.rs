@@ -17,7 +17,7 @@
 use super::{Counts, check_cell_count, check_memory};
 use crate::error::{Error, Result};
 use crate::mesh::budget::memory_budget;
-use crate::mesh::{Point, PolyMesh};
+use crate::mesh::{Overlap, Point, PolyMesh};
 
 /// The nx × ny uniform mesh of \[0,1\]² (see the module docs for the numbering).
 pub fn cartesian(nx: usize, ny: usize) -> Result<PolyMesh> {
@@ -32,18 +32,9 @@ pub fn cartesian_rect(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<
     let what = format!("a {nx} × {ny} Cartesian mesh");
     check_cell_count(&what, nx.checked_mul(ny))?;
     check_memory(&what, counts(nx, ny), memory_budget())?;
-    let vertices = grid_vertices(nx, ny, x, y)?;
-    let v = |i: usize, j: usize| j * (nx + 1) + i;
-    let mut cell_verts = Vec::with_capacity(4 * nx * ny);
-    for j in 0..ny {
-        for i in 0..nx {
-            cell_verts.extend([v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)]);
-        }
-    }
-    let cell_ptr: Vec<usize> = (0..=nx * ny).map(|k| 4 * k).collect();
-    Ok(PolyMesh::from_tensor_grid_cells(
-        vertices, cell_ptr, cell_verts,
-    )?)
+    grid_mesh(nx, ny, x, y, [1, 4], |[a, b, c, d], cells| {
+        cells.extend([a, b, c, d])
+    })
 }
 
 /// The nx × ny grid of the rectangle `[x[0], x[1]] × [y[0], y[1]]` with every square cut into
@@ -60,18 +51,43 @@ pub fn cartesian_triangles(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Re
     let what = format!("a {nx} × {ny} triangulated Cartesian mesh");
     check_cell_count(&what, nx.checked_mul(ny).and_then(|c| c.checked_mul(2)))?;
     check_memory(&what, triangle_counts(nx, ny), memory_budget())?;
+    grid_mesh(nx, ny, x, y, [2, 3], |[a, b, c, d], cells| {
+        cells.extend([a, b, c]);
+        cells.extend([a, c, d]);
+    })
+}
+
+/// The mesh of the nx × ny grid (arguments checked) whose square (i, j), with corners
+/// [v(i,j), v(i+1,j), v(i+1,j+1), v(i,j+1)], gives the cells that `square` appends to the
+/// flat cell list (`shape[0]` cells of `shape[1]` vertices), square after square in row-major
+/// order.
+fn grid_mesh(
+    nx: usize,
+    ny: usize,
+    x: [f64; 2],
+    y: [f64; 2],
+    shape: [usize; 2],
+    square: impl Fn([usize; 4], &mut Vec<usize>),
+) -> Result<PolyMesh> {
     let vertices = grid_vertices(nx, ny, x, y)?;
     let v = |i: usize, j: usize| j * (nx + 1) + i;
-    let mut cell_verts = Vec::with_capacity(6 * nx * ny);
+    let n_cells = shape[0] * nx * ny;
+    let mut cell_verts = Vec::with_capacity(shape[1] * n_cells);
     for j in 0..ny {
         for i in 0..nx {
-            cell_verts.extend([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
-            cell_verts.extend([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+            square(
+                [v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)],
+                &mut cell_verts,
+            );
         }
     }
-    let cell_ptr: Vec<usize> = (0..=2 * nx * ny).map(|k| 3 * k).collect();
-    Ok(PolyMesh::from_tensor_grid_cells(
-        vertices, cell_ptr, cell_verts,
+    debug_assert_eq!(cell_verts.len(), shape[1] * n_cells);
+    let cell_ptr: Vec<usize> = (0..=n_cells).map(|k| shape[1] * k).collect();
+    Ok(PolyMesh::from_flat_cells(
+        vertices,
+        cell_ptr,
+        cell_verts,
+        Overlap::ByConstruction,
     )?)
 }
 
@@ -120,7 +136,7 @@ fn check_grid(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<()> {
 /// The coordinates must increase strictly along each direction (an error names the first
 /// that does not: the range is too narrow for that many cells in floating point): the cells of
 /// such a tensor grid tile the rectangle by construction, which is what
-/// [`PolyMesh::from_tensor_grid_cells`] requires.
+/// [`Overlap::ByConstruction`] requires.
 fn grid_vertices(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<Vec<Point>> {
     let xs: Vec<f64> = (0..=nx).map(|i| grid_coord(x[0], x[1], i, nx)).collect();
     let ys: Vec<f64> = (0..=ny).map(|j| grid_coord(y[0], y[1], j, ny)).collect();
@@ -224,7 +240,7 @@ mod tests {
         }
     }
 
-    /// The generators skip the overlap sweep (`PolyMesh::from_tensor_grid_cells`): the same
+    /// The generators skip the overlap sweep (`Overlap::ByConstruction`): the same
     /// cells pass the full validation, with the same mesh.
     #[test]
     fn tensor_grids_pass_the_full_validation() {

@@ -44,8 +44,8 @@ pub use hexagonal::{hexagonal, hexagonal_grid};
 pub use kershaw::kershaw;
 
 use crate::error::{Error, Result};
-use crate::mesh::PolyMesh;
 use crate::mesh::budget::{self, check_budget, mesh_bytes};
+use crate::mesh::{Overlap, PolyMesh};
 use std::fmt;
 use std::str::FromStr;
 
@@ -281,7 +281,12 @@ pub fn map_unit_square(m: &PolyMesh, domain: [f64; 4]) -> Result<PolyMesh> {
         cell_verts.extend(m.cell_vertices(k).iter().map(|&v| v as usize));
         cell_ptr.push(cell_verts.len());
     }
-    Ok(PolyMesh::from_flat_cells(v, cell_ptr, cell_verts)?)
+    Ok(PolyMesh::from_flat_cells(
+        v,
+        cell_ptr,
+        cell_verts,
+        Overlap::Sweep,
+    )?)
 }
 
 /// n = 2^(level+1), or `None` on overflow.

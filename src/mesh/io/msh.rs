@@ -19,7 +19,7 @@
 
 use super::{Tokens, capacity, read_text};
 use crate::error::Result;
-use crate::mesh::{NonBoundaryTag, Point, PolyMesh, drop_unused_vertices_flat};
+use crate::mesh::{NonBoundaryTag, Overlap, Point, PolyMesh, drop_unused_vertices_flat};
 use std::collections::{BTreeSet, HashMap};
 use std::fmt::Display;
 use std::path::Path;
@@ -624,7 +624,7 @@ fn build(path: &Path, raw: Raw) -> Result<MshMesh> {
             LineTag::Curve(s) => surface_phys.get(&s).copied().unwrap_or(0),
         })
         .collect();
-    let mut mesh = PolyMesh::from_flat_cells(vertices, cell_ptr, cell_verts)
+    let mut mesh = PolyMesh::from_flat_cells(vertices, cell_ptr, cell_verts, Overlap::Sweep)
         .and_then(|m| m.with_cell_tags(cell_tags))
         .map_err(invalid)?;
     mesh.set_boundary_tags(&tagged, NonBoundaryTag::Ignore)
