@@ -79,13 +79,13 @@ crosscheck-coarse: build reference-deps
 bench: bench-peers build reference-deps
 	$(CARGO) bench --bench scale
 
-## bench-baseline: BASE=REV (default a825ec9) builds revision REV in target/baseline (through a
+## bench-baseline: BASE=REV (default 73dd38a) builds revision REV in target/baseline (through a
 ##        temporary git worktree) and runs every gradvi case of the two benchmarks with both
 ##        builds, alternately, 3 times each (GRADVI_BENCH_REPEAT), comparing medians in the same
 ##        run; scaling cases: GRADVI_BENCH_VARIANTS (default nested), GRADVI_BENCH_MAX_CELLS;
 ##        ex9 up to GRADVI_BENCH_EX9_MAX_GRID (default 1025)
 ##        -> replication/results/bench_baseline.csv and replication/REGRESSION.md
-BASE ?= a825ec9
+BASE ?= 73dd38a
 bench-baseline: build
 	rm -rf target/baseline-src && git worktree prune
 	git worktree add --detach target/baseline-src $(BASE)

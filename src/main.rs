@@ -198,7 +198,11 @@ fn one_line(e: &anyhow::Error) -> String {
 /// fresh mappings): at 4M unknowns the kernel's page zeroing (`clear_page_erms`) is 15% of
 /// the profile. No mmap at all (`MALLOC_MMAP_MAX_=0`, no trimming) was 12–20% faster at 1M
 /// unknowns but raised the peak from 1041–1043 to 1256–1257 MB (two runs each, a loaded
-/// machine); reusing those arrays across steps is the remedy that keeps both.
+/// machine); reusing those arrays across steps is the remedy that keeps both. (Also measured
+/// and rejected: a global allocator asking `madvise(MADV_HUGEPAGE)` for every block of 4 MB or
+/// more, against those faults: ex9 HMM at 1024² cells took 6.1–8.0 s instead of 5.2–6.1 s,
+/// its kernel time 3.4–4.0 s instead of 1.3–1.6 s, the huge pages being compacted and zeroed
+/// on the fault path; two runs each, alternating.)
 fn limit_malloc_arenas() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     if std::env::var_os("MALLOC_ARENA_MAX").is_none() {
