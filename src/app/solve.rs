@@ -340,19 +340,14 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         mesh.n_cells(),
         mesh.h()
     );
-    match sol.system.cell_system_size() {
-        Some(nc) => println!(
-            "unknowns        {} ({} after condensation; the iterative solves on the {nc} cells, \
-             the local matrices being two-point)",
-            sol.system.n_unknowns(),
-            sol.system.n_condensed()
-        ),
-        None => println!(
-            "unknowns        {} ({} after condensation)",
-            sol.system.n_unknowns(),
-            sol.system.n_condensed()
-        ),
-    }
+    let on_cells = sol.system.cell_system_size().map_or(String::new(), |nc| {
+        format!("; the iterative solves on the {nc} cells, the local matrices being two-point")
+    });
+    println!(
+        "unknowns        {} ({} after condensation{on_cells})",
+        sol.system.n_unknowns(),
+        sol.system.n_condensed()
+    );
     println!("method          {:?}", sol.result.method);
     if let Some(w) = &sol.warm_start {
         match &w.skipped {

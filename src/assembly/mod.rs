@@ -364,6 +364,16 @@ impl PcgOutcome {
     }
 }
 
+/// `u`, or an error naming its first non-finite entry.
+fn check_finite(u: Vec<f64>) -> crate::Result<Vec<f64>> {
+    match u.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(crate::Error::Linear(format!(
+            "the solution is not finite at unknown {i}"
+        ))),
+        None => Ok(u),
+    }
+}
+
 /// A hash of the fixed unknowns and their values (to check that a refinement continues the
 /// solve it belongs to).
 fn fingerprint(fixed: &[Option<f64>]) -> u64 {
@@ -624,7 +634,6 @@ impl<'a> DiscreteSystem<'a> {
             }
         }
         let reuse = self.next_hierarchy(fixed, false);
-        let t0 = Instant::now();
         let (values, mut rhs) = self.assemble_condensed(fixed);
         let t1 = Instant::now();
         let (t2, out) = match self.direct_pattern() {
@@ -694,12 +703,7 @@ impl<'a> DiscreteSystem<'a> {
         let mut u = vec![0.0; self.n];
         u[..self.n_skel].copy_from_slice(skel);
         self.recover_interiors(&fx, &mut u);
-        if let Some(i) = u.iter().position(|x| !x.is_finite()) {
-            return Err(crate::Error::Linear(format!(
-                "the solution is not finite at unknown {i}"
-            )));
-        }
-        Ok(u)
+        check_finite(u)
     }
 
     /// The skeleton unknowns the next iterative solve starts from (ignored by the direct

@@ -132,19 +132,12 @@ impl DiscreteSystem<'_> {
         if cells.len() == nc {
             return cells;
         }
+        // the skeleton guess holds every unknown the cells' rows read (their skeleton ones)
         let skel = self.take_initial_guess();
         (0..nc)
             .into_par_iter()
             .with_min_len(4096)
-            .map(|k| {
-                let cell = self.local(k);
-                let m = cell.matrix;
-                let mut acc = cell.load[0];
-                for (a, &s) in cell.dofs.iter().enumerate().skip(1) {
-                    acc -= m.at(a, 0) * skel[s as usize];
-                }
-                acc / m.at(0, 0)
-            })
+            .map(|k| super::interior_value(&self.local(k), &|_| None, &skel))
             .collect()
     }
 
@@ -376,11 +369,6 @@ impl DiscreteSystem<'_> {
             })
             .collect();
         u[..self.n_skel].copy_from_slice(&skel);
-        if let Some(i) = u.iter().position(|x| !x.is_finite()) {
-            return Err(crate::Error::Linear(format!(
-                "the solution is not finite at unknown {i}"
-            )));
-        }
-        Ok(u)
+        super::check_finite(u)
     }
 }

@@ -132,11 +132,10 @@ fn check_grid(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<()> {
     Ok(())
 }
 
-/// The (nx+1)(ny+1) grid vertices, numbered as in the module docs.
-/// The coordinates must increase strictly along each direction (an error names the first
-/// that does not: the range is too narrow for that many cells in floating point): the cells of
-/// such a tensor grid tile the rectangle by construction, which is what
-/// [`Overlap::ByConstruction`] requires.
+/// The (nx+1)(ny+1) grid vertices, numbered as in the module docs. Their coordinates must
+/// increase strictly along each direction (an error names the first pair that does not: the
+/// range is too narrow for that many cells in floating point): the cells of such a tensor grid
+/// tile the rectangle by construction, which is what [`Overlap::ByConstruction`] requires.
 fn grid_vertices(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<Vec<Point>> {
     let xs: Vec<f64> = (0..=nx).map(|i| grid_coord(x[0], x[1], i, nx)).collect();
     let ys: Vec<f64> = (0..=ny).map(|j| grid_coord(y[0], y[1], j, ny)).collect();
