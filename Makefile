@@ -101,7 +101,9 @@ bench-amg:
 ## bench-peers: PETSc ex9 (installed and built from Debian's packages by benches/petsc/) next to
 ##        gradvi at equal unknowns (grids up to GRADVI_BENCH_EX9_MAX_GRID, default 4097: the 4097²
 ##        grid, PETSc and gradvi P1 only, where 21 GiB are available; about 8 minutes more), and
-##        the L-shape/disk/hole family (meshed by gmsh: reference-deps installs it)
+##        the L-shape/disk/hole family (meshed by gmsh: reference-deps installs it);
+##        GRADVI_BENCH_PEER_REPEAT=N runs every case N times, interleaved, keeping the median
+##        (about N times as long); GRADVI_BENCH_PEERS=ex9 or =domains runs one part
 ##        -> replication/results/bench_peers.csv, BENCHMARKS.md
 bench-peers: build reference-deps
 	$(CARGO) bench --bench scale -- --peers

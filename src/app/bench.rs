@@ -281,6 +281,20 @@ pub struct BenchRow {
     pub run: u64,
 }
 
+/// The number of runs per case that the environment variable `var` asks for (1 to 20), or
+/// `default` if it is unset; anything else is an error.
+fn repeat_from_env(var: &str, default: usize) -> gradvi::Result<usize> {
+    match std::env::var(var) {
+        Ok(v) => v
+            .trim()
+            .parse::<usize>()
+            .ok()
+            .filter(|&r| (1..=20).contains(&r))
+            .ok_or_else(|| bad(format!("{var} must be 1 to 20, got '{v}'"))),
+        Err(_) => Ok(default),
+    }
+}
+
 fn bad(msg: String) -> gradvi::Error {
     gradvi::Error::InvalidData(msg)
 }

@@ -176,15 +176,7 @@ pub fn run(cfg: &Config, exe: &Path, base: &Path, baseline: &str) -> gradvi::Res
             base.display()
         )));
     }
-    let repeat = match std::env::var("GRADVI_BENCH_REPEAT") {
-        Ok(v) => v
-            .trim()
-            .parse::<usize>()
-            .ok()
-            .filter(|&r| (1..=20).contains(&r))
-            .ok_or_else(|| bad(format!("GRADVI_BENCH_REPEAT must be 1 to 20, got '{v}'")))?,
-        Err(_) => DEFAULT_REPEAT,
-    };
+    let repeat = super::repeat_from_env("GRADVI_BENCH_REPEAT", DEFAULT_REPEAT)?;
     let jobs = jobs(cfg)?;
     eprintln!(
         "[bench] regression check: {} cases, {repeat} runs of each build, against {baseline}",

@@ -15,8 +15,11 @@
 //!
 //! Every case runs in a child process, as in the scaling benchmark, so that peak memory is the
 //! case's own. `GRADVI_BENCH_PEERS` (default `ex9,domains`) selects the parts; the rows of the
-//! other part are kept from the existing CSV. `GRADVI_BENCH_LOG=1` prints each solve's timings. Rows go to `replication/results/bench_peers.csv`; the report's first sections
-//! are written from it ([`super::report`]).
+//! other part are kept from the existing CSV. `GRADVI_BENCH_PEER_REPEAT` (1 to 20, default 1)
+//! runs every case that many times, interleaved with the other cases of its grid or mesh, and
+//! records the run with the median time ([`run_group`]). `GRADVI_BENCH_LOG=1` prints each
+//! solve's timings. Rows go to `replication/results/bench_peers.csv`; the report's first
+//! sections are written from it ([`super::report`]).
 
 use super::{Config, bad, io_err, json_row, peak_memory_mib, stdout_of};
 use crate::app::replication::records::{read_csv, write_csv};
@@ -126,6 +129,14 @@ pub struct PeerRow {
     /// Largest scaled quantity of the certificate (NaN for PETSc).
     #[serde(deserialize_with = "nullable")]
     pub certificate: f64,
+    /// Runs of the case (`GRADVI_BENCH_PEER_REPEAT`): the row is that of the run with the
+    /// median time, its peak memory the largest of all runs.
+    #[serde(default = "one")]
+    pub runs: usize,
+}
+
+fn one() -> usize {
+    1
 }
 
 fn nan() -> f64 {
@@ -299,6 +310,7 @@ fn run_gradvi(
             .max(-c.min_multiplier)
             .max(c.complementarity)
             .max(c.balance_residual),
+        runs: 1,
     };
     // PETSc's time is its whole process, finalisation (freeing) included: so is this one
     drop(sol);
@@ -375,6 +387,7 @@ fn run_petsc(cfg: &Config, bin: &Path, grid: usize) -> gradvi::Result<PeerRow> {
         err_max: r.err_max,
         err_mean: r.err_mean,
         certificate: f64::NAN,
+        runs: 1,
     })
 }
 
@@ -505,17 +518,26 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
     if let (true, Err(why)) = (do_ex9, &petsc) {
         eprintln!("[bench] warning: no PETSc rows: {why}");
     }
+    let repeat = super::repeat_from_env("GRADVI_BENCH_PEER_REPEAT", 1)?;
+    if repeat > 1 {
+        eprintln!("[bench] {repeat} runs of every case, interleaved; rows: the median time");
+    }
     for g in ex9_grids(if do_ex9 { max_grid } else { 0 }) {
+        let mut group: Vec<Case> = Vec::new();
         if let Ok(bin) = &petsc {
-            eprintln!("[bench] ex9 PETSc gs+mg, {g}² grid ...");
-            push(run_petsc(cfg, bin, g)?, &mut rows)?;
+            group.push((
+                format!("ex9 PETSc gs+mg, {g}² grid"),
+                Box::new(move || run_petsc(cfg, bin, g)),
+            ));
         }
         for (scheme, linear) in ex9_variants(g) {
-            eprintln!("[bench] ex9 gradvi {scheme} {linear}, {g}² grid ...");
-            push(
-                gradvi_child(exe, "ex9", scheme, linear, g, None)?,
-                &mut rows,
-            )?;
+            group.push((
+                format!("ex9 gradvi {scheme} {linear}, {g}² grid"),
+                Box::new(move || gradvi_child(exe, "ex9", scheme, linear, g, None)),
+            ));
+        }
+        for row in run_group(&group, repeat)? {
+            push(row, &mut rows)?;
         }
     }
     let domains = if do_domains {
@@ -523,15 +545,57 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
     } else {
         Vec::new()
     };
-    for (domain, scheme, linear, file) in domains {
-        eprintln!(
-            "[bench] {domain} ({}) gradvi {scheme} {linear} ...",
-            file.display()
-        );
-        let row = gradvi_child(exe, domain, scheme, linear, 0, Some(&file))?;
-        push(row, &mut rows)?;
+    // the cases of one mesh form a group
+    for mesh_cases in domains.chunk_by(|a, b| a.3 == b.3) {
+        let group: Vec<Case> = mesh_cases
+            .iter()
+            .map(|(domain, scheme, linear, file)| -> Case {
+                (
+                    format!("{domain} ({}) gradvi {scheme} {linear}", file.display()),
+                    Box::new(move || {
+                        gradvi_child(exe, domain, *scheme, linear, 0, Some(file.as_path()))
+                    }),
+                )
+            })
+            .collect();
+        for row in run_group(&group, repeat)? {
+            push(row, &mut rows)?;
+        }
     }
     Ok(())
+}
+
+/// A case of this benchmark: what it is, and how to run it once.
+type Case<'a> = (String, Box<dyn Fn() -> gradvi::Result<PeerRow> + 'a>);
+
+/// Runs every case of `group` `repeat` times, the cases interleaved (so that a slow spell of
+/// the machine falls on all of them), and returns one row per case: the run with the median
+/// time (the upper median for an even count), with the largest peak memory of its runs.
+fn run_group(group: &[Case], repeat: usize) -> gradvi::Result<Vec<PeerRow>> {
+    let mut samples: Vec<Vec<PeerRow>> = vec![Vec::new(); group.len()];
+    for r in 0..repeat {
+        for ((what, run), out) in group.iter().zip(&mut samples) {
+            if repeat > 1 {
+                eprintln!("[bench] {what} (run {} of {repeat}) ...", r + 1);
+            } else {
+                eprintln!("[bench] {what} ...");
+            }
+            out.push(run()?);
+        }
+    }
+    Ok(samples.into_iter().filter_map(median_row).collect())
+}
+
+/// The row with the median time of `runs` (the upper median for an even count), with the
+/// largest peak memory and the number of runs; `None` if there is none.
+fn median_row(mut runs: Vec<PeerRow>) -> Option<PeerRow> {
+    let peak = runs.iter().map(|r| r.peak_mib).fold(f64::NAN, f64::max);
+    let n = runs.len();
+    runs.sort_by(|a, b| a.total_s.total_cmp(&b.total_s));
+    let mut row = runs.into_iter().nth(n / 2)?;
+    row.peak_mib = peak;
+    row.runs = n;
+    Some(row)
 }
 
 /// The ex9 grids up to `max_grid` that fit in the memory available ([`BIG_GRID`] needs

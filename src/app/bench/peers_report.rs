@@ -68,6 +68,7 @@ fn ex9_section(md: &mut Doc, rows: &[PeerRow]) {
         "PETSc's obstacle example (ex9) side by side",
         "Bueler's radial obstacle problem (`problems/ex9.toml`), solved in one run by PETSc's `snes/tutorials/ex9.c` (Debian's PETSc, built by `benches/petsc/build.sh`, run by `benches/petsc/run_ex9.sh` with `-snes_grid_sequence K -pc_type mg` from a 5 × 5 grid: Newton RSLS with grid sequencing and geometric multigrid, GMRES at relative tolerance 1e-5 inside Newton at 1e-8) and by gradvi with its defaults (nested start on agglomerated coarse meshes; linear solver as the column says). P1 runs on the G × G grid's squares cut into triangles, the same five-point discrete problem as ex9 with the same G² unknowns (boundary included); HMM on the (G − 1)² squares. Errors against the exact solution are computed as ex9 does: max and mean over all nodes (P1, PETSc) or cell centres (HMM). Time is wall clock: for gradvi from the start of the mesh to the certified solution, its errors computed and everything freed (the benchmark's own timing of the data evaluation, below, taken out); for PETSc the whole process, whose finalisation also frees everything; memory is the peak resident set. NITER: gradvi's fine solves (+ coarse solves), PETSc's Newton steps on the finest grid (+ on the coarser grids); Krylov: CG (gradvi) or GMRES (PETSc) iterations in all.",
     );
+    md.para(runs_note(rows.iter().filter(|r| r.family == "ex9")));
     let mut t = Table::new(
         "G | code | scheme | linear | unknowns | time [s] | peak [MiB] | NITER (+coarse) | Krylov | max error | mean error | time / PETSc | memory / PETSc",
         "rlllrrrrrrrrr",
@@ -275,12 +276,31 @@ fn profile(md: &mut Doc, rows: &[PeerRow]) {
     md.table(&t);
 }
 
+/// How many runs each of `rows` took (`GRADVI_BENCH_PEER_REPEAT`), in a sentence.
+fn runs_note<'a>(rows: impl Iterator<Item = &'a PeerRow>) -> String {
+    let mut runs: Vec<usize> = rows.map(|r| r.runs).collect();
+    runs.sort_unstable();
+    runs.dedup();
+    match runs.as_slice() {
+        [] | [1] => "Each row is a single run of its case.".into(),
+        [n] => format!(
+            "Each row is the run with the median time of {n} runs of its case, interleaved with the other cases of its grid or mesh (`GRADVI_BENCH_PEER_REPEAT={n}`); its peak memory is the largest of the {n}."
+        ),
+        more => format!(
+            "Each row is the run with the median time of its runs ({} to {} runs per case, `GRADVI_BENCH_PEER_REPEAT`), interleaved with the other cases of its grid or mesh; its peak memory is the largest of them.",
+            more[0],
+            more[more.len() - 1]
+        ),
+    }
+}
+
 fn domains_section(md: &mut Doc, rows: &[PeerRow]) {
     md.section(
         2,
         "Any domain: L-shape, disk, square with a hole",
         "The paper's Test 3 data (C = −5) on gmsh meshes of `benches/domains/*.geo`, with the default nested start (coarse HMM solves on meshes agglomerated from the user's mesh, `mesh::agglomerate`) and both linear solvers. Growth: least-squares exponent of total time against cells over the sizes of the row's domain, scheme and solver.",
     );
+    md.para(runs_note(rows.iter().filter(|r| r.family != "ex9")));
     let mut t = Table::new(
         "domain | scheme | linear | cells | unknowns | NITER (+coarse) | coarse [s] | linear [s] | total [s] | peak [MiB] | growth",
         "llllrrrrrrr",
