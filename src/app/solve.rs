@@ -340,9 +340,19 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         mesh.n_cells(),
         mesh.h()
     );
-    let on_cells = sol.system.cell_system_size().map_or(String::new(), |nc| {
-        format!("; the iterative solves on the {nc} cells, the local matrices being two-point")
-    });
+    let on_cells = match (
+        sol.system.cell_system_size(),
+        sol.system.cell_system_skeleton(),
+    ) {
+        (Some(n), Some(0)) => {
+            format!("; the iterative solves on the {n} cells, the local matrices being two-point")
+        }
+        (Some(n), Some(kept)) => format!(
+            "; the iterative solves on {n}: the cells and {kept} skeleton unknowns, the others \
+             eliminated where the local matrices are two-point"
+        ),
+        _ => String::new(),
+    };
     println!(
         "unknowns        {} ({} after condensation{on_cells})",
         sol.system.n_unknowns(),

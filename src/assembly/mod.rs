@@ -478,11 +478,16 @@ impl<'a> DiscreteSystem<'a> {
     pub fn n_condensed(&self) -> usize {
         self.n_skel
     }
-    /// The number of cells of the cell system ([`two_point`]) if the iterative solves have
-    /// taken it (`None` before any iterative solve, with the direct solver, and when the local
-    /// matrices are not two-point).
+    /// The number of unknowns of the cell system ([`two_point`]: the cells, and the skeleton
+    /// unknowns that could not be eliminated) if the iterative solves have taken it (`None`
+    /// before any iterative solve, with the direct solver, and when too few skeleton unknowns
+    /// can be eliminated).
     pub fn cell_system_size(&self) -> Option<usize> {
         self.cell_system.get()?.as_ref().map(|c| c.n())
+    }
+    /// Of the [`Self::cell_system_size`] unknowns, the skeleton ones (not eliminated).
+    pub fn cell_system_skeleton(&self) -> Option<usize> {
+        self.cell_system.get()?.as_ref().map(|c| c.n_kept())
     }
     /// Stored entries of the condensed matrix (lower triangle).
     pub fn nnz(&self) -> usize {

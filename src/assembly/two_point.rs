@@ -1,42 +1,50 @@
-//! Condensation onto the cells, when every skeleton unknown couples with its cells only.
+//! Condensation onto the cells, when most skeleton unknowns couple with their cells only.
 //!
 //! The usual condensation ([`super::condense()`]) eliminates each cell's interior unknowns and
 //! solves for the skeleton: for HMM, the face unknowns (about twice as many as the cells on
 //! quadrilaterals, 7 entries per row). It is the only choice in general, because the faces of a
-//! cell are coupled with each other. But when every local matrix M_K has a *diagonal* skeleton
-//! block (M_K)_SS — each face unknown σ is coupled with its cells' unknowns u_K and with
-//! nothing else — the global block M_SS is diagonal too, and the faces can be eliminated
-//! instead, exactly and row by row. This is the case of HMM on rectangles with a diagonal
-//! tensor and α = 1, where HMM *is* the two-point flux scheme (the classical equivalence of
-//! the lumped mixed method with cell-centred finite differences on rectangles): with
-//! d_{K,σ} = h/2 the consistent part and the stabilisation of a square sum to
-//! Σ_σ (|σ| A n·n / d_{K,σ}) (u_σ − u_K)².
+//! cell are coupled with each other. But a face unknown σ that, in each of its (at most two)
+//! cells K, is coupled with the cell's interior unknown u_K and with no other skeleton unknown
+//! — a zero row of (M_K)_SS off the diagonal — can be eliminated instead, exactly and row by
+//! row. On rectangles with a diagonal tensor and α = 1 every face is such a face: there HMM
+//! *is* the two-point flux scheme (the classical equivalence of the lumped mixed method with
+//! cell-centred finite differences on rectangles; with d_{K,σ} = h/2 the consistent part and
+//! the stabilisation of a square sum to Σ_σ (|σ| A n·n / d_{K,σ}) (u_σ − u_K)²). On the coarse
+//! meshes of the warm start agglomerated from a Cartesian grid the inner cells are rectangles,
+//! while the boundary cells keep their sides cut into the fine boundary edges, which couples
+//! their faces: those are *kept* beside the cells.
 //!
-//! With d_σ = Σ_{K ∋ σ} (M_K)_σσ, m_σK = (M_K)_σK and b the load, the row of a free face reads
-//! d_σ u_σ + Σ_{K ∋ σ} m_σK u_K = b_σ, so
+//! With E the eliminated faces, d_σ = Σ_{K ∋ σ} (M_K)_σσ, m_σK = (M_K)_σK and b the load, the
+//! row of σ ∈ E reads d_σ u_σ + Σ_{K ∋ σ} m_σK u_K = b_σ, so
 //!
 //!   u_σ = (b_σ − Σ_{K ∋ σ} m_σK u_K) / d_σ,
 //!
-//! and substituting into the cell rows gives the cell system A u_T = r:
+//! and substituting into the other rows gives the cell system A u = r on the cells and the
+//! kept (free, not eliminated) skeleton unknowns:
 //!
-//!   A_KK = (M_K)_KK − Σ_{σ ∈ K free} m_σK² / d_σ,
-//!   A_KL = − Σ_{σ ∈ K ∩ L free} m_σK m_σL / d_σ,
-//!   r_K  = b_K − Σ_{σ ∈ K free} m_σK b_σ / d_σ − Σ_{σ ∈ K Dirichlet} m_σK u_σ,
+//!   A_KK = (M_K)_KK − Σ_{σ ∈ K ∩ E} m_σK² / d_σ,
+//!   A_KL = − Σ_{σ ∈ K ∩ L ∩ E} m_σK m_σL / d_σ,
+//!   A_Kσ' = (M_K)_Kσ',  A_σ'σ'' = Σ_{K ∋ σ', σ''} (M_K)_σ'σ''  (σ', σ'' kept),
+//!   r_K  = b_K − Σ_{σ ∈ K ∩ E} m_σK b_σ / d_σ − Σ_{σ ∈ K Dirichlet} m_σK u_σ,
+//!   r_σ' = b_σ' − Σ_{K ∋ σ'} Σ_{σ ∈ K Dirichlet} (M_K)_σ'σ u_σ,
 //!
-//! symmetric positive definite (a Schur complement of M on the non-Dirichlet unknowns), one
-//! row per cell with one entry per neighbour: 5 per row on quadrilaterals instead of 7 for
-//! twice as many face unknowns. A and r are built once per problem; a solve with some cells
-//! fixed (the active obstacle constraints) turns their rows and columns into unit ones and
-//! moves A_KL u_L to the right-hand side. The faces are then recovered by the formula above,
-//! and the certificate is computed, as always, from the full system.
+//! (an eliminated face has no entry with any skeleton unknown, so the kept rows do not see
+//! E), symmetric positive definite (a Schur complement of M on the non-Dirichlet unknowns):
+//! on quadrilaterals one row per cell with one entry per neighbour, 5 per row instead of 7
+//! for twice as many face unknowns. A and r are built once per problem; a solve with some
+//! unknowns fixed (the active obstacle constraints, and Signorini faces if they are kept)
+//! turns their rows and columns into unit ones and moves their columns to the right-hand
+//! side. The eliminated faces are then recovered by the formula above, and the certificate is
+//! computed, as always, from the full system.
 //!
-//! The structure is detected, not assumed: every cell has one interior unknown, every skeleton
-//! unknown belongs to at most two cells, and every off-diagonal entry of every (M_K)_SS is at
-//! most [`TWO_POINT_TOL`] times √((M_K)_σσ (M_K)_σ'σ') in magnitude (zero in exact arithmetic on
-//! rectangles; what rounding leaves of it is dropped, a change of the system far below the
-//! certificate's tolerance, which the final residual of the full system then shows). A solve
-//! that fixes a skeleton unknown other than a Dirichlet one (a Signorini constraint) uses the
-//! skeleton system.
+//! The structure is detected, not assumed: every cell has one interior unknown; a face is
+//! eliminated if it is free, in at most two cells, and each off-diagonal entry of its rows of
+//! (M_K)_SS is at most [`TWO_POINT_TOL`] times √((M_K)_σσ (M_K)_σ'σ') in magnitude (zero in
+//! exact arithmetic; what rounding leaves of it is dropped, a change of the system far below
+//! the certificate's tolerance, which the final residual of the full system then shows). The
+//! cell system is used only if it has at most 3/4 as many unknowns as the free skeleton (on
+//! rectangles: 1/2; on triangles nothing is eliminated and it would be larger), and only for
+//! solves that fix no eliminated face (otherwise the skeleton system is solved).
 
 use super::{DiscreteSystem, FixedValues, hierarchy};
 use crate::linalg::CsrMatrix;
@@ -48,27 +56,40 @@ use std::time::Instant;
 /// (see the module docs).
 pub const TWO_POINT_TOL: f64 = 1e-12;
 
-/// The cell system of the module docs, with no cell fixed.
+/// No row: a skeleton unknown that is eliminated or Dirichlet.
+const NO_ROW: u32 = u32::MAX;
+
+/// The cell system of the module docs, with no unknown fixed.
 pub(super) struct CellSystemAll {
-    /// The interior unknown of each cell.
-    cell_dof: Vec<u32>,
+    /// The unknown of each row: the interior unknown of each cell (rows 0..n_cells), then the
+    /// kept skeleton unknowns.
+    dofs: Vec<u32>,
+    /// Number of cells.
+    n_cells: usize,
     /// The matrix A (both triangles, sorted columns).
     a: CsrMatrix,
     /// The right-hand side r.
     r: Vec<f64>,
-    /// d_σ of each skeleton unknown (0 on Dirichlet ones).
+    /// d_σ of each eliminated skeleton unknown (0 on the others).
     d: Vec<f64>,
+    /// The row of each kept skeleton unknown ([`NO_ROW`] on the others).
+    kept_row: Vec<u32>,
 }
 
 impl CellSystemAll {
-    /// Number of cells.
+    /// Number of rows.
     pub(super) fn n(&self) -> usize {
-        self.cell_dof.len()
+        self.dofs.len()
     }
 
-    /// The interior unknown of cell k.
-    pub(super) fn cell_dof(&self, k: usize) -> usize {
-        self.cell_dof[k] as usize
+    /// Number of kept skeleton unknowns.
+    pub(super) fn n_kept(&self) -> usize {
+        self.dofs.len() - self.n_cells
+    }
+
+    /// The unknown of row i.
+    pub(super) fn dof(&self, i: usize) -> usize {
+        self.dofs[i] as usize
     }
 }
 
@@ -82,17 +103,15 @@ impl DiscreteSystem<'_> {
     }
 
     /// Whether the iterative solves take the cell system: it exists, and `fixed` fixes no
-    /// skeleton unknown (besides the Dirichlet ones).
+    /// eliminated skeleton unknown.
     pub(super) fn cell_system_for(&self, fixed: &[Option<f64>]) -> Option<&CellSystemAll> {
-        let skeleton_fixed = fixed[..self.n_skel]
+        let cs = self.cell_system()?;
+        let eliminated_fixed = fixed[..self.n_skel]
             .par_iter()
+            .zip(&cs.kept_row)
             .with_min_len(4096)
-            .any(|f| f.is_some());
-        if skeleton_fixed {
-            None
-        } else {
-            self.cell_system()
-        }
+            .any(|(f, &row)| f.is_some() && row == NO_ROW);
+        (!eliminated_fixed).then_some(cs)
     }
 
     /// Solves with `fixed` on the cell system `cs` by multigrid-preconditioned conjugate
@@ -121,23 +140,28 @@ impl DiscreteSystem<'_> {
 
     /// The initial guess of a cell solve: the last cell solution; else the cells recovered
     /// from the last skeleton solution (or the warm start's guess), u_K = (b_K − Σ_σ m_σK
-    /// u_σ) / (M_K)_KK; else zero.
+    /// u_σ) / (M_K)_KK, and the kept skeleton unknowns from it; else zero.
     pub(super) fn take_cell_guess(&self, cs: &CellSystemAll) -> Vec<f64> {
-        let nc = cs.n();
         let cells = self
             .last_cells
             .lock()
             .map(|mut c| std::mem::take(&mut *c))
             .unwrap_or_default();
-        if cells.len() == nc {
+        if cells.len() == cs.n() {
             return cells;
         }
         // the skeleton guess holds every unknown the cells' rows read (their skeleton ones)
         let skel = self.take_initial_guess();
-        (0..nc)
+        (0..cs.n())
             .into_par_iter()
             .with_min_len(4096)
-            .map(|k| super::interior_value(&self.local(k), &|_| None, &skel))
+            .map(|i| {
+                if i < cs.n_cells {
+                    super::interior_value(&self.local(i), &|_| None, &skel)
+                } else {
+                    skel[cs.dof(i)]
+                }
+            })
             .collect()
     }
 
@@ -152,7 +176,7 @@ impl DiscreteSystem<'_> {
         }
     }
 
-    /// The cell system, if the local matrices have the two-point structure (module docs).
+    /// The cell system, if enough of the skeleton unknowns can be eliminated (module docs).
     fn build_cell_system(&self) -> Option<CellSystemAll> {
         let sym = &self.sym;
         let (dm, inc) = (&sym.dof_map, &sym.maps.inc);
@@ -161,26 +185,55 @@ impl DiscreteSystem<'_> {
         }
         let nc = dm.n_cells();
         let dirichlet = &self.values.dirichlet;
-        // the skeleton block of every cell is diagonal; every skeleton unknown in ≤ 2 cells
-        let diagonal = (0..nc).into_par_iter().with_min_len(4096).all(|k| {
-            let cell = self.local(k);
-            let m = cell.matrix;
-            (1..cell.dofs.len()).all(|a| {
-                m.at(a, a) > 0.0
-                    && (1..a).all(|b| {
-                        m.at(a, b).abs() <= TWO_POINT_TOL * (m.at(a, a) * m.at(b, b)).sqrt()
-                    })
+        // the free skeleton unknowns coupled with another skeleton unknown in some cell
+        let coupled_list: Vec<u32> = (0..nc)
+            .into_par_iter()
+            .with_min_len(4096)
+            .flat_map_iter(|k| {
+                let cell = self.local(k);
+                let (m, dofs) = (cell.matrix, cell.dofs);
+                let free = |a: usize| dirichlet[dofs[a] as usize].is_none();
+                let mut out = Vec::new();
+                for a in (1..dofs.len()).filter(|&a| free(a)) {
+                    let lone = m.at(a, a) > 0.0
+                        && (1..dofs.len()).filter(|&b| b != a).all(|b| {
+                            m.at(a, b).abs() <= TWO_POINT_TOL * (m.at(a, a) * m.at(b, b)).sqrt()
+                        });
+                    if !lone {
+                        out.push(dofs[a]);
+                    }
+                }
+                out
             })
-        });
-        if !diagonal || (0..self.n_skel).any(|s| inc.list(s).len() > 2) {
+            .collect();
+        let mut kept_row = vec![NO_ROW; self.n_skel];
+        let mut eliminated = vec![false; self.n_skel];
+        for s in 0..self.n_skel {
+            eliminated[s] = dirichlet[s].is_none() && inc.list(s).len() <= 2;
+        }
+        for &s in &coupled_list {
+            eliminated[s as usize] = false;
+        }
+        let mut dofs: Vec<u32> = (0..nc).map(|k| dm.cell(k).0[0]).collect();
+        for s in 0..self.n_skel {
+            if dirichlet[s].is_none() && !eliminated[s] {
+                kept_row[s] = dofs.len() as u32;
+                dofs.push(s as u32);
+            }
+        }
+        let free_skel = dirichlet[..self.n_skel]
+            .iter()
+            .filter(|d| d.is_none())
+            .count();
+        if 4 * dofs.len() > 3 * free_skel {
             return None;
         }
-        let cell_dof: Vec<u32> = (0..nc).map(|k| dm.cell(k).0[0]).collect();
+        // d_σ of the eliminated skeleton unknowns
         let d: Vec<f64> = (0..self.n_skel)
             .into_par_iter()
             .with_min_len(4096)
             .map(|s| {
-                if dirichlet[s].is_some() {
+                if !eliminated[s] {
                     return 0.0;
                 }
                 inc.list(s)
@@ -193,16 +246,38 @@ impl DiscreteSystem<'_> {
                     .sum()
             })
             .collect();
-        let b = &self.values.load;
-        // per chunk of cells: their rows' lengths, entries (sorted by column) and r_K
+        let cs = CellSystemAll {
+            dofs,
+            n_cells: nc,
+            a: CsrMatrix::new(0, 0, vec![0], Vec::new(), Vec::new()).ok()?,
+            r: Vec::new(),
+            d,
+            kept_row,
+        };
+        let n = cs.n();
+        // per chunk of rows: their lengths, entries (sorted by column) and right-hand sides
         type Rows = (Vec<usize>, Vec<u32>, Vec<f64>, Vec<f64>);
-        let chunks: Vec<Rows> = super::chunks(nc, super::CHUNK)
+        let chunks: Vec<Rows> = super::chunks(n, super::CHUNK)
             .into_par_iter()
-            .map(|(k0, k1)| {
+            .map(|(i0, i1)| {
                 let mut out: Rows = Default::default();
                 let mut entries: Vec<(u32, f64)> = Vec::new();
-                for k in k0..k1 {
-                    let r = self.cell_row(k, &d, b, &mut entries);
+                for i in i0..i1 {
+                    entries.clear();
+                    let r = if i < nc {
+                        self.cell_row(&cs, i, &mut entries)
+                    } else {
+                        self.kept_row(&cs, cs.dof(i), &mut entries)
+                    };
+                    entries.sort_by_key(|e| e.0);
+                    // several couplings with one unknown: one entry, summed in order
+                    entries.dedup_by(|later, kept| {
+                        let same = later.0 == kept.0;
+                        if same {
+                            kept.1 += later.1;
+                        }
+                        same
+                    });
                     out.0.push(entries.len());
                     out.1.extend(entries.iter().map(|e| e.0));
                     out.2.extend(entries.iter().map(|e| e.1));
@@ -212,10 +287,10 @@ impl DiscreteSystem<'_> {
             })
             .collect();
         let nnz: usize = chunks.iter().map(|c| c.1.len()).sum();
-        let mut row_ptr = Vec::with_capacity(nc + 1);
+        let mut row_ptr = Vec::with_capacity(n + 1);
         row_ptr.push(0);
         let (mut cols, mut vals) = (Vec::with_capacity(nnz), Vec::with_capacity(nnz));
-        let mut r = Vec::with_capacity(nc);
+        let mut r = Vec::with_capacity(n);
         for (lens, c, v, rk) in chunks {
             for len in lens {
                 row_ptr.push(row_ptr[row_ptr.len() - 1] + len);
@@ -224,45 +299,60 @@ impl DiscreteSystem<'_> {
             vals.extend_from_slice(&v);
             r.extend_from_slice(&rk);
         }
-        let a = CsrMatrix::new(nc, nc, row_ptr, cols, vals).ok()?;
-        Some(CellSystemAll { cell_dof, a, r, d })
+        let a = CsrMatrix::new(n, n, row_ptr, cols, vals).ok()?;
+        Some(CellSystemAll { a, r, ..cs })
     }
 
-    /// Row k of the cell system A with no cell fixed: its entries (column, value), sorted by
-    /// column, in `entries`; returns r_K (module docs).
-    fn cell_row(&self, k: usize, d: &[f64], b: &[f64], entries: &mut Vec<(u32, f64)>) -> f64 {
+    /// Row k (a cell) of the cell system A with nothing fixed: its entries (column, value),
+    /// unsorted, in `entries`; returns r_K (module docs).
+    fn cell_row(&self, cs: &CellSystemAll, k: usize, entries: &mut Vec<(u32, f64)>) -> f64 {
         let (inc, dirichlet) = (&self.sym.maps.inc, &self.values.dirichlet);
         let cell = self.local(k);
         let m = cell.matrix;
         let mut diag = m.at(0, 0);
-        let mut r = b[cell.dofs[0] as usize];
-        entries.clear();
+        let mut r = self.values.load[cell.dofs[0] as usize];
         for (a, &s) in cell.dofs.iter().enumerate().skip(1) {
             let (s, msk) = (s as usize, m.at(a, 0));
             if let Some(v) = dirichlet[s] {
                 r -= msk * v;
-                continue;
-            }
-            diag -= msk * msk / d[s];
-            r -= msk * b[s] / d[s];
-            for &l in inc.list(s) {
-                if l as usize != k {
-                    let other = self.local(l as usize);
-                    let msl = other.matrix.at(super::local_index(other.dofs, s), 0);
-                    entries.push((l, -msk * msl / d[s]));
+            } else if cs.kept_row[s] != NO_ROW {
+                entries.push((cs.kept_row[s], msk));
+            } else {
+                diag -= msk * msk / cs.d[s];
+                r -= msk * self.values.load[s] / cs.d[s];
+                for &l in inc.list(s) {
+                    if l as usize != k {
+                        let other = self.local(l as usize);
+                        let msl = other.matrix.at(super::local_index(other.dofs, s), 0);
+                        entries.push((l, -msk * msl / cs.d[s]));
+                    }
                 }
             }
         }
         entries.push((k as u32, diag));
-        entries.sort_by_key(|e| e.0);
-        // cells sharing several faces: one entry, summed in face order
-        entries.dedup_by(|later, kept| {
-            let same = later.0 == kept.0;
-            if same {
-                kept.1 += later.1;
+        r
+    }
+
+    /// The row of the kept skeleton unknown s with nothing fixed: its entries (column, value),
+    /// unsorted, in `entries`; returns its right-hand side b_σ − Σ M_σσ' u_σ' over the
+    /// Dirichlet σ' of its cells (module docs).
+    fn kept_row(&self, cs: &CellSystemAll, s: usize, entries: &mut Vec<(u32, f64)>) -> f64 {
+        let (inc, dirichlet) = (&self.sym.maps.inc, &self.values.dirichlet);
+        let mut r = self.values.load[s];
+        for &k in inc.list(s) {
+            let cell = self.local(k as usize);
+            let (m, a) = (cell.matrix, super::local_index(cell.dofs, s));
+            entries.push((k, m.at(a, 0)));
+            for (c, &t) in cell.dofs.iter().enumerate().skip(1) {
+                let t = t as usize;
+                if let Some(v) = dirichlet[t] {
+                    r -= m.at(a, c) * v;
+                } else if cs.kept_row[t] != NO_ROW {
+                    entries.push((cs.kept_row[t], m.at(a, c)));
+                }
+                // an eliminated σ' is coupled with no skeleton unknown: nothing to add
             }
-            same
-        });
+        }
         r
     }
 
@@ -278,7 +368,7 @@ impl DiscreteSystem<'_> {
         let value: Vec<Option<f64>> = (0..nc)
             .into_par_iter()
             .with_min_len(4096)
-            .map(|k| fixed.get(cs.cell_dof(k)))
+            .map(|i| fixed.get(cs.dof(i)))
             .collect();
         let (rp, ci, va) = (cs.a.row_ptr(), cs.a.col_idx(), cs.a.values());
         // the entries each row keeps (a fixed row: its diagonal)
@@ -337,9 +427,9 @@ impl DiscreteSystem<'_> {
         Ok((CsrMatrix::new(nc, nc, row_ptr, cols, vals)?, rhs))
     }
 
-    /// The full unknown vector from the cell values `x`: the fixed cells take their values,
-    /// the free skeleton unknowns u_σ = (b_σ − Σ_{K ∋ σ} m_σK u_K) / d_σ, the Dirichlet ones
-    /// theirs; a non-finite value is an error.
+    /// The full unknown vector from the values `x` of the rows: the fixed unknowns take their
+    /// values, the eliminated skeleton unknowns u_σ = (b_σ − Σ_{K ∋ σ} m_σK u_K) / d_σ, the
+    /// Dirichlet ones theirs; a non-finite value is an error.
     pub(super) fn complete_cells(
         &self,
         cs: &CellSystemAll,
@@ -347,11 +437,11 @@ impl DiscreteSystem<'_> {
         x: &[f64],
     ) -> crate::Result<Vec<f64>> {
         let mut u = vec![0.0; self.n];
-        for (k, &xk) in x.iter().enumerate() {
-            let dof = cs.cell_dof(k);
-            u[dof] = fixed.get(dof).unwrap_or(xk);
+        for (i, &xi) in x.iter().enumerate() {
+            let dof = cs.dof(i);
+            u[dof] = fixed.get(dof).unwrap_or(xi);
         }
-        let (inc, b) = (&self.sym.maps.inc, &self.values.load);
+        let inc = &self.sym.maps.inc;
         let skel: Vec<f64> = (0..self.n_skel)
             .into_par_iter()
             .with_min_len(4096)
@@ -359,7 +449,10 @@ impl DiscreteSystem<'_> {
                 if let Some(v) = self.values.dirichlet[s] {
                     return v;
                 }
-                let mut acc = b[s];
+                if cs.kept_row[s] != NO_ROW {
+                    return u[s];
+                }
+                let mut acc = self.values.load[s];
                 for &k in inc.list(s) {
                     let cell = self.local(k as usize);
                     let a = super::local_index(cell.dofs, s);

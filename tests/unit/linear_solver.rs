@@ -98,6 +98,56 @@ fn hmm_on_rectangles_solves_on_the_cells() {
     assert_eq!(s.system.cell_system_size(), None);
 }
 
+/// Squares whose boundary sides are cut into collinear faces (the coarse meshes of the warm
+/// start on a triangulated grid): the faces of the inner squares are eliminated, those coupled
+/// with another free face in some cell (the boundary cells' free faces) stay in the cell
+/// system beside the cells; same solution as the direct solver, with Dirichlet, Neumann and
+/// Signorini data, exact on an affine solution (HMM reproduces it on any mesh).
+#[test]
+fn hmm_solves_on_the_cells_and_the_coupled_faces() {
+    let tri = cartesian_triangles(96, 80, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let agg = gradvi::mesh::agglomerate::agglomerate(&tri, 0.05).unwrap();
+    let mesh = &agg.mesh;
+    assert_eq!(agg.dissolved_cells, 0);
+    let hmm = Hmm::new(mesh);
+    let nc = mesh.n_cells();
+    let check = |s: &Solution, what: &str| {
+        let (n, kept) = (
+            s.system.cell_system_size().expect(what),
+            s.system.cell_system_skeleton().expect(what),
+        );
+        assert_eq!(n, nc + kept, "{what}");
+        assert!(
+            kept > 0 && n < s.system.n_condensed(),
+            "{what}: {kept} faces kept for {nc} cells"
+        );
+    };
+    for ws in [WarmStart::Cold, WarmStart::Nested] {
+        check(&same_solution(&hmm, &paper_test3(-20.0), ws), "test 3");
+    }
+    // Signorini on the bottom side, whose faces are cut and kept: solved on the cell system
+    check(
+        &same_solution(&hmm, &paper_test1(), WarmStart::Cold),
+        "test 1",
+    );
+    let g = [2.0, -3.0];
+    let s = same_solution(
+        &hmm,
+        &affine_problem_with([[1.5, 0.0], [0.0, 0.7]]),
+        WarmStart::Cold,
+    );
+    check(&s, "affine");
+    let exact: Vec<f64> = (0..s.u().len())
+        .map(|d| match hmm.dof_entity(d) {
+            Entity::Cell(k) => mesh.centroid(k),
+            Entity::Edge(e) => mesh.edge_midpoint(e),
+            Entity::Vertex(v) => mesh.vertex(v),
+        })
+        .map(|x| 1.0 + g[0] * x[0] + g[1] * x[1])
+        .collect();
+    assert_close(&exact, s.u(), 1e-10, "affine solution, cells and faces");
+}
+
 #[test]
 fn iterative_gives_the_direct_solution() {
     let mesh = cartesian(48, 48).unwrap();
