@@ -356,9 +356,9 @@ impl DiscreteSystem<'_> {
         r
     }
 
-    /// The cell system with the cells whose unknowns `fixed` gives (or that are Dirichlet)
-    /// fixed: their rows and columns unit ones (dropped off the diagonal), A_KL u_L moved to
-    /// the right-hand side of the free rows, u_K the right-hand side of the fixed ones.
+    /// The cell system with the rows (cells, kept skeleton unknowns) whose unknowns `fixed`
+    /// gives fixed: their rows and columns unit ones (dropped off the diagonal), A_ij u_j moved
+    /// to the right-hand side of the free rows, u_i the right-hand side of the fixed ones.
     pub(super) fn fixed_cell_system(
         &self,
         cs: &CellSystemAll,
