@@ -100,9 +100,9 @@ fn hmm_on_rectangles_solves_on_the_cells() {
 
 /// Squares whose boundary sides are cut into collinear faces (the coarse meshes of the warm
 /// start on a triangulated grid): the faces of the inner squares are eliminated, those coupled
-/// with another free face in some cell (the boundary cells' free faces) stay in the cell
-/// system beside the cells; same solution as the direct solver, with Dirichlet, Neumann and
-/// Signorini data, exact on an affine solution (HMM reproduces it on any mesh).
+/// with another skeleton unknown in some cell (the boundary cells' free faces) stay in the
+/// cell system beside the cells; same solution as the direct solver, with Dirichlet, Neumann
+/// and Signorini data, exact on an affine solution (HMM reproduces it on any mesh).
 #[test]
 fn hmm_solves_on_the_cells_and_the_coupled_faces() {
     let tri = cartesian_triangles(96, 80, [0.0, 1.0], [0.0, 1.0]).unwrap();
@@ -125,7 +125,9 @@ fn hmm_solves_on_the_cells_and_the_coupled_faces() {
     for ws in [WarmStart::Cold, WarmStart::Nested] {
         check(&same_solution(&hmm, &paper_test3(-20.0), ws), "test 3");
     }
-    // Signorini on the bottom side, whose faces are cut and kept: solved on the cell system
+    // Signorini on the bottom side: the cell system is built and the solution is the direct
+    // one (in this case no solve fixes a kept face: those that fix a face take the skeleton
+    // system)
     check(
         &same_solution(&hmm, &paper_test1(), WarmStart::Cold),
         "test 1",
