@@ -419,6 +419,16 @@ impl Data {
         select(&self.source, xk, tag).map_or(f64::NAN, |f| f.at(p))
     }
 
+    /// f's value if it is one constant everywhere (no piece, or one piece without tags or
+    /// condition whose value is constant): its closure then skips the pieces.
+    fn constant_source(&self) -> Option<f64> {
+        match self.source.as_slice() {
+            [] => Some(0.0),
+            [p] if p.tags.is_empty() && p.cond.is_none() => p.value.expr.as_constant(),
+            _ => None,
+        }
+    }
+
     /// Whether some piece of A or f is selected by cell tags.
     fn uses_cell_tags(&self) -> bool {
         let tagged = |t: &[i32]| !t.is_empty();
@@ -1092,7 +1102,10 @@ impl ProblemFile {
     /// point no piece covers gets NaN data (which the assembler rejects).
     pub fn problem(&self) -> Problem {
         let d = Arc::clone(&self.data);
-        let mut pb = Problem::new(&self.name, Box::new(move |p| d.source_at(p, p, 0)));
+        let mut pb = match self.data.constant_source() {
+            Some(c) => Problem::new(&self.name, Box::new(move |_| c)),
+            None => Problem::new(&self.name, Box::new(move |p| d.source_at(p, p, 0))),
+        };
         if self.data.source.iter().any(|p| p.cond.is_some()) {
             let d = Arc::clone(&self.data);
             pb = pb.with_source_in_cell(Box::new(move |p, xk| d.source_at(p, xk, 0)));
