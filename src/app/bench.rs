@@ -246,7 +246,7 @@ pub struct BenchRow {
     pub coarse_niter: usize,
     /// Mesh generation or reading.
     pub mesh_s: f64,
-    /// Coarse solves (nested variant), beyond the setup they ran beside (`Timings::warm_start`).
+    /// Coarse solves (nested variant).
     pub coarse_s: f64,
     /// Data, local matrices and pattern (dolfinx: everything before SNES, mesh reading
     /// included).

@@ -154,17 +154,6 @@ pub enum LinearSolver {
     Iterative,
 }
 
-impl LinearSolver {
-    /// Whether a system with `n_skeleton` condensed unknowns is solved by the direct solver.
-    pub fn is_direct_for(self, n_skeleton: usize) -> bool {
-        match self {
-            LinearSolver::Direct => true,
-            LinearSolver::Iterative => false,
-            LinearSolver::Auto => n_skeleton < AUTO_ITERATIVE_MIN,
-        }
-    }
-}
-
 impl std::str::FromStr for LinearSolver {
     type Err = crate::Error;
     fn from_str(s: &str) -> crate::Result<Self> {

@@ -15,7 +15,7 @@
 //! changes anything here.
 
 use super::offsets::Offsets;
-use super::{SystemOptions, cell_chunks, chunks};
+use super::{AUTO_ITERATIVE_MIN, LinearSolver, SystemOptions, cell_chunks, chunks};
 use crate::linalg::SpdPattern;
 use crate::scheme::GradientDiscretisation;
 use rayon::prelude::*;
@@ -227,7 +227,11 @@ impl<'a> SymbolicSystem<'a> {
         // unknown -> the cells where it appears, ascending
         let inc = incidence(&dof_map, n)?;
         let (col_ptr, row_idx) = condensed_pattern(&dof_map, n_skel, &inc)?;
-        let direct = options.linear.is_direct_for(n_skel);
+        let direct = match options.linear {
+            LinearSolver::Direct => true,
+            LinearSolver::Iterative => false,
+            LinearSolver::Auto => n_skel < AUTO_ITERATIVE_MIN,
+        };
         // the symbolic factorisation (sequential) runs beside the scatter maps, on a copy of
         // the pattern; without it the pattern is moved in first and read by the maps (no
         // copy: 40 MB less at the peak of the setup at 1M P1 unknowns)

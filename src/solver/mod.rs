@@ -11,19 +11,10 @@
 //!
 //! ```text
 //! solve_problem(scheme, problem, opts)
-//!   = DiscreteSystem::new (symbolic ∥ values) ∥ coarse solves of the warm start (if nested)
-//!     → constraints::build → well_posed::analyse → warm start carried to the fine unknowns
+//!   = DiscreteSystem::new (symbolic ∥ values) → constraints::build → well_posed::analyse
+//!     → warm start?
 //!     → vi::active_set::run (→ vi::pgs::solve on a stall, if asked) → Solution
 //! ```
-//! The coarse solves of the nested start need the fine mesh and the problem only
-//! ([`warm_start::coarse`]). With the direct solver they run beside the fine setup, whose
-//! symbolic factorisation is sequential: on the hole domain at 920k HMM cells, setup (2.2 s,
-//! of which 1.9 s symbolic) and coarse solves (1.4 s) took 3.6 s one after the other, and the
-//! whole solve 0.5 to 1 s less beside each other (3 alternating runs), for 1% more memory.
-//! With the iterative solver the setup is parallel already (no symbolic factorisation): the
-//! same arrangement on ex9 at 1M unknowns saved no time measurably and took up to 4% more
-//! memory, so there they run one after the other. The memory estimate of the setup does not
-//! count the coarse solves beside it (a level has about 1/8 of the fine unknowns or fewer).
 //! [`solve_with_symbolic`] reuses the symbolic system of an earlier solve on the same scheme.
 
 pub mod constraints;
@@ -74,9 +65,7 @@ pub struct Timings {
     pub setup: f64,
     /// Of which the symbolic factorisation.
     pub symbolic: f64,
-    /// The coarse solves of a warm start (0 for a cold start), beyond the setup they ran
-    /// beside (see the module docs): the time they added to the wall clock. Their own time is
-    /// [`WarmStartReport::seconds`].
+    /// The coarse solves of a warm start (0 for a cold start).
     pub warm_start: f64,
     /// Condensation and scatter, all iterations.
     pub assemble: f64,
@@ -141,41 +130,8 @@ pub fn solve_problem<'a>(
     opts: &SolveOptions,
 ) -> crate::Result<Solution<'a>> {
     let t0 = Instant::now();
-    if !nested(problem, opts) || !opts.system.linear.is_direct_for(scheme.n_skeleton()) {
-        let system = DiscreteSystem::new(scheme, problem, opts.system)?;
-        return solve_system(system, problem, opts, t0, None);
-    }
-    // the coarse solves on this thread, the setup on another: the numeric factorisations
-    // (the coarse ones now, the fine ones later) then run on the same thread, and reuse its
-    // thread-local workspace (faer's matrix-product packing buffers), which a coarse solve on
-    // another thread would have left resident (+60 MiB at the peak of hole 920k HMM direct)
-    let (system, coarse) = std::thread::scope(|s| {
-        let setup = s.spawn(|| DiscreteSystem::new(scheme, problem, opts.system));
-        let coarse = warm_start::coarse(scheme, problem);
-        match setup.join() {
-            Ok(system) => (system, coarse),
-            Err(panic) => std::panic::resume_unwind(panic),
-        }
-    });
-    let early = Early {
-        coarse,
-        wall: t0.elapsed().as_secs_f64(),
-    };
-    solve_system(system?, problem, opts, t0, Some(early))
-}
-
-/// Whether the iteration starts from a nested prediction (see [`warm_start`]).
-fn nested(problem: &Problem, opts: &SolveOptions) -> bool {
-    opts.warm_start == WarmStart::Nested
-        && opts.active_set.initial_active.is_none()
-        && problem.constraint.is_some()
-}
-
-/// The coarse solves of a warm start run beside the fine setup, and the wall-clock time of
-/// both.
-struct Early {
-    coarse: Result<warm_start::CoarseSolution, String>,
-    wall: f64,
+    let system = DiscreteSystem::new(scheme, problem, opts.system)?;
+    solve_system(system, problem, opts, t0)
 }
 
 /// As [`solve_problem`], on a symbolic system built before for the same scheme (its
@@ -187,51 +143,34 @@ pub fn solve_with_symbolic<'a>(
 ) -> crate::Result<Solution<'a>> {
     let t0 = Instant::now();
     let system = DiscreteSystem::with_symbolic(symbolic, problem)?;
-    solve_system(system, problem, opts, t0, None)
+    solve_system(system, problem, opts, t0)
 }
 
-/// The initial active set that the warm start predicts (None: cold), its report (None: no
-/// warm start was asked for), and the seconds it added to the wall clock (its coarse solves
-/// beyond the setup they ran beside, when they did: `early`).
+/// The initial active set that the warm start predicts (None: cold), and its report (None:
+/// no warm start was asked for).
 fn warm_start(
     system: &DiscreteSystem,
     problem: &Problem,
     cons: &Constraints,
     opts: &SolveOptions,
-    early: Option<Early>,
-) -> (Option<Vec<bool>>, Option<WarmStartReport>, f64) {
-    if !nested(problem, opts) {
-        return (None, None, 0.0);
+) -> (Option<Vec<bool>>, Option<WarmStartReport>) {
+    if opts.warm_start != WarmStart::Nested || opts.active_set.initial_active.is_some() {
+        return (None, None);
     }
-    // the coarse solves, their own time, and the time they added to the wall clock
-    let (coarse, beyond_setup, own) = match early {
-        Some(e) => {
-            let own = e.coarse.as_ref().map_or(0.0, |c| c.seconds());
-            (e.coarse, (e.wall - system.setup_seconds).max(0.0), own)
-        }
-        None => {
-            let t = Instant::now();
-            let c = warm_start::coarse(system.scheme(), problem);
-            let own = t.elapsed().as_secs_f64();
-            (c, own, own)
-        }
-    };
     let t = Instant::now();
-    let outcome = coarse.map(|c| c.finish(system.scheme(), cons));
-    let added = beyond_setup + t.elapsed().as_secs_f64();
-    match outcome {
+    match warm_start::predict(system.scheme(), problem, cons) {
         Ok(p) => {
             system.set_initial_guess(p.guess);
-            (Some(p.active), Some(p.report), added)
+            (Some(p.active), Some(p.report))
         }
-        Err(reason) => {
-            let report = WarmStartReport {
-                seconds: own + t.elapsed().as_secs_f64(),
+        Err(reason) => (
+            None,
+            Some(WarmStartReport {
+                seconds: t.elapsed().as_secs_f64(),
                 skipped: Some(reason),
                 ..Default::default()
-            };
-            (None, Some(report), added)
-        }
+            }),
+        ),
     }
 }
 
@@ -272,17 +211,14 @@ fn solve_system<'a>(
     problem: &Problem,
     opts: &SolveOptions,
     t0: Instant,
-    early: Option<Early>,
 ) -> crate::Result<Solution<'a>> {
     let constraints = constraints::build(&system, problem)?;
     let floating = well_posed::analyse(&system, constraints.as_ref())?;
     let mut warm = None;
-    let mut warm_seconds = 0.0;
     let result = match &constraints {
         Some(c) => {
-            let (mut initial, report, added) = warm_start(&system, problem, c, opts, early);
+            let (mut initial, report) = warm_start(&system, problem, c, opts);
             warm = report;
-            warm_seconds = added;
             if !floating.is_empty() {
                 // parts without Dirichlet unknowns: start with their barrier active, or the
                 // first solve would be singular (see well_posed)
@@ -307,7 +243,7 @@ fn solve_system<'a>(
     let mut timings = Timings {
         setup: system.setup_seconds,
         symbolic: system.symbolic_seconds,
-        warm_start: warm_seconds,
+        warm_start: warm.as_ref().map_or(0.0, |w| w.seconds),
         ..Default::default()
     };
     for l in &result.log {

@@ -131,40 +131,12 @@ struct CoarseState {
 }
 
 /// Predicts the active set of the constrained unknowns `cons` of `scheme` for `problem`.
-/// `Err(reason)` when no prediction can be made. The same as [`coarse`], then
-/// [`CoarseSolution::finish`].
+/// `Err(reason)` when no prediction can be made.
 pub fn predict(
     scheme: &dyn GradientDiscretisation,
     problem: &Problem,
     cons: &Constraints,
 ) -> Result<Prediction, String> {
-    Ok(coarse(scheme, problem)?.finish(scheme, cons))
-}
-
-/// The coarse solves of a prediction, not yet carried to the fine unknowns.
-///
-/// They need the fine mesh and the problem only, not the fine system, so
-/// [`crate::solver::solve_problem`] runs them beside the fine system's setup (whose symbolic
-/// factorisation is sequential), and carries them to the fine unknowns
-/// ([`CoarseSolution::finish`]) once the fine constraints exist.
-pub struct CoarseSolution {
-    kind: ConstraintKind,
-    levels: Vec<Agglomeration>,
-    /// The active states of the finest coarse level.
-    state: CoarseState,
-    /// Π_D u of the finest coarse solution, per coarse cell.
-    finest_values: Vec<f64>,
-    solves: usize,
-    /// Wall-clock time of [`coarse`], seconds.
-    seconds: f64,
-}
-
-/// The coarse solves of a prediction for `scheme` and `problem` (see [`CoarseSolution`]).
-/// `Err(reason)` when no prediction can be made.
-pub fn coarse(
-    scheme: &dyn GradientDiscretisation,
-    problem: &Problem,
-) -> Result<CoarseSolution, String> {
     let t0 = Instant::now();
     let kind = problem
         .constraint
@@ -197,8 +169,7 @@ pub fn coarse(
             warm_start: WarmStart::Cold,
             ..Default::default()
         };
-        let sol =
-            super::solve_system(system, problem, &opts, Instant::now(), None).map_err(fail)?;
+        let sol = super::solve_system(system, problem, &opts, Instant::now()).map_err(fail)?;
         solves += sol.niter();
         finest_values = hmm.cell_values(sol.u());
         let mut s = CoarseState {
@@ -215,53 +186,23 @@ pub fn coarse(
         state = Some(s);
     }
     let state = state.ok_or_else(|| "no coarse level".to_string())?;
-    Ok(CoarseSolution {
-        kind,
-        levels,
-        state,
-        finest_values,
-        solves,
+    let needs_vertices =
+        (0..scheme.n_unknowns()).any(|d| matches!(scheme.dof_entity(d), Entity::Vertex(_)));
+    let incidence = needs_vertices.then(|| VertexIncidence::new(fine));
+    let active = map_down(&state, &levels[0], scheme, cons, kind, incidence.as_ref());
+    let guess = prolong(&finest_values, &levels[0], scheme, incidence.as_ref());
+    let report = WarmStartReport {
+        levels: levels.iter().map(|a| a.mesh.n_cells()).collect(),
+        coarse_solves: solves,
+        predicted_active: active.iter().filter(|&&a| a).count(),
         seconds: t0.elapsed().as_secs_f64(),
+        skipped: None,
+    };
+    Ok(Prediction {
+        active,
+        guess,
+        report,
     })
-}
-
-impl CoarseSolution {
-    /// Wall-clock time of the coarse solves, seconds.
-    pub fn seconds(&self) -> f64 {
-        self.seconds
-    }
-
-    /// The prediction on the constrained unknowns `cons` of `scheme` (the scheme [`coarse`]
-    /// was given). Its report's time is that of [`coarse`] and of this.
-    pub fn finish(self, scheme: &dyn GradientDiscretisation, cons: &Constraints) -> Prediction {
-        let t0 = Instant::now();
-        let fine = scheme.mesh();
-        let needs_vertices =
-            (0..scheme.n_unknowns()).any(|d| matches!(scheme.dof_entity(d), Entity::Vertex(_)));
-        let incidence = needs_vertices.then(|| VertexIncidence::new(fine));
-        let levels = &self.levels;
-        let active = map_down(
-            &self.state,
-            &levels[0],
-            scheme,
-            cons,
-            self.kind,
-            incidence.as_ref(),
-        );
-        let guess = prolong(&self.finest_values, &levels[0], scheme, incidence.as_ref());
-        let report = WarmStartReport {
-            levels: levels.iter().map(|a| a.mesh.n_cells()).collect(),
-            coarse_solves: self.solves,
-            predicted_active: active.iter().filter(|&&a| a).count(),
-            seconds: self.seconds + t0.elapsed().as_secs_f64(),
-            skipped: None,
-        };
-        Prediction {
-            active,
-            guess,
-            report,
-        }
-    }
 }
 
 /// What the coarse solves predict on the fine problem.

@@ -29,15 +29,6 @@ fn compare(scheme: &dyn GradientDiscretisation, p: &Problem) -> (usize, usize, W
     assert_eq!(cold.result.active, nested.result.active);
     assert_close(cold.u(), nested.u(), 1e-12, "cold and nested");
     let report = nested.warm_start.clone().expect("a nested solve reports");
-    // with the direct solver (the default here) the coarse solves ran beside the setup, and
-    // the timings count what they added to the wall clock: the phases add up to at most the
-    // total, as in the cold solve
-    for (s, what) in [(&cold, "cold"), (&nested, "nested")] {
-        let t = s.timings;
-        let phases = t.setup + t.warm_start + t.assemble + t.factor + t.solve + t.look_ahead;
-        assert!(t.warm_start >= 0.0 && phases <= t.total, "{what}: {t:?}");
-    }
-    assert!(report.seconds <= nested.timings.total, "{report:?}");
     (cold.niter(), nested.niter(), report)
 }
 

@@ -102,7 +102,7 @@ pub struct PeerRow {
     /// Data, local matrices, pattern and symbolic factorisation.
     #[serde(deserialize_with = "nullable", default = "nan")]
     pub setup_s: f64,
-    /// The coarse solves of the warm start, beyond the setup they ran beside (`Timings::warm_start`).
+    /// The coarse solves of the warm start.
     #[serde(deserialize_with = "nullable")]
     pub coarse_s: f64,
     /// Condensation and scatter, all iterations.

@@ -240,7 +240,7 @@ fn profile(md: &mut Doc, rows: &[PeerRow]) {
     md.section(
         2,
         "Profile of the ex9 runs",
-        "Seconds per phase of gradvi's ex9 runs (the largest grids): mesh generation; setup (data, local matrices, pattern, symbolic factorisation); the nested start's coarse solves (with the direct solver they run beside the setup, and this is the time they added beyond it: `Timings::warm_start`); assembly of the condensed systems; factorisation (direct) or multigrid setup (iterative); triangular solves or conjugate gradients (with the interior recovery); the rest (constraints, residuals, certificates, the look-aheads of the active set, errors, freeing the memory). Data: an upper bound of the time spent evaluating the problem's expressions (every datum at every centroid, edge midpoint and vertex, sequentially; `problems/ex9.toml` is a problem file, so this is the cost of its parsed expressions), and its share of the total.",
+        "Seconds per phase of gradvi's ex9 runs (the largest grids): mesh generation; setup (data, local matrices, pattern, symbolic factorisation); the nested start's coarse solves; assembly of the condensed systems; factorisation (direct) or multigrid setup (iterative); triangular solves or conjugate gradients (with the interior recovery); the rest (constraints, residuals, certificates, the look-aheads of the active set, errors, freeing the memory). Data: an upper bound of the time spent evaluating the problem's expressions (every datum at every centroid, edge midpoint and vertex, sequentially; `problems/ex9.toml` is a problem file, so this is the cost of its parsed expressions), and its share of the total.",
     );
     let mut t = Table::new(
         "G | scheme | linear | mesh | setup | coarse | assembly | factor / AMG setup | solve / CG | rest | total | data (share)",
@@ -298,7 +298,7 @@ fn domains_section(md: &mut Doc, rows: &[PeerRow]) {
     md.section(
         2,
         "Any domain: L-shape, disk, square with a hole",
-        "The paper's Test 3 data (C = −5) on gmsh meshes of `benches/domains/*.geo`, with the default nested start (coarse HMM solves on meshes agglomerated from the user's mesh, `mesh::agglomerate`) and both linear solvers. Coarse: the time of the coarse solves (with the direct solver they run beside the fine setup, and this is the time they added beyond it). Growth: least-squares exponent of total time against cells over the sizes of the row's domain, scheme and solver.",
+        "The paper's Test 3 data (C = −5) on gmsh meshes of `benches/domains/*.geo`, with the default nested start (coarse HMM solves on meshes agglomerated from the user's mesh, `mesh::agglomerate`) and both linear solvers. Growth: least-squares exponent of total time against cells over the sizes of the row's domain, scheme and solver.",
     );
     md.para(runs_note(rows.iter().filter(|r| r.family != "ex9")));
     let mut t = Table::new(

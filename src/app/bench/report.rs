@@ -466,7 +466,7 @@ fn active_set_changes(md: &mut Doc, all: &[Series]) {
 
 /// The share of each phase in the total of the largest case of each gradvi series.
 fn profile(md: &mut Doc, gradvi: &[&Series]) {
-    md.section(2, "Where the time goes", "Share of the total of each phase for the largest case of each gradvi series (factor = numeric Cholesky, all iterations; assemble = condensation and scatter; solve = triangular solves and recovery of the cell unknowns; other = the active-set loop's residuals and certificates; coarse = the coarse solves of the nested variant, beyond the setup they run beside).");
+    md.section(2, "Where the time goes", "Share of the total of each phase for the largest case of each gradvi series (factor = numeric Cholesky, all iterations; assemble = condensation and scatter; solve = triangular solves and recovery of the cell unknowns; other = the active-set loop's residuals and certificates; coarse = the coarse solves of the nested variant).");
     let mut t = Table::new(
         "series | cells | NITER | total [s] | mesh | setup | symbolic | coarse | assemble | factor | solve | other",
         "llllllllllll",
@@ -518,7 +518,7 @@ fn obstacles(md: &mut Doc, gradvi: &[&Series]) {
 
 /// Every row, one table per mesh family.
 fn all_cases(md: &mut Doc, rows: &[BenchRow]) {
-    md.section(2, "All cases", "Times in seconds; per-iteration columns are divided by NITER (the fine iteration); `coarse` lists the coarse solves of the nested variant as linear solves / seconds (the seconds they added beyond the setup, which they run beside). dolfinx: setup = everything before SNES (mesh reading included), solve = SNES.");
+    md.section(2, "All cases", "Times in seconds; per-iteration columns are divided by NITER (the fine iteration); `coarse` lists the coarse solves of the nested variant as linear solves / seconds. dolfinx: setup = everything before SNES (mesh reading included), solve = SNES.");
     let header = "cells | code | scheme | variant | unknowns | condensed | NITER | coarse | mesh | setup | symbolic | assemble/it | factor/it | solve/it | other | total | peak MiB | certificate";
     for family in ["gmsh", "hexagonal", "cartesian"] {
         let mut fr: Vec<&BenchRow> = rows.iter().filter(|r| r.family == family).collect();
