@@ -348,16 +348,7 @@ impl Node {
         let mut stack = vec![(self, 1)];
         while let Some((n, d)) = stack.pop() {
             deepest = deepest.max(d);
-            match n {
-                Node::Const(_) | Node::Var(_) => {}
-                Node::Neg(a) | Node::Not(a) | Node::Call1(_, a) | Node::PowI(a, _) => {
-                    stack.push((a, d + 1))
-                }
-                Node::Call2(_, a, b) | Node::Cmp(_, a, b) | Node::And(a, b) | Node::Or(a, b) => {
-                    stack.extend([(&**a, d + 1), (&**b, d + 1)])
-                }
-                Node::If(c, a, b) => stack.extend([(&**c, d + 1), (&**a, d + 1), (&**b, d + 1)]),
-            }
+            stack.extend(children(n).into_iter().map(|c| (c, d + 1)));
         }
         deepest
     }
@@ -366,11 +357,7 @@ impl Node {
         match self {
             Node::Const(_) => true,
             Node::Var(_) => false,
-            Node::Neg(a) | Node::Not(a) | Node::Call1(_, a) | Node::PowI(a, _) => a.is_constant(),
-            Node::Call2(_, a, b) | Node::Cmp(_, a, b) | Node::And(a, b) | Node::Or(a, b) => {
-                a.is_constant() && b.is_constant()
-            }
-            Node::If(c, a, b) => c.is_constant() && a.is_constant() && b.is_constant(),
+            n => children(n).iter().all(|c| c.is_constant()),
         }
     }
 }

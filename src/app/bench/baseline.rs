@@ -364,6 +364,7 @@ fn spread_text(s: &Summary) -> String {
 pub fn write_report(cfg: &Config) -> gradvi::Result<()> {
     let rows: Vec<BaselineRow> = read_csv(&cfg.path(CSV))?;
     let baseline = rows.first().map_or("?", |r| r.baseline.as_str());
+    let s = summarise(&rows);
     let mut md = Doc::default();
     md.heading(1, format!("Regression check against {baseline}"));
     md.para(format!(
@@ -375,9 +376,8 @@ pub fn write_report(cfg: &Config) -> gradvi::Result<()> {
          peak memory (the largest of its runs) exceeds {MAX_MEMORY} times the earlier build's \
          and by more than {MIN_MEMORY_MIB} MiB. That floor stands for the noise of the peak: \
          {} (the largest spread over the repeats of a case, over the cases and both builds).",
-        spread_text(&summarise(&rows))
+        spread_text(&s)
     ));
-    let s = summarise(&rows);
     let mut t = Table::new("check | measured | verdict", "lll");
     t.row(vec![
         format!("time ≤ {MAX_SLOWDOWN} × earlier build, every case"),
