@@ -4,7 +4,9 @@
 //! several times the triangular solves that the correction needs.
 //!
 //! Let S₀ = L Lᵀ (up to the permutation) be factorised and S = S₀ + D, with D nonzero only in
-//! the rows and columns of a small set Q of unknowns (q = |Q|). D_QQ is symmetric: with its
+//! the rows and columns of a small set Q of unknowns (q = |Q|), given by its nonzero entries
+//! (the caller records them while it assembles S over S₀'s values, so the two matrices never
+//! take memory side by side: [`crate::assembly`]). D_QQ is symmetric: with its
 //! eigen-decomposition D_QQ = V Λ Vᵀ, keeping the r eigenvalues above round-off
 //! (|λ| > [`EIGEN_RTOL`] max |λ|), D = U Λ Uᵀ with U = P_Q V (n × r, P_Q the columns of the
 //! identity on Q). Then
@@ -80,33 +82,30 @@ struct Change {
     lambda: Vec<f64>,
 }
 
-/// The change from `old` to `new` (values on the same lower-triangle pattern), or `None` if
-/// it touches more than `max_support` unknowns or has rank above `max_rank`.
+/// The change D given by its nonzero lower-triangle entries `diff` (position in the pattern,
+/// value), or `None` if it touches more than `max_support` unknowns or has rank above
+/// `max_rank`.
 fn change(
     col_ptr: &[usize],
     row_idx: &[usize],
-    old: &[f64],
-    new: &[f64],
+    diff: &[(usize, f64)],
     max_support: usize,
     max_rank: usize,
 ) -> Option<Change> {
-    let mut entries = Vec::new();
+    if diff.len() > max_support * max_support {
+        return None;
+    }
+    let mut entries = Vec::with_capacity(diff.len());
     let mut q: Vec<usize> = Vec::new();
-    for j in 0..col_ptr.len() - 1 {
-        for p in col_ptr[j]..col_ptr[j + 1] {
-            let d = new[p] - old[p];
-            if !d.is_finite() {
-                return None;
-            }
-            if d != 0.0 {
-                let i = row_idx[p];
-                entries.push((i, j, d));
-                q.push(i);
-                q.push(j);
-                if entries.len() > max_support * max_support {
-                    return None;
-                }
-            }
+    for &(p, d) in diff {
+        if !d.is_finite() || p >= row_idx.len() {
+            return None;
+        }
+        if d != 0.0 {
+            let (i, j) = (row_idx[p], col_ptr.partition_point(|&c| c <= p) - 1);
+            entries.push((i, j, d));
+            q.push(i);
+            q.push(j);
         }
     }
     q.sort_unstable();
@@ -183,44 +182,89 @@ impl Updated<'_> {
     }
 }
 
-/// The normwise backward error of x for S x = c.
-fn backward_error(col_ptr: &[usize], row_idx: &[usize], s: &[f64], x: &[f64], c: &[f64]) -> f64 {
+/// The normwise backward error of x for S x = c (`y`: a buffer of x's length).
+fn backward_error(
+    (col_ptr, row_idx): (&[usize], &[usize]),
+    s: &[f64],
+    x: &[f64],
+    c: &[f64],
+    y: &mut [f64],
+) -> f64 {
     let inf = |v: &mut dyn Iterator<Item = f64>| v.fold(0.0f64, |m, a| m.max(a.abs()));
-    // one buffer for S x, then |S| |x|
-    let mut y = vec![0.0; x.len()];
-    symmetric_lower_mul(col_ptr, row_idx, s, x, &mut y, false);
-    let r = inf(&mut c.iter().zip(&y).map(|(a, b)| a - b));
-    symmetric_lower_mul(col_ptr, row_idx, s, x, &mut y, true);
+    // S x, then |S| |x|, in the same buffer
+    symmetric_lower_mul(col_ptr, row_idx, s, x, y, false);
+    let r = inf(&mut c.iter().zip(y.iter()).map(|(a, b)| a - b));
+    symmetric_lower_mul(col_ptr, row_idx, s, x, y, true);
     let scale = inf(&mut y.iter().copied()) + inf(&mut c.iter().copied());
     if scale > 0.0 { r / scale } else { r }
 }
 
+/// When an updated solve is tried: at most `support` unknowns whose rows or columns changed,
+/// and a change of rank at most `rank`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limits {
+    /// q at most.
+    pub support: usize,
+    /// r at most.
+    pub rank: usize,
+}
+
+/// The memory of an updated solve, lent by the caller: `columns` holds the r + 1 columns
+/// ((r + 1) n values) and, if its capacity allows, two more vectors (2n), which otherwise go
+/// in `vectors`. Their capacity is reused, so a caller
+/// that lends buffers it keeps anyway (the assembly's) adds no memory when they are large
+/// enough; they are resized and overwritten.
+pub struct Buffers<'a> {
+    /// For [c, U], then [x, Z].
+    pub columns: &'a mut Vec<f64>,
+    /// For the residual and the backward error.
+    pub vectors: &'a mut Vec<f64>,
+}
+
 /// Solves S x = c in place (`rhs`: c, overwritten by x), S with the lower-triangle `new`
-/// values on the pattern (column pointers, row indices) of S₀, whose values `old` `factor` factorises
-/// (see the module docs). `None` (and `rhs` untouched) when the change touches more than
-/// `max_support` unknowns or has rank above `max_rank`, or when the result is not accurate to
-/// [`MAX_BACKWARD_ERROR`] after one refinement: factorise S instead.
+/// values on the `pattern` (column pointers, row indices) of S₀ = S − D, which `factor`
+/// factorises, D given by its nonzero lower-triangle entries `diff` (position in the pattern,
+/// value; see the module docs). `None` (and `rhs` untouched) when the change exceeds
+/// `limits`, or when the result is not accurate to [`MAX_BACKWARD_ERROR`] after one
+/// refinement: factorise S instead.
 pub fn solve_updated(
     factor: &SpdFactor,
-    (col_ptr, row_idx): (&[usize], &[usize]),
-    old: &[f64],
+    pattern: (&[usize], &[usize]),
     new: &[f64],
+    diff: &[(usize, f64)],
     rhs: &mut [f64],
-    max_support: usize,
-    max_rank: usize,
+    limits: Limits,
+    buf: Buffers<'_>,
 ) -> Option<UpdateReport> {
     let n = rhs.len();
-    let change = change(col_ptr, row_idx, old, new, max_support, max_rank)?;
+    let (col_ptr, row_idx) = pattern;
+    let change = change(col_ptr, row_idx, diff, limits.support, limits.rank)?;
     let (q, r) = (change.q.len(), change.lambda.len());
     // one pass over the factor for [c, U]
-    let mut cols = vec![0.0; n * (r + 1)];
+    // the two vectors after the columns when the columns' buffer has room for them
+    let (cols, vecs) = (buf.columns, buf.vectors);
+    let together = cols.capacity() >= (r + 3) * n;
+    cols.clear();
+    cols.resize((r + 1) * n, 0.0);
+    if together {
+        cols.resize((r + 3) * n, 0.0);
+    } else {
+        vecs.clear();
+        vecs.resize(2 * n, 0.0);
+    }
+    let (cols, vecs) = if together {
+        let (c, v) = cols.split_at_mut((r + 1) * n);
+        (c, v)
+    } else {
+        (&mut cols[..], &mut vecs[..])
+    };
     cols[..n].copy_from_slice(rhs);
     for k in 0..r {
         for (a, &g) in change.q.iter().enumerate() {
             cols[(k + 1) * n + g] = change.v[(a, k)];
         }
     }
-    factor.solve_columns_in_place(&mut cols, r + 1);
+    factor.solve_columns_in_place(cols, r + 1);
     let (x, z) = cols.split_at_mut(n);
     // Λ⁻¹ + Uᵀ Z
     let mut cap = DMatrix::<f64>::zeros(r, r);
@@ -245,24 +289,24 @@ pub fn solve_updated(
     if !up.correct(x) {
         return None;
     }
-    let mut err = backward_error(col_ptr, row_idx, new, x, rhs);
+    let (res, y) = vecs.split_at_mut(n);
+    let mut err = backward_error(pattern, new, x, rhs, y);
     let mut refinements = 0;
     if !(err <= MAX_BACKWARD_ERROR) {
         // one step of iterative refinement: x += S⁻¹ (c − S x)
-        let mut res = vec![0.0; n];
-        symmetric_lower_mul(col_ptr, row_idx, new, x, &mut res, false);
+        symmetric_lower_mul(col_ptr, row_idx, new, x, res, false);
         for (ri, ci) in res.iter_mut().zip(rhs.iter()) {
             *ri = ci - *ri;
         }
-        up.factor.solve_in_place(&mut res);
-        if !up.correct(&mut res) {
+        up.factor.solve_in_place(res);
+        if !up.correct(res) {
             return None;
         }
-        for (xi, di) in x.iter_mut().zip(&res) {
+        for (xi, di) in x.iter_mut().zip(res.iter()) {
             *xi += di;
         }
         refinements = 1;
-        err = backward_error(col_ptr, row_idx, new, x, rhs);
+        err = backward_error(pattern, new, x, rhs, y);
         if !(err <= MAX_BACKWARD_ERROR) {
             return None;
         }
@@ -309,6 +353,30 @@ mod tests {
         (cp, ri, v)
     }
 
+    /// The nonzero entries of new − old.
+    fn diff(old: &[f64], new: &[f64]) -> Vec<(usize, f64)> {
+        old.iter()
+            .zip(new)
+            .enumerate()
+            .filter(|(_, (a, b))| a.to_bits() != b.to_bits())
+            .map(|(p, (a, b))| (p, b - a))
+            .collect()
+    }
+
+    fn lim(support: usize, rank: usize) -> Limits {
+        Limits { support, rank }
+    }
+
+    /// New buffers for one solve.
+    macro_rules! bufs {
+        () => {
+            Buffers {
+                columns: &mut Vec::new(),
+                vectors: &mut Vec::new(),
+            }
+        };
+    }
+
     fn max_diff(a: &[f64], b: &[f64]) -> f64 {
         a.iter()
             .zip(b)
@@ -331,7 +399,16 @@ mod tests {
             .map(|i| ((i * 7919) % 101) as f64 / 101.0 - 0.3)
             .collect();
         let mut x = c.clone();
-        let rep = solve_updated(&f_old, (&cp, &ri), &old, &new, &mut x, 64, 16).unwrap();
+        let rep = solve_updated(
+            &f_old,
+            (&cp, &ri),
+            &new,
+            &diff(&old, &new),
+            &mut x,
+            lim(64, 16),
+            bufs!(),
+        )
+        .unwrap();
         // freeing or fixing an unknown changes its row and column: rank two each
         assert!((5..=10).contains(&rep.rank), "{rep:?}");
         assert!(rep.backward_error <= MAX_BACKWARD_ERROR, "{rep:?}");
@@ -360,18 +437,30 @@ mod tests {
         let f = pat.factor(&old).unwrap();
         let c = vec![1.0; n];
         let mut x = c.clone();
+        // S₀ = `old` to S = `s` with these limits
+        let solve = |s: &[f64], x: &mut [f64], support: usize, rank: usize| {
+            solve_updated(
+                &f,
+                (&cp, &ri),
+                s,
+                &diff(&old, s),
+                x,
+                lim(support, rank),
+                bufs!(),
+            )
+        };
         // 40 unknowns fixed: rank 80 > 16
-        assert!(solve_updated(&f, (&cp, &ri), &old, &new, &mut x, 1000, 16).is_none());
+        assert!(solve(&new, &mut x, 1000, 16).is_none());
         assert_eq!(x, c, "the right-hand side is left untouched");
         // support above the cap
-        assert!(solve_updated(&f, (&cp, &ri), &old, &new, &mut x, 30, 1000).is_none());
+        assert!(solve(&new, &mut x, 30, 1000).is_none());
         // non-finite values: left to the factorisation, which reports them
         let mut bad = old.clone();
         bad[5] = f64::NAN;
-        assert!(solve_updated(&f, (&cp, &ri), &old, &bad, &mut x, 1000, 16).is_none());
+        assert!(solve(&bad, &mut x, 1000, 16).is_none());
         assert_eq!(x, c);
         // no change at all: a plain solve
-        let rep = solve_updated(&f, (&cp, &ri), &old, &old, &mut x, 10, 10).unwrap();
+        let rep = solve(&old, &mut x, 10, 10).unwrap();
         assert_eq!((rep.support, rep.rank), (0, 0));
         let mut exact = c.clone();
         f.solve_in_place(&mut exact);
