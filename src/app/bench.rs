@@ -385,17 +385,8 @@ pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
         );
         for l in &sol.result.log {
             eprintln!(
-                "[bench]     solve {:>3}: active {:>8} (+{}, -{}), {} {:.3} s, solve {:.3} s",
-                l.step.solve,
-                l.step.active,
-                l.step.entered,
-                l.step.left,
-                match l.timings.update_rank {
-                    Some(r) => format!("earlier factor updated (rank {r})"),
-                    None => "factor".into(),
-                },
-                l.timings.factor,
-                l.timings.solve
+                "[bench]     solve {:>3}: active {:>8} (+{}, -{}), factor {:.3} s",
+                l.step.solve, l.step.active, l.step.entered, l.step.left, l.timings.factor
             );
         }
     }

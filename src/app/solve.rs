@@ -279,7 +279,7 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         tol: a.tol,
         progress: Some(|l| {
             eprintln!(
-                "  solve {:>3}: active {} (+{}, -{}), violation {:.2e}, {:.2} s (assembly {:.2}, {}, solve {:.2}{})",
+                "  solve {:>3}: active {} (+{}, -{}), violation {:.2e}, {:.2} s (assembly {:.2}, {} {:.2}, solve {:.2}{})",
                 l.step.solve,
                 l.step.active,
                 l.step.entered,
@@ -287,11 +287,12 @@ pub fn run(a: &SolveArgs) -> Result<()> {
                 l.step.violation,
                 l.timings.assemble + l.timings.factor + l.timings.solve,
                 l.timings.assemble,
-                match (l.timings.reused, l.timings.update_rank) {
-                    (true, _) => format!("multigrid reused {:.2}", l.timings.factor),
-                    (_, Some(r)) => format!("earlier factorisation updated (rank {r})"),
-                    _ => format!("factorisation/multigrid setup {:.2}", l.timings.factor),
+                if l.timings.reused {
+                    "multigrid reused"
+                } else {
+                    "factorisation/multigrid setup"
                 },
+                l.timings.factor,
                 l.timings.solve,
                 if l.timings.krylov > 0 {
                     format!(", {} CG iterations", l.timings.krylov)

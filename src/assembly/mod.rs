@@ -37,7 +37,7 @@ pub mod symbolic;
 pub mod two_point;
 pub mod values;
 
-use crate::linalg::{FactorThreads, Ordering, SpdFactor, SpdPattern, low_rank};
+use crate::linalg::{FactorThreads, Ordering, SpdPattern};
 use crate::problem::Problem;
 use crate::scheme::{GradientDiscretisation, PointDof};
 use crate::vi::{QuadraticEnergy, SolveTimings};
@@ -178,68 +178,19 @@ impl std::fmt::Display for LinearSolver {
     }
 }
 
-/// Entries of a matrix, (position in the pattern, value), sorted by position.
-type Entries = Vec<(usize, f64)>;
-
-/// The factorisation of the last direct solve, kept for the next ones
-/// ([`DiscreteSystem::solve_directly`]).
-struct KeptFactor {
-    factor: SpdFactor,
-    /// The values of the last solve's matrix (the next assembly writes into them).
-    values: Vec<f64>,
-    /// The entries of the factorised matrix that differ from `values`, (position, value)
-    /// sorted by position; `None` once more than [`UPDATE_MAX_SUPPORT`]² did.
-    since: Option<Vec<(usize, f64)>>,
+/// Cholesky factorisation of the condensed matrix (`values` on `pattern`) and solve of
+/// S x = c in place (`rhs`); returns when the factorisation ended, 0 Krylov iterations, and
+/// that the solve is exact.
+fn solve_directly(
+    pattern: &SpdPattern,
+    values: &[f64],
+    rhs: &mut [f64],
+) -> crate::Result<(Instant, PcgOutcome)> {
+    let factor = pattern.factor(values)?;
+    let t2 = Instant::now();
+    factor.solve_in_place(rhs);
+    Ok((t2, PcgOutcome::default()))
 }
-
-/// The entries of the factorised matrix that differ from the new one: those that differed
-/// from the last one (`since`) and those the new assembly changed (`changes`, (position,
-/// last value), sorted), the factorised value kept where both have one.
-fn merge_changes(
-    since: Option<Vec<(usize, f64)>>,
-    changes: Vec<(usize, f64)>,
-) -> Option<Vec<(usize, f64)>> {
-    let since = since?;
-    let limit = UPDATE_MAX_SUPPORT * UPDATE_MAX_SUPPORT;
-    if since.len() + changes.len() > 2 * limit {
-        return None;
-    }
-    let mut out = Vec::with_capacity(since.len() + changes.len());
-    let (mut a, mut b) = (since.into_iter().peekable(), changes.into_iter().peekable());
-    loop {
-        match (a.peek(), b.peek()) {
-            (Some(x), Some(y)) if x.0 < y.0 => out.extend(a.next()),
-            (Some(x), Some(y)) if x.0 > y.0 => out.extend(b.next()),
-            (Some(_), Some(_)) => {
-                out.extend(a.next());
-                b.next();
-            }
-            (Some(_), None) => out.extend(a.next()),
-            (None, Some(_)) => out.extend(b.next()),
-            (None, None) => break,
-        }
-    }
-    (out.len() <= limit).then_some(out)
-}
-
-/// A direct solve goes through the kept factorisation of an earlier matrix
-/// ([`crate::linalg::low_rank`]) when the matrix changed since in at most this many unknowns'
-/// rows and columns ...
-pub const UPDATE_MAX_SUPPORT: usize = 128;
-
-/// ... and by a change of at most this rank: r + 1 right-hand sides in one pass of the
-/// triangular solves, against a new factorisation and one solve. Measured on the 5-point
-/// Laplacian of a 700 × 700 grid (AMD, 25.4M factor values, this 2-core machine): the
-/// factorisation took 0.56 s, solves with 1, 2, 3, 5, 9, 17 and 33 columns 0.082, 0.13, 0.16,
-/// 0.19, 0.24, 0.39 and 0.74 s; on the gmsh mesh of 300k cells with HMM (450k condensed
-/// unknowns, 16.5M factor values) the factorisation takes 4 to 5 one-column solves. Each HMM
-/// cell entering or leaving the active set adds one to the rank (its condensed block changes
-/// by a rank-one term), each P1 node or HMM face two (its row and column). The columns are
-/// also memory, (r + 1) n values, taken in the assembly's buffers where they fit (with
-/// interior unknowns: Σ_K p_K² values, 9 per triangle for HMM, about 6n): rank 4 (5 columns,
-/// about 2.3 one-column solves) fits them there on triangles, and covers the last solves of
-/// the benchmark, where 1 or 2 cells or nodes change status.
-pub const UPDATE_MAX_RANK: usize = 4;
 
 /// [`LinearSolver::Auto`] solves iteratively from this many condensed unknowns on.
 pub const AUTO_ITERATIVE_MIN: usize = 250_000;
@@ -396,8 +347,6 @@ struct PcgOutcome {
     rate: Option<f64>,
     /// Preconditioned with the coarse levels of an earlier hierarchy.
     reused: bool,
-    /// Solved through an earlier factorisation: the rank of the change since.
-    update_rank: Option<usize>,
 }
 
 impl PcgOutcome {
@@ -411,7 +360,6 @@ impl PcgOutcome {
             krylov: self.iterations,
             inexact: self.inexact,
             reused: self.reused,
-            update_rank: self.update_rank,
         }
     }
 }
@@ -456,8 +404,6 @@ pub struct DiscreteSystem<'a> {
     cell_system: std::sync::OnceLock<Option<two_point::CellSystemAll>>,
     /// The multigrid hierarchy of the last iterative solve.
     kept: Mutex<Option<KeptHierarchy>>,
-    /// The factorisation of the last direct solve.
-    kept_factor: Mutex<Option<KeptFactor>>,
     /// With [`LinearSolver::Auto`], the direct solver built when the iterative one fails.
     direct_fallback: std::sync::OnceLock<crate::Result<SpdPattern>>,
     /// Time to build (data, local matrices, and the symbolic system when built here), seconds.
@@ -510,7 +456,6 @@ impl<'a> DiscreteSystem<'a> {
             last_cells: Mutex::new(Vec::new()),
             cell_system: std::sync::OnceLock::new(),
             kept: Mutex::new(None),
-            kept_factor: Mutex::new(None),
             direct_fallback: std::sync::OnceLock::new(),
             setup_seconds: 0.0,
             symbolic_seconds: 0.0,
@@ -694,29 +639,10 @@ impl<'a> DiscreteSystem<'a> {
             }
         }
         let reuse = self.next_hierarchy(fixed, false);
-        // with a kept factorisation, the new matrix is written over the last one, whose
-        // entries that changed are recorded
-        let kept = match self.direct_pattern() {
-            Some(_) => self.kept_factor.lock().ok().and_then(|mut k| k.take()),
-            None => None,
-        };
-        let (values, mut rhs, kept) = match kept {
-            Some(k) => {
-                let (values, rhs, changes) = self.assemble_condensed_into(fixed, Some(k.values));
-                (
-                    values,
-                    rhs,
-                    Some((k.factor, merge_changes(k.since, changes))),
-                )
-            }
-            None => {
-                let (values, rhs) = self.assemble_condensed(fixed);
-                (values, rhs, None)
-            }
-        };
+        let (values, mut rhs) = self.assemble_condensed(fixed);
         let t1 = Instant::now();
         let (t2, out) = match self.direct_pattern() {
-            Some(pattern) => self.solve_directly(pattern, values, kept, &mut rhs, t1)?,
+            Some(pattern) => solve_directly(pattern, &values, &mut rhs)?,
             None if self.sym.options.linear == LinearSolver::Auto => {
                 let c = rhs.clone();
                 let it = self
@@ -729,7 +655,7 @@ impl<'a> DiscreteSystem<'a> {
                     // for this solve and the following ones
                     Err(_) => {
                         rhs = c;
-                        self.solve_directly(self.fallback_pattern()?, values, None, &mut rhs, t1)?
+                        solve_directly(self.fallback_pattern()?, &values, &mut rhs)?
                     }
                 }
             }
@@ -794,100 +720,6 @@ impl<'a> DiscreteSystem<'a> {
         {
             *b = guess;
         }
-    }
-
-    /// Solves S x = c directly (S: the condensed matrix, lower-triangle `values` on the
-    /// pattern of `pattern`; c in `rhs`, overwritten by x): through `kept`, the factorisation
-    /// of an earlier matrix and the entries where it differs from S, when that change has low
-    /// rank ([`UPDATE_MAX_SUPPORT`], [`UPDATE_MAX_RANK`]), otherwise by a new Cholesky
-    /// factorisation; the factorisation used is kept for the next solve. Returns when the
-    /// factorisation ended (`start`, the end of the assembly, through the kept one) and what
-    /// was done.
-    fn solve_directly(
-        &self,
-        pattern: &SpdPattern,
-        values: Vec<f64>,
-        kept: Option<(SpdFactor, Option<Entries>)>,
-        rhs: &mut [f64],
-        start: Instant,
-    ) -> crate::Result<(Instant, PcgOutcome)> {
-        let (factor, since) = match kept {
-            Some((factor, Some(since))) => (factor, since),
-            // freed before the new factorisation, which reuses its memory
-            other => {
-                drop(other);
-                return self.factor_and_solve(pattern, values, rhs);
-            }
-        };
-        {
-            let diff: Vec<(usize, f64)> = since
-                .iter()
-                .map(|&(p, old)| (p, values[p] - old))
-                .filter(|&(_, d)| d != 0.0)
-                .collect();
-            // the buffers of the assembly are not needed before the next one: lent to the
-            // update for its columns, which then take no memory of their own when they fit
-            let (mut sbuf, mut gbuf) = self
-                .scratch
-                .lock()
-                .map(|mut b| std::mem::take(&mut *b))
-                .unwrap_or_default();
-            let updated = low_rank::solve_updated(
-                &factor,
-                self.condensed_pattern(),
-                &values,
-                &diff,
-                rhs,
-                low_rank::Limits {
-                    support: UPDATE_MAX_SUPPORT,
-                    rank: UPDATE_MAX_RANK,
-                },
-                low_rank::Buffers {
-                    columns: &mut sbuf,
-                    vectors: &mut gbuf,
-                },
-            );
-            if let Ok(mut b) = self.scratch.lock() {
-                *b = (sbuf, gbuf);
-            }
-            if let Some(report) = updated {
-                if let Ok(mut k) = self.kept_factor.lock() {
-                    *k = Some(KeptFactor {
-                        factor,
-                        values,
-                        since: Some(since),
-                    });
-                }
-                let out = PcgOutcome {
-                    update_rank: Some(report.rank),
-                    ..Default::default()
-                };
-                return Ok((start, out));
-            }
-            // freed before the new factorisation, which reuses its memory
-            drop(factor);
-        }
-        self.factor_and_solve(pattern, values, rhs)
-    }
-
-    /// Solves S x = c by a new factorisation, kept for the next solves.
-    fn factor_and_solve(
-        &self,
-        pattern: &SpdPattern,
-        values: Vec<f64>,
-        rhs: &mut [f64],
-    ) -> crate::Result<(Instant, PcgOutcome)> {
-        let factor = pattern.factor(&values)?;
-        let t2 = Instant::now();
-        factor.solve_in_place(rhs);
-        if let Ok(mut k) = self.kept_factor.lock() {
-            *k = Some(KeptFactor {
-                factor,
-                values,
-                since: Some(Vec::new()),
-            });
-        }
-        Ok((t2, PcgOutcome::default()))
     }
 
     /// The symbolic factorisation to solve with: the symbolic system's, or the one built when
@@ -1050,7 +882,6 @@ impl<'a> DiscreteSystem<'a> {
             inexact: report.residual_norm > ITERATIVE_RTOL * c_norm,
             rate,
             reused: false,
-            update_rank: None,
         })
     }
 
@@ -1107,18 +938,6 @@ impl<'a> DiscreteSystem<'a> {
     /// where b^N is the Neumann load and (S_K, g_K) the condensed block and load of cell K
     /// ([`condense()`]). Then S u_S = c is the skeleton system with u_F moved to the right.
     pub fn assemble_condensed(&self, fixed: &[Option<f64>]) -> (Vec<f64>, Vec<f64>) {
-        let (values, rhs, _) = self.assemble_condensed_into(fixed, None);
-        (values, rhs)
-    }
-
-    /// [`Self::assemble_condensed`], the values written into `prev` (the values of an earlier
-    /// assembly, of the same length) when given: returned with the entries that changed,
-    /// (position, earlier value), so that the two matrices never take memory side by side.
-    fn assemble_condensed_into(
-        &self,
-        fixed: &[Option<f64>],
-        prev: Option<Vec<f64>>,
-    ) -> (Vec<f64>, Vec<f64>, Vec<(usize, f64)>) {
         let fixed = FixedValues::new(&self.values.dirichlet, fixed);
         // buffers kept between calls (they are entirely rewritten where read)
         let (mut sbuf, mut gbuf) = self
@@ -1128,23 +947,23 @@ impl<'a> DiscreteSystem<'a> {
             .unwrap_or_default();
         // without interior unknowns S_K = M_K, laid out like the local matrices, and the
         // cells' right-hand sides are computed where they are gathered: no buffer at all
-        let (values, rhs, changes) = if self.sym.no_interior {
-            let (values, changes) = self.gather_matrix(&fixed, &self.values.mats, prev);
+        let (values, rhs) = if self.sym.no_interior {
+            let values = self.gather_matrix(&fixed, &self.values.mats);
             let rhs = self.gather_rhs(&fixed, |k, i| self.cell_rhs(k, i, &fixed));
-            (values, rhs, changes)
+            (values, rhs)
         } else {
             sbuf.resize(self.sym.maps.block_ptr.total(), 0.0);
             gbuf.resize(self.sym.dof_map.dofs.len(), 0.0);
             self.condense_cells(&fixed, &mut sbuf, &mut gbuf);
-            let (values, changes) = self.gather_matrix(&fixed, &sbuf, prev);
+            let values = self.gather_matrix(&fixed, &sbuf);
             let dof_ptr = &self.sym.dof_map.dof_ptr;
             let rhs = self.gather_rhs(&fixed, |k, i| gbuf[dof_ptr.at(k) + i]);
-            (values, rhs, changes)
+            (values, rhs)
         };
         if let Ok(mut b) = self.scratch.lock() {
             *b = (sbuf, gbuf);
         }
-        (values, rhs, changes)
+        (values, rhs)
     }
 
     /// Condenses every cell (some with interior unknowns), in parallel: cell k's p×p block
@@ -1221,12 +1040,7 @@ impl<'a> DiscreteSystem<'a> {
     /// `blocks` (the condensed blocks, or the local matrices when they coincide), listed in cell
     /// order (the order of a sequential scatter, whatever the number of
     /// threads); zero in the rows and columns of fixed unknowns, whose diagonal is 1.
-    fn gather_matrix(
-        &self,
-        fixed: &FixedValues,
-        blocks: &[f64],
-        prev: Option<Vec<f64>>,
-    ) -> (Vec<f64>, Vec<(usize, f64)>) {
+    fn gather_matrix(&self, fixed: &FixedValues, blocks: &[f64]) -> Vec<f64> {
         let (col_ptr, row_idx) = (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx());
         let src = &self.sym.maps.src;
         let is_fixed: Vec<bool> = (0..self.n_skel)
@@ -1234,43 +1048,29 @@ impl<'a> DiscreteSystem<'a> {
             .with_min_len(4096)
             .map(|d| fixed.get(d).is_some())
             .collect();
-        let nnz = self.sym.pattern.nnz();
-        let (mut values, diff) = match prev {
-            Some(v) if v.len() == nnz => (v, true),
-            _ => (vec![0.0; nnz], false),
-        };
+        let mut values = vec![0.0; self.sym.pattern.nnz()];
         let ranges = chunks(self.n_skel, CHUNK * 4);
         let slices = split_by_ranges(&mut values, &ranges, |k| col_ptr[k]);
         let tasks: Vec<_> = ranges.into_iter().zip(slices).collect();
-        let changes: Vec<Vec<(usize, f64)>> = tasks
-            .into_par_iter()
-            .map(|((c0, c1), out)| {
-                let base = col_ptr[c0];
-                let mut changes = Vec::new();
-                for c in c0..c1 {
-                    let col_fixed = is_fixed[c];
-                    for q in col_ptr[c]..col_ptr[c + 1] {
-                        let r = row_idx[q];
-                        let v = if col_fixed || is_fixed[r] {
-                            if r == c { 1.0 } else { 0.0 }
-                        } else {
-                            let mut v = 0.0;
-                            for &i in src.list(q) {
-                                v += blocks[i as usize];
-                            }
-                            v
-                        };
-                        let o = &mut out[q - base];
-                        if diff && o.to_bits() != v.to_bits() {
-                            changes.push((q, *o));
+        tasks.into_par_iter().for_each(|((c0, c1), out)| {
+            let base = col_ptr[c0];
+            for c in c0..c1 {
+                let col_fixed = is_fixed[c];
+                for q in col_ptr[c]..col_ptr[c + 1] {
+                    let r = row_idx[q];
+                    out[q - base] = if col_fixed || is_fixed[r] {
+                        if r == c { 1.0 } else { 0.0 }
+                    } else {
+                        let mut v = 0.0;
+                        for &i in src.list(q) {
+                            v += blocks[i as usize];
                         }
-                        *o = v;
-                    }
+                        v
+                    };
                 }
-                changes
-            })
-            .collect();
-        (values, changes.concat())
+            }
+        });
+        values
     }
 
     /// The right-hand side of the condensed system, gathered row by row: the Neumann load plus
@@ -1416,12 +1216,6 @@ impl QuadraticEnergy for DiscreteSystem<'_> {
     fn release(&self) {
         if let Ok(mut k) = self.kept.lock() {
             drop(k.take());
-        }
-        if let Ok(mut k) = self.kept_factor.lock() {
-            drop(k.take());
-        }
-        if let Ok(mut b) = self.scratch.lock() {
-            *b = Default::default();
         }
     }
     fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>) {

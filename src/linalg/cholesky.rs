@@ -260,27 +260,6 @@ impl SpdFactor {
             MemStack::new(&mut mem),
         );
     }
-
-    /// Solves A X = B in place for the `ncols` columns of B, stored one after the other
-    /// (column-major, n × ncols): one pass of each triangular solve over L for all of them,
-    /// cheaper than `ncols` single solves since the solve reads all of L for little
-    /// arithmetic per value.
-    pub fn solve_columns_in_place(&self, b: &mut [f64], ncols: usize) {
-        let n = self.symbolic.nrows();
-        debug_assert_eq!(b.len(), n * ncols);
-        if ncols == 0 {
-            return;
-        }
-        let par = self.par;
-        let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(ncols, par));
-        let mat = faer::MatMut::from_column_major_slice_mut(b, n, ncols);
-        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
-            Conj::No,
-            mat,
-            par,
-            MemStack::new(&mut mem),
-        );
-    }
 }
 
 #[cfg(test)]

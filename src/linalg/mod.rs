@@ -13,8 +13,7 @@
 //!   its supernodes; built once per pattern;
 //! - numeric ([`SpdPattern::factor`] → [`SpdFactor`]): the values of L; redone for each set of
 //!   values (each active set of the VI solver);
-//! - solve ([`SpdFactor::solve_in_place`]): the two triangular solves; after a change of
-//!   a few rows and columns, through the factor of the matrix before it ([`low_rank`]).
+//! - solve ([`SpdFactor::solve_in_place`]): the two triangular solves.
 //!
 //! P is chosen to keep the fill small ([`Ordering`], in [`ordering`]): faer's approximate
 //! minimum degree (the default) or a nested dissection by breadth-first level-set separators
@@ -28,7 +27,6 @@
 pub mod amg;
 pub mod cholesky;
 pub mod csr;
-pub mod low_rank;
 pub mod ordering;
 pub mod pcg;
 

@@ -49,12 +49,6 @@ pub struct SolveTimings {
     /// The iterative solver preconditioned with the coarse levels of an earlier solve's
     /// multigrid hierarchy instead of building one.
     pub reused: bool,
-    /// The direct solver solved through the factorisation of an earlier solve's matrix,
-    /// corrected for the low-rank change since ([`crate::linalg::low_rank`]), instead of
-    /// factorising: the rank of that change (`None`: a new factorisation, or an iterative
-    /// solve).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub update_rank: Option<usize>,
 }
 
 impl SolveTimings {
@@ -68,7 +62,6 @@ impl SolveTimings {
             krylov: self.krylov + more.krylov,
             inexact: more.inexact,
             reused: self.reused,
-            update_rank: self.update_rank,
         }
     }
 }

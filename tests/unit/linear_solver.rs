@@ -272,31 +272,28 @@ fn screening_solves_are_refined_to_the_full_solution() {
     assert!(direct.refine(&fixed).unwrap().is_none());
 }
 
-/// The discrete system of `p` with scheme `s`, solved by `linear`.
-fn discrete_system<'a>(
-    s: &'a dyn GradientDiscretisation,
-    p: &Problem,
-    linear: LinearSolver,
-) -> gradvi::assembly::DiscreteSystem<'a> {
-    let opts = SystemOptions {
-        linear,
-        ..Default::default()
-    };
-    gradvi::assembly::DiscreteSystem::new(s, p, opts).unwrap()
-}
-
 /// Consecutive iterative solves reuse the coarse levels of the previous multigrid hierarchy
 /// when at most `REUSE_MAX_CHANGED` of the unknowns changed status since the matrix it was
 /// built for (counted from that matrix, over several solves), and build a new one otherwise
 /// or after `release`; the solutions are those of fresh systems.
 #[test]
 fn multigrid_hierarchies_are_reused_when_few_unknowns_change() {
-    use gradvi::assembly::REUSE_MAX_CHANGED;
+    use gradvi::assembly::{DiscreteSystem, REUSE_MAX_CHANGED};
     use gradvi::vi::QuadraticEnergy;
     let tri = cartesian_triangles(128, 128, [0.0, 1.0], [0.0, 1.0]).unwrap();
     let p1 = P1::new(&tri).unwrap();
     let p = paper_test3(-10.0);
-    let system = || discrete_system(&p1, &p, LinearSolver::Iterative);
+    let system = || {
+        DiscreteSystem::new(
+            &p1,
+            &p,
+            SystemOptions {
+                linear: LinearSolver::Iterative,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    };
     let n = p1.n_unknowns();
     let max = (REUSE_MAX_CHANGED * n as f64) as usize;
     assert!(max >= 4, "{n} unknowns allow {max} changes");
@@ -329,63 +326,4 @@ fn multigrid_hierarchies_are_reused_when_few_unknowns_change() {
     // after the iteration is over, nothing is kept
     it.release();
     check(k0 + 20 * max, false);
-}
-
-/// Consecutive direct solves go through the factorisation of an earlier matrix, corrected for
-/// the change since (`linalg::low_rank`), when that change has rank at most `UPDATE_MAX_RANK`
-/// (counted from the factorised matrix, over several solves): one HMM cell changing status
-/// is a change of rank one, one P1 node of rank two. Otherwise, and after `release`, a new
-/// factorisation. The solutions are those of fresh systems.
-#[test]
-fn direct_solves_update_the_earlier_factorisation_after_small_changes() {
-    use gradvi::assembly::UPDATE_MAX_RANK;
-    use gradvi::vi::QuadraticEnergy;
-    const { assert!(UPDATE_MAX_RANK >= 2) };
-    let tri = cartesian_triangles(64, 64, [0.0, 1.0], [0.0, 1.0]).unwrap();
-    let p1 = P1::new(&tri).unwrap();
-    let hex = hexagonal(3).unwrap();
-    let hmm = Hmm::new(&hex);
-    let p = paper_test3(-10.0);
-    for (s, first, per_change) in [
-        (&p1 as &dyn GradientDiscretisation, 0, 2),
-        // the cells, after the faces
-        (&hmm, hmm.n_skeleton(), 1),
-    ] {
-        let system = || discrete_system(s, &p, LinearSolver::Direct);
-        let n = s.n_unknowns();
-        // the unknowns first..first + k fixed at 0.01
-        let fixed = |k: usize| -> Vec<Option<f64>> {
-            (0..n)
-                .map(|i| (i >= first && i < first + k).then_some(0.01))
-                .collect()
-        };
-        let k0 = (n - first) / 2;
-        let direct = system();
-        let check = |k: usize, rank: Option<usize>| {
-            let (u, t) = direct.solve(&fixed(k)).unwrap();
-            assert_eq!(t.update_rank, rank, "{} k = {k}", s.name());
-            assert_eq!(t.factor == 0.0, rank.is_some());
-            let (reference, t) = system().solve(&fixed(k)).unwrap();
-            assert_eq!(t.update_rank, None);
-            let gap = u
-                .iter()
-                .zip(&reference)
-                .map(|(x, y)| (x - y).abs())
-                .fold(0.0, f64::max);
-            assert!(gap < 1e-12, "{} k = {k}: {gap:e}", s.name());
-        };
-        check(k0, None);
-        // one more fixed, then one fewer than the factorised matrix: counted from it
-        check(k0 + 1, Some(per_change));
-        check(k0 - 1, Some(per_change));
-        check(k0 + 2, Some(2 * per_change));
-        // too many changes: a new factorisation, from which the next change is counted
-        check(k0 + 20, None);
-        check(k0 + 21, Some(per_change));
-        // the same matrix again: rank 0, the factorisation reused as it is
-        check(k0 + 20, Some(0));
-        // after the iteration is over, nothing is kept
-        direct.release();
-        check(k0 + 20, None);
-    }
 }
