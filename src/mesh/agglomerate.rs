@@ -7,16 +7,24 @@
 //!
 //! ## Construction, for a target cell size H
 //! 1. **Aggregates.** Each fine cell K gets the key (⌊(x_K − x₀)/H⌋, ⌊(y_K − y₀)/H⌋, tag of K)
-//!    ((x_K, y_K) the centre of K's bounding box, (x₀, y₀) the corner of the mesh's). The centre
-//!    of the bounding box rather than the centroid keeps the two triangles of a square together
-//!    (their centroids may fall in two squares), so a triangulated Cartesian grid agglomerates
-//!    into rectangles, on which HMM solves on the cells ([`crate::assembly`]'s `two_point`):
-//!    measured on ex9 with P1 at 4M unknowns, the coarse solves took 1.5 s instead of 3.5 s,
-//!    and predicted the fine active set better. Aggregates are the connected
-//!    components (through interior edges) of the cells sharing a key, so an aggregate never
-//!    mixes two materials (cell tags) and is a patch of about (H/h)² fine cells. Aggregates of
-//!    area below H²/4 (slivers along the boundary or along material interfaces) are merged into
-//!    the neighbour of the same tag with which they share the longest interface.
+//!    ((x₀, y₀) the corner of the mesh's bounding box). The point (x_K, y_K) is K's centroid,
+//!    except on a cell that fills its bounding box (an axis-parallel rectangle) or is a right
+//!    triangle with axis-parallel legs (its vertices are corners of its box): there it is the
+//!    centre of the box. That keeps the two triangles of a square together (their centroids
+//!    may fall in two squares, their boxes are the square), so a triangulated Cartesian grid
+//!    agglomerates into rectangles, on which HMM solves on the cells ([`crate::assembly`]'s
+//!    `two_point`): measured on ex9 with P1 at 4M unknowns, the coarse solves took 1.5 s
+//!    instead of 3.5 s, and predicted the fine active set better. On other cells the centroid
+//!    is kept: keying every cell by its box centre also changed the coarse meshes of the
+//!    unstructured gmsh meshes (none of whose cells is such a rectangle or triangle), and the
+//!    regression checks against 73dd38a measured that change at 1.12–1.26× the time on the
+//!    L-shape at 177k cells (HMM, iterative: 36 conjugate-gradient iterations instead of 33)
+//!    and one more solve on the 300k-cell Test 3 mesh (HMM, direct). Aggregates are the
+//!    connected components (through interior edges) of the cells sharing a key, so an
+//!    aggregate never mixes two materials (cell tags) and is a patch of about (H/h)² fine
+//!    cells. Aggregates of area below H²/4 (slivers along the boundary or along material
+//!    interfaces) are merged into the neighbour of the same tag with which they share the
+//!    longest interface.
 //! 2. **Corners.** A fine vertex is a corner (a coarse vertex) if it lies on the boundary of
 //!    the domain, or at least three interface edges meet there (an interface edge separates two
 //!    aggregates). Between two corners, the interface of two aggregates is a chain of fine
@@ -177,27 +185,51 @@ fn labels_from_least_roots(parent: &[usize]) -> Vec<usize> {
     label
 }
 
-/// The centre of the bounding box of cell k: the point that places it in a square of step 1.
-/// The centroid on parallelograms; on a square cut into two triangles, the square's centre
-/// for both, so that they stay together (their centroids may fall in two squares).
-fn box_centre(mesh: &PolyMesh, k: usize) -> Point {
-    let mut lo = [f64::INFINITY; 2];
-    let mut hi = [f64::NEG_INFINITY; 2];
-    for &v in mesh.cell_vertices(k) {
+/// Relative tolerance of [`key_point`]'s comparison of a cell's area with its bounding box's.
+const BOX_TOL: f64 = 1e-9;
+
+/// The point that places cell k in a square of step 1 (module docs): the centre of its
+/// bounding box [x_min, x_max] × [y_min, y_max] if the cell fills the box (its area is the
+/// box's up to [`BOX_TOL`]: an axis-parallel rectangle, possibly with more vertices along its
+/// sides) or is a triangle whose three vertices are corners of the box (a right triangle with
+/// axis-parallel legs, half of the box; the comparison is exact, the box being made of the
+/// vertices' own coordinates); its centroid otherwise. Computed when needed, from the cell's
+/// vertices, like the box of the earlier key (no per-cell array).
+fn key_point(mesh: &PolyMesh, k: usize) -> Point {
+    let c = mesh.cell_vertices(k);
+    let mut b = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    for &v in c {
         let p = mesh.vertex(v as usize);
-        for i in 0..2 {
-            lo[i] = lo[i].min(p[i]);
-            hi[i] = hi[i].max(p[i]);
-        }
+        b = [
+            b[0].min(p[0]),
+            b[1].min(p[1]),
+            b[2].max(p[0]),
+            b[3].max(p[1]),
+        ];
     }
-    [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])]
+    let box_area = (b[2] - b[0]) * (b[3] - b[1]);
+    let fills = (mesh.measure(k) - box_area).abs() <= BOX_TOL * box_area;
+    let corner = |v: &u32| {
+        let p = mesh.vertex(*v as usize);
+        (p[0] == b[0] || p[0] == b[2]) && (p[1] == b[1] || p[1] == b[3])
+    };
+    if fills || (c.len() == 3 && c.iter().all(corner)) {
+        [0.5 * (b[0] + b[2]), 0.5 * (b[1] + b[3])]
+    } else {
+        mesh.centroid(k)
+    }
 }
 
 /// Step 1: connected components of the cells with the same (square, tag) key.
 fn initial_aggregates(fine: &PolyMesh, size: f64) -> Vec<usize> {
     let bb = fine.bounding_box();
     let key = |k: usize| {
-        let c = box_centre(fine, k);
+        let c = key_point(fine, k);
         (
             floor_i64((c[0] - bb[0]) / size),
             floor_i64((c[1] - bb[1]) / size),
@@ -587,6 +619,44 @@ mod tests {
     }
 
     #[test]
+    fn cells_placed_by_their_box() {
+        use crate::mesh::generate::cartesian_triangles;
+        // whether key_point is the box centre rather than the centroid (both are exact here)
+        let by_box = |m: &PolyMesh| -> Vec<bool> {
+            (0..m.n_cells())
+                .map(|k| {
+                    let p = key_point(m, k);
+                    let b = m.cell_vertices(k).iter().map(|&v| m.vertex(v as usize));
+                    let lo = b
+                        .clone()
+                        .fold([f64::INFINITY; 2], |a, q| [a[0].min(q[0]), a[1].min(q[1])]);
+                    let hi = b.fold([f64::NEG_INFINITY; 2], |a, q| {
+                        [a[0].max(q[0]), a[1].max(q[1])]
+                    });
+                    let centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
+                    assert!(p == centre || p == m.centroid(k), "cell {k}: {p:?}");
+                    p == centre
+                })
+                .collect()
+        };
+        // the two triangles of each rectangle of a triangulated grid (their centroids differ
+        // from the rectangle's centre)
+        let tri = cartesian_triangles(5, 4, [0.0, 1.0], [0.0, 0.7]).unwrap();
+        assert!(by_box(&tri).iter().all(|&b| b));
+        // a right triangle with axis-parallel legs, next to a half square cut in three through
+        // an inner point, whose triangles are not placed by their boxes
+        let pts = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.7, 0.6]];
+        let cells = vec![vec![0, 1, 3], vec![1, 2, 4], vec![2, 3, 4], vec![3, 1, 4]];
+        let lone = PolyMesh::from_cells(pts, cells).unwrap();
+        assert_eq!(by_box(&lone), vec![true, false, false, false]);
+        // triangles with one side parallel to an axis fill half their box too (the lattices of
+        // gmsh's frontal algorithm are full of them), without being right triangles
+        let pts = vec![[0.0, 0.0], [1.0, 0.0], [0.5, 0.8], [1.5, 0.8]];
+        let lattice = PolyMesh::from_cells(pts, vec![vec![0, 1, 2], vec![1, 3, 2]]).unwrap();
+        assert_eq!(by_box(&lattice), vec![false; 2]);
+    }
+
+    #[test]
     fn gmsh_meshes_keep_area_tags_and_boundary() {
         // the two-material dam of problems/signorini-layers.toml (cell tags) and the L-shape
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
@@ -648,11 +718,11 @@ mod tests {
     }
 
     /// Fingerprints of the agglomerations of [`agglomeration_does_not_depend_on_threads`]'s
-    /// cases. Up to the change of the key of step 1 from the centroid to the centre of the
-    /// bounding box, they were those of the sequential implementation the parallel one replaced
-    /// (a825ec9), which the parallel passes and the reuse of polygons across rounds did not
-    /// change; since that change they are those of this implementation on one thread (the
-    /// sheared case added then): the test compares 1, 2 and 3 threads with them.
+    /// cases, on one thread; the test compares 1, 2 and 3 threads with them. Those of the gmsh
+    /// meshes (cases 4-6), keyed by centroids, are the values of the sequential implementation
+    /// the parallel one replaced (a825ec9): the parallel passes and the reuse of polygons
+    /// across rounds did not change them. Those of the grids (cases 0-3) come from the key by
+    /// box centres (654e063), that of the sheared grid (case 7) from this implementation.
     const PINNED_FINGERPRINTS: [u64; 24] = [
         0x25644aaa565376d3,
         0x9c26ca14ef49281f,
@@ -666,18 +736,18 @@ mod tests {
         0x10f97bfdf1e9b6aa,
         0xfeca08a6cf36bc43,
         0xbf2df633a0aae56d,
-        0x2f32f4e1853650e8,
-        0x677e3b02ad11faeb,
-        0x85cba8e736137bde,
-        0xc991eedd853f9a15,
-        0x1c6586c95d274a8a,
-        0xc2f81aa8fdd2bac8,
-        0x3c11cf83049887e4,
-        0x4ff153361efcb9e0,
-        0x06b85675dd850b63,
-        0x88c6b5aed0760086,
-        0x4b8455cacf39097d,
-        0x870e330956c0e77f,
+        0x75cf25bd8ed5fd5c,
+        0x3ed81432eb82ea64,
+        0x0d88128ce11d010a,
+        0xa8c9975141e2d55c,
+        0xacc97e3edf4afdec,
+        0x5853b4a692912dee,
+        0xb5e23fceec4c7343,
+        0x5afe6f3b54ccf0bf,
+        0x02dd51382c4571d2,
+        0xcf224259b493ecc0,
+        0x72f7091ec4efcc18,
+        0x6951c6558ad44ec5,
     ];
 
     #[test]
