@@ -16,7 +16,7 @@
 //!    `two_point`): measured on ex9 with P1 at 4M unknowns, the coarse solves took 1.5 s
 //!    instead of 3.5 s, and predicted the fine active set better. On other cells the centroid
 //!    is kept: keying every cell by its box centre also changed the coarse meshes of the
-//!    unstructured gmsh meshes (none of whose cells is such a rectangle or triangle), and the
+//!    unstructured gmsh meshes (those of the benchmarks have no such cell), and the
 //!    regression checks against 73dd38a measured that change at 1.12–1.26× the time on the
 //!    L-shape at 177k cells (HMM, iterative: 36 conjugate-gradient iterations instead of 33)
 //!    and one more solve on the 300k-cell Test 3 mesh (HMM, direct). Aggregates are the
@@ -193,8 +193,8 @@ const BOX_TOL: f64 = 1e-9;
 /// box's up to [`BOX_TOL`]: an axis-parallel rectangle, possibly with more vertices along its
 /// sides) or is a triangle whose three vertices are corners of the box (a right triangle with
 /// axis-parallel legs, half of the box; the comparison is exact, the box being made of the
-/// vertices' own coordinates); its centroid otherwise. Computed when needed, from the cell's
-/// vertices, like the box of the earlier key (no per-cell array).
+/// vertices' own coordinates); its centroid otherwise. Computed per call from the cell's
+/// vertices (no per-cell array).
 fn key_point(mesh: &PolyMesh, k: usize) -> Point {
     let c = mesh.cell_vertices(k);
     let mut b = [
