@@ -82,7 +82,9 @@ bench: bench-peers build reference-deps
 ## bench-baseline: BASE=REV (default 73dd38a) builds revision REV in target/baseline (through a
 ##        temporary git worktree) and runs every gradvi case of the two benchmarks with both
 ##        builds, alternately, 3 times each (GRADVI_BENCH_REPEAT), comparing medians in the same
-##        run; scaling cases: GRADVI_BENCH_VARIANTS (default nested), GRADVI_BENCH_MAX_CELLS;
+##        run; a case above 1.1x is measured again, 6 more runs of each (GRADVI_BENCH_CONFIRM),
+##        and judged on all its runs; scaling cases: GRADVI_BENCH_VARIANTS (default nested),
+##        GRADVI_BENCH_MAX_CELLS;
 ##        ex9 up to GRADVI_BENCH_EX9_MAX_GRID (default 1025)
 ##        -> replication/results/bench_baseline.csv and replication/REGRESSION.md
 BASE ?= 73dd38a
