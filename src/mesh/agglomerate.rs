@@ -228,23 +228,31 @@ fn key_point(mesh: &PolyMesh, k: usize) -> Point {
 /// Step 1: connected components of the cells with the same (square, tag) key.
 fn initial_aggregates(fine: &PolyMesh, size: f64) -> Vec<usize> {
     let bb = fine.bounding_box();
-    let key = |k: usize| {
-        let c = key_point(fine, k);
-        (
-            floor_i64((c[0] - bb[0]) / size),
-            floor_i64((c[1] - bb[1]) / size),
-            fine.cell_tag(k),
-        )
-    };
+    // the key of each cell, computed once (in parallel, in cell order): computed per edge
+    // instead, twice per edge and gathering each cell's vertices at random, it took about
+    // 0.15 s of the warm start on a 710k-triangle mesh
+    let keys: Vec<(i64, i64, i32)> = (0..fine.n_cells())
+        .into_par_iter()
+        .with_min_len(MIN_TASK)
+        .map(|k| {
+            let c = key_point(fine, k);
+            (
+                floor_i64((c[0] - bb[0]) / size),
+                floor_i64((c[1] - bb[1]) / size),
+                fine.cell_tag(k),
+            )
+        })
+        .collect();
     // whether each edge joins two cells of one key (in parallel), then the unions in edge order
     let joins: Vec<bool> = (0..fine.n_edges())
         .into_par_iter()
         .with_min_len(MIN_TASK)
         .map(|e| {
             let [a, b] = fine.edge_cells(e);
-            b != NO_CELL && key(a) == key(b)
+            b != NO_CELL && keys[a] == keys[b]
         })
         .collect();
+    drop(keys);
     let mut parent: Vec<usize> = (0..fine.n_cells()).collect();
     for (e, _) in joins.iter().enumerate().filter(|(_, j)| **j) {
         let [a, b] = fine.edge_cells(e);
