@@ -109,7 +109,7 @@ fn ex9_section(md: &mut Doc, rows: &[PeerRow]) {
 }
 
 fn targets(cfg: &Config, md: &mut Doc, rows: &[PeerRow]) {
-    md.section(2, "Targets of the performance issue", "Each verdict is computed from the rows of this run; 'not met' comes with the measured numbers.");
+    md.section(2, "Targets of the performance issue", "Each verdict is computed from the rows of `bench_peers.csv`; 'not met' comes with the measured numbers. A run restricted by `GRADVI_BENCH_PEERS` (`ex9` or `domains`) redoes its part and keeps the other part's rows, so the ex9 rows and the any-domain rows may come from different runs (the commits of the CSV say which); the ratios to PETSc always come from one run.");
     let mut t = Table::new("target | measured | verdict", "llr");
     for (g, label) in [(1025, "1M"), (2049, "4M")] {
         let (Some(p), Some(b)) = (find(rows, "petsc", "fd", "gs+mg", g), best(rows, "p1", g))
