@@ -193,8 +193,8 @@ const BOX_TOL: f64 = 1e-9;
 /// box's up to [`BOX_TOL`]: an axis-parallel rectangle, possibly with more vertices along its
 /// sides) or is a triangle whose three vertices are corners of the box (a right triangle with
 /// axis-parallel legs, half of the box; the comparison is exact, the box being made of the
-/// vertices' own coordinates); its centroid otherwise. Computed per call from the cell's
-/// vertices (no per-cell array).
+/// vertices' own coordinates); its centroid otherwise. Computed from the cell's vertices;
+/// [`initial_aggregates`] evaluates it once per cell.
 fn key_point(mesh: &PolyMesh, k: usize) -> Point {
     let c = mesh.cell_vertices(k);
     let mut b = [

@@ -8,7 +8,9 @@
 //! any-domain meshes) runs as a child process of the current executable and of EXE (the
 //! `gradvi` binary of the earlier revision), alternately (which one runs first alternates from
 //! case to case and repeat to repeat), `GRADVI_BENCH_REPEAT` times each (default
-//! [`DEFAULT_REPEAT`]); the medians are compared.
+//! [`DEFAULT_REPEAT`]); the medians are compared. The scaling cases use the variants of
+//! `GRADVI_BENCH_VARIANTS`, here `nested` (the default of `gradvi solve`) unless set, since the
+//! cold variant alone takes 25 minutes per pass.
 //!
 //! **Confirmation.** With 87 cases and medians of a few runs on a machine whose run-to-run
 //! noise is about ±10%, a case or two lands above the bound in most checks by chance alone
@@ -24,9 +26,7 @@
 //! child that does not report `solved_s` (73dd38a and other builds before ac00c7d) reports that
 //! span as `total_s`. The check compares `solved_s` when a child reports it, else `total_s`:
 //! the same span for builds before ac00c7d or from this one on (a build between the two
-//! would be timed over the longer span). The scaling cases use the variants of
-//! `GRADVI_BENCH_VARIANTS`, here `nested` (the default of `gradvi solve`) unless set, since the
-//! cold variant alone takes 25 minutes per pass.
+//! would be timed over the longer span; a NaN `solved_s` is written as null and not read).
 //!
 //! A case the earlier build cannot run (a benchmark it did not have yet, or an error) is
 //! listed with its reason, not hidden. Rows go to [`CSV`] as they come; the report is
@@ -165,7 +165,7 @@ fn sample(cfg: &Config, exe: &Path, args: &[String]) -> gradvi::Result<Sample> {
     let v: serde_json::Value = json_row(&text, &format!("{what}: bad child output"))?;
     let num = |k: &str| v.get(k).and_then(serde_json::Value::as_f64);
     // the span up to the certified solution (module docs)
-    let time = num("solved_s").filter(|t| t.is_finite()).or(num("total_s"));
+    let time = num("solved_s").or(num("total_s"));
     match (time, num("peak_mib"), num("niter")) {
         (Some(total_s), Some(peak_mib), Some(niter)) => Ok(Sample {
             total_s,
@@ -326,7 +326,7 @@ fn check_job(
         &mut base_error,
     )?;
     let mut r = row(job, baseline, &new, base_result(&old, &base_error));
-    if confirm > 0 && regresses(&r).is_some_and(|g| g.0) {
+    if regresses(&r).is_some_and(|g| g.0) {
         let first = r.new_s / r.base_s;
         eprintln!(
             "[bench]   ratio {first:.2} after {repeat} runs: {confirm} more runs of each build"
