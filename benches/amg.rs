@@ -207,7 +207,9 @@ fn header() {
 fn scheme_matrix(scheme: &dyn GradientDiscretisation, problem: &Problem) -> gradvi::Result<Lower> {
     let sys = DiscreteSystem::new(scheme, problem, SystemOptions::default())?;
     let (col_ptr, row_idx) = sys.condensed_pattern();
-    let (values, _) = sys.assemble_condensed(&vec![None; sys.n_unknowns()]);
+    let fixed = vec![None; sys.n_unknowns()];
+    let (values, _) =
+        sys.assemble_condensed(&mut gradvi::assembly::SolveState::default(), &fixed)?;
     Ok(Lower {
         n: sys.n_condensed(),
         col_ptr: col_ptr.to_vec(),

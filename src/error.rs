@@ -72,6 +72,10 @@ pub enum Error {
         /// Underlying error.
         source: std::io::Error,
     },
+    /// An internal invariant does not hold (two parts of gradvi disagree): a bug, reported as
+    /// an error instead of a wrong answer or a panic.
+    #[error("internal error (please report): {0}")]
+    Internal(String),
 }
 
 /// `path:line:column`, `path:line` or `path`, whichever is known.

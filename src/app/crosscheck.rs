@@ -27,7 +27,7 @@ use gradvi::post::contact::{contact_measure, free_boundary, hausdorff, switch_po
 use gradvi::post::relative_errors;
 use gradvi::problem::{Problem, paper_test1, paper_test2, paper_test3};
 use gradvi::scheme::SchemeKind;
-use gradvi::vi::Constraints;
+use gradvi::solver::constraints::Constraints;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};

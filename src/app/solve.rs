@@ -340,10 +340,7 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         mesh.n_cells(),
         mesh.h()
     );
-    let on_cells = match (
-        sol.system.cell_system_size(),
-        sol.system.cell_system_skeleton(),
-    ) {
+    let on_cells = match sol.cell_system.unzip() {
         (Some(n), Some(0)) => {
             format!("; the iterative solves on the {n} cells, the local matrices being two-point")
         }

@@ -63,6 +63,23 @@ pub fn pack_lower(n: usize, m: &[f64], out: &mut [f64]) {
     }
 }
 
+/// The block M_RR of the free interior unknowns of a cell is not numerically positive
+/// definite: the local matrix is not SPD to working precision (a degenerate cell, or a
+/// diffusion tensor whose anisotropy ratio is near 1/ε). An SPD local matrix never gives it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct InteriorNotSpd;
+
+impl InteriorNotSpd {
+    /// The error of the library, naming cell `k`.
+    pub fn in_cell(self, k: usize) -> crate::Error {
+        crate::Error::Linear(format!(
+            "the block of the interior unknowns of the local matrix of cell {k} is not \
+             numerically positive definite (a degenerate cell, or extreme anisotropy of the \
+             diffusion tensor)"
+        ))
+    }
+}
+
 /// The local system of one cell: M_K u_K = b_K in the cell's unknowns.
 #[derive(Debug, Clone, Copy)]
 pub struct CellSystem<'c> {
@@ -86,11 +103,11 @@ impl CellSystem<'_> {
     }
 
     /// The Cholesky factorisation of M_RR, the block of the free interior unknowns `free`.
-    fn free_block_cholesky(&self, free: &[usize]) -> Cholesky<f64, Dyn> {
+    fn free_block_cholesky(&self, free: &[usize]) -> Result<Cholesky<f64, Dyn>, InteriorNotSpd> {
         let (m, r) = (self.matrix, free.len());
         DMatrix::from_fn(r, r, |a, c| m.at(free[a], free[c]))
             .cholesky()
-            .expect("interior block of an SPD local matrix is SPD")
+            .ok_or(InteriorNotSpd)
     }
 }
 
@@ -101,7 +118,7 @@ pub fn condense(
     fx: &dyn Fn(usize) -> Option<f64>,
     s: &mut [f64],
     g: &mut [f64],
-) {
+) -> Result<(), InteriorNotSpd> {
     let CellSystem {
         dofs: d,
         n_interior: ni,
@@ -118,8 +135,11 @@ pub fn condense(
     }
     g.copy_from_slice(&b[ni..]);
     match ni {
-        0 => {}
-        1 => eliminate_cell_unknown(cell, fx, s, g),
+        0 => Ok(()),
+        1 => {
+            eliminate_cell_unknown(cell, fx, s, g);
+            Ok(())
+        }
         _ => eliminate_interior(cell, fx, s, g),
     }
 }
@@ -164,7 +184,7 @@ fn eliminate_interior(
     fx: &dyn Fn(usize) -> Option<f64>,
     s: &mut [f64],
     g: &mut [f64],
-) {
+) -> Result<(), InteriorNotSpd> {
     let (d, ni, m, b) = (cell.dofs, cell.n_interior, cell.matrix, cell.load);
     let nl = d.len();
     let p = nl - ni;
@@ -182,11 +202,11 @@ fn eliminate_interior(
         }
     }
     if free.is_empty() {
-        return;
+        return Ok(());
     }
     let r = free.len();
     let msr = DMatrix::from_fn(p, r, |a, c| m.at(ni + a, free[c]));
-    let chol = cell.free_block_cholesky(&free);
+    let chol = cell.free_block_cholesky(&free)?;
     let x = chol.solve(&msr.transpose()); // M_RR⁻¹ M_RS
     let y = chol.solve(&DVector::from_vec(br)); // M_RR⁻¹ b_R'
     for bcol in 0..p {
@@ -197,6 +217,7 @@ fn eliminate_interior(
     for arow in 0..p {
         g[arow] -= (0..r).map(|q| msr[(arow, q)] * y[q]).sum::<f64>();
     }
+    Ok(())
 }
 
 /// The interior unknown of a cell with exactly one (HMM's u_K), from its skeleton values:
@@ -218,12 +239,16 @@ pub fn interior_value(cell: &CellSystem, fx: &dyn Fn(usize) -> Option<f64>, u: &
 
 /// Recovers the interior unknowns of one cell from its skeleton values:
 /// u_F = their fixed values, u_R = M_RR⁻¹ (b_R − Σ_{j∉R} M_Rj u_j).
-pub fn recover_interior(cell: &CellSystem, fx: &dyn Fn(usize) -> Option<f64>, u: &mut [f64]) {
+pub fn recover_interior(
+    cell: &CellSystem,
+    fx: &dyn Fn(usize) -> Option<f64>,
+    u: &mut [f64],
+) -> Result<(), InteriorNotSpd> {
     let (d, ni, m, b) = (cell.dofs, cell.n_interior, cell.matrix, cell.load);
     let nl = d.len();
     if ni == 1 {
         u[d[0] as usize] = interior_value(cell, fx, u);
-        return;
+        return Ok(());
     }
     let free = cell.free_interior(fx);
     for i in 0..ni {
@@ -232,7 +257,7 @@ pub fn recover_interior(cell: &CellSystem, fx: &dyn Fn(usize) -> Option<f64>, u:
         }
     }
     if free.is_empty() {
-        return;
+        return Ok(());
     }
     let r = free.len();
     let rhs = DVector::from_fn(r, |a, _| {
@@ -245,10 +270,11 @@ pub fn recover_interior(cell: &CellSystem, fx: &dyn Fn(usize) -> Option<f64>, u:
         }
         v
     });
-    let x = cell.free_block_cholesky(&free).solve(&rhs);
+    let x = cell.free_block_cholesky(&free)?.solve(&rhs);
     for (a, &i) in free.iter().enumerate() {
         u[d[i] as usize] = x[a];
     }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -278,7 +304,7 @@ mod tests {
             },
             load: b.as_slice(),
         };
-        condense(&cell, &fx, &mut s, &mut g);
+        condense(&cell, &fx, &mut s, &mut g).unwrap();
         // dense reference
         let free: Vec<usize> = (0..ni).filter(|i| !fixed_interior.contains(i)).collect();
         let r = free.len();
@@ -309,7 +335,7 @@ mod tests {
         for a in 0..p {
             u[ni + a] = us[a];
         }
-        recover_interior(&cell, &fx, &mut u);
+        recover_interior(&cell, &fx, &mut u).unwrap();
         // reference: the full system with the fixed interior unknowns as unit rows
         let mut mf = m.clone();
         let mut bf = b.clone();
@@ -364,5 +390,46 @@ mod tests {
         check(3, 4, &[], 4);
         check(3, 4, &[1], 5);
         check(2, 5, &[0, 1], 6);
+    }
+
+    #[test]
+    fn an_interior_block_that_is_not_spd_is_a_typed_error() {
+        // two interior unknowns whose block [[1, 2], [2, 1]] is indefinite (what a tensor with
+        // an anisotropy ratio near 1/ε can leave after rounding): an error naming the cell,
+        // where the condensation used to panic
+        let (ni, p) = (2, 2);
+        let m = DMatrix::from_row_slice(
+            4,
+            4,
+            &[
+                1.0, 2.0, 0.1, 0.0, 2.0, 1.0, 0.0, 0.1, 0.1, 0.0, 3.0, 0.0, 0.0, 0.1, 0.0, 3.0,
+            ],
+        );
+        let mut packed = vec![0.0; packed_len(ni + p)];
+        pack_lower(ni + p, m.as_slice(), &mut packed);
+        let d: Vec<u32> = (0..4).collect();
+        let b = [1.0; 4];
+        let cell = CellSystem {
+            dofs: &d,
+            n_interior: ni,
+            matrix: SymMatrix {
+                n: ni + p,
+                lower: &packed,
+            },
+            load: &b,
+        };
+        let (mut s, mut g) = (vec![0.0; p * p], vec![0.0; p]);
+        let e = condense(&cell, &|_| None, &mut s, &mut g).unwrap_err();
+        assert_eq!(e, InteriorNotSpd);
+        let msg = e.in_cell(7).to_string();
+        assert!(
+            msg.contains("cell 7") && msg.contains("positive definite"),
+            "{msg}"
+        );
+        let mut u = vec![0.0; 4];
+        assert_eq!(
+            recover_interior(&cell, &|_| None, &mut u),
+            Err(InteriorNotSpd)
+        );
     }
 }

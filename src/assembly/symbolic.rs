@@ -14,8 +14,10 @@
 //! diagonal and zeros elsewhere), so neither the boundary partition nor the active set
 //! changes anything here.
 
+use super::SystemOptions;
+use super::gather::{cell_chunks, chunks, split_by_ranges};
+use super::linear::{AUTO_ITERATIVE_MIN, LinearSolver};
 use super::offsets::Offsets;
-use super::{AUTO_ITERATIVE_MIN, LinearSolver, SystemOptions, cell_chunks, chunks};
 use crate::linalg::SpdPattern;
 use crate::scheme::GradientDiscretisation;
 use rayon::prelude::*;
@@ -322,7 +324,7 @@ fn check_numeric_memory(pattern: &SpdPattern, maps: &ScatterMaps, n: usize) -> c
 fn incidence(dm: &DofMap, n: usize) -> crate::Result<Ragged<u32>> {
     let mut cell_of = vec![0u32; dm.dofs.len()];
     let ranges = cell_chunks(dm.n_cells());
-    let slices = super::split_by_ranges(&mut cell_of, &ranges, |k| dm.dof_ptr.at(k));
+    let slices = split_by_ranges(&mut cell_of, &ranges, |k| dm.dof_ptr.at(k));
     ranges
         .into_par_iter()
         .zip(slices)

@@ -46,10 +46,14 @@
 //! rectangles: 1/2; on triangles nothing is eliminated and it would be larger), and only for
 //! solves that fix no eliminated face (otherwise the skeleton system is solved).
 
-use super::{DiscreteSystem, FixedValues, hierarchy};
+use super::gather::{CHUNK, FixedValues, chunks, local_index, split_by_ranges};
+use super::iterative::hierarchy;
+use super::solve::check_finite;
+use super::{DiscreteSystem, SolveState};
 use crate::linalg::CsrMatrix;
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Relative size below which an off-diagonal entry of a local skeleton block counts as zero
@@ -95,69 +99,76 @@ impl CellSystemAll {
 
 impl DiscreteSystem<'_> {
     /// The cell system of this problem, if its local matrices have the two-point structure
-    /// (built on first use).
-    pub(super) fn cell_system(&self) -> Option<&CellSystemAll> {
-        self.cell_system
-            .get_or_init(|| self.build_cell_system())
-            .as_ref()
+    /// (built on first use and kept in `state`).
+    pub(super) fn cell_system(
+        &self,
+        state: &mut SolveState,
+    ) -> crate::Result<Option<Arc<CellSystemAll>>> {
+        if state.cell_system.is_none() {
+            state.cell_system = Some(self.build_cell_system()?.map(Arc::new));
+        }
+        Ok(state.cell_system.as_ref().and_then(|c| c.clone()))
     }
 
-    /// Whether the iterative solves take the cell system: it exists, and `fixed` fixes no
+    /// The cell system if the iterative solves take it: it exists, and `fixed` fixes no
     /// eliminated skeleton unknown.
-    pub(super) fn cell_system_for(&self, fixed: &[Option<f64>]) -> Option<&CellSystemAll> {
-        let cs = self.cell_system()?;
+    pub(super) fn cell_system_for(
+        &self,
+        state: &mut SolveState,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<Option<Arc<CellSystemAll>>> {
+        let Some(cs) = self.cell_system(state)? else {
+            return Ok(None);
+        };
         let eliminated_fixed = fixed[..self.n_skel]
             .par_iter()
             .zip(&cs.kept_row)
             .with_min_len(4096)
             .any(|(f, &row)| f.is_some() && row == NO_ROW);
-        (!eliminated_fixed).then_some(cs)
+        Ok((!eliminated_fixed).then_some(cs))
     }
 
     /// Solves with `fixed` on the cell system `cs` by multigrid-preconditioned conjugate
     /// gradients to the relative residual `rtol` (the counterpart of the skeleton solve of
-    /// [`DiscreteSystem::solve_to`], with the same reuse of hierarchies and the same screening).
+    /// [`DiscreteSystem::solve`], with the same reuse of hierarchies and the same screening).
     /// The assembly time counts from `t0` (so that it includes building the cell system).
     pub(super) fn solve_cells(
         &self,
+        state: &mut SolveState,
         cs: &CellSystemAll,
         fixed: &[Option<f64>],
         rtol: f64,
         t0: Instant,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
-        let reuse = self.next_hierarchy(fixed, true);
+        let reuse = self.next_hierarchy(state, fixed, true);
         let fx = self.fixed_values(fixed);
         let (a, rhs) = self.fixed_cell_system(cs, &fx)?;
         let t1 = Instant::now();
         let hier = hierarchy(a, reuse, true)?;
         let t2 = Instant::now();
-        let mut x = self.take_cell_guess(cs);
-        let out = self.run_pcg(hier, &rhs, &mut x, rtol, fixed)?;
+        let mut x = self.take_cell_guess(state, cs);
+        let out = self.run_pcg(state, hier, &rhs, &mut x, rtol, fixed)?;
         let u = self.complete_cells(cs, &fx, &x)?;
-        self.keep_cells(x, &u);
+        self.keep_cells(state, x, &u);
         Ok((u, out.timings([t0, t1, t2, Instant::now()])))
     }
 
     /// The initial guess of a cell solve: the last cell solution; else the cells recovered
     /// from the last skeleton solution (or the warm start's guess), u_K = (b_K − Σ_σ m_σK
     /// u_σ) / (M_K)_KK, and the kept skeleton unknowns from it; else zero.
-    pub(super) fn take_cell_guess(&self, cs: &CellSystemAll) -> Vec<f64> {
-        let cells = self
-            .last_cells
-            .lock()
-            .map(|mut c| std::mem::take(&mut *c))
-            .unwrap_or_default();
+    pub(super) fn take_cell_guess(&self, state: &mut SolveState, cs: &CellSystemAll) -> Vec<f64> {
+        let cells = std::mem::take(&mut state.last_cells);
         if cells.len() == cs.n() {
             return cells;
         }
         // the skeleton guess holds every unknown the cells' rows read (their skeleton ones)
-        let skel = self.take_initial_guess();
+        let skel = self.take_initial_guess(state);
         (0..cs.n())
             .into_par_iter()
             .with_min_len(4096)
             .map(|i| {
                 if i < cs.n_cells {
-                    super::interior_value(&self.local(i), &|_| None, &skel)
+                    super::condense::interior_value(&self.local(i), &|_| None, &skel)
                 } else {
                     skel[cs.dof(i)]
                 }
@@ -165,24 +176,41 @@ impl DiscreteSystem<'_> {
             .collect()
     }
 
-    /// Keeps the cell values `x` and the skeleton values of `u` as the initial guesses of the
-    /// next solves (of either system).
-    pub(super) fn keep_cells(&self, x: Vec<f64>, u: &[f64]) {
-        if let Ok(mut b) = self.last_solution.lock() {
-            *b = u[..self.n_skel].to_vec();
-        }
-        if let Ok(mut c) = self.last_cells.lock() {
-            *c = x;
-        }
+    /// Keeps the cell values `x` and the skeleton values of `u` in `state` as the initial
+    /// guesses of the next solves (of either system).
+    pub(super) fn keep_cells(&self, state: &mut SolveState, x: Vec<f64>, u: &[f64]) {
+        state.last_solution = u[..self.n_skel].to_vec();
+        state.last_cells = x;
     }
 
     /// The cell system, if enough of the skeleton unknowns can be eliminated (module docs).
-    fn build_cell_system(&self) -> Option<CellSystemAll> {
-        let sym = &self.sym;
-        let (dm, inc) = (&sym.dof_map, &sym.maps.inc);
-        if !sym.single_interior || self.n_skel == 0 {
-            return None;
+    fn build_cell_system(&self) -> crate::Result<Option<CellSystemAll>> {
+        if !self.sym.single_interior || self.n_skel == 0 {
+            return Ok(None);
         }
+        let Some((dofs, eliminated, kept_row)) = self.eliminated_faces() else {
+            return Ok(None);
+        };
+        let d = self.eliminated_diagonals(&eliminated)?;
+        let mut cs = CellSystemAll {
+            dofs,
+            n_cells: self.sym.dof_map.n_cells(),
+            a: CsrMatrix::new(0, 0, vec![0], Vec::new(), Vec::new())?,
+            r: Vec::new(),
+            d,
+            kept_row,
+        };
+        let (a, r) = self.cell_rows(&cs)?;
+        (cs.a, cs.r) = (a, r);
+        Ok(Some(cs))
+    }
+
+    /// Which skeleton unknowns are eliminated (module docs): the unknown of each row of the
+    /// cell system (the cells' interior unknowns, then the kept skeleton unknowns), the
+    /// eliminated flags and the row of each kept skeleton unknown; `None` when too few can be
+    /// eliminated for the cell system to pay.
+    fn eliminated_faces(&self) -> Option<(Vec<u32>, Vec<bool>, Vec<u32>)> {
+        let (dm, inc) = (&self.sym.dof_map, &self.sym.maps.inc);
         let nc = dm.n_cells();
         let dirichlet = &self.values.dirichlet;
         // the free skeleton unknowns coupled with another skeleton unknown in some cell
@@ -225,39 +253,37 @@ impl DiscreteSystem<'_> {
             .iter()
             .filter(|d| d.is_none())
             .count();
-        if 4 * dofs.len() > 3 * free_skel {
-            return None;
-        }
-        // d_σ of the eliminated skeleton unknowns
-        let d: Vec<f64> = (0..self.n_skel)
+        (4 * dofs.len() <= 3 * free_skel).then_some((dofs, eliminated, kept_row))
+    }
+
+    /// d_σ = Σ_{K ∋ σ} (M_K)_σσ of the eliminated skeleton unknowns (0 on the others).
+    fn eliminated_diagonals(&self, eliminated: &[bool]) -> crate::Result<Vec<f64>> {
+        let inc = &self.sym.maps.inc;
+        (0..self.n_skel)
             .into_par_iter()
             .with_min_len(4096)
             .map(|s| {
                 if !eliminated[s] {
-                    return 0.0;
+                    return Ok(0.0);
                 }
-                inc.list(s)
-                    .iter()
-                    .map(|&k| {
-                        let cell = self.local(k as usize);
-                        let a = super::local_index(cell.dofs, s);
-                        cell.matrix.at(a, a)
-                    })
-                    .sum()
+                let mut d = 0.0;
+                for &k in inc.list(s) {
+                    let cell = self.local(k as usize);
+                    let a = local_index(cell.dofs, s)?;
+                    d += cell.matrix.at(a, a);
+                }
+                Ok(d)
             })
-            .collect();
-        let cs = CellSystemAll {
-            dofs,
-            n_cells: nc,
-            a: CsrMatrix::new(0, 0, vec![0], Vec::new(), Vec::new()).ok()?,
-            r: Vec::new(),
-            d,
-            kept_row,
-        };
-        let n = cs.n();
+            .collect()
+    }
+
+    /// The matrix A (rows sorted by column, repeated couplings summed in order) and the
+    /// right-hand side r of the cell system `cs` with nothing fixed, row chunks in parallel.
+    fn cell_rows(&self, cs: &CellSystemAll) -> crate::Result<(CsrMatrix, Vec<f64>)> {
+        let (n, nc) = (cs.n(), cs.n_cells);
         // per chunk of rows: their lengths, entries (sorted by column) and right-hand sides
         type Rows = (Vec<usize>, Vec<u32>, Vec<f64>, Vec<f64>);
-        let chunks: Vec<Rows> = super::chunks(n, super::CHUNK)
+        let chunks: Vec<crate::Result<Rows>> = chunks(n, CHUNK)
             .into_par_iter()
             .map(|(i0, i1)| {
                 let mut out: Rows = Default::default();
@@ -265,9 +291,9 @@ impl DiscreteSystem<'_> {
                 for i in i0..i1 {
                     entries.clear();
                     let r = if i < nc {
-                        self.cell_row(&cs, i, &mut entries)
+                        self.cell_row(cs, i, &mut entries)?
                     } else {
-                        self.kept_row(&cs, cs.dof(i), &mut entries)
+                        self.kept_row(cs, cs.dof(i), &mut entries)?
                     };
                     entries.sort_by_key(|e| e.0);
                     // several couplings with one unknown: one entry, summed in order
@@ -283,9 +309,10 @@ impl DiscreteSystem<'_> {
                     out.2.extend(entries.iter().map(|e| e.1));
                     out.3.push(r);
                 }
-                out
+                Ok(out)
             })
             .collect();
+        let chunks = chunks.into_iter().collect::<crate::Result<Vec<Rows>>>()?;
         let nnz: usize = chunks.iter().map(|c| c.1.len()).sum();
         let mut row_ptr = Vec::with_capacity(n + 1);
         row_ptr.push(0);
@@ -299,13 +326,17 @@ impl DiscreteSystem<'_> {
             vals.extend_from_slice(&v);
             r.extend_from_slice(&rk);
         }
-        let a = CsrMatrix::new(n, n, row_ptr, cols, vals).ok()?;
-        Some(CellSystemAll { a, r, ..cs })
+        Ok((CsrMatrix::new(n, n, row_ptr, cols, vals)?, r))
     }
 
     /// Row k (a cell) of the cell system A with nothing fixed: its entries (column, value),
     /// unsorted, in `entries`; returns r_K (module docs).
-    fn cell_row(&self, cs: &CellSystemAll, k: usize, entries: &mut Vec<(u32, f64)>) -> f64 {
+    fn cell_row(
+        &self,
+        cs: &CellSystemAll,
+        k: usize,
+        entries: &mut Vec<(u32, f64)>,
+    ) -> crate::Result<f64> {
         let (inc, dirichlet) = (&self.sym.maps.inc, &self.values.dirichlet);
         let cell = self.local(k);
         let m = cell.matrix;
@@ -323,25 +354,30 @@ impl DiscreteSystem<'_> {
                 for &l in inc.list(s) {
                     if l as usize != k {
                         let other = self.local(l as usize);
-                        let msl = other.matrix.at(super::local_index(other.dofs, s), 0);
+                        let msl = other.matrix.at(local_index(other.dofs, s)?, 0);
                         entries.push((l, -msk * msl / cs.d[s]));
                     }
                 }
             }
         }
         entries.push((k as u32, diag));
-        r
+        Ok(r)
     }
 
     /// The row of the kept skeleton unknown s with nothing fixed: its entries (column, value),
     /// unsorted, in `entries`; returns its right-hand side b_σ − Σ M_σσ' u_σ' over the
     /// Dirichlet σ' of its cells (module docs).
-    fn kept_row(&self, cs: &CellSystemAll, s: usize, entries: &mut Vec<(u32, f64)>) -> f64 {
+    fn kept_row(
+        &self,
+        cs: &CellSystemAll,
+        s: usize,
+        entries: &mut Vec<(u32, f64)>,
+    ) -> crate::Result<f64> {
         let (inc, dirichlet) = (&self.sym.maps.inc, &self.values.dirichlet);
         let mut r = self.values.load[s];
         for &k in inc.list(s) {
             let cell = self.local(k as usize);
-            let (m, a) = (cell.matrix, super::local_index(cell.dofs, s));
+            let (m, a) = (cell.matrix, local_index(cell.dofs, s)?);
             entries.push((k, m.at(a, 0)));
             for (c, &t) in cell.dofs.iter().enumerate().skip(1) {
                 let t = t as usize;
@@ -353,7 +389,7 @@ impl DiscreteSystem<'_> {
                 // an eliminated σ' is coupled with no skeleton unknown: nothing to add
             }
         }
-        r
+        Ok(r)
     }
 
     /// The cell system with the rows (cells, kept skeleton unknowns) whose unknowns `fixed`
@@ -390,10 +426,10 @@ impl DiscreteSystem<'_> {
         }
         let nnz = row_ptr[nc];
         let (mut cols, mut vals, mut rhs) = (vec![0u32; nnz], vec![0.0; nnz], vec![0.0; nc]);
-        let ranges = super::chunks(nc, 4 * super::CHUNK);
-        let c_slices = super::split_by_ranges(&mut cols, &ranges, |k| row_ptr[k]);
-        let v_slices = super::split_by_ranges(&mut vals, &ranges, |k| row_ptr[k]);
-        let r_slices = super::split_by_ranges(&mut rhs, &ranges, |k| k);
+        let ranges = chunks(nc, 4 * CHUNK);
+        let c_slices = split_by_ranges(&mut cols, &ranges, |k| row_ptr[k]);
+        let v_slices = split_by_ranges(&mut vals, &ranges, |k| row_ptr[k]);
+        let r_slices = split_by_ranges(&mut rhs, &ranges, |k| k);
         let tasks: Vec<_> = ranges
             .into_iter()
             .zip(c_slices)
@@ -442,26 +478,27 @@ impl DiscreteSystem<'_> {
             u[dof] = fixed.get(dof).unwrap_or(xi);
         }
         let inc = &self.sym.maps.inc;
-        let skel: Vec<f64> = (0..self.n_skel)
+        let skel: crate::Result<Vec<f64>> = (0..self.n_skel)
             .into_par_iter()
             .with_min_len(4096)
             .map(|s| {
                 if let Some(v) = self.values.dirichlet[s] {
-                    return v;
+                    return Ok(v);
                 }
                 if cs.kept_row[s] != NO_ROW {
-                    return u[s];
+                    return Ok(u[s]);
                 }
                 let mut acc = self.values.load[s];
                 for &k in inc.list(s) {
                     let cell = self.local(k as usize);
-                    let a = super::local_index(cell.dofs, s);
+                    let a = local_index(cell.dofs, s)?;
                     acc -= cell.matrix.at(a, 0) * u[cell.dofs[0] as usize];
                 }
-                acc / cs.d[s]
+                Ok(acc / cs.d[s])
             })
             .collect();
+        let skel = skel?;
         u[..self.n_skel].copy_from_slice(&skel);
-        super::check_finite(u)
+        check_finite(u)
     }
 }

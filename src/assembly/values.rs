@@ -3,7 +3,7 @@
 //! the local matrices and loads the scheme emits for them. Refilled per problem; the symbolic
 //! part ([`super::symbolic`]) is shared.
 
-use super::cell_chunks;
+use super::gather::cell_chunks;
 use super::offsets::Offsets;
 use super::symbolic::DofMap;
 use crate::mesh::Point;

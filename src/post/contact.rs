@@ -9,7 +9,7 @@
 //! - [`hausdorff`]: the Hausdorff distance between two point sets (used for free boundaries).
 
 use crate::mesh::Point;
-use crate::vi::Constraints;
+use crate::solver::constraints::Constraints;
 
 /// A switch along a boundary part: where it is and how many switches there are in total
 /// (1 for a clean single transition).
@@ -146,8 +146,6 @@ pub fn neighbours(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::Side;
-    use crate::scheme::PointDof;
 
     #[test]
     fn switch_and_measure() {
@@ -155,14 +153,14 @@ mod tests {
         let cons = Constraints {
             dofs: xs
                 .iter()
-                .map(|&x| PointDof {
+                .map(|&x| crate::vi::ConstrainedDof {
                     dof: 0,
                     point: [x, 0.0],
                     measure: 0.2,
                 })
                 .collect(),
             barrier: vec![0.0; 5],
-            side: Side::Lower,
+            side: crate::vi::Side::Lower,
         };
         let active = [true, false, false, true, true];
         let s = switch_point(&cons, &active, 0).unwrap();

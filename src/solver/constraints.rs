@@ -4,10 +4,23 @@
 
 use crate::assembly::DiscreteSystem;
 use crate::mesh::Point;
-use crate::problem::{ConstraintKind, Problem, check_finite};
+use crate::problem::{ConstraintKind, Problem, Side, check_finite};
 use crate::scheme::PointDof;
-use crate::vi::Constraints;
+use crate::vi::ConstrainedDof;
 use rayon::prelude::*;
+
+/// The barrier of a problem on the unknowns of a discrete system: the algorithms' constraints
+/// ([`crate::vi::Constraints`]) with, for each constrained unknown, the point where the barrier
+/// was evaluated (read by the warm start and the post-processing, never by the algorithms).
+pub type Constraints = crate::vi::Constraints<Point>;
+
+/// The algorithms' direction of a barrier ([`crate::vi::Side`]) for the problem's.
+pub fn vi_side(side: Side) -> crate::vi::Side {
+    match side {
+        Side::Upper => crate::vi::Side::Upper,
+        Side::Lower => crate::vi::Side::Lower,
+    }
+}
 
 /// Builds the barrier of `problem` on the unknowns of the system, checking the data and the
 /// non-emptiness of the discrete convex set.
@@ -79,10 +92,18 @@ pub fn build(system: &DiscreteSystem, problem: &Problem) -> crate::Result<Option
     for (pd, &g) in dofs.iter().zip(&barrier) {
         finite(g, pd.point)?;
     }
+    let dofs = dofs
+        .into_iter()
+        .map(|pd| ConstrainedDof {
+            dof: pd.dof,
+            point: pd.point,
+            measure: pd.measure,
+        })
+        .collect();
     Ok(Some(Constraints {
         dofs,
         barrier,
-        side: c.side,
+        side: vi_side(c.side),
     }))
 }
 

@@ -14,7 +14,7 @@
 
 use crate::assembly::DiscreteSystem;
 use crate::problem::{BoundaryKind, Problem};
-use crate::vi::Constraints;
+use crate::solver::constraints::Constraints;
 use rayon::prelude::*;
 
 pub use crate::vi::certificate::MAGNITUDE_LIMIT;

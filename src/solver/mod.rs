@@ -22,12 +22,13 @@ pub mod magnitude;
 pub mod warm_start;
 pub mod well_posed;
 
-use crate::assembly::{DiscreteSystem, SymbolicSystem, SystemOptions};
+use crate::assembly::{DiscreteSystem, SolveState, SymbolicSystem, SystemOptions};
 use crate::problem::Problem;
 use crate::scheme::GradientDiscretisation;
 use crate::vi::active_set::{self, Outcome};
 pub use crate::vi::{ActiveSetOptions, Certificate, IterationLog, IterationStep, Method};
-use crate::vi::{Constraints, VariationalSolution, pgs};
+use crate::vi::{VariationalSolution, pgs};
+use constraints::Constraints;
 use std::sync::Arc;
 use std::time::Instant;
 pub use warm_start::{WarmStart, WarmStartReport};
@@ -91,6 +92,10 @@ pub struct Solution<'a> {
     pub timings: Timings,
     /// What the warm start did (`None`: cold start, or no barrier).
     pub warm_start: Option<WarmStartReport>,
+    /// The number of unknowns of the cell system the iterative solves took, and how many of
+    /// them are skeleton unknowns ([`crate::assembly::two_point`]; `None`: they solved the
+    /// skeleton system, or the solves were direct).
+    pub cell_system: Option<(usize, usize)>,
 }
 
 impl Solution<'_> {
@@ -150,6 +155,7 @@ pub fn solve_with_symbolic<'a>(
 /// no warm start was asked for).
 fn warm_start(
     system: &DiscreteSystem,
+    state: &mut SolveState,
     problem: &Problem,
     cons: &Constraints,
     opts: &SolveOptions,
@@ -160,7 +166,7 @@ fn warm_start(
     let t = Instant::now();
     match warm_start::predict(system.scheme(), problem, cons) {
         Ok(p) => {
-            system.set_initial_guess(p.guess);
+            system.set_initial_guess(state, p.guess);
             (Some(p.active), Some(p.report))
         }
         Err(reason) => (
@@ -174,9 +180,11 @@ fn warm_start(
     }
 }
 
-/// The active-set method on `system`, with the fallback of `opts`.
+/// The active-set method on `system` (its solves through `state`), with the fallback of
+/// `opts`.
 fn solve_constrained(
     system: &DiscreteSystem,
+    state: &mut SolveState,
     cons: &Constraints,
     opts: &SolveOptions,
     initial: Option<Vec<bool>>,
@@ -192,10 +200,11 @@ fn solve_constrained(
     if opts.warm_start == WarmStart::Nested && o.look_ahead.is_none() {
         o.look_ahead = Some(Default::default());
     }
-    match active_set::run(system, cons, &o)? {
+    match active_set::run(&mut system.with_state(state), cons, &o)? {
         Outcome::Solved(s) => Ok(s),
         Outcome::Stalled(stall) if opts.fallback => {
-            let mut sol = pgs::solve(system, cons, &pgs::PgsOptions::default())?;
+            let q = system.with_state(state);
+            let mut sol = pgs::solve(&q, cons, &pgs::PgsOptions::default())?;
             sol.niter += stall.log.len();
             let mut log = stall.log;
             log.extend(sol.log);
@@ -212,12 +221,14 @@ fn solve_system<'a>(
     opts: &SolveOptions,
     t0: Instant,
 ) -> crate::Result<Solution<'a>> {
+    // what the solves of this system carry from one to the next: fresh for every problem
+    let mut state = SolveState::default();
     let constraints = constraints::build(&system, problem)?;
     let floating = well_posed::analyse(&system, constraints.as_ref())?;
     let mut warm = None;
     let result = match &constraints {
         Some(c) => {
-            let (mut initial, report) = warm_start(&system, problem, c, opts);
+            let (mut initial, report) = warm_start(&system, &mut state, problem, c, opts);
             warm = report;
             if !floating.is_empty() {
                 // parts without Dirichlet unknowns: start with their barrier active, or the
@@ -232,10 +243,14 @@ fn solve_system<'a>(
                     a[j] = true;
                 }
             }
-            solve_constrained(&system, c, opts, initial)?
+            solve_constrained(&system, &mut state, c, opts, initial)?
         }
-        None => crate::vi::solve_unconstrained(&system, opts.active_set.tol)?,
+        None => {
+            crate::vi::solve_unconstrained(&mut system.with_state(&mut state), opts.active_set.tol)?
+        }
     };
+    let cell_system = state.cell_system_size().zip(state.cell_system_skeleton());
+    drop(state);
     let mut result = result;
     let scale = magnitude::data_scale(&system, problem, constraints.as_ref());
     result.certificate.data_magnitude = magnitude::data_magnitude(&result.u, scale);
@@ -259,5 +274,6 @@ fn solve_system<'a>(
         result,
         timings,
         warm_start: warm,
+        cell_system,
     })
 }

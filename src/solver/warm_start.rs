@@ -49,7 +49,8 @@ use crate::mesh::agglomerate::{Agglomeration, agglomerate};
 use crate::mesh::{NO_CELL, Point, PolyMesh};
 use crate::problem::{ConstraintKind, Problem};
 use crate::scheme::{Entity, GradientDiscretisation, Hmm};
-use crate::vi::{ActiveSetOptions, Constraints};
+use crate::solver::constraints::Constraints;
+use crate::vi::ActiveSetOptions;
 use std::time::Instant;
 
 /// How the monotony algorithm starts (`--warm-start nested|cold` on the command line).
@@ -480,7 +481,7 @@ impl VertexIncidence {
 mod tests {
     use super::*;
     use crate::mesh::generate::cartesian_triangles;
-    use crate::scheme::{P1, PointDof};
+    use crate::scheme::P1;
 
     /// The passes over the cells of [`prolong`] and [`vertex_obstacle`] give exactly what
     /// gathering the cells of each vertex (their definition) gives.
@@ -515,7 +516,7 @@ mod tests {
                 let c = cells(v);
                 let want = c.iter().map(|&k| values[agg.cell_of[k]]).sum::<f64>() / c.len() as f64;
                 assert_eq!(g.to_bits(), want.to_bits(), "vertex {v}");
-                dofs.push(PointDof {
+                dofs.push(crate::vi::ConstrainedDof {
                     dof: d,
                     point: fine.vertex(v),
                     measure: 1.0,
@@ -525,7 +526,7 @@ mod tests {
         let cons = Constraints {
             barrier: vec![0.0; dofs.len()],
             dofs,
-            side: crate::problem::Side::Upper,
+            side: crate::vi::Side::Upper,
         };
         let active = map_down(
             &s,

@@ -14,7 +14,7 @@
 //! the initial active set. Cost: one union–find pass over the local unknowns.
 
 use crate::assembly::DiscreteSystem;
-use crate::vi::Constraints;
+use crate::solver::constraints::Constraints;
 
 /// Union–find with path halving.
 fn find(parent: &mut [usize], mut i: usize) -> usize {

@@ -114,9 +114,9 @@ pub enum Outcome {
 
 /// Solves the discrete variational inequality by the active-set method (see module docs);
 /// cycling and the iteration cap are errors.
-pub fn solve(
-    q: &dyn QuadraticEnergy,
-    cons: &Constraints,
+pub fn solve<P>(
+    q: &mut dyn QuadraticEnergy,
+    cons: &Constraints<P>,
     opts: &ActiveSetOptions,
 ) -> crate::Result<VariationalSolution> {
     match run(q, cons, opts)? {
@@ -126,7 +126,7 @@ pub fn solve(
 }
 
 /// The initial active set of `opts`, checked against the constraints.
-fn initial_active(cons: &Constraints, opts: &ActiveSetOptions) -> crate::Result<Vec<bool>> {
+fn initial_active<P>(cons: &Constraints<P>, opts: &ActiveSetOptions) -> crate::Result<Vec<bool>> {
     if !(opts.c > 0.0 && opts.c.is_finite()) {
         return Err(crate::Error::InvalidData(format!(
             "the active-set parameter c must be positive and finite, got {}",
@@ -161,8 +161,8 @@ fn thresholds(ev: &Evaluation, c: f64) -> Thresholds {
 
 /// The next active set (Herbin's rule, step 2 of the module docs), with round-off thresholds
 /// taken from the scales of the evaluation of the current iterate.
-fn next_active(
-    cons: &Constraints,
+fn next_active<P>(
+    cons: &Constraints<P>,
     u: &[f64],
     active: &[bool],
     ev: &Evaluation,
@@ -196,9 +196,9 @@ fn sizes(history: &[Vec<bool>]) -> Vec<usize> {
 /// iterate that would end the iteration or close a cycle (`next` equal to `active` or in
 /// `history`) is first refined to full accuracy, so that those decisions are taken on an
 /// exact one.
-fn solve_step(
-    q: &dyn QuadraticEnergy,
-    cons: &Constraints,
+fn solve_step<P>(
+    q: &mut dyn QuadraticEnergy,
+    cons: &Constraints<P>,
     active: &[bool],
     history: &[Vec<bool>],
     screening: bool,
@@ -210,7 +210,7 @@ fn solve_step(
     } else {
         q.minimise_with_fixed(&fixed)?
     };
-    let mut ev = evaluate(q, Some(cons), &u, active);
+    let mut ev = evaluate(&*q, Some(cons), &u, active)?;
     let mut next = next_active(cons, &u, active, &ev, c);
     if timings.inexact
         && (next == active || history.contains(&next))
@@ -218,7 +218,7 @@ fn solve_step(
     {
         u = v;
         timings = timings.then(more);
-        ev = evaluate(q, Some(cons), &u, active);
+        ev = evaluate(&*q, Some(cons), &u, active)?;
         next = next_active(cons, &u, active, &ev, c);
     }
     Ok((u, timings, ev, next))
@@ -227,9 +227,9 @@ fn solve_step(
 /// The look-ahead after a solve that proposes `next` ≠ `active` (see [`look_ahead`]): its
 /// report, and its refined proposal if the local iterations converged and it differs from
 /// `active` (the caller still rejects one that would close a cycle).
-fn refine_proposal(
-    q: &dyn QuadraticEnergy,
-    cons: &Constraints,
+fn refine_proposal<P>(
+    q: &mut dyn QuadraticEnergy,
+    cons: &Constraints<P>,
     u: &[f64],
     active: &[bool],
     next: &[bool],
@@ -274,9 +274,9 @@ fn stall(
 }
 
 /// Runs the active-set method (see module docs) and says whether it converged.
-pub fn run(
-    q: &dyn QuadraticEnergy,
-    cons: &Constraints,
+pub fn run<P>(
+    q: &mut dyn QuadraticEnergy,
+    cons: &Constraints<P>,
     opts: &ActiveSetOptions,
 ) -> crate::Result<Outcome> {
     let mut active = initial_active(cons, opts)?;
@@ -354,7 +354,7 @@ pub fn run(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::Side;
+    use crate::vi::Side;
     use crate::vi::dense::{Dense, Screening, all_constrained, cycling_system, laplacian_1d, spd};
     use crate::vi::exhaustive;
 
@@ -376,14 +376,14 @@ mod tests {
                 Side::Lower
             };
             let g = (0..n).map(|i| 0.1 * (i as f64 - 2.5)).collect();
-            let sys = Dense {
+            let mut sys = Dense {
                 m,
                 b,
                 dir: vec![None; n],
             };
             let cons = all_constrained(n, g, side);
-            let (reference, ref_active) = exhaustive::solve(&sys, &cons).unwrap();
-            match run(&sys, &cons, &ActiveSetOptions::default()).unwrap() {
+            let (reference, ref_active) = exhaustive::solve(&mut sys, &cons).unwrap();
+            match run(&mut sys, &cons, &ActiveSetOptions::default()).unwrap() {
                 Outcome::Solved(sol) => {
                     sol.certificate.check(1e-10).unwrap();
                     assert_eq!(sol.active, ref_active, "seed {seed}");
@@ -404,14 +404,14 @@ mod tests {
     fn m_matrix_converges_to_the_enumerated_solution() {
         let n = 8;
         let m = laplacian_1d(n);
-        let sys = Dense {
+        let mut sys = Dense {
             m,
             b: vec![1.0; n],
             dir: vec![None; n],
         };
         let cons = all_constrained(n, vec![3.0; n], Side::Upper);
-        let sol = solve(&sys, &cons, &ActiveSetOptions::default()).unwrap();
-        let (reference, active) = exhaustive::solve(&sys, &cons).unwrap();
+        let sol = solve(&mut sys, &cons, &ActiveSetOptions::default()).unwrap();
+        let (reference, active) = exhaustive::solve(&mut sys, &cons).unwrap();
         assert_eq!(sol.active, active);
         assert!(sol.active.iter().any(|&a| a) && !sol.active.iter().all(|&a| a));
         for (a, r) in sol.u.iter().zip(&reference) {
@@ -441,17 +441,17 @@ mod tests {
             screening: false,
             ..Default::default()
         };
-        let reference = solve(&exact(&m), &cons, &no_screening).unwrap();
+        let reference = solve(&mut exact(&m), &cons, &no_screening).unwrap();
         assert!(reference.niter >= 3, "{}", reference.niter);
         let n_active = reference.active.iter().filter(|&&a| a).count();
         assert!(n_active > 2 && n_active < n, "{n_active}");
         for (error, same_path) in [(1e-9, true), (0.05, false)] {
-            let q = Screening {
+            let mut q = Screening {
                 exact: exact(&m),
                 error,
-                refinements: std::cell::Cell::new(0),
+                refinements: 0,
             };
-            let sol = solve(&q, &cons, &ActiveSetOptions::default()).unwrap();
+            let sol = solve(&mut q, &cons, &ActiveSetOptions::default()).unwrap();
             assert_eq!(sol.active, reference.active, "error {error}");
             for (a, r) in sol.u.iter().zip(&reference.u) {
                 assert!((a - r).abs() < 1e-12, "error {error}: {a} vs {r}");
@@ -460,21 +460,22 @@ mod tests {
             assert!(!sol.log.last().unwrap().timings.inexact);
             if same_path {
                 assert_eq!(sol.niter, reference.niter);
-                assert_eq!(q.refinements.get(), 1);
+                assert_eq!(q.refinements, 1);
             } else {
                 // misjudged: the active sets differ from the exact path's
                 let sizes: Vec<usize> = sol.log.iter().map(|l| l.step.active).collect();
                 let exact: Vec<usize> = reference.log.iter().map(|l| l.step.active).collect();
                 assert_ne!(sizes, exact);
-                assert!(q.refinements.get() >= 1);
+                assert!(q.refinements >= 1);
             }
         }
     }
 
     #[test]
     fn cycling_is_reported_with_its_log() {
-        let (sys, cons) = cycling_system();
-        let Outcome::Stalled(s) = run(&sys, &cons, &ActiveSetOptions::default()).unwrap() else {
+        let (mut sys, cons) = cycling_system();
+        let Outcome::Stalled(s) = run(&mut sys, &cons, &ActiveSetOptions::default()).unwrap()
+        else {
             panic!("the crafted system should cycle");
         };
         assert!(
@@ -483,19 +484,19 @@ mod tests {
             s.error
         );
         assert_eq!(s.log.len(), s.log.last().unwrap().step.solve);
-        assert!(solve(&sys, &cons, &ActiveSetOptions::default()).is_err());
+        assert!(solve(&mut sys, &cons, &ActiveSetOptions::default()).is_err());
     }
 
     #[test]
     fn bad_options_are_typed_errors() {
-        let (sys, cons) = cycling_system();
+        let (mut sys, cons) = cycling_system();
         for c in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             let o = ActiveSetOptions {
                 c,
                 ..Default::default()
             };
             assert!(matches!(
-                solve(&sys, &cons, &o),
+                solve(&mut sys, &cons, &o),
                 Err(crate::Error::InvalidData(_))
             ));
         }
@@ -504,7 +505,7 @@ mod tests {
             ..Default::default()
         };
         assert!(matches!(
-            solve(&sys, &cons, &o),
+            solve(&mut sys, &cons, &o),
             Err(crate::Error::InvalidData(_))
         ));
         for tol in [0.0, 1.0, f64::INFINITY, f64::NAN, -1e-10] {
@@ -513,7 +514,10 @@ mod tests {
                 ..Default::default()
             };
             assert!(
-                matches!(solve(&sys, &cons, &o), Err(crate::Error::InvalidData(_))),
+                matches!(
+                    solve(&mut sys, &cons, &o),
+                    Err(crate::Error::InvalidData(_))
+                ),
                 "{tol}"
             );
         }
@@ -522,7 +526,7 @@ mod tests {
             ..Default::default()
         };
         assert!(matches!(
-            solve(&sys, &cons, &o),
+            solve(&mut sys, &cons, &o),
             Err(crate::Error::InvalidData(_))
         ));
     }

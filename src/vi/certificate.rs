@@ -89,13 +89,13 @@ pub struct Evaluation {
 
 /// Computes the certificate of `u` with the active set `active` (indexed like `cons.dofs`),
 /// from a single evaluation of the residual.
-pub fn evaluate(
+pub fn evaluate<P>(
     q: &dyn QuadraticEnergy,
-    cons: Option<&Constraints>,
+    cons: Option<&Constraints<P>>,
     u: &[f64],
     active: &[bool],
-) -> Evaluation {
-    let (r, scale) = q.residual(u);
+) -> crate::Result<Evaluation> {
+    let (r, scale) = q.residual(u)?;
     let scale_r = scale
         .iter()
         .cloned()
@@ -131,10 +131,10 @@ pub fn evaluate(
             c.balance_residual = c.balance_residual.max(r[i].abs() / scale_r);
         }
     }
-    Evaluation {
+    Ok(Evaluation {
         certificate: c,
         multiplier: lambda,
         scale_r,
         scale_u,
-    }
+    })
 }

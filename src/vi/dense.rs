@@ -1,9 +1,7 @@
 //! A dense quadratic energy, to drive the algorithms of [`super`] with crafted matrices in the
 //! unit tests.
 
-use super::{Constraints, QuadraticEnergy, SolveTimings};
-use crate::problem::Side;
-use crate::scheme::PointDof;
+use super::{ConstrainedDof, Constraints, QuadraticEnergy, Side, SolveTimings};
 use nalgebra::{DMatrix, DVector};
 
 /// ½uᵀMu − bᵀu with dense M and Dirichlet unknowns.
@@ -24,9 +22,45 @@ impl QuadraticEnergy for Dense {
         &self.b
     }
     fn minimise_with_fixed(
-        &self,
+        &mut self,
         fixed: &[Option<f64>],
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        self.solve(fixed)
+    }
+    fn residual(&self, u: &[f64]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
+        let n = self.b.len();
+        let mut r = self.b.clone();
+        let mut s: Vec<f64> = self.b.iter().map(|x| x.abs()).collect();
+        for i in 0..n {
+            for (j, uj) in u.iter().enumerate() {
+                r[i] -= self.m[(i, j)] * uj;
+                s[i] += (self.m[(i, j)] * uj).abs();
+            }
+        }
+        Ok((r, s))
+    }
+    fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
+        let n = self.b.len();
+        (0..n)
+            .flat_map(|i| (0..n).map(move |j| (i, j)))
+            .map(|(i, j)| (i, j, self.m[(i, j)]))
+            .collect()
+    }
+    fn row_entries(&self, rows: &[usize]) -> crate::Result<Option<Vec<(usize, usize, f64)>>> {
+        let n = self.b.len();
+        Ok(Some(
+            rows.iter()
+                .flat_map(|&i| (0..n).map(move |j| (i, j)))
+                .filter(|&(i, j)| self.m[(i, j)] != 0.0)
+                .map(|(i, j)| (i, j, self.m[(i, j)]))
+                .collect(),
+        ))
+    }
+}
+
+impl Dense {
+    /// The minimiser with `fixed` (a dense Cholesky solve; nothing kept between solves).
+    pub fn solve(&self, fixed: &[Option<f64>]) -> crate::Result<(Vec<f64>, SolveTimings)> {
         let n = self.b.len();
         let fx = |i: usize| self.dir[i].or(fixed[i]);
         let free: Vec<usize> = (0..n).filter(|&i| fx(i).is_none()).collect();
@@ -49,35 +83,6 @@ impl QuadraticEnergy for Dense {
         }
         Ok((u, SolveTimings::default()))
     }
-    fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>) {
-        let n = self.b.len();
-        let mut r = self.b.clone();
-        let mut s: Vec<f64> = self.b.iter().map(|x| x.abs()).collect();
-        for i in 0..n {
-            for (j, uj) in u.iter().enumerate() {
-                r[i] -= self.m[(i, j)] * uj;
-                s[i] += (self.m[(i, j)] * uj).abs();
-            }
-        }
-        (r, s)
-    }
-    fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
-        let n = self.b.len();
-        (0..n)
-            .flat_map(|i| (0..n).map(move |j| (i, j)))
-            .map(|(i, j)| (i, j, self.m[(i, j)]))
-            .collect()
-    }
-    fn row_entries(&self, rows: &[usize]) -> Option<Vec<(usize, usize, f64)>> {
-        let n = self.b.len();
-        Some(
-            rows.iter()
-                .flat_map(|&i| (0..n).map(move |j| (i, j)))
-                .filter(|&(i, j)| self.m[(i, j)] != 0.0)
-                .map(|(i, j)| (i, j, self.m[(i, j)]))
-                .collect(),
-        )
-    }
 }
 
 /// [`Dense`] with inexact screening solves: [`QuadraticEnergy::screen_with_fixed`] returns the
@@ -86,7 +91,7 @@ impl QuadraticEnergy for Dense {
 pub struct Screening {
     pub exact: Dense,
     pub error: f64,
-    pub refinements: std::cell::Cell<usize>,
+    pub refinements: usize,
 }
 
 impl QuadraticEnergy for Screening {
@@ -100,13 +105,16 @@ impl QuadraticEnergy for Screening {
         self.exact.load()
     }
     fn minimise_with_fixed(
-        &self,
+        &mut self,
         fixed: &[Option<f64>],
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
-        self.exact.minimise_with_fixed(fixed)
+        self.exact.solve(fixed)
     }
-    fn screen_with_fixed(&self, fixed: &[Option<f64>]) -> crate::Result<(Vec<f64>, SolveTimings)> {
-        let (mut u, t) = self.exact.minimise_with_fixed(fixed)?;
+    fn screen_with_fixed(
+        &mut self,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        let (mut u, t) = self.exact.solve(fixed)?;
         for (i, ui) in u.iter_mut().enumerate() {
             if fixed[i].is_none() && self.exact.dir[i].is_none() {
                 *ui += if i % 2 == 0 { self.error } else { -self.error };
@@ -114,11 +122,11 @@ impl QuadraticEnergy for Screening {
         }
         Ok((u, SolveTimings { inexact: true, ..t }))
     }
-    fn refine(&self, fixed: &[Option<f64>]) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
-        self.refinements.set(self.refinements.get() + 1);
-        self.exact.minimise_with_fixed(fixed).map(Some)
+    fn refine(&mut self, fixed: &[Option<f64>]) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+        self.refinements += 1;
+        self.exact.solve(fixed).map(Some)
     }
-    fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    fn residual(&self, u: &[f64]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
         self.exact.residual(u)
     }
     fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
@@ -130,9 +138,9 @@ impl QuadraticEnergy for Screening {
 pub fn all_constrained(n: usize, barrier: Vec<f64>, side: Side) -> Constraints {
     Constraints {
         dofs: (0..n)
-            .map(|i| PointDof {
+            .map(|i| ConstrainedDof {
                 dof: i,
-                point: [0.0, 0.0],
+                point: (),
                 measure: 1.0,
             })
             .collect(),

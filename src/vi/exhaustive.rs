@@ -12,7 +12,10 @@ pub const MAX_CONSTRAINED: usize = 20;
 /// The solution and its active set, or a typed error when there are too many constrained
 /// unknowns or no subset passes the test (which the theory excludes for SPD M and a non-empty
 /// convex set: it would mean round-off larger than the tolerances, 1e-12 relative).
-pub fn solve(q: &dyn QuadraticEnergy, cons: &Constraints) -> crate::Result<(Vec<f64>, Vec<bool>)> {
+pub fn solve<P>(
+    q: &mut dyn QuadraticEnergy,
+    cons: &Constraints<P>,
+) -> crate::Result<(Vec<f64>, Vec<bool>)> {
     let m = cons.dofs.len();
     let mut found = kkt_active_sets(q, cons, true)?;
     found
@@ -26,9 +29,9 @@ pub fn solve(q: &dyn QuadraticEnergy, cons: &Constraints) -> crate::Result<(Vec<
 /// Every active set whose equality-constrained minimiser satisfies the KKT conditions, with
 /// that minimiser (the first one only if `first_only`). More than one means degenerate data
 /// (an unknown exactly at the barrier with a zero multiplier).
-pub fn kkt_active_sets(
-    q: &dyn QuadraticEnergy,
-    cons: &Constraints,
+pub fn kkt_active_sets<P>(
+    q: &mut dyn QuadraticEnergy,
+    cons: &Constraints<P>,
     first_only: bool,
 ) -> crate::Result<Vec<(Vec<bool>, Vec<f64>)>> {
     let m = cons.dofs.len();
@@ -42,7 +45,7 @@ pub fn kkt_active_sets(
     for mask in 0u32..(1 << m) {
         let active: Vec<bool> = (0..m).map(|j| mask & (1 << j) != 0).collect();
         let (u, _) = q.minimise_with_fixed(&cons.fixed(q.n_unknowns(), &active))?;
-        let (r, sc) = q.residual(&u);
+        let (r, sc) = q.residual(&u)?;
         let scale = sc.iter().cloned().fold(0.0, f64::max);
         let umax = u.iter().fold(1e-300f64, |a, x| a.max(x.abs()));
         let ok = (0..m).all(|j| {

@@ -112,9 +112,9 @@ impl Thresholds {
 /// on success `next` (the rule's next active set) is replaced on the patch by the local
 /// iteration's active set. `Ok(None)` when there is nothing to do or the energy cannot give
 /// rows of M.
-pub fn look_ahead(
+pub fn look_ahead<P>(
     q: &dyn QuadraticEnergy,
-    cons: &Constraints,
+    cons: &Constraints<P>,
     u: &[f64],
     active: &[bool],
     next: &mut [bool],
@@ -137,7 +137,8 @@ pub fn look_ahead(
         seeds,
         opts.layers,
         opts.max_fraction * n as f64,
-    ) else {
+    )?
+    else {
         return Ok(None);
     };
     let local = LocalProblem::new(q, cons, u, &patch, entries)?;
@@ -199,12 +200,14 @@ fn grow_patch(
     seeds: Vec<usize>,
     layers: usize,
     max: f64,
-) -> Option<(Vec<usize>, Entries)> {
+) -> crate::Result<Option<(Vec<usize>, Entries)>> {
     let mut inside: std::collections::HashSet<usize> = seeds.iter().copied().collect();
     let mut frontier = seeds;
     let mut entries = Vec::new();
     for layer in 0..=layers {
-        let rows = q.row_entries(&frontier)?;
+        let Some(rows) = q.row_entries(&frontier)? else {
+            return Ok(None);
+        };
         if layer < layers {
             frontier = rows
                 .iter()
@@ -216,7 +219,7 @@ fn grow_patch(
         }
         entries.extend(rows);
         if inside.len() as f64 > max {
-            return None;
+            return Ok(None);
         }
         if frontier.is_empty() {
             break;
@@ -224,7 +227,7 @@ fn grow_patch(
     }
     let mut patch: Vec<usize> = inside.into_iter().collect();
     patch.sort_unstable();
-    Some((patch, entries))
+    Ok(Some((patch, entries)))
 }
 
 /// M_PP (lower triangle, by columns), the right-hand side b_P − M_{P,P^c} u_{P^c}, and the
@@ -240,9 +243,9 @@ struct LocalProblem {
 }
 
 impl LocalProblem {
-    fn new(
+    fn new<P>(
         q: &dyn QuadraticEnergy,
-        cons: &Constraints,
+        cons: &Constraints<P>,
         u: &[f64],
         patch: &[usize],
         entries: Entries,
@@ -296,7 +299,7 @@ impl LocalProblem {
     /// The local solution with the constrained unknowns `act` (indexed like `self.cons`)
     /// fixed at their barrier: unit rows and columns for them, their columns moved to the
     /// right-hand side.
-    fn solve(&self, cons: &Constraints, act: &[bool]) -> crate::Result<Vec<f64>> {
+    fn solve<P>(&self, cons: &Constraints<P>, act: &[bool]) -> crate::Result<Vec<f64>> {
         let p = self.rhs.len();
         let mut fixed = vec![f64::NAN; p];
         for (&(l, j), &a) in self.cons.iter().zip(act) {
@@ -353,7 +356,7 @@ impl LocalProblem {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::Side;
+    use crate::vi::Side;
     use crate::vi::active_set::{self, ActiveSetOptions};
     use crate::vi::certificate::evaluate;
     use crate::vi::dense::{Dense, all_constrained, laplacian_1d};
@@ -374,7 +377,7 @@ mod tests {
     }
 
     fn thresholds(q: &Dense, cons: &Constraints, u: &[f64], active: &[bool]) -> Thresholds {
-        let ev = evaluate(q, Some(cons), u, active);
+        let ev = evaluate(q, Some(cons), u, active).unwrap();
         Thresholds {
             scale_r: ev.scale_r,
             scale_u: ev.scale_u,
@@ -388,9 +391,9 @@ mod tests {
     #[test]
     fn a_patch_over_everything_proposes_the_solution() {
         let n = 60;
-        let (q, cons) = tent(n);
+        let (mut q, cons) = tent(n);
         let exact = active_set::solve(
-            &q,
+            &mut q,
             &cons,
             &ActiveSetOptions {
                 screening: false,
@@ -408,7 +411,7 @@ mod tests {
         let (u, _) = q.minimise_with_fixed(&cons.fixed(n, &active)).unwrap();
         let thr = thresholds(&q, &cons, &u, &active);
         // the rule's next set: the violated unknowns enter
-        let ev = evaluate(&q, Some(&cons), &u, &active);
+        let ev = evaluate(&q, Some(&cons), &u, &active).unwrap();
         let rule: Vec<bool> = (0..n)
             .map(|j| {
                 let (l, gap) = if active[j] {
@@ -510,14 +513,14 @@ mod tests {
     #[test]
     fn look_ahead_saves_solves_and_keeps_the_solution() {
         let n = 60;
-        let (q, cons) = tent(n);
+        let (mut q, cons) = tent(n);
         let plain = ActiveSetOptions {
             screening: false,
             ..Default::default()
         };
-        let a = active_set::solve(&q, &cons, &plain).unwrap();
+        let a = active_set::solve(&mut q, &cons, &plain).unwrap();
         let b = active_set::solve(
-            &q,
+            &mut q,
             &cons,
             &ActiveSetOptions {
                 // the default fraction would refuse every patch of so small a problem

@@ -28,9 +28,6 @@ pub mod pgs;
 pub use active_set::ActiveSetOptions;
 pub use certificate::{Certificate, Evaluation};
 
-use crate::problem::Side;
-use crate::scheme::PointDof;
-
 /// Timings of one constrained minimisation (a linear solve), in seconds.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
 pub struct SolveTimings {
@@ -77,52 +74,92 @@ pub trait QuadraticEnergy {
     /// The load vector b.
     fn load(&self) -> &[f64];
     /// The minimiser of E with the unknowns `fixed[d] = Some(v)` (and the Dirichlet ones)
-    /// fixed, i.e. the solution of the linear system with those rows replaced.
-    fn minimise_with_fixed(&self, fixed: &[Option<f64>])
-    -> crate::Result<(Vec<f64>, SolveTimings)>;
+    /// fixed, i.e. the solution of the linear system with those rows replaced. `&mut self`:
+    /// an implementation may carry what it learnt (an initial guess, a multigrid hierarchy)
+    /// to the next solve; that state belongs to the value the caller passes, never to a lock
+    /// behind `&self`.
+    fn minimise_with_fixed(
+        &mut self,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<(Vec<f64>, SolveTimings)>;
     /// [`Self::minimise_with_fixed`] accurate enough to decide the next active set: an
     /// iterative solver may stop at a looser residual, and then sets
     /// [`SolveTimings::inexact`] (the active-set solver calls [`Self::refine`] before it
     /// stops or declares a cycle on such an iterate). Default: the full solve.
-    fn screen_with_fixed(&self, fixed: &[Option<f64>]) -> crate::Result<(Vec<f64>, SolveTimings)> {
+    fn screen_with_fixed(
+        &mut self,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         self.minimise_with_fixed(fixed)
     }
     /// Continues the last solve, an inexact [`Self::screen_with_fixed`] with the same
     /// `fixed`, to full accuracy; `None` when there is nothing to continue (the caller keeps
     /// its iterate). Default: `None`.
-    fn refine(&self, fixed: &[Option<f64>]) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+    fn refine(&mut self, fixed: &[Option<f64>]) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
         let _ = fixed;
         Ok(None)
     }
     /// The iteration is over: free what is kept from one solve to the next (a multigrid
     /// hierarchy, for instance). Default: nothing.
-    fn release(&self) {}
+    fn release(&mut self) {}
     /// r = b − Mu and, for each entry, the scale |b_i| + Σ_j |M_ij u_j| against which it is
-    /// small.
-    fn residual(&self, u: &[f64]) -> (Vec<f64>, Vec<f64>);
+    /// small (an error only if the energy's own data are inconsistent).
+    fn residual(&self, u: &[f64]) -> crate::Result<(Vec<f64>, Vec<f64>)>;
     /// The entries (i, j, M_ij) of M, possibly with repeated (i, j) to be summed.
     fn matrix_triplets(&self) -> Vec<(usize, usize, f64)>;
     /// The entries (i, j, M_ij) of the rows i ∈ `rows` of M (repeated (i, j) to be summed),
     /// for the [`look_ahead`]; `None` (the default) if the energy cannot give single rows.
-    fn row_entries(&self, rows: &[usize]) -> Option<Vec<(usize, usize, f64)>> {
+    fn row_entries(&self, rows: &[usize]) -> crate::Result<Option<Vec<(usize, usize, f64)>>> {
         let _ = rows;
-        None
+        Ok(None)
     }
+}
+
+/// Direction of a barrier, as the algorithms see it: the constraint is s·(u − g) ≤ 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Side {
+    /// u ≤ g.
+    Upper,
+    /// u ≥ g.
+    Lower,
+}
+
+impl Side {
+    /// s = +1 for an upper barrier, −1 for a lower one.
+    pub fn sign(self) -> f64 {
+        match self {
+            Side::Upper => 1.0,
+            Side::Lower => -1.0,
+        }
+    }
+}
+
+/// A constrained unknown: its index, the measure that scales its multiplier, and a payload
+/// `P` the algorithms carry without reading (the layers above put the point where the barrier
+/// was evaluated there; the algorithms' own tests put `()`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConstrainedDof<P = ()> {
+    /// Global unknown index.
+    pub dof: usize,
+    /// Where the barrier was evaluated (or any payload of the caller's).
+    pub point: P,
+    /// Measure attached to the unknown (the multiplier is compared with it).
+    pub measure: f64,
 }
 
 /// The barrier, on the unknowns it acts on.
 #[derive(Debug, Clone)]
-pub struct Constraints {
-    /// Constrained unknowns (never Dirichlet unknowns), with the point where the barrier was
-    /// evaluated and the measure that scales the multiplier.
-    pub dofs: Vec<PointDof>,
+pub struct Constraints<P = ()> {
+    /// Constrained unknowns (never Dirichlet unknowns), with the measure that scales the
+    /// multiplier.
+    pub dofs: Vec<ConstrainedDof<P>>,
     /// Barrier value on each constrained unknown (g_K, a_σ, or nodal values).
     pub barrier: Vec<f64>,
     /// Upper (u ≤ g) or lower (u ≥ ψ).
     pub side: Side,
 }
 
-impl Constraints {
+impl<P> Constraints<P> {
     /// The fixed values of a solve with the active set `active`: u_j = g_j on active j.
     pub fn fixed(&self, n: usize, active: &[bool]) -> Vec<Option<f64>> {
         let mut fixed = vec![None; n];
@@ -201,13 +238,13 @@ pub struct VariationalSolution {
 
 /// The solution of the problem without barrier: one solve, certified.
 pub fn solve_unconstrained(
-    q: &dyn QuadraticEnergy,
+    q: &mut dyn QuadraticEnergy,
     tol: f64,
 ) -> crate::Result<VariationalSolution> {
     certificate::check_tolerance(tol)?;
     let fixed = vec![None; q.n_unknowns()];
     let (u, timings) = q.minimise_with_fixed(&fixed)?;
-    let ev = certificate::evaluate(q, None, &u, &[]);
+    let ev = certificate::evaluate::<()>(&*q, None, &u, &[])?;
     ev.certificate.check(tol)?;
     Ok(VariationalSolution {
         log: vec![IterationLog {

@@ -97,7 +97,14 @@ fn cr_converges_at_the_expected_orders() {
 /// its solution (exhaustive enumeration).
 fn kkt_active_sets(sol: &Solution) -> Vec<(Vec<bool>, Vec<f64>)> {
     let cons = sol.constraints.as_ref().expect("a barrier");
-    gradvi::vi::exhaustive::kkt_active_sets(&sol.system, cons, false).unwrap()
+    gradvi::vi::exhaustive::kkt_active_sets(
+        &mut sol
+            .system
+            .with_state(&mut gradvi::assembly::SolveState::default()),
+        cons,
+        false,
+    )
+    .unwrap()
 }
 
 /// Solves `p` with CR on `mesh` and checks the solution against exhaustive enumeration: the

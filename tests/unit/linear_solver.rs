@@ -3,7 +3,7 @@
 //! Signorini problems, with HMM, P1 and CR, cold and nested; and the automatic choice.
 
 use crate::common::*;
-use gradvi::assembly::{AUTO_ITERATIVE_MIN, LinearSolver, SystemOptions};
+use gradvi::assembly::{AUTO_ITERATIVE_MIN, LinearSolver, SolveState, SystemOptions};
 use gradvi::mesh::generate::{cartesian, cartesian_triangles, hexagonal};
 use gradvi::problem::*;
 use gradvi::scheme::*;
@@ -69,15 +69,15 @@ fn hmm_on_rectangles_solves_on_the_cells() {
     let diag = |p: Problem| p.with_diffusion(Box::new(|x| [[1.0 + x[0], 0.0], [0.0, 0.3 + x[1]]]));
     for ws in [WarmStart::Cold, WarmStart::Nested] {
         let s = same_solution(&hmm, &diag(paper_test3(-20.0)), ws);
-        assert_eq!(s.system.cell_system_size(), nc);
+        assert_eq!(s.cell_system.map(|c| c.0), nc);
     }
     let s = same_solution(&hmm, &diag(paper_test1()), WarmStart::Cold);
-    assert_eq!(s.system.cell_system_size(), nc);
+    assert_eq!(s.cell_system.map(|c| c.0), nc);
     // ū = 1 + 2x − 3y, A = diag(1.5, 0.7): Dirichlet left and bottom, its flux elsewhere
     let (a, g) = ([[1.5, 0.0], [0.0, 0.7]], [2.0, -3.0]);
     let affine = affine_problem_with(a);
     let s = same_solution(&hmm, &affine, WarmStart::Cold);
-    assert_eq!(s.system.cell_system_size(), nc);
+    assert_eq!(s.cell_system.map(|c| c.0), nc);
     let exact: Vec<f64> = (0..rect.n_cells())
         .map(|k| {
             let x = rect.centroid(k);
@@ -91,11 +91,11 @@ fn hmm_on_rectangles_solves_on_the_cells() {
     // not two-point: an off-diagonal tensor, a hexagonal mesh
     let full = paper_test3(-20.0).with_diffusion(Box::new(|_| ANISOTROPIC));
     let s = same_solution(&hmm, &full, WarmStart::Cold);
-    assert_eq!(s.system.cell_system_size(), None);
+    assert_eq!(s.cell_system.map(|c| c.0), None);
     let hex = hexagonal(3).unwrap();
     let hmm = Hmm::new(&hex);
     let s = same_solution(&hmm, &paper_test3(-10.0), WarmStart::Cold);
-    assert_eq!(s.system.cell_system_size(), None);
+    assert_eq!(s.cell_system.map(|c| c.0), None);
 }
 
 /// Squares whose boundary sides are cut into collinear faces (the coarse meshes of the warm
@@ -112,10 +112,7 @@ fn hmm_solves_on_the_cells_and_the_coupled_faces() {
     let hmm = Hmm::new(mesh);
     let nc = mesh.n_cells();
     let check = |s: &Solution, what: &str| {
-        let (n, kept) = (
-            s.system.cell_system_size().expect(what),
-            s.system.cell_system_skeleton().expect(what),
-        );
+        let (n, kept) = s.cell_system.expect(what);
         assert_eq!(n, nc + kept, "{what}");
         assert!(
             kept > 0 && n < s.system.n_condensed(),
@@ -235,23 +232,25 @@ fn screening_solves_are_refined_to_the_full_solution() {
     // the unknowns of the left half fixed at 0.01
     let fixed: Vec<Option<f64>> = (0..n).map(|i| (i % 64 < 32).then_some(0.01)).collect();
     let full = system(LinearSolver::Iterative);
-    let (reference, t) = full.solve(&fixed).unwrap();
+    let st = &mut SolveState::default();
+    let (reference, t) = full.solve(st, &fixed).unwrap();
     assert!(!t.inexact);
-    assert!(full.refine(&fixed).unwrap().is_none());
+    assert!(full.refine(st, &fixed).unwrap().is_none());
 
     let it = system(LinearSolver::Iterative);
-    let (screened, t) = it.screen(&fixed).unwrap();
+    let st = &mut SolveState::default();
+    let (screened, t) = it.screen(st, &fixed).unwrap();
     assert!(t.inexact && t.krylov > 0);
     let other: Vec<Option<f64>> = fixed.iter().map(|f| f.map(|v| v + 1.0)).collect();
-    assert!(it.refine(&other).is_err());
+    assert!(it.refine(st, &other).is_err());
     // the mismatch consumed the kept solve (a second screen would start from its iterate):
-    // screen again from the start
-    assert!(it.refine(&fixed).unwrap().is_none());
-    let it = system(LinearSolver::Iterative);
-    let (_, t) = it.screen(&fixed).unwrap();
+    // screen again from the start, through a fresh state
+    assert!(it.refine(st, &fixed).unwrap().is_none());
+    let st = &mut SolveState::default();
+    let (_, t) = it.screen(st, &fixed).unwrap();
     assert!(t.inexact);
     let (refined, more) = it
-        .refine(&fixed)
+        .refine(st, &fixed)
         .unwrap()
         .expect("an inexact solve to refine");
     assert!(!more.inexact && more.krylov > 0 && more.factor == 0.0);
@@ -263,13 +262,14 @@ fn screening_solves_are_refined_to_the_full_solution() {
     };
     assert!(gap(&screened) > 1e-12, "the screening solve stopped early");
     assert!(gap(&refined) < 1e-10, "refined: {:e}", gap(&refined));
-    assert!(it.refine(&fixed).unwrap().is_none());
+    assert!(it.refine(st, &fixed).unwrap().is_none());
 
     let direct = system(LinearSolver::Direct);
-    let (u, t) = direct.screen(&fixed).unwrap();
+    let st = &mut SolveState::default();
+    let (u, t) = direct.screen(st, &fixed).unwrap();
     assert!(!t.inexact);
     assert!(gap(&u) < 1e-10);
-    assert!(direct.refine(&fixed).unwrap().is_none());
+    assert!(direct.refine(st, &fixed).unwrap().is_none());
 }
 
 /// Consecutive iterative solves reuse the coarse levels of the previous multigrid hierarchy
@@ -279,7 +279,6 @@ fn screening_solves_are_refined_to_the_full_solution() {
 #[test]
 fn multigrid_hierarchies_are_reused_when_few_unknowns_change() {
     use gradvi::assembly::{DiscreteSystem, REUSE_MAX_CHANGED};
-    use gradvi::vi::QuadraticEnergy;
     let tri = cartesian_triangles(128, 128, [0.0, 1.0], [0.0, 1.0]).unwrap();
     let p1 = P1::new(&tri).unwrap();
     let p = paper_test3(-10.0);
@@ -302,10 +301,13 @@ fn multigrid_hierarchies_are_reused_when_few_unknowns_change() {
         |k: usize| -> Vec<Option<f64>> { (0..n).map(|i| (i < k).then_some(0.01)).collect() };
     let k0 = n / 2;
     let it = system();
-    let check = |k: usize, reused: bool| {
-        let (u, t) = it.solve(&fixed(k)).unwrap();
+    let mut state = SolveState::default();
+    let check = |state: &mut SolveState, k: usize, reused: bool| {
+        let (u, t) = it.solve(state, &fixed(k)).unwrap();
         assert_eq!(t.reused, reused, "k = {k}");
-        let (reference, t) = system().solve(&fixed(k)).unwrap();
+        let (reference, t) = system()
+            .solve(&mut SolveState::default(), &fixed(k))
+            .unwrap();
         assert!(!t.reused);
         let gap = u
             .iter()
@@ -314,16 +316,16 @@ fn multigrid_hierarchies_are_reused_when_few_unknowns_change() {
             .fold(0.0, f64::max);
         assert!(gap < 1e-10, "k = {k}: {gap:e}");
     };
-    check(k0, false);
+    check(&mut state, k0, false);
     // a few more fixed, then a few fewer: reused, the changes counted from the first matrix
-    check(k0 + max / 2, true);
-    check(k0 + max, true);
+    check(&mut state, k0 + max / 2, true);
+    check(&mut state, k0 + max, true);
     // one more than the bound from the first matrix: a new hierarchy
-    check(k0 + max + 1, false);
-    check(k0 + max + 1 - max / 2, true);
+    check(&mut state, k0 + max + 1, false);
+    check(&mut state, k0 + max + 1 - max / 2, true);
     // many changes: a new hierarchy
-    check(k0 + 20 * max, false);
+    check(&mut state, k0 + 20 * max, false);
     // after the iteration is over, nothing is kept
-    it.release();
-    check(k0 + 20 * max, false);
+    state.release();
+    check(&mut state, k0 + 20 * max, false);
 }

@@ -1,0 +1,299 @@
+//! Assembly of the condensed (skeleton) system with some unknowns fixed: every cell condensed
+//! in parallel, then the global values *gathered* entry by entry (each entry of the condensed
+//! matrix and each right-hand-side row knows its contributions, listed in cell order) instead
+//! of scattered, so that the sums do not depend on the number of threads.
+
+use super::condense::{self, condense};
+use super::{DiscreteSystem, SolveState};
+use rayon::prelude::*;
+
+/// Cells per parallel task in the cell loops (large enough to amortise the task, small enough
+/// to balance two or more threads).
+pub(super) const CHUNK: usize = 4096;
+
+/// The cell ranges `[c0, c1)` of the parallel tasks.
+pub(super) fn cell_chunks(nc: usize) -> Vec<(usize, usize)> {
+    chunks(nc, CHUNK)
+}
+
+/// The ranges `[c0, c1)` of `size` consecutive indices (the last one shorter) covering `0..n`.
+pub(super) fn chunks(n: usize, size: usize) -> Vec<(usize, usize)> {
+    (0..n.div_ceil(size))
+        .map(|c| (c * size, ((c + 1) * size).min(n)))
+        .collect()
+}
+
+/// Splits a buffer laid out by the offsets `ptr` (entity e owns `ptr(e)..ptr(e + 1)`, relative to
+/// `ptr(ranges[0].0)`) into the consecutive slices of the entity `ranges`, so that each
+/// parallel task writes its own slice.
+pub(super) fn split_by_ranges<'b, T>(
+    mut buf: &'b mut [T],
+    ranges: &[(usize, usize)],
+    ptr: impl Fn(usize) -> usize,
+) -> Vec<&'b mut [T]> {
+    let mut slices = Vec::with_capacity(ranges.len());
+    for &(c0, c1) in ranges {
+        let (here, next) = std::mem::take(&mut buf).split_at_mut(ptr(c1) - ptr(c0));
+        buf = next;
+        slices.push(here);
+    }
+    slices
+}
+
+/// The position of unknown `g` among the unknowns `d` of a cell where it appears. The
+/// incidence maps of the symbolic system list, for each unknown, only cells that have it, so
+/// an error here means that the symbolic system and the values disagree (a bug), reported
+/// instead of reading another unknown's entry.
+#[inline]
+pub(super) fn local_index(d: &[u32], g: usize) -> crate::Result<usize> {
+    d.iter().position(|&x| x as usize == g).ok_or_else(|| {
+        crate::Error::Internal(format!(
+            "unknown {g} is listed in a cell whose unknowns are {d:?}"
+        ))
+    })
+}
+
+/// The value of each fixed unknown (Dirichlet, or fixed by the caller), NaN for a free one
+/// (the data and the barriers are finite).
+pub(super) struct FixedValues(Vec<f64>);
+
+impl FixedValues {
+    pub(super) fn new(dirichlet: &[Option<f64>], fixed: &[Option<f64>]) -> Self {
+        FixedValues(
+            (0..dirichlet.len())
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|d| dirichlet[d].or(fixed[d]).unwrap_or(f64::NAN))
+                .collect(),
+        )
+    }
+    /// The value of unknown `d` if it is fixed.
+    pub(super) fn get(&self, d: usize) -> Option<f64> {
+        let v = self.0[d];
+        if v.is_nan() { None } else { Some(v) }
+    }
+}
+
+impl DiscreteSystem<'_> {
+    /// The lower-triangular CSC pattern (column pointers, row indices) of the condensed matrix.
+    pub fn condensed_pattern(&self) -> (&[usize], &[usize]) {
+        (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx())
+    }
+
+    /// Condensed matrix values (in the order of [`Self::condensed_pattern`]) and right-hand
+    /// side, with `fixed` and the Dirichlet unknowns fixed (unit rows). The condensation
+    /// buffers are kept in `state` for the next call.
+    ///
+    /// With P_K the map from the global skeleton unknowns to those of cell K, and F the fixed
+    /// unknowns (value u_F),
+    ///
+    ///   S_ij = Σ_K (P_Kᵀ S_K P_K)_ij            for i, j ∉ F,   S_ii = 1 and S_ij = 0 else,
+    ///   c_i  = b^N_i + Σ_K (P_Kᵀ (g_K − S_K P_K u_F))_i   for i ∉ F,   c_i = u_i for i ∈ F,
+    ///
+    /// where b^N is the Neumann load and (S_K, g_K) the condensed block and load of cell K
+    /// ([`condense()`]). Then S u_S = c is the skeleton system with u_F moved to the right.
+    pub fn assemble_condensed(
+        &self,
+        state: &mut SolveState,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<(Vec<f64>, Vec<f64>)> {
+        self.bind(state);
+        let fixed = FixedValues::new(&self.values.dirichlet, fixed);
+        // without interior unknowns S_K = M_K, laid out like the local matrices, and the
+        // cells' right-hand sides are computed where they are gathered: no buffer at all
+        if self.sym.no_interior {
+            let values = self.gather_matrix(&fixed, &self.values.mats);
+            let rhs = self.gather_rhs(&fixed, |k, i| self.cell_rhs(k, i, &fixed))?;
+            return Ok((values, rhs));
+        }
+        // buffers kept between calls (they are entirely rewritten where read)
+        let (sbuf, gbuf) = &mut state.scratch;
+        sbuf.resize(self.sym.maps.block_ptr.total(), 0.0);
+        gbuf.resize(self.sym.dof_map.dofs.len(), 0.0);
+        self.condense_cells(&fixed, sbuf, gbuf)?;
+        let values = self.gather_matrix(&fixed, sbuf);
+        let dof_ptr = &self.sym.dof_map.dof_ptr;
+        let rhs = self.gather_rhs(&fixed, |k, i| gbuf[dof_ptr.at(k) + i])?;
+        Ok((values, rhs))
+    }
+
+    /// Condenses every cell (some with interior unknowns), in parallel: cell k's p×p block
+    /// S_K at `block_ptr[k]` in `sbuf`, and its right-hand side g_K − S_K P_K u_F (its
+    /// condensed load minus the columns of its fixed skeleton unknowns) at the positions of
+    /// its skeleton unknowns in `gbuf` (laid out like `dofs`). The first failure in cell order
+    /// is returned.
+    fn condense_cells(
+        &self,
+        fixed: &FixedValues,
+        sbuf: &mut [f64],
+        gbuf: &mut [f64],
+    ) -> crate::Result<()> {
+        let dof_ptr = &self.sym.dof_map.dof_ptr;
+        let ranges = cell_chunks(self.sym.scheme().mesh().n_cells());
+        let g_slices = split_by_ranges(gbuf, &ranges, |k| dof_ptr.at(k));
+        let block_ptr = &self.sym.maps.block_ptr;
+        let s_slices = split_by_ranges(sbuf, &ranges, |k| block_ptr.at(k));
+        let tasks: Vec<_> = ranges.into_iter().zip(s_slices).zip(g_slices).collect();
+        let results: Vec<crate::Result<()>> = tasks
+            .into_par_iter()
+            .map(|(((c0, c1), s), g)| {
+                let mut full = Vec::new();
+                for k in c0..c1 {
+                    let (so, go) = (
+                        block_ptr.at(k) - block_ptr.at(c0),
+                        dof_ptr.at(k) - dof_ptr.at(c0),
+                    );
+                    self.condense_cell(k, fixed, &mut full, &mut s[so..], &mut g[go..])?;
+                }
+                Ok(())
+            })
+            .collect();
+        results.into_iter().collect()
+    }
+
+    /// Entry i of the right-hand side b_K − M_K P_K u_F of cell k without interior unknowns
+    /// (what [`Self::condense_cell`] computes when S_K = M_K, in the same order of
+    /// operations: the load, then the fixed columns one after the other).
+    fn cell_rhs(&self, k: usize, i: usize, fixed: &FixedValues) -> f64 {
+        let cell = self.local(k);
+        let (d, m) = (cell.dofs, cell.matrix);
+        let mut g = cell.load[i];
+        for (bcol, &dj) in d.iter().enumerate() {
+            if let Some(vj) = fixed.get(dj as usize) {
+                g -= m.at(i, bcol) * vj;
+            }
+        }
+        g
+    }
+
+    /// Condenses cell k: its block S_K, packed ([`condense::packed_index`]), into the first p(p + 1)/2
+    /// entries of `s`, and its right-hand side g_K − S_K P_K u_F into `g` after its `ni`
+    /// interior entries (the cell's stretch of a buffer laid out like `dofs` starts at `g`).
+    /// `full` is scratch for the whole p × p block.
+    fn condense_cell(
+        &self,
+        k: usize,
+        fixed: &FixedValues,
+        full: &mut Vec<f64>,
+        s: &mut [f64],
+        g: &mut [f64],
+    ) -> crate::Result<()> {
+        let fx = |d: usize| fixed.get(d);
+        let cell = self.local(k);
+        let (d, ni) = (cell.dofs, cell.n_interior);
+        let p = d.len() - ni;
+        full.resize(p * p, 0.0);
+        let sk = &mut full[..];
+        let gk = &mut g[ni..ni + p];
+        condense(&cell, &fx, sk, gk).map_err(|e| e.in_cell(k))?;
+        // g_K −= S_K P_K u_F, column by column
+        for bcol in 0..p {
+            if let Some(vj) = fx(d[ni + bcol] as usize) {
+                for arow in 0..p {
+                    gk[arow] -= sk[arow + bcol * p] * vj;
+                }
+            }
+        }
+        condense::pack_lower(p, sk, s);
+        Ok(())
+    }
+
+    /// The values of the condensed matrix, gathered entry by entry (column by column in
+    /// parallel): entry q is the sum of its sources `src.list(q)` in
+    /// `blocks` (the condensed blocks, or the local matrices when they coincide), listed in cell
+    /// order (the order of a sequential scatter, whatever the number of
+    /// threads); zero in the rows and columns of fixed unknowns, whose diagonal is 1.
+    fn gather_matrix(&self, fixed: &FixedValues, blocks: &[f64]) -> Vec<f64> {
+        let (col_ptr, row_idx) = (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx());
+        let src = &self.sym.maps.src;
+        let is_fixed: Vec<bool> = (0..self.n_skel)
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|d| fixed.get(d).is_some())
+            .collect();
+        let mut values = vec![0.0; self.sym.pattern.nnz()];
+        let ranges = chunks(self.n_skel, CHUNK * 4);
+        let slices = split_by_ranges(&mut values, &ranges, |k| col_ptr[k]);
+        let tasks: Vec<_> = ranges.into_iter().zip(slices).collect();
+        tasks.into_par_iter().for_each(|((c0, c1), out)| {
+            let base = col_ptr[c0];
+            for c in c0..c1 {
+                let col_fixed = is_fixed[c];
+                for q in col_ptr[c]..col_ptr[c + 1] {
+                    let r = row_idx[q];
+                    out[q - base] = if col_fixed || is_fixed[r] {
+                        if r == c { 1.0 } else { 0.0 }
+                    } else {
+                        let mut v = 0.0;
+                        for &i in src.list(q) {
+                            v += blocks[i as usize];
+                        }
+                        v
+                    };
+                }
+            }
+        });
+        values
+    }
+
+    /// The right-hand side of the condensed system, gathered row by row: the Neumann load plus
+    /// the contributions `cell_value(k, local index)` of the cells k of `inc.list(i)` (in cell
+    /// order); the value on fixed rows.
+    fn gather_rhs(
+        &self,
+        fixed: &FixedValues,
+        cell_value: impl Fn(usize, usize) -> f64 + Sync,
+    ) -> crate::Result<Vec<f64>> {
+        let inc = &self.sym.maps.inc;
+        let mut rhs = vec![0.0; self.n_skel];
+        rhs.par_iter_mut()
+            .enumerate()
+            .with_min_len(4096)
+            .try_for_each(|(gi, out)| -> crate::Result<()> {
+                *out = match fixed.get(gi) {
+                    Some(v) => v,
+                    None => {
+                        let mut acc = self.values.neumann_load[gi];
+                        for &k in inc.list(gi) {
+                            let k = k as usize;
+                            let (d, _) = self.sym.dof_map.cell(k);
+                            acc += cell_value(k, local_index(d, gi)?);
+                        }
+                        acc
+                    }
+                };
+                Ok(())
+            })?;
+        Ok(rhs)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn local_index_finds_the_position_and_refuses_a_missing_unknown() {
+        assert_eq!(local_index(&[7, 3, 5], 5).unwrap(), 2);
+        // an unknown that is not among the cell's: a typed error, never position 0
+        let e = local_index(&[7, 3, 5], 4).unwrap_err();
+        assert!(matches!(e, crate::Error::Internal(_)), "{e}");
+        assert!(e.to_string().contains("unknown 4"), "{e}");
+    }
+
+    #[test]
+    fn chunks_cover_the_range_in_order() {
+        assert_eq!(chunks(10, 4), vec![(0, 4), (4, 8), (8, 10)]);
+        assert!(chunks(0, 4).is_empty());
+        let mut buf = [0, 1, 2, 3, 4, 5];
+        let s = split_by_ranges(&mut buf, &[(0, 1), (1, 3)], |k| 2 * k);
+        assert_eq!(s.len(), 2);
+        assert_eq!((s[0].len(), s[1].len()), (2, 4));
+    }
+
+    #[test]
+    fn fixed_values_take_dirichlet_first() {
+        let f = FixedValues::new(&[Some(1.0), None, None], &[Some(2.0), Some(3.0), None]);
+        assert_eq!((f.get(0), f.get(1), f.get(2)), (Some(1.0), Some(3.0), None));
+    }
+}

@@ -1,0 +1,312 @@
+//! The iterative solves: multigrid-preconditioned conjugate gradients on the condensed (or
+//! cell) system, started from the previous solution, with the hierarchy of the previous solve
+//! reused while it stays good ([`super::linear::REUSE_MAX_CHANGED`],
+//! [`super::linear::REUSE_MAX_SLOWDOWN`]). Everything carried from one solve to the next lives
+//! in the caller's [`SolveState`].
+
+use super::linear::{
+    ITERATIVE_MAX_ITER, ITERATIVE_RTOL, REUSE_MAX_CHANGED, REUSE_MAX_SLOWDOWN, SCREENING_REDUCTION,
+};
+use super::{DiscreteSystem, SolveState};
+use crate::linalg::{Amg, AmgOptions, CoarseHierarchy, CsrMatrix};
+use crate::vi::SolveTimings;
+use std::time::Instant;
+
+/// The multigrid hierarchy of the last iterative solve, kept in the [`SolveState`] until the
+/// next solve: to continue that solve ([`DiscreteSystem::refine`]) when it was a screening
+/// solve that stopped early, and to precondition the next solve's matrix.
+pub(super) struct KeptHierarchy {
+    /// The hierarchy (it owns the condensed matrix of that solve).
+    pub(super) amg: Amg<'static>,
+    /// For a screening solve that stopped early: the right-hand side c of S x = c and the
+    /// [`fingerprint`] of the fixed unknowns.
+    pub(super) screened: Option<(Vec<f64>, u64)>,
+    /// ln of the mean residual reduction per CG iteration of the first solve with this
+    /// hierarchy (negative; `None` if it took no iteration).
+    pub(super) fresh_rate: Option<f64>,
+    /// The last solve with it converged more than [`REUSE_MAX_SLOWDOWN`] times slower than
+    /// that: build a fresh hierarchy for the next solve.
+    pub(super) stale: bool,
+    /// The fixed unknowns (Dirichlet or fixed by the caller) of the matrix it was built for,
+    /// one bit per unknown.
+    pub(super) fixed_mask: Vec<u64>,
+    /// Built for the cell system ([`super::two_point`]), not the skeleton one.
+    pub(super) cells: bool,
+}
+
+/// One bit per unknown: set where the unknown is fixed (Dirichlet, or by `fixed`).
+pub(super) fn fixed_mask(dirichlet: &[Option<f64>], fixed: &[Option<f64>]) -> Vec<u64> {
+    let mut mask = vec![0u64; dirichlet.len().div_ceil(64)];
+    for (i, (d, f)) in dirichlet.iter().zip(fixed).enumerate() {
+        if d.is_some() || f.is_some() {
+            mask[i / 64] |= 1 << (i % 64);
+        }
+    }
+    mask
+}
+
+/// Where the hierarchy of the next iterative solve comes from.
+pub(super) enum NextHierarchy {
+    /// The coarse levels of the last one, with its [`KeptHierarchy::fresh_rate`] and
+    /// [`KeptHierarchy::fixed_mask`].
+    Reuse {
+        coarse: CoarseHierarchy,
+        fresh_rate: Option<f64>,
+        built_for: Vec<u64>,
+    },
+    /// A new one, for the matrix with these fixed unknowns.
+    New { fixed_mask: Vec<u64> },
+}
+
+/// A multigrid hierarchy in use: new, or the coarse levels of an earlier one.
+pub(super) struct Hierarchy {
+    pub(super) amg: Amg<'static>,
+    /// See [`KeptHierarchy::fresh_rate`].
+    pub(super) fresh_rate: Option<f64>,
+    /// Built for an earlier matrix (its coarse levels).
+    pub(super) reused: bool,
+    /// See [`KeptHierarchy::fixed_mask`].
+    pub(super) fixed_mask: Vec<u64>,
+    /// See [`KeptHierarchy::cells`].
+    pub(super) cells: bool,
+}
+
+/// The multigrid hierarchy for the matrix `a` (of the cell system if `cells`), as `next` says.
+pub(super) fn hierarchy(
+    a: CsrMatrix,
+    next: NextHierarchy,
+    cells: bool,
+) -> crate::Result<Hierarchy> {
+    let opts = AmgOptions::default();
+    Ok(match next {
+        NextHierarchy::Reuse {
+            coarse,
+            fresh_rate,
+            built_for,
+        } => Hierarchy {
+            amg: coarse.with_fine(a, &opts)?,
+            fresh_rate,
+            reused: true,
+            fixed_mask: built_for,
+            cells,
+        },
+        NextHierarchy::New { fixed_mask } => Hierarchy {
+            amg: Amg::owning(a, &opts)?,
+            fresh_rate: None,
+            reused: false,
+            fixed_mask,
+            cells,
+        },
+    })
+}
+
+/// Number of unknowns whose bit differs.
+fn changed(a: &[u64], b: &[u64]) -> usize {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x ^ y).count_ones() as usize)
+        .sum()
+}
+
+/// What one run of conjugate gradients did (all zero or false: a direct solve).
+#[derive(Default)]
+pub(super) struct PcgOutcome {
+    pub(super) iterations: usize,
+    /// The residual is above [`ITERATIVE_RTOL`] ‖c‖ (a screening solve that stopped early).
+    pub(super) inexact: bool,
+    /// ln of the mean residual reduction per iteration (`None` without iterations).
+    pub(super) rate: Option<f64>,
+    /// Preconditioned with the coarse levels of an earlier hierarchy.
+    pub(super) reused: bool,
+}
+
+impl PcgOutcome {
+    /// The timings of a solve that started at `t[0]`, assembled until `t[1]`, set up its
+    /// factorisation or hierarchy until `t[2]` and solved until `t[3]`.
+    pub(super) fn timings(&self, t: [Instant; 4]) -> SolveTimings {
+        SolveTimings {
+            assemble: (t[1] - t[0]).as_secs_f64(),
+            factor: (t[2] - t[1]).as_secs_f64(),
+            solve: (t[3] - t[2]).as_secs_f64(),
+            krylov: self.iterations,
+            inexact: self.inexact,
+            reused: self.reused,
+        }
+    }
+}
+
+/// A hash of the fixed unknowns and their values (to check that a refinement continues the
+/// solve it belongs to).
+pub(super) fn fingerprint(fixed: &[Option<f64>]) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    for (i, v) in fixed.iter().enumerate() {
+        if let Some(v) = v {
+            (i, v.to_bits()).hash(&mut h);
+        }
+    }
+    h.finish()
+}
+
+impl DiscreteSystem<'_> {
+    /// Where the hierarchy of the next iterative solve (of the cell system if `cells`) comes
+    /// from: the kept hierarchy's coarse levels are reused unless they went stale, were built
+    /// for the other system, or too many unknowns changed status since; its matrix (and a
+    /// screening solve not refined) are freed before the next system is built.
+    pub(super) fn next_hierarchy(
+        &self,
+        state: &mut SolveState,
+        fixed: &[Option<f64>],
+        cells: bool,
+    ) -> NextHierarchy {
+        let mask = fixed_mask(&self.values.dirichlet, fixed);
+        let max_changed = (REUSE_MAX_CHANGED * self.n as f64) as usize;
+        state
+            .kept
+            .take()
+            .filter(|k| {
+                !k.stale && k.cells == cells && changed(&k.fixed_mask, &mask) <= max_changed
+            })
+            .and_then(|k| {
+                let (fresh_rate, built_for) = (k.fresh_rate, k.fixed_mask);
+                k.amg.into_coarse().map(|coarse| NextHierarchy::Reuse {
+                    coarse,
+                    fresh_rate,
+                    built_for,
+                })
+            })
+            .unwrap_or(NextHierarchy::New { fixed_mask: mask })
+    }
+
+    /// The condensed matrix with lower-triangle `values`, both triangles stored by rows.
+    pub(super) fn csr(&self, values: &[f64]) -> crate::Result<CsrMatrix> {
+        let (col_ptr, row_idx) = self.condensed_pattern();
+        let mut a = CsrMatrix::from_lower_csc(self.n_skel, col_ptr, row_idx, values)?;
+        a.drop_zeros();
+        Ok(a)
+    }
+
+    /// Solves S x = c (S stored by rows in `a`, c in `rhs`, overwritten by x) by
+    /// multigrid-preconditioned conjugate gradients from the previous solution, to the
+    /// relative residual `rtol`, with the hierarchy `next` says; returns when the
+    /// multigrid setup ended and what the conjugate gradients did (x short of
+    /// [`ITERATIVE_RTOL`]: the system is kept for [`Self::refine`], with the fingerprint of
+    /// `fixed`).
+    pub(super) fn solve_csr(
+        &self,
+        state: &mut SolveState,
+        a: CsrMatrix,
+        rhs: &mut [f64],
+        rtol: f64,
+        fixed: &[Option<f64>],
+        next: NextHierarchy,
+    ) -> crate::Result<(Instant, PcgOutcome)> {
+        let hier = hierarchy(a, next, false)?;
+        let t2 = Instant::now();
+        let mut x = self.take_initial_guess(state);
+        let out = self.run_pcg(state, hier, rhs, &mut x, rtol, fixed)?;
+        rhs.copy_from_slice(&x);
+        self.keep_solution(state, x);
+        Ok((t2, out))
+    }
+
+    /// [`Self::pcg`] with the hierarchy `hier`, which is then kept in `state` for
+    /// the next solve (with c and the fingerprint of `fixed` if the solve stopped early). A
+    /// reused hierarchy that fails is replaced by a new one, once; one that converged more
+    /// than [`REUSE_MAX_SLOWDOWN`] times slower than when fresh is marked stale.
+    pub(super) fn run_pcg(
+        &self,
+        state: &mut SolveState,
+        hier: Hierarchy,
+        c: &[f64],
+        x: &mut [f64],
+        rtol: f64,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<PcgOutcome> {
+        let Hierarchy {
+            mut amg,
+            mut fresh_rate,
+            mut reused,
+            mut fixed_mask,
+            cells,
+        } = hier;
+        let mut out = match self.pcg(&amg, c, x, rtol) {
+            Ok(out) => out,
+            Err(_) if reused => {
+                amg = Amg::owning(amg.into_matrix(), &AmgOptions::default())?;
+                (fresh_rate, reused) = (None, false);
+                fixed_mask = self::fixed_mask(&self.values.dirichlet, fixed);
+                self.pcg(&amg, c, x, rtol)?
+            }
+            Err(e) => return Err(e),
+        };
+        out.reused = reused;
+        let stale = match (reused, out.rate, fresh_rate) {
+            (true, Some(r), Some(f)) => r > f / REUSE_MAX_SLOWDOWN,
+            _ => false,
+        };
+        state.kept = Some(KeptHierarchy {
+            amg,
+            screened: out.inexact.then(|| (c.to_vec(), fingerprint(fixed))),
+            fresh_rate: fresh_rate.or(out.rate),
+            stale,
+            fixed_mask,
+            cells,
+        });
+        Ok(out)
+    }
+
+    /// The initial guess of an iterative solve: the last solution, or zero.
+    pub(super) fn take_initial_guess(&self, state: &mut SolveState) -> Vec<f64> {
+        let x = std::mem::take(&mut state.last_solution);
+        if x.len() == self.n_skel {
+            x
+        } else {
+            vec![0.0; self.n_skel]
+        }
+    }
+
+    /// Conjugate gradients on S x = c (S the fine matrix of `amg`) from `x` to the relative
+    /// residual `rtol`: the iterations, whether the true residual is above
+    /// [`ITERATIVE_RTOL`] ‖c‖, and the mean reduction per iteration.
+    fn pcg(&self, amg: &Amg, c: &[f64], x: &mut [f64], rtol: f64) -> crate::Result<PcgOutcome> {
+        use crate::linalg::{PcgOptions, pcg};
+        let c_norm = c.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let opts = if rtol > ITERATIVE_RTOL {
+            // screening: the residual reduced by SCREENING_REDUCTION from where this solve
+            // starts, and at most rtol ‖c‖ (never below the full target)
+            let r0 = amg.matrix().residual_norm(c, x);
+            PcgOptions {
+                rtol: ITERATIVE_RTOL,
+                atol: (SCREENING_REDUCTION * r0).min(rtol * c_norm),
+                max_iter: ITERATIVE_MAX_ITER,
+            }
+        } else {
+            PcgOptions {
+                rtol,
+                atol: 0.0,
+                max_iter: ITERATIVE_MAX_ITER,
+            }
+        };
+        let report = pcg(amg.matrix(), amg, c, x, &opts)?;
+        let rate = (report.iterations > 0
+            && report.residual_norm > 0.0
+            && report.initial_residual_norm > 0.0)
+            .then(|| {
+                (report.residual_norm / report.initial_residual_norm).ln()
+                    / report.iterations as f64
+            });
+        Ok(PcgOutcome {
+            iterations: report.iterations,
+            inexact: report.residual_norm > ITERATIVE_RTOL * c_norm,
+            rate,
+            reused: false,
+        })
+    }
+
+    /// Keeps `x` as the initial guess of the next iterative solve.
+    pub(super) fn keep_solution(&self, state: &mut SolveState, x: Vec<f64>) {
+        state.last_solution = x;
+        state.last_cells = Vec::new();
+    }
+}

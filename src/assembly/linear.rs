@@ -1,0 +1,100 @@
+//! How the condensed systems S u = c are solved: the choice of solver and its tolerances.
+
+/// How the condensed systems S u = c are solved.
+///
+/// - **Direct**: sparse Cholesky (faer), symbolic factorisation once, numeric factorisation
+///   per solve ([`crate::linalg::cholesky`]). Exact to round-off; its fill grows like
+///   N log N and its time like N^1.5 on 2D meshes.
+/// - **Iterative**: conjugate gradients preconditioned by smoothed-aggregation algebraic
+///   multigrid ([`crate::linalg::amg`], [`mod@crate::linalg::pcg`]), started from the previous
+///   solution, to a relative residual of [`ITERATIVE_RTOL`]; memory O(N). The hierarchy of one
+///   solve is kept in the caller's [`super::SolveState`] and its coarse levels precondition the
+///   next solve while few unknowns changed status ([`REUSE_MAX_CHANGED`],
+///   [`REUSE_MAX_SLOWDOWN`]). The active-set solver screens with solves to
+///   [`SCREENING_RTOL`] and refines the last one ([`super::DiscreteSystem::screen`],
+///   [`super::DiscreteSystem::refine`]). The certificate of the final solution is computed
+///   the same way as for the direct solver, from the full system.
+/// - **Auto** (the default): iterative from [`AUTO_ITERATIVE_MIN`] condensed unknowns on,
+///   direct below; if the conjugate gradients fail (smoothed aggregation converges slowly on
+///   strongly distorted meshes with rotated anisotropy), the direct solver takes over for that
+///   solve and the following ones of the same [`super::SolveState`].
+///
+/// The measurements behind these choices are in `replication/BENCHMARKS.md` ("Measurements
+/// behind the defaults").
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum LinearSolver {
+    /// Direct below [`AUTO_ITERATIVE_MIN`] condensed unknowns, iterative from there on.
+    #[default]
+    Auto,
+    /// Sparse Cholesky.
+    Direct,
+    /// Multigrid-preconditioned conjugate gradients.
+    Iterative,
+}
+
+impl std::str::FromStr for LinearSolver {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        match s {
+            "auto" => Ok(LinearSolver::Auto),
+            "direct" => Ok(LinearSolver::Direct),
+            "iterative" => Ok(LinearSolver::Iterative),
+            _ => Err(crate::Error::InvalidData(format!(
+                "unknown linear solver '{s}' (expected auto, direct or iterative)"
+            ))),
+        }
+    }
+}
+
+impl std::fmt::Display for LinearSolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            LinearSolver::Auto => "auto",
+            LinearSolver::Direct => "direct",
+            LinearSolver::Iterative => "iterative",
+        })
+    }
+}
+
+/// [`LinearSolver::Auto`] solves iteratively from this many condensed unknowns on (the
+/// crossover measured by `make bench`).
+pub const AUTO_ITERATIVE_MIN: usize = 250_000;
+
+/// Relative residual ‖c − S u‖₂ ≤ ITERATIVE_RTOL ‖c‖₂ at which the conjugate gradients stop.
+pub const ITERATIVE_RTOL: f64 = 1e-12;
+
+/// Iteration cap of the conjugate gradients (multigrid keeps them in the tens).
+pub const ITERATIVE_MAX_ITER: usize = 1000;
+
+/// A screening solve ([`super::DiscreteSystem::screen`]) of the active-set iteration stops
+/// once its residual is below SCREENING_RTOL ‖c‖ *and* below [`SCREENING_REDUCTION`] times the
+/// residual it started from: accurate enough to decide the next active set; the last solve is
+/// then refined to [`ITERATIVE_RTOL`] ([`super::DiscreteSystem::refine`]). A looser bound
+/// misjudged unknowns near the free boundary, which later solves had to take back.
+pub const SCREENING_RTOL: f64 = 1e-8;
+
+/// The reduction of its initial residual a screening solve must reach besides
+/// [`SCREENING_RTOL`]. After a change of the active set, the previous solution already meets
+/// 10⁻⁸ ‖c‖ (the change is local, ‖c‖ holds all the data), so that bound alone would let a
+/// solve stop after no iteration, on the previous solution, and misjudge the unknowns near the
+/// change.
+pub const SCREENING_REDUCTION: f64 = 1e-4;
+
+/// Consecutive iterative solves through one [`super::SolveState`] share their multigrid
+/// hierarchy's coarse levels. The active-set iteration changes the condensed matrix only in
+/// the rows and columns of the unknowns whose status changed, and after the first solves these
+/// are few: the coarse levels built for an earlier matrix (the fine level and its smoother
+/// always take the new matrix, [`crate::linalg::CoarseHierarchy`]) precondition the new one
+/// about as well, and save a whole setup. A hierarchy is reused only if at most
+/// [`REUSE_MAX_CHANGED`] of the unknowns changed status since the matrix it was built for, and
+/// while conjugate gradients with it converge at most this factor slower (in mean residual
+/// reduction per iteration) than with it fresh; otherwise the next solve builds a new one.
+pub const REUSE_MAX_SLOWDOWN: f64 = 3.0;
+
+/// The largest fraction of the unknowns that may have changed status (fixed or free) since
+/// the matrix a hierarchy was built for, for it to be reused ([`REUSE_MAX_SLOWDOWN`]). The
+/// unknowns freed since, in particular, were decoupled (unit rows) in the matrix the coarse
+/// levels were built from, and have no coarse basis function.
+pub const REUSE_MAX_CHANGED: f64 = 1e-3;

@@ -1,0 +1,95 @@
+//! The full (uncondensed) system M u = b seen from outside the solves: its residual (from which
+//! the certificate is computed), its rows, its entries and the energy.
+
+use super::DiscreteSystem;
+use super::gather::local_index;
+use rayon::prelude::*;
+
+impl DiscreteSystem<'_> {
+    /// The residual r = b − M u of the full (uncondensed) system, and for each unknown the
+    /// scale |b_i| + Σ_j |M_ij u_j| against which it is small. On Dirichlet unknowns r is the
+    /// reaction, not a balance; on constrained unknowns it is the multiplier (up to sign).
+    ///
+    /// M u = Σ_K P_Kᵀ M_K P_K u, gathered row by row in parallel: row i visits the cells where
+    /// unknown i appears (`inc`, ascending) and takes there the row of M_K u_K, so the sums
+    /// run in the order of a sequential scatter (independent of the threads) and nothing per
+    /// cell is stored.
+    pub fn residual(&self, u: &[f64]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
+        let inc = &self.sym.maps.inc;
+        let mut r = vec![0.0; self.n];
+        let mut scale = vec![0.0; self.n];
+        r.par_iter_mut()
+            .zip(scale.par_iter_mut())
+            .enumerate()
+            .with_min_len(4096)
+            .try_for_each(|(gi, (ri, si))| -> crate::Result<()> {
+                let mut a = self.values.load[gi];
+                let mut b = a.abs();
+                for &k in inc.list(gi) {
+                    let cell = self.local(k as usize);
+                    let (d, m) = (cell.dofs, cell.matrix);
+                    let i = local_index(d, gi)?;
+                    let (mut mu, mut abs) = (0.0, 0.0);
+                    for (j, &gj) in d.iter().enumerate() {
+                        let v = m.at(i, j) * u[gj as usize];
+                        mu += v;
+                        abs += v.abs();
+                    }
+                    a -= mu;
+                    b += abs;
+                }
+                *ri = a;
+                *si = b;
+                Ok(())
+            })?;
+        Ok((r, scale))
+    }
+
+    /// The entries (i, j, (M_K)_ij) of the rows i ∈ `rows` of the full matrix, cell by cell
+    /// (repeated (i, j) sum), through the cells of each unknown.
+    pub fn row_entries(&self, rows: &[usize]) -> crate::Result<Vec<(usize, usize, f64)>> {
+        let inc = &self.sym.maps.inc;
+        let mut t = Vec::new();
+        for &gi in rows {
+            for &k in inc.list(gi) {
+                let cell = self.local(k as usize);
+                let (d, m) = (cell.dofs, cell.matrix);
+                let i = local_index(d, gi)?;
+                t.extend(
+                    d.iter()
+                        .enumerate()
+                        .map(|(j, &gj)| (gi, gj as usize, m.at(i, j))),
+                );
+            }
+        }
+        Ok(t)
+    }
+
+    /// The discrete energy ½ uᵀMu − bᵀu (the VI solution minimises it over the convex set).
+    pub fn energy(&self, u: &[f64]) -> crate::Result<f64> {
+        let (r, _) = self.residual(u)?;
+        // ½uᵀMu − bᵀu = ½uᵀ(Mu − b) − ½bᵀu = −½uᵀr − ½bᵀu
+        Ok(-0.5 * u.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>()
+            - 0.5
+                * u.iter()
+                    .zip(&self.values.load)
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>())
+    }
+
+    /// The entries of the full (uncondensed) matrix M = Σ_K P_Kᵀ M_K P_K, cell by cell: the
+    /// triplets (i, j, (M_K)_ij) in global indices (repeated entries sum).
+    pub fn full_matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
+        let mut t = Vec::new();
+        for k in 0..self.sym.scheme().mesh().n_cells() {
+            let cell = self.local(k);
+            let (d, m) = (cell.dofs, cell.matrix);
+            for (j, &gj) in d.iter().enumerate() {
+                for (i, &gi) in d.iter().enumerate() {
+                    t.push((gi as usize, gj as usize, m.at(i, j)));
+                }
+            }
+        }
+        t
+    }
+}

@@ -1,0 +1,311 @@
+//! One linear solve of the discrete system with some unknowns fixed: assemble the condensed
+//! (or cell) system, solve it directly or iteratively ([`super::linear::LinearSolver`]), and
+//! recover the eliminated unknowns.
+
+use super::condense::{interior_value, recover_interior};
+use super::gather::FixedValues;
+use super::iterative::{Hierarchy, KeptHierarchy, PcgOutcome, fingerprint};
+use super::linear::{ITERATIVE_RTOL, LinearSolver, SCREENING_RTOL};
+use super::{DiscreteSystem, SolveState};
+use crate::linalg::SpdPattern;
+use crate::vi::SolveTimings;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Cholesky factorisation of the condensed matrix (`values` on `pattern`) and solve of
+/// S x = c in place (`rhs`); returns when the factorisation ended, 0 Krylov iterations, and
+/// that the solve is exact.
+fn solve_directly(
+    pattern: &SpdPattern,
+    values: &[f64],
+    rhs: &mut [f64],
+) -> crate::Result<(Instant, PcgOutcome)> {
+    let factor = pattern.factor(values)?;
+    let t2 = Instant::now();
+    factor.solve_in_place(rhs);
+    Ok((t2, PcgOutcome::default()))
+}
+
+/// `u`, or an error naming its first non-finite entry.
+pub(super) fn check_finite(u: Vec<f64>) -> crate::Result<Vec<f64>> {
+    match u.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(crate::Error::Linear(format!(
+            "the solution is not finite at unknown {i}"
+        ))),
+        None => Ok(u),
+    }
+}
+
+impl DiscreteSystem<'_> {
+    /// Solves the linear system in which the unknowns with `fixed[d] = Some(v)` (and the
+    /// Dirichlet unknowns) are fixed. Returns the full unknown vector. What carries to the next
+    /// solve (initial guess, multigrid hierarchy, buffers) is kept in `state`; a fresh state
+    /// gives the same bits whatever was solved before.
+    pub fn solve(
+        &self,
+        state: &mut SolveState,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        self.solve_to(state, fixed, ITERATIVE_RTOL)
+    }
+
+    /// [`Self::solve`], but an iterative solve stops at [`SCREENING_RTOL`] and is kept in
+    /// `state` (matrix, multigrid hierarchy, right-hand side) until the next solve, so that
+    /// [`Self::refine`] can continue it ([`SolveTimings::inexact`] says whether it did stop
+    /// early).
+    pub fn screen(
+        &self,
+        state: &mut SolveState,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        self.solve_to(state, fixed, SCREENING_RTOL)
+    }
+
+    /// Continues the last solve through `state`, an inexact [`Self::screen`] with the same
+    /// `fixed`, to [`ITERATIVE_RTOL`] with its multigrid hierarchy; `None` if that solve was
+    /// exact (or another solve came since). `fixed` differing from that solve's is an error.
+    pub fn refine(
+        &self,
+        state: &mut SolveState,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+        self.bind(state);
+        let kept = match state.kept.take() {
+            Some(k) if k.screened.is_some() => k,
+            other => {
+                state.kept = other;
+                return Ok(None);
+            }
+        };
+        let KeptHierarchy {
+            amg,
+            screened,
+            fresh_rate,
+            fixed_mask,
+            cells,
+            ..
+        } = kept;
+        let (rhs, print) = screened.unwrap_or_default();
+        if print != fingerprint(fixed) {
+            return Err(crate::Error::InvalidData(
+                "refine: the fixed unknowns differ from those of the screening solve".into(),
+            ));
+        }
+        let t0 = Instant::now();
+        // the hierarchy's rate is known: a refinement is not judged against it
+        let hier = Hierarchy {
+            amg,
+            fresh_rate,
+            reused: false,
+            fixed_mask,
+            cells,
+        };
+        match self.continue_pcg(state, hier, &rhs, fixed) {
+            Ok((u, iterations)) => Ok(Some((
+                u,
+                SolveTimings {
+                    solve: t0.elapsed().as_secs_f64(),
+                    krylov: iterations,
+                    ..Default::default()
+                },
+            ))),
+            // as in a solve: with Auto, the direct solver takes over
+            Err(_) if self.sym.options.linear == LinearSolver::Auto => {
+                self.fallback_pattern(state)?;
+                self.solve(state, fixed).map(Some)
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Runs the conjugate gradients of a refinement with the kept hierarchy `hier`, on the
+    /// system it was built for, from the last solution: the full unknown vector and the
+    /// iterations.
+    fn continue_pcg(
+        &self,
+        state: &mut SolveState,
+        hier: Hierarchy,
+        rhs: &[f64],
+        fixed: &[Option<f64>],
+    ) -> crate::Result<(Vec<f64>, usize)> {
+        let cs = if hier.cells {
+            self.cell_system(state)?
+        } else {
+            None
+        };
+        let mut x = match &cs {
+            Some(cs) => self.take_cell_guess(state, cs),
+            None => self.take_initial_guess(state),
+        };
+        let out = self.run_pcg(state, hier, rhs, &mut x, ITERATIVE_RTOL, fixed)?;
+        let u = match cs {
+            Some(cs) => {
+                let u = self.complete_cells(&cs, &self.fixed_values(fixed), &x)?;
+                self.keep_cells(state, x, &u);
+                u
+            }
+            None => {
+                let u = self.complete(fixed, &x)?;
+                self.keep_solution(state, x);
+                u
+            }
+        };
+        Ok((u, out.iterations))
+    }
+
+    /// Assembles and solves with `fixed`, an iterative solve to the relative residual `rtol`.
+    fn solve_to(
+        &self,
+        state: &mut SolveState,
+        fixed: &[Option<f64>],
+        rtol: f64,
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        self.bind(state);
+        let t0 = Instant::now();
+        if !self.is_direct(state)
+            && let Some(cs) = self.cell_system_for(state, fixed)?
+        {
+            match self.solve_cells(state, &cs, fixed, rtol, t0) {
+                Ok(r) => return Ok(r),
+                // as below: with Auto, the direct solver takes over
+                Err(_) if self.sym.options.linear == LinearSolver::Auto => {
+                    self.fallback_pattern(state)?;
+                    return self.solve_to(state, fixed, rtol);
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        // the kept hierarchy is taken (or freed, for a direct solve) before the assembly
+        let reuse = if self.is_direct(state) {
+            state.kept = None;
+            None
+        } else {
+            Some(self.next_hierarchy(state, fixed, false))
+        };
+        let (values, mut rhs) = self.assemble_condensed(state, fixed)?;
+        let t1 = Instant::now();
+        let (t2, out) = match reuse {
+            None => self.solve_direct(state, &values, &mut rhs)?,
+            Some(reuse) if self.sym.options.linear == LinearSolver::Auto => {
+                let c = rhs.clone();
+                let it = self
+                    .csr(&values)
+                    .and_then(|a| self.solve_csr(state, a, &mut rhs, rtol, fixed, reuse));
+                match it {
+                    Ok(r) => r,
+                    // Auto chose the iterative solver by size: when the conjugate gradients
+                    // fail (no convergence on a hard matrix), the direct solver takes over,
+                    // for this solve and the following ones
+                    Err(_) => {
+                        rhs = c;
+                        solve_directly(self.fallback_pattern(state)?, &values, &mut rhs)?
+                    }
+                }
+            }
+            Some(reuse) => {
+                // the lower triangle is not needed once stored by rows: freed before the
+                // multigrid hierarchy is built
+                let a = self.csr(&values)?;
+                drop(values);
+                self.solve_csr(state, a, &mut rhs, rtol, fixed, reuse)?
+            }
+        };
+        let u = self.complete(fixed, &rhs)?;
+        Ok((u, out.timings([t0, t1, t2, Instant::now()])))
+    }
+
+    /// The values of the fixed unknowns: `fixed` and the Dirichlet ones.
+    pub(super) fn fixed_values(&self, fixed: &[Option<f64>]) -> FixedValues {
+        FixedValues::new(&self.values.dirichlet, fixed)
+    }
+
+    /// The full unknown vector from the skeleton solution `skel`: interior unknowns recovered
+    /// cell by cell; a non-finite value is an error.
+    fn complete(&self, fixed: &[Option<f64>], skel: &[f64]) -> crate::Result<Vec<f64>> {
+        let fx = |d: usize| -> Option<f64> { self.values.dirichlet[d].or(fixed[d]) };
+        let mut u = vec![0.0; self.n];
+        u[..self.n_skel].copy_from_slice(skel);
+        self.recover_interiors(&fx, &mut u)?;
+        check_finite(u)
+    }
+
+    /// Sets the skeleton unknowns the next iterative solve through `state` starts from
+    /// (ignored by the direct solver, and if its length is not the number of skeleton
+    /// unknowns); afterwards each iterative solve starts from the previous solution.
+    pub fn set_initial_guess(&self, state: &mut SolveState, guess: Vec<f64>) {
+        self.bind(state);
+        if guess.len() == self.n_skel {
+            state.last_solution = guess;
+        }
+    }
+
+    /// Whether the solves are direct: the symbolic system has a factorisation, or the one built
+    /// in `state` when the iterative solver failed ([`LinearSolver::Auto`]).
+    fn is_direct(&self, state: &SolveState) -> bool {
+        self.sym.pattern.has_factorisation() || matches!(state.direct_fallback, Some(Ok(_)))
+    }
+
+    /// The direct solve of S x = c with the symbolic factorisation [`Self::is_direct`] finds.
+    fn solve_direct(
+        &self,
+        state: &SolveState,
+        values: &[f64],
+        rhs: &mut [f64],
+    ) -> crate::Result<(Instant, PcgOutcome)> {
+        if self.sym.pattern.has_factorisation() {
+            return solve_directly(&self.sym.pattern, values, rhs);
+        }
+        match &state.direct_fallback {
+            Some(Ok(p)) => solve_directly(p, values, rhs),
+            _ => Err(crate::Error::Internal(
+                "a direct solve without a symbolic factorisation".into(),
+            )),
+        }
+    }
+
+    /// The symbolic factorisation of the condensed pattern, built in `state` on first use.
+    fn fallback_pattern<'s>(&self, state: &'s mut SolveState) -> crate::Result<&'s SpdPattern> {
+        let built = state.direct_fallback.get_or_insert_with(|| {
+            let (col_ptr, row_idx) = self.condensed_pattern();
+            SpdPattern::with_ordering(
+                self.n_skel,
+                col_ptr.to_vec(),
+                row_idx.to_vec(),
+                self.sym.options.ordering,
+            )
+            .map_err(|e| e.to_string())
+        });
+        built.as_ref().map_err(|e| crate::Error::Linear(e.clone()))
+    }
+
+    /// Fills the interior unknowns of `u` from its skeleton values, cell by cell
+    /// ([`recover_interior`]): u_R = M_RR⁻¹ (b_R − Σ_{j∉R} M_Rj u_j) on each cell.
+    fn recover_interiors(
+        &self,
+        fx: &(dyn Fn(usize) -> Option<f64> + Sync),
+        u: &mut [f64],
+    ) -> crate::Result<()> {
+        let nc = self.sym.scheme().mesh().n_cells();
+        if self.sym.single_interior {
+            // one interior unknown per cell, computed in parallel from the skeleton values
+            let interior: Vec<(usize, f64)> = (0..nc)
+                .into_par_iter()
+                .map(|k| {
+                    let cell = self.local(k);
+                    (cell.dofs[0] as usize, interior_value(&cell, fx, u))
+                })
+                .collect();
+            for (dof, v) in interior {
+                u[dof] = v;
+            }
+        } else {
+            for k in 0..nc {
+                let cell = self.local(k);
+                if cell.n_interior > 0 {
+                    recover_interior(&cell, fx, u).map_err(|e| e.in_cell(k))?;
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,211 @@
+//! What a sequence of solves of one [`DiscreteSystem`] carries from one solve to the next,
+//! as a value the caller owns ([`SolveState`], passed `&mut`), and the pairing of a system with
+//! a state as the energy the algorithms of [`crate::vi`] minimise ([`Solving`]).
+//!
+//! Nothing a solve returns depends on an earlier solve except through the state passed to it:
+//! two solves through fresh states give bitwise the same result. Reusing a state gives the
+//! iterative solver its previous solution as initial guess and the coarse levels of its last
+//! multigrid hierarchy (a cheaper solve, equal to the solver's tolerance), and keeps the
+//! switch to the direct solver once the iterative one failed ([`super::LinearSolver::Auto`]).
+
+use super::DiscreteSystem;
+use super::iterative::KeptHierarchy;
+use super::two_point::CellSystemAll;
+use crate::linalg::SpdPattern;
+use crate::vi::{QuadraticEnergy, SolveTimings};
+use std::sync::Arc;
+
+/// The state carried between the solves of a [`DiscreteSystem`] (see the module docs). Start
+/// with `SolveState::default()`; a state used with another system is emptied first, so it
+/// never carries one system's data into another's solve.
+#[derive(Default)]
+pub struct SolveState {
+    /// The system that filled it (`None`: fresh).
+    pub(super) system: Option<u64>,
+    /// Buffers of the condensation (blocks and loads), rewritten by every assembly.
+    pub(super) scratch: (Vec<f64>, Vec<f64>),
+    /// The last skeleton solution, the initial guess of the next iterative solve.
+    pub(super) last_solution: Vec<f64>,
+    /// The cell values of the last solve, if it solved the cell system.
+    pub(super) last_cells: Vec<f64>,
+    /// The cell system (`Some(None)`: the local matrices do not allow it), built by the first
+    /// iterative solve.
+    pub(super) cell_system: Option<Option<Arc<CellSystemAll>>>,
+    /// The multigrid hierarchy of the last iterative solve.
+    pub(super) kept: Option<KeptHierarchy>,
+    /// With [`super::LinearSolver::Auto`], the direct solver built when the iterative one
+    /// failed (or why it could not be built).
+    pub(super) direct_fallback: Option<Result<SpdPattern, String>>,
+}
+
+impl SolveState {
+    /// Frees what is kept from one solve to the next but the initial guess (the multigrid
+    /// hierarchy and a screening solve), as the active-set iteration does when it ends.
+    pub fn release(&mut self) {
+        self.kept = None;
+    }
+
+    /// The number of unknowns of the cell system ([`super::two_point`]: the cells, and the
+    /// skeleton unknowns that could not be eliminated) if the iterative solves through this
+    /// state have taken it (`None` before any iterative solve, with the direct solver, and when
+    /// too few skeleton unknowns can be eliminated).
+    pub fn cell_system_size(&self) -> Option<usize> {
+        self.cell_system.as_ref()?.as_ref().map(|c| c.n())
+    }
+
+    /// Of the [`Self::cell_system_size`] unknowns, the skeleton ones (not eliminated).
+    pub fn cell_system_skeleton(&self) -> Option<usize> {
+        self.cell_system.as_ref()?.as_ref().map(|c| c.n_kept())
+    }
+}
+
+/// A [`DiscreteSystem`] with the [`SolveState`] its solves go through: the
+/// [`QuadraticEnergy`] of the algorithms ([`DiscreteSystem::with_state`]).
+pub struct Solving<'s, 'a> {
+    /// The system.
+    pub system: &'s DiscreteSystem<'a>,
+    /// The state of its solves.
+    pub state: &'s mut SolveState,
+}
+
+impl QuadraticEnergy for Solving<'_, '_> {
+    fn n_unknowns(&self) -> usize {
+        self.system.n_unknowns()
+    }
+    fn dirichlet(&self) -> &[Option<f64>] {
+        self.system.dirichlet()
+    }
+    fn load(&self) -> &[f64] {
+        self.system.load()
+    }
+    fn minimise_with_fixed(
+        &mut self,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        self.system.solve(self.state, fixed)
+    }
+    fn screen_with_fixed(
+        &mut self,
+        fixed: &[Option<f64>],
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        self.system.screen(self.state, fixed)
+    }
+    fn refine(&mut self, fixed: &[Option<f64>]) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+        self.system.refine(self.state, fixed)
+    }
+    fn release(&mut self) {
+        self.state.release();
+    }
+    fn residual(&self, u: &[f64]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
+        self.system.residual(u)
+    }
+    fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
+        self.system.full_matrix_triplets()
+    }
+    fn row_entries(&self, rows: &[usize]) -> crate::Result<Option<Vec<(usize, usize, f64)>>> {
+        self.system.row_entries(rows).map(Some)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::assembly::{LinearSolver, SystemOptions};
+    use crate::mesh::generate::{cartesian, cartesian_triangles};
+    use crate::problem::paper_test3;
+    use crate::scheme::{GradientDiscretisation, Hmm, P1};
+
+    fn iterative() -> SystemOptions {
+        SystemOptions {
+            linear: LinearSolver::Iterative,
+            ..Default::default()
+        }
+    }
+
+    /// The unknowns below `k` fixed at 0.01.
+    fn fixed(n: usize, k: usize) -> Vec<Option<f64>> {
+        (0..n).map(|i| (i < k).then_some(0.01)).collect()
+    }
+
+    fn bits(u: &[f64]) -> Vec<u64> {
+        u.iter().map(|x| x.to_bits()).collect()
+    }
+
+    /// Whatever was solved before through other states, a solve through a fresh state gives
+    /// the same bits; through a used state it reuses the hierarchy and agrees to the solver's
+    /// tolerance. (With the state behind `&self`, the second fresh solve started from the
+    /// first one's solution and hierarchy and differed in the last bits.)
+    fn fresh_states_give_the_same_bits(scheme: &dyn GradientDiscretisation) {
+        let p = paper_test3(-10.0);
+        let sys = DiscreteSystem::new(scheme, &p, iterative()).unwrap();
+        let n = sys.n_unknowns();
+        // as many changes of status as a hierarchy may see and still be reused
+        let changes = (crate::assembly::REUSE_MAX_CHANGED * n as f64) as usize;
+        assert!(changes >= 1, "{n} unknowns");
+        let (a, b) = (fixed(n, n / 2), fixed(n, n / 2 + changes));
+        let (first, _) = sys.solve(&mut SolveState::default(), &b).unwrap();
+        let mut used = SolveState::default();
+        sys.solve(&mut used, &a).unwrap();
+        let (again, t) = sys.solve(&mut used, &b).unwrap();
+        assert!(
+            t.reused,
+            "{}: the used state's hierarchy is reused",
+            scheme.name()
+        );
+        let (fresh, t) = sys.solve(&mut SolveState::default(), &b).unwrap();
+        assert!(!t.reused);
+        assert_eq!(bits(&first), bits(&fresh), "{}", scheme.name());
+        let gap = again
+            .iter()
+            .zip(&fresh)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        assert!(gap < 1e-9, "{}: {gap:e}", scheme.name());
+        assert_ne!(bits(&again), bits(&fresh), "the reuse is seen in the bits");
+    }
+
+    #[test]
+    fn solves_through_fresh_states_are_bitwise_equal() {
+        // HMM on squares solves on the cells, P1 on the skeleton
+        let squares = cartesian(40, 40).unwrap();
+        fresh_states_give_the_same_bits(&Hmm::new(&squares));
+        let tri = cartesian_triangles(40, 40, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        fresh_states_give_the_same_bits(&P1::new(&tri).unwrap());
+    }
+
+    /// A state filled by one system is emptied before another system's solve: the result is
+    /// that of a fresh state, bit for bit, and nothing of the first system is reused.
+    #[test]
+    fn a_state_never_carries_one_systems_data_into_another() {
+        let tri = cartesian_triangles(32, 32, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        let p1 = P1::new(&tri).unwrap();
+        let x = DiscreteSystem::new(&p1, &paper_test3(-10.0), iterative()).unwrap();
+        let y = DiscreteSystem::new(&p1, &paper_test3(-20.0), iterative()).unwrap();
+        let f = fixed(x.n_unknowns(), x.n_unknowns() / 2);
+        let mut state = SolveState::default();
+        x.solve(&mut state, &f).unwrap();
+        assert!(state.kept.is_some());
+        let (u, t) = y.solve(&mut state, &f).unwrap();
+        assert!(!t.reused);
+        let (fresh, _) = y.solve(&mut SolveState::default(), &f).unwrap();
+        assert_eq!(bits(&u), bits(&fresh));
+        // and `release` frees the hierarchy but keeps the guess
+        state.release();
+        assert!(state.kept.is_none() && !state.last_solution.is_empty());
+    }
+
+    /// The cell system is reported by the state that built it.
+    #[test]
+    fn the_cell_system_belongs_to_the_state() {
+        let squares = cartesian(16, 16).unwrap();
+        let hmm = Hmm::new(&squares);
+        let sys = DiscreteSystem::new(&hmm, &paper_test3(-10.0), iterative()).unwrap();
+        let mut state = SolveState::default();
+        assert_eq!(state.cell_system_size(), None);
+        sys.solve(&mut state, &vec![None; sys.n_unknowns()])
+            .unwrap();
+        assert_eq!(state.cell_system_size(), Some(squares.n_cells()));
+        assert_eq!(state.cell_system_skeleton(), Some(0));
+        assert_eq!(SolveState::default().cell_system_size(), None);
+    }
+}
