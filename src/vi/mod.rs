@@ -4,9 +4,11 @@
 //!
 //! The algorithms see only the trait [`QuadraticEnergy`] (what they need of M and b) and their
 //! own types: [`Constraints`], [`Certificate`], [`IterationLog`] (an [`IterationStep`] and its
-//! [`SolveTimings`]), [`VariationalSolution`]. They know nothing of meshes, schemes or assembly;
-//! the assembled system ([`crate::assembly::DiscreteSystem`]) implements the trait, and so do
-//! small dense systems in the tests.
+//! [`SolveTimings`]), [`VariationalSolution`], [`Side`]. They know nothing of meshes, schemes,
+//! problems or assembly (this module imports none of them): the layers above implement the
+//! trait (the assembled system paired with the state of its solves, `assembly::Solving`), and so
+//! do small dense systems in the tests. A solve takes the energy `&mut`: what carries from one
+//! solve to the next belongs to the value the caller passes.
 //!
 //! - [`active_set`]: the monotony (primal–dual active set) algorithm, with cycle detection;
 //! - [`look_ahead`]: its next steps near the free boundary, by local solves on a patch;
