@@ -37,7 +37,7 @@ pub mod symbolic;
 pub mod two_point;
 pub mod values;
 
-use crate::linalg::{FactorThreads, Ordering, SpdPattern};
+use crate::linalg::{CholeskyWork, FactorThreads, Ordering, SpdPattern};
 use crate::problem::Problem;
 use crate::scheme::{GradientDiscretisation, PointDof};
 use crate::vi::{QuadraticEnergy, SolveTimings};
@@ -178,15 +178,16 @@ impl std::fmt::Display for LinearSolver {
     }
 }
 
-/// Cholesky factorisation of the condensed matrix (`values` on `pattern`) and solve of
-/// S x = c in place (`rhs`); returns when the factorisation ended, 0 Krylov iterations, and
+/// Cholesky factorisation of the condensed matrix (`values` on `pattern`, in `work`) and solve
+/// of S x = c in place (`rhs`); returns when the factorisation ended, 0 Krylov iterations, and
 /// that the solve is exact.
 fn solve_directly(
     pattern: &SpdPattern,
     values: &[f64],
     rhs: &mut [f64],
+    work: &mut CholeskyWork,
 ) -> crate::Result<(Instant, PcgOutcome)> {
-    let factor = pattern.factor(values)?;
+    let factor = pattern.factor(values, work)?;
     let t2 = Instant::now();
     factor.solve_in_place(rhs);
     Ok((t2, PcgOutcome::default()))
@@ -406,6 +407,8 @@ pub struct DiscreteSystem<'a> {
     kept: Mutex<Option<KeptHierarchy>>,
     /// With [`LinearSolver::Auto`], the direct solver built when the iterative one fails.
     direct_fallback: std::sync::OnceLock<crate::Result<SpdPattern>>,
+    /// The memory of the direct solver's numeric factorisations, reused from one to the next.
+    cholesky_work: Mutex<CholeskyWork>,
     /// Time to build (data, local matrices, and the symbolic system when built here), seconds.
     pub setup_seconds: f64,
     /// The symbolic factorisation, seconds (0 when the symbolic system was given). It runs
@@ -453,6 +456,7 @@ impl<'a> DiscreteSystem<'a> {
             values,
             scratch: Mutex::new((Vec::new(), Vec::new())),
             last_solution: Mutex::new(Vec::new()),
+            cholesky_work: Mutex::new(CholeskyWork::new()),
             last_cells: Mutex::new(Vec::new()),
             cell_system: std::sync::OnceLock::new(),
             kept: Mutex::new(None),
@@ -642,7 +646,12 @@ impl<'a> DiscreteSystem<'a> {
         let (values, mut rhs) = self.assemble_condensed(fixed);
         let t1 = Instant::now();
         let (t2, out) = match self.direct_pattern() {
-            Some(pattern) => solve_directly(pattern, &values, &mut rhs)?,
+            Some(pattern) => solve_directly(
+                pattern,
+                &values,
+                &mut rhs,
+                &mut self.cholesky_work.lock().unwrap_or_else(|e| e.into_inner()),
+            )?,
             None if self.sym.options.linear == LinearSolver::Auto => {
                 let c = rhs.clone();
                 let it = self
@@ -655,7 +664,12 @@ impl<'a> DiscreteSystem<'a> {
                     // for this solve and the following ones
                     Err(_) => {
                         rhs = c;
-                        solve_directly(self.fallback_pattern()?, &values, &mut rhs)?
+                        solve_directly(
+                            self.fallback_pattern()?,
+                            &values,
+                            &mut rhs,
+                            &mut self.cholesky_work.lock().unwrap_or_else(|e| e.into_inner()),
+                        )?
                     }
                 }
             }
@@ -869,7 +883,7 @@ impl<'a> DiscreteSystem<'a> {
                 max_iter: ITERATIVE_MAX_ITER,
             }
         };
-        let report = pcg(amg.matrix(), amg, c, x, &opts)?;
+        let report = pcg(amg.matrix(), amg, &mut amg.work(), c, x, &opts)?;
         let rate = (report.iterations > 0
             && report.residual_norm > 0.0
             && report.initial_residual_norm > 0.0)

@@ -30,8 +30,8 @@ pub mod csr;
 pub mod ordering;
 pub mod pcg;
 
-pub use amg::{Amg, AmgOptions, CoarseHierarchy, LevelSummary, Smoother};
-pub use cholesky::{FactorThreads, SpdFactor, SpdPattern};
+pub use amg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, LevelSummary, Smoother};
+pub use cholesky::{CholeskyWork, FactorThreads, SpdFactor, SpdPattern};
 pub use csr::CsrMatrix;
 pub use ordering::{Ordering, nested_dissection};
 pub use pcg::{Identity, Jacobi, PcgOptions, PcgReport, Preconditioner, pcg};
