@@ -496,6 +496,12 @@ mod tests {
         );
     }
 
+    /// Unpreconditioned CG with the default options on A x = b, from `x`, with M = I of
+    /// order `m`.
+    fn plain(a: &CsrMatrix, m: usize, b: &[f64], x: &mut [f64]) -> crate::Result<PcgReport> {
+        pcg(a, &Identity(m), &mut (), b, x, &PcgOptions::default())
+    }
+
     #[test]
     fn failures_are_errors() {
         let (a, _) = small();
@@ -521,30 +527,10 @@ mod tests {
         // NaN in b or in x₀
         let mut bad = b.clone();
         bad[3] = f64::NAN;
-        assert!(
-            pcg(
-                &a,
-                &Identity(n),
-                &mut (),
-                &bad,
-                &mut x,
-                &PcgOptions::default()
-            )
-            .is_err()
-        );
+        assert!(plain(&a, n, &bad, &mut x).is_err());
         let mut x0 = vec![0.0; n];
         x0[5] = f64::INFINITY;
-        assert!(
-            pcg(
-                &a,
-                &Identity(n),
-                &mut (),
-                &b,
-                &mut x0,
-                &PcgOptions::default()
-            )
-            .is_err()
-        );
+        assert!(plain(&a, n, &b, &mut x0).is_err());
         // an indefinite matrix: breakdown pᵀAp ≤ 0
         let neg = CsrMatrix::new(
             n,
@@ -555,16 +541,7 @@ mod tests {
         )
         .unwrap();
         let mut x = vec![0.0; n];
-        let e = pcg(
-            &neg,
-            &Identity(n),
-            &mut (),
-            &b,
-            &mut x,
-            &PcgOptions::default(),
-        )
-        .unwrap_err()
-        .to_string();
+        let e = plain(&neg, n, &b, &mut x).unwrap_err().to_string();
         assert!(e.contains("breakdown") && e.contains("iteration 1"), "{e}");
         // a negative definite preconditioner: breakdown rᵀM⁻¹r ≤ 0
         struct Minus(usize);
@@ -584,28 +561,8 @@ mod tests {
             .to_string();
         assert!(e.contains("preconditioner is not positive definite"), "{e}");
         // mismatched lengths, negative tolerances
-        assert!(
-            pcg(
-                &a,
-                &Identity(n),
-                &mut (),
-                &b[1..],
-                &mut x,
-                &PcgOptions::default()
-            )
-            .is_err()
-        );
-        assert!(
-            pcg(
-                &a,
-                &Identity(n + 1),
-                &mut (),
-                &b,
-                &mut x,
-                &PcgOptions::default()
-            )
-            .is_err()
-        );
+        assert!(plain(&a, n, &b[1..], &mut x).is_err());
+        assert!(plain(&a, n + 1, &b, &mut x).is_err());
         let neg_tol = PcgOptions {
             rtol: -1.0,
             ..PcgOptions::default()

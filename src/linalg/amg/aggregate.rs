@@ -98,3 +98,45 @@ pub(super) fn aggregate(a: &CsrMatrix, strong: &[bool], diag: &[f64]) -> (Vec<u3
     }
     (agg, n_agg as usize)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::strength::strength;
+    use super::super::testing::{fix, grid};
+    use super::*;
+
+    #[test]
+    fn every_coupled_unknown_is_aggregated_with_strong_neighbours() {
+        let m = 30;
+        // a row of unit rows (fixed unknowns) across the grid
+        let a = fix(&grid(m, 1.0, 1.0, &|_, _| 1.0), &|k| k / m == 10);
+        let d = a.diagonal();
+        let strong = strength(&a, &d, 0.08);
+        let (agg, n_agg) = aggregate(&a, &strong, &d);
+        // the decoupled rows belong to no aggregate, every other unknown to one
+        for (k, &g) in agg.iter().enumerate() {
+            assert_eq!(g == NONE, k / m == 10, "unknown {k}");
+            assert!(g == NONE || (g as usize) < n_agg);
+        }
+        // aggregates of about 3 × 3 unknowns, each used
+        let free = m * m - m;
+        assert!(n_agg * 5 < free && n_agg * 12 > free, "{n_agg}");
+        let mut size = vec![0; n_agg];
+        agg.iter()
+            .filter(|&&g| g != NONE)
+            .for_each(|&g| size[g as usize] += 1);
+        assert!(size.iter().all(|&s| s > 0));
+        // each aggregated unknown has a strong neighbour in its aggregate
+        for i in 0..m * m {
+            if agg[i] == NONE {
+                continue;
+            }
+            let r = a.row_ptr()[i]..a.row_ptr()[i + 1];
+            let with = a.col_idx()[r.clone()]
+                .iter()
+                .zip(&strong[r])
+                .any(|(&j, &s)| s && agg[j as usize] == agg[i]);
+            assert!(with, "unknown {i}");
+        }
+    }
+}

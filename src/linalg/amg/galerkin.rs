@@ -90,3 +90,49 @@ fn product(l: &CsrMatrix, m: &CsrMatrix, sorted: bool) -> CsrMatrix {
         },
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::grid;
+    use super::*;
+
+    #[test]
+    fn the_galerkin_product_is_pt_a_p() {
+        // A large enough that the rows are built in parallel; P with two entries per row
+        for m in [7, 120] {
+            let a = grid(m, 1.0, 0.3, &|i, j| 1.0 + ((i * j) % 5) as f64);
+            let (n, nc) = (m * m, m * m / 4 + 1);
+            let (mut rp, mut cols, mut vals) = (vec![0], vec![], vec![]);
+            for i in 0..n {
+                let (c0, c1) = (i / 4, (i * 7 + 3) % nc);
+                let mut row = vec![(c0 as u32, 1.0), (c1 as u32, 0.5 - (i % 3) as f64)];
+                row.sort_by_key(|e| e.0);
+                row.dedup_by_key(|e| e.0);
+                for (c, v) in row {
+                    cols.push(c);
+                    vals.push(v);
+                }
+                rp.push(cols.len());
+            }
+            let p = CsrMatrix::new(n, nc, rp, cols, vals).unwrap();
+            let ac = galerkin(&a, &p, p.transpose());
+            assert_eq!((ac.n_rows(), ac.n_cols()), (nc, nc));
+            // column J of A_c against Pᵀ (A (P e_J)), for a few J
+            for jc in [0, 1, nc / 2, nc - 1] {
+                let mut e = vec![0.0; nc];
+                e[jc] = 1.0;
+                let (mut pe, mut ape, mut col) = (vec![0.0; n], vec![0.0; n], vec![0.0; nc]);
+                p.spmv(&e, &mut pe).unwrap();
+                a.spmv(&pe, &mut ape).unwrap();
+                p.mul_transpose_to(&ape, &mut col);
+                let mut got = vec![0.0; nc];
+                ac.spmv(&e, &mut got).unwrap();
+                for (g, c) in got.iter().zip(&col) {
+                    assert!((g - c).abs() <= 1e-12 * c.abs().max(1.0), "{g} vs {c}");
+                }
+            }
+            // sorted rows
+            assert!((0..nc).all(|i| ac.row(i).0.windows(2).all(|w| w[0] < w[1])));
+        }
+    }
+}

@@ -73,3 +73,43 @@ where
     }
     CsrMatrix::from_parts(n_rows, n_cols, row_ptr, col_idx, values)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_built_in_parallel_are_concatenated_in_order() {
+        // row i holds the columns i, i + 1, …, i + i % 5 (mod n) sorted, value i + j / 8;
+        // below and far above the parallel thresholds
+        for n in [10, 3 * ROW_CHUNK + 11, PAR_MIN_NNZ + 5] {
+            let row = |i: usize| -> Vec<(u32, f64)> {
+                let mut r: Vec<u32> = (0..=i % 5).map(|k| ((i + k) % n) as u32).collect();
+                r.sort_unstable();
+                r.dedup();
+                r.iter().map(|&j| (j, i as f64 + j as f64 / 8.0)).collect()
+            };
+            let m = build_rows(
+                n,
+                n,
+                || 0usize,
+                |calls, i, cols, vals| {
+                    *calls += 1;
+                    for (j, v) in row(i) {
+                        cols.push(j);
+                        vals.push(v);
+                    }
+                },
+            );
+            assert_eq!((m.n_rows(), m.n_cols()), (n, n));
+            for i in 0..n {
+                let (c, v) = m.row(i);
+                let expected = row(i);
+                assert_eq!(c.len(), expected.len(), "row {i}");
+                for ((&cj, &vj), &(ej, ev)) in c.iter().zip(v).zip(&expected) {
+                    assert_eq!((cj, vj), (ej, ev), "row {i}");
+                }
+            }
+        }
+    }
+}

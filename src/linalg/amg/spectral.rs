@@ -74,3 +74,41 @@ pub(super) fn lanczos_lambda_max(a: &CsrMatrix, diag: &[f64], steps: usize) -> f
         .copied()
         .fold(0.0, f64::max)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// tridiag(−1, 2, −1) of order n.
+    fn laplacian_1d(n: usize) -> CsrMatrix {
+        let (mut row_ptr, mut cols, mut vals) = (vec![0], vec![], vec![]);
+        for i in 0..n {
+            for j in i.saturating_sub(1)..(i + 2).min(n) {
+                cols.push(j as u32);
+                vals.push(if i == j { 2.0 } else { -1.0 });
+            }
+            row_ptr.push(cols.len());
+        }
+        CsrMatrix::new(n, n, row_ptr, cols, vals).unwrap()
+    }
+
+    #[test]
+    fn bounds_of_the_largest_eigenvalue() {
+        // D⁻¹A = A / 2 has the eigenvalues 1 − cos(kπ/(n + 1)), k = 1..n
+        let n = 30;
+        let a = laplacian_1d(n);
+        let d = a.diagonal();
+        let exact = 1.0 + (std::f64::consts::PI / (n + 1) as f64).cos();
+        assert_eq!(gershgorin(&a, &d), 2.0);
+        // n steps: the whole Krylov space, the exact value
+        let full = lanczos_lambda_max(&a, &d, n);
+        assert!((full - exact).abs() < 1e-10, "{full} vs {exact}");
+        // fewer steps: a Ritz value, below λ_max and close to it
+        let few = lanczos_lambda_max(&a, &d, 8);
+        assert!(
+            few <= exact + 1e-12 && few > 0.95 * exact,
+            "{few} vs {exact}"
+        );
+        assert_eq!(lanczos_lambda_max(&laplacian_1d(0), &[], 5), 0.0);
+    }
+}

@@ -54,3 +54,32 @@ where
     }
     parts.into_par_iter().for_each(|(i0, part)| f(i0, part));
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::grid;
+    use super::*;
+
+    #[test]
+    fn only_the_strong_direction_of_an_anisotropic_diffusion_is_strong() {
+        // couplings 0.01 in x (neighbours j = i ± 1), 1 in y (j = i ± m); a_ii ≈ 2
+        for m in [12, 150] {
+            let a = grid(m, 0.01, 1.0, &|_, _| 1.0);
+            let d = a.diagonal();
+            let flags = strength(&a, &d, 0.08);
+            let mut n_strong = 0;
+            for i in 0..a.n_rows() {
+                let r = a.row_ptr()[i]..a.row_ptr()[i + 1];
+                for (&j, &s) in a.col_idx()[r.clone()].iter().zip(&flags[r]) {
+                    let vertical = (j as usize).abs_diff(i) == m;
+                    assert_eq!(s, vertical, "m = {m}, entry ({i}, {j})");
+                    n_strong += s as usize;
+                }
+            }
+            assert_eq!(n_strong, 2 * m * (m - 1));
+            // θ = 0: every off-diagonal nonzero
+            let all = strength(&a, &d, 0.0);
+            assert_eq!(all.iter().filter(|&&s| s).count(), a.nnz() - a.n_rows());
+        }
+    }
+}
