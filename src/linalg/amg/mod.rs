@@ -79,12 +79,12 @@
 //! fresh workspace or a used one.
 //!
 //! ## Files
-//! One step per file: [`options`] (the parameters), [`setup`] (building the hierarchy and
-//! checking the matrix), [`strength`] (step 1), [`aggregate`] (step 2), [`prolong`] (steps 3
-//! and 4), [`galerkin`] (step 5), [`rows`] (building a matrix row by row in parallel),
-//! [`spectral`] (bounds of λ_max(D⁻¹A)), [`smooth`] (the smoothers), [`coarse`] (the coarsest
-//! solve), [`cycle`] (the V-cycle and its workspace) and [`reuse`] (keeping the coarse levels
-//! for a changed matrix).
+//! One step per file of `src/linalg/amg/`: `options.rs` (the parameters), `setup.rs`
+//! (building the hierarchy and checking the matrix), `strength.rs` (step 1), `aggregate.rs`
+//! (step 2), `prolong.rs` (steps 3 and 4), `galerkin.rs` (step 5), `rows.rs` (building a
+//! matrix row by row in parallel), `spectral.rs` (bounds of λ_max(D⁻¹A)), `smooth.rs` (the
+//! smoothers), `coarse.rs` (the coarsest solve), `cycle.rs` (the V-cycle and its workspace)
+//! and `reuse.rs` (keeping the coarse levels for a changed matrix); each with its tests.
 
 mod aggregate;
 mod coarse;
