@@ -10,7 +10,9 @@
 //! symbolic + numeric + solve) on the same matrix.
 
 use gradvi::assembly::{DiscreteSystem, SystemOptions};
-use gradvi::linalg::{Amg, AmgOptions, CsrMatrix, PcgOptions, Smoother, SpdPattern, pcg};
+use gradvi::linalg::{
+    Amg, AmgOptions, CholeskyWork, CsrMatrix, PcgOptions, Smoother, SpdPattern, pcg,
+};
 use gradvi::mesh::generate::{
     cartesian, cartesian_rect, cartesian_triangles, hexagonal_grid, kershaw,
 };
@@ -130,12 +132,15 @@ fn run(name: &str, l: &Lower, opts: &AmgOptions, cholesky: bool, reps: usize) {
             Ok(m) => m,
             Err(e) => return println!("{name}: {e}"),
         };
+        // the cycle's vectors, allocated with the hierarchy
+        let mut work = amg.work();
         t_setup = t_setup.min(t.elapsed().as_secs_f64());
         let mut x = vec![0.0; n];
         let t = Instant::now();
         let rep = pcg(
             &a,
             &amg,
+            &mut work,
             &b,
             &mut x,
             &PcgOptions {
@@ -157,7 +162,7 @@ fn run(name: &str, l: &Lower, opts: &AmgOptions, cholesky: bool, reps: usize) {
             res,
             amg.n_levels(),
             amg.operator_complexity(),
-            amg.memory_bytes(),
+            amg.memory_bytes() + work.memory_bytes(),
         ));
     }
     let Some((iters, res, levels, oc, mem)) = summary else {
@@ -166,7 +171,8 @@ fn run(name: &str, l: &Lower, opts: &AmgOptions, cholesky: bool, reps: usize) {
     let chol = if cholesky {
         let t = Instant::now();
         let p = SpdPattern::new(l.n, l.col_ptr.clone(), l.row_idx.clone()).expect("pattern");
-        let f = p.factor(&l.values).expect("factor");
+        let mut work = CholeskyWork::new();
+        let f = p.factor(&l.values, &mut work).expect("factor");
         let mut y = b.clone();
         f.solve_in_place(&mut y);
         format!("{:8.3}", t.elapsed().as_secs_f64())
@@ -331,7 +337,8 @@ fn kernels() {
             },
         )
         .expect("amg");
-        let t = best(&mut || amg.apply(&x, &mut y).expect("lengths"));
+        let mut work = amg.work();
+        let t = best(&mut || amg.apply(&x, &mut y, &mut work).expect("lengths"));
         println!("one V(1,1) cycle, {name}: {:.2} ms", t * 1e3);
     }
 }

@@ -8,7 +8,7 @@ use super::linear::{
     ITERATIVE_MAX_ITER, ITERATIVE_RTOL, REUSE_MAX_CHANGED, REUSE_MAX_SLOWDOWN, SCREENING_REDUCTION,
 };
 use super::{DiscreteSystem, SolveState};
-use crate::linalg::{Amg, AmgOptions, CoarseHierarchy, CsrMatrix};
+use crate::linalg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, CsrMatrix};
 use crate::vi::SolveTimings;
 use std::time::Instant;
 
@@ -230,13 +230,13 @@ impl DiscreteSystem<'_> {
             mut fixed_mask,
             cells,
         } = hier;
-        let mut out = match self.pcg(&amg, c, x, rtol) {
+        let mut out = match self.pcg(&amg, &mut state.amg, c, x, rtol) {
             Ok(out) => out,
             Err(_) if reused => {
                 amg = Amg::owning(amg.into_matrix(), &AmgOptions::default())?;
                 (fresh_rate, reused) = (None, false);
                 fixed_mask = self::fixed_mask(&self.values.dirichlet, fixed);
-                self.pcg(&amg, c, x, rtol)?
+                self.pcg(&amg, &mut state.amg, c, x, rtol)?
             }
             Err(e) => return Err(e),
         };
@@ -269,7 +269,14 @@ impl DiscreteSystem<'_> {
     /// Conjugate gradients on S x = c (S the fine matrix of `amg`) from `x` to the relative
     /// residual `rtol`: the iterations, whether the true residual is above
     /// [`ITERATIVE_RTOL`] ‖c‖, and the mean reduction per iteration.
-    fn pcg(&self, amg: &Amg, c: &[f64], x: &mut [f64], rtol: f64) -> crate::Result<PcgOutcome> {
+    fn pcg(
+        &self,
+        amg: &Amg,
+        work: &mut AmgWork,
+        c: &[f64],
+        x: &mut [f64],
+        rtol: f64,
+    ) -> crate::Result<PcgOutcome> {
         use crate::linalg::{PcgOptions, pcg};
         let c_norm = c.iter().map(|v| v * v).sum::<f64>().sqrt();
         let opts = if rtol > ITERATIVE_RTOL {
@@ -288,7 +295,7 @@ impl DiscreteSystem<'_> {
                 max_iter: ITERATIVE_MAX_ITER,
             }
         };
-        let report = pcg(amg.matrix(), amg, c, x, &opts)?;
+        let report = pcg(amg.matrix(), amg, work, c, x, &opts)?;
         let rate = (report.iterations > 0
             && report.residual_norm > 0.0
             && report.initial_residual_norm > 0.0)

@@ -7,20 +7,21 @@ use super::gather::FixedValues;
 use super::iterative::{Hierarchy, KeptHierarchy, PcgOutcome, fingerprint};
 use super::linear::{ITERATIVE_RTOL, LinearSolver, SCREENING_RTOL};
 use super::{DiscreteSystem, SolveState};
-use crate::linalg::SpdPattern;
+use crate::linalg::{CholeskyWork, SpdPattern};
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// Cholesky factorisation of the condensed matrix (`values` on `pattern`) and solve of
-/// S x = c in place (`rhs`); returns when the factorisation ended, 0 Krylov iterations, and
+/// Cholesky factorisation of the condensed matrix (`values` on `pattern`, in `work`) and solve
+/// of S x = c in place (`rhs`); returns when the factorisation ended, 0 Krylov iterations, and
 /// that the solve is exact.
 fn solve_directly(
     pattern: &SpdPattern,
     values: &[f64],
     rhs: &mut [f64],
+    work: &mut CholeskyWork,
 ) -> crate::Result<(Instant, PcgOutcome)> {
-    let factor = pattern.factor(values)?;
+    let factor = pattern.factor(values, work)?;
     let t2 = Instant::now();
     factor.solve_in_place(rhs);
     Ok((t2, PcgOutcome::default()))
@@ -198,7 +199,8 @@ impl DiscreteSystem<'_> {
                     // for this solve and the following ones
                     Err(_) => {
                         rhs = c;
-                        solve_directly(self.fallback_pattern(state)?, &values, &mut rhs)?
+                        self.fallback_pattern(state)?;
+                        self.solve_direct(state, &values, &mut rhs)?
                     }
                 }
             }
@@ -248,15 +250,20 @@ impl DiscreteSystem<'_> {
     /// The direct solve of S x = c with the symbolic factorisation [`Self::is_direct`] finds.
     fn solve_direct(
         &self,
-        state: &SolveState,
+        state: &mut SolveState,
         values: &[f64],
         rhs: &mut [f64],
     ) -> crate::Result<(Instant, PcgOutcome)> {
+        let SolveState {
+            direct_fallback,
+            cholesky,
+            ..
+        } = state;
         if self.sym.pattern.has_factorisation() {
-            return solve_directly(&self.sym.pattern, values, rhs);
+            return solve_directly(&self.sym.pattern, values, rhs, cholesky);
         }
-        match &state.direct_fallback {
-            Some(Ok(p)) => solve_directly(p, values, rhs),
+        match direct_fallback {
+            Some(Ok(p)) => solve_directly(p, values, rhs, cholesky),
             _ => Err(crate::Error::Internal(
                 "a direct solve without a symbolic factorisation".into(),
             )),

@@ -11,7 +11,7 @@
 use super::DiscreteSystem;
 use super::iterative::KeptHierarchy;
 use super::two_point::CellSystemAll;
-use crate::linalg::SpdPattern;
+use crate::linalg::{AmgWork, CholeskyWork, SpdPattern};
 use crate::vi::{QuadraticEnergy, SolveTimings};
 use std::sync::Arc;
 
@@ -36,6 +36,10 @@ pub struct SolveState {
     /// With [`super::LinearSolver::Auto`], the direct solver built when the iterative one
     /// failed (or why it could not be built).
     pub(super) direct_fallback: Option<Result<SpdPattern, String>>,
+    /// The memory of the direct solver's numeric factorisations, reused from one to the next.
+    pub(super) cholesky: CholeskyWork,
+    /// The vectors of the multigrid cycles, reused from one iterative solve to the next.
+    pub(super) amg: AmgWork,
 }
 
 impl SolveState {
@@ -43,6 +47,7 @@ impl SolveState {
     /// hierarchy and a screening solve), as the active-set iteration does when it ends.
     pub fn release(&mut self) {
         self.kept = None;
+        self.amg = AmgWork::default();
     }
 
     /// The number of unknowns of the cell system ([`super::two_point`]: the cells, and the

@@ -10,22 +10,51 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, Side};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 /// Scratch memory of the numeric factorisation, with the size and alignment it was made for.
 type Scratch = (MemBuffer, usize, usize);
 
-/// Buffers kept between factorisations: the values of a dropped factor and the scratch
-/// memory, so that a refactorisation does not map (and page-fault) hundreds of megabytes anew.
-type Pool = Arc<Mutex<(Vec<f64>, Option<Scratch>)>>;
+/// The memory of the numeric factorisation, owned by the caller and kept between
+/// factorisations: the values of L and faer's scratch memory. [`SpdPattern::factor`] writes
+/// the factor into it (growing it when the pattern needs more), so a refactorisation reuses
+/// the same memory instead of mapping (and page-faulting) hundreds of megabytes anew, and the
+/// factor it returns borrows it. Its contents never change a result: every value of L is
+/// written by the factorisation before it is read.
+#[derive(Default)]
+pub struct CholeskyWork {
+    /// The values of L (the last factor's).
+    values: Vec<f64>,
+    /// faer's scratch memory of the numeric factorisation.
+    scratch: Option<Scratch>,
+}
+
+impl std::fmt::Debug for CholeskyWork {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CholeskyWork")
+            .field("bytes", &self.memory_bytes())
+            .finish()
+    }
+}
+
+impl CholeskyWork {
+    /// Empty: the first factorisation allocates.
+    pub fn new() -> Self {
+        Self::default()
+    }
+    /// Bytes held (values of L and scratch memory).
+    pub fn memory_bytes(&self) -> usize {
+        self.values.capacity() * std::mem::size_of::<f64>()
+            + self.scratch.as_ref().map_or(0, |s| s.1)
+    }
+}
 
 /// Threads of the numeric factorisation and the triangular solves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FactorThreads {
-    /// One thread (the default). On the 2-core machine of the benchmark the sequential
-    /// supernodal factorisation was faster than faer's parallel one on most cases, by up to
-    /// about 2× around 10⁵ cells and by little at 10⁶ (`replication/BENCHMARKS.md`, lever
-    /// table of variant `nested-par`); the assembly still runs on every core (rayon).
+    /// One thread (the default; the assembly still runs on every core, with rayon). Chosen by
+    /// measurement against [`FactorThreads::Global`]: `replication/BENCHMARKS.md`
+    /// ("Measurements behind the defaults", and the lever table of variant `nested-par`).
     #[default]
     Sequential,
     /// faer's global parallelism (`faer::get_global_parallelism()`, rayon by default).
@@ -48,7 +77,6 @@ impl FactorThreads {
 pub struct SpdPattern {
     pattern: SymbolicSparseColMat<usize>,
     symbolic: Option<Arc<SymbolicCholesky<usize>>>,
-    pool: Pool,
     threads: FactorThreads,
 }
 
@@ -132,7 +160,6 @@ impl SpdPattern {
         Ok(SpdPattern {
             pattern,
             symbolic: Some(Arc::new(symbolic)),
-            pool: Pool::default(),
             threads: FactorThreads::default(),
         })
     }
@@ -146,7 +173,6 @@ impl SpdPattern {
         Ok(SpdPattern {
             pattern: SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx),
             symbolic: None,
-            pool: Pool::default(),
             threads: FactorThreads::default(),
         })
     }
@@ -181,8 +207,13 @@ impl SpdPattern {
     }
     /// Numeric factorisation of the matrix with these `values` (same order as `row_idx`),
     /// reusing the symbolic analysis: the values of L with P A Pᵀ = L Lᵀ, computed
-    /// supernode by supernode in the order of the elimination tree.
-    pub fn factor(&self, values: &[f64]) -> crate::Result<SpdFactor> {
+    /// supernode by supernode in the order of the elimination tree, into `work` (whose memory
+    /// is reused from the previous factorisation); the factor borrows it.
+    pub fn factor<'w>(
+        &'w self,
+        values: &[f64],
+        work: &'w mut CholeskyWork,
+    ) -> crate::Result<SpdFactor<'w>> {
         let Some(symbolic) = &self.symbolic else {
             return Err(crate::Error::Linear(
                 "no symbolic factorisation: this pattern was built for iterative solves".into(),
@@ -191,17 +222,15 @@ impl SpdPattern {
         let a = SparseColMatRef::new(self.pattern.as_ref(), values);
         let par = self.threads.par();
         let len = symbolic.len_val();
-        let (mut l_values, kept) = match self.pool.lock() {
-            Ok(mut p) => (std::mem::take(&mut p.0), p.1.take()),
-            Err(_) => (Vec::new(), None),
-        };
+        let l_values = &mut work.values;
         l_values.clear();
         l_values.resize(len, 0.0);
         let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
-        let mut mem = scratch_for(kept, req)?;
-        let res = symbolic
+        let kept = work.scratch.take();
+        let mem = work.scratch.insert(scratch_for(kept, req)?);
+        symbolic
             .factorize_numeric_llt(
-                &mut l_values,
+                l_values,
                 a,
                 Side::Lower,
                 Default::default(),
@@ -209,51 +238,38 @@ impl SpdPattern {
                 MemStack::new(&mut mem.0),
                 Default::default(),
             )
-            .map(|_| ());
-        if let Ok(mut p) = self.pool.lock() {
-            p.1 = Some(mem);
-        }
-        res.map_err(|e| {
-            crate::Error::Linear(format!(
-                "numeric Cholesky failed ({e:?}): the condensed matrix of order {} is singular or \
-                 not numerically positive definite (a part of the mesh without Dirichlet \
-                 unknowns or active barrier, or a degenerate cell)",
-                self.n()
-            ))
-        })?;
+            .map_err(|e| {
+                crate::Error::Linear(format!(
+                    "numeric Cholesky failed ({e:?}): the condensed matrix of order {} is \
+                     singular or not numerically positive definite (a part of the mesh without \
+                     Dirichlet unknowns or active barrier, or a degenerate cell)",
+                    self.n()
+                ))
+            })?;
         Ok(SpdFactor {
-            symbolic: symbolic.clone(),
-            values: l_values,
-            pool: self.pool.clone(),
+            symbolic,
+            values: &work.values,
             par,
         })
     }
 }
 
-/// A numeric Cholesky factor.
-pub struct SpdFactor {
-    symbolic: Arc<SymbolicCholesky<usize>>,
-    values: Vec<f64>,
-    pool: Pool,
+/// A numeric Cholesky factor: the symbolic analysis of its pattern and the values of L, held
+/// in the caller's [`CholeskyWork`].
+pub struct SpdFactor<'w> {
+    symbolic: &'w SymbolicCholesky<usize>,
+    values: &'w [f64],
     par: faer::Par,
 }
 
-impl Drop for SpdFactor {
-    fn drop(&mut self) {
-        if let Ok(mut p) = self.pool.lock() {
-            p.0 = std::mem::take(&mut self.values);
-        }
-    }
-}
-
-impl SpdFactor {
+impl SpdFactor<'_> {
     /// Solves A x = b in place: x = Pᵀ L⁻ᵀ L⁻¹ P b (a forward and a backward triangular solve
     /// between the two permutations).
     pub fn solve_in_place(&self, b: &mut [f64]) {
         let par = self.par;
         let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(1, par));
         let col = faer::ColMut::from_slice_mut(b);
-        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+        LltRef::new(self.symbolic, self.values).solve_in_place_with_conj(
             Conj::No,
             col.as_mat_mut(),
             par,
@@ -266,10 +282,8 @@ impl SpdFactor {
 mod tests {
     use super::*;
 
-    #[test]
-    fn solves_a_tridiagonal_system_and_refactorises() {
-        // lower triangle of tridiag(−1, 2, −1), n = 5
-        let n = 5;
+    /// The lower triangle of `scale` · tridiag(−1, 2, −1) of order n, by columns.
+    fn tridiagonal(n: usize) -> SpdPattern {
         let mut col_ptr = vec![0];
         let mut row_idx = vec![];
         for j in 0..n {
@@ -279,30 +293,38 @@ mod tests {
             }
             col_ptr.push(row_idx.len());
         }
-        let p = SpdPattern::new(n, col_ptr, row_idx).unwrap();
+        SpdPattern::new(n, col_ptr, row_idx).unwrap()
+    }
+
+    /// The values of `scale` · tridiag(−1, 2, −1) on the pattern `p` (with a diagonal varying
+    /// with the row, so that the factors of different scales differ everywhere).
+    fn tridiagonal_values(p: &SpdPattern, scale: f64) -> Vec<f64> {
+        let mut vals = Vec::with_capacity(p.nnz());
+        for j in 0..p.n() {
+            for &i in &p.row_idx()[p.col_ptr()[j]..p.col_ptr()[j + 1]] {
+                vals.push(if i == j {
+                    (2.0 + 0.01 * j as f64) * scale
+                } else {
+                    -scale
+                });
+            }
+        }
+        vals
+    }
+
+    #[test]
+    fn solves_a_tridiagonal_system_and_refactorises() {
+        let n = 5;
+        let p = tridiagonal(n);
+        let mut work = CholeskyWork::new();
         for scale in [1.0, 3.0] {
-            let vals: Vec<f64> = p
-                .row_idx()
-                .iter()
-                .enumerate()
-                .map(|(i, _)| i)
-                .collect::<Vec<_>>()
-                .iter()
-                .map(|&i| {
-                    let j = p.col_ptr().iter().rposition(|&c| c <= i).unwrap();
-                    if p.row_idx()[i] == j {
-                        2.0 * scale
-                    } else {
-                        -scale
-                    }
-                })
-                .collect();
-            let f = p.factor(&vals).unwrap();
+            let vals = tridiagonal_values(&p, scale);
+            let f = p.factor(&vals, &mut work).unwrap();
             let mut x = vec![1.0; n];
             f.solve_in_place(&mut x);
             // residual of A x = 1
             for i in 0..n {
-                let mut ax = 2.0 * scale * x[i];
+                let mut ax = (2.0 + 0.01 * i as f64) * scale * x[i];
                 if i > 0 {
                     ax -= scale * x[i - 1];
                 }
@@ -315,6 +337,50 @@ mod tests {
         // an indefinite matrix is an error, not a panic
         let mut vals = vec![-1.0; p.nnz()];
         vals[0] = -2.0;
-        assert!(p.factor(&vals).is_err());
+        assert!(p.factor(&vals, &mut work).is_err());
+        // a pattern without symbolic analysis cannot be factorised
+        let bare = SpdPattern::without_factorisation(n, p.col_ptr().to_vec(), p.row_idx().to_vec())
+            .unwrap();
+        assert!(!bare.has_factorisation());
+        assert!(
+            bare.factor(&tridiagonal_values(&p, 1.0), &mut work)
+                .is_err()
+        );
+    }
+
+    /// The solution of A x = b for the tridiagonal matrix of `scale`, factorised in `work`.
+    fn solve(p: &SpdPattern, scale: f64, work: &mut CholeskyWork) -> Vec<f64> {
+        let mut x: Vec<f64> = (0..p.n()).map(|i| (i as f64 * 0.7).sin() + 1.5).collect();
+        p.factor(&tridiagonal_values(p, scale), work)
+            .unwrap()
+            .solve_in_place(&mut x);
+        x
+    }
+
+    #[test]
+    fn a_reused_workspace_gives_the_bits_of_a_fresh_one() {
+        let p = tridiagonal(3000);
+        // two solves through fresh workspaces: the same bits
+        let fresh = solve(&p, 2.0, &mut CholeskyWork::new());
+        assert_eq!(fresh, solve(&p, 2.0, &mut CholeskyWork::new()));
+        // a workspace that factorised other values (and failed once) gives them again, and
+        // keeps its memory: no growth from one factorisation to the next
+        let mut work = CholeskyWork::new();
+        let other = solve(&p, 5.0, &mut work);
+        assert_ne!(other, fresh);
+        let bytes = work.memory_bytes();
+        assert!(bytes >= p.factor_len() * 8, "{bytes}");
+        let mut indefinite = tridiagonal_values(&p, 1.0);
+        indefinite[0] = -1.0;
+        assert!(p.factor(&indefinite, &mut work).is_err());
+        assert_eq!(solve(&p, 2.0, &mut work), fresh);
+        assert_eq!(solve(&p, 2.0, &mut work), fresh);
+        assert_eq!(work.memory_bytes(), bytes);
+        // a workspace grown by a larger pattern serves a smaller one
+        let small = tridiagonal(40);
+        assert_eq!(
+            solve(&small, 2.0, &mut work),
+            solve(&small, 2.0, &mut CholeskyWork::new())
+        );
     }
 }

@@ -38,6 +38,31 @@ pub(crate) const PAR_MIN_NNZ: usize = 60_000;
 /// grid numberings, which each chunk scans again).
 const CSC_CHUNK: usize = 16384;
 
+/// For each chunk of [`CSC_CHUNK`] rows of the parallel [`CsrMatrix::from_lower_csc`], the
+/// first column whose last row reaches the chunk (from the running maximum of the last
+/// rows); `None` when the chunks would scan more than 4 n columns in all (a wide band).
+fn first_columns(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<Vec<usize>> {
+    // reach[j] = max_{j' ≤ j} (last row of column j'), running maximum
+    let mut reach = vec![0usize; n];
+    let mut m = 0;
+    for (j, r) in reach.iter_mut().enumerate() {
+        let (s, e) = (col_ptr[j], col_ptr[j + 1]);
+        if e > s {
+            m = m.max(row_idx[e - 1]);
+        }
+        *r = m.max(j);
+    }
+    let n_chunks = n.div_ceil(CSC_CHUNK);
+    let first: Vec<usize> = (0..n_chunks)
+        .map(|c| reach.partition_point(|&r| r < c * CSC_CHUNK))
+        .collect();
+    drop(reach);
+    let scanned: usize = (0..n_chunks)
+        .map(|c| ((c + 1) * CSC_CHUNK).min(n) - first[c])
+        .sum();
+    (scanned <= 4 * n).then_some(first)
+}
+
 /// A sparse matrix in compressed sparse row form, with sorted column indices.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct CsrMatrix {
@@ -196,9 +221,8 @@ impl CsrMatrix {
     /// by chunks of rows, each gathering the left parts of its rows from the columns that reach
     /// it (see `from_lower_csc_par`); the result is the same (the entries are only moved). When
     /// the band is so wide that the chunks would rescan more than 4 n columns, the sequential
-    /// sweep is used. Measured (release, 2 cores, on a loaded machine, single timings of
-    /// `make bench-amg -- setup`): ex9 P1 at 1025² (7.3 M entries) 48–49 ms sequential against
-    /// 40–73 ms, HMM at 1024² 113–115 against 92–94 ms: a modest gain, bounded by memory traffic.
+    /// sweep is used. (Timings of both sweeps: `replication/BENCHMARKS.md`, "Measurements
+    /// behind the defaults".)
     pub fn from_lower_csc(
         n: usize,
         col_ptr: &[usize],
@@ -274,27 +298,8 @@ impl CsrMatrix {
         row_idx: &[usize],
         values: &[f64],
     ) -> Option<Self> {
-        // reach[j] = max_{j' ≤ j} (last row of column j'), running maximum
-        let mut reach = vec![0usize; n];
-        let mut m = 0;
-        for (j, r) in reach.iter_mut().enumerate() {
-            let (s, e) = (col_ptr[j], col_ptr[j + 1]);
-            if e > s {
-                m = m.max(row_idx[e - 1]);
-            }
-            *r = m.max(j);
-        }
-        let n_chunks = n.div_ceil(CSC_CHUNK);
-        let first: Vec<usize> = (0..n_chunks)
-            .map(|c| reach.partition_point(|&r| r < c * CSC_CHUNK))
-            .collect();
-        drop(reach);
-        let scanned: usize = (0..n_chunks)
-            .map(|c| ((c + 1) * CSC_CHUNK).min(n) - first[c])
-            .sum();
-        if scanned > 4 * n {
-            return None;
-        }
+        let first = first_columns(n, col_ptr, row_idx)?;
+        let n_chunks = first.len();
         // the entries (r, j), r0 ≤ r < r1, of the columns j < r1 from `first` on, below the
         // diagonal, in increasing j: f(r, j, v)
         let scan = |c: usize, f: &mut dyn FnMut(usize, usize, f64)| {

@@ -11,8 +11,9 @@
 //! is split as in faer:
 //! - symbolic ([`SpdPattern`], in [`cholesky`]): P, the elimination tree, the pattern of L and
 //!   its supernodes; built once per pattern;
-//! - numeric ([`SpdPattern::factor`] → [`SpdFactor`]): the values of L; redone for each set of
-//!   values (each active set of the VI solver);
+//! - numeric ([`SpdPattern::factor`] → [`SpdFactor`]): the values of L, written into a
+//!   [`CholeskyWork`] the caller keeps from one factorisation to the next; redone for each set
+//!   of values (each active set of the VI solver);
 //! - solve ([`SpdFactor::solve_in_place`]): the two triangular solves.
 //!
 //! P is chosen to keep the fill small ([`Ordering`], in [`ordering`]): faer's approximate
@@ -23,6 +24,12 @@
 //! form ([`CsrMatrix::from_lower_csc`], in [`csr`]), a smoothed-aggregation multigrid
 //! preconditioner ([`Amg`], in [`amg`]) and preconditioned conjugate gradients ([`pcg()`], in
 //! [`pcg`](mod@pcg)); memory O(nnz).
+//!
+//! State is explicit: a pattern, a factor's symbolic analysis and a multigrid hierarchy do not
+//! change once built, and the memory a factorisation or a cycle needs is a workspace the
+//! caller owns and passes `&mut` ([`CholeskyWork`], [`AmgWork`], [`Preconditioner::Work`]).
+//! A workspace's contents never change a result: solves through a fresh or a used workspace
+//! give the same bits.
 
 pub mod amg;
 pub mod cholesky;
@@ -30,8 +37,8 @@ pub mod csr;
 pub mod ordering;
 pub mod pcg;
 
-pub use amg::{Amg, AmgOptions, CoarseHierarchy, LevelSummary, Smoother};
-pub use cholesky::{FactorThreads, SpdFactor, SpdPattern};
+pub use amg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, LevelSummary, Smoother};
+pub use cholesky::{CholeskyWork, FactorThreads, SpdFactor, SpdPattern};
 pub use csr::CsrMatrix;
 pub use ordering::{Ordering, nested_dissection};
 pub use pcg::{Identity, Jacobi, PcgOptions, PcgReport, Preconditioner, pcg};

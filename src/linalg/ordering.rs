@@ -322,13 +322,17 @@ mod tests {
             values[col_ptr[c]] = 5.0;
         }
         let mut x = [vec![1.0; n], vec![1.0; n]];
+        // one workspace for both factorisations (of different fill)
+        let mut work = crate::linalg::CholeskyWork::new();
         for (o, ordering) in [Ordering::Amd, Ordering::NestedDissection]
             .iter()
             .enumerate()
         {
             let p =
                 SpdPattern::with_ordering(n, col_ptr.clone(), row_idx.clone(), *ordering).unwrap();
-            p.factor(&values).unwrap().solve_in_place(&mut x[o]);
+            p.factor(&values, &mut work)
+                .unwrap()
+                .solve_in_place(&mut x[o]);
         }
         for (a, b) in x[0].iter().zip(&x[1]) {
             assert!((a - b).abs() < 1e-12);

@@ -21,12 +21,19 @@
 use super::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
 use rayon::prelude::*;
 
-/// An approximate inverse z = M⁻¹ r of a symmetric positive definite M.
+/// An approximate inverse z = M⁻¹ r of a symmetric positive definite M. M does not change
+/// once built; what an application needs besides (vectors) is a workspace the caller owns and
+/// keeps between applications ([`Self::Work`]).
 pub trait Preconditioner {
+    /// The workspace of an application (`()` when none is needed). Its contents never change
+    /// a result.
+    type Work;
     /// Order of M.
     fn n(&self) -> usize;
-    /// z = M⁻¹ r (`r` and `z` have [`Self::n`] entries, else an error).
-    fn apply(&self, r: &[f64], z: &mut [f64]) -> crate::Result<()>;
+    /// A workspace for this preconditioner.
+    fn work(&self) -> Self::Work;
+    /// z = M⁻¹ r (`r` and `z` have [`Self::n`] entries, else an error), with `work`.
+    fn apply(&self, r: &[f64], z: &mut [f64], work: &mut Self::Work) -> crate::Result<()>;
 }
 
 /// M = I: plain conjugate gradients.
@@ -34,10 +41,12 @@ pub trait Preconditioner {
 pub struct Identity(pub usize);
 
 impl Preconditioner for Identity {
+    type Work = ();
     fn n(&self) -> usize {
         self.0
     }
-    fn apply(&self, r: &[f64], z: &mut [f64]) -> crate::Result<()> {
+    fn work(&self) {}
+    fn apply(&self, r: &[f64], z: &mut [f64], _: &mut ()) -> crate::Result<()> {
         check_len("identity preconditioner", self.0, r.len(), z.len())?;
         z.copy_from_slice(r);
         Ok(())
@@ -68,10 +77,12 @@ impl Jacobi {
 }
 
 impl Preconditioner for Jacobi {
+    type Work = ();
     fn n(&self) -> usize {
         self.inv_diag.len()
     }
-    fn apply(&self, r: &[f64], z: &mut [f64]) -> crate::Result<()> {
+    fn work(&self) {}
+    fn apply(&self, r: &[f64], z: &mut [f64], _: &mut ()) -> crate::Result<()> {
         check_len("Jacobi preconditioner", self.n(), r.len(), z.len())?;
         zip_chunks2(z, r, &self.inv_diag, |z, r, d| {
             for ((zi, ri), di) in z.iter_mut().zip(r).zip(d) {
@@ -153,8 +164,17 @@ fn check_inputs(
     Ok(())
 }
 
+/// The error of an iteration that failed: `what` happened at iteration `k`, with the residual
+/// norm `res` reached (order `n`).
+fn failure(n: usize, what: String, k: usize, res: f64) -> crate::Error {
+    crate::Error::Linear(format!(
+        "conjugate gradients (order {n}): {what} at iteration {k}, residual norm {res:e}"
+    ))
+}
+
 /// Solves A x = b by preconditioned conjugate gradients (see the module documentation),
-/// starting from the `x` given and leaving the solution in it.
+/// starting from the `x` given and leaving the solution in it; `work` is the preconditioner's
+/// workspace (e.g. [`Preconditioner::work`], or one kept from an earlier solve).
 ///
 /// Errors: mismatched lengths, a non-finite residual (NaN or infinite data), a breakdown
 /// (pᵀAp ≤ 0 or rᵀM⁻¹r ≤ 0: A or M not positive definite), or no convergence within
@@ -163,30 +183,27 @@ fn check_inputs(
 pub fn pcg<M: Preconditioner + ?Sized>(
     a: &CsrMatrix,
     m: &M,
+    work: &mut M::Work,
     b: &[f64],
     x: &mut [f64],
     opts: &PcgOptions,
 ) -> crate::Result<PcgReport> {
     check_inputs(a, m.n(), b, x, opts)?;
     let n = a.n_rows();
-    let fail = |what: String, k: usize, res: f64| {
-        crate::Error::Linear(format!(
-            "conjugate gradients (order {n}): {what} at iteration {k}, residual norm {res:e}"
-        ))
-    };
     let b_norm = dot(b, b).sqrt();
     let tol = (opts.rtol * b_norm).max(opts.atol);
     let mut r = vec![0.0; n];
     a.residual_to(b, x, &mut r);
     let r0 = dot(&r, &r).sqrt();
     if !r0.is_finite() {
-        return Err(fail(
+        return Err(failure(
+            n,
             "non-finite initial residual (NaN or infinite data)".into(),
             0,
             r0,
         ));
     }
-    let mut report = PcgReport {
+    let report = PcgReport {
         iterations: 0,
         residual_norm: r0,
         initial_residual_norm: r0,
@@ -194,25 +211,44 @@ pub fn pcg<M: Preconditioner + ?Sized>(
     if r0 <= tol {
         return Ok(report);
     }
+    iterate(a, m, work, b, x, r, tol, opts.max_iter, report)
+}
+
+/// The iterations of [`pcg`] from the initial residual `r` = b − A x (above `tol`, its norm in
+/// `report`), with the preconditioner `m` and its workspace `work`, until ‖r‖₂ ≤ `tol` or
+/// `max_iter` iterations.
+#[allow(clippy::too_many_arguments)]
+fn iterate<M: Preconditioner + ?Sized>(
+    a: &CsrMatrix,
+    m: &M,
+    work: &mut M::Work,
+    b: &[f64],
+    x: &mut [f64],
+    mut r: Vec<f64>,
+    tol: f64,
+    max_iter: usize,
+    mut report: PcgReport,
+) -> crate::Result<PcgReport> {
+    let n = a.n_rows();
     let mut z = vec![0.0; n];
-    m.apply(&r, &mut z)?;
+    m.apply(&r, &mut z, work)?;
     let mut rz = dot(&r, &z);
+    let mut r_norm = report.initial_residual_norm;
+    let not_pd = |rz: f64| {
+        format!("breakdown, rᵀM⁻¹r = {rz:e} (the preconditioner is not positive definite)")
+    };
     if !(rz > 0.0 && rz.is_finite()) {
-        return Err(fail(
-            format!("breakdown, rᵀM⁻¹r = {rz:e} (the preconditioner is not positive definite)"),
-            0,
-            r0,
-        ));
+        return Err(failure(n, not_pd(rz), 0, r_norm));
     }
     let mut p = z.clone();
-    let mut r_norm = r0;
     // q = A p lives in z's storage: q is dead once r is updated, before z = M⁻¹ r is written
     // (one vector fewer)
-    for k in 1..=opts.max_iter {
+    for k in 1..=max_iter {
         let q = &mut z;
         let pq = mul_dot(a, &p, q);
         if !(pq > 0.0 && pq.is_finite()) {
-            return Err(fail(
+            return Err(failure(
+                n,
                 format!("breakdown, pᵀAp = {pq:e} (the matrix is not positive definite)"),
                 k,
                 r_norm,
@@ -223,23 +259,17 @@ pub fn pcg<M: Preconditioner + ?Sized>(
         r_norm = rr.sqrt();
         report.iterations = k;
         if !r_norm.is_finite() {
-            return Err(fail("non-finite residual".into(), k, r_norm));
+            return Err(failure(n, "non-finite residual".into(), k, r_norm));
         }
         if r_norm <= tol {
             a.residual_to(b, x, &mut r);
             report.residual_norm = dot(&r, &r).sqrt();
             return Ok(report);
         }
-        m.apply(&r, &mut z)?;
+        m.apply(&r, &mut z, work)?;
         let rz_new = dot(&r, &z);
         if !(rz_new > 0.0 && rz_new.is_finite()) {
-            return Err(fail(
-                format!(
-                    "breakdown, rᵀM⁻¹r = {rz_new:e} (the preconditioner is not positive definite)"
-                ),
-                k,
-                r_norm,
-            ));
+            return Err(failure(n, not_pd(rz_new), k, r_norm));
         }
         let beta = rz_new / rz;
         rz = rz_new;
@@ -250,13 +280,13 @@ pub fn pcg<M: Preconditioner + ?Sized>(
         });
     }
     a.residual_to(b, x, &mut r);
-    Err(fail(
+    Err(failure(
+        n,
         format!(
-            "no convergence within {} iterations (target {tol:e}, true residual {:e})",
-            opts.max_iter,
+            "no convergence within {max_iter} iterations (target {tol:e}, true residual {:e})",
             dot(&r, &r).sqrt()
         ),
-        opts.max_iter,
+        max_iter,
         r_norm,
     ))
 }
@@ -421,7 +451,7 @@ mod tests {
             max_iter: 100,
         };
         let mut x = vec![0.0; n];
-        let rep = pcg(&a, &Identity(n), &b, &mut x, &opts).unwrap();
+        let rep = pcg(&a, &Identity(n), &mut (), &b, &mut x, &opts).unwrap();
         let bn = dot(&b, &b).sqrt();
         assert!(rep.residual_norm <= 1e-12 * bn * 1.5, "{rep:?}");
         assert!(rep.iterations > 1 && rep.iterations <= n);
@@ -429,7 +459,7 @@ mod tests {
         assert!(err < 1e-11, "{err}");
         // Jacobi, from a nonzero initial guess
         let mut x = vec![1.0; n];
-        let rep = pcg(&a, &Jacobi::new(&a).unwrap(), &b, &mut x, &opts).unwrap();
+        let rep = pcg(&a, &Jacobi::new(&a).unwrap(), &mut (), &b, &mut x, &opts).unwrap();
         assert!((rep.initial_residual_norm - dot(&b, &b).sqrt()).abs() > 0.1);
         let err = max_diff(&x, exact.as_slice());
         assert!(err < 1e-11, "{err}");
@@ -438,6 +468,7 @@ mod tests {
         let rep = pcg(
             &a,
             &Identity(n),
+            &mut (),
             &b,
             &mut x,
             &PcgOptions { rtol: 1e-8, ..opts },
@@ -449,6 +480,7 @@ mod tests {
         let rep = pcg(
             &a,
             &Identity(n),
+            &mut (),
             &b,
             &mut x,
             &PcgOptions {
@@ -464,6 +496,12 @@ mod tests {
         );
     }
 
+    /// Unpreconditioned CG with the default options on A x = b, from `x`, with M = I of
+    /// order `m`.
+    fn plain(a: &CsrMatrix, m: usize, b: &[f64], x: &mut [f64]) -> crate::Result<PcgReport> {
+        pcg(a, &Identity(m), &mut (), b, x, &PcgOptions::default())
+    }
+
     #[test]
     fn failures_are_errors() {
         let (a, _) = small();
@@ -474,6 +512,7 @@ mod tests {
         let e = pcg(
             &a,
             &Identity(n),
+            &mut (),
             &b,
             &mut x,
             &PcgOptions {
@@ -488,10 +527,10 @@ mod tests {
         // NaN in b or in x₀
         let mut bad = b.clone();
         bad[3] = f64::NAN;
-        assert!(pcg(&a, &Identity(n), &bad, &mut x, &PcgOptions::default()).is_err());
+        assert!(plain(&a, n, &bad, &mut x).is_err());
         let mut x0 = vec![0.0; n];
         x0[5] = f64::INFINITY;
-        assert!(pcg(&a, &Identity(n), &b, &mut x0, &PcgOptions::default()).is_err());
+        assert!(plain(&a, n, &b, &mut x0).is_err());
         // an indefinite matrix: breakdown pᵀAp ≤ 0
         let neg = CsrMatrix::new(
             n,
@@ -502,36 +541,40 @@ mod tests {
         )
         .unwrap();
         let mut x = vec![0.0; n];
-        let e = pcg(&neg, &Identity(n), &b, &mut x, &PcgOptions::default())
-            .unwrap_err()
-            .to_string();
+        let e = plain(&neg, n, &b, &mut x).unwrap_err().to_string();
         assert!(e.contains("breakdown") && e.contains("iteration 1"), "{e}");
         // a negative definite preconditioner: breakdown rᵀM⁻¹r ≤ 0
         struct Minus(usize);
         impl Preconditioner for Minus {
+            type Work = ();
             fn n(&self) -> usize {
                 self.0
             }
-            fn apply(&self, r: &[f64], z: &mut [f64]) -> crate::Result<()> {
+            fn work(&self) {}
+            fn apply(&self, r: &[f64], z: &mut [f64], _: &mut ()) -> crate::Result<()> {
                 z.iter_mut().zip(r).for_each(|(z, r)| *z = -r);
                 Ok(())
             }
         }
-        let e = pcg(&a, &Minus(n), &b, &mut x, &PcgOptions::default())
+        let e = pcg(&a, &Minus(n), &mut (), &b, &mut x, &PcgOptions::default())
             .unwrap_err()
             .to_string();
         assert!(e.contains("preconditioner is not positive definite"), "{e}");
         // mismatched lengths, negative tolerances
-        assert!(pcg(&a, &Identity(n), &b[1..], &mut x, &PcgOptions::default()).is_err());
-        assert!(pcg(&a, &Identity(n + 1), &b, &mut x, &PcgOptions::default()).is_err());
+        assert!(plain(&a, n, &b[1..], &mut x).is_err());
+        assert!(plain(&a, n + 1, &b, &mut x).is_err());
         let neg_tol = PcgOptions {
             rtol: -1.0,
             ..PcgOptions::default()
         };
-        assert!(pcg(&a, &Identity(n), &b, &mut x, &neg_tol).is_err());
+        assert!(pcg(&a, &Identity(n), &mut (), &b, &mut x, &neg_tol).is_err());
         // a non-positive diagonal for Jacobi
         assert!(Jacobi::new(&neg).is_err());
-        assert!(Identity(3).apply(&[1.0; 3], &mut [0.0; 2]).is_err());
+        assert!(
+            Identity(3)
+                .apply(&[1.0; 3], &mut [0.0; 2], &mut ())
+                .is_err()
+        );
     }
 
     #[test]
@@ -555,6 +598,7 @@ mod tests {
         let rep = pcg(
             &a,
             &Jacobi::new(&a).unwrap(),
+            &mut (),
             &u,
             &mut x,
             &PcgOptions::default(),

@@ -31,7 +31,7 @@
 //! above [`LookAheadOptions::max_fraction`] of the unknowns are not tried.
 
 use super::{Constraints, QuadraticEnergy};
-use crate::linalg::SpdPattern;
+use crate::linalg::{CholeskyWork, SpdPattern};
 use std::collections::HashMap;
 
 /// Options of the look-ahead.
@@ -141,7 +141,7 @@ pub fn look_ahead<P>(
     else {
         return Ok(None);
     };
-    let local = LocalProblem::new(q, cons, u, &patch, entries)?;
+    let mut local = LocalProblem::new(q, cons, u, &patch, entries)?;
     let mut report = LookAheadReport {
         patch: patch.len(),
         ..Default::default()
@@ -240,6 +240,8 @@ struct LocalProblem {
     rhs: Vec<f64>,
     /// (local index, constraint index) of the constrained unknowns of the patch.
     cons: Vec<(usize, usize)>,
+    /// The memory of the factorisations, reused from one local solve to the next.
+    work: CholeskyWork,
 }
 
 impl LocalProblem {
@@ -293,13 +295,14 @@ impl LocalProblem {
             values,
             rhs,
             cons,
+            work: CholeskyWork::new(),
         })
     }
 
     /// The local solution with the constrained unknowns `act` (indexed like `self.cons`)
     /// fixed at their barrier: unit rows and columns for them, their columns moved to the
     /// right-hand side.
-    fn solve<P>(&self, cons: &Constraints<P>, act: &[bool]) -> crate::Result<Vec<f64>> {
+    fn solve<P>(&mut self, cons: &Constraints<P>, act: &[bool]) -> crate::Result<Vec<f64>> {
         let p = self.rhs.len();
         let mut fixed = vec![f64::NAN; p];
         for (&(l, j), &a) in self.cons.iter().zip(act) {
@@ -332,7 +335,9 @@ impl LocalProblem {
                 *xl = *f;
             }
         }
-        self.pattern.factor(&values)?.solve_in_place(&mut x);
+        self.pattern
+            .factor(&values, &mut self.work)?
+            .solve_in_place(&mut x);
         Ok(x)
     }
 

@@ -1,0 +1,106 @@
+//! The solve on the coarsest level: a dense Cholesky factorisation A_L = L Lᵀ, once per
+//! hierarchy, and two triangular solves per cycle.
+
+use crate::linalg::csr::CsrMatrix;
+
+/// The solver of the coarsest level.
+#[derive(Debug, Clone)]
+pub(super) enum CoarseSolve {
+    /// The Cholesky factor L (A_L = L Lᵀ), its lower triangle packed row after row.
+    Dense { n: usize, l: Vec<f64> },
+    /// Coarsening stalled above [`DENSE_MAX`]: the level is only smoothed.
+    Smooth,
+}
+
+impl CoarseSolve {
+    /// Bytes of the factor.
+    pub(super) fn memory_bytes(&self) -> usize {
+        match self {
+            CoarseSolve::Dense { l, .. } => std::mem::size_of_val(l.as_slice()),
+            CoarseSolve::Smooth => 0,
+        }
+    }
+}
+
+/// The dense Cholesky factor of the coarsest operator (faer), packed.
+pub(super) fn dense_cholesky(a: &CsrMatrix, level: usize) -> crate::Result<CoarseSolve> {
+    let n = a.n_rows();
+    if n == 0 {
+        return Ok(CoarseSolve::Dense { n, l: Vec::new() });
+    }
+    let mut m = faer::Mat::<f64>::zeros(n, n);
+    for i in 0..n {
+        let (cols, vals) = a.row(i);
+        for (&j, &v) in cols.iter().zip(vals) {
+            m[(i, j as usize)] = v;
+        }
+    }
+    let llt = m.llt(faer::Side::Lower).map_err(|e| {
+        crate::Error::Linear(format!(
+            "multigrid setup: the coarsest operator (level {level}, order {n}) is not \
+             numerically positive definite ({e:?}): neither is the matrix"
+        ))
+    })?;
+    let lf = llt.L();
+    let mut l = Vec::with_capacity(n * (n + 1) / 2);
+    for i in 0..n {
+        for j in 0..=i {
+            l.push(lf[(i, j)]);
+        }
+    }
+    Ok(CoarseSolve::Dense { n, l })
+}
+
+/// x = (L Lᵀ)⁻¹ b with L packed by rows: L y = b by rows, then Lᵀ x = y by columns of Lᵀ
+/// (rows of L), both reading L contiguously.
+pub(super) fn dense_solve(n: usize, l: &[f64], b: &[f64], x: &mut [f64]) {
+    for i in 0..n {
+        let row = &l[i * (i + 1) / 2..(i + 1) * (i + 2) / 2];
+        let mut s = b[i];
+        for (lij, xj) in row[..i].iter().zip(&x[..i]) {
+            s -= lij * xj;
+        }
+        x[i] = s / row[i];
+    }
+    for i in (0..n).rev() {
+        let row = &l[i * (i + 1) / 2..(i + 1) * (i + 2) / 2];
+        let xi = x[i] / row[i];
+        x[i] = xi;
+        for (lij, xj) in row[..i].iter().zip(&mut x[..i]) {
+            *xj -= lij * xi;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::grid;
+    use super::*;
+
+    #[test]
+    fn the_coarsest_solve_is_exact_and_rejects_an_indefinite_matrix() {
+        let a = grid(12, 1.0, 0.5, &|i, j| 1.0 + ((i + j) % 3) as f64);
+        let n = a.n_rows();
+        let CoarseSolve::Dense { n: m, l } = dense_cholesky(&a, 2).unwrap() else {
+            panic!("a dense factor was expected");
+        };
+        assert_eq!((m, l.len()), (n, n * (n + 1) / 2));
+        let xs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.3).cos()).collect();
+        let mut b = vec![0.0; n];
+        a.spmv(&xs, &mut b).unwrap();
+        let mut x = vec![f64::NAN; n];
+        dense_solve(n, &l, &b, &mut x);
+        for (xi, si) in x.iter().zip(&xs) {
+            assert!((xi - si).abs() < 1e-12, "{xi} vs {si}");
+        }
+        // off-diagonal entries larger than the diagonal: not positive definite
+        let mut indef = a.clone();
+        for v in indef.values_mut() {
+            if *v < 0.0 {
+                *v *= 10.0;
+            }
+        }
+        let e = dense_cholesky(&indef, 3).unwrap_err().to_string();
+        assert!(e.contains("level 3"), "{e}");
+    }
+}

@@ -1,0 +1,138 @@
+//! The Galerkin product A_{ℓ+1} = Pᵀ A_ℓ P (step 5 of the setup, see [`super`]).
+
+use super::NONE;
+use super::rows::build_rows;
+use crate::linalg::csr::CsrMatrix;
+
+/// A dense accumulator of a sparse row: the values by column and the list of touched columns.
+struct Accumulator {
+    /// Position of each column in `cols`, or [`NONE`].
+    pos: Vec<u32>,
+    cols: Vec<u32>,
+    vals: Vec<f64>,
+}
+
+impl Accumulator {
+    fn new(n: usize) -> Self {
+        Accumulator {
+            pos: vec![NONE; n],
+            cols: Vec::new(),
+            vals: Vec::new(),
+        }
+    }
+    #[inline(always)]
+    fn add(&mut self, j: u32, v: f64) {
+        let p = self.pos[j as usize];
+        if p == NONE {
+            self.pos[j as usize] = self.cols.len() as u32;
+            self.cols.push(j);
+            self.vals.push(v);
+        } else {
+            self.vals[p as usize] += v;
+        }
+    }
+    /// Appends the row in the order of first touch and clears the accumulator.
+    fn drain_unsorted_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) {
+        for &c in &self.cols {
+            self.pos[c as usize] = NONE;
+        }
+        cols.extend_from_slice(&self.cols);
+        vals.extend_from_slice(&self.vals);
+        self.cols.clear();
+        self.vals.clear();
+    }
+    /// Appends the row, sorted by column, and clears the accumulator.
+    fn drain_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) {
+        self.cols.sort_unstable();
+        for &c in &self.cols {
+            let p = self.pos[c as usize] as usize;
+            cols.push(c);
+            vals.push(self.vals[p]);
+            self.pos[c as usize] = NONE;
+        }
+        self.cols.clear();
+        self.vals.clear();
+    }
+}
+
+/// A_c = Pᵀ A P in two row-parallel products (see the module documentation): R A with
+/// R = Pᵀ, row J = Σ_{i : r_Ji ≠ 0} r_Ji A_i (its columns left in the order they are met: only
+/// read below), R freed, then row J of A_c = Σ_k (R A)_Jk P_k.
+pub(super) fn galerkin(a: &CsrMatrix, p: &CsrMatrix, r: CsrMatrix) -> CsrMatrix {
+    let ra = product(&r, a, false);
+    drop(r);
+    product(&ra, p, true)
+}
+
+/// The sparse product L M, row J = Σ_k l_Jk M_k, zero entries of M skipped; each row's
+/// columns sorted if `sorted`, else in the order they are met.
+fn product(l: &CsrMatrix, m: &CsrMatrix, sorted: bool) -> CsrMatrix {
+    let n = m.n_cols();
+    build_rows(
+        l.n_rows(),
+        n,
+        || Accumulator::new(n),
+        |acc, row, cols, vals| {
+            let (lc, lv) = l.row(row);
+            for (&k, &lk) in lc.iter().zip(lv) {
+                let (mc, mv) = m.row(k as usize);
+                for (&j, &mkj) in mc.iter().zip(mv) {
+                    if mkj != 0.0 {
+                        acc.add(j, lk * mkj);
+                    }
+                }
+            }
+            if sorted {
+                acc.drain_into(cols, vals);
+            } else {
+                acc.drain_unsorted_into(cols, vals);
+            }
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::grid;
+    use super::*;
+
+    #[test]
+    fn the_galerkin_product_is_pt_a_p() {
+        // A large enough that the rows are built in parallel; P with two entries per row
+        for m in [7, 120] {
+            let a = grid(m, 1.0, 0.3, &|i, j| 1.0 + ((i * j) % 5) as f64);
+            let (n, nc) = (m * m, m * m / 4 + 1);
+            let (mut rp, mut cols, mut vals) = (vec![0], vec![], vec![]);
+            for i in 0..n {
+                let (c0, c1) = (i / 4, (i * 7 + 3) % nc);
+                let mut row = vec![(c0 as u32, 1.0), (c1 as u32, 0.5 - (i % 3) as f64)];
+                row.sort_by_key(|e| e.0);
+                row.dedup_by_key(|e| e.0);
+                for (c, v) in row {
+                    cols.push(c);
+                    vals.push(v);
+                }
+                rp.push(cols.len());
+            }
+            let p = CsrMatrix::new(n, nc, rp, cols, vals).unwrap();
+            let ac = galerkin(&a, &p, p.transpose());
+            assert_eq!((ac.n_rows(), ac.n_cols()), (nc, nc));
+            // column J of A_c against Pᵀ (A (P e_J)), for a few J
+            for jc in [0, 1, nc / 2, nc - 1] {
+                let mut e = vec![0.0; nc];
+                e[jc] = 1.0;
+                let (mut pe, mut ape, mut col) = (vec![0.0; n], vec![0.0; n], vec![0.0; nc]);
+                p.spmv(&e, &mut pe).unwrap();
+                a.spmv(&pe, &mut ape).unwrap();
+                p.mul_transpose_to(&ape, &mut col);
+                let mut got = vec![0.0; nc];
+                ac.spmv(&e, &mut got).unwrap();
+                for (g, c) in got.iter().zip(&col) {
+                    assert!((g - c).abs() <= 1e-12 * c.abs().max(1.0), "{g} vs {c}");
+                }
+            }
+            // sorted rows
+            assert!((0..nc).all(|i| ac.row(i).0.windows(2).all(|w| w[0] < w[1])));
+        }
+    }
+}

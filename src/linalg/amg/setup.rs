@@ -1,0 +1,255 @@
+//! Building the hierarchy (see [`super`]): the fine matrix is checked, then each level's
+//! smoother, strength of connection, aggregates, prolongator and Galerkin operator, down to
+//! the coarsest level and its factorisation.
+
+use super::aggregate::aggregate;
+use super::coarse::{CoarseSolve, dense_cholesky};
+use super::galerkin::galerkin;
+use super::prolong::smoothed_prolongator;
+use super::smooth::LevelSmoother;
+use super::strength::strength;
+use super::{Amg, AmgOptions, CoarseHierarchy, DENSE_MAX, Transfer};
+use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ};
+use rayon::prelude::*;
+
+impl<'a> Amg<'a> {
+    /// Builds the hierarchy of `a` (square, symmetric, positive definite; symmetry is the
+    /// caller's, e.g. [`CsrMatrix::from_lower_csc`]).
+    ///
+    /// Errors: a non-finite entry or a non-positive diagonal entry (naming the row), a missing
+    /// diagonal, invalid options, or a coarse operator that is not numerically positive
+    /// definite (then neither is `a`).
+    pub fn new(a: &'a CsrMatrix, opts: &AmgOptions) -> crate::Result<Self> {
+        opts.check()?;
+        validate(a)?;
+        let mut coarse_ops: Vec<CsrMatrix> = Vec::new();
+        let mut transfers = Vec::new();
+        let mut smoothers = Vec::new();
+        // the near-null space of the current level (the constants on the fine one)
+        let mut near_null = vec![1.0; a.n_rows()];
+        loop {
+            let level = coarse_ops.len();
+            let al = coarse_ops.last().unwrap_or(a);
+            let diag = al.diagonal();
+            if level > 0
+                && let Some(i) = diag.iter().position(|&d| !(d > 0.0 && d.is_finite()))
+            {
+                return Err(crate::Error::Linear(format!(
+                    "multigrid setup: the coarse operator of level {level} has the diagonal \
+                     entry {:e} at row {i}: the matrix is not positive definite",
+                    diag[i]
+                )));
+            }
+            smoothers.push(LevelSmoother::new(al, &diag, opts));
+            let n = al.n_rows();
+            if n <= opts.max_coarse || level + 1 >= opts.max_levels {
+                break;
+            }
+            let strong = strength(al, &diag, opts.strength_threshold);
+            let (agg, n_agg) = aggregate(al, &strong, &diag);
+            drop(strong);
+            // stop when coarsening stalls (every row decoupled, or barely any reduction)
+            if n_agg == 0 || n_agg as f64 > 0.85 * n as f64 {
+                break;
+            }
+            let (p, b_next) = smoothed_prolongator(
+                al,
+                &diag,
+                &agg,
+                n_agg,
+                &near_null,
+                opts.smoothing_threshold,
+                opts.spectral_steps,
+            );
+            near_null = b_next;
+            let ac = galerkin(al, &p, p.transpose());
+            transfers.push(Transfer { p });
+            coarse_ops.push(ac);
+        }
+        let last = coarse_ops.last().unwrap_or(a);
+        let coarse = if last.n_rows() <= DENSE_MAX {
+            dense_cholesky(last, coarse_ops.len())?
+        } else {
+            CoarseSolve::Smooth
+        };
+        Ok(Amg {
+            fine: std::borrow::Cow::Borrowed(a),
+            h: CoarseHierarchy {
+                n: a.n_rows(),
+                coarse_ops,
+                transfers,
+                smoothers,
+                coarse,
+            },
+        })
+    }
+
+    /// [`Amg::new`] keeping `a` (for a hierarchy that outlives the caller's borrow, e.g. kept
+    /// to continue a solve later); [`Amg::matrix`] gives it back.
+    pub fn owning(a: CsrMatrix, opts: &AmgOptions) -> crate::Result<Amg<'static>> {
+        let h = Amg::new(&a, opts)?.h;
+        Ok(Amg {
+            fine: std::borrow::Cow::Owned(a),
+            h,
+        })
+    }
+}
+
+/// Checks the fine matrix: square, finite, with a positive diagonal entry in every row. The
+/// first offending row (in order) is reported.
+pub(super) fn validate(a: &CsrMatrix) -> crate::Result<()> {
+    let n = a.n_rows();
+    if a.n_cols() != n {
+        return Err(crate::Error::Linear(format!(
+            "multigrid: the matrix is {}×{}, not square",
+            n,
+            a.n_cols()
+        )));
+    }
+    let check_row = |i: usize| -> Option<String> {
+        let (cols, vals) = a.row(i);
+        if let Some(k) = vals.iter().position(|v| !v.is_finite()) {
+            return Some(format!(
+                "row {i} has the non-finite entry {} in column {}",
+                vals[k], cols[k]
+            ));
+        }
+        match cols.binary_search(&(i as u32)) {
+            Ok(p) if vals[p] > 0.0 => None,
+            Ok(p) => Some(format!(
+                "row {i} has the non-positive diagonal entry {:e}",
+                vals[p]
+            )),
+            Err(_) => Some(format!("row {i} has no diagonal entry")),
+        }
+    };
+    let bad = if a.nnz() < PAR_MIN_NNZ {
+        (0..n).find_map(check_row)
+    } else {
+        (0..n).into_par_iter().find_map_first(check_row)
+    };
+    match bad {
+        Some(msg) => Err(crate::Error::Linear(format!(
+            "multigrid: {msg} (the matrix must be symmetric positive definite)"
+        ))),
+        None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::grid;
+    use super::super::{AmgWork, Smoother};
+    use super::*;
+    use crate::linalg::pcg::{PcgOptions, pcg};
+
+    #[test]
+    fn bad_input_is_an_error() {
+        let a = grid(10, 1.0, 1.0, &|_, _| 1.0);
+        let opts = AmgOptions::default();
+        // a NaN entry off the diagonal, in row 13
+        let mut nan = a.clone();
+        let p = a.row_ptr()[13];
+        nan.values_mut()[p] = f64::NAN;
+        let e = Amg::new(&nan, &opts).unwrap_err().to_string();
+        assert!(e.contains("row 13") && e.contains("non-finite"), "{e}");
+        // an infinite diagonal entry
+        let mut inf = a.clone();
+        let d = a.row_ptr()[40] + a.row(40).0.iter().position(|&j| j == 40).unwrap();
+        inf.values_mut()[d] = f64::INFINITY;
+        assert!(
+            Amg::new(&inf, &opts)
+                .unwrap_err()
+                .to_string()
+                .contains("row 40")
+        );
+        // a zero and a negative diagonal entry
+        for v in [0.0, -1.0] {
+            let mut z = a.clone();
+            z.values_mut()[d] = v;
+            let e = Amg::new(&z, &opts).unwrap_err().to_string();
+            assert!(e.contains("row 40") && e.contains("non-positive"), "{e}");
+        }
+        // a missing diagonal entry
+        let nodiag = CsrMatrix::new(2, 2, vec![0, 1, 2], vec![1, 0], vec![1.0, 1.0]).unwrap();
+        assert!(Amg::new(&nodiag, &opts).is_err());
+        // not square
+        let rect = CsrMatrix::new(1, 2, vec![0, 1], vec![0], vec![1.0]).unwrap();
+        assert!(Amg::new(&rect, &opts).is_err());
+        // bad options
+        for o in [
+            AmgOptions {
+                strength_threshold: 1.5,
+                ..opts
+            },
+            AmgOptions {
+                strength_threshold: f64::NAN,
+                ..opts
+            },
+            AmgOptions {
+                max_coarse: 0,
+                ..opts
+            },
+            AmgOptions {
+                max_levels: 0,
+                ..opts
+            },
+            AmgOptions {
+                smoother: Smoother::Chebyshev {
+                    degree: 0,
+                    ratio: 30.0,
+                },
+                ..opts
+            },
+            AmgOptions {
+                smoother: Smoother::Chebyshev {
+                    degree: 2,
+                    ratio: 1.0,
+                },
+                ..opts
+            },
+        ] {
+            assert!(Amg::new(&a, &o).is_err(), "{o:?}");
+        }
+        // wrong vector lengths
+        let amg = Amg::new(&a, &opts).unwrap();
+        let mut z = vec![0.0; 99];
+        assert!(amg.apply(&[0.0; 100], &mut z, &mut AmgWork::new()).is_err());
+        // an indefinite matrix (positive diagonal): the coarsest factorisation fails, or CG
+        // breaks down; an error either way, never a panic
+        let mut indef = grid(8, 1.0, 1.0, &|_, _| 1.0);
+        for p in 0..indef.nnz() {
+            if indef.values()[p] < 0.0 {
+                indef.values_mut()[p] = -3.0;
+            }
+        }
+        let b = vec![1.0; 64];
+        let mut x = vec![0.0; 64];
+        let r = Amg::new(&indef, &opts).and_then(|m| {
+            pcg(
+                &indef,
+                &m,
+                &mut AmgWork::new(),
+                &b,
+                &mut x,
+                &PcgOptions::default(),
+            )
+        });
+        assert!(r.is_err());
+    }
+
+    #[test]
+    fn hierarchy_summary() {
+        let a = grid(128, 1.0, 1.0, &|_, _| 1.0);
+        let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
+        let lv = amg.levels();
+        assert_eq!(lv[0].n, 128 * 128);
+        assert!(lv.last().unwrap().n <= AmgOptions::default().max_coarse);
+        // aggregates of about 3 × 3 unknowns
+        assert!(lv.windows(2).all(|w| w[1].n * 5 < w[0].n), "{lv:?}");
+        let oc = amg.operator_complexity();
+        assert!((1.0..1.6).contains(&oc), "{oc}");
+        assert!(amg.memory_bytes() < 3 * a.memory_bytes());
+        assert!(amg.coarsest_is_exact());
+    }
+}
