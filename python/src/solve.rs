@@ -10,7 +10,7 @@ use gradvi::mesh::Point;
 use gradvi::post::contact::{contact_measure, free_boundary, neighbours};
 use gradvi::post::fields::EntityFields;
 use gradvi::post::{Errors, relative_errors};
-use gradvi::problem::Side;
+use gradvi::vi::Side;
 use gradvi::scheme::{Entity, SchemeKind, SchemeOptions, build_with};
 use gradvi::solver::{
     ActiveSetOptions, Certificate, IterationLog, Method, SolveOptions, Timings, WarmStart,
