@@ -10,7 +10,7 @@
 //! - [`DiscreteSystem`] = both, immutable once built. [`DiscreteSystem::solve`] takes a set of
 //!   *fixed* unknowns (Dirichlet unknowns are always fixed; the active-set solver adds active
 //!   constrained unknowns) and
-//!   1. condenses each cell ([`condense()`]): interior unknowns are eliminated, for HMM the cell
+//!   1. condenses each cell ([`condense::condense`]): interior unknowns are eliminated, for HMM the cell
 //!      value u_K (or nothing when the cell is active);
 //!   2. assembles into the fixed pattern ([`gather`]); a fixed skeleton unknown keeps its row
 //!      and column in the pattern with a unit diagonal and zeros elsewhere, its value moved to

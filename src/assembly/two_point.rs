@@ -1,6 +1,6 @@
 //! Condensation onto the cells, when most skeleton unknowns couple with their cells only.
 //!
-//! The usual condensation ([`super::condense()`]) eliminates each cell's interior unknowns and
+//! The usual condensation ([`super::condense::condense`]) eliminates each cell's interior unknowns and
 //! solves for the skeleton: for HMM, the face unknowns (about twice as many as the cells on
 //! quadrilaterals, 7 entries per row). It is the only choice in general, because the faces of a
 //! cell are coupled with each other. But a face unknown σ that, in each of its (at most two)
