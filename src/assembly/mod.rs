@@ -142,7 +142,6 @@ pub struct SystemOptions {
 ///   (smoothed aggregation converges slowly on strongly distorted meshes with rotated
 ///   anisotropy), the direct solver takes over for that solve and the following ones.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum LinearSolver {
     /// Direct below [`AUTO_ITERATIVE_MIN`] condensed unknowns, iterative from there on.

@@ -4,6 +4,8 @@
 use super::output::{atomic, check_distinct};
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use gradvi::assembly::LinearSolver;
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::Family;
 use gradvi::mesh::io::write_vtu;
@@ -43,7 +45,7 @@ pub struct SolveArgs {
     #[arg(long)]
     level: Option<usize>,
     /// The scheme (default: the problem file's `scheme`, else hmm).
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = named::<SchemeKind>(SchemeKind::ALL.iter().map(|k| k.name())))]
     scheme: Option<SchemeKind>,
     /// HMM stabilisation parameter α.
     #[arg(long, default_value_t = 1.0)]
@@ -64,19 +66,30 @@ pub struct SolveArgs {
     /// coarse HMM solves of the same problem on agglomerated meshes of the domain, and each
     /// next active set looked ahead by local solves near its changes; same solution, far fewer
     /// solves on fine meshes) or cold (A₀ = ∅, no look-ahead: the paper's algorithm and NITER).
-    #[arg(long, value_enum, default_value_t = WarmStart::Nested)]
+    #[arg(long, default_value_t = WarmStart::Nested,
+          value_parser = named::<WarmStart>(["cold", "nested"]))]
     warm_start: WarmStart,
     /// Linear solver of the condensed systems: auto (direct below 250 000 condensed unknowns,
     /// iterative above), direct (sparse Cholesky) or iterative (algebraic-multigrid
     /// preconditioned conjugate gradients, memory linear in the size).
-    #[arg(long, value_enum, default_value_t = gradvi::assembly::LinearSolver::Auto)]
-    linear: gradvi::assembly::LinearSolver,
+    #[arg(long, default_value_t = LinearSolver::Auto,
+          value_parser = named::<LinearSolver>(["auto", "direct", "iterative"]))]
+    linear: LinearSolver,
     /// Write the solution (u, active set, multiplier) to this VTU file.
     #[arg(long)]
     vtu: Option<PathBuf>,
     /// Write a JSON summary to this file.
     #[arg(long)]
     json: Option<PathBuf>,
+}
+
+/// The parser of an option whose values are the names of a library type: `names` (listed in the
+/// help and checked by clap), turned into a `T` by its `FromStr`.
+fn named<T>(names: impl IntoIterator<Item = &'static str>) -> impl TypedValueParser<Value = T>
+where
+    T: std::str::FromStr<Err = gradvi::Error> + Clone + Send + Sync + 'static,
+{
+    PossibleValuesParser::new(names).try_map(|s| s.parse::<T>())
 }
 
 pub fn parse_param(s: &str) -> Result<(String, f64), String> {

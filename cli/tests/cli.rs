@@ -8,7 +8,7 @@ use std::process::Command;
 fn gradvi_with(args: &[&str], backtrace: &str) -> (bool, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_gradvi"))
         .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
         .env("RUST_BACKTRACE", backtrace)
         .output()
         .expect("run gradvi");

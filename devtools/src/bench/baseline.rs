@@ -38,8 +38,8 @@
 //! stands for, and the cases above [`MAX_MEMORY`] that the floor lets through.
 
 use super::{Config, bad, json_row, peers, plan, stdout_of};
-use crate::app::markdown::{Doc, Table, fixed, met};
-use crate::app::replication::records::{read_csv, write_csv};
+use gradvi_cli::markdown::{Doc, Table, fixed, met};
+use gradvi_cli::replication::records::{read_csv, write_csv};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::process::Command;

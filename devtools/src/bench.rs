@@ -39,13 +39,13 @@
 //! [--baseline-rev REV]` compares every gradvi case with the earlier build EXE in the same run
 //! ([`baseline`]).
 
-use crate::app::replication::records::{read_csv, write_csv};
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{cartesian, hexagonal};
 use gradvi::mesh::io::read_mesh;
 use gradvi::problem::paper_test3;
 use gradvi::scheme::SchemeKind;
 use gradvi::solver::{SolveOptions, WarmStart, solve_problem};
+use gradvi_cli::replication::records::{read_csv, write_csv};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

@@ -22,7 +22,6 @@
 //! sections are written from it ([`super::report`]).
 
 use super::{Config, bad, io_err, json_row, peak_memory_mib, stdout_of};
-use crate::app::replication::records::{read_csv, write_csv};
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::budget::human_bytes;
 use gradvi::mesh::generate::{cartesian_rect, cartesian_triangles};
@@ -30,6 +29,7 @@ use gradvi::mesh::io::read_mesh;
 use gradvi::problem::{Problem, paper_test3};
 use gradvi::scheme::{Entity, SchemeKind};
 use gradvi::solver::{SolveOptions, solve_problem};
+use gradvi_cli::replication::records::{read_csv, write_csv};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

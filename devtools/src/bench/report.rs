@@ -3,9 +3,9 @@
 //! family, a fixed colour and marker per variant).
 
 use super::{BenchRow, C, CSV, Config, FIGURE, FIT_RANGE, P1_TARGET_MIN_CELLS, REPORT, bad};
-use crate::app::markdown::{Doc, NONE, Table, cells, fixed, list, met, seconds};
-use crate::app::plot::{LineOptions, LineSeries, Marker, data_range, palette, plot_panels};
-use crate::app::replication::records::read_csv;
+use gradvi_cli::markdown::{Doc, NONE, Table, cells, fixed, list, met, seconds};
+use gradvi_cli::plot::{LineOptions, LineSeries, Marker, data_range, palette, plot_panels};
+use gradvi_cli::replication::records::read_csv;
 
 /// The rows of one series (code, scheme, variant, family) in order of cells, and its name.
 struct Series<'a> {

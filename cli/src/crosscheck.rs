@@ -16,8 +16,8 @@
 //! load = exact integral of the one-sided affine interpolant of f, nodal barriers, Dirichlet
 //! vertices excluded), so their solutions must agree to round-off: [`SAME_PROBLEM_TOL`].
 
-use crate::app::replication::experiments::with_solution;
-use crate::app::replication::records::{
+use crate::replication::experiments::with_solution;
+use crate::replication::records::{
     PaperTable1, PaperTable2, PaperTable3, TimingRow, read_csv, write_csv,
 };
 use anyhow::{Context, Result, bail};
@@ -612,7 +612,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     let rows = solve_cases(args, &cases, &mut progress)?;
     let t_solve = t.elapsed().as_secs_f64();
     let res = args.out.join("results");
-    crate::app::replication::create_dir(&res)?;
+    crate::replication::create_dir(&res)?;
     write_csv(&res.join("crosscheck.csv"), &rows)?;
     let timings = vec![
         TimingRow {

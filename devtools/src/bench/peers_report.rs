@@ -4,8 +4,8 @@
 
 use super::Config;
 use super::peers::PeerRow;
-use crate::app::markdown::{Doc, NONE, Table, cells, fixed, met, seconds};
-use crate::app::plot::{LineOptions, LineSeries, Marker, data_range, plot_panels};
+use gradvi_cli::markdown::{Doc, NONE, Table, cells, fixed, met, seconds};
+use gradvi_cli::plot::{LineOptions, LineSeries, Marker, data_range, plot_panels};
 
 /// The figure of this part.
 pub const FIGURE: &str = "replication/figures/bench_peers.png";
