@@ -21,7 +21,7 @@ use std::path::PathBuf;
 
 /// Gradient schemes (HMM, P1) for the obstacle and Signorini problems.
 #[derive(Parser)]
-#[command(name = "gradvi", version, about, long_about = None)]
+#[command(name = "gradvi", version, long_about = None)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -1,4 +1,4 @@
-//! The scaling benchmark behind `make bench` (`cargo bench --bench scale`).
+//! The scaling benchmark behind `make bench` (`gradvi-dev bench`).
 //!
 //! Test 3 of the paper (obstacle problem, C = −5, [`gradvi::problem::paper_test3`]) is solved
 //!
@@ -9,7 +9,7 @@
 //! - with the dolfinx P1 reference (`reference/solve.py`, PETSc SNES VI) on the same gmsh meshes
 //!   up to [`DOLFINX_MAX_CELLS`] cells.
 //!
-//! Every case runs in a child process (the benchmark binary re-invokes itself with `--child`),
+//! Every case runs in a child process (`gradvi-dev` re-invokes itself with `bench --child`),
 //! so that the peak resident memory (`VmHWM` of `/proc/self/status`) is that of the case alone.
 //! A child prints one JSON [`BenchRow`]; the driver appends it to
 //! `replication/results/bench.csv` as soon as it is known, and at the end writes
@@ -629,7 +629,8 @@ fn stdout_of(mut cmd: Command, exe: &Path, what: &str) -> gradvi::Result<String>
     Ok(String::from_utf8_lossy(&out.stdout).into_owned())
 }
 
-/// Runs `case` in a child process (`gradvi bench --child …`) and parses its row.
+/// Runs `case` in a child process (`EXE bench --child …`: `gradvi-dev`, or an earlier build's
+/// `gradvi`) and parses its row.
 pub fn run_child(exe: &Path, case: &Case) -> gradvi::Result<BenchRow> {
     let mut cmd = Command::new(exe);
     cmd.args(case.child_args());

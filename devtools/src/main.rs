@@ -1,6 +1,6 @@
 //! `gradvi-dev`: gradvi's developer tools, apart from the `gradvi` binary that users install.
 //!
-//! - `gradvi-dev bench [ARGS]`: the benchmarks ([`bench`]): the scaling benchmark (`make
+//! - `gradvi-dev bench [ARGS]`: the benchmarks ([`mod@bench`]): the scaling benchmark (`make
 //!   bench`), the peer benchmark (`--peers`, `make bench-peers`), the regression check against
 //!   an earlier build (`--baseline EXE`, `make bench-baseline`) and the report writer
 //!   (`--report-only`); run from the repository root.

@@ -50,7 +50,7 @@ fn best<'a>(rows: &'a [PeerRow], scheme: &str, grid: usize) -> Option<&'a PeerRo
 pub fn write(cfg: &Config, md: &mut Doc, rows: &[PeerRow]) -> gradvi::Result<()> {
     if rows.is_empty() {
         md.para(
-            "*The peer benchmark (`gradvi bench --peers`) has not been run: no `bench_peers.csv`.*",
+            "*The peer benchmark (`gradvi-dev bench --peers`) has not been run: no `bench_peers.csv`.*",
         );
         return Ok(());
     }
