@@ -1,8 +1,12 @@
 # gradvi — make targets. Everything needs only Rust (cargo) except `crosscheck` (installs
 # python3-dolfinx and gmsh from Debian) and `meshes` (installs gmsh from Debian).
+# The Cargo workspace: the library (Cargo.toml, src/), the command line (cli/, the `gradvi`
+# binary) and the developer tools (devtools/, the `gradvi-dev` binary: benchmarks, regression
+# check, fuzzer); one target directory for all.
 
 CARGO ?= cargo
 BIN := target/release/gradvi
+DEV := target/release/gradvi-dev
 FVCA5_MESHES ?=
 PYTHON := /usr/bin/python3
 REFDIR := replication/results/reference
@@ -11,37 +15,41 @@ REFDIR := replication/results/reference
 
 all: build
 
+## build: the release binaries gradvi and gradvi-dev
 build:
-	$(CARGO) build --release
+	$(CARGO) build --release --workspace
 
-## test: the test suite (unit, convergence and regression tiers), a few minutes at most
+## test: the test suite of the workspace (library: unit, convergence and regression tiers;
+## command line; developer tools), a few minutes at most
 test:
-	$(CARGO) test
+	$(CARGO) test --workspace
 
 ## test-external: the tests that need what a fresh machine may lack (#[ignore]d in `make test`):
 ## the FVCA5 files in ../shared/meshes/fvca5 and dolfinx (installed here if missing). CI runs it.
 test-external: build reference-deps
-	$(CARGO) test -- --ignored
+	$(CARGO) test --workspace -- --ignored
 
 ## fuzz: seeded mutation fuzzing of meshes and problem files through the readers, validation
-## and a small solve, in child processes under memory and time limits (FUZZ_SECONDS, FUZZ_SEED)
+## and a small solve of the release gradvi, in child processes under memory and time limits
+## (FUZZ_SECONDS, FUZZ_SEED); the fuzzer is gradvi-dev
 FUZZ_SECONDS ?= 300
 FUZZ_SEED ?= 1
 fuzz: build
-	$(BIN) fuzz --seconds $(FUZZ_SECONDS) --seed $(FUZZ_SEED)
+	$(DEV) fuzz --seconds $(FUZZ_SECONDS) --seed $(FUZZ_SEED) --gradvi $(BIN)
 
-## lint: formatting, clippy with warnings as errors, and documentation
+## lint: formatting, clippy with warnings as errors (the workspace, then the library alone:
+## nothing of the other members' dependencies), and documentation
 lint:
 	$(CARGO) fmt --all -- --check
-	$(CARGO) clippy --all-targets -- -D warnings
-	$(CARGO) clippy --lib --no-default-features -- -D warnings
-	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps
+	$(CARGO) clippy --workspace --all-targets -- -D warnings
+	$(CARGO) clippy -p gradvi --lib -- -D warnings
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --workspace --no-deps
 
 fmt:
 	$(CARGO) fmt --all
 
 doc:
-	$(CARGO) doc --no-deps
+	$(CARGO) doc --workspace --no-deps
 
 ## replicate: every table and figure of the paper -> replication/REPORT.md
 ## (add FVCA5_MESHES=../shared/meshes/fvca5 to run Test 2 on the original files too)
@@ -76,11 +84,14 @@ crosscheck-coarse: build reference-deps
 ## bench: peer benchmark (PETSc ex9 side by side, any domain), then the scaling benchmark
 ##        (HMM and P1, Test 3, 1e3 to 1e6 cells; dolfinx up to ~300k cells)
 ##        -> replication/results/bench_peers.csv, bench.csv and replication/BENCHMARKS.md
+##        (`$(DEV) bench --report-only` rewrites BENCHMARKS.md and REGRESSION.md from the CSVs)
 bench: bench-peers build reference-deps
-	$(CARGO) bench --bench scale
+	$(DEV) bench
 
-## bench-baseline: BASE=REV (default 73dd38a) builds revision REV in target/baseline (through a
-##        temporary git worktree) and runs every gradvi case of the two benchmarks with both
+## bench-baseline: BASE=REV (default 73dd38a, the build the regression rows compare with)
+##        builds revision REV in target/baseline (through a temporary git worktree: its
+##        gradvi-dev, or its gradvi for revisions before the workspace, whose gradvi has the
+##        benchmark's child mode) and runs every gradvi case of the two benchmarks with both
 ##        builds, alternately, 3 times each (GRADVI_BENCH_REPEAT), comparing medians in the same
 ##        run; a case above 1.1x is measured again, 6 more runs of each (GRADVI_BENCH_CONFIRM),
 ##        and judged on all its runs; scaling cases: GRADVI_BENCH_VARIANTS (default nested),
@@ -91,9 +102,11 @@ BASE ?= 73dd38a
 bench-baseline: build
 	rm -rf target/baseline-src && git worktree prune
 	git worktree add --detach target/baseline-src $(BASE)
-	$(CARGO) build --release --manifest-path target/baseline-src/Cargo.toml --target-dir target/baseline --bin gradvi
-	git worktree remove --force target/baseline-src
-	$(CARGO) bench --bench scale -- --baseline target/baseline/release/gradvi --baseline-rev $(BASE)
+	bin=$$(test -f target/baseline-src/devtools/Cargo.toml && echo gradvi-dev || echo gradvi) && \
+	$(CARGO) build --release --manifest-path target/baseline-src/Cargo.toml \
+		--target-dir target/baseline --workspace --bin $$bin && \
+	git worktree remove --force target/baseline-src && \
+	$(DEV) bench --baseline target/baseline/release/$$bin --baseline-rev $(BASE)
 
 ## bench-amg: multigrid-preconditioned CG against sparse Cholesky on model problems (the
 ##        measurements behind linalg::amg's defaults; prints a table)
@@ -108,7 +121,7 @@ bench-amg:
 ##        (about N times as long); GRADVI_BENCH_PEERS=ex9 or =domains runs one part
 ##        -> replication/results/bench_peers.csv, BENCHMARKS.md
 bench-peers: build reference-deps
-	$(CARGO) bench --bench scale -- --peers
+	$(DEV) bench --peers
 
 clean:
 	$(CARGO) clean

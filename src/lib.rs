@@ -98,10 +98,10 @@
 //!    [`solver::Solution`].
 //! 7. [`post`]: errors, orders, fitted slopes, contact-zone metrics, fields on mesh entities.
 //!
-//! The applications (command line, replication of the paper, cross-check with dolfinx,
-//! benchmark, plots and reports) live in the `gradvi` binary (`src/main.rs`, `src/app/`), not
-//! in this library: built with `default-features = false`, the library depends on no CLI,
-//! plotting, report or CSV crate.
+//! The applications live in the other members of the workspace, not in this library: the
+//! `gradvi` command line (`cli/`: solve, mesh tools, replication of the paper, cross-check with
+//! dolfinx, plots and reports) and the developer tools (`devtools/`: benchmarks, regression
+//! check, fuzzer). The library depends on no CLI, plotting, report or CSV crate.
 #![warn(missing_docs)]
 // `!(x > y)` is used on purpose throughout: unlike `x <= y` it is true when x is NaN, so
 // validation rejects NaN data.

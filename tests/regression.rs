@@ -1,5 +1,6 @@
 //! Regression tier: a few pinned numbers of the replication (Table 2, Table 3, Table 1 on the
-//! coarsest meshes), and a smoke run of the whole replication pipeline.
+//! coarsest meshes). The smoke run of the whole replication pipeline, an application of the
+//! library, is a test of the command line (`cli/tests/replicate.rs`).
 
 mod common;
 
@@ -65,56 +66,4 @@ fn table3_and_table1_on_the_coarsest_meshes() {
     let cons = sol.constraints.as_ref().unwrap();
     let sw = gradvi::post::contact::switch_point(cons, &sol.result.active, 0).unwrap();
     assert!(close(sw.at, 0.6875, 1e-9), "switch at {}", sw.at);
-}
-
-#[test]
-fn quick_replication_writes_csv_figures_and_report() {
-    // the replication is an application of the library: run it through the `gradvi` binary
-    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("replicate-test-{}", std::process::id()));
-    let run = std::process::Command::new(env!("CARGO_BIN_EXE_gradvi"))
-        .args(["replicate", "--quick", "--out"])
-        .arg(&out)
-        .arg("--meshes")
-        .arg(root().join("meshes"))
-        .arg("--paper")
-        .arg(root().join("replication/paper"))
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&run.stderr);
-    assert!(
-        run.status.success(),
-        "gradvi replicate --quick failed: {stderr}"
-    );
-    let report = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
-    for needle in [
-        "Table 1",
-        "Table 2",
-        "Table 3",
-        "Figure 4.1",
-        "Figure 4.5",
-        "paper",
-    ] {
-        assert!(report.contains(needle), "REPORT.md lacks {needle}");
-    }
-    for f in [
-        "fig4_1_test1.png",
-        "fig4_3_test2_hexagonal.png",
-        "fig4_5_test3.png",
-        "test3_niter.png",
-    ] {
-        let bytes = std::fs::read(out.join("figures").join(f)).unwrap();
-        assert_eq!(&bytes[1..4], b"PNG", "{f}");
-    }
-    for f in [
-        "test1.csv",
-        "test2.csv",
-        "test3.csv",
-        "iterations.csv",
-        "timings.csv",
-    ] {
-        assert!(out.join("results").join(f).is_file(), "{f}");
-    }
-    assert!(stderr.lines().count() > 10, "progress lines on stderr");
-    std::fs::remove_dir_all(&out).ok();
 }

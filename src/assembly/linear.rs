@@ -22,7 +22,6 @@
 /// The measurements behind these choices are in `replication/BENCHMARKS.md` ("Measurements
 /// behind the defaults").
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum LinearSolver {
     /// Direct below [`AUTO_ITERATIVE_MIN`] condensed unknowns, iterative from there on.

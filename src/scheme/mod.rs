@@ -142,16 +142,15 @@ impl Default for SchemeOptions {
     }
 }
 
-/// Declares the registered schemes: the [`SchemeKind`] enum (a clap `ValueEnum` with the `cli`
-/// feature), its names, and [`build`]. One line per scheme.
+/// Declares the registered schemes: the [`SchemeKind`] enum, its names, and [`build`]. One line
+/// per scheme.
 macro_rules! register_schemes {
     ($($(#[$doc:meta])* $variant:ident = $name:literal => $ctor:expr,)*) => {
         /// The registered schemes (`--scheme NAME` on the command line).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
-        #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
         #[serde(rename_all = "lowercase")]
         pub enum SchemeKind {
-            $($(#[$doc])* #[cfg_attr(feature = "cli", value(name = $name))] $variant,)*
+            $($(#[$doc])* $variant,)*
         }
 
         impl SchemeKind {

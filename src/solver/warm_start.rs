@@ -55,7 +55,6 @@ use std::time::Instant;
 
 /// How the monotony algorithm starts (`--warm-start nested|cold` on the command line).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum WarmStart {
     /// From A₀ = ∅ (the paper's algorithm; NITER comparable with its tables; the

@@ -1,4 +1,4 @@
-//! The scaling benchmark behind `make bench` (`cargo bench --bench scale`).
+//! The scaling benchmark behind `make bench` (`gradvi-dev bench`).
 //!
 //! Test 3 of the paper (obstacle problem, C = −5, [`gradvi::problem::paper_test3`]) is solved
 //!
@@ -9,7 +9,7 @@
 //! - with the dolfinx P1 reference (`reference/solve.py`, PETSc SNES VI) on the same gmsh meshes
 //!   up to [`DOLFINX_MAX_CELLS`] cells.
 //!
-//! Every case runs in a child process (the benchmark binary re-invokes itself with `--child`),
+//! Every case runs in a child process (`gradvi-dev` re-invokes itself with `bench --child`),
 //! so that the peak resident memory (`VmHWM` of `/proc/self/status`) is that of the case alone.
 //! A child prints one JSON [`BenchRow`]; the driver appends it to
 //! `replication/results/bench.csv` as soon as it is known, and at the end writes
@@ -39,13 +39,13 @@
 //! [--baseline-rev REV]` compares every gradvi case with the earlier build EXE in the same run
 //! ([`baseline`]).
 
-use crate::app::replication::records::{read_csv, write_csv};
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{cartesian, hexagonal};
 use gradvi::mesh::io::read_mesh;
 use gradvi::problem::paper_test3;
 use gradvi::scheme::SchemeKind;
-use gradvi::solver::{SolveOptions, WarmStart, solve_problem};
+use gradvi::solver::{Solution, SolveOptions, WarmStart, solve_problem};
+use gradvi_cli::replication::records::{read_csv, write_csv};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -323,46 +323,11 @@ pub fn peak_memory_mib() -> f64 {
 /// Runs one case in this process and returns its row (the body of a `--child` process).
 pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
     let t0 = Instant::now();
-    let (mesh, name): (PolyMesh, String) = match case.family {
-        BenchFamily::Gmsh => {
-            let f = case
-                .file
-                .as_ref()
-                .ok_or_else(|| bad("a gmsh case needs its file".into()))?;
-            let stem = f
-                .file_stem()
-                .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-            (read_mesh(f)?, stem)
-        }
-        BenchFamily::Hexagonal => (hexagonal(case.size)?, format!("hexa level {}", case.size)),
-        BenchFamily::Cartesian => (
-            cartesian(case.size, case.size)?,
-            format!("{0}x{0}", case.size),
-        ),
-    };
+    let (mesh, name) = case_mesh(case)?;
     let mesh_s = t0.elapsed().as_secs_f64();
     let scheme = gradvi::scheme::build(case.scheme, &mesh)?;
     let problem = paper_test3(C);
-    let system_options = gradvi::assembly::SystemOptions {
-        ordering: match case.variant {
-            Variant::NestedNd => gradvi::linalg::Ordering::NestedDissection,
-            _ => gradvi::linalg::Ordering::Amd,
-        },
-        factor_threads: match case.variant {
-            Variant::NestedParallel => gradvi::linalg::FactorThreads::Global,
-            _ => gradvi::linalg::FactorThreads::Sequential,
-        },
-        // these variants measure the direct solver (the peer benchmark compares the two)
-        linear: gradvi::assembly::LinearSolver::Direct,
-    };
-    let opts = SolveOptions {
-        system: system_options,
-        warm_start: match case.variant {
-            Variant::Cold => WarmStart::Cold,
-            Variant::Nested | Variant::NestedParallel | Variant::NestedNd => WarmStart::Nested,
-        },
-        ..Default::default()
-    };
+    let opts = case_options(case.variant);
     let sol = solve_problem(scheme.as_ref(), &problem, &opts)?;
     let total_s = t0.elapsed().as_secs_f64();
     // a nested case must have been predicted, except on meshes too coarse to have a coarser
@@ -377,18 +342,7 @@ pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
     }
     let system = &sol.system;
     if std::env::var_os("GRADVI_BENCH_LOG").is_some() {
-        eprintln!(
-            "[bench]     condensed {} unknowns, {} entries, factor {} values",
-            system.n_condensed(),
-            system.nnz(),
-            system.factor_len()
-        );
-        for l in &sol.result.log {
-            eprintln!(
-                "[bench]     solve {:>3}: active {:>8} (+{}, -{}), factor {:.3} s",
-                l.step.solve, l.step.active, l.step.entered, l.step.left, l.timings.factor
-            );
-        }
+        log_solve(&sol);
     }
     let t = sol.timings;
     let coarse_s = t.warm_start;
@@ -438,6 +392,68 @@ pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
             .join(" "),
         run: 0,
     })
+}
+
+/// The mesh of `case` and its name (file stem, `hexa level K`, `n×n`).
+fn case_mesh(case: &Case) -> gradvi::Result<(PolyMesh, String)> {
+    Ok(match case.family {
+        BenchFamily::Gmsh => {
+            let f = case
+                .file
+                .as_ref()
+                .ok_or_else(|| bad("a gmsh case needs its file".into()))?;
+            let stem = f
+                .file_stem()
+                .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+            (read_mesh(f)?, stem)
+        }
+        BenchFamily::Hexagonal => (hexagonal(case.size)?, format!("hexa level {}", case.size)),
+        BenchFamily::Cartesian => (
+            cartesian(case.size, case.size)?,
+            format!("{0}x{0}", case.size),
+        ),
+    })
+}
+
+/// The solver options of a variant (module docs).
+fn case_options(variant: Variant) -> SolveOptions {
+    let system_options = gradvi::assembly::SystemOptions {
+        ordering: match variant {
+            Variant::NestedNd => gradvi::linalg::Ordering::NestedDissection,
+            _ => gradvi::linalg::Ordering::Amd,
+        },
+        factor_threads: match variant {
+            Variant::NestedParallel => gradvi::linalg::FactorThreads::Global,
+            _ => gradvi::linalg::FactorThreads::Sequential,
+        },
+        // these variants measure the direct solver (the peer benchmark compares the two)
+        linear: gradvi::assembly::LinearSolver::Direct,
+    };
+    SolveOptions {
+        system: system_options,
+        warm_start: match variant {
+            Variant::Cold => WarmStart::Cold,
+            Variant::Nested | Variant::NestedParallel | Variant::NestedNd => WarmStart::Nested,
+        },
+        ..Default::default()
+    }
+}
+
+/// The factor size and the active-set log of a case's solve, on stderr (`GRADVI_BENCH_LOG`).
+fn log_solve(sol: &Solution) {
+    let system = &sol.system;
+    eprintln!(
+        "[bench]     condensed {} unknowns, {} entries, factor {} values",
+        system.n_condensed(),
+        system.nnz(),
+        system.factor_len()
+    );
+    for l in &sol.result.log {
+        eprintln!(
+            "[bench]     solve {:>3}: active {:>8} (+{}, -{}), factor {:.3} s",
+            l.step.solve, l.step.active, l.step.entered, l.step.left, l.timings.factor
+        );
+    }
 }
 
 /// Settings of a benchmark run.
@@ -629,7 +645,8 @@ fn stdout_of(mut cmd: Command, exe: &Path, what: &str) -> gradvi::Result<String>
     Ok(String::from_utf8_lossy(&out.stdout).into_owned())
 }
 
-/// Runs `case` in a child process (`gradvi bench --child …`) and parses its row.
+/// Runs `case` in a child process (`EXE bench --child …`: `gradvi-dev`, or an earlier build's
+/// `gradvi`) and parses its row.
 pub fn run_child(exe: &Path, case: &Case) -> gradvi::Result<BenchRow> {
     let mut cmd = Command::new(exe);
     cmd.args(case.child_args());
@@ -779,12 +796,19 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
         peers::run(&cfg, &exe)?;
         return write_report(&cfg);
     }
+    run_scaling(&cfg, &exe, t0)
+}
+
+/// The scaling benchmark: every case of [`plan`] in a child process of `exe` (and dolfinx on
+/// the gmsh meshes), the CSV written row by row, then the report and figure; `t0` is the start
+/// of the run.
+fn run_scaling(cfg: &Config, exe: &Path, t0: Instant) -> gradvi::Result<()> {
     eprintln!(
         "[bench] Test 3 (C = {C}), cells up to {} (GRADVI_BENCH_MAX_CELLS), dolfinx up to {} \
          (GRADVI_BENCH_DOLFINX_MAX_CELLS)",
         cfg.max_cells, cfg.dolfinx_max_cells
     );
-    let cases = plan(&cfg)?;
+    let cases = plan(cfg)?;
     let dolfinx = dolfinx_available(&cfg.python);
     if !dolfinx {
         eprintln!(
@@ -801,33 +825,12 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());
     // GRADVI_BENCH_MERGE: keep the rows of earlier runs that this run does not redo
-    let mut rows: Vec<BenchRow> =
-        if std::env::var_os("GRADVI_BENCH_MERGE").is_some() && csv.exists() {
-            let redo = |r: &BenchRow| {
-                cases.iter().any(|c| {
-                    r.code == "gradvi"
-                        && r.family == c.family.name()
-                        && r.scheme == c.scheme.to_string()
-                        && r.variant == c.variant.name()
-                        && (r.cells as f64 - c.expected_cells() as f64).abs()
-                            <= 0.2 * c.expected_cells() as f64
-                })
-            };
-            let old: Vec<BenchRow> = read_csv(&csv)?;
-            let kept: Vec<BenchRow> = old.into_iter().filter(|r| !redo(r)).collect();
-            eprintln!(
-                "[bench] GRADVI_BENCH_MERGE: keeping {} rows of earlier runs",
-                kept.len()
-            );
-            kept
-        } else {
-            Vec::new()
-        };
+    let mut rows: Vec<BenchRow> = kept_rows(&csv, &cases)?;
     let mut done_dolfinx: Vec<PathBuf> = Vec::new();
     let n_cases = cases.len();
     for (i, case) in cases.iter().enumerate() {
         eprintln!("[bench] ({}/{n_cases}) {} ...", i + 1, case.label());
-        let mut row = run_child(&exe, case)?;
+        let mut row = run_child(exe, case)?;
         row.run = run;
         eprintln!(
             "[bench]   {} cells, NITER {} (+{} coarse), total {:.3} s (factor {:.3}, assemble \
@@ -849,7 +852,7 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
             && !done_dolfinx.contains(f)
         {
             eprintln!("[bench]   dolfinx P1 on {} ...", f.display());
-            let mut d = run_dolfinx(&cfg, f)?;
+            let mut d = run_dolfinx(cfg, f)?;
             d.run = run;
             rows.retain(|r| !(r.code == "dolfinx" && r.mesh == d.mesh));
             rows.push(d);
@@ -857,7 +860,7 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
         }
         write_csv(&csv, &rows)?;
     }
-    write_report(&cfg)?;
+    write_report(cfg)?;
     eprintln!(
         "[bench] wrote {}, {} and {} in {:.1} s",
         csv.display(),
@@ -866,6 +869,31 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
         t0.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// The rows of the CSV `csv` that the run of `cases` does not redo, if `GRADVI_BENCH_MERGE` is
+/// set; none otherwise.
+fn kept_rows(csv: &Path, cases: &[Case]) -> gradvi::Result<Vec<BenchRow>> {
+    if std::env::var_os("GRADVI_BENCH_MERGE").is_none() || !csv.exists() {
+        return Ok(Vec::new());
+    }
+    let redo = |r: &BenchRow| {
+        cases.iter().any(|c| {
+            r.code == "gradvi"
+                && r.family == c.family.name()
+                && r.scheme == c.scheme.to_string()
+                && r.variant == c.variant.name()
+                && (r.cells as f64 - c.expected_cells() as f64).abs()
+                    <= 0.2 * c.expected_cells() as f64
+        })
+    };
+    let old: Vec<BenchRow> = read_csv(csv)?;
+    let kept: Vec<BenchRow> = old.into_iter().filter(|r| !redo(r)).collect();
+    eprintln!(
+        "[bench] GRADVI_BENCH_MERGE: keeping {} rows of earlier runs",
+        kept.len()
+    );
+    Ok(kept)
 }
 
 #[cfg(test)]

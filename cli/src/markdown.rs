@@ -34,8 +34,8 @@ impl Doc {
     pub fn insert(&mut self, at: usize, text: &str) {
         self.0.insert_str(at, text);
     }
-    /// Length in bytes so far.
-    pub fn len(&self) -> usize {
+    /// The byte offset of the end of the document so far (a place for [`Doc::insert`]).
+    pub fn end(&self) -> usize {
         self.0.len()
     }
     /// Writes the document to `path` (ending in a single newline).
@@ -109,10 +109,11 @@ impl Display for Table {
 }
 
 /// The cells of a table row from values that implement `Display`: `cells![a, b, c]`.
+#[macro_export]
 macro_rules! cells {
     ($($x:expr),* $(,)?) => { vec![$($x.to_string()),*] };
 }
-pub(crate) use cells;
+pub use cells;
 
 /// `x` with `d` decimals; [`NONE`] when not finite.
 pub fn fixed(x: f64, d: usize) -> String {

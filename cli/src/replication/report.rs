@@ -4,7 +4,7 @@
 
 use super::Config;
 use super::records::*;
-use crate::app::markdown::{Doc, NONE, Table, cells, fixed, list, orders};
+use crate::markdown::{Doc, NONE, Table, cells, fixed, list, orders};
 use gradvi::post::order;
 use std::path::Path;
 
@@ -552,7 +552,7 @@ mod tests {
 
     #[test]
     fn the_report_of_the_committed_results_has_every_table_and_figure() {
-        let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let repo = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
         let out = std::env::temp_dir().join(format!("gradvi-report-{}", std::process::id()));
         std::fs::create_dir_all(out.join("results")).unwrap();
         for f in ["meshes", "test1", "test2", "test3", "timings"] {

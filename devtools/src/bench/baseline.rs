@@ -1,12 +1,14 @@
 //! Regression check against an earlier build, measured in the same run
-//! (`make bench-baseline BASE=REV`, or `gradvi bench --baseline EXE [--baseline-rev REV]`).
+//! (`make bench-baseline BASE=REV`, or `gradvi-dev bench --baseline EXE [--baseline-rev REV]`).
 //!
 //! Run-to-run noise on the benchmark machine is about ±10%, so two benchmark runs on different
 //! days cannot show that a change did not slow a case down. Here every gradvi case of the two
 //! benchmarks (the scaling cases of [`super::plan`], and the gradvi cases of the peer
 //! benchmark: ex9 up to `GRADVI_BENCH_EX9_MAX_GRID`, default [`DEFAULT_EX9_MAX_GRID`], and the
 //! any-domain meshes) runs as a child process of the current executable and of EXE (the
-//! `gradvi` binary of the earlier revision), alternately (which one runs first alternates from
+//! `gradvi-dev` binary of the earlier revision, or its `gradvi` binary for revisions before the
+//! workspace: both take the same child arguments, `bench --child …` and `bench --peer-child
+//! …`), alternately (which one runs first alternates from
 //! case to case and repeat to repeat), `GRADVI_BENCH_REPEAT` times each (default
 //! [`DEFAULT_REPEAT`]); the medians are compared. The scaling cases use the variants of
 //! `GRADVI_BENCH_VARIANTS`, here `nested` (the default of `gradvi solve`) unless set, since the
@@ -14,7 +16,7 @@
 //!
 //! **Confirmation.** With 87 cases and medians of a few runs on a machine whose run-to-run
 //! noise is about ±10%, a case or two lands above the bound in most checks by chance alone
-//! (two 5-repeat checks of one build flagged 1 and 4 cases, none twice). A case found slower
+//! (`replication/BENCHMARKS.md`, "Measurements behind the defaults"). A case found slower
 //! after the first pass is therefore measured again, `GRADVI_BENCH_CONFIRM` more runs of each
 //! build (default [`DEFAULT_CONFIRM`], alternating as before), and judged on the medians of all
 //! its runs, the first ones included; the report shows the first-pass ratio beside. The bound
@@ -22,11 +24,12 @@
 //! stays flagged, with more runs behind it.
 //!
 //! **Span.** The peer children of this build report `solved_s`, from the mesh to the certified
-//! solution, beside `total_s`, which since ac00c7d also covers the errors and the freeing; a
-//! child that does not report `solved_s` (73dd38a and other builds before ac00c7d) reports that
-//! span as `total_s`. The check compares `solved_s` when a child reports it, else `total_s`:
-//! the same span for builds before ac00c7d or from this one on (a build between the two
-//! would be timed over the longer span; a NaN `solved_s` is written as null and not read).
+//! solution, beside `total_s`, which also covers the errors and the freeing; a child that does
+//! not report `solved_s` (the earlier builds whose `total_s` ended at the certified solution,
+//! the default revision of `make bench-baseline` among them) reports that span as `total_s`.
+//! The check compares `solved_s` when a child reports it, else `total_s`: the same span on
+//! both sides (a NaN `solved_s` is written as null and not read). Which builds are which is in
+//! `replication/BENCHMARKS.md` ("Measurements behind the defaults").
 //!
 //! A case the earlier build cannot run (a benchmark it did not have yet, or an error) is
 //! listed with its reason, not hidden. Rows go to [`CSV`] as they come; the report is
@@ -38,8 +41,8 @@
 //! stands for, and the cases above [`MAX_MEMORY`] that the floor lets through.
 
 use super::{Config, bad, json_row, peers, plan, stdout_of};
-use crate::app::markdown::{Doc, Table, fixed, met};
-use crate::app::replication::records::{read_csv, write_csv};
+use gradvi_cli::markdown::{Doc, Table, fixed, met};
+use gradvi_cli::replication::records::{read_csv, write_csv};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::process::Command;
@@ -62,9 +65,8 @@ pub const MIN_SLOWDOWN_S: f64 = 0.05;
 pub const MAX_MEMORY: f64 = 1.05;
 /// ... and by more than this many MiB. The peak resident memory of one binary on one case
 /// varies from run to run (thread stacks, allocator arenas and packing buffers touched or
-/// not): 31.8 to 33.5 MiB over 5 runs of hexagonal 4 HMM nested in the check of 654e063, whose
-/// only case above 1.05× was 33.8 against 32.2 MiB. Fixed before the next check, as the time
-/// floor is; the report shows the spread measured in its own run beside it.
+/// not; the spread behind this floor is in `replication/BENCHMARKS.md`, "Measurements behind
+/// the defaults"). The report shows the spread measured in its own run beside it.
 pub const MIN_MEMORY_MIB: f64 = 2.0;
 
 /// One case measured with both builds.
@@ -472,7 +474,7 @@ pub fn write_report(cfg: &Config) -> gradvi::Result<()> {
     md.para(format!(
         "Written by `make bench-baseline BASE={baseline}` from `{CSV}`. Every case ran as a \
          child process of the current build and of the earlier one, alternately, and the medians \
-         of their total times are compared in the same run (`src/app/bench/baseline.rs`). A case \
+         of their total times are compared in the same run (`devtools/src/bench/baseline.rs`). A case \
          regresses when its median time exceeds {MAX_SLOWDOWN} times the earlier build's (this \
          machine's run-to-run noise is about ±10%) and by more than {MIN_SLOWDOWN_S} s, or its \
          peak memory (the largest of its runs) exceeds {MAX_MEMORY} times the earlier build's \

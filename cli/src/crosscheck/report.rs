@@ -6,8 +6,8 @@ use super::{
     ACTIVE_TOL, CrosscheckRow, ERROR_AGREEMENT_TOL, HAUSDORFF_TOL_H, MATCH_TOL, MIN_ORDER_U,
     SAME_PROBLEM_TOL, SWITCH_TOL_H,
 };
-use crate::app::markdown::{Doc, NONE, Table, cells, fixed, list, opt, orders, pass, sci, yes_no};
-use crate::app::replication::records::{TimingRow, read_csv};
+use crate::markdown::{Doc, NONE, Table, cells, fixed, list, opt, orders, pass, sci, yes_no};
+use crate::replication::records::{TimingRow, read_csv};
 use anyhow::Result;
 use gradvi::post::fitted_slope;
 use std::path::Path;
@@ -39,7 +39,7 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
         },
         rows.len()
     ));
-    let summary_at = md.len();
+    let summary_at = md.end();
     definitions(&mut md);
     same_problem(&mut md, &all, &mut failed);
     let sections: [(usize, &str, &str, Section); 4] = [
@@ -739,12 +739,13 @@ fn timing(md: &mut Doc, rows: &Rows, timings: &[TimingRow]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::app::replication::records::write_csv;
+    use crate::replication::records::write_csv;
 
     /// The committed cross-check results in a temporary replication directory, changed by
     /// `edit`; returns the failures and the report.
     fn report_of(name: &str, edit: impl Fn(&mut [CrosscheckRow])) -> (Vec<String>, String) {
-        let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("replication/results");
+        let repo =
+            Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).join("replication/results");
         let mut rows: Vec<CrosscheckRow> = read_csv(&repo.join("crosscheck.csv")).unwrap();
         let timings: Vec<TimingRow> = read_csv(&repo.join("crosscheck_timings.csv")).unwrap();
         edit(&mut rows);

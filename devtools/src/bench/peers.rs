@@ -1,4 +1,4 @@
-//! The peer benchmark (`gradvi bench --peers`, part of `make bench`):
+//! The peer benchmark (`gradvi-dev bench --peers`, part of `make bench`):
 //!
 //! 1. **PETSc's obstacle example side by side.** Bueler's radial obstacle problem
 //!    (`problems/ex9.toml`) as PETSc's `snes/tutorials/ex9.c` solves it, with grid sequencing
@@ -22,7 +22,6 @@
 //! sections are written from it ([`super::report`]).
 
 use super::{Config, bad, io_err, json_row, peak_memory_mib, stdout_of};
-use crate::app::replication::records::{read_csv, write_csv};
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::budget::human_bytes;
 use gradvi::mesh::generate::{cartesian_rect, cartesian_triangles};
@@ -30,6 +29,7 @@ use gradvi::mesh::io::read_mesh;
 use gradvi::problem::{Problem, paper_test3};
 use gradvi::scheme::{Entity, SchemeKind};
 use gradvi::solver::{SolveOptions, solve_problem};
+use gradvi_cli::replication::records::{read_csv, write_csv};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -42,14 +42,15 @@ pub const CSV: &str = "replication/results/bench_peers.csv";
 pub const EX9_GRIDS: [usize; 5] = [257, 513, 1025, 2049, 4097];
 /// Default cap on G: all grids. The largest, 4097² (16.8M unknowns), runs only where the
 /// memory available is at least [`BIG_GRID_MEMORY`], and there only PETSc and gradvi P1 with
-/// the iterative solver: the other variants would not fit in 24 GiB (at 2049² P1 direct peaked
-/// at 7.2 GiB and HMM iterative, on 4 times fewer cells than HMM at 4097², at 7.1 GiB;
-/// both grow about 4-fold per level).
+/// the iterative solver: the other variants would not fit in 24 GiB (their peaks at 2049²,
+/// which grow about 4-fold per level, are in `replication/BENCHMARKS.md`, "Measurements behind
+/// the defaults").
 pub const DEFAULT_MAX_GRID: usize = 4097;
 /// The grid from which only gradvi P1 iterative runs beside PETSc.
 pub const BIG_GRID: usize = 4097;
-/// The memory available needed to run [`BIG_GRID`]: 21 GiB (measured peaks: gradvi P1
-/// iterative 18.2 GiB; PETSc about 14 GiB, four times its 2049² peak).
+/// The memory available needed to run [`BIG_GRID`]: 21 GiB, above the measured peaks of gradvi
+/// P1 iterative and PETSc there (`replication/BENCHMARKS.md`, "Measurements behind the
+/// defaults").
 pub const BIG_GRID_MEMORY: u64 = 21 << 30;
 
 /// The gradvi variants (scheme, linear solver) run on the ex9 grid G (see [`BIG_GRID`]).
@@ -97,8 +98,8 @@ pub struct PeerRow {
     /// (PETSc: the process's wall clock).
     pub total_s: f64,
     /// From the mesh to the certified solution, without the errors and the freeing: the span
-    /// of `total_s` before ac00c7d, which the regression check compares with the builds of
-    /// that time (`super::baseline`). NaN for PETSc and in rows written before this column.
+    /// the regression check compares with earlier builds (`super::baseline`, "Span"). NaN for
+    /// PETSc and in rows written before this column.
     #[serde(deserialize_with = "nullable", default = "nan")]
     pub solved_s: f64,
     /// Mesh generation or reading.
@@ -329,7 +330,7 @@ fn run_gradvi(
     Ok(row)
 }
 
-/// Arguments of a child process: FAMILY SCHEME LINEAR SIZE [FILE].
+/// Arguments of a child process: `FAMILY SCHEME LINEAR SIZE [FILE]`.
 pub fn child_main(args: &[String], root: &Path) -> gradvi::Result<()> {
     if args.len() < 4 {
         return Err(bad("--peer-child FAMILY SCHEME LINEAR SIZE [FILE]".into()));

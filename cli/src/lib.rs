@@ -1,16 +1,27 @@
 //! The `gradvi` command line: mesh tools, single solves, the replication of the paper and the
 //! cross-check against dolfinx. Run `gradvi --help` or `gradvi <command> --help`.
+//!
+//! The binary (`src/main.rs`) calls [`main_with_args`]; the commands are this library so that
+//! the developer tools (`devtools/`) run the same command line in their child processes and
+//! reuse the report ([`markdown`]), figure ([`plot`]) and CSV ([`replication::records`])
+//! helpers.
 
-mod app;
+pub mod crosscheck;
+pub mod markdown;
+pub mod output;
+pub mod plot;
+pub mod replication;
+pub mod solve;
 
 use anyhow::{Result, bail};
 use clap::{Args, Parser, Subcommand};
 use gradvi::mesh::io::{read_mesh, write_typ2, write_vtu};
+use std::ffi::OsString;
 use std::path::PathBuf;
 
 /// Gradient schemes (HMM, P1) for the obstacle and Signorini problems.
 #[derive(Parser)]
-#[command(name = "gradvi", version, about, long_about = None)]
+#[command(name = "gradvi", version, long_about = None)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -23,22 +34,11 @@ enum Command {
     Mesh(MeshCommand),
     /// Solve one problem on one mesh with one scheme; prints NITER, the certificate, errors and
     /// timings; optionally writes VTU and JSON.
-    Solve(app::solve::SolveArgs),
+    Solve(solve::SolveArgs),
     /// Reproduce the paper's tables and figures (results/*.csv, figures/*.png, REPORT.md).
     Replicate(ReplicateArgs),
     /// Compare gradvi's P1 and HMM with the dolfinx reference solves (CROSSCHECK.md).
-    Crosscheck(app::crosscheck::CrosscheckArgs),
-    /// Seeded mutation fuzzing of the readers, validation and solver (run by `make fuzz`).
-    #[command(hide = true)]
-    Fuzz(app::fuzz::FuzzArgs),
-    /// The scaling benchmark (run by `make bench`; see README "Performance"). Arguments:
-    /// `--report-only` rewrites BENCHMARKS.md from bench.csv; `--root DIR` is the repository.
-    #[command(hide = true)]
-    Bench {
-        /// Arguments passed to the benchmark driver.
-        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
-        args: Vec<String>,
-    },
+    Crosscheck(crosscheck::CrosscheckArgs),
 }
 
 #[derive(Subcommand)]
@@ -119,7 +119,7 @@ fn mesh_info(file: &PathBuf) -> Result<()> {
 }
 
 fn replicate(a: &ReplicateArgs) -> Result<()> {
-    let cfg = app::replication::Config {
+    let cfg = replication::Config {
         out: a.out.clone(),
         meshes: a.meshes.clone(),
         fvca5: a.fvca5.clone(),
@@ -131,32 +131,36 @@ fn replicate(a: &ReplicateArgs) -> Result<()> {
     if !a.report_only {
         let t0 = std::time::Instant::now();
         eprintln!("running the experiments of the paper's Section 4 (HMM and P1)...");
-        let mut timings = app::replication::experiments::run(&cfg, &mut progress)?;
+        let mut timings = replication::experiments::run(&cfg, &mut progress)?;
         let t = std::time::Instant::now();
         eprintln!("drawing the figures...");
-        app::replication::figures::run(&cfg, &mut progress)?;
-        timings.push(app::replication::records::TimingRow {
+        replication::figures::run(&cfg, &mut progress)?;
+        timings.push(replication::records::TimingRow {
             stage: "figures".into(),
             seconds: t.elapsed().as_secs_f64(),
         });
-        app::replication::records::write_csv(&cfg.results().join("timings.csv"), &timings)?;
+        replication::records::write_csv(&cfg.results().join("timings.csv"), &timings)?;
         eprintln!(
             "experiments and figures: {:.1} s",
             t0.elapsed().as_secs_f64()
         );
     } else {
-        app::replication::figures::plots_from_csv(&cfg)?;
+        replication::figures::plots_from_csv(&cfg)?;
     }
-    app::replication::report::write(&cfg, &root)?;
+    replication::report::write(&cfg, &root)?;
     eprintln!("wrote {}", cfg.out.join("REPORT.md").display());
     Ok(())
 }
 
-/// Runs the command; a user error is one clean line on stderr (`error: ...` with its causes)
-/// and exit status 1, whatever `RUST_BACKTRACE` says.
-fn main() -> std::process::ExitCode {
-    limit_malloc_arenas();
-    match run(Cli::parse()) {
+/// Runs the command line `args` (the program name first); a user error is one clean line on
+/// stderr (`error: ...` with its causes) and exit status 1, whatever `RUST_BACKTRACE` says.
+/// Arguments clap rejects print its message and exit with its status (2).
+pub fn main_with_args<I, T>(args: I) -> std::process::ExitCode
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    match run(Cli::parse_from(args)) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", one_line(&e));
@@ -168,7 +172,7 @@ fn main() -> std::process::ExitCode {
 /// The error and its causes on one line, each cause once: the library's errors show their
 /// cause in their own message (so that they read whole alone, e.g. from Python), which
 /// anyhow's `{:#}` would repeat ("x.msh: No such file …: No such file …").
-fn one_line(e: &anyhow::Error) -> String {
+pub fn one_line(e: &anyhow::Error) -> String {
     let mut line = String::new();
     for cause in e.chain() {
         let c = cause.to_string();
@@ -182,28 +186,17 @@ fn one_line(e: &anyhow::Error) -> String {
     line
 }
 
-/// One malloc arena for all threads (glibc), unless `MALLOC_ARENA_MAX` says otherwise.
+/// One malloc arena for all threads (glibc), unless `MALLOC_ARENA_MAX` says otherwise. Call it
+/// first thing in `main`, before any other thread exists.
 ///
 /// glibc gives each thread that allocates (here rayon's workers) its own arena and returns
 /// the freed memory of those arenas to the system far less readily than that of the main
-/// one, so the vectors freed between two active-set steps stayed resident. Measured with
-/// `gradvi solve problems/ex9.toml --scheme p1 --generate triangles --level 9` (1M unknowns,
-/// 2 cores, three runs each): peak resident memory 1505–1568 MB with glibc's default, 1366–1378
-/// MB with one arena, 1393–1450 MB with two; total time 6.9–7.9 s and 6.7–7.3 s (unchanged
-/// within the noise). The
-/// benchmark's cases run this binary, so they measure the same setting. (Also measured:
-/// mimalloc, 1636–1679 MB; a fixed mmap threshold of 128 kB, 1323–1341 MB but 30% slower
-/// from the page faults of fresh mappings.) Those faults remain the cost of the large arrays
-/// each active-set step allocates and frees (above glibc's 32 MB mmap limit they are always
-/// fresh mappings): at 4M unknowns the kernel's page zeroing (`clear_page_erms`) is 15% of
-/// the profile. No mmap at all (`MALLOC_MMAP_MAX_=0`, no trimming) was 12–20% faster at 1M
-/// unknowns but raised the peak from 1041–1043 to 1256–1257 MB (two runs each, a loaded
-/// machine); reusing those arrays across steps is the remedy that keeps both. (Also measured
-/// and rejected: a global allocator asking `madvise(MADV_HUGEPAGE)` for every block of 4 MB or
-/// more, against those faults: ex9 HMM at 1024² cells took 6.1–8.0 s instead of 5.2–6.1 s,
-/// its kernel time 3.4–4.0 s instead of 1.3–1.6 s, the huge pages being compacted and zeroed
-/// on the fault path; two runs each, alternating.)
-fn limit_malloc_arenas() {
+/// one, so the vectors freed between two active-set steps stayed resident: one arena lowers
+/// the peak resident memory at an unchanged time. The benchmark's children (`gradvi-dev`)
+/// call it too, so they measure the same setting. The measurements behind this choice, and
+/// the alternatives measured and rejected, are in `replication/BENCHMARKS.md` ("Measurements
+/// behind the defaults").
+pub fn limit_malloc_arenas() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     if std::env::var_os("MALLOC_ARENA_MAX").is_none() {
         use std::ffi::c_int;
@@ -228,12 +221,10 @@ fn run(cli: Cli) -> Result<()> {
             level,
             output,
         }) => {
-            let m = app::solve::generate(family, *level)?;
+            let m = solve::generate(family, *level)?;
             match output.extension().and_then(|e| e.to_str()) {
-                Some("typ2") => app::output::atomic(output, |tmp| Ok(write_typ2(tmp, &m)?))?,
-                Some("vtu") => {
-                    app::output::atomic(output, |tmp| Ok(write_vtu(tmp, &m, &[], &[])?))?
-                }
+                Some("typ2") => output::atomic(output, |tmp| Ok(write_typ2(tmp, &m)?))?,
+                Some("vtu") => output::atomic(output, |tmp| Ok(write_vtu(tmp, &m, &[], &[])?))?,
                 _ => bail!(
                     "unknown output format for {} (use .typ2 or .vtu)",
                     output.display()
@@ -247,13 +238,8 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
-        Command::Solve(a) => app::solve::run(a),
+        Command::Solve(a) => solve::run(a),
         Command::Replicate(a) => replicate(a),
-        Command::Crosscheck(a) => app::crosscheck::run(a),
-        Command::Fuzz(a) => app::fuzz::run(a),
-        Command::Bench { args } => {
-            let root = std::env::current_dir()?;
-            Ok(app::bench::main_with_args(&root, args)?)
-        }
+        Command::Crosscheck(a) => crosscheck::run(a),
     }
 }

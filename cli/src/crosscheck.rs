@@ -16,8 +16,8 @@
 //! load = exact integral of the one-sided affine interpolant of f, nodal barriers, Dirichlet
 //! vertices excluded), so their solutions must agree to round-off: [`SAME_PROBLEM_TOL`].
 
-use crate::app::replication::experiments::with_solution;
-use crate::app::replication::records::{
+use crate::replication::experiments::with_solution;
+use crate::replication::records::{
     PaperTable1, PaperTable2, PaperTable3, TimingRow, read_csv, write_csv,
 };
 use anyhow::{Context, Result, bail};
@@ -435,140 +435,12 @@ pub fn solve_cases(
             .with_context(|| format!("case {}: matching the vertices", r.case))?;
         let ud: Vec<f64> = map.iter().map(|&i| case.nodal[i].u).collect();
         let problem = problem_of(r)?;
-        let is2 = r.test == "test2";
-        let is3 = r.test == "test3";
-        let axis = if r.test == "test1" {
-            Some(0)
-        } else if is2 {
-            Some(1)
-        } else {
-            None
-        };
-        let exact = problem.exact.as_ref();
-
-        let hmm = with_solution(mesh, SchemeKind::Hmm, &problem, |sol| {
-            let cons = sol.constraints.as_ref().expect("every test has a barrier");
-            let active = &sol.result.active;
-            let scheme = sol.system.scheme();
-            Ok(HmmOutcome {
-                niter: sol.niter(),
-                time: sol.timings.total,
-                n_active: active.iter().filter(|&&a| a).count(),
-                err: exact.map(|ex| {
-                    let e = relative_errors(scheme, sol.u(), &ex.u, &ex.grad);
-                    (e.l2_u, e.l2_grad)
-                }),
-                switch: axis.and_then(|a| switch_point(cons, active, a).map(|s| s.at)),
-                switch_count: axis.map(|a| switch_point(cons, active, a).map_or(0, |s| s.count)),
-                trace_zone: is2.then(|| trace_zone(cons, sol.u())),
-                contact: is3.then(|| contact_measure(cons, active)),
-                free: if is3 {
-                    free_boundary(
-                        cons,
-                        active,
-                        &gradvi::post::contact::neighbours(scheme, cons),
-                    )
-                } else {
-                    Vec::new()
-                },
-            })
-        })
-        .with_context(|| format!("case {}: gradvi HMM", r.case))?;
-
+        let compared = Compared::of(&r.test);
+        let hmm = hmm_outcome(mesh, &problem, compared)
+            .with_context(|| format!("case {}: gradvi HMM", r.case))?;
         let paper_n = paper_niter(&paper, r, mesh.boundary_edges_on(0, 0.0));
-        let row = with_solution(mesh, SchemeKind::P1, &problem, |sol| {
-            let cons = sol.constraints.as_ref().expect("every test has a barrier");
-            let active = &sol.result.active;
-            let scheme = sol.system.scheme();
-            let u = sol.u();
-            // dolfinx active set on gradvi's constrained vertices
-            let dact: Vec<bool> = cons
-                .dofs
-                .iter()
-                .zip(&cons.barrier)
-                .map(|(d, &g)| (ud[d.dof] - g).abs() <= ACTIVE_TOL * g.abs().max(1.0))
-                .collect();
-            let n_diff = active.iter().zip(&dact).filter(|(a, b)| a != b).count();
-            let umax = ud.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-            let dmax = u[..mesh.n_vertices()]
-                .iter()
-                .zip(&ud)
-                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-            let errs = |v: &[f64]| {
-                exact.map(|ex| {
-                    let e = relative_errors(scheme, v, &ex.u, &ex.grad);
-                    (e.l2_u, e.l2_grad)
-                })
-            };
-            let (eg, ed) = (errs(u), errs(&ud));
-            let sw = |act: &[bool]| axis.and_then(|a| switch_point(cons, act, a).map(|s| s.at));
-            let swc =
-                |act: &[bool]| axis.map(|a| switch_point(cons, act, a).map_or(0, |s| s.count));
-            let (fb_p1, fb_d) = if is3 {
-                let nb = gradvi::post::contact::neighbours(scheme, cons);
-                (
-                    free_boundary(cons, active, &nb),
-                    free_boundary(cons, &dact, &nb),
-                )
-            } else {
-                (Vec::new(), Vec::new())
-            };
-            Ok(CrosscheckRow {
-                case: r.case.clone(),
-                test: r.test.clone(),
-                mesh: r.mesh.trim_end_matches(".msh").to_string(),
-                c: r.c,
-                n_cells: mesh.n_cells(),
-                n_vertices: mesh.n_vertices(),
-                h: mesh.h(),
-                n_constrained_gradvi: cons.dofs.len(),
-                n_constrained_dolfinx: r.n_constrained,
-                p1_max_rel_diff: dmax / umax.max(f64::MIN_POSITIVE),
-                active_identical: n_diff == 0 && cons.dofs.len() == r.n_constrained,
-                active_n_diff: n_diff,
-                n_active_hmm: hmm.n_active,
-                n_active_p1: active.iter().filter(|&&a| a).count(),
-                n_active_dolfinx: dact.iter().filter(|&&a| a).count(),
-                niter_hmm: hmm.niter,
-                niter_p1: sol.niter(),
-                snes_iterations: r.snes_iterations,
-                snes_reason: r.snes_reason,
-                paper_niter: paper_n,
-                err_u_hmm: hmm.err.map(|e| e.0),
-                err_grad_hmm: hmm.err.map(|e| e.1),
-                err_u_p1: eg.map(|e| e.0),
-                err_grad_p1: eg.map(|e| e.1),
-                err_u_dolfinx: ed.map(|e| e.0),
-                err_grad_dolfinx: ed.map(|e| e.1),
-                switch_hmm: hmm.switch,
-                switch_p1: sw(active),
-                switch_dolfinx: sw(&dact),
-                switch_count_hmm: hmm.switch_count,
-                switch_count_p1: swc(active),
-                switch_count_dolfinx: swc(&dact),
-                trace_zone_hmm: hmm.trace_zone,
-                trace_zone_p1: is2.then(|| trace_zone(cons, u)),
-                trace_zone_dolfinx: is2.then(|| trace_zone(cons, &ud)),
-                contact_hmm: hmm.contact,
-                contact_p1: is3.then(|| contact_measure(cons, active)),
-                contact_dolfinx: is3.then(|| contact_measure(cons, &dact)),
-                hausdorff_hmm_p1: if is3 {
-                    finite(hausdorff(&hmm.free, &fb_p1))
-                } else {
-                    None
-                },
-                hausdorff_p1_dolfinx: if is3 {
-                    finite(hausdorff(&fb_p1, &fb_d))
-                } else {
-                    None
-                },
-                time_hmm_s: hmm.time,
-                time_p1_s: sol.timings.total,
-                time_dolfinx_setup_s: r.time_setup_s,
-                time_dolfinx_solve_s: r.time_solve_s,
-            })
-        })
-        .with_context(|| format!("case {}: gradvi P1", r.case))?;
+        let row = p1_row(mesh, &problem, r, &ud, &hmm, paper_n, compared)
+            .with_context(|| format!("case {}: gradvi P1", r.case))?;
         progress(&format!(
             "{:<14} {:>6} cells  P1 diff {:.1e}  active sets {}  NITER HMM {:>2} P1 {:>2} SNES {:>2}",
             row.case,
@@ -586,6 +458,168 @@ pub fn solve_cases(
         rows.push(row);
     }
     Ok(rows)
+}
+
+/// What a test compares besides the solutions: the switch point along an axis (Tests 1 and 2),
+/// the trace zone (Test 2), the contact measure and the free boundary (Test 3).
+#[derive(Debug, Clone, Copy)]
+struct Compared {
+    axis: Option<usize>,
+    trace_zone: bool,
+    contact: bool,
+}
+
+impl Compared {
+    fn of(test: &str) -> Self {
+        let is2 = test == "test2";
+        let is3 = test == "test3";
+        let axis = if test == "test1" {
+            Some(0)
+        } else if is2 {
+            Some(1)
+        } else {
+            None
+        };
+        Compared {
+            axis,
+            trace_zone: is2,
+            contact: is3,
+        }
+    }
+}
+
+/// Solves `problem` with gradvi HMM on `mesh` and keeps what the cross-check compares.
+fn hmm_outcome(mesh: &PolyMesh, problem: &Problem, compared: Compared) -> Result<HmmOutcome> {
+    let (axis, is2, is3) = (compared.axis, compared.trace_zone, compared.contact);
+    let exact = problem.exact.as_ref();
+    with_solution(mesh, SchemeKind::Hmm, problem, |sol| {
+        let cons = sol.constraints.as_ref().expect("every test has a barrier");
+        let active = &sol.result.active;
+        let scheme = sol.system.scheme();
+        Ok(HmmOutcome {
+            niter: sol.niter(),
+            time: sol.timings.total,
+            n_active: active.iter().filter(|&&a| a).count(),
+            err: exact.map(|ex| {
+                let e = relative_errors(scheme, sol.u(), &ex.u, &ex.grad);
+                (e.l2_u, e.l2_grad)
+            }),
+            switch: axis.and_then(|a| switch_point(cons, active, a).map(|s| s.at)),
+            switch_count: axis.map(|a| switch_point(cons, active, a).map_or(0, |s| s.count)),
+            trace_zone: is2.then(|| trace_zone(cons, sol.u())),
+            contact: is3.then(|| contact_measure(cons, active)),
+            free: if is3 {
+                free_boundary(
+                    cons,
+                    active,
+                    &gradvi::post::contact::neighbours(scheme, cons),
+                )
+            } else {
+                Vec::new()
+            },
+        })
+    })
+    .map_err(anyhow::Error::from)
+}
+
+/// Solves `problem` with gradvi P1 on `mesh` and compares it with the dolfinx solution `ud`
+/// (on gradvi's vertices) of the reference case `r`, beside the HMM outcome `hmm` and the
+/// paper's NITER `paper_n`.
+fn p1_row(
+    mesh: &PolyMesh,
+    problem: &Problem,
+    r: &ReferenceRow,
+    ud: &[f64],
+    hmm: &HmmOutcome,
+    paper_n: Option<usize>,
+    compared: Compared,
+) -> Result<CrosscheckRow> {
+    let (axis, is2, is3) = (compared.axis, compared.trace_zone, compared.contact);
+    let exact = problem.exact.as_ref();
+    with_solution(mesh, SchemeKind::P1, problem, |sol| {
+        let cons = sol.constraints.as_ref().expect("every test has a barrier");
+        let active = &sol.result.active;
+        let scheme = sol.system.scheme();
+        let u = sol.u();
+        // dolfinx active set on gradvi's constrained vertices
+        let dact: Vec<bool> = cons
+            .dofs
+            .iter()
+            .zip(&cons.barrier)
+            .map(|(d, &g)| (ud[d.dof] - g).abs() <= ACTIVE_TOL * g.abs().max(1.0))
+            .collect();
+        let n_diff = active.iter().zip(&dact).filter(|(a, b)| a != b).count();
+        let umax = ud.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let dmax = u[..mesh.n_vertices()]
+            .iter()
+            .zip(ud)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        let errs = |v: &[f64]| {
+            exact.map(|ex| {
+                let e = relative_errors(scheme, v, &ex.u, &ex.grad);
+                (e.l2_u, e.l2_grad)
+            })
+        };
+        let (eg, ed) = (errs(u), errs(ud));
+        let sw = |act: &[bool]| axis.and_then(|a| switch_point(cons, act, a).map(|s| s.at));
+        let swc = |act: &[bool]| axis.map(|a| switch_point(cons, act, a).map_or(0, |s| s.count));
+        let (fb_p1, fb_d) = if is3 {
+            let nb = gradvi::post::contact::neighbours(scheme, cons);
+            (
+                free_boundary(cons, active, &nb),
+                free_boundary(cons, &dact, &nb),
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        Ok(CrosscheckRow {
+            case: r.case.clone(),
+            test: r.test.clone(),
+            mesh: r.mesh.trim_end_matches(".msh").to_string(),
+            c: r.c,
+            n_cells: mesh.n_cells(),
+            n_vertices: mesh.n_vertices(),
+            h: mesh.h(),
+            n_constrained_gradvi: cons.dofs.len(),
+            n_constrained_dolfinx: r.n_constrained,
+            p1_max_rel_diff: dmax / umax.max(f64::MIN_POSITIVE),
+            active_identical: n_diff == 0 && cons.dofs.len() == r.n_constrained,
+            active_n_diff: n_diff,
+            n_active_hmm: hmm.n_active,
+            n_active_p1: active.iter().filter(|&&a| a).count(),
+            n_active_dolfinx: dact.iter().filter(|&&a| a).count(),
+            niter_hmm: hmm.niter,
+            niter_p1: sol.niter(),
+            snes_iterations: r.snes_iterations,
+            snes_reason: r.snes_reason,
+            paper_niter: paper_n,
+            err_u_hmm: hmm.err.map(|e| e.0),
+            err_grad_hmm: hmm.err.map(|e| e.1),
+            err_u_p1: eg.map(|e| e.0),
+            err_grad_p1: eg.map(|e| e.1),
+            err_u_dolfinx: ed.map(|e| e.0),
+            err_grad_dolfinx: ed.map(|e| e.1),
+            switch_hmm: hmm.switch,
+            switch_p1: sw(active),
+            switch_dolfinx: sw(&dact),
+            switch_count_hmm: hmm.switch_count,
+            switch_count_p1: swc(active),
+            switch_count_dolfinx: swc(&dact),
+            trace_zone_hmm: hmm.trace_zone,
+            trace_zone_p1: is2.then(|| trace_zone(cons, u)),
+            trace_zone_dolfinx: is2.then(|| trace_zone(cons, ud)),
+            contact_hmm: hmm.contact,
+            contact_p1: is3.then(|| contact_measure(cons, active)),
+            contact_dolfinx: is3.then(|| contact_measure(cons, &dact)),
+            hausdorff_hmm_p1: is3.then(|| finite(hausdorff(&hmm.free, &fb_p1))).flatten(),
+            hausdorff_p1_dolfinx: is3.then(|| finite(hausdorff(&fb_p1, &fb_d))).flatten(),
+            time_hmm_s: hmm.time,
+            time_p1_s: sol.timings.total,
+            time_dolfinx_setup_s: r.time_setup_s,
+            time_dolfinx_solve_s: r.time_solve_s,
+        })
+    })
+    .map_err(anyhow::Error::from)
 }
 
 /// Runs the cross-check: reads the reference, solves, writes `results/crosscheck.csv`,
@@ -612,7 +646,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     let rows = solve_cases(args, &cases, &mut progress)?;
     let t_solve = t.elapsed().as_secs_f64();
     let res = args.out.join("results");
-    crate::app::replication::create_dir(&res)?;
+    crate::replication::create_dir(&res)?;
     write_csv(&res.join("crosscheck.csv"), &rows)?;
     let timings = vec![
         TimingRow {

@@ -4,13 +4,17 @@
 use super::output::{atomic, check_distinct};
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use gradvi::assembly::LinearSolver;
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::Family;
 use gradvi::mesh::io::write_vtu;
 use gradvi::post::fields::EntityFields;
 use gradvi::problem::file;
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with};
-use gradvi::solver::{ActiveSetOptions, Solution, SolveOptions, WarmStart, solve_problem};
+use gradvi::solver::{
+    ActiveSetOptions, IterationLog, Solution, SolveOptions, WarmStart, solve_problem,
+};
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
@@ -43,7 +47,7 @@ pub struct SolveArgs {
     #[arg(long)]
     level: Option<usize>,
     /// The scheme (default: the problem file's `scheme`, else hmm).
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = named::<SchemeKind>(SchemeKind::ALL.iter().map(|k| k.name())))]
     scheme: Option<SchemeKind>,
     /// HMM stabilisation parameter α.
     #[arg(long, default_value_t = 1.0)]
@@ -64,19 +68,30 @@ pub struct SolveArgs {
     /// coarse HMM solves of the same problem on agglomerated meshes of the domain, and each
     /// next active set looked ahead by local solves near its changes; same solution, far fewer
     /// solves on fine meshes) or cold (A₀ = ∅, no look-ahead: the paper's algorithm and NITER).
-    #[arg(long, value_enum, default_value_t = WarmStart::Nested)]
+    #[arg(long, default_value_t = WarmStart::Nested,
+          value_parser = named::<WarmStart>(["cold", "nested"]))]
     warm_start: WarmStart,
     /// Linear solver of the condensed systems: auto (direct below 250 000 condensed unknowns,
     /// iterative above), direct (sparse Cholesky) or iterative (algebraic-multigrid
     /// preconditioned conjugate gradients, memory linear in the size).
-    #[arg(long, value_enum, default_value_t = gradvi::assembly::LinearSolver::Auto)]
-    linear: gradvi::assembly::LinearSolver,
+    #[arg(long, default_value_t = LinearSolver::Auto,
+          value_parser = named::<LinearSolver>(["auto", "direct", "iterative"]))]
+    linear: LinearSolver,
     /// Write the solution (u, active set, multiplier) to this VTU file.
     #[arg(long)]
     vtu: Option<PathBuf>,
     /// Write a JSON summary to this file.
     #[arg(long)]
     json: Option<PathBuf>,
+}
+
+/// The parser of an option whose values are the names of a library type: `names` (listed in the
+/// help and checked by clap), turned into a `T` by its `FromStr`.
+fn named<T>(names: impl IntoIterator<Item = &'static str>) -> impl TypedValueParser<Value = T>
+where
+    T: std::str::FromStr<Err = gradvi::Error> + Clone + Send + Sync + 'static,
+{
+    PossibleValuesParser::new(names).try_map(|s| s.parse::<T>())
 }
 
 pub fn parse_param(s: &str) -> Result<(String, f64), String> {
@@ -262,7 +277,84 @@ pub fn run(a: &SolveArgs) -> Result<()> {
     pf.check_against_mesh(&mesh)?;
     let problem = pf.problem();
     let kind = a.scheme.or(pf.scheme).unwrap_or(SchemeKind::Hmm);
-    let scheme = build_with(kind, &mesh, &SchemeOptions { alpha: a.alpha }).map_err(|e| {
+    let scheme = scheme_on(kind, &mesh, a.alpha, &mesh_desc)?;
+    eprintln!(
+        "solving {} with {} on {} cells ({} unknowns)...",
+        problem.name,
+        kind,
+        mesh.n_cells(),
+        scheme.n_unknowns()
+    );
+    let sol = solve_problem(scheme.as_ref(), &problem, &solve_options(a))?;
+    println!("problem         {}", problem.name);
+    println!("scheme          {kind}");
+    println!(
+        "mesh            {} cells, h = {:.6}",
+        mesh.n_cells(),
+        mesh.h()
+    );
+    print_solution(&sol, a.tol);
+    let errors = problem
+        .exact
+        .as_ref()
+        .map(|ex| gradvi::post::relative_errors(scheme.as_ref(), sol.u(), &ex.u, &ex.grad));
+    if let Some(e) = errors {
+        println!(
+            "errors          relative L2 of u at centroids {:.6e}, of the gradient {:.6e}",
+            e.l2_u, e.l2_grad
+        );
+    }
+    let t = sol.timings;
+    println!(
+        "timings [s]     mesh {mesh_seconds:.3}, setup {:.3} (symbolic {:.3}), warm start {:.3}, assembly {:.3}, factorisation {:.3}, solves {:.3}, look-ahead {:.3}, total {:.3} (mesh excluded)",
+        t.setup, t.symbolic, t.warm_start, t.assemble, t.factor, t.solve, t.look_ahead, t.total
+    );
+    if let Some(path) = &a.vtu {
+        atomic(path, |tmp| write_solution_vtu(tmp, scheme.as_ref(), &sol))?;
+        println!("wrote           {}", path.display());
+    }
+    if let Some(path) = &a.json {
+        let j = serde_json::json!({
+            "problem": problem.name,
+            "problem_file": {
+                "path": pf.path.display().to_string(),
+                "name": pf.name,
+                "parameters": pf.parameters.iter().cloned().collect::<std::collections::BTreeMap<_, _>>(),
+            },
+            "mesh": mesh_desc,
+            "scheme": kind,
+            "n_cells": mesh.n_cells(),
+            "h": mesh.h(),
+            "n_unknowns": sol.system.n_unknowns(),
+            "n_constrained": sol.constraints.as_ref().map_or(0, |c| c.dofs.len()),
+            "n_active": sol.result.active.iter().filter(|&&x| x).count(),
+            "niter": sol.niter(),
+            "warm_start": sol.warm_start,
+            "method": format!("{:?}", sol.result.method),
+            "certificate": sol.result.certificate,
+            "errors": errors,
+            "timings": t,
+            "mesh_seconds": mesh_seconds,
+            "log": sol.result.log,
+        });
+        let text = serde_json::to_string_pretty(&j)?;
+        atomic(path, |tmp| {
+            std::fs::write(tmp, &text).with_context(|| format!("writing {}", path.display()))
+        })?;
+        println!("wrote           {}", path.display());
+    }
+    Ok(())
+}
+
+/// The scheme `kind` on `mesh` (described as `mesh_desc`) with the stabilisation `alpha`; a
+/// triangle scheme refused on a polygonal mesh says how to get a triangle mesh.
+fn scheme_on<'a>(
+    kind: SchemeKind,
+    mesh: &'a PolyMesh,
+    alpha: f64,
+    mesh_desc: &str,
+) -> Result<Box<dyn GradientDiscretisation + 'a>> {
+    build_with(kind, mesh, &SchemeOptions { alpha }).map_err(|e| {
         let e = anyhow::Error::from(e);
         // the triangle schemes on a polygonal mesh: say how to get a triangle mesh
         if matches!(kind, SchemeKind::P1 | SchemeKind::Cr) && !mesh.is_triangular() {
@@ -272,51 +364,19 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         } else {
             e
         }
-    })?;
+    })
+}
+
+/// The solver options of the command line, the iteration's progress printed to stderr.
+fn solve_options(a: &SolveArgs) -> SolveOptions {
     let active_set = ActiveSetOptions {
         c: a.c,
         max_solves: a.max_solves,
         tol: a.tol,
-        progress: Some(|l| {
-            eprintln!(
-                "  solve {:>3}: active {} (+{}, -{}), violation {:.2e}, {:.2} s (assembly {:.2}, {} {:.2}, solve {:.2}{})",
-                l.step.solve,
-                l.step.active,
-                l.step.entered,
-                l.step.left,
-                l.step.violation,
-                l.timings.assemble + l.timings.factor + l.timings.solve,
-                l.timings.assemble,
-                if l.timings.reused {
-                    "multigrid reused"
-                } else {
-                    "factorisation/multigrid setup"
-                },
-                l.timings.factor,
-                l.timings.solve,
-                if l.timings.krylov > 0 {
-                    format!(", {} CG iterations", l.timings.krylov)
-                } else {
-                    String::new()
-                }
-            );
-            if let Some(la) = l.look_ahead {
-                eprintln!(
-                    "             look-ahead: {} unknowns, {} local solves, {}, {:.2} s",
-                    la.patch,
-                    la.solves,
-                    if la.converged {
-                        "converged"
-                    } else {
-                        "not converged"
-                    },
-                    la.seconds
-                );
-            }
-        }),
+        progress: Some(print_progress),
         ..Default::default()
     };
-    let opts = SolveOptions {
+    SolveOptions {
         active_set,
         warm_start: a.warm_start,
         fallback: a.fallback,
@@ -324,22 +384,51 @@ pub fn run(a: &SolveArgs) -> Result<()> {
             linear: a.linear,
             ..Default::default()
         },
-    };
+    }
+}
+
+/// One line of the iteration log on stderr, as soon as it is known (and the look-ahead's).
+fn print_progress(l: &IterationLog) {
     eprintln!(
-        "solving {} with {} on {} cells ({} unknowns)...",
-        problem.name,
-        kind,
-        mesh.n_cells(),
-        scheme.n_unknowns()
+        "  solve {:>3}: active {} (+{}, -{}), violation {:.2e}, {:.2} s (assembly {:.2}, {} {:.2}, solve {:.2}{})",
+        l.step.solve,
+        l.step.active,
+        l.step.entered,
+        l.step.left,
+        l.step.violation,
+        l.timings.assemble + l.timings.factor + l.timings.solve,
+        l.timings.assemble,
+        if l.timings.reused {
+            "multigrid reused"
+        } else {
+            "factorisation/multigrid setup"
+        },
+        l.timings.factor,
+        l.timings.solve,
+        if l.timings.krylov > 0 {
+            format!(", {} CG iterations", l.timings.krylov)
+        } else {
+            String::new()
+        }
     );
-    let sol = solve_problem(scheme.as_ref(), &problem, &opts)?;
-    println!("problem         {}", problem.name);
-    println!("scheme          {kind}");
-    println!(
-        "mesh            {} cells, h = {:.6}",
-        mesh.n_cells(),
-        mesh.h()
-    );
+    if let Some(la) = l.look_ahead {
+        eprintln!(
+            "             look-ahead: {} unknowns, {} local solves, {}, {:.2} s",
+            la.patch,
+            la.solves,
+            if la.converged {
+                "converged"
+            } else {
+                "not converged"
+            },
+            la.seconds
+        );
+    }
+}
+
+/// The system, the warm start, the iteration log and the certificate (tolerance `tol`) of a
+/// solve, on stdout.
+fn print_solution(sol: &Solution, tol: f64) {
     let on_cells = match sol.cell_system.unzip() {
         (Some(n), Some(0)) => {
             format!("; the iterative solves on the {n} cells, the local matrices being two-point")
@@ -387,58 +476,8 @@ pub fn run(a: &SolveArgs) -> Result<()> {
     let c = sol.result.certificate;
     println!(
         "certificate     violation {:.2e}, min multiplier {:.2e}, complementarity {:.2e}, balance residual {:.2e} (tolerance {:.0e})",
-        c.max_violation, c.min_multiplier, c.complementarity, c.balance_residual, a.tol
+        c.max_violation, c.min_multiplier, c.complementarity, c.balance_residual, tol
     );
-    let errors = problem
-        .exact
-        .as_ref()
-        .map(|ex| gradvi::post::relative_errors(scheme.as_ref(), sol.u(), &ex.u, &ex.grad));
-    if let Some(e) = errors {
-        println!(
-            "errors          relative L2 of u at centroids {:.6e}, of the gradient {:.6e}",
-            e.l2_u, e.l2_grad
-        );
-    }
-    let t = sol.timings;
-    println!(
-        "timings [s]     mesh {mesh_seconds:.3}, setup {:.3} (symbolic {:.3}), warm start {:.3}, assembly {:.3}, factorisation {:.3}, solves {:.3}, look-ahead {:.3}, total {:.3} (mesh excluded)",
-        t.setup, t.symbolic, t.warm_start, t.assemble, t.factor, t.solve, t.look_ahead, t.total
-    );
-    if let Some(path) = &a.vtu {
-        atomic(path, |tmp| write_solution_vtu(tmp, scheme.as_ref(), &sol))?;
-        println!("wrote           {}", path.display());
-    }
-    if let Some(path) = &a.json {
-        let j = serde_json::json!({
-            "problem": problem.name,
-            "problem_file": {
-                "path": pf.path.display().to_string(),
-                "name": pf.name,
-                "parameters": pf.parameters.iter().cloned().collect::<std::collections::BTreeMap<_, _>>(),
-            },
-            "mesh": mesh_desc,
-            "scheme": kind,
-            "n_cells": mesh.n_cells(),
-            "h": mesh.h(),
-            "n_unknowns": sol.system.n_unknowns(),
-            "n_constrained": sol.constraints.as_ref().map_or(0, |c| c.dofs.len()),
-            "n_active": sol.result.active.iter().filter(|&&x| x).count(),
-            "niter": sol.niter(),
-            "warm_start": sol.warm_start,
-            "method": format!("{:?}", sol.result.method),
-            "certificate": c,
-            "errors": errors,
-            "timings": t,
-            "mesh_seconds": mesh_seconds,
-            "log": sol.result.log,
-        });
-        let text = serde_json::to_string_pretty(&j)?;
-        atomic(path, |tmp| {
-            std::fs::write(tmp, &text).with_context(|| format!("writing {}", path.display()))
-        })?;
-        println!("wrote           {}", path.display());
-    }
-    Ok(())
 }
 
 /// Writes u (cell values, vertex values, cell gradients), the active set and the multiplier to

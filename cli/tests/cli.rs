@@ -1,14 +1,17 @@
 //! The command line: exit codes, error messages, outputs.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
+
+/// The repository, where the commands run: the workspace root, above this package.
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 
 /// Runs `gradvi args` in the repository with `RUST_BACKTRACE=backtrace`: (success, stdout,
 /// stderr).
 fn gradvi_with(args: &[&str], backtrace: &str) -> (bool, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_gradvi"))
         .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .current_dir(ROOT)
         .env("RUST_BACKTRACE", backtrace)
         .output()
         .expect("run gradvi");
@@ -174,7 +177,7 @@ fn absurd_or_conflicting_options_are_refused_before_any_work() {
     }
     // the mesh was not touched
     assert!(
-        std::fs::read_to_string(mesh)
+        std::fs::read_to_string(Path::new(ROOT).join(mesh))
             .unwrap()
             .starts_with("$MeshFormat")
     );

@@ -385,7 +385,7 @@ pub(super) mod tests {
     use super::*;
 
     /// A unit square of n × n quadrilaterals, or of 2n² triangles.
-    pub(in crate::app::plot) fn grid(n: usize, triangles: bool) -> PolyMesh {
+    pub(in crate::plot) fn grid(n: usize, triangles: bool) -> PolyMesh {
         let v = (0..=n)
             .flat_map(|j| (0..=n).map(move |i| [i as f64 / n as f64, j as f64 / n as f64]))
             .collect();

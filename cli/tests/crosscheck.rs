@@ -25,7 +25,7 @@ const SAME_PROBLEM_TOL: f64 = 1e-8;
 #[test]
 #[ignore = "needs dolfinx (/usr/bin/python3); run by `make test-external`"]
 fn gradvi_p1_equals_dolfinx_p1_on_coarse_meshes() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
     let tmp = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
         .join(format!("crosscheck-{}", std::process::id()));
     let reference = tmp.join("reference");

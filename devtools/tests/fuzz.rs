@@ -1,11 +1,12 @@
 //! A short deterministic slice of the fuzzer (`make fuzz` runs it for minutes): 40 seeded
-//! mutations of the good meshes and problem files through `gradvi solve`, each in a child
-//! process under a memory and a time limit; every case must end with a certified solution or
-//! a one-line typed error, never a panic, an abort or a hang.
+//! mutations of the good meshes and problem files through `gradvi solve` (the command line run
+//! by `gradvi-dev gradvi`), each in a child process under a memory and a time limit; every case
+//! must end with a certified solution or a one-line typed error, never a panic, an abort or a
+//! hang.
 
 #[test]
 fn forty_seeded_mutations_end_cleanly() {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_gradvi"))
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_gradvi-dev"))
         .args([
             "fuzz",
             "--seed",
@@ -16,7 +17,8 @@ fn forty_seeded_mutations_end_cleanly() {
             "240",
         ])
         .args(["--case-seconds", "30", "--memory-mib", "4096", "--root"])
-        .arg(env!("CARGO_MANIFEST_DIR"))
+        // the repository: the workspace root, above this package
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);

@@ -34,7 +34,7 @@ use gradvi::error::{Error, Result};
 /// DejaVu Sans (Bitstream Vera licence, see `assets/fonts/LICENSE-DejaVu.txt`).
 static FONT_BYTES: &[u8] = include_bytes!(concat!(
     env!("CARGO_MANIFEST_DIR"),
-    "/assets/fonts/DejaVuSans.ttf"
+    "/../assets/fonts/DejaVuSans.ttf"
 ));
 
 /// Family name under which the embedded font is registered.

@@ -1,15 +1,17 @@
-//! `gradvi fuzz`: a seeded mutation fuzzer of the whole input path (readers, validation,
-//! problem setup, a small solve), run through the `gradvi` binary in child processes so that
-//! panics, aborts, hangs and memory exhaustion are all observed.
+//! `gradvi-dev fuzz`: a seeded mutation fuzzer of the whole input path (readers, validation,
+//! problem setup, a small solve), run through the `gradvi` command line in child processes so
+//! that panics, aborts, hangs and memory exhaustion are all observed.
 //!
 //! Each case takes a good input (the small meshes of `tests/data/good/` and `meshes/test*_1.msh`,
 //! and the problem files of `problems/` when present), mutates it with a seeded generator (bit
 //! flips, byte and line deletion, duplication and swaps, truncation, numbers replaced by
 //! extreme values, NaN, huge counts), writes it to a scratch directory and runs
-//! `gradvi solve` on it under a memory limit (`ulimit -v`) and a wall-clock limit. A case
-//! passes when the child exits with 0 (then the CLI has checked the certificate) or 1 (a
-//! typed error, one line on stderr), in time, with no panic message. Anything else is a
-//! failure, and its input is kept in the scratch directory for reproduction.
+//! `gradvi solve` on it under a memory limit (`ulimit -v`) and a wall-clock limit: the binary
+//! given by `--gradvi` (`make fuzz` gives the release build), else this program's `gradvi` mode
+//! (the same command line, [`gradvi_cli`]). A case passes when the child exits with 0 (then
+//! the CLI has checked the certificate) or 1 (a typed error, one line on stderr), in time, with
+//! no panic message. Anything else is a failure, and its input is kept in the scratch
+//! directory for reproduction.
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -17,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// Options of `gradvi fuzz`.
+/// Options of `gradvi-dev fuzz`.
 #[derive(Args, Debug)]
 pub struct FuzzArgs {
     /// Seed of the mutations (the same seed gives the same cases).
@@ -41,6 +43,9 @@ pub struct FuzzArgs {
     /// Scratch directory (failing inputs are kept there).
     #[arg(long)]
     pub scratch: Option<PathBuf>,
+    /// The `gradvi` binary to fuzz (default: this program's `gradvi` mode).
+    #[arg(long)]
+    pub gradvi: Option<PathBuf>,
 }
 
 /// A small deterministic generator (SplitMix64).
@@ -230,12 +235,16 @@ fn run_case(exe: &Path, args: &[String], a: &FuzzArgs) -> Result<Verdict> {
     })
 }
 
-/// `gradvi fuzz` (see the module docs). Fails (nonzero exit) if any case failed.
+/// `gradvi-dev fuzz` (see the module docs). Fails (nonzero exit) if any case failed.
 pub fn run(a: &FuzzArgs) -> Result<()> {
     if !(a.seconds > 0.0 && a.case_seconds > 0.0 && a.seconds.is_finite()) {
         bail!("--seconds and --case-seconds must be positive and finite");
     }
-    let exe = std::env::current_exe()?;
+    // the program and the arguments before `solve …` that run the command line
+    let (exe, prefix): (PathBuf, &[&str]) = match &a.gradvi {
+        Some(g) => (g.clone(), &[]),
+        None => (std::env::current_exe()?, &["gradvi"]),
+    };
     let seeds = corpus(&a.root)?;
     let scratch = a.scratch.clone().unwrap_or_else(|| {
         std::env::temp_dir().join(format!("gradvi-fuzz-{}", std::process::id()))
@@ -251,7 +260,7 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
         let input = scratch.join(format!("case{cases:05}.{ext}"));
         std::fs::write(&input, mutate(&data, &mut rng))?;
         let input_s = input.display().to_string();
-        let args: Vec<String> = match *kind {
+        let solve: Vec<String> = match *kind {
             "mesh" => [
                 "solve",
                 "--problem",
@@ -267,6 +276,7 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
                 .map(String::from)
                 .to_vec(),
         };
+        let args: Vec<String> = prefix.iter().map(|p| p.to_string()).chain(solve).collect();
         let verdict = run_case(&exe, &args, a)?;
         match &verdict {
             Verdict::Solved | Verdict::Refused => {

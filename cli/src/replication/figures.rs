@@ -4,7 +4,7 @@
 use super::experiments::{NamedMesh, gmsh_family, test2_polygonal, with_solution};
 use super::records::{PaperTable3, Test2Row, Test3Row, read_csv};
 use super::{Config, create_dir};
-use crate::app::plot::{
+use crate::plot::{
     LineOptions, LineSeries, Marker, MeshPlotOptions, SurfaceOptions, palette, plot_lines,
     plot_mesh, plot_surface,
 };
