@@ -262,7 +262,8 @@ impl Cx<'_> {
                 let family: Family = g.parse().map_err(|e: Error| bad(&e.to_string()))?;
                 let level = m.level.ok_or_else(|| bad("'generate' needs a 'level'"))?;
                 family.check_level(level).map_err(|e| bad(&e.to_string()))?;
-                if let Some([x0, x1, y0, y1]) = m.domain
+                let domain = m.domain.as_ref().map(|d| d.0);
+                if let Some([x0, x1, y0, y1]) = domain
                     && !(x1 > x0 && y1 > y0 && [x0, x1, y0, y1].iter().all(|v| v.is_finite()))
                 {
                     return Err(bad("'domain' = [x0, x1, y0, y1] needs x0 < x1 and y0 < y1"));
@@ -270,7 +271,7 @@ impl Cx<'_> {
                 Ok(MeshSpec::Generated {
                     family,
                     level,
-                    domain: m.domain,
+                    domain,
                 })
             }
             _ => Err(bad("give either 'file' or 'generate' (with 'level')")),
@@ -305,8 +306,8 @@ impl Cx<'_> {
             Some(e) => Some((
                 self.expr("exact.u", &e.u, scope, Kind::Number)?,
                 [
-                    self.expr("exact.grad[0]", &e.grad[0], scope, Kind::Number)?,
-                    self.expr("exact.grad[1]", &e.grad[1], scope, Kind::Number)?,
+                    self.expr("exact.grad[0]", &e.grad.0[0], scope, Kind::Number)?,
+                    self.expr("exact.grad[1]", &e.grad.0[1], scope, Kind::Number)?,
                 ],
             )),
             None => None,

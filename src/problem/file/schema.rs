@@ -6,6 +6,7 @@ use serde::Deserialize;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use std::collections::BTreeMap;
 use std::fmt;
+use std::marker::PhantomData;
 use toml::Spanned;
 
 #[derive(Deserialize)]
@@ -34,7 +35,7 @@ pub(super) struct RawMesh {
     pub(super) file: Option<String>,
     pub(super) generate: Option<String>,
     pub(super) level: Option<usize>,
-    pub(super) domain: Option<[f64; 4]>,
+    pub(super) domain: Option<Exactly<f64, 4>>,
 }
 
 /// A datum given whole (`KEY = ...`) or by pieces (`[[SECTION.piece]]`, each with `where`,
@@ -132,7 +133,7 @@ pub(super) struct RawObstacle {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawExact {
     pub(super) u: Spanned<Src>,
-    pub(super) grad: [Spanned<Src>; 2],
+    pub(super) grad: Exactly<Spanned<Src>, 2>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -202,10 +203,10 @@ impl<'de> Visitor<'de> for TensorVisitor {
         SrcVisitor.visit_u64(v).map(TensorSrc::Scalar)
     }
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> std::result::Result<TensorSrc, A::Error> {
-        let r0: [Spanned<Src>; 2] = seq
+        let Exactly(r0) = seq
             .next_element()?
             .ok_or_else(|| de::Error::invalid_length(0, &self))?;
-        let r1: [Spanned<Src>; 2] = seq
+        let Exactly(r1) = seq
             .next_element()?
             .ok_or_else(|| de::Error::invalid_length(1, &self))?;
         if seq.next_element::<de::IgnoredAny>()?.is_some() {
@@ -221,9 +222,53 @@ impl<'de> Deserialize<'de> for TensorSrc {
     }
 }
 
+/// An array of exactly `N` values. serde's `[T; N]` takes the first `N` values of a TOML array
+/// and drops the rest without a word (`domain = [0, 1, 0, 1, 9]` would read as the unit
+/// square); this refuses a longer array as it refuses a shorter one, with the same message.
+pub(super) struct Exactly<T, const N: usize>(pub(super) [T; N]);
+
+impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Exactly<T, N> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        d.deserialize_tuple(N, ExactlyVisitor(PhantomData))
+    }
+}
+
+struct ExactlyVisitor<T, const N: usize>(PhantomData<T>);
+
+impl<'de, T: Deserialize<'de>, const N: usize> Visitor<'de> for ExactlyVisitor<T, N> {
+    type Value = Exactly<T, N>;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(f, "an array of length {N}")
+    }
+    fn visit_seq<A: SeqAccess<'de>>(
+        self,
+        mut seq: A,
+    ) -> std::result::Result<Self::Value, A::Error> {
+        let mut values = Vec::with_capacity(N);
+        while values.len() < N {
+            match seq.next_element()? {
+                Some(v) => values.push(v),
+                None => return Err(de::Error::invalid_length(values.len(), &self)),
+            }
+        }
+        let mut extra = 0;
+        while seq.next_element::<de::IgnoredAny>()?.is_some() {
+            extra += 1;
+        }
+        if extra > 0 {
+            return Err(de::Error::invalid_length(N + extra, &self));
+        }
+        let n = values.len();
+        values
+            .try_into()
+            .map(Exactly)
+            .map_err(|_| de::Error::invalid_length(n, &self))
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{RawFile, Src, TensorSrc};
+    use super::{Exactly, RawFile, Src, TensorSrc};
     use serde::Deserialize;
 
     #[derive(Deserialize)]
@@ -262,6 +307,35 @@ mod tests {
         for bad in ["[[1, 0]]", "[[1, 0], [0, 1], [0, 0]]", "[[1], [0, 1]]"] {
             assert!(value::<TensorSrc>(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn fixed_size_arrays_refuse_more_values_as_they_refuse_fewer() {
+        let domain = |d: &str| toml::from_str::<RawFile>(&format!("[mesh]\ndomain = {d}"));
+        let Ok(RawFile { mesh: Some(m), .. }) = domain("[0, 1, -2, 2]") else {
+            panic!("a domain of four values is read");
+        };
+        assert!(matches!(
+            m.get_ref().domain,
+            Some(Exactly([0.0, 1.0, -2.0, 2.0]))
+        ));
+        for (d, len) in [("[0, 1, 0]", 3), ("[0, 1, 0, 1, 9]", 5)] {
+            let e = domain(d).err().unwrap();
+            let msg = format!("invalid length {len}, expected an array of length 4");
+            assert_eq!(e.message(), msg, "{d}");
+        }
+        let grad = |g: &str| toml::from_str::<RawFile>(&format!("[exact]\nu = 0\ngrad = {g}"));
+        assert!(grad("[\"y\", \"x\"]").is_ok());
+        let e = grad("[0, 0, 5]").err().unwrap();
+        assert_eq!(
+            e.message(),
+            "invalid length 3, expected an array of length 2"
+        );
+        let e = value::<TensorSrc>("[[1, 0, 7], [0, 1]]").err().unwrap();
+        assert_eq!(
+            e.message(),
+            "invalid length 3, expected an array of length 2"
+        );
     }
 
     #[test]
