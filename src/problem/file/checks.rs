@@ -342,15 +342,8 @@ mod tests {
 
     /// The unit square cut into two squares: cells [0, 0.5] × [0, 1] and [0.5, 1] × [0, 1].
     fn two_squares() -> PolyMesh {
-        let v = vec![
-            [0.0, 0.0],
-            [0.5, 0.0],
-            [1.0, 0.0],
-            [0.0, 1.0],
-            [0.5, 1.0],
-            [1.0, 1.0],
-        ];
-        PolyMesh::from_cells(v, vec![vec![0, 1, 4, 3], vec![1, 2, 5, 4]]).unwrap()
+        let v = (0..6).map(|i| [0.5 * (i % 3) as f64, (i / 3) as f64]);
+        PolyMesh::from_cells(v.collect(), vec![vec![0, 1, 4, 3], vec![1, 2, 5, 4]]).unwrap()
     }
 
     /// The kind and message of the first failure of the file `text` on [`two_squares`].
@@ -383,21 +376,32 @@ mod tests {
 
     #[test]
     fn boundary_edges_are_selected_once() {
-        let uncovered = "[dirichlet]\nwhere = \"x < 0.1\"\n[neumann]\nwhere = \"x > 0.9\"";
-        let (kind, msg) = failure(uncovered).unwrap();
-        assert_eq!(kind, K::UncoveredEdge);
-        assert!(
-            msg.contains("is selected by none of [dirichlet], [neumann]"),
-            "{msg}"
+        let (dirichlet, neumann) = (
+            "[dirichlet]\nwhere = \"x < ",
+            "\"\n[neumann]\nwhere = \"x > ",
         );
-        // every boundary edge is covered, the two with midpoint x = 0.25 twice
-        let overlap = "[dirichlet]\nwhere = \"x < 0.6\"\n[neumann]\nwhere = \"x > 0.2\"";
-        let (kind, msg) = failure(overlap).unwrap();
-        assert_eq!(kind, K::OverlappingRules);
-        assert!(
-            msg.starts_with("[dirichlet] and [neumann]: both select"),
-            "{msg}"
-        );
+        let cases = [
+            // the top and bottom edges are selected by neither section
+            (
+                "0.1",
+                "0.9",
+                K::UncoveredEdge,
+                "is selected by none of [dirichlet], [neumann]",
+            ),
+            // the two edges with midpoint x = 0.25 by both
+            (
+                "0.6",
+                "0.2",
+                K::OverlappingRules,
+                "[dirichlet] and [neumann]: both select",
+            ),
+        ];
+        for (d, n, kind, fragment) in cases {
+            let (k, msg) = failure(&format!("{dirichlet}{d}{neumann}{n}\"")).unwrap();
+            assert_eq!(k, kind, "{msg}");
+            assert!(msg.contains(fragment), "{msg}");
+        }
+        // a section without selection takes the rest
         let rest = "[dirichlet]\nwhere = \"x < 0.6\"\n[neumann]\n";
         assert_eq!(failure(rest), None);
     }
