@@ -120,7 +120,7 @@ impl Part {
     }
 }
 
-/// Everything the closures of the [`Problem`] evaluate.
+/// Everything the closures of the [`Problem`](crate::problem::Problem) evaluate.
 #[derive(Debug)]
 pub(super) struct Data {
     /// Empty: A = I.
