@@ -84,6 +84,7 @@
 //!    and barrier unknowns, the mesh [`scheme::Entity`] of each unknown); one file per scheme:
 //!    [`scheme::Hmm`], [`scheme::P1`], [`scheme::Cr`]; registered once in [`scheme::SchemeKind`].
 //! 3. [`problem`]: data A, f, Γ1/Γ2/Γ3, barriers; the paper's Tests 1–3.
+//!    Above it, [`case`]: a problem file's case, its mesh read or generated from `[mesh]`.
 //! 4. [`linalg`] (sparse Cholesky with symbolic reuse, orderings; algebraic multigrid and
 //!    conjugate gradients) and [`vi`] (the algebraic
 //!    variational-inequality algorithms over the [`vi::QuadraticEnergy`] trait: the monotony
@@ -107,6 +108,7 @@
 // validation rejects NaN data.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 pub mod assembly;
+pub mod case;
 pub mod error;
 pub mod linalg;
 pub mod mesh;

@@ -7,6 +7,7 @@ mod common;
 
 use common::assert_close;
 use gradvi::Error;
+use gradvi::case::build_mesh;
 use gradvi::error::ProblemFileErrorKind as K;
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{cartesian, hexagonal, kershaw};
@@ -247,7 +248,7 @@ fn first_error(name: &str) -> Error {
         Err(e) => return e,
     };
     let mesh = match &pf.mesh {
-        Some(spec) => spec.build().unwrap(),
+        Some(spec) => build_mesh(spec).unwrap(),
         None => cartesian(4, 4).unwrap(),
     };
     if let Err(e) = pf.check_against_mesh(&mesh) {
@@ -342,7 +343,7 @@ fn parameters_are_overridden_by_name_and_unknown_ones_rejected() {
 fn example(name: &str) -> (ProblemFile, PolyMesh) {
     let pf = file::load(problems().join(format!("{name}.toml")), &[]).unwrap();
     let spec = pf.mesh.clone().expect("examples name their mesh");
-    let mesh = spec.build().unwrap();
+    let mesh = build_mesh(&spec).unwrap();
     pf.check_against_mesh(&mesh).unwrap();
     (pf, mesh)
 }
@@ -525,7 +526,7 @@ fn readme_example_is_a_valid_problem() {
     let pf = file::parse(text, &problems().join("readme.toml"), &[]).unwrap();
     assert_eq!(pf.name, "membrane-C-5");
     assert_eq!(pf.scheme, Some(gradvi::scheme::SchemeKind::Hmm));
-    let mesh = pf.mesh.as_ref().unwrap().build().unwrap();
+    let mesh = build_mesh(pf.mesh.as_ref().unwrap()).unwrap();
     pf.check_against_mesh(&mesh).unwrap();
     let s = Hmm::new(&mesh);
     let sol = solve(&s, &pf.problem());
@@ -591,7 +592,7 @@ fn example_ex9_with_p1_on_generated_triangles() {
         domain,
     };
     assert_eq!(spec.to_string(), "triangles level 4 on [-2, 2]x[-2, 2]");
-    let mesh = spec.build().unwrap();
+    let mesh = build_mesh(&spec).unwrap();
     let reference = cartesian_triangles(32, 32, [-2.0, 2.0], [-2.0, 2.0]).unwrap();
     assert_eq!(mesh.vertices(), reference.vertices());
     assert_eq!(mesh.n_cells(), 2 * 32 * 32);

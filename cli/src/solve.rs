@@ -272,7 +272,7 @@ pub fn run(a: &SolveArgs) -> Result<()> {
     )?;
     // the resolved mesh, as the JSON output records it
     let mesh_desc = spec.to_string();
-    let mesh = spec.build()?;
+    let mesh = gradvi::case::build_mesh(&spec)?;
     let mesh_seconds = t0.elapsed().as_secs_f64();
     pf.check_against_mesh(&mesh)?;
     let problem = pf.problem();

@@ -61,6 +61,7 @@ mod sweep;
 pub mod validate;
 
 pub use complex::CellComplex;
+pub use generate::Family;
 pub use validate::MAX_CELL_VERTICES;
 
 use crate::error::MeshError;

@@ -1,0 +1,267 @@
+//! Problem files: a [`Problem`] described in TOML, so that a problem is posed without writing
+//! Rust. The format is documented, with a complete annotated example, in `problems/README.md`;
+//! the built-in problems are files of that folder ([`builtin`]).
+//!
+//! ```toml
+//! name = "membrane"
+//! [parameters]            # overridable by the caller: load(path, &[("C".into(), -10.0)])
+//! C = -5
+//! [source]
+//! f = "C"                 # expressions of x, y, parameters and definitions
+//! [obstacle]
+//! side = "lower"          # u ≥ ψ
+//! barrier = "-min(x, 1 - x, y, 1 - y)"
+//! ```
+//!
+//! Loading ([`load`], [`parse`]) checks everything that does not depend on a mesh: TOML
+//! syntax (line and column), unknown keys, expressions (position in the expression, unknown
+//! names, number versus condition), parameters and definitions.
+//! [`ProblemFile::check_against_mesh`] checks the rest on a given mesh: tags the mesh does not
+//! carry, boundary edges selected by no section or by two, points where no piece of a
+//! piecewise datum applies, tensors that are not symmetric positive definite, and NaN or
+//! infinite values of every datum at the points where the schemes evaluate it (see the table
+//! there). [`ProblemFile::problem`] then builds the [`Problem`] whose
+//! closures evaluate the compiled expressions. Every failure is an
+//! [`Error::ProblemFile`] naming the file, the line and column, and the key.
+//!
+//! ## Pieces, boundary sections and where data is evaluated
+//! - `[[diffusion.piece]]` and `[[source.piece]]`: the first piece whose `where` holds applies; a
+//!   piece without `where` applies everywhere (the rest). Diffusion pieces are chosen at the
+//!   cell centroid x_K (the schemes take A_K = A(x_K)); source pieces at x_K too
+//!   ([`Problem::source_in_cell`]), so a vertex on an interface takes the formula of the cell
+//!   being assembled.
+//! - `[dirichlet]`, `[neumann]`, `[signorini]`: each selects the boundary edges whose gmsh tag is
+//!   in `tags` or whose midpoint x_σ satisfies `where`; at most one section may have neither,
+//!   and it takes every edge the others leave. Without any section, the whole boundary is
+//!   Dirichlet with u = 0.
+//!
+//! Cell (surface) tags: a piece of A or f may be selected by `tags` (gmsh physical surfaces,
+//! [`crate::mesh::PolyMesh::cell_tag`]) and/or `where` (a condition on the cell centroid).
+
+//!
+//! ## The modules, one job each
+//! | module | job |
+//! |---|---|
+//! | `schema` | what the file may contain: the serde types, with the spans of the values |
+//! | `build` | the raw file compiled into the data, every error located in the file |
+//! | `data` | the compiled data (expressions, pieces, boundary parts) and its evaluation at a point |
+//! | `checks` | the checks against a mesh ([`ProblemFile::check_against_mesh`]) |
+//! | this file | the public API: [`load`], [`builtin`], [`parse`], [`ProblemFile`], [`MeshSpec`] |
+//!
+//! A [`MeshSpec`] is data: the layers above this one read or generate the mesh it describes.
+
+mod build;
+mod checks;
+mod data;
+mod schema;
+
+use super::expr::Scope;
+use super::{BoundaryKind, Problem};
+use crate::error::{Error, ProblemFileErrorKind as K, Result};
+use crate::mesh::Family;
+use crate::scheme::SchemeKind;
+use build::Cx;
+use data::Data;
+use schema::RawFile;
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// How the mesh of a problem file is obtained (`[mesh]`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum MeshSpec {
+    /// A mesh file (`.msh`, `.typ1`, `.typ2`), its path resolved against the problem file's folder.
+    File(PathBuf),
+    /// A generated mesh of the unit square, optionally mapped affinely onto
+    /// `domain` = \[x0, x1, y0, y1\].
+    Generated {
+        /// The family.
+        family: Family,
+        /// Its level (checked by [`Family::check_level`] when the file is loaded).
+        level: usize,
+        /// The rectangle \[x0, x1\] × \[y0, y1\] the unit square is mapped onto.
+        domain: Option<[f64; 4]>,
+    },
+}
+
+impl fmt::Display for MeshSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            MeshSpec::File(p) => write!(f, "{}", p.display()),
+            MeshSpec::Generated {
+                family,
+                level,
+                domain,
+            } => {
+                write!(f, "{} level {level}", family.name())?;
+                if let Some([x0, x1, y0, y1]) = domain {
+                    write!(f, " on [{x0}, {x1}]x[{y0}, {y1}]")?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// A loaded, checked problem file. Build the [`Problem`] with [`ProblemFile::problem`] after
+/// [`ProblemFile::check_against_mesh`].
+#[derive(Debug, Clone)]
+pub struct ProblemFile {
+    /// The file (for built-in problems, `problems/NAME.toml`).
+    pub path: PathBuf,
+    /// The problem's name (`name`, with `{expr}` replaced by its value formatted by
+    /// [`super::format_parameter`]; default: the file stem).
+    pub name: String,
+    /// `description`, if given.
+    pub description: Option<String>,
+    /// Every parameter with the value used (default or override), sorted by name.
+    pub parameters: Vec<(String, f64)>,
+    /// `[mesh]`, if given.
+    pub mesh: Option<MeshSpec>,
+    /// `scheme`, if given.
+    pub scheme: Option<SchemeKind>,
+    data: Arc<Data>,
+}
+
+/// The built-in problems, as problem files compiled into the library: `(name, TOML text)`.
+pub const BUILTIN: [(&str, &str); 4] = [
+    ("test1", include_str!("../../../problems/test1.toml")),
+    ("test2", include_str!("../../../problems/test2.toml")),
+    ("test3", include_str!("../../../problems/test3.toml")),
+    (
+        "fvca5-1.1",
+        include_str!("../../../problems/fvca5-1.1.toml"),
+    ),
+];
+
+/// Loads the problem file at `path`, with the parameter values `overrides` replacing the
+/// defaults of `[parameters]` (an exact name, or a unique case-insensitive match; any other name
+/// is an error).
+pub fn load(path: impl AsRef<Path>, overrides: &[(String, f64)]) -> Result<ProblemFile> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse(&text, path, overrides)
+}
+
+/// One of the [`BUILTIN`] problems, by name.
+pub fn builtin(name: &str, overrides: &[(String, f64)]) -> Result<ProblemFile> {
+    let Some((_, text)) = BUILTIN.iter().find(|(n, _)| *n == name) else {
+        let names: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
+        return Err(Error::InvalidData(format!(
+            "unknown problem '{name}' (expected one of: {})",
+            names.join(", ")
+        )));
+    };
+    parse(
+        text,
+        &Path::new("problems").join(format!("{name}.toml")),
+        overrides,
+    )
+}
+
+/// Parses the text of a problem file; `path` is used in messages and to resolve `[mesh] file`.
+pub fn parse(text: &str, path: &Path, overrides: &[(String, f64)]) -> Result<ProblemFile> {
+    let cx = Cx { path, text };
+    // syntax first, so that a syntax error is reported as such
+    if let Err(e) = toml::from_str::<toml::Table>(text) {
+        return Err(cx.toml_error(K::Syntax, &e));
+    }
+    let raw: RawFile = toml::from_str(text).map_err(|e| {
+        let kind = if e.message().starts_with("unknown field") {
+            K::UnknownKey
+        } else {
+            K::Schema
+        };
+        cx.toml_error(kind, &e)
+    })?;
+    let parameters = cx.parameters(&raw.parameters, overrides)?;
+    let mut scope = Scope::new(&["x", "y"]);
+    for (name, v) in &parameters {
+        let loc = cx.loc(&format!("parameters.{name}"), raw.parameters[name].span());
+        scope
+            .set_constant(name, *v)
+            .map_err(|m| cx.at(K::Parameter, &loc, m))?;
+    }
+    cx.definitions(&raw.definitions, &mut scope)?;
+    let data = cx.data(&raw, &scope)?;
+    let name = match &raw.name {
+        Some(n) => cx.name(n, &scope)?,
+        None => path
+            .file_stem()
+            .map_or_else(|| "problem".into(), |s| s.to_string_lossy().into_owned()),
+    };
+    Ok(ProblemFile {
+        path: path.to_path_buf(),
+        name,
+        description: raw.description.clone(),
+        parameters,
+        mesh: raw.mesh.as_ref().map(|m| cx.mesh(m)).transpose()?,
+        scheme: raw.scheme,
+        data: Arc::new(data),
+    })
+}
+
+impl ProblemFile {
+    /// The value of parameter `name` (exact name).
+    pub fn parameter(&self, name: &str) -> Option<f64> {
+        self.parameters
+            .iter()
+            .find(|(k, _)| k == name)
+            .map(|(_, v)| *v)
+    }
+
+    /// Builds the [`Problem`]: closures that evaluate the compiled expressions (cheap; call it
+    /// once per solve). Run [`ProblemFile::check_against_mesh`] on the mesh first: on a mesh
+    /// it has not checked, a boundary edge no section selects is taken as Dirichlet, and a
+    /// point no piece covers gets NaN data (which the assembler rejects).
+    pub fn problem(&self) -> Problem {
+        let d = Arc::clone(&self.data);
+        let mut pb = match self.data.constant_source() {
+            Some(c) => Problem::new(&self.name, Box::new(move |_| c)),
+            None => Problem::new(&self.name, Box::new(move |p| d.source_at(p, p, 0))),
+        };
+        if self.data.source.iter().any(|p| p.cond.is_some()) {
+            let d = Arc::clone(&self.data);
+            pb = pb.with_source_in_cell(Box::new(move |p, xk| d.source_at(p, xk, 0)));
+        }
+        if !self.data.diffusion.is_empty() {
+            let d = Arc::clone(&self.data);
+            pb = pb.with_diffusion(Box::new(move |p| d.diffusion_at(p, 0)));
+        }
+        if self.data.uses_cell_tags() {
+            let (d, e) = (Arc::clone(&self.data), Arc::clone(&self.data));
+            pb = pb
+                .with_diffusion_by_tag(Box::new(move |xk, t| d.diffusion_at(xk, t)))
+                .with_source_by_tag(Box::new(move |p, xk, t| e.source_at(p, xk, t)));
+        }
+        if self.data.has_boundary_sections() {
+            let d = Arc::clone(&self.data);
+            pb = pb.with_boundary(move |x, tag| {
+                d.boundary_at(x, tag).unwrap_or(BoundaryKind::Dirichlet)
+            });
+        }
+        if let Some(g) = &self.data.dirichlet {
+            let g = g.expr.clone();
+            pb = pb.with_dirichlet(Box::new(move |p| g.eval(&p)));
+        }
+        if let Some(g) = &self.data.neumann {
+            let g = g.expr.clone();
+            pb = pb.with_neumann(Box::new(move |p| g.eval(&p)));
+        }
+        if let Some((kind, side, b)) = &self.data.constraint {
+            let b = b.expr.clone();
+            pb = pb.with_constraint(*kind, *side, Box::new(move |p| b.eval(&p)));
+        }
+        if let Some((u, [gx, gy])) = &self.data.exact {
+            let (u, gx, gy) = (u.expr.clone(), gx.expr.clone(), gy.expr.clone());
+            pb = pb.with_exact(
+                Box::new(move |p| u.eval(&p)),
+                Box::new(move |p| [gx.eval(&p), gy.eval(&p)]),
+            );
+        }
+        pb
+    }
+}
