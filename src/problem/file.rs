@@ -42,7 +42,7 @@ use super::expr::{Expr, ExprError, ExprErrorKind, Kind, Scope};
 use super::{BoundaryKind, ConstraintKind, Problem, Side, check_tensor};
 use crate::error::{Error, ProblemFileErrorKind as K, Result};
 use crate::mesh::generate::Family;
-use crate::mesh::{Point, PolyMesh};
+use crate::mesh::{MemoryBudget, Point, PolyMesh, Rect};
 use crate::scheme::{SchemeKind, Tensor};
 use rayon::prelude::*;
 use serde::Deserialize;
@@ -464,22 +464,22 @@ pub enum MeshSpec {
         /// Its level (see [`crate::mesh::generate`]).
         level: usize,
         /// The rectangle \[x0, x1\] × \[y0, y1\] the unit square is mapped onto.
-        domain: Option<[f64; 4]>,
+        domain: Option<Rect>,
     },
 }
 
 impl MeshSpec {
-    /// Reads or generates the mesh.
-    pub fn build(&self) -> Result<PolyMesh> {
+    /// Reads or generates the mesh, within `budget`.
+    pub fn build(&self, budget: MemoryBudget) -> Result<PolyMesh> {
         match self {
-            MeshSpec::File(p) => crate::mesh::io::read_mesh(p),
+            MeshSpec::File(p) => crate::mesh::io::read_mesh(p, budget),
             MeshSpec::Generated {
                 family,
                 level,
                 domain,
             } => match domain {
-                None => family.generate(*level),
-                Some(d) => family.generate_on(*level, *d),
+                None => family.generate(*level, budget),
+                Some(d) => family.generate_on(*level, *d, budget),
             },
         }
     }
@@ -495,8 +495,8 @@ impl fmt::Display for MeshSpec {
                 domain,
             } => {
                 write!(f, "{} level {level}", family.name())?;
-                if let Some([x0, x1, y0, y1]) = domain {
-                    write!(f, " on [{x0}, {x1}]x[{y0}, {y1}]")?;
+                if let Some(d) = domain {
+                    write!(f, " on {d}")?;
                 }
                 Ok(())
             }
@@ -850,15 +850,15 @@ impl Cx<'_> {
                 let family: Family = g.parse().map_err(|e: Error| bad(&e.to_string()))?;
                 let level = m.level.ok_or_else(|| bad("'generate' needs a 'level'"))?;
                 family.check_level(level).map_err(|e| bad(&e.to_string()))?;
-                if let Some([x0, x1, y0, y1]) = m.domain
-                    && !(x1 > x0 && y1 > y0 && [x0, x1, y0, y1].iter().all(|v| v.is_finite()))
-                {
+                // the file writes the x range, then the y range
+                let domain = m.domain.map(|[x0, x1, y0, y1]| Rect::new([x0, x1], [y0, y1]));
+                if domain.is_some_and(|d| !d.is_proper()) {
                     return Err(bad("'domain' = [x0, x1, y0, y1] needs x0 < x1 and y0 < y1"));
                 }
                 Ok(MeshSpec::Generated {
                     family,
                     level,
-                    domain: m.domain,
+                    domain,
                 })
             }
             _ => Err(bad("give either 'file' or 'generate' (with 'level')")),

@@ -2,7 +2,7 @@
 //! files of `tests/data/good`, the FVCA5 benchmark files (when `../shared/meshes/fvca5` is
 //! present), and round trips through the typ2 and VTU writers.
 
-use gradvi::mesh::PolyMesh;
+use gradvi::mesh::{MemoryBudget, PolyMesh};
 use gradvi::mesh::io::{read_msh, read_typ1, read_typ2, write_typ2, write_vtu};
 use gradvi::{Error, MeshError, mesh::io::read_mesh};
 use std::collections::BTreeMap;
@@ -24,7 +24,7 @@ fn scratch(name: &str) -> PathBuf {
 
 /// Reads with `read_mesh`, turning a panic into a test failure that names the file.
 fn read_no_panic(path: &Path) -> gradvi::Result<PolyMesh> {
-    match catch_unwind(AssertUnwindSafe(|| read_mesh(path))) {
+    match catch_unwind(AssertUnwindSafe(|| read_mesh(path, MemoryBudget::DEFAULT))) {
         Ok(r) => r,
         Err(_) => panic!("reader panicked on {}", path.display()),
     }
@@ -224,7 +224,7 @@ fn read_unit_square(
     counts: (usize, usize, usize),
     tags: [(i32, usize); 3],
 ) -> gradvi::mesh::io::MshMesh {
-    let r = read_msh(path).expect("gmsh file");
+    let r = read_msh(path, MemoryBudget::DEFAULT).expect("gmsh file");
     let m = &r.mesh;
     assert_eq!((m.n_vertices(), m.n_cells(), m.n_edges()), counts);
     assert!((total_area(m) - 1.0).abs() < 1e-15);
@@ -238,7 +238,7 @@ fn gmsh_41_unit_square() {
     // node 5 at (2, 2) belongs to a geometry point only and is dropped
     let r = read_unit_square(&path, (6, 5, 10), [(1, 2), (2, 2), (3, 1)]);
     let m = &r.mesh;
-    assert_eq!(m.bounding_box(), [0.0, 0.0, 1.0, 1.0]);
+    assert_eq!(m.bounding_box(), gradvi::mesh::Rect::UNIT);
     assert!((0..m.n_edges()).all(|e| m.is_boundary_edge(e) || m.edge_tag(e) == 0));
     assert_eq!(r.physical_names.len(), 5);
     assert!(
@@ -262,7 +262,7 @@ fn gmsh_41_unit_square() {
         assert_eq!(m.edge_tag(e), expected);
     }
     // read_mesh gives the same mesh
-    let m2 = read_mesh(&path).expect("read_mesh");
+    let m2 = read_mesh(&path, MemoryBudget::DEFAULT).expect("read_mesh");
     assert_eq!(m2.vertices(), m.vertices());
 }
 
@@ -285,8 +285,8 @@ fn gmsh_22_unit_square() {
 #[test]
 fn gmsh_written_22_file_matches_the_41_original() {
     // square_41_gmsh22.msh is square_41.msh re-saved by gmsh 4.8.4 with `-format msh22`
-    let a = read_msh(data("good/square_41.msh")).expect("4.1");
-    let b = read_msh(data("good/square_41_gmsh22.msh")).expect("2.2");
+    let a = read_msh(data("good/square_41.msh"), MemoryBudget::DEFAULT).expect("4.1");
+    let b = read_msh(data("good/square_41_gmsh22.msh"), MemoryBudget::DEFAULT).expect("2.2");
     assert_eq!(a.physical_names, b.physical_names);
     let (a, b) = (&a.mesh, &b.mesh);
     assert_eq!(a.vertices(), b.vertices());
@@ -318,7 +318,7 @@ fn repository_gmsh_meshes_match_their_table() {
         if !path.exists() {
             continue;
         }
-        let r = read_msh(&path).unwrap_or_else(|e| panic!("{e}"));
+        let r = read_msh(&path, MemoryBudget::DEFAULT).unwrap_or_else(|e| panic!("{e}"));
         let m = &r.mesh;
         assert_eq!(m.n_cells() as f64, num(2), "{}", cols[1]);
         assert_eq!(m.n_vertices() as f64, num(3), "{}", cols[1]);
@@ -380,8 +380,8 @@ fn assert_same_mesh(name: &str, a: &PolyMesh, b: &PolyMesh, tol: f64) {
 
 #[test]
 fn typ1_hanging_nodes_match_typ2() {
-    let t1 = read_typ1(data("good/hanging.typ1")).expect("hanging.typ1");
-    let t2 = read_typ2(data("good/hanging.typ2")).expect("hanging.typ2");
+    let t1 = read_typ1(data("good/hanging.typ1"), MemoryBudget::DEFAULT).expect("hanging.typ1");
+    let t2 = read_typ2(data("good/hanging.typ2"), MemoryBudget::DEFAULT).expect("hanging.typ2");
     assert_eq!((t1.n_vertices(), t1.n_cells(), t1.n_edges()), (8, 3, 10));
     assert_same_mesh("hanging", &t1, &t2, 1e-15);
     // the clockwise left half became a counter-clockwise pentagon through the hanging node
@@ -398,18 +398,18 @@ fn read_mesh_dispatches_on_extension() {
     let upper = out.join("HANGING.TYP2");
     std::fs::write(&upper, &src).expect("write");
     assert_eq!(
-        read_mesh(&upper).expect("upper-case extension").n_cells(),
+        read_mesh(&upper, MemoryBudget::DEFAULT).expect("upper-case extension").n_cells(),
         3
     );
     let unknown = out.join("hanging.txt");
     std::fs::write(&unknown, &src).expect("write");
-    let e = read_mesh(&unknown).unwrap_err();
+    let e = read_mesh(&unknown, MemoryBudget::DEFAULT).unwrap_err();
     assert!(
         matches!(e, Error::MeshIo { .. }) && e.to_string().contains("hanging.txt"),
         "{e}"
     );
     let missing = out.join("missing.typ2");
-    assert!(matches!(read_mesh(&missing), Err(Error::Io { .. })));
+    assert!(matches!(read_mesh(&missing, MemoryBudget::DEFAULT), Err(Error::Io { .. })));
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -519,7 +519,7 @@ fn fvca5_files_match_the_readme_table() {
     assert!(files.len() > 50, "only {} FVCA5 files found", files.len());
     let mut meshes: BTreeMap<String, PolyMesh> = BTreeMap::new();
     for (name, path) in &files {
-        let m = match read_mesh(path) {
+        let m = match read_mesh(path, MemoryBudget::DEFAULT) {
             Ok(m) => m,
             Err(e) if name.starts_with("mesh8") => {
                 eprintln!("{name}: rejected ({e}); mesh8 does not cover the unit square");
@@ -533,7 +533,7 @@ fn fvca5_files_match_the_readme_table() {
                 "{name}: area {}",
                 total_area(&m)
             );
-            assert_eq!(m.bounding_box(), [0.0, 0.0, 1.0, 1.0], "{name}");
+            assert_eq!(m.bounding_box(), gradvi::mesh::Rect::UNIT, "{name}");
         }
         match rows.get(name) {
             Some(r) => check_row(name, &m, r),
@@ -602,10 +602,10 @@ fn typ2_write_read_round_trip_of_fvca5_files() {
 fn typ2_round_trips(sources: &[PathBuf]) {
     let out = scratch("typ2");
     for src in sources {
-        let m = read_mesh(src).expect("source mesh");
+        let m = read_mesh(src, MemoryBudget::DEFAULT).expect("source mesh");
         let path = out.join("round.typ2");
         write_typ2(&path, &m).expect("write_typ2");
-        let back = read_typ2(&path).expect("read back");
+        let back = read_typ2(&path, MemoryBudget::DEFAULT).expect("read back");
         assert_eq!(back.vertices(), m.vertices(), "{}", src.display());
         assert_eq!(back.n_cells(), m.n_cells());
         for k in 0..m.n_cells() {
@@ -652,7 +652,7 @@ fn numbers(s: &str) -> Vec<f64> {
 #[test]
 fn vtu_round_trip() {
     let out = scratch("vtu");
-    let m = read_typ1(data("good/hanging.typ1")).expect("hanging.typ1");
+    let m = read_typ1(data("good/hanging.typ1"), MemoryBudget::DEFAULT).expect("hanging.typ1");
     let u: Vec<f64> = m
         .vertices()
         .iter()

@@ -19,7 +19,9 @@
 
 use super::{Tokens, capacity, read_text};
 use crate::error::Result;
-use crate::mesh::{NonBoundaryTag, Overlap, Point, PolyMesh, drop_unused_vertices_flat};
+use crate::mesh::{
+    MemoryBudget, NonBoundaryTag, Overlap, Point, PolyMesh, drop_unused_vertices_flat,
+};
 use std::collections::{BTreeSet, HashMap};
 use std::fmt::Display;
 use std::path::Path;
@@ -45,9 +47,10 @@ impl MshMesh {
 }
 
 /// Reads a gmsh ASCII mesh (format 4.1 or 2.2); see the module docs.
-pub fn read_msh(path: impl AsRef<Path>) -> Result<MshMesh> {
+/// No file larger than [`MemoryBudget::max_file_bytes`] of `budget` is read.
+pub fn read_msh(path: impl AsRef<Path>, budget: MemoryBudget) -> Result<MshMesh> {
     let path = path.as_ref();
-    let text = read_text(path)?;
+    let text = read_text(path, budget)?;
     let raw = parse_raw(Tokens::from_text(path, &text))?;
     // the text is no longer needed: free it before the mesh is built
     drop(text);

@@ -24,14 +24,15 @@
 
 use super::{Tokens, capacity, read_text};
 use crate::error::Result;
-use crate::mesh::{NO_CELL, Point, PolyMesh};
+use crate::mesh::{MemoryBudget, NO_CELL, Point, PolyMesh};
 use std::path::Path;
 
 /// Reads a `.typ1` mesh, inserting the hanging nodes of the `all edges` list into the cells
-/// (see the module docs).
-pub fn read_typ1(path: impl AsRef<Path>) -> Result<PolyMesh> {
+/// (see the module docs). No file larger than [`MemoryBudget::max_file_bytes`] of `budget` is
+/// read.
+pub fn read_typ1(path: impl AsRef<Path>, budget: MemoryBudget) -> Result<PolyMesh> {
     let path = path.as_ref();
-    let text = read_text(path)?;
+    let text = read_text(path, budget)?;
     parse_tokens(path, Tokens::from_text(path, &text))
 }
 
