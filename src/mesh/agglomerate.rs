@@ -663,7 +663,9 @@ mod tests {
         // the two-material dam of problems/signorini-layers.toml (cell tags) and the L-shape
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
         for name in ["dam.msh", "lshape.msh", "hole.msh"] {
-            let fine = crate::mesh::io::read_mesh(dir.join(name), crate::mesh::MemoryBudget::DEFAULT).unwrap();
+            let fine =
+                crate::mesh::io::read_mesh(dir.join(name), crate::mesh::MemoryBudget::DEFAULT)
+                    .unwrap();
             let area = total_area(&fine);
             let size = (area / (fine.n_cells() / 16) as f64).sqrt();
             let agg = agglomerate(&fine, size).unwrap();
@@ -768,7 +770,10 @@ mod tests {
         let coarse = agglomerate(&cases[0], size).unwrap().mesh;
         cases.push(coarse);
         for name in ["dam.msh", "lshape.msh", "hole.msh"] {
-            cases.push(crate::mesh::io::read_mesh(dir.join(name), crate::mesh::MemoryBudget::DEFAULT).unwrap());
+            cases.push(
+                crate::mesh::io::read_mesh(dir.join(name), crate::mesh::MemoryBudget::DEFAULT)
+                    .unwrap(),
+            );
         }
         // a sheared triangulated grid with its inner vertices moved by up to 0.3 h (a fixed
         // pseudo-random pattern): some aggregates fail and are dissolved, so that later rounds

@@ -191,7 +191,6 @@ impl PolyMesh {
             h,
         })
     }
-
 }
 
 #[cfg(test)]

@@ -29,7 +29,11 @@ use crate::error::MeshError;
 /// the O(n log n) sort of scattered records. The scatter of step 1 is a random access per side,
 /// so the bucket arrays use `u32` indices whenever the mesh allows it (fewer than 2³¹ cell
 /// sides): half the memory traffic of `usize` records.
-pub(super) fn build_edges(nv: usize, cell_ptr: &[usize], cell_verts: &[usize]) -> Result<Edges, MeshError> {
+pub(super) fn build_edges(
+    nv: usize,
+    cell_ptr: &[usize],
+    cell_verts: &[usize],
+) -> Result<Edges, MeshError> {
     // the largest value stored is 2·slot + 1 < 2·cell_verts.len() (cells and vertices are fewer)
     let small = u32::try_from(cell_verts.len().saturating_mul(2))
         .ok()

@@ -71,10 +71,10 @@ pub(crate) use build::Overlap;
 pub use complex::CellComplex;
 pub(crate) use edges::EdgeIndex;
 pub(crate) use geometry::side_normal_dist;
-use geometry::{dist, sub};
 pub use geometry::{Rect, polygon_area_centroid};
-pub(crate) use renumber::drop_unused_vertices_flat;
+use geometry::{dist, sub};
 pub use renumber::drop_unused_vertices;
+pub(crate) use renumber::drop_unused_vertices_flat;
 pub(crate) use tags::NonBoundaryTag;
 pub use validate::MAX_CELL_VERTICES;
 

@@ -73,7 +73,6 @@ impl PolyMesh {
         }
         m
     }
-
 }
 
 #[cfg(test)]

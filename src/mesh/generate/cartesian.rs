@@ -242,7 +242,10 @@ mod tests {
         let m = cartesian_rect(20, 2, [0.0, 1.0], [0.0, 0.1]).unwrap();
         assert_eq!(m.n_cells(), 40);
         assert!((total_area(&m) - 0.1).abs() < 1e-14);
-        assert_eq!(m.bounding_box(), crate::mesh::Rect::new([0.0, 1.0], [0.0, 0.1]));
+        assert_eq!(
+            m.bounding_box(),
+            crate::mesh::Rect::new([0.0, 1.0], [0.0, 0.1])
+        );
         assert!((m.h() - (0.05f64.powi(2) * 2.0).sqrt()).abs() < 1e-14);
         let m = cartesian_rect(3, 1, [-1.0, 2.0], [5.0, 6.0]).unwrap();
         assert_eq!(m.vertex(7), [2.0, 6.0]);

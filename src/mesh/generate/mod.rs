@@ -439,7 +439,9 @@ mod tests {
     #[test]
     fn triangles_are_the_triangulated_cartesian_grid() {
         for level in 1..=4 {
-            let m = Family::Triangles.generate(level, MemoryBudget::DEFAULT).unwrap();
+            let m = Family::Triangles
+                .generate(level, MemoryBudget::DEFAULT)
+                .unwrap();
             let n = 1 << (level + 1);
             let reference = cartesian_triangles(n, n, [0.0, 1.0], [0.0, 1.0]).unwrap();
             assert!(m.is_triangular(), "level {level}");
@@ -448,7 +450,9 @@ mod tests {
                 assert_eq!(m.cell_vertices(k), reference.cell_vertices(k));
             }
             // the same vertices as the Cartesian mesh of the same level, twice its cells
-            let squares = Family::Cartesian.generate(level, MemoryBudget::DEFAULT).unwrap();
+            let squares = Family::Cartesian
+                .generate(level, MemoryBudget::DEFAULT)
+                .unwrap();
             assert_eq!(m.vertices(), squares.vertices());
             assert_eq!(m.n_cells(), 2 * squares.n_cells());
             assert_eq!(m.n_edges(), squares.n_edges() + squares.n_cells());
