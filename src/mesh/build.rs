@@ -80,8 +80,9 @@ impl PolyMesh {
     /// `overlap` says whether the sweep for crossing edges and overlapping cells (checks 11
     /// and 12, O(N log N) and sequential) runs: [`Overlap::ByConstruction`] only for the cells
     /// of a tensor-product grid whose coordinates increase strictly along both directions (the
-    /// Cartesian generators check them), which tile their rectangle by construction (the sweep
-    /// was 1.5 s of the 3 s taken by a 2048² triangulated grid); every other check runs.
+    /// Cartesian generators check them), which tile their rectangle by construction (the time
+    /// this saves is recorded in `replication/BENCHMARKS.md`, "Measurements behind the
+    /// defaults"); every other check runs.
     pub(crate) fn from_flat_cells(
         vertices: Vec<Point>,
         cell_ptr: Vec<usize>,
@@ -118,13 +119,9 @@ impl PolyMesh {
             || build_edges(nv, &cell_ptr, &cell_verts),
             || validate::check_simple_cells(&vertices, &cell_ptr, &cell_verts),
         );
-        let Edges {
-            edges,
-            edge_cells,
-            cell_edges,
-        } = built?;
+        let built = built?;
         simple?;
-        let ne = edges.len();
+        let ne = built.edges.len();
         // not reached (every edge is a side of some cell), but the ids must fit in `cell_edges`
         if ne >= u32::MAX as usize {
             return Err(MeshError::TooManyEntities {
@@ -141,55 +138,103 @@ impl PolyMesh {
         let cell_ptr = to_u32(cell_ptr);
         let cell_verts = to_u32(cell_verts);
 
-        let boundary_edges: Vec<usize> = (0..ne).filter(|&e| edge_cells[e][1] == NO_CELL).collect();
-        let boundary = validate::boundary_loops(
-            &vertices,
-            &edges,
-            &cell_verts,
-            &cell_ptr,
-            &cell_edges,
-            &boundary_edges,
-        )?;
-        if let Some(order) = order {
-            validate::check_no_overlap(
-                &validate::Topology {
-                    vertices: &vertices,
-                    cell_ptr: &cell_ptr,
-                    cell_verts: &cell_verts,
-                    edges: &edges,
-                    edge_cells: &edge_cells,
-                    cell_area: &cells.area,
-                },
-                &boundary,
-                order,
-            )?;
-        }
-        drop(boundary);
-
-        // compact storage of the edges (ids below u32::MAX, checked above); the usize arrays
-        // are freed
-        let edges: Vec<[u32; 2]> = edges.iter().map(|e| e.map(|v| v as u32)).collect();
-        let edge_cells: Vec<[u32; 2]> = edge_cells
-            .iter()
-            .map(|c| c.map(|k| if k == NO_CELL { u32::MAX } else { k as u32 }))
+        let boundary_edges: Vec<usize> = (0..ne)
+            .filter(|&e| built.edge_cells[e][1] == NO_CELL)
             .collect();
-        let edge_tags = vec![0i32; ne];
-        let cell_tags = vec![0i32; cells.area.len()];
-        let h = cells.diameter.iter().cloned().fold(0.0, f64::max);
-        Ok(PolyMesh {
+        check_boundary_and_overlap(
+            &vertices,
+            &cell_ptr,
+            &cell_verts,
+            &built,
+            &boundary_edges,
+            &cells.area,
+            order,
+        )?;
+        Ok(compact(
             vertices,
             cell_ptr,
             cell_verts,
-            cell_edges,
-            edges,
-            edge_cells,
-            edge_tags,
-            cell_tags,
-            cell_area: cells.area,
-            cell_centroid: cells.centroid,
+            built,
+            cells,
             boundary_edges,
-            h,
-        })
+        ))
+    }
+}
+
+/// Checks 10–12 of [`validate`] on cells stored in their final 32-bit arrays: the boundary is
+/// a union of simple closed loops and, if `order` is given (the sweep runs), no two edges cross
+/// and the cells do not overlap.
+fn check_boundary_and_overlap(
+    vertices: &[Point],
+    cell_ptr: &[u32],
+    cell_verts: &[u32],
+    built: &Edges,
+    boundary_edges: &[usize],
+    cell_area: &[f64],
+    order: Option<sweep::SweepOrder>,
+) -> Result<(), MeshError> {
+    let boundary = validate::boundary_loops(
+        vertices,
+        &built.edges,
+        cell_verts,
+        cell_ptr,
+        &built.cell_edges,
+        boundary_edges,
+    )?;
+    if let Some(order) = order {
+        validate::check_no_overlap(
+            &validate::Topology {
+                vertices,
+                cell_ptr,
+                cell_verts,
+                edges: &built.edges,
+                edge_cells: &built.edge_cells,
+                cell_area,
+            },
+            &boundary,
+            order,
+        )?;
+    }
+    Ok(())
+}
+
+/// The validated mesh, its edge arrays made 32-bit (ids below `u32::MAX`, checked before), no
+/// tags, h = max_K h_K.
+fn compact(
+    vertices: Vec<Point>,
+    cell_ptr: Vec<u32>,
+    cell_verts: Vec<u32>,
+    built: Edges,
+    cells: validate::CellGeometry,
+    boundary_edges: Vec<usize>,
+) -> PolyMesh {
+    let Edges {
+        edges,
+        edge_cells,
+        cell_edges,
+    } = built;
+    let ne = edges.len();
+    let edges: Vec<[u32; 2]> = edges.iter().map(|e| e.map(|v| v as u32)).collect();
+    let edge_cells: Vec<[u32; 2]> = edge_cells
+        .iter()
+        .map(|c| c.map(|k| if k == NO_CELL { u32::MAX } else { k as u32 }))
+        .collect();
+    let edge_tags = vec![0i32; ne];
+    let cell_tags = vec![0i32; cells.area.len()];
+    let h = cells.diameter.iter().cloned().fold(0.0, f64::max);
+    PolyMesh {
+        vertices,
+        cell_ptr,
+        cell_verts,
+        cell_edges,
+        edges,
+        edge_cells,
+        edge_tags,
+        cell_tags,
+        cell_area: cells.area,
+        cell_centroid: cells.centroid,
+        boundary_edges,
+        h,
     }
 }
 

@@ -85,14 +85,19 @@ impl EdgeIndex for usize {
     }
 }
 
-/// [`build_edges`] with scratch indices of type `I`.
-fn build_edges_with<I: EdgeIndex>(
+/// A cell side in the buckets of [`build_edges`]: (larger vertex, 2·slot + \[the side runs from
+/// the larger to the smaller vertex\], cell). The direction rides along so that step 3 reads no
+/// vertex ids; sorting by the second item sorts by slot.
+type HalfEdge<I> = (I, I, I);
+
+/// Steps 1 and 2 of [`build_edges`]: the cell sides in buckets by smaller vertex (bucket v is
+/// `half[start[v]..start[v + 1]]`), each bucket sorted, and the number of edges.
+fn bucket_sides<I: EdgeIndex>(
     nv: usize,
     cell_ptr: &[usize],
     cell_verts: &[usize],
-) -> Result<Edges, MeshError> {
+) -> (Vec<I>, Vec<HalfEdge<I>>, usize) {
     let n_half = cell_verts.len();
-    debug_assert!(n_half < u32::MAX as usize, "checked by from_flat_cells");
     let nc = cell_ptr.len().saturating_sub(1);
     // the side in `slot` of cell k (slots s..e) joins cell_verts[slot] to cell_verts[next(slot)]
     let next = |slot: usize, s: usize, e: usize| if slot + 1 < e { slot + 1 } else { s };
@@ -111,8 +116,6 @@ fn build_edges_with<I: EdgeIndex>(
         start[v + 1] = I::from_usize(start[v + 1].to_usize() + start[v].to_usize());
     }
     let mut cursor = start.clone();
-    // (larger vertex, 2·slot + [side runs from larger to smaller vertex], cell): the direction
-    // rides along so that step 3 reads no vertex ids; sorting by the second item sorts by slot
     let mut half = vec![(I::default(), I::default(), I::default()); n_half];
     for k in 0..nc {
         let (s, e) = (cell_ptr[k], cell_ptr[k + 1]);
@@ -139,6 +142,18 @@ fn build_edges_with<I: EdgeIndex>(
             .filter(|&(i, h)| i == 0 || bucket[i - 1].0 != h.0)
             .count();
     }
+    (start, half, ne)
+}
+
+/// [`build_edges`] with scratch indices of type `I`.
+fn build_edges_with<I: EdgeIndex>(
+    nv: usize,
+    cell_ptr: &[usize],
+    cell_verts: &[usize],
+) -> Result<Edges, MeshError> {
+    let n_half = cell_verts.len();
+    debug_assert!(n_half < u32::MAX as usize, "checked by from_flat_cells");
+    let (start, half, ne) = bucket_sides::<I>(nv, cell_ptr, cell_verts);
     // 3. runs of equal (smaller, larger) vertex pairs are the edges
     let mut edges = Vec::with_capacity(ne);
     let mut edge_cells = Vec::with_capacity(ne);

@@ -526,6 +526,26 @@ fn read_elements41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     expect(t, "$EndElements")
 }
 
+/// The error of a file without cells, naming the element types that were skipped.
+fn no_cells(t: &Tokens, ignored_types: &BTreeSet<i32>) -> crate::Error {
+    let ignored = if ignored_types.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " (ignored element types: {})",
+            ignored_types
+                .iter()
+                .map(i32::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    t.err_at(
+        0,
+        format!("no triangles (type 2) or quadrangles (type 3) in the file{ignored}"),
+    )
+}
+
 /// Resolves node tags, drops unused nodes, builds the mesh and tags its boundary edges.
 ///
 /// Errors come in this order: a cell naming an unknown node (first such cell in file order),
@@ -559,22 +579,7 @@ fn build(path: &Path, raw: Raw) -> Result<MshMesh> {
     };
     let nc = cell_line.len();
     if nc == 0 {
-        let ignored = if ignored_types.is_empty() {
-            String::new()
-        } else {
-            format!(
-                " (ignored element types: {})",
-                ignored_types
-                    .iter()
-                    .map(i32::to_string)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )
-        };
-        return Err(t.err_at(
-            0,
-            format!("no triangles (type 2) or quadrangles (type 3) in the file{ignored}"),
-        ));
+        return Err(no_cells(t, &ignored_types));
     }
     // cells, flat: the node tags of cell k are cell_nodes[cell_ptr[k]..cell_ptr[k + 1]], and
     // cell_ptr has nc + 1 entries starting at 0 (read_elements* push them)
