@@ -528,7 +528,12 @@ fn readme_example_is_a_valid_problem() {
     let pf = file::parse(text, &problems().join("readme.toml"), &[]).unwrap();
     assert_eq!(pf.name, "membrane-C-5");
     assert_eq!(pf.scheme, Some(gradvi::scheme::SchemeKind::Hmm));
-    let mesh = pf.mesh.as_ref().unwrap().build(gradvi::mesh::MemoryBudget::DEFAULT).unwrap();
+    let mesh = pf
+        .mesh
+        .as_ref()
+        .unwrap()
+        .build(gradvi::mesh::MemoryBudget::DEFAULT)
+        .unwrap();
     pf.check_against_mesh(&mesh).unwrap();
     let s = Hmm::new(&mesh);
     let sol = solve(&s, &pf.problem());
@@ -569,7 +574,11 @@ fn pieces_by_cell_tag_equal_pieces_by_condition() {
 /// Format 2.2: a cell's tag is its first (physical) tag.
 #[test]
 fn gmsh22_cells_carry_their_physical_tag() {
-    let mesh = read_mesh(root().join("tests/data/good/square_41_gmsh22.msh"), gradvi::mesh::MemoryBudget::DEFAULT).unwrap();
+    let mesh = read_mesh(
+        root().join("tests/data/good/square_41_gmsh22.msh"),
+        gradvi::mesh::MemoryBudget::DEFAULT,
+    )
+    .unwrap();
     assert!(mesh.n_cells() > 0);
     for k in 0..mesh.n_cells() {
         assert_eq!(mesh.cell_tag(k), 10, "cell {k}");
@@ -587,7 +596,10 @@ fn example_ex9_with_p1_on_generated_triangles() {
     let Some(MeshSpec::Generated { level, domain, .. }) = pf.mesh.clone() else {
         panic!("ex9 generates its mesh: {:?}", pf.mesh);
     };
-    assert_eq!((level, domain), (4, Some(gradvi::mesh::Rect::new([-2.0, 2.0], [-2.0, 2.0]))));
+    assert_eq!(
+        (level, domain),
+        (4, Some(gradvi::mesh::Rect::new([-2.0, 2.0], [-2.0, 2.0])))
+    );
     let spec = MeshSpec::Generated {
         family: Family::Triangles,
         level,

@@ -40,8 +40,8 @@
 //! ([`baseline`]).
 
 use crate::app::replication::records::{read_csv, write_csv};
-use gradvi::mesh::PolyMesh;
 use gradvi::mesh::MemoryBudget;
+use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{Family, cartesian_rect_within};
 use gradvi::mesh::io::read_mesh;
 use gradvi::problem::paper_test3;
@@ -336,9 +336,9 @@ pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
             (read_mesh(f, MemoryBudget::available())?, stem)
         }
         BenchFamily::Hexagonal => (
-                Family::Hexagonal.generate(case.size, MemoryBudget::available())?,
-                format!("hexa level {}", case.size),
-            ),
+            Family::Hexagonal.generate(case.size, MemoryBudget::available())?,
+            format!("hexa level {}", case.size),
+        ),
         BenchFamily::Cartesian => (
             cartesian_rect_within(
                 case.size,

@@ -418,7 +418,8 @@ pub fn solve_cases(
         let r = &case.summary;
         if !meshes.contains_key(&r.mesh) {
             let path = args.meshes.join(&r.mesh);
-            let m = read_mesh(&path, MemoryBudget::available()).with_context(|| format!("reading {}", path.display()))?;
+            let m = read_mesh(&path, MemoryBudget::available())
+                .with_context(|| format!("reading {}", path.display()))?;
             meshes.insert(r.mesh.clone(), m);
         }
         let mesh = &meshes[&r.mesh];

@@ -4,9 +4,9 @@
 use super::output::{atomic, check_distinct};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use gradvi::mesh::{MemoryBudget, PolyMesh};
 use gradvi::mesh::generate::Family;
 use gradvi::mesh::io::write_vtu;
+use gradvi::mesh::{MemoryBudget, PolyMesh};
 use gradvi::post::fields::EntityFields;
 use gradvi::problem::file;
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with};

@@ -851,7 +851,9 @@ impl Cx<'_> {
                 let level = m.level.ok_or_else(|| bad("'generate' needs a 'level'"))?;
                 family.check_level(level).map_err(|e| bad(&e.to_string()))?;
                 // the file writes the x range, then the y range
-                let domain = m.domain.map(|[x0, x1, y0, y1]| Rect::new([x0, x1], [y0, y1]));
+                let domain = m
+                    .domain
+                    .map(|[x0, x1, y0, y1]| Rect::new([x0, x1], [y0, y1]));
                 if domain.is_some_and(|d| !d.is_proper()) {
                     return Err(bad("'domain' = [x0, x1, y0, y1] needs x0 < x1 and y0 < y1"));
                 }

@@ -23,9 +23,9 @@
 
 use super::{Config, bad, io_err, json_row, peak_memory_mib, stdout_of};
 use crate::app::replication::records::{read_csv, write_csv};
+use gradvi::mesh::MemoryBudget;
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::budget::human_bytes;
-use gradvi::mesh::MemoryBudget;
 use gradvi::mesh::generate::{cartesian_rect_within, cartesian_triangles_within};
 use gradvi::mesh::io::read_mesh;
 use gradvi::problem::{Problem, paper_test3};
@@ -254,13 +254,23 @@ fn run_gradvi(
                     [-2.0, 2.0],
                     MemoryBudget::available(),
                 )?,
-                _ => cartesian_rect_within(n, n, [-2.0, 2.0], [-2.0, 2.0], MemoryBudget::available())?,
+                _ => cartesian_rect_within(
+                    n,
+                    n,
+                    [-2.0, 2.0],
+                    [-2.0, 2.0],
+                    MemoryBudget::available(),
+                )?,
             };
             (mesh, ex9_problem(root)?, size)
         }
         _ => {
             let f = file.ok_or_else(|| bad(format!("{family}: a domain case needs its mesh")))?;
-            (read_mesh(f, MemoryBudget::available())?, paper_test3(super::C), 0)
+            (
+                read_mesh(f, MemoryBudget::available())?,
+                paper_test3(super::C),
+                0,
+            )
         }
     };
     let mesh_s = t0.elapsed().as_secs_f64();
