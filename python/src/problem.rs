@@ -550,7 +550,9 @@ impl PyProblem {
         let Some(spec) = pf.mesh.clone() else {
             return Ok(None);
         };
-        let m = guard(py, move || spec.build(gradvi::mesh::MemoryBudget::available()))?;
+        let m = guard(py, move || {
+            spec.build(gradvi::mesh::MemoryBudget::available())
+        })?;
         Ok(Some(PyMesh {
             mesh: Arc::new(m),
             physical_names: Vec::new(),
