@@ -5,7 +5,7 @@
 //! library never looks at the machine's free memory unless the caller asks for it with
 //! [`MemoryBudget::available`]. The same call therefore passes or fails whatever the load of
 //! the machine. The convenience generators without a budget argument
-//! ([`cartesian`](super::generate::cartesian) and the like) use the fixed
+//! ([`cartesian()`](super::generate::cartesian()) and the like) use the fixed
 //! [`MemoryBudget::DEFAULT`] (8 GiB).
 //!
 //! * [`MemoryBudget::available`]: the memory the kernel reports as available (`MemAvailable` in

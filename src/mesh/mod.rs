@@ -6,7 +6,7 @@
 //! the geometry named in the crate's notation table, and validates everything HMM needs: a
 //! partition of a polygonal domain into simple, star-shaped polygons meeting edge to edge, with
 //! no overlap, checked in O(n log n) time whatever the input (see [`validate`] for the list of
-//! checks and their costs, and [`MeshError`]). Nothing is mutated afterwards; transformations
+//! checks and their costs, and [`MeshError`](crate::MeshError)). Nothing is mutated afterwards; transformations
 //! return new meshes.
 //!
 //! The geometry of the cells and edges is stored; that of the cell sides (one entry per
@@ -27,6 +27,16 @@
 //! | [`PolyMesh::cell_dist`] | d_{K,σ} = (x_σ − x_K)·n_{K,σ} > 0 on local edge i |
 //! | [`PolyMesh::cell_normals_dists`] | (n_{K,σ}, d_{K,σ}) for all local edges, in order |
 //! | [`PolyMesh::h`] | h = max_K h_K |
+//! | [`PolyMesh::bounding_box`] | the smallest [`Rect`] \[x0, x1\] × \[y0, y1\] holding Ω |
+//!
+//! ## Files
+//! One job each: `build.rs` builds a mesh from cell lists (through the checks of [`validate`],
+//! the edge numbering of `edges.rs` and the overlap sweep of `sweep.rs`); `poly_mesh.rs` holds
+//! the accessors; `tags.rs` the boundary and cell tags; `geometry.rs` the geometry of points
+//! and polygons and [`Rect`]; `renumber.rs` drops unused vertices for the readers;
+//! [`budget`] estimates the memory of a mesh against the caller's [`MemoryBudget`];
+//! [`generate`] and [`io`] make meshes, [`agglomerate`] coarsens them, [`complex`] is the
+//! dimension-generic view a scheme reads.
 //!
 //! ## Dimension
 //! [`PolyMesh`] is two-dimensional by nature: its checks (orientation, star-shapedness, the

@@ -4,7 +4,8 @@ use super::Point;
 
 /// Removes the vertices that no cell uses and renumbers the cells accordingly.
 /// Returns the new vertices, the new cells, and for each old vertex its new id (`None` if dropped).
-/// Readers of formats that may list extra nodes (gmsh) call this before [`PolyMesh::from_cells`].
+/// Readers of formats that may list extra nodes (gmsh) call this before
+/// [`PolyMesh::from_cells`](super::PolyMesh::from_cells).
 pub fn drop_unused_vertices(
     vertices: &[Point],
     cells: &[Vec<usize>],

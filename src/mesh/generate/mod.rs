@@ -11,7 +11,7 @@
 //! [`hexagonal`](mod@hexagonal), [`kershaw`](mod@kershaw)). All generators return a validated
 //! [`PolyMesh`] (counter-clockwise cells) and never panic: invalid arguments, and meshes larger
 //! than [`MAX_CELLS`], are reported as [`Error::InvalidData`]. Before allocating anything, every
-//! generator estimates the memory it will need ([`budget::mesh_bytes`], from the exact numbers of
+//! generator estimates the memory it will need ([`mesh_bytes`], from the exact numbers of
 //! cells, vertices and edges) and refuses, with [`MeshError::TooLarge`](crate::MeshError::TooLarge)
 //! giving the estimate, a mesh that does not fit in the memory budget. The budget is the
 //! caller's ([`MemoryBudget`]): [`Family::generate`], [`Family::generate_on`] and the `_within`
@@ -197,7 +197,7 @@ impl Family {
     }
 
     /// Estimated peak memory, in bytes, of generating the mesh at `level`
-    /// ([`budget::mesh_bytes`]); `u64::MAX` when it cannot be counted.
+    /// ([`mesh_bytes`]); `u64::MAX` when it cannot be counted.
     pub fn memory_estimate(self, level: usize) -> u64 {
         self.counts(level)
             .map_or(u64::MAX, |[c, s, v, e]| mesh_bytes(c, s, v, e))
