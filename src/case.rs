@@ -6,23 +6,24 @@
 //! reader or generator.
 
 use crate::error::Result;
-use crate::mesh::PolyMesh;
+use crate::mesh::{MemoryBudget, PolyMesh};
 use crate::problem::file::MeshSpec;
 
 /// The mesh `spec` describes: the file read ([`crate::mesh::io::read_mesh`], which knows the
 /// formats by their extension), or the family generated at its level
 /// ([`crate::mesh::Family::generate`]), on `domain` if one is given
-/// ([`crate::mesh::Family::generate_on`]).
-pub fn build_mesh(spec: &MeshSpec) -> Result<PolyMesh> {
+/// ([`crate::mesh::Family::generate_on`]), within the caller's memory `budget` (the command
+/// line and Python pass [`MemoryBudget::available`]).
+pub fn build_mesh(spec: &MeshSpec, budget: MemoryBudget) -> Result<PolyMesh> {
     match spec {
-        MeshSpec::File(p) => crate::mesh::io::read_mesh(p),
+        MeshSpec::File(p) => crate::mesh::io::read_mesh(p, budget),
         MeshSpec::Generated {
             family,
             level,
             domain,
         } => match domain {
-            None => family.generate(*level),
-            Some(d) => family.generate_on(*level, *d),
+            None => family.generate(*level, budget),
+            Some(d) => family.generate_on(*level, *d, budget),
         },
     }
 }
@@ -30,7 +31,7 @@ pub fn build_mesh(spec: &MeshSpec) -> Result<PolyMesh> {
 #[cfg(test)]
 mod tests {
     use super::build_mesh;
-    use crate::mesh::Family;
+    use crate::mesh::{Family, MemoryBudget, Rect};
     use crate::problem::file::{MeshSpec, parse};
     use std::path::Path;
 
@@ -38,17 +39,17 @@ mod tests {
     fn mesh_of(section: &str) -> crate::mesh::PolyMesh {
         let text = format!("[mesh]\n{section}\n");
         let pf = parse(&text, Path::new("tests/data/case.toml"), &[]).unwrap();
-        build_mesh(pf.mesh.as_ref().unwrap()).unwrap()
+        build_mesh(pf.mesh.as_ref().unwrap(), MemoryBudget::DEFAULT).unwrap()
     }
 
     #[test]
     fn generated_meshes_are_the_family_at_its_level_on_its_domain() {
         let m = mesh_of("generate = \"cartesian\"\nlevel = 2");
-        let g = Family::Cartesian.generate(2).unwrap();
+        let g = Family::Cartesian.generate(2, MemoryBudget::DEFAULT).unwrap();
         assert_eq!((m.n_cells(), m.vertices()), (g.n_cells(), g.vertices()));
         let m = mesh_of("generate = \"kershaw\"\nlevel = 1\ndomain = [-1, 3, 0, 0.5]");
         let g = Family::Kershaw
-            .generate_on(1, [-1.0, 3.0, 0.0, 0.5])
+            .generate_on(1, Rect::new([-1.0, 3.0], [0.0, 0.5]), MemoryBudget::DEFAULT)
             .unwrap();
         assert_eq!((m.n_cells(), m.vertices()), (g.n_cells(), g.vertices()));
         let [x0, x1, y0, y1] = m.vertices().iter().fold(
@@ -66,10 +67,10 @@ mod tests {
     #[test]
     fn mesh_files_are_read_relative_to_the_problem_file() {
         let m = mesh_of("file = \"good/square_22.msh\"");
-        let r = crate::mesh::io::read_mesh("tests/data/good/square_22.msh").unwrap();
+        let r = crate::mesh::io::read_mesh("tests/data/good/square_22.msh", MemoryBudget::DEFAULT).unwrap();
         assert_eq!((m.n_cells(), m.vertices()), (r.n_cells(), r.vertices()));
         let spec = MeshSpec::File(Path::new("tests/data").join("missing.msh"));
-        let e = build_mesh(&spec).unwrap_err().to_string();
+        let e = build_mesh(&spec, MemoryBudget::DEFAULT).unwrap_err().to_string();
         assert!(e.contains("missing.msh"), "{e}");
     }
 }

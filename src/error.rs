@@ -2,6 +2,7 @@
 //! (a malformed file, a non-conforming mesh, infeasible constraints, NaN data, a solver that
 //! does not converge) is one of these variants, with enough context to find the culprit.
 
+use crate::units::human_bytes;
 use std::path::PathBuf;
 use thiserror::Error;
 
@@ -48,8 +49,8 @@ pub enum Error {
     /// The active-set iteration did not converge, cycled, or its certificate failed.
     #[error("active-set solver: {0}")]
     Solver(#[from] SolverError),
-    /// A problem file is invalid (see [`crate::problem::file`]): TOML syntax, an unknown key, a bad
-    /// expression, or data that does not fit the mesh. `line` and `column` are 1-based (0 when
+    /// A problem file is invalid: TOML syntax, an unknown key, a bad expression, or data that
+    /// does not fit the mesh. `line` and `column` are 1-based (0 when
     /// the error is not tied to a place in the file); the message names the key.
     #[error("{}: {msg}", place(path, *line, *column))]
     ProblemFile {
@@ -209,16 +210,15 @@ pub enum MeshError {
     /// The boundary is not a union of simple closed polygons (hanging nodes, pinched vertices).
     #[error("non-conforming mesh: {0}")]
     NonConforming(String),
-    /// A cell with more vertices than [`MAX_CELL_VERTICES`](crate::mesh::MAX_CELL_VERTICES).
-    #[error(
-        "cell {cell} has {n_vertices} vertices, more than the limit of {}",
-        crate::mesh::MAX_CELL_VERTICES
-    )]
+    /// A cell with more vertices than the limit a mesh accepts.
+    #[error("cell {cell} has {n_vertices} vertices, more than the limit of {max}")]
     CellTooLarge {
         /// 0-based cell index.
         cell: usize,
         /// Its number of vertices.
         n_vertices: usize,
+        /// The largest number of vertices a cell may have.
+        max: usize,
     },
     /// A cell whose boundary crosses or touches itself (not a simple polygon).
     #[error(
@@ -259,12 +259,11 @@ pub enum MeshError {
         /// The cell that contains that loop, if any.
         cell: Option<usize>,
     },
-    /// Building the mesh would need more memory than the budget
-    /// ([`memory_budget`](crate::mesh::budget::memory_budget)).
+    /// Building the mesh would need more memory than the budget the caller gave.
     #[error(
         "{what} would need about {}, more than the memory budget of {}",
-        crate::mesh::budget::human_bytes(*bytes),
-        crate::mesh::budget::human_bytes(*budget)
+        human_bytes(*bytes),
+        human_bytes(*budget)
     )]
     TooLarge {
         /// What was asked for.

@@ -116,5 +116,6 @@ pub mod post;
 pub mod problem;
 pub mod scheme;
 pub mod solver;
+pub mod units;
 pub mod vi;
 pub use error::{Error, MeshError, Result, SolverError};

@@ -110,7 +110,13 @@ fn fvca5_triangles_from_the_shared_files() {
     let dir = fvca5_dir();
     let p = fvca5_test11();
     let meshes: Vec<PolyMesh> = (1..=4)
-        .map(|l| gradvi::mesh::io::read_mesh(dir.join(format!("mesh1_{l}.typ2"))).unwrap())
+        .map(|l| {
+            gradvi::mesh::io::read_mesh(
+                dir.join(format!("mesh1_{l}.typ2")),
+                gradvi::mesh::MemoryBudget::DEFAULT,
+            )
+            .unwrap()
+        })
         .collect();
     assert_slopes("HMM FVCA5 mesh1", errors(&meshes, false, &p), 2.0, 1.0);
     assert_slopes("P1 FVCA5 mesh1", errors(&meshes, true, &p), 2.0, 1.0);

@@ -61,7 +61,7 @@ fn builtin_files_reproduce_the_rust_problems() {
         let pf = file::load(problems().join(format!("{name}.toml")), &params).unwrap();
         let embedded = file::builtin(name, &params).unwrap();
         assert_eq!(pf.name, embedded.name);
-        let tri = read_mesh(root().join(tri)).unwrap();
+        let tri = read_mesh(root().join(tri), gradvi::mesh::MemoryBudget::DEFAULT).unwrap();
         for mesh in [&hex, &ker, &tri] {
             pf.check_against_mesh(mesh).unwrap();
             same_solution(&Hmm::new(mesh), &builtin, &pf.problem());
@@ -248,7 +248,7 @@ fn first_error(name: &str) -> Error {
         Err(e) => return e,
     };
     let mesh = match &pf.mesh {
-        Some(spec) => build_mesh(spec).unwrap(),
+        Some(spec) => build_mesh(spec, gradvi::mesh::MemoryBudget::DEFAULT).unwrap(),
         None => cartesian(4, 4).unwrap(),
     };
     if let Err(e) = pf.check_against_mesh(&mesh) {
@@ -343,7 +343,7 @@ fn parameters_are_overridden_by_name_and_unknown_ones_rejected() {
 fn example(name: &str) -> (ProblemFile, PolyMesh) {
     let pf = file::load(problems().join(format!("{name}.toml")), &[]).unwrap();
     let spec = pf.mesh.clone().expect("examples name their mesh");
-    let mesh = build_mesh(&spec).unwrap();
+    let mesh = build_mesh(&spec, gradvi::mesh::MemoryBudget::DEFAULT).unwrap();
     pf.check_against_mesh(&mesh).unwrap();
     (pf, mesh)
 }
@@ -503,11 +503,14 @@ fn example_ex9_with_its_own_mesh() {
         Some(MeshSpec::Generated {
             family: gradvi::mesh::generate::Family::Cartesian,
             level: 4,
-            domain: Some([-2.0, 2.0, -2.0, 2.0]),
+            domain: Some(gradvi::mesh::Rect::new([-2.0, 2.0], [-2.0, 2.0])),
         })
     );
     assert_eq!(mesh.n_cells(), 32 * 32);
-    assert_eq!(mesh.bounding_box(), [-2.0, -2.0, 2.0, 2.0]); // [x_min, y_min, x_max, y_max]
+    assert_eq!(
+        mesh.bounding_box(),
+        gradvi::mesh::Rect::new([-2.0, 2.0], [-2.0, 2.0])
+    );
     let p = pf.problem();
     let s = Hmm::new(&mesh);
     let sol = solve(&s, &p);
@@ -526,7 +529,7 @@ fn readme_example_is_a_valid_problem() {
     let pf = file::parse(text, &problems().join("readme.toml"), &[]).unwrap();
     assert_eq!(pf.name, "membrane-C-5");
     assert_eq!(pf.scheme, Some(gradvi::scheme::SchemeKind::Hmm));
-    let mesh = build_mesh(pf.mesh.as_ref().unwrap()).unwrap();
+    let mesh = build_mesh(pf.mesh.as_ref().unwrap(), gradvi::mesh::MemoryBudget::DEFAULT).unwrap();
     pf.check_against_mesh(&mesh).unwrap();
     let s = Hmm::new(&mesh);
     let sol = solve(&s, &pf.problem());
@@ -567,7 +570,11 @@ fn pieces_by_cell_tag_equal_pieces_by_condition() {
 /// Format 2.2: a cell's tag is its first (physical) tag.
 #[test]
 fn gmsh22_cells_carry_their_physical_tag() {
-    let mesh = read_mesh(root().join("tests/data/good/square_41_gmsh22.msh")).unwrap();
+    let mesh = read_mesh(
+        root().join("tests/data/good/square_41_gmsh22.msh"),
+        gradvi::mesh::MemoryBudget::DEFAULT,
+    )
+    .unwrap();
     assert!(mesh.n_cells() > 0);
     for k in 0..mesh.n_cells() {
         assert_eq!(mesh.cell_tag(k), 10, "cell {k}");
@@ -585,14 +592,17 @@ fn example_ex9_with_p1_on_generated_triangles() {
     let Some(MeshSpec::Generated { level, domain, .. }) = pf.mesh.clone() else {
         panic!("ex9 generates its mesh: {:?}", pf.mesh);
     };
-    assert_eq!((level, domain), (4, Some([-2.0, 2.0, -2.0, 2.0])));
+    assert_eq!(
+        (level, domain),
+        (4, Some(gradvi::mesh::Rect::new([-2.0, 2.0], [-2.0, 2.0])))
+    );
     let spec = MeshSpec::Generated {
         family: Family::Triangles,
         level,
         domain,
     };
     assert_eq!(spec.to_string(), "triangles level 4 on [-2, 2]x[-2, 2]");
-    let mesh = build_mesh(&spec).unwrap();
+    let mesh = build_mesh(&spec, gradvi::mesh::MemoryBudget::DEFAULT).unwrap();
     let reference = cartesian_triangles(32, 32, [-2.0, 2.0], [-2.0, 2.0]).unwrap();
     assert_eq!(mesh.vertices(), reference.vertices());
     assert_eq!(mesh.n_cells(), 2 * 32 * 32);

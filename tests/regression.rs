@@ -50,7 +50,11 @@ fn table2_hexagonal_levels_1_and_2() {
 
 #[test]
 fn table3_and_table1_on_the_coarsest_meshes() {
-    let m3 = read_mesh(root().join("meshes/test3_1.msh")).unwrap();
+    let m3 = read_mesh(
+        root().join("meshes/test3_1.msh"),
+        gradvi::mesh::MemoryBudget::DEFAULT,
+    )
+    .unwrap();
     for (c, hmm, p1) in [(-5.0, 8, 6), (-10.0, 8, 6), (-15.0, 5, 5), (-20.0, 5, 4)] {
         let hmm_scheme = Hmm::new(&m3);
         let sol = solve_problem(&hmm_scheme, &paper_test3(c), &SolveOptions::paper()).unwrap();
@@ -59,7 +63,11 @@ fn table3_and_table1_on_the_coarsest_meshes() {
         let sol = solve_problem(&s1, &paper_test3(c), &SolveOptions::paper()).unwrap();
         assert_eq!(sol.niter(), p1, "P1, C = {c}");
     }
-    let m1 = read_mesh(root().join("meshes/test1_1.msh")).unwrap();
+    let m1 = read_mesh(
+        root().join("meshes/test1_1.msh"),
+        gradvi::mesh::MemoryBudget::DEFAULT,
+    )
+    .unwrap();
     let s1 = Hmm::new(&m1);
     let sol = solve_problem(&s1, &paper_test1(), &SolveOptions::paper()).unwrap();
     assert_eq!(sol.niter(), 4);

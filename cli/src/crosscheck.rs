@@ -22,7 +22,7 @@ use crate::replication::records::{
 };
 use anyhow::{Context, Result, bail};
 use gradvi::mesh::io::read_mesh;
-use gradvi::mesh::{Point, PolyMesh};
+use gradvi::mesh::{MemoryBudget, Point, PolyMesh};
 use gradvi::post::contact::{contact_measure, free_boundary, hausdorff, switch_point};
 use gradvi::post::relative_errors;
 use gradvi::problem::{Problem, paper_test1, paper_test2, paper_test3};
@@ -418,7 +418,8 @@ pub fn solve_cases(
         let r = &case.summary;
         if !meshes.contains_key(&r.mesh) {
             let path = args.meshes.join(&r.mesh);
-            let m = read_mesh(&path).with_context(|| format!("reading {}", path.display()))?;
+            let m = read_mesh(&path, MemoryBudget::available())
+                .with_context(|| format!("reading {}", path.display()))?;
             meshes.insert(r.mesh.clone(), m);
         }
         let mesh = &meshes[&r.mesh];

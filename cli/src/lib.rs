@@ -15,6 +15,7 @@ pub mod solve;
 
 use anyhow::{Result, bail};
 use clap::{Args, Parser, Subcommand};
+use gradvi::mesh::MemoryBudget;
 use gradvi::mesh::io::{read_mesh, write_typ2, write_vtu};
 use std::ffi::OsString;
 use std::path::PathBuf;
@@ -86,7 +87,7 @@ struct ReplicateArgs {
 }
 
 fn mesh_info(file: &PathBuf) -> Result<()> {
-    let m = read_mesh(file)?;
+    let m = read_mesh(file, MemoryBudget::available())?;
     let mut sides = std::collections::BTreeMap::new();
     for k in 0..m.n_cells() {
         *sides.entry(m.cell_vertices(k).len()).or_insert(0usize) += 1;
@@ -109,7 +110,7 @@ fn mesh_info(file: &PathBuf) -> Result<()> {
     println!("total area      {area:.12}");
     println!(
         "bounding box    [{}, {}] x [{}, {}]",
-        bb[0], bb[2], bb[1], bb[3]
+        bb.x[0], bb.x[1], bb.y[0], bb.y[1]
     );
     let s: Vec<String> = sides.iter().map(|(n, c)| format!("{n}:{c}")).collect();
     println!("cells by sides  {}", s.join(" "));

@@ -6,9 +6,9 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use gradvi::assembly::LinearSolver;
-use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::Family;
 use gradvi::mesh::io::write_vtu;
+use gradvi::mesh::{MemoryBudget, PolyMesh};
 use gradvi::post::fields::EntityFields;
 use gradvi::problem::file;
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with};
@@ -105,10 +105,10 @@ pub fn parse_param(s: &str) -> Result<(String, f64), String> {
     Ok((k.trim().to_string(), v))
 }
 
-/// Generates a mesh of the unit square.
+/// Generates a mesh of the unit square, within the memory the machine has free.
 pub fn generate(family: &str, level: usize) -> Result<PolyMesh> {
     let fam: Family = family.parse()?;
-    Ok(fam.generate(level)?)
+    Ok(fam.generate(level, MemoryBudget::available())?)
 }
 
 /// Rejects absurd or conflicting options before any work: the certificate tolerance must be
@@ -272,7 +272,7 @@ pub fn run(a: &SolveArgs) -> Result<()> {
     )?;
     // the resolved mesh, as the JSON output records it
     let mesh_desc = spec.to_string();
-    let mesh = gradvi::case::build_mesh(&spec)?;
+    let mesh = gradvi::case::build_mesh(&spec, MemoryBudget::available())?;
     let mesh_seconds = t0.elapsed().as_secs_f64();
     pf.check_against_mesh(&mesh)?;
     let problem = pf.problem();
@@ -529,6 +529,7 @@ fn write_solution_vtu(
 mod tests {
     use super::*;
     use file::MeshSpec;
+    use gradvi::mesh::Rect;
 
     const PROBLEM: &str = "problems/ex9.toml";
 
@@ -537,7 +538,7 @@ mod tests {
         MeshSpec::Generated {
             family: Family::Cartesian,
             level: 4,
-            domain: Some([-2.0, 2.0, -2.0, 2.0]),
+            domain: Some(Rect::new([-2.0, 2.0], [-2.0, 2.0])),
         }
     }
 
@@ -569,7 +570,7 @@ mod tests {
         )
     }
 
-    fn generated(family: Family, level: usize, domain: Option<[f64; 4]>) -> MeshSpec {
+    fn generated(family: Family, level: usize, domain: Option<Rect>) -> MeshSpec {
         MeshSpec::Generated {
             family,
             level,
@@ -580,7 +581,7 @@ mod tests {
     #[test]
     fn a_generated_file_mesh_keeps_its_domain_under_overrides() {
         let file = ex9_mesh();
-        let d = Some([-2.0, 2.0, -2.0, 2.0]);
+        let d = Some(Rect::new([-2.0, 2.0], [-2.0, 2.0]));
         let cases = [
             // nothing: the file's mesh
             (None, None, file.clone()),

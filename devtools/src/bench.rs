@@ -39,8 +39,9 @@
 //! [--baseline-rev REV]` compares every gradvi case with the earlier build EXE in the same run
 //! ([`baseline`]).
 
+use gradvi::mesh::MemoryBudget;
 use gradvi::mesh::PolyMesh;
-use gradvi::mesh::generate::{cartesian, hexagonal};
+use gradvi::mesh::generate::{Family, cartesian_rect_within};
 use gradvi::mesh::io::read_mesh;
 use gradvi::problem::paper_test3;
 use gradvi::scheme::SchemeKind;
@@ -405,11 +406,20 @@ fn case_mesh(case: &Case) -> gradvi::Result<(PolyMesh, String)> {
             let stem = f
                 .file_stem()
                 .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-            (read_mesh(f)?, stem)
+            (read_mesh(f, MemoryBudget::available())?, stem)
         }
-        BenchFamily::Hexagonal => (hexagonal(case.size)?, format!("hexa level {}", case.size)),
+        BenchFamily::Hexagonal => (
+            Family::Hexagonal.generate(case.size, MemoryBudget::available())?,
+            format!("hexa level {}", case.size),
+        ),
         BenchFamily::Cartesian => (
-            cartesian(case.size, case.size)?,
+            cartesian_rect_within(
+                case.size,
+                case.size,
+                [0.0, 1.0],
+                [0.0, 1.0],
+                MemoryBudget::available(),
+            )?,
             format!("{0}x{0}", case.size),
         ),
     })

@@ -2,9 +2,9 @@
 
 use crate::errors::invalid;
 use crate::guard;
-use gradvi::mesh::generate::{Family, cartesian_rect};
+use gradvi::mesh::generate::{Family, cartesian_rect_within};
 use gradvi::mesh::io::{read_mesh, read_msh, write_typ2, write_vtu};
-use gradvi::mesh::{NO_CELL, Point, PolyMesh};
+use gradvi::mesh::{MemoryBudget, NO_CELL, Point, PolyMesh, Rect};
 use gradvi::scheme::Cr;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -89,13 +89,13 @@ impl PyMesh {
             .is_some_and(|e| e.eq_ignore_ascii_case("msh"));
         guard(py, move || {
             if is_msh {
-                let m = read_msh(&path)?;
+                let m = read_msh(&path, MemoryBudget::available())?;
                 Ok(PyMesh {
                     mesh: Arc::new(m.mesh),
                     physical_names: m.physical_names,
                 })
             } else {
-                Ok(PyMesh::new(read_mesh(&path)?))
+                Ok(PyMesh::new(read_mesh(&path, MemoryBudget::available())?))
             }
         })
     }
@@ -188,8 +188,12 @@ impl PyMesh {
         }
         guard(py, move || {
             Ok(PyMesh::new(match domain {
-                None => fam.generate(level)?,
-                Some(d) => fam.generate_on(level, d)?,
+                None => fam.generate(level, MemoryBudget::available())?,
+                Some([x0, x1, y0, y1]) => fam.generate_on(
+                    level,
+                    Rect::new([x0, x1], [y0, y1]),
+                    MemoryBudget::available(),
+                )?,
             }))
         })
     }
@@ -199,11 +203,12 @@ impl PyMesh {
     fn cartesian(py: Python<'_>, nx: usize, ny: usize, domain: [f64; 4]) -> PyResult<Self> {
         check_rect(domain)?;
         guard(py, move || {
-            Ok(PyMesh::new(cartesian_rect(
+            Ok(PyMesh::new(cartesian_rect_within(
                 nx,
                 ny,
                 [domain[0], domain[1]],
                 [domain[2], domain[3]],
+                MemoryBudget::available(),
             )?))
         })
     }
@@ -245,7 +250,9 @@ impl PyMesh {
         d.set_item("n_edges", m.n_edges())?;
         d.set_item("h", m.h())?;
         d.set_item("is_triangular", m.is_triangular())?;
-        d.set_item("bounding_box", m.bounding_box())?;
+        // [xmin, ymin, xmax, ymax], the layout the Python side reads
+        let b = m.bounding_box();
+        d.set_item("bounding_box", [b.x[0], b.y[0], b.x[1], b.y[1]])?;
         d.set_item("physical_names", self.physical_names.clone())?;
         Ok(d)
     }

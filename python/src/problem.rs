@@ -550,7 +550,9 @@ impl PyProblem {
         let Some(spec) = pf.mesh.clone() else {
             return Ok(None);
         };
-        let m = guard(py, move || gradvi::case::build_mesh(&spec))?;
+        let m = guard(py, move || {
+            gradvi::case::build_mesh(&spec, gradvi::mesh::MemoryBudget::available())
+        })?;
         Ok(Some(PyMesh {
             mesh: Arc::new(m),
             physical_names: Vec::new(),

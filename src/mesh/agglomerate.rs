@@ -13,13 +13,9 @@
 //!    centre of the box. That keeps the two triangles of a square together (their centroids
 //!    may fall in two squares, their boxes are the square), so a triangulated Cartesian grid
 //!    agglomerates into rectangles, on which HMM solves on the cells ([`crate::assembly`]'s
-//!    `two_point`): measured on ex9 with P1 at 4M unknowns, the coarse solves took 1.5 s
-//!    instead of 3.5 s, and predicted the fine active set better. On other cells the centroid
-//!    is kept: keying every cell by its box centre also changed the coarse meshes of the
-//!    unstructured gmsh meshes (those of the benchmarks have no such cell), and the
-//!    regression checks against 73dd38a measured that change at 1.12–1.26× the time on the
-//!    L-shape at 177k cells (HMM, iterative: 36 conjugate-gradient iterations instead of 33)
-//!    and one more solve on the 300k-cell Test 3 mesh (HMM, direct). Aggregates are the
+//!    `two_point`). On other cells the centroid is kept, so that the coarse meshes of
+//!    unstructured meshes do not change (the measurements behind both choices are in
+//!    `replication/BENCHMARKS.md`, "Measurements behind the defaults"). Aggregates are the
 //!    connected components (through interior edges) of the cells sharing a key, so an
 //!    aggregate never mixes two materials (cell tags) and is a patch of about (H/h)² fine
 //!    cells. Aggregates of area below H²/4 (slivers along the boundary or along material
@@ -228,17 +224,15 @@ fn key_point(mesh: &PolyMesh, k: usize) -> Point {
 /// Step 1: connected components of the cells with the same (square, tag) key.
 fn initial_aggregates(fine: &PolyMesh, size: f64) -> Vec<usize> {
     let bb = fine.bounding_box();
-    // the key of each cell, computed once (in parallel, in cell order): computed per edge
-    // instead, twice per edge and gathering each cell's vertices at random, it took about
-    // 0.15 s of the warm start on a 710k-triangle mesh
+    // the key of each cell, computed once (in parallel, in cell order), not per edge
     let keys: Vec<(i64, i64, i32)> = (0..fine.n_cells())
         .into_par_iter()
         .with_min_len(MIN_TASK)
         .map(|k| {
             let c = key_point(fine, k);
             (
-                floor_i64((c[0] - bb[0]) / size),
-                floor_i64((c[1] - bb[1]) / size),
+                floor_i64((c[0] - bb.x[0]) / size),
+                floor_i64((c[1] - bb.y[0]) / size),
                 fine.cell_tag(k),
             )
         })
@@ -669,7 +663,9 @@ mod tests {
         // the two-material dam of problems/signorini-layers.toml (cell tags) and the L-shape
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
         for name in ["dam.msh", "lshape.msh", "hole.msh"] {
-            let fine = crate::mesh::io::read_mesh(dir.join(name)).unwrap();
+            let fine =
+                crate::mesh::io::read_mesh(dir.join(name), crate::mesh::MemoryBudget::DEFAULT)
+                    .unwrap();
             let area = total_area(&fine);
             let size = (area / (fine.n_cells() / 16) as f64).sqrt();
             let agg = agglomerate(&fine, size).unwrap();
@@ -774,7 +770,10 @@ mod tests {
         let coarse = agglomerate(&cases[0], size).unwrap().mesh;
         cases.push(coarse);
         for name in ["dam.msh", "lshape.msh", "hole.msh"] {
-            cases.push(crate::mesh::io::read_mesh(dir.join(name)).unwrap());
+            cases.push(
+                crate::mesh::io::read_mesh(dir.join(name), crate::mesh::MemoryBudget::DEFAULT)
+                    .unwrap(),
+            );
         }
         // a sheared triangulated grid with its inner vertices moved by up to 0.3 h (a fixed
         // pseudo-random pattern): some aggregates fail and are dissolved, so that later rounds

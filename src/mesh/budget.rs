@@ -1,26 +1,96 @@
-//! How much memory building a mesh may take, so that a request too large for the machine is
-//! refused up front with an error giving the estimate, instead of aborting on allocation.
+//! How much memory building a mesh may take, so that a request too large is refused up front
+//! with an error giving the estimate, instead of aborting on allocation.
 //!
-//! * [`memory_budget`]: the memory the kernel reports as available (`MemAvailable` in
+//! The budget is the caller's: every generator and reader takes a [`MemoryBudget`], and the
+//! library never looks at the machine's free memory unless the caller asks for it with
+//! [`MemoryBudget::available`]. The same call therefore passes or fails whatever the load of
+//! the machine. The convenience generators without a budget argument
+//! ([`cartesian()`](super::generate::cartesian()) and the like) use the fixed
+//! [`MemoryBudget::DEFAULT`] (8 GiB).
+//!
+//! * [`MemoryBudget::available`]: the memory the kernel reports as available (`MemAvailable` in
 //!   `/proc/meminfo`), or less if the control group of the process limits it (a container:
-//!   `/proc/meminfo` then shows the host's memory); [`DEFAULT_MEMORY_BUDGET`] (8 GiB) where
-//!   neither is known. (It was capped at 8 GiB before; PETSc ex9's 4097² grid, 33.6M triangles,
-//!   needed an estimated 9.5 GB for its mesh (8.5 GB since the cell arrays are 32-bit), and its
-//!   whole P1 solve 19 GB, on a 24 GiB machine.)
+//!   `/proc/meminfo` then shows the host's memory); [`MemoryBudget::DEFAULT`] where neither is
+//!   known. The command line and the Python module start from it.
 //! * [`mesh_bytes`]: the peak memory of building and validating a [`PolyMesh`](super::PolyMesh)
 //!   with given numbers of cells, cell sides, vertices and edges. The generators compare it with
-//!   the budget before allocating anything ([`check_budget`]); a caller that needs memory for
-//!   more than the mesh (a solve) can pass a smaller budget
-//!   ([`Family::generate_within`](super::generate::Family::generate_within)).
-//! * [`max_file_bytes`]: the largest mesh file the readers read, a quarter of the budget (the
-//!   mesh built from a text file needs several times the size of the text). A larger file, or an
-//!   endless stream, is refused after reading at most that much.
+//!   the budget before allocating anything ([`MemoryBudget::check`]); a caller that needs memory
+//!   for more than the mesh (a solve) passes a smaller budget.
+//! * [`MemoryBudget::max_file_bytes`]: the largest mesh file the readers read, a quarter of the
+//!   budget (the mesh built from a text file needs several times the size of the text). A
+//!   larger file, or an endless stream, is refused after reading at most that much.
+//!
+//! Measurements of the estimate against peak resident memory are in `replication/BENCHMARKS.md`
+//! ("Measurements behind the defaults").
 
 use crate::error::MeshError;
+pub use crate::units::human_bytes;
+use std::fmt;
 
-/// The memory budget where neither the available memory nor a control-group limit is known:
-/// 8 GiB.
-pub const DEFAULT_MEMORY_BUDGET: u64 = 8 << 30;
+/// A number of bytes that building a mesh may take. Chosen by the caller: a fixed value
+/// ([`MemoryBudget::new`], [`MemoryBudget::DEFAULT`]) gives the same answer on every machine,
+/// [`MemoryBudget::available`] follows the machine's free memory at the time of the call.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct MemoryBudget(u64);
+
+impl MemoryBudget {
+    /// 8 GiB: the budget of the generators that take none, and of
+    /// [`MemoryBudget::available`] where the machine's memory is not known.
+    pub const DEFAULT: MemoryBudget = MemoryBudget(8 << 30);
+
+    /// A budget of `bytes` bytes.
+    pub const fn new(bytes: u64) -> Self {
+        MemoryBudget(bytes)
+    }
+
+    /// The budget in bytes.
+    pub const fn bytes(self) -> u64 {
+        self.0
+    }
+
+    /// The memory the machine has free now: the available memory ([`available_memory`]), or
+    /// what the control group's limit leaves ([`cgroup_remaining`]) if smaller;
+    /// [`MemoryBudget::DEFAULT`] where neither is known.
+    pub fn available() -> Self {
+        MemoryBudget(match (available_memory(), cgroup_remaining()) {
+            (Some(a), Some(c)) => a.min(c),
+            (Some(a), None) => a,
+            (None, Some(c)) => c,
+            (None, None) => Self::DEFAULT.0,
+        })
+    }
+
+    /// The largest mesh file the readers accept with this budget: a quarter of it.
+    pub const fn max_file_bytes(self) -> u64 {
+        self.0 / 4
+    }
+
+    /// `Ok` if `bytes` fit in the budget, else [`MeshError::TooLarge`] naming `what`.
+    pub fn check(self, what: impl Into<String>, bytes: u64) -> Result<(), MeshError> {
+        if bytes <= self.0 {
+            Ok(())
+        } else {
+            Err(MeshError::TooLarge {
+                what: what.into(),
+                bytes,
+                budget: self.0,
+            })
+        }
+    }
+}
+
+impl Default for MemoryBudget {
+    /// [`MemoryBudget::DEFAULT`].
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+impl fmt::Display for MemoryBudget {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&human_bytes(self.0))
+    }
+}
 
 /// The memory the kernel reports as available (`MemAvailable` of `/proc/meminfo`), in bytes;
 /// `None` where that file does not exist or cannot be read.
@@ -51,23 +121,6 @@ pub fn cgroup_remaining() -> Option<u64> {
     (limit < 1 << 60).then(|| limit.saturating_sub(usage))
 }
 
-/// The memory a mesh may take: the available memory ([`available_memory`]), or what the
-/// control group's limit leaves ([`cgroup_remaining`]) if smaller; [`DEFAULT_MEMORY_BUDGET`]
-/// where neither is known.
-pub fn memory_budget() -> u64 {
-    match (available_memory(), cgroup_remaining()) {
-        (Some(a), Some(c)) => a.min(c),
-        (Some(a), None) => a,
-        (None, Some(c)) => c,
-        (None, None) => DEFAULT_MEMORY_BUDGET,
-    }
-}
-
-/// The largest mesh file the readers accept: a quarter of [`memory_budget`].
-pub fn max_file_bytes() -> u64 {
-    memory_budget() / 4
-}
-
 /// Estimated peak memory, in bytes, of building a mesh with `cells` cells whose vertex lists
 /// hold `sides` entries in all, `vertices` vertices and `edges` edges.
 ///
@@ -75,20 +128,13 @@ pub fn max_file_bytes() -> u64 {
 /// [`validate`](super::validate)), when the arrays of [`PolyMesh`](super::PolyMesh) are all
 /// built: 16 bytes per vertex (coordinates), 36 per cell (32-bit CSR offset, area, centroid,
 /// and the diameter, present during the check, not kept by the mesh), 8 per cell side (32-bit
-/// vertex and edge ids, compacted from `usize` before the check; n_{K,σ} and d_{K,σ} are
-/// computed on demand) and 56 per edge (end points, cells, length, midpoint, tag); and the
-/// sweep adds 72 bytes per vertex (sort keys, ranks, sorted points, event offsets, boundary
-/// links) and 44 per edge (renumbered segments, event lists, treap handles). Measured peaks
-/// (resident memory) were 85–95% of this estimate when it counted 40 bytes per side for the
-/// stored normals and distances; without them the measured saving is exactly those 24 bytes
-/// per side. Since then the mesh stores neither the edge lengths nor the midpoints (24 bytes
-/// per edge, computed on demand), its edge end points and cells are 32-bit (16 bytes less per
-/// edge) and the sweep's events are 32-bit where they fit; the estimate still counts the old
-/// edge sizes, as margin. Its cell arrays (offsets, vertex and edge ids) are 32-bit too, and
-/// counted so (4 bytes per cell and 8 per side less than with `usize`): measured peaks of
-/// `gradvi mesh generate` (output file included) are 67–73% of the estimate (Cartesian level 9
-/// 72%, triangles level 9 73%, hexagonal level 8 67%), and reading and validating a 1M-cell
-/// typ2 file (Cartesian level 9, text and parsing included) 93%.
+/// vertex and edge ids; n_{K,σ} and d_{K,σ} are computed on demand) and 56 per edge (end
+/// points, cells, length, midpoint, tag: more than the mesh keeps, which stores 32-bit end
+/// points and cells and computes lengths and midpoints on demand, as margin); and the sweep
+/// adds 72 bytes per vertex (sort keys, ranks, sorted points, event offsets, boundary links)
+/// and 44 per edge (renumbered segments, event lists, treap handles). How the estimate
+/// compares with measured peaks is recorded in `replication/BENCHMARKS.md` ("Measurements
+/// behind the defaults").
 pub fn mesh_bytes(cells: u64, sides: u64, vertices: u64, edges: u64) -> u64 {
     let per_vertex = 16 + 72;
     let per_cell = 36;
@@ -101,42 +147,13 @@ pub fn mesh_bytes(cells: u64, sides: u64, vertices: u64, edges: u64) -> u64 {
         .saturating_add(edges.saturating_mul(per_edge))
 }
 
-/// `Ok` if `bytes` fit in `budget`, else [`MeshError::TooLarge`] naming `what`.
-pub fn check_budget(what: impl Into<String>, bytes: u64, budget: u64) -> Result<(), MeshError> {
-    if bytes <= budget {
-        Ok(())
-    } else {
-        Err(MeshError::TooLarge {
-            what: what.into(),
-            bytes,
-            budget,
-        })
-    }
-}
-
-/// A byte count for people: `"512 B"`, `"3.2 MiB"`, `"6.1 GiB"`.
-pub fn human_bytes(bytes: u64) -> String {
-    const UNITS: [&str; 6] = ["B", "KiB", "MiB", "GiB", "TiB", "PiB"];
-    let mut value = bytes as f64;
-    let mut unit = 0;
-    while value >= 1024.0 && unit + 1 < UNITS.len() {
-        value /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{bytes} B")
-    } else {
-        format!("{value:.1} {}", UNITS[unit])
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn budget_and_formatting() {
-        let b = memory_budget();
+    fn the_available_budget_is_the_smaller_of_the_machine_limits() {
+        let b = MemoryBudget::available().bytes();
         assert!(b > 0);
         if let Some(a) = available_memory() {
             assert!(b <= a);
@@ -144,13 +161,22 @@ mod tests {
         if let Some(c) = cgroup_remaining() {
             assert!(b <= c);
         }
-        assert_eq!(max_file_bytes(), b / 4);
-        assert_eq!(human_bytes(512), "512 B");
-        assert_eq!(human_bytes(3 << 20), "3.0 MiB");
-        assert_eq!(human_bytes(DEFAULT_MEMORY_BUDGET), "8.0 GiB");
-        assert_eq!(human_bytes(u64::MAX), "16384.0 PiB");
-        assert!(check_budget("x", 10, 10).is_ok());
-        let e = check_budget("a big mesh", 11 << 30, 8 << 30).unwrap_err();
+        if available_memory().is_none() && cgroup_remaining().is_none() {
+            assert_eq!(b, MemoryBudget::DEFAULT.bytes());
+        }
+    }
+
+    #[test]
+    fn a_fixed_budget_checks_the_same_everywhere() {
+        let budget = MemoryBudget::new(10);
+        assert_eq!(budget.bytes(), 10);
+        assert_eq!(MemoryBudget::new(4 << 30).max_file_bytes(), 1 << 30);
+        assert_eq!(MemoryBudget::default(), MemoryBudget::DEFAULT);
+        assert_eq!(MemoryBudget::DEFAULT.to_string(), "8.0 GiB");
+        assert!(budget.check("x", 10).is_ok());
+        let e = MemoryBudget::new(8 << 30)
+            .check("a big mesh", 11 << 30)
+            .unwrap_err();
         assert_eq!(
             e.to_string(),
             "a big mesh would need about 11.0 GiB, more than the memory budget of 8.0 GiB"

@@ -141,6 +141,7 @@ fn check_cell_vertices(k: usize, c: &[usize], nv: usize) -> Result<(), MeshError
         return Err(MeshError::CellTooLarge {
             cell: k,
             n_vertices: c.len(),
+            max: MAX_CELL_VERTICES,
         });
     }
     if let Some(&v) = c.iter().find(|&&v| v >= nv) {

@@ -43,7 +43,7 @@ pub fn data_scale(system: &DiscreteSystem, problem: &Problem, cons: Option<&Cons
         }
     }
     let bb = mesh.bounding_box();
-    let diam = ((bb[2] - bb[0]).powi(2) + (bb[3] - bb[1]).powi(2)).sqrt();
+    let diam = (bb.width().powi(2) + bb.height().powi(2)).sqrt();
     let dirichlet = system
         .dirichlet()
         .iter()

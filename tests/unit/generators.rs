@@ -13,8 +13,8 @@
 //! crate's reader.
 
 use crate::common::fvca5_dir;
-use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{Family, hexagonal, kershaw};
+use gradvi::mesh::{MemoryBudget, PolyMesh};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -220,7 +220,7 @@ fn counts_and_h_without_the_files() {
     ];
     for (family, level, cells, vertices, edges, h, x0) in table {
         assert_eq!(family.cells_at_level(level), cells, "{family} {level}");
-        let m = family.generate(level).unwrap();
+        let m = family.generate(level, MemoryBudget::DEFAULT).unwrap();
         let what = format!("{family} level {level}");
         assert_eq!(
             (m.n_cells(), m.n_vertices(), m.n_edges()),
@@ -240,7 +240,6 @@ fn counts_and_h_without_the_files() {
 #[test]
 fn memory_budget_refuses_large_levels_up_front() {
     use gradvi::MeshError;
-    use gradvi::mesh::budget::{available_memory, memory_budget};
     for (family, level, budget) in [
         (Family::Cartesian, 11, 4u64 << 30),
         (Family::Hexagonal, 8, 512 << 20),
@@ -250,7 +249,9 @@ fn memory_budget_refuses_large_levels_up_front() {
         assert!(estimate > budget);
         assert!(estimate > family.memory_estimate(level - 1));
         let t0 = std::time::Instant::now();
-        let e = family.generate_within(level, budget).unwrap_err();
+        let e = family
+            .generate(level, MemoryBudget::new(budget))
+            .unwrap_err();
         assert!(
             t0.elapsed().as_secs_f64() < 1.0,
             "{family} {level}: slow refusal"
@@ -270,9 +271,44 @@ fn memory_budget_refuses_large_levels_up_front() {
             "{msg}"
         );
     }
-    assert!(available_memory().is_none_or(|a| memory_budget() <= a));
     for f in Family::ALL {
         assert!(f.memory_estimate(3) < 64 << 20, "{f}");
-        assert!(f.generate_within(3, 64 << 20).is_ok());
+        assert!(f.generate(3, MemoryBudget::new(64 << 20)).is_ok());
     }
+}
+
+/// Whether a generator builds a mesh depends on the budget it is given, never on the memory
+/// the machine has free: the same request passes at its estimate and fails one byte below,
+/// every time, and the generators without a budget argument refuse by the fixed 8 GiB default.
+#[test]
+fn the_answer_of_a_generator_does_not_depend_on_the_machine() {
+    use gradvi::MeshError;
+    use gradvi::mesh::generate::{cartesian, cartesian_rect_within, hexagonal_grid_within};
+    for f in Family::ALL {
+        let estimate = f.memory_estimate(2);
+        for _ in 0..2 {
+            assert!(f.generate(2, MemoryBudget::new(estimate)).is_ok(), "{f}");
+            assert!(
+                matches!(
+                    f.generate(2, MemoryBudget::new(estimate - 1)),
+                    Err(gradvi::Error::InvalidMesh(MeshError::TooLarge { .. }))
+                ),
+                "{f}"
+            );
+        }
+    }
+    let tiny = MemoryBudget::new(1 << 10);
+    assert!(cartesian_rect_within(4, 4, [0.0, 1.0], [0.0, 1.0], tiny).is_err());
+    assert!(hexagonal_grid_within(2, tiny).is_err());
+    // 64 M cells: under the cell cap, about 21 GiB: refused by the default budget whatever the
+    // machine has, before anything is allocated
+    let t0 = std::time::Instant::now();
+    match cartesian(8000, 8000) {
+        Err(gradvi::Error::InvalidMesh(MeshError::TooLarge { bytes, budget, .. })) => {
+            assert_eq!(budget, MemoryBudget::DEFAULT.bytes());
+            assert!(bytes > budget);
+        }
+        r => panic!("{:?}", r.map(|m| m.n_cells())),
+    }
+    assert!(t0.elapsed().as_secs_f64() < 1.0);
 }

@@ -5,7 +5,7 @@
 
 use gradvi::mesh::generate::{cartesian, cartesian_rect, hexagonal, hexagonal_grid, kershaw};
 use gradvi::mesh::io::read_mesh;
-use gradvi::mesh::{MAX_CELL_VERTICES, Point, PolyMesh};
+use gradvi::mesh::{MAX_CELL_VERTICES, MemoryBudget, Point, PolyMesh};
 use gradvi::{Error, MeshError};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -103,7 +103,7 @@ fn invalid_corpus_is_rejected_with_typed_errors() {
     for (name, expect) in expectations {
         let path = dir.join(name);
         let t0 = Instant::now();
-        let err = match read_mesh(&path) {
+        let err = match read_mesh(&path, MemoryBudget::DEFAULT) {
             Ok(m) => panic!("{name}: accepted ({} cells)", m.n_cells()),
             Err(e) => e,
         };
@@ -152,11 +152,11 @@ fn good_meshes_still_validate() {
     files.sort();
     assert!(files.len() >= 18, "{files:?}");
     for p in &files {
-        let m = read_mesh(p).unwrap_or_else(|e| panic!("{e}"));
+        let m = read_mesh(p, MemoryBudget::DEFAULT).unwrap_or_else(|e| panic!("{e}"));
         assert!(m.n_cells() > 0);
     }
     // the annulus around a hole (a clockwise loop inside the cells) with an island in the hole
-    let m = read_mesh(data("good/annulus_with_island.typ2")).unwrap();
+    let m = read_mesh(data("good/annulus_with_island.typ2"), MemoryBudget::DEFAULT).unwrap();
     assert_eq!((m.n_cells(), m.boundary_edges().len()), (9, 20));
     assert!((total_area(&m) - 8.25).abs() < 1e-14);
 }
@@ -249,7 +249,8 @@ fn cells_beyond_the_vertex_limit_are_refused_at_once() {
             e,
             MeshError::CellTooLarge {
                 cell: 0,
-                n_vertices: m
+                n_vertices: m,
+                max: MAX_CELL_VERTICES
             }
         );
         assert_eq!(
@@ -304,7 +305,7 @@ fn over_long_lines_are_refused() {
     let mut text = b"Vertices\n3\n0 0\n".to_vec();
     text.extend(std::iter::repeat_n(b'1', 2 << 20));
     std::fs::write(&path, &text).unwrap();
-    let e = read_mesh(&path).unwrap_err();
+    let e = read_mesh(&path, MemoryBudget::DEFAULT).unwrap_err();
     assert!(
         matches!(&e, Error::MeshIo { line: 4, msg, .. } if msg.contains("longer than")),
         "{e}"
@@ -349,7 +350,7 @@ fn validation_times() {
     let path = Path::new("/dev/zero");
     if path.exists() {
         let t0 = Instant::now();
-        let r = gradvi::mesh::io::read_msh(path).map(|_| ());
+        let r = gradvi::mesh::io::read_msh(path, MemoryBudget::DEFAULT).map(|_| ());
         println!(
             "/dev/zero as msh: {:.3} s ({r:?})",
             t0.elapsed().as_secs_f64()

@@ -57,7 +57,11 @@ fn nested_obstacle_gives_the_cold_solution_in_fewer_solves() {
     assert!(r.predicted_active > 0 && r.coarse_solves >= 2);
     assert!(nested < cold, "nested {nested} solves, cold {cold}");
     // P1 on a gmsh triangle mesh of the replication, and HMM on hexagons
-    let tri = read_mesh(Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/test3_4.msh")).unwrap();
+    let tri = read_mesh(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/test3_4.msh"),
+        gradvi::mesh::MemoryBudget::DEFAULT,
+    )
+    .unwrap();
     let p1 = P1::new(&tri).unwrap();
     let (cold, nested, r) = compare(&p1, &paper_test3(-5.0));
     assert!(
@@ -101,7 +105,11 @@ fn nested_signorini_gives_the_cold_solution() {
     let hmm = Hmm::new(&mesh);
     let (_, _, r) = compare(&hmm, &paper_test1());
     assert!(r.skipped.is_none() && r.predicted_active > 0, "{r:?}");
-    let tri = read_mesh(Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/test1_3.msh")).unwrap();
+    let tri = read_mesh(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/test1_3.msh"),
+        gradvi::mesh::MemoryBudget::DEFAULT,
+    )
+    .unwrap();
     let p1 = P1::new(&tri).unwrap();
     let (_, _, r) = compare(&p1, &paper_test1());
     assert!(r.skipped.is_none() && r.predicted_active > 0, "{r:?}");
@@ -140,7 +148,11 @@ fn nested_works_on_any_domain() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
     for (file, msh) in [("lshape-obstacle", "lshape"), ("hole-obstacle", "hole")] {
         let pf = gradvi::problem::file::load(dir.join(format!("{file}.toml")), &[]).unwrap();
-        let mesh = read_mesh(dir.join(format!("{msh}.msh"))).unwrap();
+        let mesh = read_mesh(
+            dir.join(format!("{msh}.msh")),
+            gradvi::mesh::MemoryBudget::DEFAULT,
+        )
+        .unwrap();
         let hmm = Hmm::new(&mesh);
         let (cold, nested, r) = compare(&hmm, &pf.problem());
         assert!(

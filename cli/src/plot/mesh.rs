@@ -9,7 +9,7 @@ use super::{
     titled, widen,
 };
 use gradvi::error::{Error, Result};
-use gradvi::mesh::PolyMesh;
+use gradvi::mesh::{PolyMesh, Rect};
 
 /// Options of [`plot_mesh`].
 #[derive(Debug, Clone)]
@@ -77,7 +77,10 @@ fn draw_mesh(root: &Canvas, s: f64, mesh: &PolyMesh, opts: &MeshPlotOptions) -> 
     let area = titled(root, &opts.title, s)?;
     let (area, right) = area.split_horizontally(area.dim_in_pixel().0 - legend_w);
     // equal aspect ratio: the plotting area is centred in what the tick labels leave
-    let [x0, y0, x1, y1] = mesh.bounding_box();
+    let Rect {
+        x: [x0, x1],
+        y: [y0, y1],
+    } = mesh.bounding_box();
     let ((x0, x1), (y0, y1)) = (widen(x0, x1), widen(y0, y1));
     let pad = 0.03 * (x1 - x0).max(y1 - y0);
     let ((x0, x1), (y0, y1)) = ((x0 - pad, x1 + pad), (y0 - pad, y1 + pad));

@@ -14,7 +14,7 @@ use super::{
     viridis, widen,
 };
 use gradvi::error::{Error, Result};
-use gradvi::mesh::PolyMesh;
+use gradvi::mesh::{PolyMesh, Rect};
 
 /// Options of [`plot_surface`].
 #[derive(Debug, Clone)]
@@ -116,7 +116,10 @@ pub fn plot_surface(
         return Err(Error::InvalidData("z_aspect must be positive".into()));
     }
     let surface = vertex_surface(mesh, values);
-    let [x0, y0, x1, y1] = mesh.bounding_box();
+    let Rect {
+        x: [x0, x1],
+        y: [y0, y1],
+    } = mesh.bounding_box();
     let (z0, z1) = min_max(values.iter().copied());
     // plotters' coordinates are (y, u, x): its second axis is the vertical one, and this order
     // keeps the data axes right-handed

@@ -4,9 +4,9 @@
 use super::records::*;
 use super::{Config, create_dir};
 use gradvi::assembly::SymbolicSystem;
-use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{hexagonal::hexagonal, kershaw::kershaw};
 use gradvi::mesh::io::read_mesh;
+use gradvi::mesh::{MemoryBudget, PolyMesh};
 use gradvi::post::contact::{contact_measure, switch_point};
 use gradvi::post::relative_errors;
 use gradvi::problem::{Problem, file, paper_test2_tie};
@@ -35,7 +35,7 @@ fn load(cfg: &Config, file: &str) -> gradvi::Result<NamedMesh> {
     Ok(NamedMesh {
         name: file.trim_end_matches(".msh").to_string(),
         source: format!("gmsh file meshes/{file}"),
-        mesh: read_mesh(&path)?,
+        mesh: read_mesh(&path, MemoryBudget::available())?,
     })
 }
 
@@ -95,7 +95,7 @@ pub fn test2_polygonal(cfg: &Config) -> gradvi::Result<Vec<(String, NamedMesh)>>
                 NamedMesh {
                     name: f.trim_end_matches(".typ2").to_string(),
                     source: format!("FVCA5 file {}", path.display()),
-                    mesh: read_mesh(&path)?,
+                    mesh: read_mesh(&path, MemoryBudget::available())?,
                 },
             ));
         }

@@ -22,9 +22,10 @@
 //! sections are written from it ([`super::report`]).
 
 use super::{Config, bad, io_err, json_row, peak_memory_mib, stdout_of};
+use gradvi::mesh::MemoryBudget;
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::budget::human_bytes;
-use gradvi::mesh::generate::{cartesian_rect, cartesian_triangles};
+use gradvi::mesh::generate::{cartesian_rect_within, cartesian_triangles_within};
 use gradvi::mesh::io::read_mesh;
 use gradvi::problem::{Problem, paper_test3};
 use gradvi::scheme::{Entity, SchemeKind};
@@ -247,14 +248,30 @@ fn run_gradvi(
         "ex9" => {
             let n = size - 1;
             let mesh = match scheme {
-                SchemeKind::P1 => cartesian_triangles(n, n, [-2.0, 2.0], [-2.0, 2.0])?,
-                _ => cartesian_rect(n, n, [-2.0, 2.0], [-2.0, 2.0])?,
+                SchemeKind::P1 => cartesian_triangles_within(
+                    n,
+                    n,
+                    [-2.0, 2.0],
+                    [-2.0, 2.0],
+                    MemoryBudget::available(),
+                )?,
+                _ => cartesian_rect_within(
+                    n,
+                    n,
+                    [-2.0, 2.0],
+                    [-2.0, 2.0],
+                    MemoryBudget::available(),
+                )?,
             };
             (mesh, ex9_problem(root)?, size)
         }
         _ => {
             let f = file.ok_or_else(|| bad(format!("{family}: a domain case needs its mesh")))?;
-            (read_mesh(f)?, paper_test3(super::C), 0)
+            (
+                read_mesh(f, MemoryBudget::available())?,
+                paper_test3(super::C),
+                0,
+            )
         }
     };
     let mesh_s = t0.elapsed().as_secs_f64();
@@ -610,7 +627,7 @@ fn median_row(mut runs: Vec<PeerRow>) -> Option<PeerRow> {
 /// The ex9 grids up to `max_grid` that fit in the memory available ([`BIG_GRID`] needs
 /// [`BIG_GRID_MEMORY`]; a grid left out is said on stderr).
 fn ex9_grids(max_grid: usize) -> Vec<usize> {
-    let available = gradvi::mesh::budget::memory_budget();
+    let available = MemoryBudget::available().bytes();
     EX9_GRIDS
         .into_iter()
         .filter(|&g| g <= max_grid)

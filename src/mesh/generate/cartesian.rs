@@ -16,22 +16,36 @@
 
 use super::{Counts, check_cell_count, check_memory};
 use crate::error::{Error, Result};
-use crate::mesh::budget::memory_budget;
+use crate::mesh::budget::MemoryBudget;
 use crate::mesh::{Overlap, Point, PolyMesh};
 
-/// The nx × ny uniform mesh of \[0,1\]² (see the module docs for the numbering).
+/// The nx × ny uniform mesh of \[0,1\]² (see the module docs for the numbering), within the
+/// fixed budget [`MemoryBudget::DEFAULT`].
 pub fn cartesian(nx: usize, ny: usize) -> Result<PolyMesh> {
     cartesian_rect(nx, ny, [0.0, 1.0], [0.0, 1.0])
 }
 
 /// The nx × ny uniform mesh of the rectangle `[x[0], x[1]] × [y[0], y[1]]` (for instance a strip
 /// `[0,1] × [0,0.1]`). Requires nx, ny ≥ 1, finite bounds with `x[0] < x[1]`, `y[0] < y[1]`,
-/// and at most [`MAX_CELLS`](super::MAX_CELLS) cells; otherwise [`Error::InvalidData`].
+/// and at most [`MAX_CELLS`](super::MAX_CELLS) cells; otherwise [`Error::InvalidData`]. Within
+/// the fixed budget [`MemoryBudget::DEFAULT`]; [`cartesian_rect_within`] takes the caller's.
 pub fn cartesian_rect(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<PolyMesh> {
+    cartesian_rect_within(nx, ny, x, y, MemoryBudget::DEFAULT)
+}
+
+/// As [`cartesian_rect`], refusing ([`MeshError::TooLarge`](crate::MeshError::TooLarge)) a mesh
+/// that would need more memory than `budget`, before allocating anything.
+pub fn cartesian_rect_within(
+    nx: usize,
+    ny: usize,
+    x: [f64; 2],
+    y: [f64; 2],
+    budget: MemoryBudget,
+) -> Result<PolyMesh> {
     check_grid(nx, ny, x, y)?;
     let what = format!("a {nx} × {ny} Cartesian mesh");
     check_cell_count(&what, nx.checked_mul(ny))?;
-    check_memory(&what, counts(nx, ny), memory_budget())?;
+    check_memory(&what, counts(nx, ny), budget)?;
     grid_mesh(nx, ny, x, y, [1, 4], |[a, b, c, d], cells| {
         cells.extend([a, b, c, d])
     })
@@ -45,12 +59,25 @@ pub fn cartesian_rect(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<
 /// couplings cancel), the discretisation of PETSc's obstacle example `snes/tutorials/ex9.c`.
 /// Same requirements as [`cartesian_rect`], with 2·nx·ny ≤ [`MAX_CELLS`](super::MAX_CELLS).
 /// On \[0,1\]² with nx = ny = 2^(k+1), this is level k of the `triangles` family
-/// ([`Family::Triangles`](super::Family::Triangles)).
+/// ([`Family::Triangles`](super::Family::Triangles)). Within the fixed budget
+/// [`MemoryBudget::DEFAULT`]; [`cartesian_triangles_within`] takes the caller's.
 pub fn cartesian_triangles(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<PolyMesh> {
+    cartesian_triangles_within(nx, ny, x, y, MemoryBudget::DEFAULT)
+}
+
+/// As [`cartesian_triangles`], refusing ([`MeshError::TooLarge`](crate::MeshError::TooLarge)) a
+/// mesh that would need more memory than `budget`, before allocating anything.
+pub fn cartesian_triangles_within(
+    nx: usize,
+    ny: usize,
+    x: [f64; 2],
+    y: [f64; 2],
+    budget: MemoryBudget,
+) -> Result<PolyMesh> {
     check_grid(nx, ny, x, y)?;
     let what = format!("a {nx} × {ny} triangulated Cartesian mesh");
     check_cell_count(&what, nx.checked_mul(ny).and_then(|c| c.checked_mul(2)))?;
-    check_memory(&what, triangle_counts(nx, ny), memory_budget())?;
+    check_memory(&what, triangle_counts(nx, ny), budget)?;
     grid_mesh(nx, ny, x, y, [2, 3], |[a, b, c, d], cells| {
         cells.extend([a, b, c]);
         cells.extend([a, c, d]);
@@ -185,7 +212,7 @@ mod tests {
             assert!((total_area(&m) - 1.0).abs() < 1e-12);
             let h = ((1.0 / (nx * nx) as f64) + 1.0 / (ny * ny) as f64).sqrt();
             assert!((m.h() - h).abs() < 1e-14, "{} vs {h}", m.h());
-            assert_eq!(m.bounding_box(), [0.0, 0.0, 1.0, 1.0]);
+            assert_eq!(m.bounding_box(), crate::mesh::Rect::UNIT);
         }
     }
 
@@ -215,7 +242,10 @@ mod tests {
         let m = cartesian_rect(20, 2, [0.0, 1.0], [0.0, 0.1]).unwrap();
         assert_eq!(m.n_cells(), 40);
         assert!((total_area(&m) - 0.1).abs() < 1e-14);
-        assert_eq!(m.bounding_box(), [0.0, 0.0, 1.0, 0.1]);
+        assert_eq!(
+            m.bounding_box(),
+            crate::mesh::Rect::new([0.0, 1.0], [0.0, 0.1])
+        );
         assert!((m.h() - (0.05f64.powi(2) * 2.0).sqrt()).abs() < 1e-14);
         let m = cartesian_rect(3, 1, [-1.0, 2.0], [5.0, 6.0]).unwrap();
         assert_eq!(m.vertex(7), [2.0, 6.0]);

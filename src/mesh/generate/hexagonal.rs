@@ -56,7 +56,7 @@
 
 use super::{Counts, check_cell_count, check_memory};
 use crate::error::{Error, Result};
-use crate::mesh::budget::memory_budget;
+use crate::mesh::budget::MemoryBudget;
 use crate::mesh::{Point, PolyMesh};
 use std::f64::consts::PI;
 
@@ -71,7 +71,8 @@ pub(crate) fn level_n(level: usize) -> Option<usize> {
 
 /// The mesh `hexa1_level`: n = 10·2^(level−1), (n+1)² cells (121, 441, 1681, 6561, 25921, …).
 /// Level 0 and levels above [`Family::max_level`](super::Family::max_level) (10) give
-/// [`Error::InvalidData`].
+/// [`Error::InvalidData`]. Within the fixed budget [`MemoryBudget::DEFAULT`];
+/// [`Family::generate`](super::Family::generate) takes the caller's.
 pub fn hexagonal(level: usize) -> Result<PolyMesh> {
     super::Family::Hexagonal.check_level(level)?;
     let n = level_n(level).expect("valid level");
@@ -81,7 +82,15 @@ pub fn hexagonal(level: usize) -> Result<PolyMesh> {
 /// The same construction on an n × n lattice, for any n ≥ 1 ((n+1)² cells). Errors
 /// ([`Error::InvalidData`]) for n = 0 or more than [`MAX_CELLS`](super::MAX_CELLS) cells; an
 /// n for which the distortion folds a cell would give [`Error::InvalidMesh`] (none is known).
+/// Within the fixed budget [`MemoryBudget::DEFAULT`]; [`hexagonal_grid_within`] takes the
+/// caller's.
 pub fn hexagonal_grid(n: usize) -> Result<PolyMesh> {
+    hexagonal_grid_within(n, MemoryBudget::DEFAULT)
+}
+
+/// As [`hexagonal_grid`], refusing ([`MeshError::TooLarge`](crate::MeshError::TooLarge)) a mesh
+/// that would need more memory than `budget`, before allocating anything.
+pub fn hexagonal_grid_within(n: usize, budget: MemoryBudget) -> Result<PolyMesh> {
     if n == 0 {
         return Err(Error::InvalidData(
             "a hexagonal mesh needs a lattice of at least 1 × 1 squares (got n = 0)".into(),
@@ -89,7 +98,7 @@ pub fn hexagonal_grid(n: usize) -> Result<PolyMesh> {
     }
     let what = format!("a hexagonal mesh on a {n} × {n} lattice");
     check_cell_count(&what, n.checked_add(1).and_then(|m| m.checked_mul(m)))?;
-    check_memory(&what, counts(n), memory_budget())?;
+    check_memory(&what, counts(n), budget)?;
     let (vertices, cells) = hexagonal_data(n);
     Ok(PolyMesh::from_cells(vertices, cells)?)
 }

@@ -51,6 +51,7 @@
 //! counter-clockwise).
 
 use crate::error::Result;
+use crate::mesh::budget::MemoryBudget;
 use crate::mesh::{Point, PolyMesh};
 use std::f64::consts::PI;
 
@@ -80,13 +81,20 @@ fn amplitude(i: usize) -> f64 {
 
 /// The mesh `mesh4_1_level`: (17·level)² quadrangles. Level 0 and levels above
 /// [`Family::max_level`](super::Family::max_level) (481) give
-/// [`Error::InvalidData`](crate::Error::InvalidData).
+/// [`Error::InvalidData`](crate::Error::InvalidData). Within the fixed budget
+/// [`MemoryBudget::DEFAULT`]; [`kershaw_within`] takes the caller's.
 pub fn kershaw(level: usize) -> Result<PolyMesh> {
+    kershaw_within(level, MemoryBudget::DEFAULT)
+}
+
+/// As [`kershaw`], refusing ([`MeshError::TooLarge`](crate::MeshError::TooLarge)) a mesh that
+/// would need more memory than `budget`, before allocating anything.
+pub fn kershaw_within(level: usize, budget: MemoryBudget) -> Result<PolyMesh> {
     super::Family::Kershaw.check_level(level)?;
     super::check_memory(
         &format!("the Kershaw mesh of level {level}"),
         counts(level),
-        crate::mesh::budget::memory_budget(),
+        budget,
     )?;
     let (vertices, cells) = kershaw_data(level);
     Ok(PolyMesh::from_cells(vertices, cells)?)
@@ -208,7 +216,7 @@ mod tests {
             assert_eq!(m.boundary_edges_on(0, 0.0), n);
             assert!((total_area(&m) - 1.0).abs() < 1e-12);
             assert!((m.h() - h).abs() < 1e-4, "level {k}: h = {}", m.h());
-            assert_eq!(m.bounding_box(), [0.0, 0.0, 1.0, 1.0]);
+            assert_eq!(m.bounding_box(), crate::mesh::Rect::UNIT);
         }
     }
 

@@ -11,11 +11,13 @@
 //! [`hexagonal`](mod@hexagonal), [`kershaw`](mod@kershaw)). All generators return a validated
 //! [`PolyMesh`] (counter-clockwise cells) and never panic: invalid arguments, and meshes larger
 //! than [`MAX_CELLS`], are reported as [`Error::InvalidData`]. Before allocating anything, every
-//! generator estimates the memory it will need ([`budget::mesh_bytes`], from the exact numbers of
-//! cells, vertices and edges) and refuses, with [`MeshError::TooLarge`](crate::MeshError::TooLarge) giving the estimate, a
-//! mesh that does not fit in the memory budget ([`budget::memory_budget`]: the available memory,
-//! or what a control-group limit leaves); [`Family::generate_within`] takes a smaller budget, for callers that need
-//! memory for more than the mesh.
+//! generator estimates the memory it will need ([`mesh_bytes`], from the exact numbers of
+//! cells, vertices and edges) and refuses, with [`MeshError::TooLarge`](crate::MeshError::TooLarge)
+//! giving the estimate, a mesh that does not fit in the memory budget. The budget is the
+//! caller's ([`MemoryBudget`]): [`Family::generate`], [`Family::generate_on`] and the `_within`
+//! generators take it; [`cartesian()`], [`cartesian_rect`], [`cartesian_triangles`],
+//! [`hexagonal()`], [`hexagonal_grid`] and [`kershaw()`] use the fixed
+//! [`MemoryBudget::DEFAULT`] (8 GiB), so that their answer does not depend on the machine.
 //!
 //! [`Family`] names the four families for the command line (`"cartesian"`, `"hexagonal"`,
 //! `"kershaw"`, `"triangles"`), generates a level ([`Family::generate`]) and predicts its size
@@ -28,24 +30,28 @@
 //! | Kershaw | `mesh4_1_k`: 17k × 17k quadrangles, 17k edges on x=0 | 289 k² | 481 (66.9 M cells) |
 //! | Triangles | the Cartesian grid of level k, each square cut by its diagonal from lower left to upper right ([`cartesian_triangles`]) | 2·4^(k+1) | 11 (2·4096², 33.6 M cells: PETSc ex9's 4097² grid) |
 //!
-//! The largest levels come from the cap [`MAX_CELLS`] = 2^26 cells; the memory budget (the
-//! available memory) stops earlier on most machines. Estimated peaks ([`Family::memory_estimate`]): Cartesian level 9 (1 M cells) 0.4 GB,
-//! level 10 1.5 GB, level 11 6.0 GB; hexagonal level 8 (1.6 M cells) 0.9 GB, level 9 3.7 GB;
-//! Kershaw level 100 (2.9 M cells) 1.0 GB, level 240 5.9 GB; triangles level 9 (2.1 M cells)
-//! 0.5 GB, level 10 2.1 GB, level 11 8.5 GB (measured peak of the ex9 solve's mesh phase: 6.2 GB,
-//! before the cell arrays were 32-bit) (1 GB = 10⁹ bytes).
+//! The largest levels come from the cap [`MAX_CELLS`] = 2^26 cells; the memory budget stops
+//! earlier unless it is large. Estimated peaks ([`Family::memory_estimate`]): Cartesian level 9
+//! (1 M cells) 0.4 GB, level 10 1.5 GB, level 11 6.0 GB; hexagonal level 8 (1.6 M cells) 0.9 GB,
+//! level 9 3.7 GB; Kershaw level 100 (2.9 M cells) 1.0 GB, level 240 5.9 GB; triangles level 9
+//! (2.1 M cells) 0.5 GB, level 10 2.1 GB, level 11 8.5 GB (1 GB = 10⁹ bytes). How these
+//! estimates compare with measured peaks is in `replication/BENCHMARKS.md` ("Measurements behind
+//! the defaults").
 
 pub mod cartesian;
 pub mod hexagonal;
 pub mod kershaw;
 
-pub use cartesian::{cartesian, cartesian_rect, cartesian_triangles};
-pub use hexagonal::{hexagonal, hexagonal_grid};
-pub use kershaw::kershaw;
+pub use cartesian::{
+    cartesian, cartesian_rect, cartesian_rect_within, cartesian_triangles,
+    cartesian_triangles_within,
+};
+pub use hexagonal::{hexagonal, hexagonal_grid, hexagonal_grid_within};
+pub use kershaw::{kershaw, kershaw_within};
 
 use crate::error::{Error, Result};
-use crate::mesh::budget::{self, check_budget, mesh_bytes};
-use crate::mesh::{Overlap, PolyMesh};
+use crate::mesh::budget::{MemoryBudget, mesh_bytes};
+use crate::mesh::{Overlap, PolyMesh, Rect};
 use std::fmt;
 use std::str::FromStr;
 
@@ -72,9 +78,9 @@ pub(crate) type Counts = Option<[u64; 4]>;
 
 /// [`MeshError::TooLarge`](crate::MeshError::TooLarge) (as an [`Error`]) if a mesh with these counts would need more memory
 /// than `budget`.
-pub(crate) fn check_memory(what: &str, counts: Counts, budget: u64) -> Result<()> {
+pub(crate) fn check_memory(what: &str, counts: Counts, budget: MemoryBudget) -> Result<()> {
     let bytes = counts.map_or(u64::MAX, |[c, s, v, e]| mesh_bytes(c, s, v, e));
-    check_budget(what, bytes, budget).map_err(Error::from)
+    budget.check(what, bytes).map_err(Error::from)
 }
 
 /// A family of generated meshes, indexed by a refinement level ≥ 1 (see the module docs for
@@ -191,45 +197,18 @@ impl Family {
     }
 
     /// Estimated peak memory, in bytes, of generating the mesh at `level`
-    /// ([`budget::mesh_bytes`]); `u64::MAX` when it cannot be counted.
+    /// ([`mesh_bytes`]); `u64::MAX` when it cannot be counted.
     pub fn memory_estimate(self, level: usize) -> u64 {
         self.counts(level)
             .map_or(u64::MAX, |[c, s, v, e]| mesh_bytes(c, s, v, e))
     }
 
     /// Builds the mesh of this family at `level` (see the table in the module docs).
-    /// Level 0 and levels above [`Family::max_level`] give [`Error::InvalidData`]; a mesh that
-    /// would not fit in [`budget::memory_budget`] gives [`MeshError::TooLarge`](crate::MeshError::TooLarge).
-    pub fn generate(self, level: usize) -> Result<PolyMesh> {
-        self.generate_within(level, budget::memory_budget())
-    }
-
-    /// The mesh of this family at `level` on the rectangle `[x0, x1] × [y0, y1]` (`domain` =
-    /// `[x0, x1, y0, y1]`) instead of the unit square. The Cartesian and triangle families are
-    /// generated on the rectangle directly ([`cartesian_rect`], [`cartesian_triangles`]: one
-    /// build, one validation, the last grid line exactly on x1 and y1); the others are built on
-    /// the unit square and mapped ([`map_unit_square`]). Errors as [`Family::generate`], and
-    /// [`Error::InvalidData`] for a domain that is not a finite rectangle.
-    pub fn generate_on(self, level: usize, domain: [f64; 4]) -> Result<PolyMesh> {
-        check_domain(domain)?;
-        let [x0, x1, y0, y1] = domain;
-        match self {
-            Family::Cartesian | Family::Triangles => {
-                self.check_level(level)?;
-                let n = cartesian_level_n(level).expect("checked by check_level");
-                if self == Family::Cartesian {
-                    cartesian_rect(n, n, [x0, x1], [y0, y1])
-                } else {
-                    cartesian_triangles(n, n, [x0, x1], [y0, y1])
-                }
-            }
-            Family::Hexagonal | Family::Kershaw => map_unit_square(&self.generate(level)?, domain),
-        }
-    }
-
-    /// As [`Family::generate`], refusing ([`MeshError::TooLarge`](crate::MeshError::TooLarge), with the estimate) a mesh
-    /// whose [`Family::memory_estimate`] exceeds `budget` bytes, before allocating anything.
-    pub fn generate_within(self, level: usize, budget: u64) -> Result<PolyMesh> {
+    /// Level 0 and levels above [`Family::max_level`] give [`Error::InvalidData`]; a mesh whose
+    /// [`Family::memory_estimate`] exceeds `budget` gives
+    /// [`MeshError::TooLarge`](crate::MeshError::TooLarge) (with the estimate), before anything
+    /// is allocated.
+    pub fn generate(self, level: usize, budget: MemoryBudget) -> Result<PolyMesh> {
         self.check_level(level)?;
         let what = format!(
             "the {} mesh of level {level} ({} cells)",
@@ -240,35 +219,62 @@ impl Family {
         match self {
             Family::Cartesian => {
                 let n = cartesian_level_n(level).expect("checked by check_level");
-                cartesian(n, n)
+                cartesian_rect_within(n, n, [0.0, 1.0], [0.0, 1.0], budget)
             }
-            Family::Hexagonal => hexagonal(level),
-            Family::Kershaw => kershaw(level),
+            Family::Hexagonal => {
+                let n = hexagonal::level_n(level).expect("checked by check_level");
+                hexagonal_grid_within(n, budget)
+            }
+            Family::Kershaw => kershaw_within(level, budget),
             Family::Triangles => {
                 let n = cartesian_level_n(level).expect("checked by check_level");
-                cartesian_triangles(n, n, [0.0, 1.0], [0.0, 1.0])
+                cartesian_triangles_within(n, n, [0.0, 1.0], [0.0, 1.0], budget)
+            }
+        }
+    }
+
+    /// The mesh of this family at `level` on the rectangle `domain` instead of the unit square.
+    /// The Cartesian and triangle families are generated on the rectangle directly
+    /// ([`cartesian_rect_within`], [`cartesian_triangles_within`]: one build, one validation,
+    /// the last grid line exactly on x1 and y1); the others are built on the unit square and
+    /// mapped ([`map_unit_square`]). Errors as [`Family::generate`], and
+    /// [`Error::InvalidData`] for a domain that is not a finite rectangle.
+    pub fn generate_on(self, level: usize, domain: Rect, budget: MemoryBudget) -> Result<PolyMesh> {
+        check_domain(domain)?;
+        match self {
+            Family::Cartesian | Family::Triangles => {
+                self.check_level(level)?;
+                let n = cartesian_level_n(level).expect("checked by check_level");
+                if self == Family::Cartesian {
+                    cartesian_rect_within(n, n, domain.x, domain.y, budget)
+                } else {
+                    cartesian_triangles_within(n, n, domain.x, domain.y, budget)
+                }
+            }
+            Family::Hexagonal | Family::Kershaw => {
+                map_unit_square(&self.generate(level, budget)?, domain)
             }
         }
     }
 }
 
-/// `Ok` if `[x0, x1, y0, y1]` is a finite rectangle with x0 < x1 and y0 < y1.
-fn check_domain([x0, x1, y0, y1]: [f64; 4]) -> Result<()> {
-    if x1 > x0 && y1 > y0 && [x0, x1, y0, y1].iter().all(|v| v.is_finite()) {
+/// `Ok` if `domain` is a finite rectangle with x0 < x1 and y0 < y1 ([`Rect::is_proper`]).
+fn check_domain(domain: Rect) -> Result<()> {
+    if domain.is_proper() {
         Ok(())
     } else {
         Err(Error::InvalidData(format!(
-            "the domain [{x0}, {x1}]x[{y0}, {y1}] is not a finite rectangle with x0 < x1, y0 < y1"
+            "the domain {domain} is not a finite rectangle with x0 < x1, y0 < y1"
         )))
     }
 }
 
-/// The mesh `m` of the unit square mapped onto \[x0, x1\] × \[y0, y1\] by
+/// The mesh `m` of the unit square mapped onto `domain` = \[x0, x1\] × \[y0, y1\] by
 /// (x, y) ↦ (x0 + (x1 − x0) x, y0 + (y1 − y0) y), validated again (rounding could in
 /// principle spoil a nearly degenerate cell). Boundary tags are not kept.
-pub fn map_unit_square(m: &PolyMesh, domain: [f64; 4]) -> Result<PolyMesh> {
+pub fn map_unit_square(m: &PolyMesh, domain: Rect) -> Result<PolyMesh> {
     check_domain(domain)?;
-    let [x0, x1, y0, y1] = domain;
+    let ([x0, x1], [y0, y1]) = (domain.x, domain.y);
     let v = m
         .vertices()
         .iter()
@@ -378,11 +384,14 @@ mod tests {
 
     #[test]
     fn generated_on_a_rectangle_is_the_unit_square_mesh_mapped() {
-        let d = [-2.0, 2.0, -1.0, 0.5];
+        let d = Rect::new([-2.0, 2.0], [-1.0, 0.5]);
         for f in Family::ALL {
-            let unit = f.generate(2).unwrap();
+            let unit = f.generate(2, MemoryBudget::DEFAULT).unwrap();
             let mapped = map_unit_square(&unit, d).unwrap();
-            let on = f.generate_on(2, d).unwrap();
+            let on = f.generate_on(2, d, MemoryBudget::DEFAULT).unwrap();
+            // the rectangle asked for is the rectangle the mesh covers
+            assert_eq!(on.bounding_box(), d, "{f}");
+            assert_eq!(unit.bounding_box(), Rect::UNIT, "{f}");
             assert_eq!(on.n_cells(), unit.n_cells(), "{f}");
             for k in 0..on.n_cells() {
                 assert_eq!(on.cell_vertices(k), mapped.cell_vertices(k), "{f} cell {k}");
@@ -399,27 +408,40 @@ mod tests {
             assert!(has(-2.0, -1.0) && has(2.0, 0.5), "{f}");
         }
         for bad in [
-            [1.0, 0.0, 0.0, 1.0],
-            [0.0, f64::NAN, 0.0, 1.0],
-            [0.0, 1.0, 2.0, 2.0],
+            Rect::new([1.0, 0.0], [0.0, 1.0]),
+            Rect::new([0.0, f64::NAN], [0.0, 1.0]),
+            Rect::new([0.0, 1.0], [2.0, 2.0]),
         ] {
             for f in Family::ALL {
-                let e = f.generate_on(2, bad).unwrap_err().to_string();
+                let e = f
+                    .generate_on(2, bad, MemoryBudget::DEFAULT)
+                    .unwrap_err()
+                    .to_string();
                 assert!(e.contains("is not a finite rectangle"), "{f} {bad:?}: {e}");
             }
         }
         // the level is checked before anything is built
         let e = Family::Triangles
-            .generate_on(12, d)
+            .generate_on(12, d, MemoryBudget::DEFAULT)
             .unwrap_err()
             .to_string();
         assert!(e.contains("level 12"), "{e}");
+        // and so is the budget, on a rectangle as on the unit square
+        for f in Family::ALL {
+            let small = MemoryBudget::new(f.memory_estimate(2) - 1);
+            match f.generate_on(2, d, small) {
+                Err(Error::InvalidMesh(crate::MeshError::TooLarge { .. })) => {}
+                r => panic!("{f}: {r:?}"),
+            }
+        }
     }
 
     #[test]
     fn triangles_are_the_triangulated_cartesian_grid() {
         for level in 1..=4 {
-            let m = Family::Triangles.generate(level).unwrap();
+            let m = Family::Triangles
+                .generate(level, MemoryBudget::DEFAULT)
+                .unwrap();
             let n = 1 << (level + 1);
             let reference = cartesian_triangles(n, n, [0.0, 1.0], [0.0, 1.0]).unwrap();
             assert!(m.is_triangular(), "level {level}");
@@ -428,7 +450,9 @@ mod tests {
                 assert_eq!(m.cell_vertices(k), reference.cell_vertices(k));
             }
             // the same vertices as the Cartesian mesh of the same level, twice its cells
-            let squares = Family::Cartesian.generate(level).unwrap();
+            let squares = Family::Cartesian
+                .generate(level, MemoryBudget::DEFAULT)
+                .unwrap();
             assert_eq!(m.vertices(), squares.vertices());
             assert_eq!(m.n_cells(), 2 * squares.n_cells());
             assert_eq!(m.n_edges(), squares.n_edges() + squares.n_cells());
@@ -443,7 +467,7 @@ mod tests {
     fn cells_at_level_matches_the_generated_meshes() {
         for f in Family::ALL {
             for level in 1..=2 {
-                let m = f.generate(level).unwrap();
+                let m = f.generate(level, MemoryBudget::DEFAULT).unwrap();
                 assert_eq!(m.n_cells(), f.cells_at_level(level), "{f} level {level}");
             }
         }
@@ -467,7 +491,7 @@ mod tests {
                 if level > 0 && level <= max {
                     continue;
                 }
-                match f.generate(level) {
+                match f.generate(level, MemoryBudget::DEFAULT) {
                     Err(Error::InvalidData(msg)) => assert!(msg.contains(f.name()), "{msg}"),
                     Err(e) => panic!("{f} level {level}: unexpected error {e}"),
                     Ok(_) => panic!("{f} level {level} was accepted"),
@@ -499,13 +523,13 @@ mod tests {
             for level in levels {
                 assert_eq!(
                     f.counts(level),
-                    count(&f.generate(level).unwrap()),
+                    count(&f.generate(level, MemoryBudget::DEFAULT).unwrap()),
                     "{f} {level}"
                 );
             }
             let estimate = f.memory_estimate(2);
-            assert!(f.generate_within(2, estimate).is_ok());
-            match f.generate_within(2, estimate - 1) {
+            assert!(f.generate(2, MemoryBudget::new(estimate)).is_ok());
+            match f.generate(2, MemoryBudget::new(estimate - 1)) {
                 Err(Error::InvalidMesh(crate::MeshError::TooLarge { bytes, budget, .. })) => {
                     assert_eq!((bytes, budget), (estimate, estimate - 1))
                 }

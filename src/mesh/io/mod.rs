@@ -18,8 +18,8 @@
 //! the zeros of `/dev/zero`, invalid UTF-8, or a line longer than [`MAX_LINE_BYTES`]. The text
 //! before that line is parsed as usual, and its parse error, if any, is reported (a binary
 //! gmsh file is still reported as such); otherwise the non-text line is. No file larger than
-//! [`max_file_bytes`](crate::mesh::budget::max_file_bytes) (a quarter of the memory budget) is
-//! read: an endless stream of text is refused once that much has been read. Counts announced by
+//! [`MemoryBudget::max_file_bytes`] (a quarter of the memory budget the caller passes) is read:
+//! an endless stream of text is refused once that much has been read. Counts announced by
 //! headers never reserve more memory than the rest of the file could fill.
 
 pub mod msh;
@@ -33,7 +33,7 @@ pub use typ2::{read_typ2, write_typ2};
 pub use vtu::write_vtu;
 
 use crate::error::{Error, Result};
-use crate::mesh::PolyMesh;
+use crate::mesh::{MemoryBudget, PolyMesh};
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -41,17 +41,17 @@ use std::str::FromStr;
 /// Reads a mesh, choosing the reader from the extension of `path` (case-insensitive):
 /// `.msh` (gmsh ASCII 4.1 or 2.2, see [`read_msh`]), `.typ1` ([`read_typ1`]) or `.typ2`
 /// ([`read_typ2`]). For gmsh files the physical-group names are dropped; call [`read_msh`] to
-/// keep them.
-pub fn read_mesh(path: impl AsRef<Path>) -> Result<PolyMesh> {
+/// keep them. No file larger than [`MemoryBudget::max_file_bytes`] of `budget` is read.
+pub fn read_mesh(path: impl AsRef<Path>, budget: MemoryBudget) -> Result<PolyMesh> {
     let path = path.as_ref();
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("msh") => read_msh(path).map(|m| m.mesh),
-        Some("typ1") => read_typ1(path),
-        Some("typ2") => read_typ2(path),
+        Some("msh") => read_msh(path, budget).map(|m| m.mesh),
+        Some("typ1") => read_typ1(path, budget),
+        Some("typ2") => read_typ2(path, budget),
         _ => Err(Error::MeshIo {
             path: path.to_path_buf(),
             line: 0,
@@ -170,15 +170,15 @@ pub(crate) fn text_prefix(bytes: &[u8]) -> (&[u8], Option<NotText>) {
 }
 
 /// Reads a mesh file up to its first line that is not text (see the module docs), at most
-/// [`max_file_bytes`](crate::mesh::budget::max_file_bytes) bytes; I/O failures are
-/// [`Error::Io`], a file too large [`Error::MeshIo`].
-pub(crate) fn read_text(path: &Path) -> Result<Text> {
+/// [`MemoryBudget::max_file_bytes`] bytes of `budget`; I/O failures are [`Error::Io`], a file
+/// too large [`Error::MeshIo`].
+pub(crate) fn read_text(path: &Path, budget: MemoryBudget) -> Result<Text> {
     use std::io::Read;
     let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
     };
-    let limit = usize::try_from(crate::mesh::budget::max_file_bytes()).unwrap_or(usize::MAX);
+    let limit = usize::try_from(budget.max_file_bytes()).unwrap_or(usize::MAX);
     let too_large = |what: String| Error::MeshIo {
         path: path.to_path_buf(),
         line: 0,
@@ -757,7 +757,7 @@ mod tests {
             return;
         }
         let t0 = std::time::Instant::now();
-        let text = read_text(zero).unwrap();
+        let text = read_text(zero, MemoryBudget::DEFAULT).unwrap();
         assert!(text.bytes.is_empty());
         assert_eq!(text.stop.unwrap().line, 1);
         let e = msh::parse_msh(zero, &[0; 4096]).unwrap_err();
@@ -770,7 +770,7 @@ mod tests {
 
     #[test]
     fn unknown_extension() {
-        let e = read_mesh("foo.obj").unwrap_err();
+        let e = read_mesh("foo.obj", MemoryBudget::DEFAULT).unwrap_err();
         assert!(matches!(e, Error::MeshIo { .. }), "{e}");
     }
 }

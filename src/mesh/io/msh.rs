@@ -19,7 +19,9 @@
 
 use super::{Tokens, capacity, read_text};
 use crate::error::Result;
-use crate::mesh::{NonBoundaryTag, Overlap, Point, PolyMesh, drop_unused_vertices_flat};
+use crate::mesh::{
+    MemoryBudget, NonBoundaryTag, Overlap, Point, PolyMesh, drop_unused_vertices_flat,
+};
 use std::collections::{BTreeSet, HashMap};
 use std::fmt::Display;
 use std::path::Path;
@@ -45,9 +47,10 @@ impl MshMesh {
 }
 
 /// Reads a gmsh ASCII mesh (format 4.1 or 2.2); see the module docs.
-pub fn read_msh(path: impl AsRef<Path>) -> Result<MshMesh> {
+/// No file larger than [`MemoryBudget::max_file_bytes`] of `budget` is read.
+pub fn read_msh(path: impl AsRef<Path>, budget: MemoryBudget) -> Result<MshMesh> {
     let path = path.as_ref();
-    let text = read_text(path)?;
+    let text = read_text(path, budget)?;
     let raw = parse_raw(Tokens::from_text(path, &text))?;
     // the text is no longer needed: free it before the mesh is built
     drop(text);
@@ -523,6 +526,26 @@ fn read_elements41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     expect(t, "$EndElements")
 }
 
+/// The error of a file without cells, naming the element types that were skipped.
+fn no_cells(t: &Tokens, ignored_types: &BTreeSet<i32>) -> crate::Error {
+    let ignored = if ignored_types.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " (ignored element types: {})",
+            ignored_types
+                .iter()
+                .map(i32::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    t.err_at(
+        0,
+        format!("no triangles (type 2) or quadrangles (type 3) in the file{ignored}"),
+    )
+}
+
 /// Resolves node tags, drops unused nodes, builds the mesh and tags its boundary edges.
 ///
 /// Errors come in this order: a cell naming an unknown node (first such cell in file order),
@@ -556,22 +579,7 @@ fn build(path: &Path, raw: Raw) -> Result<MshMesh> {
     };
     let nc = cell_line.len();
     if nc == 0 {
-        let ignored = if ignored_types.is_empty() {
-            String::new()
-        } else {
-            format!(
-                " (ignored element types: {})",
-                ignored_types
-                    .iter()
-                    .map(i32::to_string)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )
-        };
-        return Err(t.err_at(
-            0,
-            format!("no triangles (type 2) or quadrangles (type 3) in the file{ignored}"),
-        ));
+        return Err(no_cells(t, &ignored_types));
     }
     // cells, flat: the node tags of cell k are cell_nodes[cell_ptr[k]..cell_ptr[k + 1]], and
     // cell_ptr has nc + 1 entries starting at 0 (read_elements* push them)

@@ -24,14 +24,15 @@
 
 use super::{Tokens, capacity, read_text};
 use crate::error::Result;
-use crate::mesh::{NO_CELL, Point, PolyMesh};
+use crate::mesh::{MemoryBudget, NO_CELL, Point, PolyMesh};
 use std::path::Path;
 
 /// Reads a `.typ1` mesh, inserting the hanging nodes of the `all edges` list into the cells
-/// (see the module docs).
-pub fn read_typ1(path: impl AsRef<Path>) -> Result<PolyMesh> {
+/// (see the module docs). No file larger than [`MemoryBudget::max_file_bytes`] of `budget` is
+/// read.
+pub fn read_typ1(path: impl AsRef<Path>, budget: MemoryBudget) -> Result<PolyMesh> {
     let path = path.as_ref();
-    let text = read_text(path)?;
+    let text = read_text(path, budget)?;
     parse_tokens(path, Tokens::from_text(path, &text))
 }
 
@@ -273,6 +274,38 @@ fn walk(
     None
 }
 
+/// Checks that record `r` of the `all edges` list, edge `e` of the mesh, names the cells on
+/// either side of `e` (in either order).
+fn check_edge_cells(t: &Tokens, mesh: &PolyMesh, r: &EdgeRecord, e: usize) -> Result<()> {
+    let mut file_cells = [r.k, r.l];
+    let mut mesh_cells = mesh.edge_cells(e);
+    file_cells.sort_unstable();
+    mesh_cells.sort_unstable();
+    if file_cells == mesh_cells {
+        return Ok(());
+    }
+    let show = |c: usize| {
+        if c == NO_CELL {
+            "0 (boundary)".to_string()
+        } else {
+            (c + 1).to_string()
+        }
+    };
+    Err(t.err_at(
+        r.line,
+        format!(
+            "edge {}-{} lies between cells {} and {} according to the cell lists, \
+             not {} and {}",
+            r.a + 1,
+            r.b + 1,
+            show(mesh_cells[0]),
+            show(mesh_cells[1]),
+            show(file_cells[0]),
+            show(file_cells[1])
+        ),
+    ))
+}
+
 /// Checks the `all edges` and `edges of the boundary` lists against the mesh built from the
 /// cells: same edges, each listed once, between the cells the file names.
 fn check_edge_lists(
@@ -308,32 +341,7 @@ fn check_edge_lists(
                 format!("edge {}-{} is listed twice", r.a + 1, r.b + 1),
             ));
         }
-        let mut file_cells = [r.k, r.l];
-        let mut mesh_cells = mesh.edge_cells(e);
-        file_cells.sort_unstable();
-        mesh_cells.sort_unstable();
-        if file_cells != mesh_cells {
-            let show = |c: usize| {
-                if c == NO_CELL {
-                    "0 (boundary)".to_string()
-                } else {
-                    (c + 1).to_string()
-                }
-            };
-            return Err(t.err_at(
-                r.line,
-                format!(
-                    "edge {}-{} lies between cells {} and {} according to the cell lists, \
-                     not {} and {}",
-                    r.a + 1,
-                    r.b + 1,
-                    show(mesh_cells[0]),
-                    show(mesh_cells[1]),
-                    show(file_cells[0]),
-                    show(file_cells[1])
-                ),
-            ));
-        }
+        check_edge_cells(t, mesh, r, e)?;
     }
     if let Some(e) = seen.iter().position(|s| !s) {
         let [a, b] = mesh.edge_vertices(e);

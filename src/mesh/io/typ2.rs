@@ -18,16 +18,17 @@
 
 use super::{Tokens, capacity, read_text};
 use crate::error::{Error, Result};
-use crate::mesh::{MAX_CELL_VERTICES, Point, PolyMesh};
+use crate::mesh::{MAX_CELL_VERTICES, MemoryBudget, Point, PolyMesh};
 use std::io::Write;
 use std::path::Path;
 
 /// Reads a `.typ2` mesh. Cells may be listed in either orientation; the `centers` block, if
 /// present, is ignored (centroids are recomputed). Any other data after the cells block is an
-/// error, as it usually means a wrong count.
-pub fn read_typ2(path: impl AsRef<Path>) -> Result<PolyMesh> {
+/// error, as it usually means a wrong count. No file larger than
+/// [`MemoryBudget::max_file_bytes`] of `budget` is read.
+pub fn read_typ2(path: impl AsRef<Path>, budget: MemoryBudget) -> Result<PolyMesh> {
     let path = path.as_ref();
-    let text = read_text(path)?;
+    let text = read_text(path, budget)?;
     parse_tokens(path, Tokens::from_text(path, &text))
 }
 

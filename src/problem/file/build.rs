@@ -5,7 +5,7 @@ use super::MeshSpec;
 use super::data::{Data, Field, Loc, Part, Piece, TensorField};
 use super::schema::{Piecewise, RawFile, RawMesh, RawSide, Src, TensorSrc};
 use crate::error::{Error, ProblemFileErrorKind as K, Result};
-use crate::mesh::Family;
+use crate::mesh::{Family, Rect};
 use crate::problem::expr::{Expr, ExprError, ExprErrorKind, Kind, Scope};
 use crate::problem::{BoundaryKind, ConstraintKind, Side, format_parameter};
 use std::collections::BTreeMap;
@@ -262,10 +262,13 @@ impl Cx<'_> {
                 let family: Family = g.parse().map_err(|e: Error| bad(&e.to_string()))?;
                 let level = m.level.ok_or_else(|| bad("'generate' needs a 'level'"))?;
                 family.check_level(level).map_err(|e| bad(&e.to_string()))?;
-                let domain = m.domain.as_ref().map(|d| d.0);
-                if let Some([x0, x1, y0, y1]) = domain
-                    && !(x1 > x0 && y1 > y0 && [x0, x1, y0, y1].iter().all(|v| v.is_finite()))
-                {
+                // the file writes the x range, then the y range
+                let domain = m
+                    .domain
+                    .as_ref()
+                    .map(|d| d.0)
+                    .map(|[x0, x1, y0, y1]| Rect::new([x0, x1], [y0, y1]));
+                if domain.is_some_and(|d| !d.is_proper()) {
                     return Err(bad("'domain' = [x0, x1, y0, y1] needs x0 < x1 and y0 < y1"));
                 }
                 Ok(MeshSpec::Generated {

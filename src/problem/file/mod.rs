@@ -58,7 +58,7 @@ mod schema;
 use super::expr::Scope;
 use super::{BoundaryKind, Problem};
 use crate::error::{Error, ProblemFileErrorKind as K, Result};
-use crate::mesh::Family;
+use crate::mesh::{Family, Rect};
 use crate::scheme::SchemeKind;
 use build::Cx;
 use data::Data;
@@ -80,7 +80,7 @@ pub enum MeshSpec {
         /// Its level (checked by [`Family::check_level`] when the file is loaded).
         level: usize,
         /// The rectangle \[x0, x1\] × \[y0, y1\] the unit square is mapped onto.
-        domain: Option<[f64; 4]>,
+        domain: Option<Rect>,
     },
 }
 
@@ -94,8 +94,8 @@ impl fmt::Display for MeshSpec {
                 domain,
             } => {
                 write!(f, "{} level {level}", family.name())?;
-                if let Some([x0, x1, y0, y1]) = domain {
-                    write!(f, " on [{x0}, {x1}]x[{y0}, {y1}]")?;
+                if let Some(d) = domain {
+                    write!(f, " on {d}")?;
                 }
                 Ok(())
             }
