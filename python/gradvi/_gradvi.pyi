@@ -121,4 +121,5 @@ def solve(
     keep_iterates: bool,
     ordering: str,
     factor_threads: str,
+    linear: str,
 ) -> Dict[str, Any]: ...

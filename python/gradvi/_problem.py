@@ -35,7 +35,8 @@ class CellData(_EntityData):
 
     For the source f and the diffusion A (shape (n_cells,) or (n_cells, 2, 2)) each cell takes
     its own value, whatever the scheme. Where a scheme needs the datum at an edge midpoint or a
-    vertex (e.g. an obstacle with P1), the value there is the mean over the adjacent cells."""
+    vertex (e.g. an obstacle with P1), the value there is the mean over the adjacent cells; at
+    another point of a cell, the cell's value."""
 
     kind = "cell"
 
@@ -45,7 +46,8 @@ class EdgeData(_EntityData):
 
     At a vertex (P1), the value is the mean over the adjacent edges weighted by 1/|σ| (for
     boundary data: over the adjacent boundary edges; exact for affine data along a straight
-    side); at a cell centroid, the mean over the cell's edges."""
+    side); at a cell centroid, the mean over the cell's edges; at another point of a cell (CR's
+    sub-triangle centroids), the value of the edge σ whose triangle co(σ ∪ {x_K}) holds it."""
 
     kind = "edge"
 
@@ -54,7 +56,9 @@ class VertexData(_EntityData):
     """Values per vertex (nodal values, as P1 uses them).
 
     At an edge midpoint the value is the mean of the two ends, at a centroid the mean over the
-    cell's vertices (the linear interpolant on triangles)."""
+    cell's vertices (the linear interpolant on triangles), at another point of a cell (CR's
+    sub-triangle centroids) the affine interpolant on the triangle co(σ ∪ {x_K}) holding it,
+    from the values at the ends of σ and that mean at x_K."""
 
     kind = "vertex"
 
@@ -232,11 +236,14 @@ class Problem:
       ``f(x, y)`` taking numpy arrays, or per-entity values (:class:`CellData`,
       :class:`EdgeData`, :class:`VertexData`; a plain array is taken by its length). At
       :func:`gradvi.solve`, each callable is called **once**, on the arrays of the points where
-      the scheme evaluates that datum: A at the cell centroids x_K; boundary data (u_D, g_N, a
-      Signorini barrier) at the boundary edge midpoints and vertices; f, an obstacle barrier and
-      the exact solution at the centroids, edge midpoints, vertices and, for CR, the centroids
-      of the sub-triangles co(σ ∪ {x_K}). The Rust assembly then reads the values from that
-      table, by point. (Only the coarse meshes of ``warm_start="nested"`` ask for other points:
+      the scheme evaluates that datum, as the Rust library lists them
+      (``gradvi::scheme::points``): A and the exact solution at the cell centroids x_K; f
+      where the scheme's load reads it (HMM x_K, P1 the vertices, CR the centroids of the
+      sub-triangles co(σ ∪ {x_K})) and at x_K; g_N at the boundary edge midpoints; u_D and a
+      Signorini barrier at the trace unknowns (HMM and CR the boundary edge midpoints, P1 the
+      boundary vertices); an obstacle barrier at the obstacle unknowns (HMM x_K, P1 the
+      vertices, CR the edge midpoints) and the trace unknowns. The Rust assembly then reads
+      the values from that table, by point. (Only the coarse meshes of ``warm_start="nested"`` ask for other points:
       callables are then called point by point there, array data cannot be, and the warm start
       is skipped with the reason in :attr:`Solution.warm_start`.)
 
@@ -415,8 +422,9 @@ class Problem:
         """The data of a Python-built problem on the evaluation points of ``scheme`` on ``mesh``
         (what :func:`gradvi.solve` hands to the Rust assembly): a dict with ``points`` (m, 2),
         the points the Rust library lists for ``scheme`` (``gradvi::scheme::points``), and one
-        array per datum over those rows, NaN on the rows where the solve does not read that
-        datum. Each callable is called once here, on its datum's points."""
+        array per datum over those rows, with ``<datum>_rows``: the rows where the solve reads
+        it (NaN on the others; a constant has every row). Each callable is called once here, on
+        its datum's points."""
         if self._handle is not None:
             raise InvalidDataError("only problems built in Python are tabulated")
         s = self._spec
@@ -433,11 +441,12 @@ class Problem:
                 vals = np.full(m, np.nan)
                 vals[rows] = _scalar_result(_call(v, what, pts.x[rows], pts.y[rows]), rows.size, what)
                 out[key] = vals
+                out[key + "_rows"] = rows
                 out[key + "_fallback"] = _point_adapter(v, what)
-            elif isinstance(v, _EntityData):
-                out[key] = pts.spread(v, what, rows, boundary)
-            elif isinstance(v, (np.ndarray, list, tuple)):
-                out[key] = pts.spread(pts.entity(v, what), what, rows, boundary)
+            elif isinstance(v, (_EntityData, np.ndarray, list, tuple)):
+                d = v if isinstance(v, _EntityData) else pts.entity(v, what)
+                out[key] = pts.spread(d, what, rows, boundary)
+                out[key + "_rows"] = rows
             else:
                 try:
                     c = float(v)
@@ -468,6 +477,7 @@ class Problem:
             if g is not None:
                 rows = pts.rows["exact"]
                 out["exact_grad"][rows] = _grad_result(_call(g, "exact_grad", pts.x[rows], pts.y[rows]), rows.size)
+                out["exact_grad_rows"] = rows
 
                 def gfb(x: float, y: float) -> Tuple[float, float]:
                     r = _grad_result(g(np.array([x]), np.array([y])), 1)
@@ -490,7 +500,7 @@ class Problem:
             rows = pts.rows["diffusion"]  # A_K = A(x_K)
             out = np.full((m, 2, 2), np.nan)
             out[rows] = _tensor_result(_call(a, "diffusion", pts.x[rows], pts.y[rows]), rows.size, "diffusion")
-            return {"diffusion": out, "diffusion_fallback": fb}
+            return {"diffusion": out, "diffusion_rows": rows, "diffusion_fallback": fb}
         if isinstance(a, CellData) or (isinstance(a, np.ndarray) and a.shape[:1] == (pts.nc,) and a.shape != (2, 2)):
             v = a.values if isinstance(a, CellData) else np.asarray(a, dtype=np.float64)
             if v.shape not in ((pts.nc,), (pts.nc, 2, 2)):
@@ -500,7 +510,7 @@ class Problem:
                 raise InvalidDataError("diffusion: the scheme reads A off the cell centroids; give it as a callable")
             out = np.full((m, 2, 2), np.nan)
             out[rows] = _tensor_result(v, pts.nc, "diffusion")[pts.site_index[rows]]
-            return {"diffusion": out}
+            return {"diffusion": out, "diffusion_rows": rows}
         t = _tensor_result(a, m, "diffusion")
         c = t[0].copy() if m else np.eye(2)
         return {

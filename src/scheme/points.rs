@@ -145,7 +145,7 @@ pub fn obstacle_points(scheme: &dyn GradientDiscretisation) -> Vec<EvaluationPoi
 }
 
 /// The exact solution ū and its gradient ∇ū: x_K, in cell order (the errors of
-/// [`crate::post::relative_errors`]).
+/// `post::relative_errors`).
 pub fn exact_points(mesh: &PolyMesh) -> Vec<EvaluationPoint> {
     centroids(mesh)
 }
