@@ -84,8 +84,8 @@ class _Points:
         self.site_index = np.asarray(p["site_index"])
         self.site_edge = np.asarray(p["site_edge"])
         self.site_weights = np.asarray(p["site_weights"])
-        #: for each datum, the rows of its points (each once)
-        self.rows: Dict[str, np.ndarray] = {k: np.unique(v) for k, v in p["rows"].items()}
+        #: for each datum, the rows of its points (each once, ascending)
+        self.rows: Dict[str, np.ndarray] = dict(p["rows"])
 
     # means over incidences -------------------------------------------------------------
     def _cell_to_edges(self, a: np.ndarray) -> np.ndarray:

@@ -10,6 +10,7 @@ use gradvi::scheme::{SchemeKind, build};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use rustc_hash::FxHashMap;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -326,7 +327,7 @@ impl PyMesh {
     /// `site_edge`: the edge σ of the triangle co(σ ∪ {x_K}) holding it and `site_weights` (m, 3):
     /// its barycentric weights there with respect to x_K and the ends of σ, else -1 and 0);
     /// and `rows`: for each datum (`diffusion`, `source`, `boundary`, `trace`, `obstacle`,
-    /// `exact`), the rows of the points where the solve reads it, in the solve's order.
+    /// `exact`), the rows of the points where the solve reads it (each once, ascending).
     fn evaluation_points<'py>(
         &self,
         py: Python<'py>,
@@ -346,11 +347,13 @@ impl PyMesh {
                 ("exact", points::exact_points(m)),
             ])
         })?;
-        let mut row_of: HashMap<[u64; 2], usize> = HashMap::new();
-        let mut unique: Vec<points::EvaluationPoint> = Vec::new();
+        let total = lists.iter().map(|(_, l)| l.len()).sum();
+        let mut row_of: FxHashMap<[u64; 2], usize> =
+            FxHashMap::with_capacity_and_hasher(total, Default::default());
+        let mut unique: Vec<points::EvaluationPoint> = Vec::with_capacity(total);
         let rows = PyDict::new(py);
         for (name, list) in lists {
-            let r: Vec<i64> = list
+            let mut r: Vec<i64> = list
                 .iter()
                 .map(|q| {
                     *row_of.entry(point_key(q.point)).or_insert_with(|| {
@@ -359,6 +362,8 @@ impl PyMesh {
                     }) as i64
                 })
                 .collect();
+            r.sort_unstable();
+            r.dedup();
             rows.set_item(name, vec_array(py, r))?;
         }
         let m = unique.len();
