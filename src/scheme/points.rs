@@ -132,12 +132,13 @@ pub fn trace_points(scheme: &dyn GradientDiscretisation) -> Vec<EvaluationPoint>
 /// x_σ), then the [`trace_points`] (the check that Dirichlet data satisfy the barrier).
 pub fn obstacle_points(scheme: &dyn GradientDiscretisation) -> Vec<EvaluationPoint> {
     let mesh = scheme.mesh();
+    let mut vertex_cells = None;
     let mut out: Vec<EvaluationPoint> = scheme
         .obstacle_dofs()
         .iter()
         .map(|d| EvaluationPoint {
             point: d.point,
-            site: entity_site(mesh, d.point, scheme.dof_entity(d.dof)),
+            site: entity_site(mesh, d.point, scheme.dof_entity(d.dof), &mut vertex_cells),
         })
         .collect();
     out.extend(trace_points(scheme));
@@ -150,9 +151,15 @@ pub fn exact_points(mesh: &PolyMesh) -> Vec<EvaluationPoint> {
     centroids(mesh)
 }
 
-/// The site of the point `p` of an unknown living on `entity` (its own point, or a point of
-/// one of its cells).
-fn entity_site(mesh: &PolyMesh, p: Point, entity: super::Entity) -> Site {
+/// The site of the point `p` of an unknown living on `entity`: that entity when `p` is its
+/// point, else where `p` lies in a cell of the entity (`vertex_cells`: the cells around each
+/// vertex, [`PolyMesh::vertex_cells`], computed on first need).
+fn entity_site(
+    mesh: &PolyMesh,
+    p: Point,
+    entity: super::Entity,
+    vertex_cells: &mut Option<(Vec<usize>, Vec<usize>)>,
+) -> Site {
     use super::Entity;
     match entity {
         Entity::Vertex(v) if mesh.vertex(v) == p => Site::Vertex(v),
@@ -161,8 +168,10 @@ fn entity_site(mesh: &PolyMesh, p: Point, entity: super::Entity) -> Site {
         Entity::Cell(k) => locate(mesh, k, p),
         Entity::Edge(e) => locate(mesh, mesh.edge_cells(e)[0], p),
         Entity::Vertex(v) => {
-            match (0..mesh.n_cells()).find(|&k| mesh.cell_vertices(k).contains(&(v as u32))) {
-                Some(k) => locate(mesh, k, p),
+            let (ptr, ids) = vertex_cells.get_or_insert_with(|| mesh.vertex_cells());
+            match ids[ptr[v]..ptr[v + 1]].first() {
+                Some(&k) => locate(mesh, k, p),
+                // a validated mesh has no vertex outside every cell
                 None => Site::Vertex(v),
             }
         }
@@ -331,6 +340,33 @@ mod tests {
         check_sites(&hex, &tr);
         assert_eq!(tr, boundary_points(&hex));
         assert_eq!(exact_points(&hex), diffusion_points(&hex));
+    }
+
+    #[test]
+    fn an_unknown_evaluated_off_its_entity_is_located_in_a_cell_of_it() {
+        use crate::scheme::Entity;
+        let m = triangles();
+        let mut vc = None;
+        // a point of cell 2 = (5, 2, 4) near its vertex 4, the first cell around vertex 4
+        let [a, b, c] = [5, 2, 4].map(|v| m.vertex(v));
+        let p = [
+            0.01 * a[0] + 0.01 * b[0] + 0.98 * c[0],
+            0.01 * a[1] + 0.01 * b[1] + 0.98 * c[1],
+        ];
+        for entity in [Entity::Vertex(4), Entity::Cell(2)] {
+            let site = entity_site(&m, p, entity, &mut vc);
+            assert!(matches!(site, Site::InCell { cell: 2, .. }), "{site:?}");
+            check_sites(&m, &[EvaluationPoint { point: p, site }]);
+        }
+        assert_eq!(
+            entity_site(&m, m.vertex(4), Entity::Vertex(4), &mut vc),
+            Site::Vertex(4)
+        );
+        let e = m.cell_edges(2)[1] as usize;
+        assert_eq!(
+            entity_site(&m, m.edge_midpoint(e), Entity::Edge(e), &mut vc),
+            Site::Edge(e)
+        );
     }
 
     #[test]
