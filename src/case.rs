@@ -45,7 +45,9 @@ mod tests {
     #[test]
     fn generated_meshes_are_the_family_at_its_level_on_its_domain() {
         let m = mesh_of("generate = \"cartesian\"\nlevel = 2");
-        let g = Family::Cartesian.generate(2, MemoryBudget::DEFAULT).unwrap();
+        let g = Family::Cartesian
+            .generate(2, MemoryBudget::DEFAULT)
+            .unwrap();
         assert_eq!((m.n_cells(), m.vertices()), (g.n_cells(), g.vertices()));
         let m = mesh_of("generate = \"kershaw\"\nlevel = 1\ndomain = [-1, 3, 0, 0.5]");
         let g = Family::Kershaw
@@ -67,10 +69,13 @@ mod tests {
     #[test]
     fn mesh_files_are_read_relative_to_the_problem_file() {
         let m = mesh_of("file = \"good/square_22.msh\"");
-        let r = crate::mesh::io::read_mesh("tests/data/good/square_22.msh", MemoryBudget::DEFAULT).unwrap();
+        let r = crate::mesh::io::read_mesh("tests/data/good/square_22.msh", MemoryBudget::DEFAULT)
+            .unwrap();
         assert_eq!((m.n_cells(), m.vertices()), (r.n_cells(), r.vertices()));
         let spec = MeshSpec::File(Path::new("tests/data").join("missing.msh"));
-        let e = build_mesh(&spec, MemoryBudget::DEFAULT).unwrap_err().to_string();
+        let e = build_mesh(&spec, MemoryBudget::DEFAULT)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("missing.msh"), "{e}");
     }
 }

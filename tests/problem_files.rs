@@ -529,7 +529,11 @@ fn readme_example_is_a_valid_problem() {
     let pf = file::parse(text, &problems().join("readme.toml"), &[]).unwrap();
     assert_eq!(pf.name, "membrane-C-5");
     assert_eq!(pf.scheme, Some(gradvi::scheme::SchemeKind::Hmm));
-    let mesh = build_mesh(pf.mesh.as_ref().unwrap(), gradvi::mesh::MemoryBudget::DEFAULT).unwrap();
+    let mesh = build_mesh(
+        pf.mesh.as_ref().unwrap(),
+        gradvi::mesh::MemoryBudget::DEFAULT,
+    )
+    .unwrap();
     pf.check_against_mesh(&mesh).unwrap();
     let s = Hmm::new(&mesh);
     let sol = solve(&s, &pf.problem());

@@ -19,11 +19,16 @@ The pipeline is mesh → problem → solve::
     sol.write_vtu("u.vtu")                                   # or sol.to_meshio()
 
 Main names: :class:`Mesh`, :class:`Problem` (with :class:`CellData`, :class:`EdgeData`,
-:class:`VertexData`), :func:`solve` returning a :class:`Solution`, and the exceptions, all
-subclasses of :class:`GradviError`.
+:class:`VertexData`), :func:`solve` returning a :class:`Solution`, :class:`Rect`, the
+registries ``SCHEMES``, ``FAMILIES`` and ``BUILTIN_PROBLEMS`` (from the Rust library), and the
+exceptions, all subclasses of :class:`GradviError` (:class:`InvalidDataError` is also a
+``ValueError``, :class:`MeshIoError` an ``OSError``).
 """
 
 from ._gradvi import (
+    BUILTIN_PROBLEMS,
+    FAMILIES,
+    SCHEMES,
     CertificateError,
     CyclingError,
     FileError,
@@ -41,16 +46,15 @@ from ._gradvi import (
     SolverError,
 )
 from ._gradvi import __version__ as _rust_version
-from ._mesh import Mesh
+from ._mesh import Mesh, Rect
 from ._problem import CellData, EdgeData, Problem, VertexData
-from ._solve import SCHEMES, Certificate, IterationLog, Solution, solve
+from ._solve import Certificate, IterationLog, Solution, solve
 
 __version__ = _rust_version
 
-#: Mesh families of :meth:`Mesh.generate`.
-FAMILIES = ("cartesian", "hexagonal", "kershaw", "triangles")
-#: Problems of :meth:`Problem.builtin`.
-BUILTIN_PROBLEMS = ("test1", "test2", "test3", "fvca5-1.1")
+# The registries come from the Rust library: SCHEMES (schemes of :func:`solve`), FAMILIES (mesh
+# families of :meth:`Mesh.generate`) and BUILTIN_PROBLEMS (problems of :meth:`Problem.builtin`),
+# tuples of names in registration order.
 
 
 def fitted_slope(h, e) -> float:
@@ -67,6 +71,7 @@ def fitted_slope(h, e) -> float:
 
 __all__ = [
     "Mesh",
+    "Rect",
     "Problem",
     "CellData",
     "EdgeData",

@@ -7,18 +7,24 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+#: gradvi::scheme::SchemeKind::ALL, by name
+SCHEMES: Tuple[str, ...]
+#: gradvi::mesh::generate::Family::ALL, by name
+FAMILIES: Tuple[str, ...]
+#: gradvi::problem::file::BUILTIN, by name
+BUILTIN_PROBLEMS: Tuple[str, ...]
 
 class GradviError(Exception):
     """Base class of every error gradvi reports (same message as the Rust library)."""
 
-class MeshIoError(GradviError):
+class MeshIoError(GradviError, OSError):
     path: str
     line: int
 
 class InvalidMeshError(GradviError):
     path: Optional[str]
 
-class InvalidDataError(GradviError): ...
+class InvalidDataError(GradviError, ValueError): ...
 class InfeasibleError(GradviError): ...
 class LinearSolverError(GradviError): ...
 class IllPosedError(GradviError): ...
@@ -71,7 +77,9 @@ class _Mesh:
     def scalars(self) -> Dict[str, Any]: ...
     def same_as(self, other: _Mesh) -> bool: ...
     def geometry(self) -> Dict[str, np.ndarray]: ...
-    def evaluation_points(self, scheme: str) -> Dict[str, npt.NDArray[np.float64]]: ...
+    # points (m, 2), site_kind (m,), site_index (m,), site_edge (m,), site_weights (m, 3),
+    # rows: {datum: row indices}
+    def evaluation_points(self, scheme: str) -> Dict[str, Any]: ...
     def write_vtu(
         self,
         path: str,
@@ -113,4 +121,5 @@ def solve(
     keep_iterates: bool,
     ordering: str,
     factor_threads: str,
+    linear: str,
 ) -> Dict[str, Any]: ...

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from typing import TYPE_CHECKING, Any, Callable, Dict, Generic, List, Mapping, Optional, Sequence, Tuple, TypeVar, Union, overload
+from typing import TYPE_CHECKING, Any, Callable, Dict, Generic, List, Mapping, NamedTuple, Optional, Sequence, Tuple, TypeVar, Union, overload
 
 import numpy as np
 
@@ -16,7 +16,32 @@ if TYPE_CHECKING:  # pragma: no cover
 ArrayLike = Any
 PathLike = Union[str, "os.PathLike[str]"]
 
-__all__ = ["Mesh"]
+__all__ = ["Mesh", "Rect"]
+
+
+class Rect(NamedTuple):
+    """An axis-aligned rectangle [x0, x1] × [y0, y1]: the x range, then the y range (the
+    order of the Rust library's rectangle). :attr:`Mesh.bounding_box` returns one, and the
+    ``domain=`` of :meth:`Mesh.generate` and :meth:`Mesh.cartesian` takes one (or a plain
+    sequence in the same order ``(x0, x1, y0, y1)``)."""
+
+    x0: float
+    x1: float
+    y0: float
+    y1: float
+
+
+def _rect(domain: Union[Rect, Sequence[float]]) -> Rect:
+    """``domain`` as a :class:`Rect`: a Rect, or four numbers ``(x0, x1, y0, y1)``."""
+    if isinstance(domain, Rect):
+        return Rect(*(float(v) for v in domain))
+    try:
+        d = [float(v) for v in domain]
+    except (TypeError, ValueError):
+        raise InvalidDataError(f"domain must be a gradvi.Rect or (x0, x1, y0, y1), got {domain!r}") from None
+    if len(d) != 4:
+        raise InvalidDataError(f"domain must be a gradvi.Rect or (x0, x1, y0, y1), got {len(d)} numbers")
+    return Rect(*d)
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -176,28 +201,25 @@ class Mesh:
 
     @classmethod
     def generate(
-        cls, family: str, level: int, domain: Optional[Sequence[float]] = None
+        cls, family: str, level: int, domain: Optional[Union[Rect, Sequence[float]]] = None
     ) -> "Mesh":
         """A mesh of a built-in family of the unit square: ``"cartesian"`` (level k: 2^(k+1)
         squares per side), ``"hexagonal"`` (FVCA5 ``hexa1_k``), ``"kershaw"`` (``mesh4_1_k``),
         ``"triangles"`` (the Cartesian squares of level k, each cut into two triangles by its
         diagonal from lower left to upper right: a mesh for P1 and CR).
-        ``domain = (x0, x1, y0, y1)`` maps it affinely onto that rectangle."""
+        ``domain``, a :class:`Rect` or ``(x0, x1, y0, y1)``, maps it affinely onto that
+        rectangle (then ``bounding_box == Rect(*domain)``)."""
         if int(level) < 1:
             raise InvalidDataError(f"mesh levels start at 1, got {level}")
-        d = None if domain is None else [float(v) for v in domain]
-        if d is not None and len(d) != 4:
-            raise InvalidDataError("domain must be (x0, x1, y0, y1)")
+        d = None if domain is None else list(_rect(domain))
         return cls._wrap(_gradvi._Mesh.generate(str(family), int(level), d))
 
     @classmethod
     def cartesian(
-        cls, nx: int, ny: int, domain: Sequence[float] = (0.0, 1.0, 0.0, 1.0)
+        cls, nx: int, ny: int, domain: Union[Rect, Sequence[float]] = Rect(0.0, 1.0, 0.0, 1.0)
     ) -> "Mesh":
-        """nx × ny rectangles on ``domain = (x0, x1, y0, y1)``."""
-        d = [float(v) for v in domain]
-        if len(d) != 4:
-            raise InvalidDataError("domain must be (x0, x1, y0, y1)")
+        """nx × ny rectangles on ``domain``, a :class:`Rect` or ``(x0, x1, y0, y1)``."""
+        d = list(_rect(domain))
         if int(nx) < 1 or int(ny) < 1:
             raise InvalidDataError(f"nx and ny must be at least 1, got {nx} x {ny}")
         return cls._wrap(_gradvi._Mesh.cartesian(int(nx), int(ny), d))
@@ -389,9 +411,10 @@ class Mesh:
     is_triangular = _Scalar(bool, "Whether every cell is a triangle (P1 and CR need it).")
 
     @property
-    def bounding_box(self) -> Tuple[float, float, float, float]:
-        """(xmin, ymin, xmax, ymax)."""
-        return tuple(self._scalar("bounding_box"))  # type: ignore[return-value]
+    def bounding_box(self) -> Rect:
+        """The smallest rectangle holding the mesh, ``Rect(x0=xmin, x1=xmax, y0=ymin,
+        y1=ymax)``."""
+        return Rect(*(float(v) for v in self._scalar("bounding_box")))
 
     @property
     def physical_names(self) -> Dict[str, Tuple[int, int]]:

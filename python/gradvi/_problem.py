@@ -35,7 +35,8 @@ class CellData(_EntityData):
 
     For the source f and the diffusion A (shape (n_cells,) or (n_cells, 2, 2)) each cell takes
     its own value, whatever the scheme. Where a scheme needs the datum at an edge midpoint or a
-    vertex (e.g. an obstacle with P1), the value there is the mean over the adjacent cells."""
+    vertex (e.g. an obstacle with P1), the value there is the mean over the adjacent cells; at
+    another point of a cell, the cell's value."""
 
     kind = "cell"
 
@@ -45,7 +46,8 @@ class EdgeData(_EntityData):
 
     At a vertex (P1), the value is the mean over the adjacent edges weighted by 1/|σ| (for
     boundary data: over the adjacent boundary edges; exact for affine data along a straight
-    side); at a cell centroid, the mean over the cell's edges."""
+    side); at a cell centroid, the mean over the cell's edges; at another point of a cell (CR's
+    sub-triangle centroids), the value of the edge σ whose triangle co(σ ∪ {x_K}) holds it."""
 
     kind = "edge"
 
@@ -54,36 +56,36 @@ class VertexData(_EntityData):
     """Values per vertex (nodal values, as P1 uses them).
 
     At an edge midpoint the value is the mean of the two ends, at a centroid the mean over the
-    cell's vertices (the linear interpolant on triangles)."""
+    cell's vertices (the linear interpolant on triangles), at another point of a cell (CR's
+    sub-triangle centroids) the affine interpolant on the triangle co(σ ∪ {x_K}) holding it,
+    from the values at the ends of σ and that mean at x_K."""
 
     kind = "vertex"
 
 
+#: The site kinds of :meth:`_Mesh.evaluation_points` (``gradvi::scheme::points::Site``).
+_VERTEX, _EDGE, _CELL, _IN_CELL = 0, 1, 2, 3
+
+
 class _Points:
-    """The points where the schemes evaluate data, on one mesh: rows
-    [centroids | midpoints | vertices | CR sub-triangle centroids]."""
+    """The points where the scheme evaluates data on one mesh, as the Rust library lists them
+    (``gradvi::scheme::points``): each point once (``xy``), the mesh entity it lies on, and for
+    each datum the rows where the solve reads it (``rows``: ``diffusion``, ``source``,
+    ``boundary``, ``trace``, ``obstacle``, ``exact``)."""
 
     def __init__(self, mesh: Mesh, scheme: str) -> None:
         p = mesh._m.evaluation_points(scheme)
         self.mesh = mesh
         self.nc, self.ne, self.nv = mesh.n_cells, mesh.n_edges, mesh.n_vertices
-        self.ns = len(p["subcentroids"])
-        self.xy = np.ascontiguousarray(
-            np.concatenate([p["centroids"], p["midpoints"], p["vertices"], p["subcentroids"]])
-        )
+        self.xy = np.ascontiguousarray(p["points"])
         self.m = len(self.xy)
         self.x, self.y = self.xy[:, 0].copy(), self.xy[:, 1].copy()
-        self.C = slice(0, self.nc)
-        self.E = slice(self.nc, self.nc + self.ne)
-        self.V = slice(self.nc + self.ne, self.nc + self.ne + self.nv)
-        self.S = slice(self.nc + self.ne + self.nv, self.m)
-        be = mesh.boundary_edges
-        #: rows of the boundary points: boundary edge midpoints and boundary vertices
-        self.boundary_rows = np.concatenate(
-            [self.nc + be, self.nc + self.ne + np.unique(mesh.edges[be].reshape(-1))]
-        )
-        #: rows of the cell centroids
-        self.cell_rows = np.arange(self.nc)
+        self.site_kind = np.asarray(p["site_kind"])
+        self.site_index = np.asarray(p["site_index"])
+        self.site_edge = np.asarray(p["site_edge"])
+        self.site_weights = np.asarray(p["site_weights"])
+        #: for each datum, the rows of its points (each once, ascending)
+        self.rows: Dict[str, np.ndarray] = dict(p["rows"])
 
     # means over incidences -------------------------------------------------------------
     def _cell_to_edges(self, a: np.ndarray) -> np.ndarray:
@@ -119,40 +121,38 @@ class _Points:
         off, conn = self.mesh.cell_offsets, self.mesh.cell_connectivity
         return np.add.reduceat(a[conn], off[:-1]) / np.diff(off)
 
-    def _subcells(self, cell_values: np.ndarray, edge_values: Optional[np.ndarray] = None) -> np.ndarray:
-        """Values at the sub-triangle centroids (3 per triangle, local edge order)."""
-        if self.ns == 0:
-            return np.zeros(0)
-        if edge_values is not None:
-            return edge_values[self.mesh.cell_edges]
-        return np.repeat(cell_values, 3)
-
-    def spread(self, d: _EntityData, what: str, boundary: bool = False) -> np.ndarray:
-        """A per-entity array spread onto every row (see the docs of the entity classes)."""
+    def spread(self, d: _EntityData, what: str, rows: np.ndarray, boundary: bool = False) -> np.ndarray:
+        """A per-entity array spread onto ``rows`` (NaN on the other rows), by the site of each
+        point (see the docs of the entity classes): its own entity's value, a mean over
+        incidences, and at a point of the triangle co(σ ∪ {x_K}) of a cell: the cell's value,
+        the edge σ's value, or the affine interpolant of the vertex values of σ and the cell's
+        mean at x_K."""
         a = d.values
         n = {"cell": self.nc, "edge": self.ne, "vertex": self.nv}[d.kind]
         if a.shape != (n,):
             raise InvalidDataError(f"{what}: {type(d).__name__} must have shape ({n},), got {a.shape}")
-        out = np.empty(self.m)
         if d.kind == "cell":
-            out[self.C] = a
-            out[self.E] = self._cell_to_edges(a)
-            out[self.V] = self._cell_to_vertices(a)
-            out[self.S] = self._subcells(a)
+            at = {_CELL: a, _EDGE: self._cell_to_edges(a), _VERTEX: self._cell_to_vertices(a)}
         elif d.kind == "edge":
-            out[self.E] = a
-            out[self.C] = self._edge_to_cells(a)
-            out[self.V] = self._edge_to_vertices(a, boundary)
-            out[self.S] = self._subcells(None, a)  # type: ignore[arg-type]
+            at = {_EDGE: a, _CELL: self._edge_to_cells(a), _VERTEX: self._edge_to_vertices(a, boundary)}
         else:
-            out[self.V] = a
             ed = self.mesh.edges
-            out[self.E] = 0.5 * (a[ed[:, 0]] + a[ed[:, 1]])
-            out[self.C] = self._vertex_to_cells(a)
-            if self.ns:
-                conn = self.mesh.cell_connectivity.reshape(-1, 3)
-                c = out[self.C]
-                out[self.S] = (a[conn] + a[np.roll(conn, -1, axis=1)] + c[:, None]).reshape(-1) / 3.0
+            at = {_VERTEX: a, _EDGE: 0.5 * (a[ed[:, 0]] + a[ed[:, 1]]), _CELL: self._vertex_to_cells(a)}
+        out = np.full(self.m, np.nan)
+        kind = self.site_kind[rows]
+        for k in (_VERTEX, _EDGE, _CELL):
+            sel = rows[kind == k]
+            out[sel] = at[k][self.site_index[sel]]
+        sel = rows[kind == _IN_CELL]
+        if sel.size:
+            cell, edge = self.site_index[sel], self.site_edge[sel]
+            if d.kind == "cell":
+                out[sel] = a[cell]
+            elif d.kind == "edge":
+                out[sel] = a[edge]
+            else:
+                w, ends = self.site_weights[sel], self.mesh.edges[edge]
+                out[sel] = w[:, 0] * at[_CELL][cell] + w[:, 1] * a[ends[:, 0]] + w[:, 2] * a[ends[:, 1]]
         return out
 
     def entity(self, values: ArrayLike, what: str) -> _EntityData:
@@ -236,11 +236,14 @@ class Problem:
       ``f(x, y)`` taking numpy arrays, or per-entity values (:class:`CellData`,
       :class:`EdgeData`, :class:`VertexData`; a plain array is taken by its length). At
       :func:`gradvi.solve`, each callable is called **once**, on the arrays of the points where
-      the scheme evaluates that datum: A at the cell centroids x_K; boundary data (u_D, g_N, a
-      Signorini barrier) at the boundary edge midpoints and vertices; f, an obstacle barrier and
-      the exact solution at the centroids, edge midpoints, vertices and, for CR, the centroids
-      of the sub-triangles co(σ ∪ {x_K}). The Rust assembly then reads the values from that
-      table, by point. (Only the coarse meshes of ``warm_start="nested"`` ask for other points:
+      the scheme evaluates that datum, as the Rust library lists them
+      (``gradvi::scheme::points``): A and the exact solution at the cell centroids x_K; f
+      where the scheme's load reads it (HMM x_K, P1 the vertices, CR the centroids of the
+      sub-triangles co(σ ∪ {x_K})) and at x_K; g_N at the boundary edge midpoints; u_D and a
+      Signorini barrier at the trace unknowns (HMM and CR the boundary edge midpoints, P1 the
+      boundary vertices); an obstacle barrier at the obstacle unknowns (HMM x_K, P1 the
+      vertices, CR the edge midpoints) and the trace unknowns. The Rust assembly then reads
+      the values from that table, by point. (Only the coarse meshes of ``warm_start="nested"`` ask for other points:
       callables are then called point by point there, array data cannot be, and the warm start
       is skipped with the reason in :attr:`Solution.warm_start`.)
 
@@ -417,8 +420,11 @@ class Problem:
 
     def tabulate(self, mesh: Mesh, scheme: str = "hmm", *, _points: Optional[_Points] = None) -> Dict[str, Any]:
         """The data of a Python-built problem on the evaluation points of ``scheme`` on ``mesh``
-        (what :func:`gradvi.solve` hands to the Rust assembly): a dict with ``points`` (m, 2)
-        and one array per datum over those rows. Each callable is called once here."""
+        (what :func:`gradvi.solve` hands to the Rust assembly): a dict with ``points`` (m, 2),
+        the points the Rust library lists for ``scheme`` (``gradvi::scheme::points``), and one
+        array per datum over those rows, with ``<datum>_rows``: the rows where the solve reads
+        it (NaN on the others; a constant has every row). Each callable is called once here, on
+        its datum's points."""
         if self._handle is not None:
             raise InvalidDataError("only problems built in Python are tabulated")
         s = self._spec
@@ -426,22 +432,21 @@ class Problem:
         m = pts.m
         out: Dict[str, Any] = {}
 
-        def scalar(key: str, v: Any, boundary: bool = False) -> None:
+        def scalar(key: str, v: Any, at: str, boundary: bool = False) -> None:
+            """Datum ``key`` on the rows ``pts.rows[at]`` (NaN on the others); ``boundary``:
+            per-edge values reach a vertex through the boundary edges only."""
             what = {"barrier": f"{s['constraint']} barrier", "exact_u": "exact"}.get(key, key)
+            rows = pts.rows[at]
             if callable(v):
-                # boundary data is evaluated on the boundary points only, the rest everywhere
-                rows = pts.boundary_rows if boundary else None
-                if rows is None:
-                    out[key] = _scalar_result(_call(v, what, pts.x, pts.y), m, what)
-                else:
-                    vals = np.full(m, np.nan)
-                    vals[rows] = _scalar_result(_call(v, what, pts.x[rows], pts.y[rows]), rows.size, what)
-                    out[key] = vals
+                vals = np.full(m, np.nan)
+                vals[rows] = _scalar_result(_call(v, what, pts.x[rows], pts.y[rows]), rows.size, what)
+                out[key] = vals
+                out[key + "_rows"] = rows
                 out[key + "_fallback"] = _point_adapter(v, what)
-            elif isinstance(v, _EntityData):
-                out[key] = pts.spread(v, what, boundary)
-            elif isinstance(v, (np.ndarray, list, tuple)):
-                out[key] = pts.spread(pts.entity(v, what), what, boundary)
+            elif isinstance(v, (_EntityData, np.ndarray, list, tuple)):
+                d = v if isinstance(v, _EntityData) else pts.entity(v, what)
+                out[key] = pts.spread(d, what, rows, boundary)
+                out[key + "_rows"] = rows
             else:
                 try:
                     c = float(v)
@@ -455,22 +460,24 @@ class Problem:
             isinstance(src, (np.ndarray, list, tuple)) and isinstance(pts.entity(src, "source"), CellData)
         ):
             out["source_per_cell"] = True
-        scalar("source", src)
-        scalar("dirichlet", s["dirichlet"], boundary=True)
-        scalar("neumann", s["neumann"], boundary=True)
+        scalar("source", src, "source")
+        scalar("dirichlet", s["dirichlet"], "trace", boundary=True)
+        scalar("neumann", s["neumann"], "boundary", boundary=True)
         if s["constraint"] is not None:
-            scalar("barrier", s["barrier"], boundary=s["constraint"] == "signorini")
+            signorini = s["constraint"] == "signorini"
+            scalar("barrier", s["barrier"], "trace" if signorini else "obstacle", boundary=signorini)
             out["constraint"] = s["constraint"]
             out["side"] = s["side"]
         out.update(self._diffusion(pts))
         out.update(self._boundary(pts))
         if s["exact"] is not None:
-            scalar("exact_u", s["exact"])
+            scalar("exact_u", s["exact"], "exact")
             g = s["exact_grad"]
-            if g is None:
-                out["exact_grad"] = np.full((m, 2), np.nan)
-            else:
-                out["exact_grad"] = _grad_result(_call(g, "exact_grad", pts.x, pts.y), m)
+            out["exact_grad"] = np.full((m, 2), np.nan)
+            if g is not None:
+                rows = pts.rows["exact"]
+                out["exact_grad"][rows] = _grad_result(_call(g, "exact_grad", pts.x[rows], pts.y[rows]), rows.size)
+                out["exact_grad_rows"] = rows
 
                 def gfb(x: float, y: float) -> Tuple[float, float]:
                     r = _grad_result(g(np.array([x]), np.array([y])), 1)
@@ -490,17 +497,20 @@ class Problem:
                 t = _tensor_result(a(np.array([x]), np.array([y])), 1, "diffusion")[0]
                 return float(t[0, 0]), float(t[0, 1]), float(t[1, 0]), float(t[1, 1])
 
-            rows = pts.cell_rows  # A_K = A(x_K)
+            rows = pts.rows["diffusion"]  # A_K = A(x_K)
             out = np.full((m, 2, 2), np.nan)
             out[rows] = _tensor_result(_call(a, "diffusion", pts.x[rows], pts.y[rows]), rows.size, "diffusion")
-            return {"diffusion": out, "diffusion_fallback": fb}
+            return {"diffusion": out, "diffusion_rows": rows, "diffusion_fallback": fb}
         if isinstance(a, CellData) or (isinstance(a, np.ndarray) and a.shape[:1] == (pts.nc,) and a.shape != (2, 2)):
             v = a.values if isinstance(a, CellData) else np.asarray(a, dtype=np.float64)
             if v.shape not in ((pts.nc,), (pts.nc, 2, 2)):
                 raise InvalidDataError(f"diffusion: per-cell values must have shape ({pts.nc},) or ({pts.nc}, 2, 2), got {v.shape}")
+            rows = pts.rows["diffusion"]
+            if (pts.site_kind[rows] != _CELL).any():
+                raise InvalidDataError("diffusion: the scheme reads A off the cell centroids; give it as a callable")
             out = np.full((m, 2, 2), np.nan)
-            out[pts.C] = _tensor_result(v, pts.nc, "diffusion")
-            return {"diffusion": out}
+            out[rows] = _tensor_result(v, pts.nc, "diffusion")[pts.site_index[rows]]
+            return {"diffusion": out, "diffusion_rows": rows}
         t = _tensor_result(a, m, "diffusion")
         c = t[0].copy() if m else np.eye(2)
         return {

@@ -3,61 +3,63 @@
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, fields
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, Union
 
 import numpy as np
 
 from . import _gradvi
-from ._gradvi import InvalidDataError
+from ._gradvi import SCHEMES, InternalError, InvalidDataError
 from ._mesh import Mesh
 from ._problem import Problem
 
 if TYPE_CHECKING:  # pragma: no cover
     import meshio
 
-__all__ = ["solve", "Solution", "Certificate", "IterationLog", "SCHEMES"]
+__all__ = ["solve", "Solution", "Certificate", "IterationLog"]
 
-#: The registered schemes.
-SCHEMES = ("hmm", "p1", "cr")
 _KIND_NAMES = np.array(["vertex", "edge", "cell"])
 
 
+@dataclass(frozen=True)
 class Certificate:
     """Evidence that u solves the discrete variational inequality; every quantity is scaled
-    (see the crate documentation, ``vi::certificate``). Attributes: ``max_violation``
-    (max_j max(0, s(u_j − g_j)) / scale_u), ``min_multiplier`` (min_j λ_j / scale_r, ≥ 0 up to
-    round-off), ``complementarity`` (max_j |λ_j (u_j − g_j)| / (scale_r scale_u)),
-    ``balance_residual`` (max_i |(b − Mu)_i| / scale_r on the free unknowns), and any other
-    quantity the library reports (:meth:`as_dict` lists them all)."""
+    (see the crate documentation, ``vi::certificate``), one attribute per field of the
+    library's ``Certificate``."""
 
-    __slots__ = ("_d",)
+    #: max_j max(0, s(u_j − g_j)) / scale_u.
+    max_violation: float
+    #: min_j λ_j / scale_r (≥ 0 up to round-off).
+    min_multiplier: float
+    #: max_j |λ_j (u_j − g_j)| / (scale_r scale_u).
+    complementarity: float
+    #: max_i |(b − Mu)_i| / scale_r on the free unknowns.
+    balance_residual: float
+    #: ‖u‖∞ against the size of the data (at most 1e6).
+    data_magnitude: float
 
-    def __init__(self, d: Dict[str, float]) -> None:
-        self._d = {k: float(v) for k, v in d.items()}
-
-    def __getattr__(self, name: str) -> float:
-        try:
-            return self._d[name]
-        except KeyError:
-            raise AttributeError(name) from None
+    @classmethod
+    def _from(cls, d: Dict[str, float]) -> "Certificate":
+        names = [f.name for f in fields(cls)]
+        if sorted(d) != sorted(names):
+            raise InternalError(f"the library's certificate has the fields {sorted(d)}, the Python class {sorted(names)}")
+        return cls(**{k: float(d[k]) for k in names})
 
     def as_dict(self) -> Dict[str, float]:
         """Every quantity, by name."""
-        return dict(self._d)
+        return asdict(self)
 
     def worst(self) -> float:
         """The largest of the four scaled quantities checked against the tolerance (the minimum
         multiplier counted by its negative part)."""
-        d = self._d
-        return max(d["max_violation"], max(0.0, -d["min_multiplier"]), d["complementarity"], d["balance_residual"])
+        return max(self.max_violation, max(0.0, -self.min_multiplier), self.complementarity, self.balance_residual)
 
     def ok(self, tol: float = 1e-10) -> bool:
         """Whether every scaled quantity is below ``tol``."""
         return self.worst() <= tol
 
     def __repr__(self) -> str:
-        return "Certificate(" + ", ".join(f"{k}={v:.2e}" for k, v in self._d.items()) + ")"
+        return "Certificate(" + ", ".join(f"{k}={v:.2e}" for k, v in self.as_dict().items()) + ")"
 
 
 @dataclass(frozen=True)
@@ -101,34 +103,55 @@ class Solution:
     obstacle problem, the contact length of a Signorini problem).
     """
 
+    #: The mesh solved on.
+    mesh: Mesh
+    #: The problem solved.
+    problem: Problem
+    #: The certificate of u.
+    certificate: Certificate
+    #: NITER: the number of linear solves (sweeps for projected Gauss–Seidel).
+    niter: int
+    #: ``"linear"`` (no barrier), ``"active-set"`` or ``"projected-gauss-seidel"``.
+    method: str
+    #: The iteration log, one entry per linear solve.
+    log: List[IterationLog]
+    #: Wall-clock seconds: data (evaluation of Python data), setup, symbolic, warm_start,
+    #: assemble, factor, solve, total (total excludes data).
+    timings: Dict[str, float]
+    #: Relative L² errors at the centroids ``{"l2_u", "l2_grad"}`` (exact solution known), else None.
+    errors: Optional[Dict[str, float]]
+    #: What the nested warm start did (None: cold start or no barrier).
+    warm_start: Optional[Dict[str, Any]]
+    #: The scheme's name.
+    scheme: str
+    #: Points outside the evaluation table that the solve asked data at (only the coarse
+    #: meshes of the nested warm start do).
+    untabulated_points: int
+    #: How many of those called a Python callable.
+    fallback_calls: int
+    #: The iterates u^1, u^2, … (with ``keep_iterates=True``).
+    iterates: List[np.ndarray]
+
+    __slots__ = (
+        "_r", "mesh", "problem", "certificate", "niter", "method", "log", "timings", "errors", "warm_start",
+        "scheme", "untabulated_points", "fallback_calls", "iterates",
+    )
+
     def __init__(self, mesh: Mesh, problem: Problem, r: Dict[str, Any], data_seconds: float) -> None:
         self.mesh = mesh
         self.problem = problem
         self._r = r
-        c = r["certificate"]
-        #: The certificate of u.
-        self.certificate = Certificate(c)
-        #: NITER: the number of linear solves (sweeps for projected Gauss–Seidel).
-        self.niter: int = int(r["niter"])
-        #: ``"linear"`` (no barrier), ``"active-set"`` or ``"projected-gauss-seidel"``.
-        self.method: str = r["method"]
-        #: The iteration log, one entry per linear solve.
-        self.log: List[IterationLog] = [IterationLog._from(e) for e in r["log"]]
-        #: Wall-clock seconds: data (evaluation of Python data), setup, symbolic, warm_start,
-        #: assemble, factor, solve, total (total excludes data).
-        self.timings: Dict[str, float] = dict(r["timings"], data=data_seconds)
-        #: Relative L² errors at the centroids ``{"l2_u", "l2_grad"}`` (exact solution known), else None.
-        self.errors: Optional[Dict[str, float]] = r["errors"]
-        #: What the nested warm start did (None: cold start or no barrier).
-        self.warm_start: Optional[Dict[str, Any]] = r["warm_start"]
-        #: The scheme's name.
-        self.scheme: str = r["scheme"]
-        #: Points outside the evaluation table that the solve asked data at (only the coarse
-        #: meshes of the nested warm start do), and how many of them called a Python callable.
-        self.untabulated_points: int = int(r.get("untabulated_points", 0))
-        self.fallback_calls: int = int(r.get("fallback_calls", 0))
-        #: The iterates u^1, u^2, … (with ``keep_iterates=True``).
-        self.iterates: List[np.ndarray] = list(r["iterates"])
+        self.certificate = Certificate._from(r["certificate"])
+        self.niter = int(r["niter"])
+        self.method = str(r["method"])
+        self.log = [IterationLog._from(e) for e in r["log"]]
+        self.timings = dict(r["timings"], data=data_seconds)
+        self.errors = r["errors"]
+        self.warm_start = r["warm_start"]
+        self.scheme = str(r["scheme"])
+        self.untabulated_points = int(r.get("untabulated_points", 0))
+        self.fallback_calls = int(r.get("fallback_calls", 0))
+        self.iterates = list(r["iterates"])
 
     # ---------------------------------------------------------------- the discrete solution
 

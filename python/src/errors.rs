@@ -4,9 +4,10 @@
 //!
 //! ```text
 //! GradviError
-//! ├── MeshIoError            Error::MeshIo            (path, line)
+//! ├── MeshIoError            Error::MeshIo            (path, line); also an OSError
 //! ├── InvalidMeshError       Error::InvalidMesh, Error::InvalidMeshFile   (path or None)
-//! ├── InvalidDataError       Error::InvalidData (also: bad arrays given to the bindings)
+//! ├── InvalidDataError       Error::InvalidData (also: bad arrays given to the bindings);
+//! │                          also a ValueError
 //! ├── InfeasibleError        Error::Infeasible
 //! ├── LinearSolverError      Error::Linear
 //! ├── IllPosedError          Error::IllPosed
@@ -25,8 +26,10 @@ use gradvi::SolverError as Stall;
 use gradvi::error::ProblemFileErrorKind;
 use pyo3::BoundObject;
 use pyo3::create_exception;
-use pyo3::exceptions::PyException;
+use pyo3::exceptions::{PyException, PyOSError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyDict, PyTuple, PyType};
 use std::any::Any;
 
 create_exception!(
@@ -37,21 +40,9 @@ create_exception!(
 );
 create_exception!(
     gradvi,
-    MeshIoError,
-    GradviError,
-    "A mesh file could not be read or parsed (attributes: path, line; line 0 when unknown)."
-);
-create_exception!(
-    gradvi,
     InvalidMeshError,
     GradviError,
     "The mesh is geometrically or topologically invalid (attribute path: the file, or None)."
-);
-create_exception!(
-    gradvi,
-    InvalidDataError,
-    GradviError,
-    "Invalid data: problem data, options, or arrays of the wrong shape or with NaN."
 );
 create_exception!(
     gradvi,
@@ -120,13 +111,65 @@ create_exception!(
     "A bug in gradvi (a panic); the interpreter survives. Please report it with the input."
 );
 
+/// An exception class with two bases: `GradviError` and a built-in exception, created once.
+/// (`create_exception!` takes one base.)
+pub struct DualBase {
+    name: &'static str,
+    doc: &'static str,
+    builtin: fn(Python<'_>) -> Bound<'_, PyType>,
+    class: PyOnceLock<Py<PyType>>,
+}
+
+impl DualBase {
+    /// The class `gradvi.<name>(GradviError, <builtin>)`.
+    fn class<'py>(&self, py: Python<'py>) -> PyResult<&Bound<'py, PyType>> {
+        self.class
+            .get_or_try_init(py, || {
+                let bases = PyTuple::new(py, [py.get_type::<GradviError>(), (self.builtin)(py)])?;
+                let ns = PyDict::new(py);
+                ns.set_item("__doc__", self.doc)?;
+                ns.set_item("__module__", "gradvi")?;
+                let t = py
+                    .get_type::<PyType>()
+                    .call1((self.name, bases, ns))?
+                    .cast_into::<PyType>()?;
+                Ok::<_, PyErr>(t.unbind())
+            })
+            .map(|t| t.bind(py))
+    }
+
+    /// An exception of this class with `msg` (a `GradviError` if the class cannot be made).
+    pub fn new_err(&self, msg: String) -> PyErr {
+        Python::attach(|py| match self.class(py) {
+            Ok(t) => PyErr::from_type(t.clone(), msg),
+            Err(e) => e,
+        })
+    }
+}
+
+/// `InvalidDataError`, also a `ValueError`.
+pub static INVALID_DATA: DualBase = DualBase {
+    name: "InvalidDataError",
+    doc: "Invalid data: problem data, options, or arrays of the wrong shape or with NaN (also a ValueError).",
+    builtin: |py| py.get_type::<PyValueError>(),
+    class: PyOnceLock::new(),
+};
+
+/// `MeshIoError`, also an `OSError`.
+pub static MESH_IO: DualBase = DualBase {
+    name: "MeshIoError",
+    doc: "A mesh file could not be read or parsed (attributes: path, line; line 0 when unknown; also an OSError).",
+    builtin: |py| py.get_type::<PyOSError>(),
+    class: PyOnceLock::new(),
+};
+
 /// Adds the exception classes to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add("GradviError", py.get_type::<GradviError>())?;
-    m.add("MeshIoError", py.get_type::<MeshIoError>())?;
+    m.add("MeshIoError", MESH_IO.class(py)?)?;
     m.add("InvalidMeshError", py.get_type::<InvalidMeshError>())?;
-    m.add("InvalidDataError", py.get_type::<InvalidDataError>())?;
+    m.add("InvalidDataError", INVALID_DATA.class(py)?)?;
     m.add("InfeasibleError", py.get_type::<InfeasibleError>())?;
     m.add("LinearSolverError", py.get_type::<LinearSolverError>())?;
     m.add("IllPosedError", py.get_type::<IllPosedError>())?;
@@ -143,7 +186,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 
 /// An `InvalidDataError` with `msg` (for bad arrays and options caught by the bindings).
 pub fn invalid(msg: impl Into<String>) -> PyErr {
-    InvalidDataError::new_err(msg.into())
+    INVALID_DATA.new_err(msg.into())
 }
 
 /// The snake-case name of a problem-file error kind (`"unknown_key"`, `"not_spd"`, ...).
@@ -172,7 +215,7 @@ pub fn to_pyerr(py: Python<'_>, e: &Error) -> PyErr {
     let msg = e.to_string();
     let (err, attrs): (PyErr, Vec<(&str, Py<PyAny>)>) = match e {
         Error::MeshIo { path, line, .. } => (
-            MeshIoError::new_err(msg),
+            MESH_IO.new_err(msg),
             vec![("path", path_obj(py, path)), ("line", obj(py, *line))],
         ),
         Error::InvalidMesh(_) => (InvalidMeshError::new_err(msg), vec![("path", py.None())]),
@@ -180,7 +223,7 @@ pub fn to_pyerr(py: Python<'_>, e: &Error) -> PyErr {
             InvalidMeshError::new_err(msg),
             vec![("path", path_obj(py, path))],
         ),
-        Error::InvalidData(_) => (InvalidDataError::new_err(msg), vec![]),
+        Error::InvalidData(_) => (INVALID_DATA.new_err(msg), vec![]),
         Error::Infeasible(_) => (InfeasibleError::new_err(msg), vec![]),
         Error::Linear(_) => (LinearSolverError::new_err(msg), vec![]),
         Error::IllPosed(_) => (IllPosedError::new_err(msg), vec![]),

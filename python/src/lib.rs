@@ -7,7 +7,8 @@
 //! - [`mesh`]: `_Mesh` (read, build from arrays, generate, geometry arrays, VTU/typ2 output);
 //! - [`problem`]: `_Problem` (built-in problems, problem files, and problems tabulated by the
 //!   Python layer on the points a scheme evaluates data at);
-//! - [`solve`]: `solve`, which returns every result as numpy arrays and plain values.
+//! - [`solve`]: `solve`, which returns every result as numpy arrays and plain values;
+//! - the registries `SCHEMES`, `FAMILIES` and `BUILTIN_PROBLEMS` (names, from the library).
 //!
 //! Every gradvi error becomes an exception of the `GradviError` hierarchy with the same message
 //! ([`errors`]); every call into the library runs under [`guard`], which turns a panic into
@@ -20,6 +21,7 @@ mod problem;
 mod solve;
 
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 pub use errors::to_pyerr;
@@ -58,5 +60,19 @@ fn _gradvi(m: &Bound<'_, PyModule>) -> PyResult<()> {
     problem::register(m)?;
     solve::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    register_registries(m)
+}
+
+/// The library's registries, as tuples of names in registration order: `SCHEMES`
+/// (`gradvi::scheme::SchemeKind::ALL`), `FAMILIES` (`gradvi::mesh::generate::Family::ALL`) and
+/// `BUILTIN_PROBLEMS` (`gradvi::problem::file::BUILTIN`).
+fn register_registries(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    let schemes = gradvi::scheme::SchemeKind::ALL.iter().map(|k| k.name());
+    m.add("SCHEMES", PyTuple::new(py, schemes)?)?;
+    let families = gradvi::mesh::generate::Family::ALL.iter().map(|f| f.name());
+    m.add("FAMILIES", PyTuple::new(py, families)?)?;
+    let problems = gradvi::problem::file::BUILTIN.iter().map(|(n, _)| *n);
+    m.add("BUILTIN_PROBLEMS", PyTuple::new(py, problems)?)?;
     Ok(())
 }

@@ -5,10 +5,12 @@ use crate::guard;
 use gradvi::mesh::generate::{Family, cartesian_rect_within};
 use gradvi::mesh::io::{read_mesh, read_msh, write_typ2, write_vtu};
 use gradvi::mesh::{MemoryBudget, NO_CELL, Point, PolyMesh, Rect};
-use gradvi::scheme::Cr;
+use gradvi::scheme::points::{self, Site};
+use gradvi::scheme::{SchemeKind, build};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use rustc_hash::FxHashMap;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -240,8 +242,9 @@ impl PyMesh {
         })
     }
 
-    /// The scalar attributes (sizes, h, whether every cell is a triangle, bounding box, gmsh
-    /// physical names), as a dict (computed once by the Python layer, which caches it).
+    /// The scalar attributes (sizes, h, whether every cell is a triangle, bounding box as
+    /// (x0, x1, y0, y1), gmsh physical names), as a dict (computed once by the Python layer,
+    /// which caches it).
     fn scalars<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let m = &*self.mesh;
         let d = PyDict::new(py);
@@ -250,9 +253,9 @@ impl PyMesh {
         d.set_item("n_edges", m.n_edges())?;
         d.set_item("h", m.h())?;
         d.set_item("is_triangular", m.is_triangular())?;
-        // [xmin, ymin, xmax, ymax], the layout the Python side reads
+        // (x0, x1, y0, y1): the x range, then the y range (gradvi.Rect)
         let b = m.bounding_box();
-        d.set_item("bounding_box", [b.x[0], b.y[0], b.x[1], b.y[1]])?;
+        d.set_item("bounding_box", (b.x[0], b.x[1], b.y[0], b.y[1]))?;
         d.set_item("physical_names", self.physical_names.clone())?;
         Ok(d)
     }
@@ -322,38 +325,81 @@ impl PyMesh {
         Ok(d)
     }
 
-    /// The points where a scheme evaluates problem data: cell centroids, edge midpoints,
-    /// vertices, and for the Crouzeix–Raviart scheme the centroids of the sub-triangles
-    /// co(σ ∪ {x_K}) (3 per cell, in local edge order; empty for the other schemes).
+    /// The points where `scheme` evaluates problem data on this mesh, from
+    /// `gradvi::scheme::points`: `points` (m, 2), each point once (in the order of first
+    /// appearance in the lists below); its site (`site_kind`: 0 vertex, 1 edge midpoint, 2
+    /// centroid, 3 another point of a cell; `site_index`: the vertex, edge or cell; for kind 3,
+    /// `site_edge`: the edge σ of the triangle co(σ ∪ {x_K}) holding it and `site_weights` (m, 3):
+    /// its barycentric weights there with respect to x_K and the ends of σ, else -1 and 0);
+    /// and `rows`: for each datum (`diffusion`, `source`, `boundary`, `trace`, `obstacle`,
+    /// `exact`), the rows of the points where the solve reads it (each once, ascending).
     fn evaluation_points<'py>(
         &self,
         py: Python<'py>,
         scheme: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let m = &*self.mesh;
+        let kind = SchemeKind::from_str(scheme).map_err(|e| crate::to_pyerr(py, &e))?;
+        let mesh = Arc::clone(&self.mesh);
+        let lists = guard(py, move || {
+            let s = build(kind, &mesh)?;
+            let m = mesh.as_ref();
+            Ok([
+                ("diffusion", points::diffusion_points(m)),
+                ("source", points::source_points(s.as_ref())),
+                ("boundary", points::boundary_points(m)),
+                ("trace", points::trace_points(s.as_ref())),
+                ("obstacle", points::obstacle_points(s.as_ref())),
+                ("exact", points::exact_points(m)),
+            ])
+        })?;
+        let total = lists.iter().map(|(_, l)| l.len()).sum();
+        let mut row_of: FxHashMap<[u64; 2], usize> =
+            FxHashMap::with_capacity_and_hasher(total, Default::default());
+        let mut unique: Vec<points::EvaluationPoint> = Vec::with_capacity(total);
+        let rows = PyDict::new(py);
+        for (name, list) in lists {
+            let mut r: Vec<i64> = list
+                .iter()
+                .map(|q| {
+                    *row_of.entry(point_key(q.point)).or_insert_with(|| {
+                        unique.push(*q);
+                        unique.len() - 1
+                    }) as i64
+                })
+                .collect();
+            r.sort_unstable();
+            r.dedup();
+            rows.set_item(name, vec_array(py, r))?;
+        }
+        let m = unique.len();
+        let (mut kind, mut index, mut edge) = (Vec::with_capacity(m), Vec::new(), Vec::new());
+        let mut weights = Vec::with_capacity(3 * m);
+        for q in &unique {
+            let (c, i, e, w) = match q.site {
+                Site::Vertex(v) => (0u8, v, -1, [0.0; 3]),
+                Site::Edge(e) => (1, e, -1, [0.0; 3]),
+                Site::Cell(k) => (2, k, -1, [0.0; 3]),
+                Site::InCell {
+                    cell,
+                    edge,
+                    weights,
+                } => (3, cell, edge as i64, weights),
+            };
+            kind.push(c);
+            index.push(i as i64);
+            edge.push(e);
+            weights.extend_from_slice(&w);
+        }
         let d = PyDict::new(py);
+        d.set_item("points", points_array(py, unique.iter().map(|q| q.point))?)?;
+        d.set_item("site_kind", vec_array(py, kind))?;
+        d.set_item("site_index", vec_array(py, index))?;
+        d.set_item("site_edge", vec_array(py, edge))?;
         d.set_item(
-            "centroids",
-            points_array(py, per_cell(m, PolyMesh::centroid).into_iter())?,
+            "site_weights",
+            PyArray1::from_vec(py, weights).reshape([m, 3])?,
         )?;
-        d.set_item(
-            "midpoints",
-            points_array(py, per_edge(m, PolyMesh::edge_midpoint).into_iter())?,
-        )?;
-        d.set_item("vertices", points_array(py, m.vertices().iter().copied())?)?;
-        let sub: Vec<Point> = if scheme.eq_ignore_ascii_case("cr") {
-            let mesh = Arc::clone(&self.mesh);
-            guard(py, move || {
-                let cr = Cr::new(&mesh)?;
-                Ok((0..mesh.n_cells())
-                    .flat_map(|k| (0..3).map(move |i| (k, i)))
-                    .map(|(k, i)| cr.sub_centroid(k, i))
-                    .collect())
-            })?
-        } else {
-            Vec::new()
-        };
-        d.set_item("subcentroids", points_array(py, sub.into_iter())?)?;
+        d.set_item("rows", rows)?;
         Ok(d)
     }
 

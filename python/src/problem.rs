@@ -1,13 +1,13 @@
 //! `_Problem`: a built-in problem, a problem file, or a problem *tabulated* by the Python layer.
 //!
-//! A tabulated problem holds, for one mesh, the value of every datum at every point where a
-//! scheme evaluates it (cell centroids, edge midpoints, vertices, and the sub-triangle centroids
-//! of Crouzeix–Raviart): the Python layer evaluates each vectorised callable once on the
-//! arrays of those points. The closures of the `gradvi::problem::Problem` built here look the
-//! value up by the bits of the point. A point that is not in the table (only the coarse meshes
-//! of the nested warm start ask for such points) calls the point-wise fallback the Python layer
-//! gave for a callable datum, or gets NaN for array data (the warm start is then skipped, with
-//! the reason in the solution's report).
+//! A tabulated problem holds, for one mesh, the value of every datum at the points where the
+//! scheme evaluates it, as `gradvi::scheme::points` lists them (`_Mesh.evaluation_points`): the
+//! Python layer evaluates each vectorised callable once on the arrays of those points. The
+//! closures of the `gradvi::problem::Problem` built here look the value up by the bits of the
+//! point, on the rows where that datum was given (`{key}_rows`; every row without it). A point
+//! without a value (only the coarse meshes of the nested warm start ask for such points) calls
+//! the point-wise fallback the Python layer gave for a callable datum, or gets NaN for array
+//! data (the warm start is then skipped, with the reason in the solution's report).
 
 use crate::errors::invalid;
 use crate::guard;
@@ -72,7 +72,21 @@ impl Misses {
 /// Values of one datum at the rows of the point table.
 struct Column<T> {
     values: Vec<T>,
+    /// The rows that hold a value of this datum (`None`: every row). The Python layer
+    /// tabulates a datum only on the points where the scheme reads it; a lookup on another
+    /// row is a miss, like a point outside the table.
+    given: Option<Vec<bool>>,
     fallback: Option<Py<PyAny>>,
+}
+
+impl<T: Copy> Column<T> {
+    /// The value at row `i`, if the datum was given there.
+    fn at(&self, i: usize) -> Option<T> {
+        match &self.given {
+            Some(g) if !g[i] => None,
+            _ => Some(self.values[i]),
+        }
+    }
 }
 
 /// A problem tabulated on a mesh (see the module docs).
@@ -119,8 +133,8 @@ impl Tabulated {
         convert: impl Fn(&Bound<'_, PyAny>) -> PyResult<T>,
         nan: T,
     ) -> T {
-        if let Some(i) = self.row(p) {
-            return col.values[i];
+        if let Some(v) = self.row(p).and_then(|i| col.at(i)) {
+            return v;
         }
         self.misses.count.fetch_add(1, Ordering::Relaxed);
         match &col.fallback {
@@ -315,8 +329,28 @@ fn scalar_col(d: &Bound<'_, PyDict>, key: &str, m: usize) -> PyResult<Option<Col
     }
     Ok(Some(Column {
         values,
+        given: given_rows(d, key, m)?,
         fallback: item(d, &format!("{key}_fallback"))?.map(Bound::unbind),
     }))
+}
+
+/// The rows `data["{key}_rows"]` where datum `key` was given, as a mask over the `m` rows
+/// (`None` without that entry: every row).
+fn given_rows(d: &Bound<'_, PyDict>, key: &str, m: usize) -> PyResult<Option<Vec<bool>>> {
+    let Some(v) = item(d, &format!("{key}_rows"))? else {
+        return Ok(None);
+    };
+    let rows: PyReadonlyArray1<'_, i64> = v
+        .extract()
+        .map_err(|_| invalid(format!("{key}_rows: expected an int64 array")))?;
+    let mut given = vec![false; m];
+    for &r in rows.as_array() {
+        match usize::try_from(r).ok().filter(|&r| r < m) {
+            Some(r) => given[r] = true,
+            None => return Err(invalid(format!("{key}_rows: row {r} is not in 0..{m}"))),
+        }
+    }
+    Ok(Some(given))
 }
 
 fn required_scalar(d: &Bound<'_, PyDict>, key: &str, m: usize) -> PyResult<Column<f64>> {
@@ -393,6 +427,7 @@ impl PyProblem {
                         .collect();
                     Some(Column {
                         values,
+                        given: given_rows(data, "diffusion", m)?,
                         fallback: item(data, "diffusion_fallback")?.map(Bound::unbind),
                     })
                 }
@@ -448,6 +483,7 @@ impl PyProblem {
                         u,
                         Column {
                             values,
+                            given: given_rows(data, "exact_grad", m)?,
                             fallback: item(data, "exact_grad_fallback")?.map(Bound::unbind),
                         },
                     ))

@@ -1,6 +1,6 @@
 //! `solve`: one problem on one mesh with one scheme; every result as numpy arrays.
 
-use crate::errors::InvalidDataError;
+use crate::errors::INVALID_DATA;
 use crate::mesh::{PyMesh, points_array, vec_array};
 use crate::problem::{Misses, PyProblem};
 use crate::to_pyerr;
@@ -10,12 +10,12 @@ use gradvi::mesh::Point;
 use gradvi::post::contact::{contact_measure, free_boundary, neighbours};
 use gradvi::post::fields::EntityFields;
 use gradvi::post::{Errors, relative_errors};
-use gradvi::vi::Side;
 use gradvi::scheme::{Entity, SchemeKind, SchemeOptions, build_with};
 use gradvi::solver::{
     ActiveSetOptions, Certificate, IterationLog, Method, SolveOptions, Timings, WarmStart,
     WarmStartReport, solve_problem,
 };
+use gradvi::vi::Side;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::str::FromStr;
@@ -202,7 +202,7 @@ fn miss_error(py: Python<'_>, e: &gradvi::Error, misses: &Misses) -> Option<PyEr
         return Some(pe);
     }
     let (what, p) = misses.first_unresolved.lock().ok().and_then(|g| *g)?;
-    Some(InvalidDataError::new_err(format!(
+    Some(INVALID_DATA.new_err(format!(
         "{e} ({what} was asked at ({}, {}), a point where no value was given: array data is \
          known only on the mesh it was given for)",
         p[0], p[1]

@@ -14,6 +14,27 @@ def test_hierarchy():
     for cls in (gradvi.MaxIterationsError, gradvi.CyclingError, gradvi.NoKktPointError, gradvi.CertificateError):
         assert issubclass(cls, gradvi.SolverError)
     assert gradvi.GradviError.__module__ == "gradvi"
+    # the two that are also built-in exceptions
+    assert issubclass(gradvi.InvalidDataError, ValueError) and issubclass(gradvi.MeshIoError, OSError)
+    assert gradvi.InvalidDataError.__module__ == "gradvi" and gradvi.MeshIoError.__module__ == "gradvi"
+    assert not issubclass(gradvi.InvalidMeshError, (ValueError, OSError))
+
+
+def test_builtin_bases_catch_the_library_errors(tmp_path):
+    # raised by the library (through the bindings) and by the Python layer alike
+    for bad in (lambda: gradvi.Mesh.generate("voronoi", 1), lambda: gradvi.Problem(obstacle=psi)):
+        with pytest.raises(ValueError) as e:
+            bad()
+        assert isinstance(e.value, gradvi.InvalidDataError) and isinstance(e.value, gradvi.GradviError)
+    bad = tmp_path / "bad.msh"
+    bad.write_text("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2 1 2\nnonsense\n")
+    try:
+        gradvi.Mesh.read(bad)
+    except OSError as e:
+        assert isinstance(e, gradvi.MeshIoError) and e.line > 0 and e.path.endswith("bad.msh")
+        assert str(e).startswith(str(bad))
+    else:
+        raise AssertionError("no error")
 
 
 def test_mesh_files(tmp_path):

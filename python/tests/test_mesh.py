@@ -1,5 +1,7 @@
 """Meshes: reading, building from arrays (mixed polygons), generators, geometry arrays, and
 round trips through meshio and the file formats."""
+import re
+
 import numpy as np
 import pytest
 
@@ -67,14 +69,67 @@ def test_mixed_polygons_from_lists():
 def test_generators_and_domain():
     for fam, level, cells in (("cartesian", 1, 16), ("hexagonal", 1, 121), ("kershaw", 1, 289), ("triangles", 1, 32)):
         assert gradvi.Mesh.generate(fam, level).n_cells == cells
-    assert set(gradvi.FAMILIES) == {"cartesian", "hexagonal", "kershaw", "triangles"}
     t = gradvi.Mesh.generate("triangles", 2, domain=(-2, 2, -2, 2))
-    assert t.is_triangular and t.n_cells == 128 and t.bounding_box == (-2.0, -2.0, 2.0, 2.0)
+    assert t.is_triangular and t.n_cells == 128 and t.bounding_box == gradvi.Rect(-2.0, 2.0, -2.0, 2.0)
     m = gradvi.Mesh.generate("cartesian", 2, domain=(-2, 2, -1, 3))
-    assert m.bounding_box == (-2.0, -1.0, 2.0, 3.0)
+    assert m.bounding_box == gradvi.Rect(x0=-2.0, x1=2.0, y0=-1.0, y1=3.0)
     assert m.measures.sum() == pytest.approx(16.0)
     r = gradvi.Mesh.cartesian(3, 2, (0, 3, 0, 1))
     assert r.n_cells == 6 and np.allclose(r.measures, 0.5)
+
+
+def test_a_rectangle_is_the_x_range_then_the_y_range():
+    # a rectangle that is not a square, away from the origin: any swap of the two meanings
+    # ([x0, x1, y0, y1] against [xmin, ymin, xmax, ymax]) changes it
+    r = gradvi.Rect(x0=-1.0, x1=3.0, y0=10.0, y1=10.5)
+    for fam in gradvi.FAMILIES:
+        m = gradvi.Mesh.generate(fam, 1, domain=r)
+        assert m.bounding_box == r, fam
+        assert (m.points.min(axis=0) == (r.x0, r.y0)).all() and (m.points.max(axis=0) == (r.x1, r.y1)).all()
+        # a plain sequence in the documented order (x0, x1, y0, y1) means the same
+        assert gradvi.Mesh.generate(fam, 1, domain=tuple(r)).bounding_box == r
+    c = gradvi.Mesh.cartesian(4, 2, r)
+    assert c.bounding_box == r and c.measures.sum() == pytest.approx(2.0)
+    assert gradvi.Mesh.generate("cartesian", 1).bounding_box == gradvi.Rect(0.0, 1.0, 0.0, 1.0)
+    with pytest.raises(gradvi.InvalidDataError, match="x0 < x1"):
+        gradvi.Mesh.generate("cartesian", 1, domain=gradvi.Rect(0.0, 1.0, 2.0, 1.0))
+    with pytest.raises(gradvi.InvalidDataError, match="Rect"):
+        gradvi.Mesh.generate("cartesian", 1, domain=(0.0, 1.0, 2.0))
+
+
+def test_registries_are_the_rust_ones():
+    from gradvi import _gradvi
+
+    # the package's constants are the extension's, built from the Rust registries
+    assert gradvi.SCHEMES is _gradvi.SCHEMES and gradvi.FAMILIES is _gradvi.FAMILIES
+    assert gradvi.BUILTIN_PROBLEMS is _gradvi.BUILTIN_PROBLEMS
+    for names in (gradvi.SCHEMES, gradvi.FAMILIES, gradvi.BUILTIN_PROBLEMS):
+        assert isinstance(names, tuple) and len(names) == len(set(names)) > 0
+    # every name is accepted by the Rust parser of its registry, and an unknown name is
+    # refused with the Rust registry's list of names, which is the tuple
+    tri = gradvi.Mesh.generate("triangles", 1)
+    for name in gradvi.SCHEMES:
+        assert tri._m.evaluation_points(name)["points"].shape[1] == 2
+        assert gradvi.solve(tri, gradvi.Problem(source=1.0), scheme=name).scheme == name
+    with pytest.raises(gradvi.InvalidDataError) as e:
+        tri._m.evaluation_points("fem")
+    assert listed(e.value) == gradvi.SCHEMES
+    for name in gradvi.FAMILIES:
+        assert gradvi.Mesh.generate(name, 1).n_cells > 0
+    with pytest.raises(gradvi.InvalidDataError) as e:
+        gradvi.Mesh.generate("voronoi", 1)
+    assert listed(e.value) == gradvi.FAMILIES
+    for name in gradvi.BUILTIN_PROBLEMS:
+        assert gradvi.Problem.builtin(name).origin == "builtin"
+    with pytest.raises(gradvi.InvalidDataError) as e:
+        gradvi.Problem.builtin("test9")
+    assert listed(e.value) == gradvi.BUILTIN_PROBLEMS
+
+
+def listed(e: Exception) -> tuple:
+    """The names a Rust "unknown name" error lists after "expected one of"."""
+    tail = str(e).split("expected one of", 1)[1]
+    return tuple(n for n in re.findall(r"[A-Za-z0-9][A-Za-z0-9_.-]*[A-Za-z0-9]", tail) if n != "or")
 
 
 def test_round_trip_through_meshio(test3_mesh):

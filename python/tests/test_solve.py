@@ -142,3 +142,46 @@ def test_options():
     assert ex9.errors is not None and ex9.mesh.n_cells == 1024
     # a built-in name and a mesh path
     assert gradvi.solve(str(ROOT / "meshes" / "test3_1.msh"), "test3", warm_start="cold").niter == 8
+
+
+def test_solution_attributes_are_declared_and_typed(test3_mesh):
+    """Every documented field of a Solution and its Certificate is an attribute declared on the
+    class (no dynamic lookup): present, of its type, and an unknown name is an AttributeError."""
+    import dataclasses
+    import typing
+
+    sol = gradvi.solve(test3_mesh, make_test3(-20.0))
+    properties = {n for n, v in vars(gradvi.Solution).items() if isinstance(v, property)}
+    documented = {
+        "u", "u_cell", "u_vertex", "u_edge", "gradient", "dof_kind", "dof_index", "n_unknowns", "n_condensed",
+        "u_exact_cell", "constraint", "constrained_dofs", "constrained_points", "constrained_measures", "barrier",
+        "multiplier", "active", "active_set", "n_active", "multiplier_field", "active_field", "active_cells",
+        "active_vertices", "active_edges", "contact_measure", "free_boundary",
+    }
+    assert documented <= properties
+    assert "__getattr__" not in vars(gradvi.Solution) and "__getattr__" not in vars(gradvi.Certificate)
+    # the plain attributes are declared (typed) on the class
+    plain = {"mesh", "problem", "certificate", "niter", "method", "log", "timings", "errors", "warm_start", "scheme",
+             "untabulated_points", "fallback_calls", "iterates"}
+    hints = typing.get_type_hints(gradvi.Solution)
+    assert plain <= set(hints)
+    assert hints["niter"] is int and hints["certificate"] is gradvi.Certificate and hints["mesh"] is gradvi.Mesh
+    for name in documented | plain:
+        assert hasattr(sol, name), name
+    assert typing.get_type_hints(gradvi.Solution.n_active.fget)["return"] is int
+    assert isinstance(sol.niter, int) and isinstance(sol.n_active, int) and isinstance(sol.contact_measure, float)
+    with pytest.raises(AttributeError):
+        sol.n_iterations
+    with pytest.raises(AttributeError):
+        sol.n_iterations = 3  # no attribute beyond the declared ones
+    # the certificate: one typed field per field of the library's certificate
+    c = sol.certificate
+    names = [f.name for f in dataclasses.fields(gradvi.Certificate)]
+    assert names == ["max_violation", "min_multiplier", "complementarity", "balance_residual", "data_magnitude"]
+    assert all(typing.get_type_hints(gradvi.Certificate)[n] is float for n in names)
+    assert c.as_dict() == {n: getattr(c, n) for n in names} and all(isinstance(getattr(c, n), float) for n in names)
+    assert c.ok(1e-10) and c.worst() == max(c.max_violation, -c.min_multiplier, c.complementarity, c.balance_residual, 0.0)
+    with pytest.raises(AttributeError):
+        c.residual
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        c.max_violation = 0.0  # type: ignore[misc]

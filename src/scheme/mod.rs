@@ -21,6 +21,7 @@
 pub mod cr;
 pub mod hmm;
 pub mod p1;
+pub mod points;
 mod triangle;
 
 use crate::mesh::PolyMesh;
