@@ -112,6 +112,7 @@ pub mod case;
 pub mod error;
 pub mod linalg;
 pub mod mesh;
+pub mod mesh3d;
 pub mod post;
 pub mod problem;
 pub mod scheme;

@@ -1,0 +1,115 @@
+//! Three-dimensional polyhedral meshes.
+//!
+//! Readers and generators describe a 3D mesh first as [`Polyhedra`]: flat arrays of vertex
+//! coordinates and, for every cell, its faces as loops of vertex ids (a face shared by two
+//! cells is listed by both, in either orientation, as in HArDCore's RF files and in gmsh's
+//! element types once their faces are spelled out). The mesh type is built from that
+//! description, which is where faces are matched, oriented and validated.
+
+use crate::error::MeshError;
+
+/// A point or vector of ℝ³.
+pub type Point3 = [f64; 3];
+
+/// The flat description of a 3D polyhedral mesh, before validation.
+///
+/// Cell `k` has the faces `cell_ptr[k]..cell_ptr[k + 1]` (indices into `face_ptr`, one entry
+/// per cell side, so a face shared by two cells appears twice); face side `s` has the vertex
+/// loop `face_vertices[face_ptr[s]..face_ptr[s + 1]]` (0-based vertex ids, in order around the
+/// face, either orientation). Both offset arrays start at 0, are non-decreasing and end at the
+/// length of what they index; they are 32-bit, as every id of the mesh.
+///
+/// Tags: `cell_tags` is empty (no tags) or has one entry per cell (gmsh's physical volume);
+/// boundary faces are tagged by `boundary_tags`, each a vertex loop of a boundary face (any
+/// rotation or orientation: faces are matched by their vertex sets) with its tag (gmsh's
+/// physical surface), in `tagged_ptr` / `tagged_vertices` / `tagged_tags` with the same flat
+/// layout as the faces.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Polyhedra {
+    /// Vertex coordinates.
+    pub vertices: Vec<Point3>,
+    /// Offsets of each cell's faces in `face_ptr` (length: cells + 1).
+    pub cell_ptr: Vec<u32>,
+    /// Offsets of each face side's vertex loop in `face_vertices` (length: cell sides + 1).
+    pub face_ptr: Vec<u32>,
+    /// The vertex loops of the cell sides, concatenated.
+    pub face_vertices: Vec<u32>,
+    /// One tag per cell, or empty.
+    pub cell_tags: Vec<i32>,
+    /// Offsets of the tagged boundary faces' vertex loops in `tagged_vertices`.
+    pub tagged_ptr: Vec<u32>,
+    /// The vertex loops of the tagged boundary faces, concatenated.
+    pub tagged_vertices: Vec<u32>,
+    /// The tag of each tagged boundary face.
+    pub tagged_tags: Vec<i32>,
+}
+
+impl Polyhedra {
+    /// Number of cells.
+    pub fn n_cells(&self) -> usize {
+        self.cell_ptr.len().saturating_sub(1)
+    }
+
+    /// The face sides of cell `k`, as ranges of `face_ptr` indices.
+    pub fn cell_sides(&self, k: usize) -> std::ops::Range<usize> {
+        self.cell_ptr[k] as usize..self.cell_ptr[k + 1] as usize
+    }
+
+    /// The vertex loop of face side `s`.
+    pub fn side_vertices(&self, s: usize) -> &[u32] {
+        &self.face_vertices[self.face_ptr[s] as usize..self.face_ptr[s + 1] as usize]
+    }
+
+    /// Appends a cell given as its faces' vertex loops (for readers and generators; the ids are
+    /// not checked here, but when the mesh is built). [`MeshError::TooManyEntities`] if the
+    /// face sides or face vertices outgrow the 32-bit offsets (then nothing is appended).
+    pub fn push_cell<'a>(
+        &mut self,
+        faces: impl IntoIterator<Item = &'a [u32]> + Clone,
+    ) -> Result<(), MeshError> {
+        let (sides, verts) = faces
+            .clone()
+            .into_iter()
+            .fold((0, 0), |(s, v), f| (s + 1, v + f.len()));
+        check_count("face sides", self.face_ptr.len() + sides)?;
+        check_count("face vertices", self.face_vertices.len() + verts)?;
+        if self.cell_ptr.is_empty() {
+            self.cell_ptr.push(0);
+        }
+        if self.face_ptr.is_empty() {
+            self.face_ptr.push(0);
+        }
+        for f in faces {
+            self.face_vertices.extend_from_slice(f);
+            self.face_ptr.push(self.face_vertices.len() as u32);
+        }
+        self.cell_ptr.push((self.face_ptr.len() - 1) as u32);
+        Ok(())
+    }
+}
+
+/// [`MeshError::TooManyEntities`] unless `count` fits the 32-bit ids and offsets.
+fn check_count(what: &'static str, count: usize) -> Result<(), MeshError> {
+    if count >= u32::MAX as usize {
+        return Err(MeshError::TooManyEntities { what, count });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Polyhedra;
+
+    #[test]
+    fn pushed_cells_are_read_back() {
+        let mut p = Polyhedra::default();
+        p.push_cell([&[0, 1, 2][..], &[0, 3, 1], &[1, 3, 2], &[2, 3, 0]])
+            .unwrap();
+        p.push_cell([&[1, 2, 3][..], &[1, 4, 2], &[2, 4, 3], &[3, 4, 1]])
+            .unwrap();
+        assert_eq!(p.n_cells(), 2);
+        assert_eq!(p.cell_sides(1), 4..8);
+        assert_eq!(p.side_vertices(5), &[1, 4, 2]);
+        assert_eq!(p.face_ptr.len(), 9);
+    }
+}
