@@ -11,6 +11,67 @@ use crate::error::MeshError;
 /// A point or vector of ℝ³.
 pub type Point3 = [f64; 3];
 
+/// An axis-parallel box \[x0, x1\] × \[y0, y1\] × \[z0, z1\]: the x range, the y range, then
+/// the z range (the 3D counterpart of [`crate::mesh::Rect`]). Generators map the unit cube
+/// onto one; the bounding box of a mesh is one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cuboid {
+    /// \[x0, x1\].
+    pub x: [f64; 2],
+    /// \[y0, y1\].
+    pub y: [f64; 2],
+    /// \[z0, z1\].
+    pub z: [f64; 2],
+}
+
+impl Cuboid {
+    /// The unit cube \[0, 1\]³.
+    pub const UNIT: Cuboid = Cuboid {
+        x: [0.0, 1.0],
+        y: [0.0, 1.0],
+        z: [0.0, 1.0],
+    };
+
+    /// \[x\[0\], x\[1\]\] × \[y\[0\], y\[1\]\] × \[z\[0\], z\[1\]\].
+    pub const fn new(x: [f64; 2], y: [f64; 2], z: [f64; 2]) -> Self {
+        Cuboid { x, y, z }
+    }
+
+    /// The three ranges, in the order x, y, z.
+    pub fn ranges(&self) -> [[f64; 2]; 3] {
+        [self.x, self.y, self.z]
+    }
+
+    /// Whether every bound is finite and each range has positive length.
+    pub fn is_proper(&self) -> bool {
+        self.ranges()
+            .iter()
+            .all(|r| r[0].is_finite() && r[1].is_finite() && r[0] < r[1])
+    }
+
+    /// |x1 − x0| · |y1 − y0| · |z1 − z0|.
+    pub fn volume(&self) -> f64 {
+        self.ranges().iter().map(|r| r[1] - r[0]).product()
+    }
+
+    /// The image of `p` of the unit cube under the affine map onto this box.
+    pub fn map_unit(&self, p: Point3) -> Point3 {
+        let r = self.ranges();
+        std::array::from_fn(|i| r[i][0] + (r[i][1] - r[i][0]) * p[i])
+    }
+}
+
+impl std::fmt::Display for Cuboid {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [x, y, z] = self.ranges();
+        write!(
+            f,
+            "[{}, {}]x[{}, {}]x[{}, {}]",
+            x[0], x[1], y[0], y[1], z[0], z[1]
+        )
+    }
+}
+
 /// The flat description of a 3D polyhedral mesh, before validation.
 ///
 /// Cell `k` has the faces `cell_ptr[k]..cell_ptr[k + 1]` (indices into `face_ptr`, one entry
@@ -98,7 +159,19 @@ fn check_count(what: &'static str, count: usize) -> Result<(), MeshError> {
 
 #[cfg(test)]
 mod tests {
-    use super::Polyhedra;
+    use super::{Cuboid, Polyhedra};
+
+    #[test]
+    fn cuboids_map_the_unit_cube_range_by_range() {
+        let c = Cuboid::new([-1.0, 3.0], [0.0, 0.5], [2.0, 2.25]);
+        assert_eq!(c.map_unit([0.0, 0.0, 0.0]), [-1.0, 0.0, 2.0]);
+        assert_eq!(c.map_unit([1.0, 1.0, 1.0]), [3.0, 0.5, 2.25]);
+        assert_eq!(c.volume(), 0.5);
+        assert!(c.is_proper() && Cuboid::UNIT.is_proper());
+        assert!(!Cuboid::new([0.0, 1.0], [1.0, 1.0], [0.0, 1.0]).is_proper());
+        assert!(!Cuboid::new([0.0, f64::NAN], [0.0, 1.0], [0.0, 1.0]).is_proper());
+        assert_eq!(c.to_string(), "[-1, 3]x[0, 0.5]x[2, 2.25]");
+    }
 
     #[test]
     fn pushed_cells_are_read_back() {
