@@ -164,7 +164,8 @@ fn warm_start(
         return (None, None);
     }
     let t = Instant::now();
-    match warm_start::predict(system.scheme(), problem, cons) {
+    let budget = system.symbolic().options.budget;
+    match warm_start::predict(system.scheme(), problem, cons, budget) {
         Ok(p) => {
             system.set_initial_guess(state, p.guess);
             (Some(p.active), Some(p.report))

@@ -44,9 +44,9 @@
 //! or a coarse solve fails, the
 //! iteration starts cold and [`WarmStartReport::skipped`] says why.
 
-use crate::assembly::DiscreteSystem;
+use crate::assembly::{DiscreteSystem, SystemOptions};
 use crate::mesh::agglomerate::{Agglomeration, agglomerate};
-use crate::mesh::{NO_CELL, Point, PolyMesh};
+use crate::mesh::{MemoryBudget, NO_CELL, Point, PolyMesh};
 use crate::problem::{ConstraintKind, Problem};
 use crate::scheme::{Entity, GradientDiscretisation, Hmm};
 use crate::solver::constraints::Constraints;
@@ -130,12 +130,13 @@ struct CoarseState {
     edge: Vec<bool>,
 }
 
-/// Predicts the active set of the constrained unknowns `cons` of `scheme` for `problem`.
-/// `Err(reason)` when no prediction can be made.
+/// Predicts the active set of the constrained unknowns `cons` of `scheme` for `problem`, the
+/// coarse systems assembled within `budget`. `Err(reason)` when no prediction can be made.
 pub fn predict(
     scheme: &dyn GradientDiscretisation,
     problem: &Problem,
     cons: &Constraints,
+    budget: MemoryBudget,
 ) -> Result<Prediction, String> {
     let t0 = Instant::now();
     let kind = problem
@@ -153,7 +154,11 @@ pub fn predict(
         let mesh = &levels[l].mesh;
         let hmm = Hmm::new(mesh);
         let fail = |e: crate::Error| format!("coarse solve ({} cells): {e}", mesh.n_cells());
-        let system = DiscreteSystem::new(&hmm, problem, Default::default()).map_err(fail)?;
+        let system_options = SystemOptions {
+            budget,
+            ..Default::default()
+        };
+        let system = DiscreteSystem::new(&hmm, problem, system_options).map_err(fail)?;
         let c = super::constraints::build(&system, problem)
             .map_err(fail)?
             .ok_or_else(|| "the problem has no barrier".to_string())?;
