@@ -307,7 +307,7 @@ fn numeric_bytes(pattern: &SpdPattern, maps: &ScatterMaps, n: usize) -> u64 {
 
 /// [`numeric_bytes`] checked against the caller's `budget` before anything is allocated: a
 /// typed error with the estimate instead of an abort.
-fn check_numeric_memory(
+pub(super) fn check_numeric_memory(
     pattern: &SpdPattern,
     maps: &ScatterMaps,
     n: usize,
