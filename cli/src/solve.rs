@@ -382,6 +382,7 @@ fn solve_options(a: &SolveArgs) -> SolveOptions {
         fallback: a.fallback,
         system: gradvi::assembly::SystemOptions {
             linear: a.linear,
+            budget: MemoryBudget::available(),
             ..Default::default()
         },
     }

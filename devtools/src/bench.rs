@@ -438,6 +438,7 @@ fn case_options(variant: Variant) -> SolveOptions {
         },
         // these variants measure the direct solver (the peer benchmark compares the two)
         linear: gradvi::assembly::LinearSolver::Direct,
+        budget: MemoryBudget::available(),
     };
     SolveOptions {
         system: system_options,

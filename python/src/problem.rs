@@ -367,6 +367,112 @@ fn side_of(s: &str) -> PyResult<Side> {
     }
 }
 
+/// The row of each tabulated point (the first row where a point is repeated).
+fn point_index(points: impl Iterator<Item = Point>, m: usize) -> HashMap<[u64; 2], usize> {
+    let mut index = HashMap::with_capacity(m);
+    for (i, p) in points.enumerate() {
+        index.entry(point_key(p)).or_insert(i);
+    }
+    index
+}
+
+/// The `diffusion` column of `data` (m, 2, 2), with its `given` rows and fallback; `None`
+/// when absent.
+fn diffusion_column(data: &Bound<'_, PyDict>, m: usize) -> PyResult<Option<Column<Tensor>>> {
+    let Some(v) = item(data, "diffusion")? else {
+        return Ok(None);
+    };
+    let a: PyReadonlyArray3<'_, f64> = v
+        .extract()
+        .map_err(|_| invalid("diffusion: expected a float64 array of shape (m, 2, 2)"))?;
+    let a = a.as_array();
+    if a.shape() != [m, 2, 2] {
+        return Err(invalid(format!(
+            "diffusion: expected shape ({m}, 2, 2), got {:?}",
+            a.shape()
+        )));
+    }
+    let values = (0..m)
+        .map(|i| [[a[[i, 0, 0]], a[[i, 0, 1]]], [a[[i, 1, 0]], a[[i, 1, 1]]]])
+        .collect();
+    Ok(Some(Column {
+        values,
+        given: given_rows(data, "diffusion", m)?,
+        fallback: item(data, "diffusion_fallback")?.map(Bound::unbind),
+    }))
+}
+
+/// The `boundary` codes of `data`, one per edge (0 Dirichlet, 1 Neumann, 2 Signorini; all 0
+/// when absent).
+fn boundary_codes(data: &Bound<'_, PyDict>, n_edges: usize) -> PyResult<Vec<u8>> {
+    let boundary: Vec<u8> = match item(data, "boundary")? {
+        None => vec![0; n_edges],
+        Some(v) => {
+            let a: PyReadonlyArray1<'_, u8> = v
+                .extract()
+                .map_err(|_| invalid("boundary: expected a uint8 array"))?;
+            a.as_array().to_vec()
+        }
+    };
+    if boundary.len() != n_edges || boundary.iter().any(|&c| c > 2) {
+        return Err(invalid(format!(
+            "boundary: expected one code 0, 1 or 2 per edge ({n_edges} edges)"
+        )));
+    }
+    Ok(boundary)
+}
+
+/// The barrier of `data`: its `constraint` kind, `side` and `barrier` column; `None` when
+/// there is no `constraint`.
+fn constraint_column(
+    data: &Bound<'_, PyDict>,
+    m: usize,
+) -> PyResult<Option<(ConstraintKind, Side, Column<f64>)>> {
+    let Some(k) = item(data, "constraint")? else {
+        return Ok(None);
+    };
+    let kind = match k.extract::<String>()?.as_str() {
+        "obstacle" => ConstraintKind::Obstacle,
+        "signorini" => ConstraintKind::Signorini,
+        other => return Err(invalid(format!("unknown constraint kind {other:?}"))),
+    };
+    let side = side_of(
+        &item(data, "side")?
+            .ok_or_else(|| invalid("side: missing"))?
+            .extract::<String>()?,
+    )?;
+    Ok(Some((kind, side, required_scalar(data, "barrier", m)?)))
+}
+
+/// The exact solution of `data`: `exact_u` and its gradient `exact_grad` (m, 2); `None` when
+/// there is no `exact_u`.
+fn exact_columns(
+    data: &Bound<'_, PyDict>,
+    m: usize,
+) -> PyResult<Option<(Column<f64>, Column<Point>)>> {
+    let Some(u) = scalar_col(data, "exact_u", m)? else {
+        return Ok(None);
+    };
+    let g = item(data, "exact_grad")?.ok_or_else(|| invalid("exact_grad: missing"))?;
+    let g: PyReadonlyArray2<'_, f64> = g
+        .extract()
+        .map_err(|_| invalid("exact_grad: expected a float64 array of shape (m, 2)"))?;
+    let g = g.as_array();
+    if g.shape() != [m, 2] {
+        return Err(invalid(format!(
+            "exact_grad: expected shape ({m}, 2), got {:?}",
+            g.shape()
+        )));
+    }
+    let values = g.rows().into_iter().map(|r| [r[0], r[1]]).collect();
+    let grad = Column {
+        values,
+        given: given_rows(data, "exact_grad", m)?,
+        fallback: item(data, "exact_grad_fallback")?.map(Bound::unbind),
+    };
+    Ok(Some((u, grad)))
+}
+
 #[pymethods]
 impl PyProblem {
     /// A built-in problem by name, with parameters (e.g. `[("C", -20.0)]` for test3).
@@ -404,91 +510,12 @@ impl PyProblem {
                 return Err(invalid("points must have shape (m, 2)"));
             }
             let m = pts.nrows();
-            let mut index = HashMap::with_capacity(m);
-            for (i, r) in pts.rows().into_iter().enumerate() {
-                index.entry(point_key([r[0], r[1]])).or_insert(i);
-            }
+            let index = point_index(pts.rows().into_iter().map(|r| [r[0], r[1]]), m);
             let mesh_ref = Arc::clone(&mesh.mesh);
-            let diffusion = match item(data, "diffusion")? {
-                None => None,
-                Some(v) => {
-                    let a: PyReadonlyArray3<'_, f64> = v.extract().map_err(|_| {
-                        invalid("diffusion: expected a float64 array of shape (m, 2, 2)")
-                    })?;
-                    let a = a.as_array();
-                    if a.shape() != [m, 2, 2] {
-                        return Err(invalid(format!(
-                            "diffusion: expected shape ({m}, 2, 2), got {:?}",
-                            a.shape()
-                        )));
-                    }
-                    let values = (0..m)
-                        .map(|i| [[a[[i, 0, 0]], a[[i, 0, 1]]], [a[[i, 1, 0]], a[[i, 1, 1]]]])
-                        .collect();
-                    Some(Column {
-                        values,
-                        given: given_rows(data, "diffusion", m)?,
-                        fallback: item(data, "diffusion_fallback")?.map(Bound::unbind),
-                    })
-                }
-            };
-            let boundary: Vec<u8> = match item(data, "boundary")? {
-                None => vec![0; mesh_ref.n_edges()],
-                Some(v) => {
-                    let a: PyReadonlyArray1<'_, u8> = v
-                        .extract()
-                        .map_err(|_| invalid("boundary: expected a uint8 array"))?;
-                    a.as_array().to_vec()
-                }
-            };
-            if boundary.len() != mesh_ref.n_edges() || boundary.iter().any(|&c| c > 2) {
-                return Err(invalid(format!(
-                    "boundary: expected one code 0, 1 or 2 per edge ({} edges)",
-                    mesh_ref.n_edges()
-                )));
-            }
-            let constraint = match item(data, "constraint")? {
-                None => None,
-                Some(k) => {
-                    let kind = match k.extract::<String>()?.as_str() {
-                        "obstacle" => ConstraintKind::Obstacle,
-                        "signorini" => ConstraintKind::Signorini,
-                        other => return Err(invalid(format!("unknown constraint kind {other:?}"))),
-                    };
-                    let side = side_of(
-                        &item(data, "side")?
-                            .ok_or_else(|| invalid("side: missing"))?
-                            .extract::<String>()?,
-                    )?;
-                    Some((kind, side, required_scalar(data, "barrier", m)?))
-                }
-            };
-            let exact = match scalar_col(data, "exact_u", m)? {
-                None => None,
-                Some(u) => {
-                    let g =
-                        item(data, "exact_grad")?.ok_or_else(|| invalid("exact_grad: missing"))?;
-                    let g: PyReadonlyArray2<'_, f64> = g.extract().map_err(|_| {
-                        invalid("exact_grad: expected a float64 array of shape (m, 2)")
-                    })?;
-                    let g = g.as_array();
-                    if g.shape() != [m, 2] {
-                        return Err(invalid(format!(
-                            "exact_grad: expected shape ({m}, 2), got {:?}",
-                            g.shape()
-                        )));
-                    }
-                    let values = g.rows().into_iter().map(|r| [r[0], r[1]]).collect();
-                    Some((
-                        u,
-                        Column {
-                            values,
-                            given: given_rows(data, "exact_grad", m)?,
-                            fallback: item(data, "exact_grad_fallback")?.map(Bound::unbind),
-                        },
-                    ))
-                }
-            };
+            let diffusion = diffusion_column(data, m)?;
+            let boundary = boundary_codes(data, mesh_ref.n_edges())?;
+            let constraint = constraint_column(data, m)?;
+            let exact = exact_columns(data, m)?;
             let boundary_points = mesh_ref
                 .boundary_edges()
                 .iter()

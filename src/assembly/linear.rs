@@ -57,8 +57,9 @@ impl std::fmt::Display for LinearSolver {
     }
 }
 
-/// [`LinearSolver::Auto`] solves iteratively from this many condensed unknowns on (the
-/// crossover measured by `make bench`).
+/// [`LinearSolver::Auto`] solves iteratively from this many condensed unknowns on: about where
+/// the iterative solver overtakes the direct one on the benchmarks (`make bench-peers`, the
+/// peer benchmark in `replication/BENCHMARKS.md`).
 pub const AUTO_ITERATIVE_MIN: usize = 250_000;
 
 /// Relative residual ‖c − S u‖₂ ≤ ITERATIVE_RTOL ‖c‖₂ at which the conjugate gradients stop.

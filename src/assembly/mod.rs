@@ -48,6 +48,7 @@ pub mod two_point;
 pub mod values;
 
 use crate::linalg::{FactorThreads, Ordering};
+use crate::mesh::MemoryBudget;
 use crate::problem::Problem;
 use crate::scheme::{GradientDiscretisation, PointDof};
 use condense::{CellSystem, SymMatrix};
@@ -71,6 +72,12 @@ pub struct SystemOptions {
     pub factor_threads: FactorThreads,
     /// How the condensed systems are solved (default: chosen by size).
     pub linear: LinearSolver,
+    /// The memory the assembly may take (default: the fixed [`MemoryBudget::DEFAULT`], so
+    /// that the answer does not depend on the machine; the command line and Python pass
+    /// [`MemoryBudget::available`]). The setup ([`DofMap::check_setup_memory`]) and the
+    /// numeric factorisation are estimated against it before they allocate, and refused with
+    /// [`Error::Linear`](crate::Error::Linear) giving the estimate if it does not fit.
+    pub budget: MemoryBudget,
 }
 
 /// The identity of each [`DiscreteSystem`], so that a [`SolveState`] filled by one system is
@@ -102,7 +109,7 @@ impl<'a> DiscreteSystem<'a> {
     ) -> crate::Result<Self> {
         let t0 = Instant::now();
         let dof_map = Arc::new(DofMap::new(scheme)?);
-        dof_map.check_setup_memory()?;
+        dof_map.check_setup_memory(options.budget)?;
         let (values, sym) = rayon::join(
             || ProblemValues::evaluate(scheme, &dof_map, problem),
             || SymbolicSystem::with_dof_map(scheme, Arc::clone(&dof_map), options),

@@ -6,6 +6,7 @@ use super::condense::{interior_value, recover_interior};
 use super::gather::FixedValues;
 use super::iterative::{Hierarchy, KeptHierarchy, PcgOutcome, fingerprint};
 use super::linear::{ITERATIVE_RTOL, LinearSolver, SCREENING_RTOL};
+use super::symbolic::check_numeric_memory;
 use super::{DiscreteSystem, SolveState};
 use crate::linalg::{CholeskyWork, SpdPattern};
 use crate::vi::SolveTimings;
@@ -270,17 +271,25 @@ impl DiscreteSystem<'_> {
         }
     }
 
-    /// The symbolic factorisation of the condensed pattern, built in `state` on first use.
+    /// The symbolic factorisation of the condensed pattern, built in `state` on first use, and
+    /// its numeric phase checked against the caller's budget
+    /// ([`SystemOptions::budget`](super::SystemOptions::budget)) as for a direct system.
     fn fallback_pattern<'s>(&self, state: &'s mut SolveState) -> crate::Result<&'s SpdPattern> {
         let built = state.direct_fallback.get_or_insert_with(|| {
             let (col_ptr, row_idx) = self.condensed_pattern();
-            SpdPattern::with_ordering(
+            let p = SpdPattern::with_ordering(
                 self.n_skel,
                 col_ptr.to_vec(),
                 row_idx.to_vec(),
                 self.sym.options.ordering,
             )
-            .map_err(|e| e.to_string())
+            .map_err(|e| e.to_string())?;
+            let budget = self.sym.options.budget;
+            match check_numeric_memory(&p, &self.sym.maps, self.n, budget) {
+                Ok(()) => Ok(p),
+                Err(crate::Error::Linear(m)) => Err(m),
+                Err(e) => Err(e.to_string()),
+            }
         });
         built.as_ref().map_err(|e| crate::Error::Linear(e.clone()))
     }

@@ -19,7 +19,9 @@ use super::gather::{cell_chunks, chunks, split_by_ranges};
 use super::linear::{AUTO_ITERATIVE_MIN, LinearSolver};
 use super::offsets::Offsets;
 use crate::linalg::SpdPattern;
+use crate::mesh::MemoryBudget;
 use crate::scheme::GradientDiscretisation;
+use crate::units::human_bytes;
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
@@ -109,20 +111,19 @@ impl DofMap {
         entries.saturating_mul(32) + 64 * self.dofs.len() as u64
     }
 
-    /// An error if [`DofMap::setup_bytes`] exceeds the memory the kernel reports as available.
-    pub fn check_setup_memory(&self) -> crate::Result<()> {
-        use crate::mesh::budget::{available_memory, human_bytes};
+    /// An error ([`Error::Linear`](crate::Error::Linear), with the estimate) if
+    /// [`DofMap::setup_bytes`] exceeds `budget`.
+    pub fn check_setup_memory(&self, budget: MemoryBudget) -> crate::Result<()> {
         let bytes = self.setup_bytes();
-        match available_memory() {
-            Some(available) if bytes > available => Err(crate::Error::Linear(format!(
-                "assembling the system needs about {} (local matrices, pattern and scatter maps \
-                 of {} cells), more than the {} of memory available",
-                human_bytes(bytes),
-                self.n_cells(),
-                human_bytes(available)
-            ))),
-            _ => Ok(()),
+        if bytes <= budget.bytes() {
+            return Ok(());
         }
+        Err(crate::Error::Linear(format!(
+            "assembling the system needs about {} (local matrices, pattern and scatter maps \
+             of {} cells), more than the memory budget of {budget}",
+            human_bytes(bytes),
+            self.n_cells(),
+        )))
     }
 
     /// The skeleton unknowns of cell k.
@@ -210,7 +211,7 @@ impl<'a> SymbolicSystem<'a> {
         options: SystemOptions,
     ) -> crate::Result<Self> {
         let dof_map = DofMap::new(scheme)?;
-        dof_map.check_setup_memory()?;
+        dof_map.check_setup_memory(options.budget)?;
         Self::with_dof_map(scheme, Arc::new(dof_map), options)
     }
 
@@ -263,7 +264,7 @@ impl<'a> SymbolicSystem<'a> {
         let symbolic = symbolic.map(|(p, t)| (p.with_threads(options.factor_threads), t));
         let (pattern, symbolic_seconds) = symbolic?;
         let maps = maps?;
-        check_numeric_memory(&pattern, &maps, n)?;
+        check_numeric_memory(&pattern, &maps, n, options.budget)?;
         let single_interior = dof_map.n_int.iter().all(|&ni| ni == 1);
         let no_interior = dof_map.n_int.iter().all(|&ni| ni == 0);
         Ok(SymbolicSystem {
@@ -293,30 +294,35 @@ impl<'a> SymbolicSystem<'a> {
     }
 }
 
-/// The memory the numeric phase will allocate (the Cholesky factor, whose size the symbolic
-/// factorisation has just computed, the condensed values, the condensation and residual
-/// buffers and a few vectors of unknowns), checked against the memory the kernel reports as
-/// available before anything is allocated: a typed error with the estimate instead of an abort.
-fn check_numeric_memory(pattern: &SpdPattern, maps: &ScatterMaps, n: usize) -> crate::Result<()> {
-    let Some(available) = crate::mesh::budget::available_memory() else {
-        return Ok(());
-    };
-    let bytes = 8 * (pattern.factor_len() as u64)
+/// The memory, in bytes, the numeric phase will allocate for `n` unknowns: the Cholesky
+/// factor (whose size the symbolic factorisation has computed), the condensed values, the
+/// condensation and residual buffers and a few vectors of unknowns.
+fn numeric_bytes(pattern: &SpdPattern, maps: &ScatterMaps, n: usize) -> u64 {
+    8 * (pattern.factor_len() as u64)
         + 8 * (pattern.nnz() as u64)
         + 8 * (maps.block_ptr.total() as u64)
         + 24 * (maps.inc.items.len() as u64)
-        + 8 * 6 * (n as u64);
-    if bytes > available {
-        use crate::mesh::budget::human_bytes;
-        return Err(crate::Error::Linear(format!(
-            "the numeric factorisation needs about {} (a Cholesky factor of {} entries), more \
-             than the {} of memory available",
-            human_bytes(bytes),
-            pattern.factor_len(),
-            human_bytes(available)
-        )));
+        + 8 * 6 * (n as u64)
+}
+
+/// [`numeric_bytes`] checked against the caller's `budget` before anything is allocated: a
+/// typed error with the estimate instead of an abort.
+pub(super) fn check_numeric_memory(
+    pattern: &SpdPattern,
+    maps: &ScatterMaps,
+    n: usize,
+    budget: MemoryBudget,
+) -> crate::Result<()> {
+    let bytes = numeric_bytes(pattern, maps, n);
+    if bytes <= budget.bytes() {
+        return Ok(());
     }
-    Ok(())
+    Err(crate::Error::Linear(format!(
+        "the numeric factorisation needs about {} (a Cholesky factor of {} entries), more \
+         than the memory budget of {budget}",
+        human_bytes(bytes),
+        pattern.factor_len(),
+    )))
 }
 
 /// For each of the `n` unknowns, the cells where it appears, ascending (a counting sort of the
@@ -450,4 +456,64 @@ fn scatter_maps(
         src,
         inc,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::assembly::DiscreteSystem;
+    use crate::mesh::generate::cartesian;
+    use crate::problem::paper_test3;
+    use crate::scheme::Hmm;
+
+    fn within(budget: MemoryBudget) -> SystemOptions {
+        SystemOptions {
+            budget,
+            ..Default::default()
+        }
+    }
+
+    fn is_budget_error(e: &crate::Error) -> bool {
+        matches!(e, crate::Error::Linear(m) if m.contains("more than the memory budget of"))
+    }
+
+    /// The budget is the caller's: the same system passes with a large budget and is refused
+    /// with a tiny one, whatever memory the machine has free.
+    #[test]
+    fn the_setup_is_checked_against_the_callers_budget() {
+        let mesh = cartesian(8, 8).unwrap();
+        let hmm = Hmm::new(&mesh);
+        let large = MemoryBudget::new(u64::MAX);
+        assert!(SymbolicSystem::new(&hmm, within(large)).is_ok());
+        let tiny = MemoryBudget::new(1024);
+        let e = SymbolicSystem::new(&hmm, within(tiny)).err().unwrap();
+        assert!(is_budget_error(&e), "{e}");
+        let p = paper_test3(1.0);
+        assert!(DiscreteSystem::new(&hmm, &p, within(large)).is_ok());
+        let e = DiscreteSystem::new(&hmm, &p, within(tiny)).err().unwrap();
+        assert!(is_budget_error(&e), "{e}");
+        // the setup estimate itself is the bound
+        let dm = DofMap::new(&hmm).unwrap();
+        let setup = dm.setup_bytes();
+        assert!(dm.check_setup_memory(MemoryBudget::new(setup)).is_ok());
+        let e = dm
+            .check_setup_memory(MemoryBudget::new(setup - 1))
+            .unwrap_err();
+        assert!(is_budget_error(&e), "{e}");
+    }
+
+    /// The numeric phase is refused one byte below its estimate and accepted at it.
+    #[test]
+    fn the_numeric_phase_is_checked_against_the_callers_budget() {
+        let mesh = cartesian(8, 8).unwrap();
+        let hmm = Hmm::new(&mesh);
+        let sym = SymbolicSystem::new(&hmm, Default::default()).unwrap();
+        let n = hmm.n_unknowns();
+        let bytes = numeric_bytes(&sym.pattern, &sym.maps, n);
+        let at = MemoryBudget::new(bytes);
+        assert!(check_numeric_memory(&sym.pattern, &sym.maps, n, at).is_ok());
+        let below = MemoryBudget::new(bytes - 1);
+        let e = check_numeric_memory(&sym.pattern, &sym.maps, n, below).unwrap_err();
+        assert!(is_budget_error(&e), "{e}");
+    }
 }

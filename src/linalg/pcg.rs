@@ -465,22 +465,12 @@ mod tests {
         assert!(err < 1e-11, "{err}");
         // an exact initial guess: no iteration
         let mut x: Vec<f64> = exact.iter().copied().collect();
-        let rep = pcg(
-            &a,
-            &Identity(n),
-            &mut (),
-            &b,
-            &mut x,
-            &PcgOptions { rtol: 1e-8, ..opts },
-        )
-        .unwrap();
+        let rep = run(&a, &b, &mut x, &PcgOptions { rtol: 1e-8, ..opts }).unwrap();
         assert_eq!(rep.iterations, 0);
         // the absolute tolerance alone
         let mut x = vec![0.0; n];
-        let rep = pcg(
+        let rep = run(
             &a,
-            &Identity(n),
-            &mut (),
             &b,
             &mut x,
             &PcgOptions {
@@ -496,6 +486,11 @@ mod tests {
         );
     }
 
+    /// Unpreconditioned CG with `opts` on A x = b, from `x`.
+    fn run(a: &CsrMatrix, b: &[f64], x: &mut [f64], o: &PcgOptions) -> crate::Result<PcgReport> {
+        pcg(a, &Identity(a.n_rows()), &mut (), b, x, o)
+    }
+
     /// Unpreconditioned CG with the default options on A x = b, from `x`, with M = I of
     /// order `m`.
     fn plain(a: &CsrMatrix, m: usize, b: &[f64], x: &mut [f64]) -> crate::Result<PcgReport> {
@@ -509,10 +504,8 @@ mod tests {
         let b = vec![1.0; n];
         // too few iterations
         let mut x = vec![0.0; n];
-        let e = pcg(
+        let e = run(
             &a,
-            &Identity(n),
-            &mut (),
             &b,
             &mut x,
             &PcgOptions {

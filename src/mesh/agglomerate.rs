@@ -722,11 +722,11 @@ mod tests {
     }
 
     /// Fingerprints of the agglomerations of [`agglomeration_does_not_depend_on_threads`]'s
-    /// cases, on one thread; the test compares 1, 2 and 3 threads with them. Those of the gmsh
-    /// meshes (cases 4-6), keyed by centroids, are the values of the sequential implementation
-    /// the parallel one replaced (a825ec9): the parallel passes and the reuse of polygons
-    /// across rounds did not change them. Those of the grids (cases 0-3) come from the key by
-    /// box centres (654e063), that of the sheared grid (case 7) from this implementation.
+    /// cases, on one thread; the test compares 1, 2 and 3 threads with them, so that any
+    /// change of the agglomeration fails it. The grids (cases 0-3), the gmsh meshes (cases
+    /// 4-6) and the sheared grid (case 7) exercise both keys of `key_point` (box centre and
+    /// centroid). Where each value was computed: `replication/BENCHMARKS.md` ("Measurements
+    /// behind the defaults").
     const PINNED_FINGERPRINTS: [u64; 24] = [
         0x25644aaa565376d3,
         0x9c26ca14ef49281f,

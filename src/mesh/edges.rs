@@ -205,9 +205,8 @@ fn build_edges_with<I: EdgeIndex>(
 
 #[cfg(test)]
 mod tests {
-    use super::super::{NO_CELL, PolyMesh, generate, unit_square_2x1};
+    use super::super::{NO_CELL, PolyMesh, test_meshes};
     use super::*;
-    use crate::mesh::MemoryBudget;
 
     /// The edges as the original construction defined them: all cell sides sorted by
     /// (smaller vertex, larger vertex) with ties in slot order (a stable sort), runs of equal
@@ -242,10 +241,7 @@ mod tests {
 
     #[test]
     fn edges_are_numbered_by_vertex_pair_with_lower_cell_first() {
-        let mut meshes = vec![unit_square_2x1()];
-        for f in generate::Family::ALL {
-            meshes.push(f.generate(2, MemoryBudget::DEFAULT).unwrap());
-        }
+        let meshes = test_meshes();
         for m in &meshes {
             let reference = reference_edges(m);
             let edges: Vec<[usize; 2]> = (0..m.n_edges()).map(|e| m.edge_vertices(e)).collect();

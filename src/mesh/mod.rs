@@ -158,3 +158,13 @@ pub(crate) fn unit_square_2x1() -> PolyMesh {
     // the second cell is clockwise on purpose
     PolyMesh::from_cells(v, vec![vec![0, 1, 4, 3], vec![1, 4, 5, 2]]).unwrap()
 }
+
+/// [`unit_square_2x1`] and level 2 of every generated family (for the tests).
+#[cfg(test)]
+pub(crate) fn test_meshes() -> Vec<PolyMesh> {
+    let mut meshes = vec![unit_square_2x1()];
+    for f in generate::Family::ALL {
+        meshes.push(f.generate(2, MemoryBudget::DEFAULT).unwrap());
+    }
+    meshes
+}

@@ -198,9 +198,8 @@ impl PolyMesh {
 #[cfg(test)]
 mod tests {
     use super::super::geometry::sub;
-    use super::super::{generate, unit_square_2x1};
+    use super::super::{test_meshes, unit_square_2x1};
     use super::*;
-    use crate::mesh::MemoryBudget;
 
     #[test]
     fn geometry_of_two_rectangles() {
@@ -232,10 +231,7 @@ mod tests {
 
     #[test]
     fn side_geometry_is_computed_on_demand_consistently() {
-        let mut meshes = vec![unit_square_2x1()];
-        for f in generate::Family::ALL {
-            meshes.push(f.generate(2, MemoryBudget::DEFAULT).unwrap());
-        }
+        let meshes = test_meshes();
         for m in &meshes {
             for k in 0..m.n_cells() {
                 let sides: Vec<(Point, f64)> = m.cell_normals_dists(k).collect();

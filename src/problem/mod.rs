@@ -38,24 +38,10 @@ pub enum BoundaryKind {
     Signorini,
 }
 
-/// Direction of a barrier.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-pub enum Side {
-    /// u ≤ barrier (the paper's form).
-    Upper,
-    /// u ≥ barrier.
-    Lower,
-}
-
-impl Side {
-    /// +1 for an upper barrier, −1 for a lower one: the constraint is s·(u − barrier) ≤ 0.
-    pub fn sign(self) -> f64 {
-        match self {
-            Side::Upper => 1.0,
-            Side::Lower => -1.0,
-        }
-    }
-}
+/// Direction of a barrier: u ≤ barrier ([`Side::Upper`], the paper's form) or u ≥ barrier
+/// ([`Side::Lower`]). The algorithms' type, from the algebra layer below ([`crate::vi`]), so
+/// that a problem's barrier reaches them unchanged.
+pub use crate::vi::Side;
 
 /// Where a barrier acts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]

@@ -4,7 +4,7 @@
 
 use crate::assembly::DiscreteSystem;
 use crate::mesh::Point;
-use crate::problem::{ConstraintKind, Problem, Side, check_finite};
+use crate::problem::{ConstraintKind, Problem, check_finite};
 use crate::scheme::PointDof;
 use crate::vi::ConstrainedDof;
 use rayon::prelude::*;
@@ -13,14 +13,6 @@ use rayon::prelude::*;
 /// ([`crate::vi::Constraints`]) with, for each constrained unknown, the point where the barrier
 /// was evaluated (read by the warm start and the post-processing, never by the algorithms).
 pub type Constraints = crate::vi::Constraints<Point>;
-
-/// The algorithms' direction of a barrier ([`crate::vi::Side`]) for the problem's.
-pub fn vi_side(side: Side) -> crate::vi::Side {
-    match side {
-        Side::Upper => crate::vi::Side::Upper,
-        Side::Lower => crate::vi::Side::Lower,
-    }
-}
 
 /// Builds the barrier of `problem` on the unknowns of the system, checking the data and the
 /// non-emptiness of the discrete convex set.
@@ -103,7 +95,7 @@ pub fn build(system: &DiscreteSystem, problem: &Problem) -> crate::Result<Option
     Ok(Some(Constraints {
         dofs,
         barrier,
-        side: vi_side(c.side),
+        side: c.side,
     }))
 }
 

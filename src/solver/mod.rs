@@ -4,9 +4,8 @@
 //! cannot: how the active-set iteration starts ([`WarmStart`]: cold, or from a nested coarse
 //! prediction, [`warm_start`]), whether it looks ahead (with the nested start, the fast path:
 //! each next active set is proposed after local solves on a patch around its changes,
-//! [`crate::vi::look_ahead`], which took ex9 at 1M unknowns from 5 to 3 global solves with P1
-//! and from 4 to 3 with HMM; the paper's cold start does not, so its NITER stays the paper's
-//! algorithm), and what happens when it stalls (projected Gauss–Seidel if
+//! [`crate::vi::look_ahead`], which saves global solves; the paper's cold start does not, so
+//! its NITER stays the paper's algorithm), and what happens when it stalls (projected Gauss–Seidel if
 //! [`SolveOptions::fallback`] is set, an error otherwise).
 //!
 //! ```text
@@ -164,7 +163,8 @@ fn warm_start(
         return (None, None);
     }
     let t = Instant::now();
-    match warm_start::predict(system.scheme(), problem, cons) {
+    let budget = system.symbolic().options.budget;
+    match warm_start::predict(system.scheme(), problem, cons, budget) {
         Ok(p) => {
             system.set_initial_guess(state, p.guess);
             (Some(p.active), Some(p.report))

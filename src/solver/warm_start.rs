@@ -28,12 +28,13 @@
 //! skeleton unknowns (each takes the mean of Π_D u over the coarse cells of the fine cells
 //! around it; [`Prediction::guess`]); the first iterative fine solve starts from it instead
 //! of zero. It is within the coarse discretisation error of the fine solution (a few per cent
-//! in the tests), which saves the conjugate gradients about two of their first ≈ 15
-//! iterations on ex9 at 1M unknowns; the direct solver ignores it.
+//! in the tests), which saves the conjugate gradients some of their first iterations; the
+//! direct solver ignores it.
 //!
-//! The coarse iterations look ahead ([`crate::vi::look_ahead`]) like the fine one: on ex9 at
-//! 1M unknowns, 9 coarse solves instead of 14 (P1) and 9 instead of 15 (HMM), with the same
-//! prediction.
+//! The coarse iterations look ahead ([`crate::vi::look_ahead`]) like the fine one, which
+//! saves coarse solves and leaves the prediction unchanged. The measurements behind these
+//! choices and the constants below are in `replication/BENCHMARKS.md` ("Measurements behind
+//! the defaults").
 //!
 //! The warm start changes the path, never the answer: the stopping rule (A_{k+1} = A_k) and
 //! the [`Certificate`](super::Certificate) do not depend on the start, so the solution is the
@@ -44,9 +45,9 @@
 //! or a coarse solve fails, the
 //! iteration starts cold and [`WarmStartReport::skipped`] says why.
 
-use crate::assembly::DiscreteSystem;
+use crate::assembly::{DiscreteSystem, SystemOptions};
 use crate::mesh::agglomerate::{Agglomeration, agglomerate};
-use crate::mesh::{NO_CELL, Point, PolyMesh};
+use crate::mesh::{MemoryBudget, NO_CELL, Point, PolyMesh};
 use crate::problem::{ConstraintKind, Problem};
 use crate::scheme::{Entity, GradientDiscretisation, Hmm};
 use crate::solver::constraints::Constraints;
@@ -109,9 +110,8 @@ pub const RATIO: usize = 16;
 
 /// The first coarse level has about (fine unknowns) / FIRST_LEVEL_UNKNOWNS_PER_CELL cells.
 /// HMM has about 3 unknowns per cell, so that is N/8 cells for an HMM fine mesh; P1 on
-/// triangles has about one unknown per two cells, so N/48. Measured on ex9 with P1 at 1M
-/// unknowns: N/16 cells made the coarse HMM solves cost 5 s of 18; 48 unknowns per cell gave
-/// a coarser prediction and 6 fine solves instead of 5.
+/// triangles has about one unknown per two cells, so N/48. A finer first level makes the
+/// coarse solves cost more, a coarser one predicts less well and costs fine solves.
 pub const FIRST_LEVEL_UNKNOWNS_PER_CELL: usize = 24;
 
 /// A coarser level is made while it would have at least this many cells.
@@ -130,12 +130,13 @@ struct CoarseState {
     edge: Vec<bool>,
 }
 
-/// Predicts the active set of the constrained unknowns `cons` of `scheme` for `problem`.
-/// `Err(reason)` when no prediction can be made.
+/// Predicts the active set of the constrained unknowns `cons` of `scheme` for `problem`, the
+/// coarse systems assembled within `budget`. `Err(reason)` when no prediction can be made.
 pub fn predict(
     scheme: &dyn GradientDiscretisation,
     problem: &Problem,
     cons: &Constraints,
+    budget: MemoryBudget,
 ) -> Result<Prediction, String> {
     let t0 = Instant::now();
     let kind = problem
@@ -153,7 +154,11 @@ pub fn predict(
         let mesh = &levels[l].mesh;
         let hmm = Hmm::new(mesh);
         let fail = |e: crate::Error| format!("coarse solve ({} cells): {e}", mesh.n_cells());
-        let system = DiscreteSystem::new(&hmm, problem, Default::default()).map_err(fail)?;
+        let system_options = SystemOptions {
+            budget,
+            ..Default::default()
+        };
+        let system = DiscreteSystem::new(&hmm, problem, system_options).map_err(fail)?;
         let c = super::constraints::build(&system, problem)
             .map_err(fail)?
             .ok_or_else(|| "the problem has no barrier".to_string())?;

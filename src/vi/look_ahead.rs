@@ -46,11 +46,11 @@ pub struct LookAheadOptions {
 }
 
 impl Default for LookAheadOptions {
-    /// 6 layers. Measured on ex9 at 1M unknowns after the nested warm start (P1: 5 global
-    /// solves without look-ahead): 1 layer took 4 solves, 2 layers 6 (small patches proposed
-    /// detours, taken back), 4 to 24 layers 3 solves, with a first patch of 31k unknowns
-    /// (0.11 s) at 4 layers, 43k (0.20 s) at 6, 133k (1.16 s) at 24; HMM: 4 → 3 solves at 4,
-    /// 6 and 8 layers. 6 keeps a margin over the smallest that worked.
+    /// 6 layers, at most 50 local solves, patches of at most a fifth of the unknowns. Too few
+    /// layers give small patches whose proposals the global iteration takes back; 6 keeps a
+    /// margin over the smallest number that saved global solves on the benchmarks. The
+    /// measurements behind it are in `replication/BENCHMARKS.md` ("Measurements behind the
+    /// defaults").
     fn default() -> Self {
         LookAheadOptions {
             layers: 6,

@@ -329,3 +329,27 @@ fn multigrid_hierarchies_are_reused_when_few_unknowns_change() {
     state.release();
     check(&mut state, k0 + 20 * max, false);
 }
+
+/// The memory budget of the assembly is the caller's (`SystemOptions::budget`): the same
+/// solve succeeds with a large budget and is refused, with the estimate, with a tiny one,
+/// whatever memory the machine has free.
+#[test]
+fn a_solve_is_refused_beyond_the_callers_memory_budget() {
+    let mesh = cartesian(16, 16).unwrap();
+    let hmm = Hmm::new(&mesh);
+    let p = paper_test3(-20.0);
+    for ws in [WarmStart::Cold, WarmStart::Nested] {
+        let mut o = opts(LinearSolver::Direct, ws);
+        o.system.budget = gradvi::mesh::MemoryBudget::new(u64::MAX);
+        let sol = solve_problem(&hmm, &p, &o).unwrap();
+        sol.result.certificate.check(1e-10).unwrap();
+        o.system.budget = gradvi::mesh::MemoryBudget::new(4096);
+        match solve_problem(&hmm, &p, &o) {
+            Err(gradvi::Error::Linear(m)) => assert!(m.contains("memory budget of 4.0 KiB"), "{m}"),
+            other => panic!(
+                "expected the budget error, got {:?}",
+                other.map(|s| s.niter())
+            ),
+        }
+    }
+}

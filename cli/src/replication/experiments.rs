@@ -125,8 +125,16 @@ pub fn with_solution<R>(
     f: impl FnOnce(&Solution) -> gradvi::Result<R>,
 ) -> gradvi::Result<R> {
     let scheme = build(kind, mesh)?;
-    let sol = solve_problem(scheme.as_ref(), problem, &SolveOptions::paper())?;
+    let sol = solve_problem(scheme.as_ref(), problem, &paper_options())?;
     f(&sol)
+}
+
+/// The paper's solver options ([`SolveOptions::paper`]), within the memory the machine has
+/// free ([`MemoryBudget::available`]).
+pub fn paper_options() -> SolveOptions {
+    let mut o = SolveOptions::paper();
+    o.system.budget = MemoryBudget::available();
+    o
 }
 
 fn worst(sol: &Solution) -> f64 {
@@ -368,11 +376,14 @@ fn test2(cfg: &Config, logs: &mut Logs) -> gradvi::Result<Vec<Test2Row>> {
 fn test3(cfg: &Config, logs: &mut Logs) -> gradvi::Result<Vec<Test3Row>> {
     on_gmsh_family(cfg, logs, "test3", |logs, m, kind| {
         let scheme = build(kind, &m.mesh)?;
-        let symbolic = Arc::new(SymbolicSystem::new(scheme.as_ref(), Default::default())?);
+        let symbolic = Arc::new(SymbolicSystem::new(
+            scheme.as_ref(),
+            paper_options().system,
+        )?);
         let mut rows = Vec::new();
         for c in TEST3_C {
             let p = builtin("test3", &[("C".into(), c)])?;
-            let sol = solve_with_symbolic(symbolic.clone(), &p, &SolveOptions::paper())?;
+            let sol = solve_with_symbolic(symbolic.clone(), &p, &paper_options())?;
             let cons = sol.constraints.as_ref().expect("Test 3 has a barrier");
             logs.keep_log(&p.name, kind, &m.name, &sol);
             let row = Test3Row {

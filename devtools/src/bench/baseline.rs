@@ -590,19 +590,21 @@ mod tests {
         std::fs::write(&list, times.join("\n") + "\n").unwrap();
         let count = dir.join(format!("{name}.count"));
         let exe = dir.join(name);
-        let script = format!(
-            "#!/bin/sh\nn=$(cat '{c}' 2>/dev/null || echo 0); n=$((n+1)); echo $n > '{c}'\n\
-             t=$(sed -n \"${{n}}p\" '{l}'); [ -n \"$t\" ] || t=$(tail -n 1 '{l}')\n\
-             echo '{{{extra}\"{key}\":'$t',\"peak_mib\":10,\"niter\":3}}'\n",
-            c = count.display(),
-            l = list.display(),
-            // a child reporting solved_s also reports a longer total_s, which is not compared
-            extra = if key == "solved_s" {
-                "\"total_s\":99,"
-            } else {
-                ""
-            }
-        );
+        let (c, l) = (count.display(), list.display());
+        // a child reporting solved_s also reports a longer total_s, which is not compared
+        let extra = if key == "solved_s" {
+            "\"total_s\":99,"
+        } else {
+            ""
+        };
+        let script = [
+            "#!/bin/sh".to_string(),
+            format!("n=$(cat '{c}' 2>/dev/null || echo 0); n=$((n+1)); echo $n > '{c}'"),
+            format!("t=$(sed -n \"${{n}}p\" '{l}'); [ -n \"$t\" ] || t=$(tail -n 1 '{l}')"),
+            format!("echo '{{{extra}\"{key}\":'$t',\"peak_mib\":10,\"niter\":3}}'"),
+        ]
+        .join("\n")
+            + "\n";
         std::fs::write(&exe, script).unwrap();
         std::fs::set_permissions(&exe, std::fs::Permissions::from_mode(0o755)).unwrap();
         exe

@@ -231,20 +231,19 @@ fn errors(
 fn options(linear: &str) -> gradvi::Result<SolveOptions> {
     let mut o = SolveOptions::default();
     o.system.linear = linear.parse()?;
+    o.system.budget = MemoryBudget::available();
     Ok(o)
 }
 
-/// Solves one gradvi case in this process (the body of a `--peer-child` process).
-fn run_gradvi(
+/// The mesh, the problem and the grid size (0 for a domain case) of one gradvi case.
+fn case_of(
     family: &str,
     scheme: SchemeKind,
-    linear: &str,
     size: usize,
     file: Option<&Path>,
     root: &Path,
-) -> gradvi::Result<PeerRow> {
-    let t0 = Instant::now();
-    let (mesh, problem, grid): (PolyMesh, Problem, usize) = match family {
+) -> gradvi::Result<(PolyMesh, Problem, usize)> {
+    Ok(match family {
         "ex9" => {
             let n = size - 1;
             let mesh = match scheme {
@@ -273,7 +272,42 @@ fn run_gradvi(
                 0,
             )
         }
-    };
+    })
+}
+
+/// The timings of a solve and of each of its steps, on stderr (`GRADVI_BENCH_LOG`).
+fn log_solve(sol: &gradvi::solver::Solution) {
+    let t = sol.timings;
+    eprintln!(
+        "[bench]     setup {:.3} (symbolic {:.3}), warm start {:.3}, assembly {:.3}, factor/setup {:.3}, solve {:.3}, look-ahead {:.3}, total {:.3}",
+        t.setup, t.symbolic, t.warm_start, t.assemble, t.factor, t.solve, t.look_ahead, t.total
+    );
+    for l in &sol.result.log {
+        eprintln!(
+            "[bench]     solve {:>3}: active {:>8} (+{}, -{}), assembly {:.3}, factor/setup {:.3}, solve {:.3}, {} CG",
+            l.step.solve,
+            l.step.active,
+            l.step.entered,
+            l.step.left,
+            l.timings.assemble,
+            l.timings.factor,
+            l.timings.solve,
+            l.timings.krylov
+        );
+    }
+}
+
+/// Solves one gradvi case in this process (the body of a `--peer-child` process).
+fn run_gradvi(
+    family: &str,
+    scheme: SchemeKind,
+    linear: &str,
+    size: usize,
+    file: Option<&Path>,
+    root: &Path,
+) -> gradvi::Result<PeerRow> {
+    let t0 = Instant::now();
+    let (mesh, problem, grid) = case_of(family, scheme, size, file, root)?;
     let mesh_s = t0.elapsed().as_secs_f64();
     let scheme_obj = gradvi::scheme::build(scheme, &mesh)?;
     let sol = solve_problem(scheme_obj.as_ref(), &problem, &options(linear)?)?;
@@ -282,24 +316,7 @@ fn run_gradvi(
         return Err(bad(format!("{family} {size}: no nested prediction: {why}")));
     }
     if std::env::var_os("GRADVI_BENCH_LOG").is_some() {
-        let t = sol.timings;
-        eprintln!(
-            "[bench]     setup {:.3} (symbolic {:.3}), warm start {:.3}, assembly {:.3}, factor/setup {:.3}, solve {:.3}, look-ahead {:.3}, total {:.3}",
-            t.setup, t.symbolic, t.warm_start, t.assemble, t.factor, t.solve, t.look_ahead, t.total
-        );
-        for l in &sol.result.log {
-            eprintln!(
-                "[bench]     solve {:>3}: active {:>8} (+{}, -{}), assembly {:.3}, factor/setup {:.3}, solve {:.3}, {} CG",
-                l.step.solve,
-                l.step.active,
-                l.step.entered,
-                l.step.left,
-                l.timings.assemble,
-                l.timings.factor,
-                l.timings.solve,
-                l.timings.krylov
-            );
-        }
+        log_solve(&sol);
     }
     // errors as ex9 computes them, inside the timing as in ex9's
     let (err_max, err_mean) = errors(scheme_obj.as_ref(), &problem, sol.u());
