@@ -414,16 +414,14 @@ pub enum MeshError {
         /// The tolerance.
         tol: f64,
     },
-    /// The polyhedra cover some region more than once: their volumes add up to more (or less)
-    /// than the volume enclosed by the boundary surface.
-    #[error(
-        "cells overlap: their volumes add up to {cells_volume} but the boundary surface encloses {enclosed_volume}"
-    )]
+    /// The polyhedra cover some region more than once: a vertex of the boundary surface lies
+    /// strictly inside a cell.
+    #[error("cells overlap: the boundary vertex {vertex} lies inside cell {cell}")]
     OverlappingPolyhedra {
-        /// Σ_K |K|.
-        cells_volume: f64,
-        /// (1/3) Σ over boundary faces of ∫_σ x·n.
-        enclosed_volume: f64,
+        /// The boundary vertex.
+        vertex: usize,
+        /// The cell holding it.
+        cell: usize,
     },
     /// Cell tags that are neither absent nor one per cell.
     #[error("{tags} cell tags for {cells} cells")]

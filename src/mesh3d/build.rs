@@ -68,6 +68,8 @@ impl PolyMesh3 {
         m.compute_face_geometry()?;
         m.compute_cell_geometry()?;
         m.check_shapes()?;
+        m.check_boundary_surface()?;
+        m.check_overlap()?;
         m.cell_tags = if p.cell_tags.is_empty() {
             vec![0; p.n_cells()]
         } else {

@@ -72,21 +72,18 @@ pub(crate) fn vertex_average(vertices: &[Point3], ids: &[u32]) -> Point3 {
     c.map(|x| x / m)
 }
 
-/// Calls `f(N_T, x_T)` on each fan triangle of the face with vertex loop `ids` (see the module
-/// docs), in loop order, or in reverse loop order (with N_T negated) if `reversed`.
-pub(crate) fn for_each_fan_triangle(
+/// Calls `f(a, b, c)` on the corners of each fan triangle of the face with vertex loop `ids`
+/// (see the module docs), in loop order, or reversed (each triangle turned) if `reversed`.
+pub(crate) fn for_each_fan_corners(
     vertices: &[Point3],
     ids: &[u32],
     reversed: bool,
-    mut f: impl FnMut(Point3, Point3),
+    mut f: impl FnMut(Point3, Point3, Point3),
 ) {
     let m = ids.len();
     let p = |i: usize| vertices[ids[i] as usize];
     let mut tri = |a: Point3, b: Point3, c: Point3| {
-        let (b, c) = if reversed { (c, b) } else { (b, c) };
-        let n = cross(sub(b, a), sub(c, a)).map(|x| 0.5 * x);
-        let x = [0, 1, 2].map(|r| (a[r] + b[r] + c[r]) / 3.0);
-        f(n, x);
+        if reversed { f(a, c, b) } else { f(a, b, c) }
     };
     if m == 3 {
         tri(p(0), p(1), p(2));
@@ -96,6 +93,27 @@ pub(crate) fn for_each_fan_triangle(
     for i in 0..m {
         tri(c, p(i), p((i + 1) % m));
     }
+}
+
+/// Calls `f(N_T, x_T)` on each fan triangle of the face with vertex loop `ids` (see the module
+/// docs), in loop order, or reversed (N_T negated) if `reversed`.
+pub(crate) fn for_each_fan_triangle(
+    vertices: &[Point3],
+    ids: &[u32],
+    reversed: bool,
+    mut f: impl FnMut(Point3, Point3),
+) {
+    for_each_fan_corners(vertices, ids, reversed, |a, b, c| {
+        let n = cross(sub(b, a), sub(c, a)).map(|x| 0.5 * x);
+        let x = [0, 1, 2].map(|r| (a[r] + b[r] + c[r]) / 3.0);
+        f(n, x);
+    });
+}
+
+/// The signed volume of the tetrahedron (p, a, b, c), positive if (a, b, c) turns
+/// counter-clockwise seen from outside, that is, from the side away from p.
+pub(crate) fn tet_volume(p: Point3, a: Point3, b: Point3, c: Point3) -> f64 {
+    dot(sub(a, p), cross(sub(b, p), sub(c, p))) / 6.0
 }
 
 /// The geometry of a face: |σ|, x_σ, and its vector area N_σ (see the module docs).

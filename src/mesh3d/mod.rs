@@ -40,12 +40,16 @@ mod faces;
 mod geometry;
 mod mesh;
 mod orient;
+mod overlap;
 mod shape;
+mod surface;
 mod tags;
 #[cfg(test)]
 pub(crate) mod test_meshes;
 #[cfg(test)]
 mod tests_build;
+#[cfg(test)]
+mod tests_external;
 pub mod validate;
 
 pub use build::mesh3_bytes;

@@ -155,3 +155,19 @@ pub(crate) fn dented_pair(apex_z: f64, seed: u64) -> Polyhedra {
     push_scrambled(&mut p, &upper, &mut rng);
     p
 }
+
+/// [`cubes`] with every interior grid node moved by up to `amp` times the grid step in each
+/// coordinate (seeded): hexahedra with warped faces.
+pub(crate) fn perturbed_cubes(k: usize, amp: f64, seed: u64) -> Polyhedra {
+    let mut p = cubes(k, seed);
+    let mut rng = test_rng(seed ^ 0x5eed);
+    let h = 1.0 / k as f64;
+    for v in &mut p.vertices {
+        if v.iter().all(|&c| c > 0.0 && c < 1.0) {
+            for c in v.iter_mut() {
+                *c += amp * h * (2.0 * rng() - 1.0);
+            }
+        }
+    }
+    p
+}

@@ -227,3 +227,21 @@ fn the_memory_estimate_is_checked_against_the_budget() {
         "{e:?}"
     );
 }
+
+#[test]
+fn warped_faces_give_a_consistency_defect_of_the_order_of_their_warp() {
+    // interior nodes of 4³ cubes moved by up to amp·h: planar faces no longer, the fan
+    // geometry keeps Σ|K| = 1 and Σ_σ |σ| d_{K,σ} = 3|K| only approximately per cell
+    for amp in [0.05, 0.1, 0.2] {
+        let m = build(super::test_meshes::perturbed_cubes(4, amp, 23));
+        let warp = (0..m.n_faces()).map(|f| m.face_warp(f)).fold(0.0, f64::max);
+        let defect = consistency_defect(&m);
+        let total: f64 = (0..m.n_cells()).map(|k| m.measure(k)).sum();
+        eprintln!("amp {amp}: max warp {warp:.3e}, consistency defect {defect:.3e}");
+        assert!((total - 1.0).abs() < 1e-12);
+        assert!(
+            warp > 0.1 * amp && defect > 1e-6 && defect < 2.0 * warp,
+            "{warp} {defect}"
+        );
+    }
+}
