@@ -361,8 +361,8 @@ pub enum MeshError {
         /// What is wrong.
         msg: String,
     },
-    /// The boundary surface of a 3D mesh is not closed and edge-manifold: a boundary edge
-    /// used once (a hanging node), more than twice, or twice in the same direction.
+    /// The boundary surface of a 3D mesh is not edge-manifold: a boundary edge used by more
+    /// than two boundary faces (cells meeting along an edge only, a non-conforming interface).
     #[error("non-conforming mesh: the boundary edge ({a}, {b}) {msg}")]
     NonConformingEdge {
         /// First vertex of the edge.

@@ -49,6 +49,8 @@ pub(crate) mod test_meshes;
 #[cfg(test)]
 mod tests_build;
 #[cfg(test)]
+mod tests_errors;
+#[cfg(test)]
 mod tests_external;
 pub mod validate;
 

@@ -2,9 +2,10 @@
 //! their loops outward) is closed and manifold.
 //!
 //! * Edges: the directed edges of the boundary loops, sorted by their vertex pair, must come
-//!   in pairs running opposite ways. An edge used once is a hole in the surface (a hanging
-//!   node: a face of one cell that is only part of a face of its neighbour); more than twice,
-//!   cells meeting along an edge only; twice the same way, two cells on the same side.
+//!   in pairs. Every cell being closed (check 6) and every interior face listed oppositely by
+//!   its two cells (check 7), each edge runs as often one way as the other over the boundary
+//!   loops, so a count other than 2 is 4 or more: cells meeting along an edge only, or the two
+//!   sheets of a non-conforming interface meeting at a common edge.
 //! * Vertices: pairing the edges gives, at each corner (face, vertex) of the surface, the next
 //!   corner around the vertex (across the outgoing edge, then one step along the neighbour's
 //!   loop), a permutation of the corners. The corners at a vertex must form one cycle (one fan
@@ -56,10 +57,8 @@ impl PolyMesh3 {
             if j - i != 2 {
                 return bad(format!("is used by {} boundary faces instead of 2", j - i));
             }
+            // the two uses run opposite ways (see the module docs)
             let d = edges[i + 1].2;
-            if corner_vertex[c as usize] == corner_vertex[d as usize] {
-                return bad("runs the same way in its two boundary faces".into());
-            }
             next[c as usize] = succ[d as usize];
             next[d as usize] = succ[c as usize];
             i = j;

@@ -13,7 +13,7 @@
 //! | 8 | non-degenerate faces (\|N_σ\| > 10⁻¹⁴ diam(σ)²) not warped beyond [`WARP_TOL`] | [`MeshError::BadFace`], [`MeshError::WarpedFace`] | O(n) |
 //! | 9 | non-negligible volumes: \|K\| > 10⁻¹⁴ h_K³ | [`MeshError::DegenerateVolume`] | O(n) |
 //! | 10 | star-shaped cells: d_{K,σ} > 10⁻¹² h_K, and every fan triangle T of σ seen positively from x_K: the tetrahedron (x_K, T) has volume > 10⁻¹⁴ h_K³ | [`MeshError::NotStarShaped3`] | O(n) |
-//! | 11 | a closed, edge-manifold boundary surface: every boundary edge used by exactly two boundary faces, in opposite directions, and the boundary faces around each boundary vertex forming one fan (a hanging node, two cells touching along an edge or at a vertex, a non-conforming interface all fail one of these) | [`MeshError::NonConformingEdge`], [`MeshError::NonConformingVertex`] | O(n log n) |
+//! | 11 | a closed, edge-manifold boundary surface: every boundary edge used by exactly two boundary faces (then in opposite directions), and the boundary faces around each boundary vertex forming one fan (hanging nodes, cells touching along an edge or at a vertex, non-conforming interfaces all fail one of these; see `surface.rs`) | [`MeshError::NonConformingEdge`], [`MeshError::NonConformingVertex`] | O(n log n) |
 //! | 12 | no overlap: no boundary vertex strictly inside a cell (the volume balance Σ_K \|K\| = (1/3) Σ_{boundary σ} ∫_σ x·n holds by construction once the checks above pass, overlap or not; see `overlap.rs`) | [`MeshError::OverlappingPolyhedra`] | O(n) expected, a grid of buckets |
 //! | 13 | tagged faces are boundary faces | [`MeshError::BadTaggedFace`] | O(n log n) |
 //!
