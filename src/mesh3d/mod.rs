@@ -30,7 +30,9 @@
 //! `geometry.rs` computes the geometry (the maths is in its docs); [`validate`] lists every
 //! check and runs those on the input; `shape.rs` checks warp and star-shapedness; `mesh.rs`
 //! holds the type and its accessors; `tags.rs` the tags; `complex.rs` the
-//! [`CellComplex<3>`](crate::mesh::CellComplex) view a scheme reads.
+//! [`CellComplex<3>`](crate::mesh::CellComplex) view a scheme reads; `renumber.rs` drops
+//! unused vertices ([`Polyhedra::drop_unused_vertices`], for readers); `surface.rs` and
+//! `overlap.rs` check the boundary surface and overlaps.
 
 use crate::error::MeshError;
 
@@ -41,6 +43,7 @@ mod geometry;
 mod mesh;
 mod orient;
 mod overlap;
+mod renumber;
 mod shape;
 mod surface;
 mod tags;

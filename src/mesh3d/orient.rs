@@ -12,6 +12,7 @@
 use super::Polyhedra;
 use super::geometry::{cell_volume_centroid, vertex_average};
 use crate::error::MeshError;
+use rayon::prelude::*;
 
 /// Reused buffers of [`orient_cell`].
 #[derive(Default)]
@@ -34,7 +35,7 @@ fn find(parent: &mut [(u32, bool)], i: u32) -> (u32, bool) {
     (root, par ^ rpar)
 }
 
-/// Sets `inward[s]` for the sides `s` of cell `k`: whether the loop of side `s` must be
+/// Sets `inward[j]` for the local faces j of cell `k`: whether the loop of its side j must be
 /// reversed to run counter-clockwise seen from outside the cell.
 pub(crate) fn orient_cell(
     p: &Polyhedra,
@@ -95,10 +96,12 @@ pub(crate) fn orient_cell(
                 msg: "its faces form more than one closed surface".into(),
             });
         }
-        inward[first + j as usize] = parity;
+        inward[j as usize] = parity;
     }
     let apex = vertex_average(&p.vertices, p.side_vertices(first));
-    let loops = sides.clone().map(|s| (p.side_vertices(s), inward[s]));
+    let loops = sides
+        .clone()
+        .map(|s| (p.side_vertices(s), inward[s - first]));
     let (vol, _) = cell_volume_centroid(&p.vertices, apex, loops);
     if !(vol.abs() > 0.0) {
         return Err(MeshError::DegenerateVolume {
@@ -107,18 +110,31 @@ pub(crate) fn orient_cell(
         });
     }
     if vol < 0.0 {
-        sides.for_each(|s| inward[s] = !inward[s]);
+        inward.iter_mut().for_each(|b| *b = !*b);
     }
     Ok(())
 }
 
 /// Per side of `p`, whether its loop must be reversed to be outward ([`orient_cell`] on every
-/// cell, in order: the first error is that of the first bad cell).
+/// cell, in parallel; the error reported is that of the first bad cell).
 pub(crate) fn orient_cells(p: &Polyhedra) -> Result<Vec<bool>, MeshError> {
     let mut inward = vec![false; p.face_ptr.len() - 1];
-    let mut scratch = OrientScratch::default();
+    let mut chunks = Vec::with_capacity(p.n_cells());
+    let mut rest = &mut inward[..];
     for k in 0..p.n_cells() {
-        orient_cell(p, k, &mut scratch, &mut inward)?;
+        let (cell, tail) = rest.split_at_mut(p.cell_sides(k).len());
+        chunks.push(cell);
+        rest = tail;
     }
-    Ok(inward)
+    let err = chunks
+        .into_par_iter()
+        .enumerate()
+        .map_init(OrientScratch::default, |scratch, (k, cell)| {
+            orient_cell(p, k, scratch, cell)
+        })
+        .find_map_first(|r| r.err());
+    match err {
+        Some(e) => Err(e),
+        None => Ok(inward),
+    }
 }

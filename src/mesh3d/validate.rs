@@ -33,6 +33,7 @@
 
 use super::Polyhedra;
 use crate::error::MeshError;
+use rayon::prelude::*;
 
 /// The most faces a cell may have (a refined Cartesian cell has 24; Voronoi cells rarely more
 /// than 40): local HMM matrices are dense in the number of faces.
@@ -179,7 +180,7 @@ pub(crate) fn check_vertices(p: &Polyhedra) -> Result<(), MeshError> {
             .then(a[1].total_cmp(&b[1]))
             .then(a[2].total_cmp(&b[2]))
     };
-    order.sort_unstable_by(|a, b| cmp(a, b).then(a.cmp(b)));
+    order.par_sort_unstable_by(|a, b| cmp(a, b).then(a.cmp(b)));
     if let Some(w) = order
         .windows(2)
         .find(|w| v[w[0] as usize] == v[w[1] as usize])
