@@ -17,10 +17,8 @@ impl Polyhedra {
                 *slot = 0;
             }
         }
-        let mut next = 0u32;
-        for id in new_id.iter_mut().filter(|id| **id == 0) {
-            *id = next;
-            next += 1;
+        for (next, id) in new_id.iter_mut().filter(|id| **id == 0).enumerate() {
+            *id = next as u32;
         }
         let mut i = 0;
         self.vertices.retain(|_| {
