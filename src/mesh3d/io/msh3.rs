@@ -225,5 +225,8 @@ fn build(
         p.tagged_ptr.push(p.tagged_vertices.len() as u32);
         p.tagged_tags.push(tag);
     }
+    if p.tagged_tags.is_empty() {
+        p.tagged_ptr.clear();
+    }
     Ok(p)
 }

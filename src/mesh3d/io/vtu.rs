@@ -80,7 +80,7 @@ fn cell_vertices(p: &Polyhedra, k: usize) -> Vec<u32> {
     v
 }
 
-fn write_to(
+pub(super) fn write_to(
     w: &mut impl Write,
     p: &Polyhedra,
     point_data: &[(&str, &[f64])],
