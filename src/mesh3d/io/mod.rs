@@ -32,7 +32,6 @@ use crate::error::{Error, MeshError, Result};
 use crate::mesh::MemoryBudget;
 use crate::mesh3d::{Point3, Polyhedra};
 use std::path::Path;
-use std::str::FromStr;
 
 /// Reads a 3D mesh, choosing the reader from the extension of `path` (case-insensitive):
 /// `.msh` ([`read_msh3`]), `.vtu` ([`read_vtu3`]), `.node` or `.ele` ([`read_rf`]); a path
@@ -88,69 +87,4 @@ pub(crate) fn compact_vertices(
         *v = new_id[*v as usize];
     }
     vertices
-}
-
-/// The whitespace-separated fields of one line of a file, with errors at that line.
-pub(crate) struct Fields<'a> {
-    path: &'a Path,
-    line: usize,
-    it: std::str::SplitAsciiWhitespace<'a>,
-}
-
-impl<'a> Fields<'a> {
-    pub(crate) fn new(path: &'a Path, line: usize, text: &'a str) -> Self {
-        Fields {
-            path,
-            line,
-            it: text.split_ascii_whitespace(),
-        }
-    }
-
-    /// An error at this line.
-    pub(crate) fn err(&self, msg: impl Into<String>) -> Error {
-        Error::MeshIo {
-            path: self.path.to_path_buf(),
-            line: self.line,
-            msg: msg.into(),
-        }
-    }
-
-    fn next(&mut self, what: &str) -> Result<&'a str> {
-        self.it
-            .next()
-            .ok_or_else(|| self.err(format!("the line ends before {what}")))
-    }
-
-    /// The next field parsed as `T`.
-    pub(crate) fn parse<T: FromStr>(&mut self, what: &str) -> Result<T> {
-        let tok = self.next(what)?;
-        tok.parse()
-            .map_err(|_| self.err(format!("cannot read {what} from \"{tok}\"")))
-    }
-
-    /// A non-negative integer.
-    pub(crate) fn count(&mut self, what: &str) -> Result<usize> {
-        let tok = self.next(what)?;
-        tok.parse().map_err(|_| {
-            self.err(format!(
-                "cannot read {what} from \"{tok}\" (expected a non-negative integer)"
-            ))
-        })
-    }
-
-    /// A finite number.
-    pub(crate) fn coord(&mut self, what: &str) -> Result<f64> {
-        match self.parse::<f64>(what)? {
-            x if x.is_finite() => Ok(x),
-            x => Err(self.err(format!("{what} is not finite: {x}"))),
-        }
-    }
-
-    /// `Ok` if no field is left.
-    pub(crate) fn end(&mut self) -> Result<()> {
-        match self.it.next() {
-            None => Ok(()),
-            Some(tok) => Err(self.err(format!("unexpected \"{tok}\" at the end of the line"))),
-        }
-    }
 }

@@ -1,13 +1,14 @@
 //! HArDCore's RF format: `NAME.node` (vertices) and `NAME.ele` (cells as lists of faces).
 //!
-//! Lines starting with `#` are comments. `NAME.node` has the header `nv 3 0 0` and then one
-//! line `id x y z` per vertex, ids consecutive from 0 or from 1; `NAME.ele` has the header
-//! `nc 0` and then, for each cell, a line `id nf` followed by `nf` lines `local_id n v_0 …
-//! v_{n−1}`, the vertex ids of one face in order around it (numbered as in `NAME.node`).
+//! The files are read as whitespace-separated numbers (a record may span lines, as in
+//! HArDCore's own files); `#` starts a comment that runs to the end of its line. `NAME.node`
+//! has the header `nv 3 0 0` and then `id x y z` per vertex, ids consecutive from 0 or from 1;
+//! `NAME.ele` has the header `nc 0` and then, for each cell, `id nf` followed by `nf` faces
+//! `local_id n v_0 … v_{n−1}`, the vertex ids of one face in order around it (numbered as in
+//! `NAME.node`).
 //! A face shared by two cells is listed by both, in either orientation. The files carry no
 //! tags: the cells and the boundary faces are untagged.
 
-use super::Fields;
 use crate::error::{Error, Result};
 use crate::mesh::MemoryBudget;
 use crate::mesh::io::{Tokens, capacity, read_text};
@@ -36,7 +37,7 @@ pub fn rf_files(path: &Path) -> (PathBuf, PathBuf) {
 pub fn read_rf(path: impl AsRef<Path>, budget: MemoryBudget) -> Result<Polyhedra> {
     let (node, ele) = rf_files(path.as_ref());
     let text = read_text(&node, budget)?;
-    let (vertices, base) = parse_node(&node, Tokens::from_text(&node, &text))?;
+    let (vertices, base) = parse_node(Tokens::from_text(&node, &text))?;
     drop(text);
     let text = read_text(&ele, budget)?;
     let mut p = parse_ele(&ele, Tokens::from_text(&ele, &text), vertices.len(), base)?;
@@ -44,104 +45,125 @@ pub fn read_rf(path: impl AsRef<Path>, budget: MemoryBudget) -> Result<Polyhedra
     Ok(p)
 }
 
-/// The next line that is not blank and not a comment, as fields.
-fn data_line<'a>(path: &'a Path, t: &mut Tokens<'a>, what: &str) -> Result<Fields<'a>> {
-    loop {
-        match t.next_line()? {
-            Some((_, l)) if l.starts_with('#') => {}
-            Some((line, l)) => return Ok(Fields::new(path, line, l)),
-            None => return Err(t.err(format!("unexpected end of file: expected {what}"))),
+/// The tokens of an RF file: [`Tokens`] with `#` comments skipped.
+struct Rf<'a> {
+    t: Tokens<'a>,
+}
+
+impl<'a> Rf<'a> {
+    /// The next token that is not in a comment, or `None` at the end of the file.
+    fn next_opt(&mut self) -> Result<Option<&'a str>> {
+        loop {
+            match self.t.next_opt()? {
+                Some(tok) if tok.starts_with('#') => {
+                    self.t.rest_of_line()?;
+                }
+                other => return Ok(other),
+            }
+        }
+    }
+
+    fn next(&mut self, what: &str) -> Result<&'a str> {
+        self.next_opt()?.ok_or_else(|| {
+            self.t
+                .err(format!("unexpected end of file while reading {what}"))
+        })
+    }
+
+    fn parse<T: std::str::FromStr>(&mut self, what: &str) -> Result<T> {
+        let tok = self.next(what)?;
+        tok.parse()
+            .map_err(|_| self.t.err(format!("cannot read {what} from \"{tok}\"")))
+    }
+
+    fn count(&mut self, what: &str) -> Result<usize> {
+        let tok = self.next(what)?;
+        tok.parse().map_err(|_| {
+            self.t.err(format!(
+                "cannot read {what} from \"{tok}\" (expected a non-negative integer)"
+            ))
+        })
+    }
+
+    fn coord(&mut self, what: &str) -> Result<f64> {
+        match self.parse::<f64>(what)? {
+            x if x.is_finite() => Ok(x),
+            x => Err(self.t.err(format!("{what} is not finite: {x}"))),
+        }
+    }
+
+    /// `Ok` if only comments and blanks remain.
+    fn end(&mut self) -> Result<()> {
+        match self.next_opt()? {
+            None => Ok(()),
+            Some(tok) => Err(self
+                .t
+                .err(format!("unexpected \"{tok}\" after the last record"))),
         }
     }
 }
 
 /// The vertices of a `.node` file and the id of the first one (0 or 1).
-pub(crate) fn parse_node<'a>(path: &'a Path, mut t: Tokens<'a>) -> Result<(Vec<Point3>, u64)> {
-    let mut h = data_line(path, &mut t, "the header \"nv 3 0 0\"")?;
-    let nv = h.count("the number of vertices")?;
-    let dim = h.count("the dimension")?;
+pub(crate) fn parse_node(t: Tokens) -> Result<(Vec<Point3>, u64)> {
+    let mut t = Rf { t };
+    let nv = t.count("the number of vertices")?;
+    let dim = t.count("the dimension")?;
     if dim != 3 {
-        return Err(h.err(format!("the dimension is {dim}, not 3")));
+        return Err(t.t.err(format!("the dimension is {dim}, not 3")));
     }
-    let mut vertices = Vec::with_capacity(capacity(nv, t.remaining()));
+    t.count("the first flag")?;
+    t.count("the second flag")?;
+    let mut vertices = Vec::with_capacity(capacity(nv, t.t.remaining()));
     let mut base = 0;
     for i in 0..nv {
-        let mut f = data_line(path, &mut t, &format!("vertex {} of {nv}", i + 1))?;
-        let id: u64 = f.parse("the vertex id")?;
+        let id: u64 = t.parse("a vertex id")?;
         if i == 0 && id <= 1 {
             base = id;
         }
         if id != base + i as u64 {
-            return Err(f.err(format!(
+            return Err(t.t.err(format!(
                 "vertex id {id} where {} was expected (ids are consecutive from 0 or 1)",
                 base + i as u64
             )));
         }
-        let p = [f.coord("x")?, f.coord("y")?, f.coord("z")?];
-        f.end()?;
-        vertices.push(p);
+        vertices.push([t.coord("x")?, t.coord("y")?, t.coord("z")?]);
     }
-    end_of_file(&mut t)?;
+    t.end()?;
     Ok((vertices, base))
 }
 
-/// `Ok` if only comments and blank lines remain.
-fn end_of_file(t: &mut Tokens) -> Result<()> {
-    while let Some((line, l)) = t.next_line()? {
-        if !l.starts_with('#') {
-            return Err(t.err_at(
-                line,
-                format!("unexpected line after the last record: \"{l}\""),
-            ));
-        }
-    }
-    Ok(())
-}
-
 /// The cells of a `.ele` file whose vertex ids count from `base` up to `base + nv`.
-pub(crate) fn parse_ele<'a>(
-    path: &'a Path,
-    mut t: Tokens<'a>,
-    nv: usize,
-    base: u64,
-) -> Result<Polyhedra> {
-    let mut h = data_line(path, &mut t, "the header \"nc 0\"")?;
-    let nc = h.count("the number of cells")?;
+pub(crate) fn parse_ele(path: &Path, t: Tokens, nv: usize, base: u64) -> Result<Polyhedra> {
+    let mut t = Rf { t };
+    let nc = t.count("the number of cells")?;
+    t.count("the flag of the header")?;
     let mut p = Polyhedra::default();
     p.cell_ptr
-        .reserve(capacity(nc, t.remaining()).saturating_add(1));
+        .reserve(capacity(nc, t.t.remaining()).saturating_add(1));
     let (mut loops, mut ends) = (Vec::new(), Vec::new());
     for k in 0..nc {
-        let mut c = data_line(path, &mut t, &format!("the header of cell {k}"))?;
-        c.parse::<u64>("the cell id")?;
-        let nf = c.count("the number of faces")?;
-        if nf > t.remaining() / 4 {
-            return Err(c.err(format!(
-                "cell {k} announces {nf} faces, more than the file holds"
-            )));
-        }
-        c.end()?;
-        (loops.clear(), ends.clear());
+        t.parse::<u64>(&format!("the id of cell {k}"))?;
+        let nf = t.count("the number of faces")?;
+        loops.clear();
+        ends.clear();
         for j in 0..nf {
-            let mut f = data_line(path, &mut t, &format!("face {j} of cell {k}"))?;
-            f.parse::<u64>("the face id")?;
-            let n = f.count("the number of vertices")?;
+            t.parse::<u64>(&format!("the id of face {j} of cell {k}"))?;
+            let n = t.count("the number of vertices of a face")?;
             if n < 3 {
-                return Err(f.err(format!(
+                return Err(t.t.err(format!(
                     "face {j} of cell {k} has {n} vertices (at least 3)"
                 )));
             }
             for _ in 0..n {
-                let v: u64 = f.parse("a vertex id")?;
+                let v: u64 = t.parse("a vertex id")?;
                 if v < base || v - base >= nv as u64 {
-                    return Err(f.err(format!(
+                    return Err(t.t.err(format!(
                         "vertex id {v} is out of range {base}..{}",
                         base + nv as u64
                     )));
                 }
                 loops.push((v - base) as u32);
             }
-            f.end()?;
             ends.push(loops.len());
         }
         let faces = (0..ends.len()).map(|j| &loops[if j == 0 { 0 } else { ends[j - 1] }..ends[j]]);
@@ -151,9 +173,9 @@ pub(crate) fn parse_ele<'a>(
                 source,
             })?;
     }
-    end_of_file(&mut t)?;
+    t.end()?;
     if p.cell_ptr.is_empty() {
-        return Err(t.err_at(0, "the file has no cells"));
+        return Err(t.t.err_at(0, "the file has no cells"));
     }
     Ok(p)
 }

@@ -24,7 +24,7 @@ fn msh(text: &str) -> crate::Result<Polyhedra> {
 
 fn rf_parse(node: &str, ele: &str) -> crate::Result<Polyhedra> {
     let (pn, pe) = (Path::new("r.node"), Path::new("r.ele"));
-    let (vertices, base) = rf::parse_node(pn, Tokens::new(pn, node.as_bytes()))?;
+    let (vertices, base) = rf::parse_node(Tokens::new(pn, node.as_bytes()))?;
     let mut p = rf::parse_ele(pe, Tokens::new(pe, ele.as_bytes()), vertices.len(), base)?;
     p.vertices = vertices;
     Ok(p)
@@ -143,6 +143,9 @@ fn rf_pairs_are_read() {
     );
     assert_eq!(p.side_vertices(7), &[1, 5, 2]);
     assert!(p.cell_tags.is_empty() && p.tagged_tags.is_empty());
+    // a face may continue on the next line (as in HArDCore's Random-Hexahedra files)
+    let split = RF_ELE.replace("  6  4    7  8  11  10", "  6  4\n    7  8  11  10 # top");
+    assert_eq!(rf_parse(RF_NODE, &split).unwrap(), p);
     // ids from 1
     let node1 = RF_NODE.replace("\n11 2 1 1", "\n12 2 1 1");
     let node1: String = node1
@@ -271,21 +274,21 @@ fn edited_files_are_rejected_with_their_line() {
             "  6  4    7  8  11  10",
             "  6  4    7  8  11",
             false,
-            "r.ele:18: the line ends before a vertex id",
+            "r.ele:19: unexpected end of file while reading a vertex id",
         ),
         (
             RF_ELE,
             "1  7\n",
             "1  8\n",
             false,
-            "r.ele:19: unexpected end of file: expected face 7 of cell 1",
+            "r.ele:19: unexpected end of file while reading the id of face 7 of cell 1",
         ),
         (
             RF_ELE,
             "0  6\n",
             "0  6 x\n",
             false,
-            "r.ele:4: unexpected \"x\"",
+            "r.ele:4: cannot read the id of face 0 of cell 0 from \"x\"",
         ),
         (
             RF_NODE,
