@@ -1,20 +1,20 @@
 //! VTK XML unstructured-grid (`.vtu`) writer for 3D meshes, ASCII, for ParaView and meshio.
 //!
-//! Cells are written in the order of the [`Polyhedra`]: a tetrahedron (4 triangles on 4
-//! vertices) as `VTK_TETRA` (10), a hexahedron (6 quadrangles on 8 vertices, connected as a
-//! hexahedron) as `VTK_HEXAHEDRON` (12), both with VTK's vertex order and positive orientation,
-//! and any other cell as `VTK_POLYHEDRON` (42): its connectivity lists the cell's vertices
-//! (each once, in order of appearance) and the `faces` stream lists, per cell, the number of
-//! faces and then each face as its number of vertices and its vertex loop, as given;
-//! `faceoffsets` holds the end of each cell's part of that stream (−1 for cells that are not
-//! polyhedra). Both arrays are written only when some cell is a polyhedron.
+//! Cells are written in the order of the [`Polyhedra`]. When every cell is a tetrahedron (4
+//! triangles on 4 vertices) or a hexahedron (6 quadrangles on 8 vertices, connected as a
+//! hexahedron), they are written as `VTK_TETRA` (10) and `VTK_HEXAHEDRON` (12), with VTK's
+//! vertex order and positive orientation. Otherwise every cell is a `VTK_POLYHEDRON` (42)
+//! (meshio reads no mix of polyhedra and other cells): its connectivity lists the cell's
+//! vertices (each once, in order of appearance), the `faces` stream lists, per cell, the number
+//! of faces and then each face as its number of vertices and its vertex loop, as given, and
+//! `faceoffsets` holds the end of each cell's part of that stream.
 //!
-//! Tagged boundary faces are written after the cells as `VTK_POLYGON` (7) cells. Tags are
-//! `Int32` cell data: `cell_tag` (the cell tags, 0 on the polygons) when the mesh has cell
-//! tags, `face_tag` (the boundary tags, 0 on the volume cells) when it has tagged faces. The
-//! caller's cell-data arrays have one value per cell and are `nan` on the polygons. Floats
-//! follow the 2D writer ([`crate::mesh::io::vtu`]): 17 significant digits, deterministic,
-//! exact on reading back.
+//! The cell tags, when the mesh has them, are the `Int32` cell-data array `cell_tag`. The
+//! tagged boundary faces, when there are any, are `FieldData` of the grid (which ParaView and
+//! meshio read but do not draw): `tagged_faces`, their number followed by each face as its
+//! number of vertices and its vertex loop, and `tagged_tags`, their tags. Floats follow the 2D
+//! writer ([`crate::mesh::io::vtu`]): 17 significant digits, deterministic, exact on reading
+//! back.
 
 use super::cells::{Shape, shape_of};
 use crate::error::{Error, Result};
@@ -24,7 +24,6 @@ use std::io::Write;
 use std::path::Path;
 
 /// VTK cell types.
-pub(crate) const VTK_POLYGON: i64 = 7;
 pub(crate) const VTK_TETRA: i64 = 10;
 pub(crate) const VTK_HEXAHEDRON: i64 = 12;
 pub(crate) const VTK_POLYHEDRON: i64 = 42;
@@ -54,10 +53,9 @@ pub fn write_vtu3(
 }
 
 /// How one VTK cell is written.
-enum Out<'a> {
+enum Out {
     Shape(Shape),
     Polyhedron(usize),
-    Polygon(&'a [u32]),
 }
 
 impl Polyhedra {
@@ -87,10 +85,8 @@ pub(super) fn write_to(
     cell_data: &[(&str, &[f64])],
 ) -> std::io::Result<()> {
     let nc = p.n_cells();
-    let cells: Vec<Out> = (0..nc)
-        .map(|k| shape_of(p, k).map_or(Out::Polyhedron(k), Out::Shape))
-        .chain((0..p.tagged_tags.len()).map(|j| Out::Polygon(p.tagged_face(j))))
-        .collect();
+    let shapes: Option<Vec<Out>> = (0..nc).map(|k| shape_of(p, k).map(Out::Shape)).collect();
+    let cells = shapes.unwrap_or_else(|| (0..nc).map(Out::Polyhedron).collect());
     let n = cells.len();
     writeln!(w, "<?xml version=\"1.0\"?>")?;
     writeln!(
@@ -98,6 +94,7 @@ pub(super) fn write_to(
         "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">"
     )?;
     writeln!(w, "  <UnstructuredGrid>")?;
+    write_tagged_faces(w, p)?;
     writeln!(
         w,
         "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{n}\">",
@@ -110,7 +107,7 @@ pub(super) fn write_to(
         }
         writeln!(w, "      </PointData>")?;
     }
-    write_cell_data(w, p, cell_data, n)?;
+    write_cell_data(w, p, cell_data)?;
     writeln!(w, "      <Points>")?;
     writeln!(
         w,
@@ -132,35 +129,58 @@ pub(super) fn write_to(
     writeln!(w, "</VTKFile>")
 }
 
-/// The `<CellData>` block: the tags and the caller's arrays, `nan` on the polygons.
+/// The tagged boundary faces, as `FieldData` (see the module docs).
+fn write_tagged_faces(w: &mut impl Write, p: &Polyhedra) -> std::io::Result<()> {
+    let nt = p.tagged_tags.len();
+    if nt == 0 {
+        return Ok(());
+    }
+    let len = 1 + nt + p.tagged_vertices.len();
+    writeln!(w, "    <FieldData>")?;
+    writeln!(
+        w,
+        "      <DataArray type=\"Int64\" Name=\"tagged_faces\" NumberOfTuples=\"{len}\" \
+         format=\"ascii\">"
+    )?;
+    writeln!(w, "        {nt}")?;
+    for j in 0..nt {
+        let l = p.tagged_face(j);
+        write!(w, "        {}", l.len())?;
+        for v in l {
+            write!(w, " {v}")?;
+        }
+        writeln!(w)?;
+    }
+    writeln!(w, "      </DataArray>")?;
+    writeln!(
+        w,
+        "      <DataArray type=\"Int32\" Name=\"tagged_tags\" NumberOfTuples=\"{nt}\" \
+         format=\"ascii\">"
+    )?;
+    for t in &p.tagged_tags {
+        writeln!(w, "        {t}")?;
+    }
+    writeln!(w, "      </DataArray>")?;
+    writeln!(w, "    </FieldData>")
+}
+
+/// The `<CellData>` block: the cell tags and the caller's arrays.
 fn write_cell_data(
     w: &mut impl Write,
     p: &Polyhedra,
     cell_data: &[(&str, &[f64])],
-    n: usize,
 ) -> std::io::Result<()> {
-    let nc = p.n_cells();
-    let has_cell_tags = !p.cell_tags.is_empty();
-    let has_face_tags = !p.tagged_tags.is_empty();
-    if cell_data.is_empty() && !has_cell_tags && !has_face_tags {
+    if cell_data.is_empty() && p.cell_tags.is_empty() {
         return Ok(());
     }
     writeln!(w, "      <CellData>")?;
-    if has_cell_tags {
-        write_cell_array(w, "Int32", "cell_tag", n, |w, k| {
-            writeln!(w, "          {}", p.cell_tags.get(k).copied().unwrap_or(0))
-        })?;
-    }
-    if has_face_tags {
-        write_cell_array(w, "Int32", "face_tag", n, |w, k| {
-            let tag = k.checked_sub(nc).map_or(0, |j| p.tagged_tags[j]);
-            writeln!(w, "          {tag}")
+    if !p.cell_tags.is_empty() {
+        write_cell_array(w, "Int32", "cell_tag", p.n_cells(), |w, k| {
+            writeln!(w, "          {}", p.cell_tags[k])
         })?;
     }
     for (name, values) in cell_data {
-        let mut padded = values.to_vec();
-        padded.resize(n, f64::NAN);
-        write_data(w, name, &padded)?;
+        write_data(w, name, values)?;
     }
     writeln!(w, "      </CellData>")
 }
@@ -172,7 +192,6 @@ fn write_cells(w: &mut impl Write, p: &Polyhedra, cells: &[Out]) -> std::io::Res
         Out::Shape(Shape::Tet(v)) => v.to_vec(),
         Out::Shape(Shape::Hex(v)) => v.to_vec(),
         Out::Polyhedron(k) => cell_vertices(p, *k),
-        Out::Polygon(l) => l.to_vec(),
     };
     writeln!(w, "      <Cells>")?;
     write_cell_array(w, "Int64", "connectivity", n, |w, k| {
@@ -192,7 +211,6 @@ fn write_cells(w: &mut impl Write, p: &Polyhedra, cells: &[Out]) -> std::io::Res
             Out::Shape(Shape::Tet(_)) => VTK_TETRA,
             Out::Shape(Shape::Hex(_)) => VTK_HEXAHEDRON,
             Out::Polyhedron(_) => VTK_POLYHEDRON,
-            Out::Polygon(_) => VTK_POLYGON,
         };
         writeln!(w, "          {ty}")
     })?;
@@ -214,7 +232,7 @@ fn write_cells(w: &mut impl Write, p: &Polyhedra, cells: &[Out]) -> std::io::Res
         let mut end = 0usize;
         write_cell_array(w, "Int64", "faceoffsets", n, |w, k| {
             let Out::Polyhedron(k) = cells[k] else {
-                return writeln!(w, "          -1");
+                return Ok(());
             };
             end += 1 + p
                 .cell_sides(k)

@@ -2,13 +2,13 @@
 //! `DataArray` element on a line of its own and its values on the lines after it.
 //!
 //! `VTK_TETRA` and `VTK_HEXAHEDRON` cells get the faces of [`super::cells`], `VTK_POLYHEDRON`
-//! cells the faces of their `faces` stream as written, `VTK_POLYGON` cells become tagged
-//! boundary faces (with their `face_tag`); the `cell_tag` array gives the cell tags. Other
+//! cells the faces of their `faces` stream as written; the `cell_tag` cell data gives the
+//! cell tags, the `tagged_faces` and `tagged_tags` field data the tagged boundary faces. Other
 //! cell types and other layouts (binary or appended data) are errors naming the line.
 
 use super::cells::{HEX_FACES, TET_FACES, push_shape};
 use super::too_large;
-use super::vtu::{VTK_HEXAHEDRON, VTK_POLYGON, VTK_POLYHEDRON, VTK_TETRA};
+use super::vtu::{VTK_HEXAHEDRON, VTK_POLYHEDRON, VTK_TETRA};
 use crate::error::Result;
 use crate::mesh::MemoryBudget;
 use crate::mesh::io::{Tokens, read_text};
@@ -32,14 +32,15 @@ struct Arrays {
     ints: Vec<(&'static str, Vec<i64>, usize)>,
 }
 
-const INT_ARRAYS: [&str; 7] = [
+const INT_ARRAYS: [&str; 8] = [
     "connectivity",
     "offsets",
     "types",
     "faces",
     "faceoffsets",
     "cell_tag",
-    "face_tag",
+    "tagged_faces",
+    "tagged_tags",
 ];
 
 /// The value of attribute `name` in the tag `line`.
@@ -123,15 +124,29 @@ fn read_array(t: &mut Tokens, a: &mut Arrays, line: usize, l: &str, in_points: b
     Ok(())
 }
 
+/// The arrays of the `<Cells>` block and the tags.
+struct CellArrays {
+    offsets: Vec<i64>,
+    types: Vec<i64>,
+    conn: Vec<i64>,
+    faces: Vec<i64>,
+    faceoffsets: Vec<i64>,
+    /// Lines of `offsets`, `types`, `connectivity`, `faces`.
+    lines: [usize; 4],
+}
+
 /// Builds the mesh from the arrays of a file with `np` points and `nc` cells.
 fn build(path: &Path, t: &Tokens, mut a: Arrays, np: usize, nc: usize) -> Result<Polyhedra> {
     let mut take = |name: &str, len: Option<usize>| -> Result<(Vec<i64>, usize)> {
-        let i = a.ints.iter().position(|(n, ..)| *n == name);
-        let (_, v, line) = match i {
-            Some(i) => a.ints.swap_remove(i),
-            None if len.is_none() || name.ends_with("tag") => return Ok((Vec::new(), 0)),
-            None => return Err(t.err_at(0, format!("no \"{name}\" array"))),
+        let Some(i) = a.ints.iter().position(|(n, ..)| *n == name) else {
+            return match len {
+                Some(_) if !name.contains("tag") => {
+                    Err(t.err_at(0, format!("no \"{name}\" array")))
+                }
+                _ => Ok((Vec::new(), 0)),
+            };
         };
+        let (_, v, line) = a.ints.swap_remove(i);
         match len {
             Some(n) if v.len() != n => Err(t.err_at(
                 line,
@@ -140,19 +155,22 @@ fn build(path: &Path, t: &Tokens, mut a: Arrays, np: usize, nc: usize) -> Result
             _ => Ok((v, line)),
         }
     };
-    let (offsets, off_line) = take("offsets", Some(nc))?;
-    let (types, ty_line) = take("types", Some(nc))?;
-    let (conn, conn_line) = take("connectivity", None)?;
-    let (faces, faces_line) = take("faces", None)?;
-    let (faceoffsets, _) = take("faceoffsets", Some(nc)).or_else(|e| {
-        if faces.is_empty() {
-            Ok((Vec::new(), 0))
-        } else {
-            Err(e)
-        }
-    })?;
-    let (cell_tag, _) = take("cell_tag", Some(nc))?;
-    let (face_tag, _) = take("face_tag", Some(nc))?;
+    let (offsets, l0) = take("offsets", Some(nc))?;
+    let (types, l1) = take("types", Some(nc))?;
+    let (conn, l2) = take("connectivity", None)?;
+    let (faces, l3) = take("faces", None)?;
+    let faceoffsets = take("faceoffsets", None)?.0;
+    let cell_tag = take("cell_tag", Some(nc))?.0;
+    let (tagged, tagged_line) = take("tagged_faces", None)?;
+    let tagged_tags = take("tagged_tags", None)?.0;
+    let arrays = CellArrays {
+        offsets,
+        types,
+        conn,
+        faces,
+        faceoffsets,
+        lines: [l0, l1, l2, l3],
+    };
     let mut p = Polyhedra {
         vertices: a
             .points
@@ -160,101 +178,103 @@ fn build(path: &Path, t: &Tokens, mut a: Arrays, np: usize, nc: usize) -> Result
             .chunks_exact(3)
             .map(|c| [c[0], c[1], c[2]])
             .collect(),
+        cell_tags: cell_tag.iter().map(|&g| g as i32).collect(),
         ..Polyhedra::default()
     };
+    read_cells(path, t, &arrays, np, &mut p)?;
+    if tagged.is_empty() && tagged_tags.is_empty() {
+        return Ok(p);
+    }
+    let (mut loops, mut ends) = (Vec::new(), Vec::new());
+    let valid = polyhedron(&tagged, &mut loops, &mut ends).is_some()
+        && ends.len() == tagged_tags.len()
+        && loops.iter().all(|&v| (v as usize) < np);
+    if !valid {
+        return Err(t.err_at(
+            tagged_line,
+            "\"tagged_faces\" and \"tagged_tags\" do not match",
+        ));
+    }
+    p.tagged_ptr = std::iter::once(0)
+        .chain(ends.iter().map(|&e| e as u32))
+        .collect();
+    p.tagged_vertices = loops;
+    p.tagged_tags = tagged_tags.iter().map(|&g| g as i32).collect();
+    Ok(p)
+}
+
+/// Appends the cells described by `a` to `p`.
+fn read_cells(path: &Path, t: &Tokens, a: &CellArrays, np: usize, p: &mut Polyhedra) -> Result<()> {
+    let [off_line, ty_line, conn_line, faces_line] = a.lines;
     let vertex = |v: i64, line: usize| {
         u32::try_from(v)
             .ok()
             .filter(|&v| (v as usize) < np)
             .ok_or_else(|| t.err_at(line, format!("vertex {v} is out of range 0..{np}")))
     };
+    let mesh_err = |e| too_large(path, e);
     let (mut start, mut face_start) = (0usize, 0usize);
     let (mut nodes, mut scratch, mut ends) = (Vec::new(), Vec::new(), Vec::new());
-    for c in 0..nc {
-        let end = usize::try_from(offsets[c])
+    for (c, (&off, &ty)) in a.offsets.iter().zip(&a.types).enumerate() {
+        let end = usize::try_from(off)
             .ok()
-            .filter(|&e| e >= start && e <= conn.len())
+            .filter(|&e| e >= start && e <= a.conn.len())
             .ok_or_else(|| {
                 t.err_at(
                     off_line,
-                    format!("offset {} of cell {c} is out of range", offsets[c]),
+                    format!("offset {off} of cell {c} is out of range"),
                 )
             })?;
         nodes.clear();
-        for &v in &conn[start..end] {
+        for &v in &a.conn[start..end] {
             nodes.push(vertex(v, conn_line)?);
         }
         start = end;
-        let shape = |ty: i64, len: usize| -> Result<()> {
-            if nodes.len() == len {
-                Ok(())
-            } else {
-                Err(t.err_at(
+        let (table, len): (&[&[usize]], usize) = match ty {
+            VTK_TETRA => (&TET_FACES, 4),
+            VTK_HEXAHEDRON => (&HEX_FACES, 8),
+            VTK_POLYHEDRON => (&[], 0),
+            _ => {
+                return Err(t.err_at(
+                    ty_line,
+                    format!("cell {c} has the VTK type {ty}: only 10, 12 and 42 are read"),
+                ));
+            }
+        };
+        if ty != VTK_POLYHEDRON {
+            if nodes.len() != len {
+                return Err(t.err_at(
                     conn_line,
                     format!(
                         "cell {c} of type {ty} has {} vertices, not {len}",
                         nodes.len()
                     ),
-                ))
-            }
-        };
-        let mesh_err = |e| too_large(path, e);
-        match types[c] {
-            VTK_TETRA => {
-                shape(VTK_TETRA, 4)?;
-                push_shape(&mut p, &TET_FACES, &nodes, &mut scratch).map_err(mesh_err)?;
-            }
-            VTK_HEXAHEDRON => {
-                shape(VTK_HEXAHEDRON, 8)?;
-                push_shape(&mut p, &HEX_FACES, &nodes, &mut scratch).map_err(mesh_err)?;
-            }
-            VTK_POLYHEDRON => {
-                let fend = faceoffsets.get(c).and_then(|&e| usize::try_from(e).ok());
-                let stream = fend.and_then(|e| faces.get(face_start..e)).ok_or_else(|| {
-                    t.err_at(faces_line, format!("faceoffsets of cell {c} out of range"))
-                })?;
-                face_start = fend.unwrap_or(face_start);
-                polyhedron(stream, &mut scratch, &mut ends)
-                    .and_then(|()| {
-                        scratch
-                            .iter()
-                            .try_for_each(|&v| vertex(i64::from(v), faces_line).map(|_| ()))
-                            .ok()
-                    })
-                    .ok_or_else(|| {
-                        t.err_at(
-                            faces_line,
-                            format!("the faces of cell {c} are not a valid stream"),
-                        )
-                    })?;
-                let loops = (0..ends.len())
-                    .map(|j| &scratch[if j == 0 { 0 } else { ends[j - 1] }..ends[j]]);
-                p.push_cell(loops).map_err(mesh_err)?;
-            }
-            VTK_POLYGON => {
-                if p.tagged_ptr.is_empty() {
-                    p.tagged_ptr.push(0);
-                }
-                p.tagged_vertices.extend_from_slice(&nodes);
-                p.tagged_ptr.push(p.tagged_vertices.len() as u32);
-                p.tagged_tags.push(face_tag.get(c).map_or(0, |&g| g as i32));
-                continue;
-            }
-            ty => {
-                return Err(t.err_at(
-                    ty_line,
-                    format!("cell {c} has the VTK type {ty}: only 10, 12, 42 and 7 are read"),
                 ));
             }
+            push_shape(p, table, &nodes, &mut scratch).map_err(mesh_err)?;
+            continue;
         }
-        if !cell_tag.is_empty() {
-            p.cell_tags.push(cell_tag[c] as i32);
+        let fend = a.faceoffsets.get(c).and_then(|&e| usize::try_from(e).ok());
+        let stream = fend.and_then(|e| a.faces.get(face_start..e));
+        face_start = fend.unwrap_or(face_start);
+        let ok = stream
+            .and_then(|s| polyhedron(s, &mut scratch, &mut ends))
+            .is_some()
+            && scratch.iter().all(|&v| (v as usize) < np);
+        if !ok {
+            return Err(t.err_at(
+                faces_line,
+                format!("the faces of cell {c} are not a valid stream"),
+            ));
         }
+        let loops =
+            (0..ends.len()).map(|j| &scratch[if j == 0 { 0 } else { ends[j - 1] }..ends[j]]);
+        p.push_cell(loops).map_err(mesh_err)?;
     }
     if p.n_cells() == 0 {
-        return Err(t.err_at(0, "the file has no volume cells"));
+        return Err(t.err_at(0, "the file has no cells"));
     }
-    Ok(p)
+    Ok(())
 }
 
 /// Splits the face stream of one polyhedron (`nf`, then per face `n` and `n` vertex ids) into
