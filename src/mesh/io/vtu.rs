@@ -37,7 +37,12 @@ pub fn write_vtu(
     w.flush().map_err(io)
 }
 
-pub(crate) fn check_arrays(kind: &str, arrays: &[(&str, &[f64])], n: usize, what: &str) -> Result<()> {
+pub(crate) fn check_arrays(
+    kind: &str,
+    arrays: &[(&str, &[f64])],
+    n: usize,
+    what: &str,
+) -> Result<()> {
     for (i, (name, values)) in arrays.iter().enumerate() {
         if name.is_empty() {
             return Err(Error::InvalidData(format!(

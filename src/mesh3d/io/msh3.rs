@@ -212,6 +212,18 @@ fn build(
     if p.cell_tags.iter().all(|&g| g == 0) {
         p.cell_tags.clear();
     }
+    push_tagged(&mut p, &faces, &face_nodes, tag_of);
+    Ok(p)
+}
+
+/// Appends to `p` the faces with a non-zero tag whose vertices some cell uses (`face_nodes`:
+/// their vertex ids, `u32::MAX` for a vertex no cell uses).
+fn push_tagged(
+    p: &mut Polyhedra,
+    faces: &Elements,
+    face_nodes: &[u32],
+    tag_of: impl Fn(ElementTag) -> i32,
+) {
     let mut at = 0;
     p.tagged_ptr.push(0);
     for k in 0..faces.len() {
@@ -228,5 +240,4 @@ fn build(
     if p.tagged_tags.is_empty() {
         p.tagged_ptr.clear();
     }
-    Ok(p)
 }

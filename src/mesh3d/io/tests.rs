@@ -127,8 +127,10 @@ fn tets_and_hexahedra_are_recognised() {
     assert!(matches!(shape_of(&rf, 0), Some(Shape::Hex(_))));
     assert_eq!(shape_of(&rf, 1), None);
     // 4 triangles that do not close a tetrahedron
-    let mut bad = Polyhedra::default();
-    bad.vertices = p.vertices.clone();
+    let mut bad = Polyhedra {
+        vertices: p.vertices.clone(),
+        ..Polyhedra::default()
+    };
     bad.push_cell([&[0, 1, 2][..], &[0, 1, 3], &[0, 3, 2], &[4, 1, 2]])
         .unwrap();
     assert_eq!(shape_of(&bad, 0), None);
