@@ -2,7 +2,7 @@
 //! reader's parser, [`crate::mesh::io::msh`], so both check the syntax alike).
 //!
 //! * Tetrahedra (element type 4), hexahedra (5), prisms (6) and pyramids (7) become the cells,
-//!   their faces spelled out in gmsh's node ordering ([`super::cells`]). Each cell gets a cell
+//!   their faces spelled out in gmsh's node ordering (faces of each element as gmsh lists them). Each cell gets a cell
 //!   tag: in format 4.1 the first physical tag of its volume entity, in format 2.2 its first
 //!   tag; 0 when it has none.
 //! * Triangles (2) and quadrangles (3) are tagged boundary faces: in format 4.1 with the first

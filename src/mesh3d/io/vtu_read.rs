@@ -1,7 +1,7 @@
 //! Reads back the `.vtu` files of [`super::write_vtu3`]: ASCII XML with one `<Piece>`, every
 //! `DataArray` element on a line of its own and its values on the lines after it.
 //!
-//! `VTK_TETRA` and `VTK_HEXAHEDRON` cells get the faces of [`super::cells`], `VTK_POLYHEDRON`
+//! `VTK_TETRA` and `VTK_HEXAHEDRON` cells get the faces gmsh lists for them, `VTK_POLYHEDRON`
 //! cells the faces of their `faces` stream as written; the `cell_tag` cell data gives the
 //! cell tags, the `tagged_faces` and `tagged_tags` field data the tagged boundary faces. Other
 //! cell types and other layouts (binary or appended data) are errors naming the line.
