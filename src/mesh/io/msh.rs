@@ -51,10 +51,11 @@ impl MshMesh {
 pub fn read_msh(path: impl AsRef<Path>, budget: MemoryBudget) -> Result<MshMesh> {
     let path = path.as_ref();
     let text = read_text(path, budget)?;
-    let raw = parse_raw(Tokens::from_text(path, &text))?;
+    let mut raw = Raw::default();
+    let sections = parse_sections(Tokens::from_text(path, &text), point2, &mut raw)?;
     // the text is no longer needed: free it before the mesh is built
     drop(text);
-    build(path, raw)
+    build(path, sections, raw)
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -79,7 +80,7 @@ enum LineTag {
 /// cache-friendly); larger tags, which only sparse numberings produce, go to a hash map. The
 /// limit also bounds the vector by a small multiple of the file size, whatever the header says.
 #[derive(Default)]
-struct NodeIndex {
+pub(crate) struct NodeIndex {
     /// Position of node `tag` for `tag < dense_limit` ([`NodeIndex::ABSENT`] if not defined);
     /// grows on demand up to `dense_limit`.
     dense: Vec<usize>,
@@ -127,7 +128,7 @@ impl NodeIndex {
     }
 
     /// The position of node `tag`, if it was defined.
-    fn get(&self, tag: u64) -> Option<usize> {
+    pub(crate) fn get(&self, tag: u64) -> Option<usize> {
         if tag < self.dense_limit {
             self.dense
                 .get(tag as usize)
@@ -139,11 +140,43 @@ impl NodeIndex {
     }
 }
 
-/// Everything read from the file, before node tags are resolved.
-#[derive(Default)]
+/// What every gmsh mesh needs from the file, whatever its dimension: the nodes (points of
+/// type `P`), the physical tag of each entity and the physical names.
+pub(crate) struct Sections<P> {
+    pub(crate) nodes: Vec<P>,
+    pub(crate) node_index: NodeIndex,
+    /// `entity_phys[d]`: the first physical tag of each entity of dimension `d` (format 4.1).
+    pub(crate) entity_phys: [HashMap<i32, i32>; 4],
+    pub(crate) physical_names: Vec<(i32, i32, String)>,
+}
+
+impl<P> Default for Sections<P> {
+    fn default() -> Self {
+        Sections {
+            nodes: Vec::new(),
+            node_index: NodeIndex::default(),
+            entity_phys: Default::default(),
+            physical_names: Vec::new(),
+        }
+    }
+}
+
+/// Where an element record gets its tags: format 2.2 gives the element's first tag (its
+/// physical tag), format 4.1 the dimension and tag of the entity of its block.
+#[derive(Clone, Copy)]
+pub(crate) enum ElementTag {
+    Physical(i32),
+    Entity { dim: i32, tag: i32 },
+}
+
+/// A reader of gmsh element records: given the type, tags and id of an element, reads its
+/// node tags from `t` and files it.
+pub(crate) trait ElementSink {
+    fn element(&mut self, t: &mut Tokens, ty: i32, tag: ElementTag, id: u64) -> Result<()>;
+}
+
+/// The 2D elements read from the file, before node tags are resolved.
 struct Raw {
-    nodes: Vec<Point>,
-    node_index: NodeIndex,
     /// Node tags of the cells, CSR by `cell_ptr`.
     cell_nodes: Vec<u64>,
     cell_ptr: Vec<usize>,
@@ -151,14 +184,35 @@ struct Raw {
     /// The tag of each cell, as for lines: its physical tag (2.2) or its surface entity (4.1).
     cell_tag: Vec<LineTag>,
     lines: Vec<([u64; 2], LineTag, usize)>,
-    curve_phys: HashMap<i32, i32>,
-    surface_phys: HashMap<i32, i32>,
-    physical_names: Vec<(i32, i32, String)>,
     ignored_types: BTreeSet<i32>,
 }
 
+impl Default for Raw {
+    fn default() -> Self {
+        Raw {
+            cell_nodes: Vec::new(),
+            cell_ptr: vec![0],
+            cell_line: Vec::new(),
+            cell_tag: Vec::new(),
+            lines: Vec::new(),
+            ignored_types: BTreeSet::new(),
+        }
+    }
+}
+
+impl ElementSink for Raw {
+    fn element(&mut self, t: &mut Tokens, ty: i32, tag: ElementTag, id: u64) -> Result<()> {
+        let tag = match tag {
+            ElementTag::Physical(p) => LineTag::Physical(p),
+            ElementTag::Entity { dim: 1 | 2, tag } => LineTag::Curve(tag),
+            ElementTag::Entity { .. } => LineTag::Physical(0),
+        };
+        read_element(t, self, ty, tag, id)
+    }
+}
+
 /// Number of nodes of the gmsh element types (`None` for types not in this table).
-fn nodes_of_type(ty: i32) -> Option<usize> {
+pub(crate) fn nodes_of_type(ty: i32) -> Option<usize> {
     Some(match ty {
         1 => 2,
         2 => 3,
@@ -201,11 +255,23 @@ fn nodes_of_type(ty: i32) -> Option<usize> {
 /// [`read_msh`] does, for tests that work in memory.
 #[cfg(test)]
 pub(crate) fn parse_msh(path: &Path, bytes: &[u8]) -> Result<MshMesh> {
-    build(path, parse_raw(Tokens::new(path, bytes))?)
+    let mut raw = Raw::default();
+    let sections = parse_sections(Tokens::new(path, bytes), point2, &mut raw)?;
+    build(path, sections, raw)
 }
 
-/// Reads the sections of a `.msh` file, checking its syntax; [`build`] makes the mesh.
-fn parse_raw(mut t: Tokens) -> Result<Raw> {
+/// The 2D point of a gmsh node: z is dropped.
+fn point2([x, y, _]: [f64; 3]) -> Point {
+    [x, y]
+}
+
+/// Reads the sections of a `.msh` file, checking its syntax: the nodes, converted by `point`,
+/// physical names and entities are returned, the elements handed to `elements`.
+pub(crate) fn parse_sections<P, E: ElementSink>(
+    mut t: Tokens,
+    point: fn([f64; 3]) -> P,
+    elements: &mut E,
+) -> Result<Sections<P>> {
     match t.next_opt()? {
         Some("$MeshFormat") => {}
         Some(tok) => {
@@ -237,7 +303,7 @@ fn parse_raw(mut t: Tokens) -> Result<Raw> {
     };
     expect(&mut t, "$EndMeshFormat")?;
 
-    let mut raw = Raw::default();
+    let mut raw = Sections::default();
     let mut seen: Vec<&str> = Vec::new();
     while let Some(tok) = t.next_opt()? {
         let section = tok;
@@ -254,10 +320,10 @@ fn parse_raw(mut t: Tokens) -> Result<Raw> {
         match (section, version) {
             ("$PhysicalNames", _) => read_physical_names(&mut t, &mut raw)?,
             ("$Entities", Version::V41) => read_entities(&mut t, &mut raw)?,
-            ("$Nodes", Version::V41) => read_nodes41(&mut t, &mut raw)?,
-            ("$Nodes", Version::V22) => read_nodes22(&mut t, &mut raw)?,
-            ("$Elements", Version::V41) => read_elements41(&mut t, &mut raw)?,
-            ("$Elements", Version::V22) => read_elements22(&mut t, &mut raw)?,
+            ("$Nodes", Version::V41) => read_nodes41(&mut t, &mut raw, point)?,
+            ("$Nodes", Version::V22) => read_nodes22(&mut t, &mut raw, point)?,
+            ("$Elements", Version::V41) => read_elements41(&mut t, elements)?,
+            ("$Elements", Version::V22) => read_elements22(&mut t, elements)?,
             (s, _) if s.starts_with('$') && !s.starts_with("$End") => skip_section(&mut t, s)?,
             (s, _) => {
                 return Err(t.err(format!(
@@ -300,7 +366,7 @@ fn skip_section(t: &mut Tokens, section: &str) -> Result<()> {
     }
 }
 
-fn read_physical_names(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+fn read_physical_names<P>(t: &mut Tokens, raw: &mut Sections<P>) -> Result<()> {
     let n = t.count("the number of physical names")?;
     raw.physical_names.reserve(capacity(n, t.remaining()));
     for i in 1..=n {
@@ -327,7 +393,7 @@ fn skip_floats(t: &mut Tokens, n: usize, what: impl Display) -> Result<()> {
     Ok(())
 }
 
-fn read_entities(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+fn read_entities<P>(t: &mut Tokens, raw: &mut Sections<P>) -> Result<()> {
     let mut counts = [0usize; 4];
     for (d, c) in counts.iter_mut().enumerate() {
         *c = t.count_with(format_args!("the number of entities of dimension {d}"))?;
@@ -344,11 +410,8 @@ fn read_entities(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
             let nphys = t.count_with(format_args!("the number of physical tags of {what}"))?;
             for j in 0..nphys {
                 let p: i32 = t.parse_with(format_args!("a physical tag of {what}"))?;
-                if dim == 1 && j == 0 {
-                    raw.curve_phys.insert(tag, p);
-                }
-                if dim == 2 && j == 0 {
-                    raw.surface_phys.insert(tag, p);
+                if dim > 0 && j == 0 {
+                    raw.entity_phys[dim].insert(tag, p);
                 }
             }
             if dim > 0 {
@@ -362,7 +425,7 @@ fn read_entities(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
     expect(t, "$EndEntities")
 }
 
-fn add_node(t: &Tokens, raw: &mut Raw, tag: u64, p: Point) -> Result<()> {
+fn add_node<P>(t: &Tokens, raw: &mut Sections<P>, tag: u64, p: P) -> Result<()> {
     if !raw.node_index.insert(tag, raw.nodes.len()) {
         return Err(t.err(format!("node {tag} is defined twice")));
     }
@@ -370,16 +433,22 @@ fn add_node(t: &Tokens, raw: &mut Raw, tag: u64, p: Point) -> Result<()> {
     Ok(())
 }
 
-fn read_nodes22(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+/// The x, y and z coordinates of node `tag`.
+fn read_xyz(t: &mut Tokens, tag: u64) -> Result<[f64; 3]> {
+    let x = t.coord_with(format_args!("x of node {tag}"))?;
+    let y = t.coord_with(format_args!("y of node {tag}"))?;
+    let z = t.coord_with(format_args!("z of node {tag}"))?;
+    Ok([x, y, z])
+}
+
+fn read_nodes22<P>(t: &mut Tokens, raw: &mut Sections<P>, point: fn([f64; 3]) -> P) -> Result<()> {
     let n = t.count("the number of nodes")?;
     raw.nodes.reserve(capacity(n, t.remaining()));
     raw.node_index = NodeIndex::new(n, t.remaining());
     for i in 1..=n {
         let tag = t.parse_u64_with(format_args!("the tag of node {i}"))?;
-        let x = t.coord_with(format_args!("x of node {tag}"))?;
-        let y = t.coord_with(format_args!("y of node {tag}"))?;
-        t.coord_with(format_args!("z of node {tag}"))?;
-        add_node(t, raw, tag, [x, y])?;
+        let p = read_xyz(t, tag)?;
+        add_node(t, raw, tag, point(p))?;
     }
     expect(t, "$EndNodes")
 }
@@ -395,7 +464,7 @@ fn read_block_header41(t: &mut Tokens, what: &str) -> Result<(usize, usize, usiz
     Ok((nblocks, n, header_line))
 }
 
-fn read_nodes41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+fn read_nodes41<P>(t: &mut Tokens, raw: &mut Sections<P>, point: fn([f64; 3]) -> P) -> Result<()> {
     let (nblocks, n, header_line) = read_block_header41(t, "node")?;
     raw.nodes.reserve(capacity(n, t.remaining()));
     raw.node_index = NodeIndex::new(n, t.remaining());
@@ -421,15 +490,13 @@ fn read_nodes41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
             tags.push(t.parse_u64_with(format_args!("a node tag of block {b}"))?);
         }
         for &tag in &tags {
-            let x = t.coord_with(format_args!("x of node {tag}"))?;
-            let y = t.coord_with(format_args!("y of node {tag}"))?;
-            t.coord_with(format_args!("z of node {tag}"))?;
+            let p = read_xyz(t, tag)?;
             skip_floats(
                 t,
                 extra,
                 format_args!("a parametric coordinate of node {tag}"),
             )?;
-            add_node(t, raw, tag, [x, y])?;
+            add_node(t, raw, tag, point(p))?;
         }
     }
     if raw.nodes.len() != n {
@@ -478,9 +545,8 @@ fn read_element(t: &mut Tokens, raw: &mut Raw, ty: i32, tag: LineTag, id: u64) -
     Ok(())
 }
 
-fn read_elements22(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+fn read_elements22(t: &mut Tokens, elements: &mut impl ElementSink) -> Result<()> {
     let n = t.count("the number of elements")?;
-    raw.cell_ptr.push(0);
     for i in 1..=n {
         let id = t.parse_u64_with(format_args!("the tag of element {i}"))?;
         let ty: i32 = t.parse_with(format_args!("the type of element {id}"))?;
@@ -492,28 +558,23 @@ fn read_elements22(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
                 phys = tag;
             }
         }
-        read_element(t, raw, ty, LineTag::Physical(phys), id)?;
+        elements.element(t, ty, ElementTag::Physical(phys), id)?;
     }
     expect(t, "$EndElements")
 }
 
-fn read_elements41(t: &mut Tokens, raw: &mut Raw) -> Result<()> {
+fn read_elements41(t: &mut Tokens, elements: &mut impl ElementSink) -> Result<()> {
     let (nblocks, n, header_line) = read_block_header41(t, "element")?;
-    raw.cell_ptr.push(0);
     let mut total = 0usize;
     for b in 1..=nblocks {
         let dim: i32 = t.parse_with(format_args!("the entity dimension of element block {b}"))?;
         let entity: i32 = t.parse_with(format_args!("the entity tag of element block {b}"))?;
         let ty: i32 = t.parse_with(format_args!("the element type of element block {b}"))?;
         let m = t.count_with(format_args!("the number of elements of block {b}"))?;
-        let tag = if dim == 1 || dim == 2 {
-            LineTag::Curve(entity)
-        } else {
-            LineTag::Physical(0)
-        };
+        let tag = ElementTag::Entity { dim, tag: entity };
         for _ in 0..m {
             let id = t.parse_u64_with(format_args!("an element tag of block {b}"))?;
-            read_element(t, raw, ty, tag, id)?;
+            elements.element(t, ty, tag, id)?;
         }
         total = total.saturating_add(m);
     }
@@ -553,20 +614,22 @@ fn no_cells(t: &Tokens, ignored_types: &BTreeSet<i32>) -> crate::Error {
 /// Tagged lines that are not boundary edges of the mesh are skipped: they are looked up among
 /// the boundary edges of the constructed mesh ([`PolyMesh::set_boundary_tags`] with
 /// [`NonBoundaryTag::Ignore`]), so no second pass over all cell sides is needed.
-fn build(path: &Path, raw: Raw) -> Result<MshMesh> {
+fn build(path: &Path, sections: Sections<Point>, raw: Raw) -> Result<MshMesh> {
     // only for its error constructors (errors name the file and a line)
     let t = &Tokens::new(path, &[]);
-    let Raw {
+    let Sections {
         nodes,
         node_index,
+        entity_phys,
+        physical_names,
+    } = sections;
+    let [_, curve_phys, surface_phys, _] = &entity_phys;
+    let Raw {
         cell_nodes,
         cell_ptr,
         cell_line,
         cell_tag,
         lines,
-        curve_phys,
-        surface_phys,
-        physical_names,
         ignored_types,
     } = raw;
     let node = |tag: u64, line: usize| {

@@ -37,7 +37,12 @@ pub fn write_vtu(
     w.flush().map_err(io)
 }
 
-fn check_arrays(kind: &str, arrays: &[(&str, &[f64])], n: usize, what: &str) -> Result<()> {
+pub(crate) fn check_arrays(
+    kind: &str,
+    arrays: &[(&str, &[f64])],
+    n: usize,
+    what: &str,
+) -> Result<()> {
     for (i, (name, values)) in arrays.iter().enumerate() {
         if name.is_empty() {
             return Err(Error::InvalidData(format!(
@@ -75,7 +80,7 @@ fn xml_escape(s: &str) -> String {
     out
 }
 
-fn write_f64(w: &mut impl Write, x: f64) -> std::io::Result<()> {
+pub(crate) fn write_f64(w: &mut impl Write, x: f64) -> std::io::Result<()> {
     if x.is_nan() {
         write!(w, "nan")
     } else if x.is_infinite() {
@@ -85,7 +90,7 @@ fn write_f64(w: &mut impl Write, x: f64) -> std::io::Result<()> {
     }
 }
 
-fn write_data(w: &mut impl Write, name: &str, values: &[f64]) -> std::io::Result<()> {
+pub(crate) fn write_data(w: &mut impl Write, name: &str, values: &[f64]) -> std::io::Result<()> {
     writeln!(
         w,
         "        <DataArray type=\"Float64\" Name=\"{}\" format=\"ascii\">",
@@ -104,7 +109,7 @@ fn write_data(w: &mut impl Write, name: &str, values: &[f64]) -> std::io::Result
 
 /// A `DataArray` of the `<Cells>` block, of type `ty` and named `name`: one line per cell
 /// `k < n_cells`, written by `line`.
-fn write_cell_array<W: Write>(
+pub(crate) fn write_cell_array<W: Write>(
     w: &mut W,
     ty: &str,
     name: &str,
