@@ -6,6 +6,8 @@
 //! element types once their faces are spelled out). The mesh type is built from that
 //! description, which is where faces are matched, oriented and validated.
 
+pub mod generate;
+
 use crate::error::MeshError;
 
 /// A point or vector of ℝ³.
