@@ -273,6 +273,176 @@ pub enum MeshError {
         /// The budget, in bytes.
         budget: u64,
     },
+    /// A [`Polyhedra`](crate::mesh3d::Polyhedra) whose offset arrays are malformed (not
+    /// starting at 0, decreasing, or not ending at the length of what they index).
+    #[error("malformed polyhedra: {0}")]
+    MalformedPolyhedra(String),
+    /// A polyhedron with more faces than the limit a 3D mesh accepts.
+    #[error("cell {cell} has {n_faces} faces, more than the limit of {max}")]
+    PolyhedronTooLarge {
+        /// 0-based cell index.
+        cell: usize,
+        /// Its number of faces.
+        n_faces: usize,
+        /// The largest number of faces a cell may have.
+        max: usize,
+    },
+    /// A face with more vertices than the limit a 3D mesh accepts.
+    #[error(
+        "cell {cell}, local face {local_face}: {n_vertices} vertices, more than the limit of {max}"
+    )]
+    FaceTooLarge {
+        /// 0-based cell index.
+        cell: usize,
+        /// The face's index among the faces of the cell.
+        local_face: usize,
+        /// Its number of vertices.
+        n_vertices: usize,
+        /// The largest number of vertices a face may have.
+        max: usize,
+    },
+    /// A face with fewer than three vertices, or listing a vertex twice.
+    #[error("cell {cell}, local face {local_face}: {msg}")]
+    BadFace {
+        /// 0-based cell index.
+        cell: usize,
+        /// The face's index among the faces of the cell.
+        local_face: usize,
+        /// What is wrong.
+        msg: String,
+    },
+    /// Two vertices of a 3D mesh at the same place.
+    #[error("vertices {a} and {b} coincide at ({}, {}, {})", point[0], point[1], point[2])]
+    DuplicateVertex3 {
+        /// First vertex.
+        a: usize,
+        /// Second vertex.
+        b: usize,
+        /// Their coordinates.
+        point: [f64; 3],
+    },
+    /// A polyhedron whose faces do not close up: an edge of its faces is used `uses` times
+    /// instead of twice, or twice in the same direction once the faces are oriented.
+    #[error("cell {cell} is not a closed polyhedron: its edge ({a}, {b}) {msg}")]
+    OpenCell {
+        /// 0-based cell index.
+        cell: usize,
+        /// First vertex of the edge.
+        a: usize,
+        /// Second vertex of the edge.
+        b: usize,
+        /// What is wrong with it.
+        msg: String,
+    },
+    /// A face (given by its vertices) listed by more than two cells.
+    #[error("the face with vertices {vertices:?} belongs to cells {}, {} and {} (at most two)", cells[0], cells[1], cells[2])]
+    OvercrowdedFace {
+        /// Its vertices, sorted.
+        vertices: Vec<usize>,
+        /// Three of the cells listing it.
+        cells: [usize; 3],
+    },
+    /// A polyhedron with zero or numerically negligible volume.
+    #[error("cell {cell} has zero volume ({volume:e})")]
+    DegenerateVolume {
+        /// 0-based cell index.
+        cell: usize,
+        /// Its volume.
+        volume: f64,
+    },
+    /// Two cells sharing a face that they orient the same way (both on the same side of it:
+    /// the cells overlap), or list with the same vertices in different cyclic orders.
+    #[error("cells {} and {} share the face with vertices {vertices:?} but {msg}", cells[0], cells[1])]
+    InconsistentFace {
+        /// The two cells.
+        cells: [usize; 2],
+        /// The face's vertex loop as the first cell lists it.
+        vertices: Vec<usize>,
+        /// What is wrong.
+        msg: String,
+    },
+    /// The boundary surface of a 3D mesh is not edge-manifold: a boundary edge used by more
+    /// than two boundary faces (cells meeting along an edge only, a non-conforming interface).
+    #[error("non-conforming mesh: the boundary edge ({a}, {b}) {msg}")]
+    NonConformingEdge {
+        /// First vertex of the edge.
+        a: usize,
+        /// Second vertex of the edge.
+        b: usize,
+        /// What is wrong with it.
+        msg: String,
+    },
+    /// A vertex where the boundary surface of a 3D mesh is pinched: its boundary faces form
+    /// more than one fan (two cells touching at a vertex only, or a non-conforming interface).
+    #[error(
+        "non-conforming mesh: the boundary faces around vertex {vertex} form {fans} separate fans"
+    )]
+    NonConformingVertex {
+        /// 0-based vertex index.
+        vertex: usize,
+        /// The number of fans of boundary faces around it.
+        fans: usize,
+    },
+    /// A polyhedron not strictly star-shaped with respect to its centroid: d_{K,σ} ≤ 0 on one
+    /// of its faces, or a triangle of a face's fan seen negatively from x_K.
+    #[error(
+        "cell {cell} is not strictly star-shaped with respect to its centroid: {what} = {value:e} on its local face {local_face}"
+    )]
+    NotStarShaped3 {
+        /// 0-based cell index.
+        cell: usize,
+        /// Local face index in the cell.
+        local_face: usize,
+        /// Which quantity is not positive.
+        what: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A face further from planar than the tolerance of a 3D mesh.
+    #[error(
+        "face {face} (of cell {cell}, vertices {vertices:?}) is warped: a vertex lies {warp:e} times its diameter off its plane, more than {tol:e}"
+    )]
+    WarpedFace {
+        /// 0-based face index.
+        face: usize,
+        /// A cell of the face.
+        cell: usize,
+        /// Its vertex loop.
+        vertices: Vec<usize>,
+        /// max over its vertices v of |(v − x_σ)·n_σ| / diam(σ).
+        warp: f64,
+        /// The tolerance.
+        tol: f64,
+    },
+    /// The polyhedra cover some region more than once: a vertex of the boundary surface lies
+    /// strictly inside a cell.
+    #[error("cells overlap: the boundary vertex {vertex} lies inside cell {cell}")]
+    OverlappingPolyhedra {
+        /// The boundary vertex.
+        vertex: usize,
+        /// The cell holding it.
+        cell: usize,
+    },
+    /// Cell tags that are neither absent nor one per cell.
+    #[error("{tags} cell tags for {cells} cells")]
+    CellTagCount {
+        /// The number of tags.
+        tags: usize,
+        /// The number of cells.
+        cells: usize,
+    },
+    /// A tagged face of a 3D mesh that is not one of its boundary faces.
+    #[error("tagged face {index} (vertices {vertices:?}, tag {tag}) {msg}")]
+    BadTaggedFace {
+        /// Its index among the tagged faces.
+        index: usize,
+        /// Its vertex loop.
+        vertices: Vec<usize>,
+        /// Its tag.
+        tag: i32,
+        /// What is wrong.
+        msg: String,
+    },
 }
 
 /// The end of the message of [`MeshError::OverlappingCells`].

@@ -5,10 +5,60 @@
 //! cells is listed by both, in either orientation, as in HArDCore's RF files and in gmsh's
 //! element types once their faces are spelled out). The mesh type is built from that
 //! description, which is where faces are matched, oriented and validated.
+//!
+//! [`PolyMesh3::from_polyhedra`] builds a [`PolyMesh3`]: flat CSR arrays with 32-bit ids (cells
+//! as lists of faces, faces as vertex loops counter-clockwise seen from outside their first
+//! cell, face–cell incidence, boundary faces, tags) and the cached geometry of the notation
+//! table, computed as `geometry.rs` states (exact for planar faces; for warped faces the fan
+//! of triangles around the face's vertex average, HArDCore3D's convention).
+//!
+//! | accessor | maths |
+//! |---|---|
+//! | [`PolyMesh3::measure`] | \|K\| |
+//! | [`PolyMesh3::centroid`] | x_K (centre of mass, not the vertex average) |
+//! | [`PolyMesh3::diameter`] | h_K = max distance between two vertices of K |
+//! | [`PolyMesh3::face_measure`] | \|σ\| |
+//! | [`PolyMesh3::face_centroid`] | x_σ |
+//! | [`PolyMesh3::face_normal`] | n_σ, unit, outward from the face's first cell |
+//! | [`PolyMesh3::cell_normal_dist`] | (n_{K,σ}, d_{K,σ} = (x_σ − x_K)·n_{K,σ}) on local face i |
+//! | [`PolyMesh3::h`] | h = max_K h_K |
+//! | [`PolyMesh3::bounding_box`] | the smallest [`Cuboid`] holding Ω |
+//!
+//! ## Files
+//! One job each: `build.rs` runs the construction ([`mesh3_bytes`] is its memory estimate);
+//! `faces.rs` matches face sides into faces; `orient.rs` orients each cell's faces outward;
+//! `geometry.rs` computes the geometry (the maths is in its docs); [`validate`] lists every
+//! check and runs those on the input; `shape.rs` checks warp and star-shapedness; `mesh.rs`
+//! holds the type and its accessors; `tags.rs` the tags; `complex.rs` the
+//! [`CellComplex<3>`](crate::mesh::CellComplex) view a scheme reads.
 
 pub mod generate;
 
 use crate::error::MeshError;
+
+mod build;
+mod complex;
+mod faces;
+mod geometry;
+mod mesh;
+mod orient;
+mod overlap;
+mod shape;
+mod surface;
+mod tags;
+#[cfg(test)]
+pub(crate) mod test_meshes;
+#[cfg(test)]
+mod tests_build;
+#[cfg(test)]
+mod tests_errors;
+#[cfg(test)]
+mod tests_external;
+pub mod validate;
+
+pub use build::mesh3_bytes;
+pub use mesh::PolyMesh3;
+pub use validate::{MAX_CELL_FACES, MAX_FACE_VERTICES, WARP_TOL};
 
 /// A point or vector of ℝ³.
 pub type Point3 = [f64; 3];

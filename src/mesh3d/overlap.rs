@@ -1,0 +1,122 @@
+//! Check 12 of [`validate`](super::validate): no cell covers a boundary vertex.
+//!
+//! Once every cell is a closed, outward-oriented surface and interior faces are shared by two
+//! cells on opposite sides, Σ_K |K| equals the volume enclosed by the boundary surface,
+//! (1/3) Σ_{boundary σ} Σ_{T ⊂ σ} N_T·x_T, exactly in exact arithmetic (the divergence theorem,
+//! interior fans cancelling), whether or not cells overlap: the volume balance cannot see an
+//! overlap in 3D. What does see it: cells covering a region twice have boundary faces inside
+//! other cells (a cell floating inside another, two meshes interpenetrating, a mesh folded
+//! over itself), so some boundary vertex lies strictly inside a cell. Each boundary vertex is
+//! tested against the cells whose bounding box holds it, found in a uniform grid of about one
+//! bucket per cell over the bounding box of the mesh; a cell, star-shaped with respect to x_K
+//! (check 10), is the union of the tetrahedra (x_K, T) over the fan triangles T of its faces,
+//! and a point is strictly inside it if it lies in one of these tetrahedra and not on its
+//! outer triangle (barycentric coordinates, to 10⁻⁹). Expected O(n) for meshes of cells of comparable sizes. (Overlaps in which no
+//! vertex enters a cell, such as two bars crossing edge through edge, are not detected.)
+
+use super::Point3;
+use super::PolyMesh3;
+use super::geometry::{for_each_fan_corners, tet_volume};
+use crate::error::MeshError;
+use crate::mesh::buckets::counting_sort;
+use rayon::prelude::*;
+
+impl PolyMesh3 {
+    /// [`MeshError::OverlappingPolyhedra`] naming a boundary vertex strictly inside a cell.
+    pub(crate) fn check_overlap(&self) -> Result<(), MeshError> {
+        let bb = self.bounding_box().ranges();
+        let n = ((self.n_cells() as f64).cbrt().ceil() as usize).clamp(1, 1024);
+        let width: [f64; 3] = std::array::from_fn(|a| (bb[a][1] - bb[a][0]) / n as f64);
+        let cell_of = |x: f64, a: usize| -> usize {
+            (((x - bb[a][0]) / width[a]).floor().max(0.0) as usize).min(n - 1)
+        };
+        let boxes: Vec<[[usize; 2]; 3]> = (0..self.n_cells())
+            .map(|k| {
+                let mut r = [[usize::MAX, 0]; 3];
+                for &f in self.cell_faces(k) {
+                    for &v in self.face_vertices(f as usize) {
+                        let p = self.vertices[v as usize];
+                        for a in 0..3 {
+                            let i = cell_of(p[a], a);
+                            r[a] = [r[a][0].min(i), r[a][1].max(i)];
+                        }
+                    }
+                }
+                r
+            })
+            .collect();
+        // (bucket, cell) pairs, one per bucket a cell's box meets
+        let pairs: Vec<(usize, u32)> = boxes
+            .iter()
+            .enumerate()
+            .flat_map(|(k, r)| {
+                (r[2][0]..=r[2][1]).flat_map(move |z| {
+                    (r[1][0]..=r[1][1]).flat_map(move |y| {
+                        (r[0][0]..=r[0][1]).map(move |x| (x + n * (y + n * z), k as u32))
+                    })
+                })
+            })
+            .collect();
+        let (ptr, cells) =
+            counting_sort(n * n * n, pairs.iter().map(|p| Some(p.0)), |i| pairs[i].1);
+        drop(pairs);
+        let mut boundary_vertices: Vec<u32> = self
+            .boundary_faces
+            .iter()
+            .flat_map(|&f| self.face_vertices(f as usize).iter().copied())
+            .collect();
+        boundary_vertices.sort_unstable();
+        boundary_vertices.dedup();
+        let hit = boundary_vertices.par_iter().find_map_first(|&v| {
+            let p = self.vertices[v as usize];
+            let b = cell_of(p[0], 0) + n * (cell_of(p[1], 1) + n * cell_of(p[2], 2));
+            cells[ptr[b]..ptr[b + 1]]
+                .iter()
+                .find(|&&k| self.strictly_inside(k as usize, v))
+                .map(|&k| (v, k))
+        });
+        match hit {
+            Some((v, k)) => Err(MeshError::OverlappingPolyhedra {
+                vertex: v as usize,
+                cell: k as usize,
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// Whether vertex `v` lies strictly inside cell `k` (see the module docs).
+    fn strictly_inside(&self, k: usize, v: u32) -> bool {
+        let xk = self.cell_centroid[k];
+        let p = self.vertices[v as usize];
+        let mut inside = false;
+        for &f in self.cell_faces(k) {
+            if inside {
+                break;
+            }
+            let l = self.face_vertices(f as usize);
+            if l.contains(&v) {
+                return false;
+            }
+            let reversed = self.face_cells[f as usize][0] as usize != k;
+            for_each_fan_corners(&self.vertices, l, reversed, |a, b, c| {
+                inside |= in_tetrahedron(xk, [a, b, c], p);
+            });
+        }
+        inside
+    }
+}
+
+/// Whether `p` lies in the tetrahedron (xk, a, b, c) (positively oriented), strictly on the
+/// inner side of (a, b, c): its barycentric coordinate of xk above 10⁻⁹, the others not below
+/// −10⁻⁹.
+fn in_tetrahedron(xk: Point3, [a, b, c]: [Point3; 3], p: Point3) -> bool {
+    let vol = tet_volume(xk, a, b, c);
+    if !(vol > 0.0) {
+        return false;
+    }
+    let eps = 1e-9;
+    tet_volume(p, a, b, c) / vol > eps
+        && tet_volume(xk, p, b, c) / vol >= -eps
+        && tet_volume(xk, a, p, c) / vol >= -eps
+        && tet_volume(xk, a, b, p) / vol >= -eps
+}
