@@ -22,7 +22,9 @@
 //! [`Error::InvalidData`]; before allocating anything, the memory the mesh needs is estimated
 //! from its exact counts ([`Family3::polyhedra_estimate`]) and a request beyond the caller's
 //! [`MemoryBudget`] gives [`MeshError::TooLarge`](crate::MeshError::TooLarge) with the estimate.
-//! [`Family3::polyhedra`] gives the description of a level on a box.
+//! [`Family3::polyhedra`] gives the description of a level on a box, [`Family3::generate`] and
+//! [`Family3::generate_on`] the validated [`PolyMesh3`] built from it (its memory estimate,
+//! [`Family3::memory_estimate`], includes the build's).
 
 pub mod cubes;
 mod fill;
@@ -35,6 +37,8 @@ pub mod warped;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_mesh;
 
 pub use crate::mesh::generate::MAX_CELLS;
 pub use cubes::cubes;
@@ -45,7 +49,7 @@ pub use warped::warped;
 
 use crate::error::{Error, Result};
 use crate::mesh::MemoryBudget;
-use crate::mesh3d::{Cuboid, Polyhedra};
+use crate::mesh3d::{Cuboid, PolyMesh3, Polyhedra, mesh3_bytes};
 use std::fmt;
 use std::str::FromStr;
 
@@ -242,6 +246,50 @@ impl Family3 {
             Family3::Refined => refined(n, domain, budget),
             Family3::Warped => warped(n, domain, warped::SEED, budget),
         }
+    }
+}
+
+impl Family3 {
+    /// Estimated peak memory, in bytes, of [`Family3::generate`] at `level`: the description
+    /// ([`Family3::polyhedra_estimate`]) plus what building the mesh from it needs
+    /// ([`mesh3_bytes`]); `u64::MAX` when it cannot be counted.
+    pub fn memory_estimate(self, level: usize) -> u64 {
+        let build = self
+            .counts(level)
+            .map_or(u64::MAX, |[c, s, v, p]| mesh3_bytes(c, s, v, p));
+        self.polyhedra_estimate(level).saturating_add(build)
+    }
+
+    /// The validated mesh of this family at `level` on the unit cube
+    /// ([`Family3::generate_on`] with [`Cuboid::UNIT`]).
+    pub fn generate(self, level: usize, budget: MemoryBudget) -> Result<PolyMesh3> {
+        self.generate_on(level, Cuboid::UNIT, budget)
+    }
+
+    /// The validated mesh of this family at `level` on `domain`: [`Family3::polyhedra`] built
+    /// by [`PolyMesh3::from_polyhedra`]. Errors as [`Family3::polyhedra`], with the whole
+    /// [`Family3::memory_estimate`] checked against `budget` before anything is allocated; the
+    /// build is given what the description leaves of the budget.
+    pub fn generate_on(
+        self,
+        level: usize,
+        domain: Cuboid,
+        budget: MemoryBudget,
+    ) -> Result<PolyMesh3> {
+        check_domain(domain)?;
+        self.check_level(level)?;
+        let what = format!(
+            "the 3D {} mesh of level {level} ({} cells)",
+            self.name(),
+            self.cells_at_level(level)
+        );
+        budget
+            .check(what, self.memory_estimate(level))
+            .map_err(Error::from)?;
+        let p = self.polyhedra(level, domain, budget)?;
+        let held = polyhedra_bytes(self.counts(level));
+        let rest = MemoryBudget::new(budget.bytes().saturating_sub(held));
+        Ok(PolyMesh3::from_polyhedra(p, rest)?)
     }
 }
 
