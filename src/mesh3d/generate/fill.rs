@@ -147,7 +147,7 @@ mod tests {
 
     #[test]
     fn layers_are_counted_then_written_at_their_offsets() {
-        let counts = count_layers(4, |l, s| describe(l, s));
+        let counts = count_layers(4, describe);
         assert_eq!(counts[2], [3, 6, 18]);
         let [cell_ptr, face_ptr, fv] = fill_layers(&counts, |l, s| describe(l, s));
         assert_eq!(cell_ptr, [0, 1, 2, 4, 5, 7, 10, 11, 13, 16, 20]);
