@@ -36,6 +36,8 @@
 
 pub mod io;
 
+pub mod generate;
+
 use crate::error::MeshError;
 
 mod build;
