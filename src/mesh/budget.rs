@@ -78,6 +78,23 @@ impl MemoryBudget {
     }
 }
 
+impl MemoryBudget {
+    /// `Ok` if `bytes` fit in the budget, else [`Error::OutOfMemory`](crate::Error::OutOfMemory)
+    /// naming `what`: the check of a computation that is not the building of a mesh (assembly,
+    /// factorisation, multigrid).
+    pub fn check_computation(self, what: impl Into<String>, bytes: u64) -> crate::Result<()> {
+        if bytes <= self.0 {
+            Ok(())
+        } else {
+            Err(crate::Error::OutOfMemory {
+                what: what.into(),
+                bytes,
+                budget: self.0,
+            })
+        }
+    }
+}
+
 impl Default for MemoryBudget {
     /// [`MemoryBudget::DEFAULT`].
     fn default() -> Self {
@@ -288,5 +305,17 @@ mod tests {
             "a big mesh would need about 11.0 GiB, more than the memory budget of 8.0 GiB"
         );
         assert_eq!(mesh_bytes(u64::MAX, 1, 1, 1), u64::MAX);
+        assert!(budget.check_computation("y", 10).is_ok());
+        let e = MemoryBudget::new(1 << 30)
+            .check_computation("assembling the system", 3 << 30)
+            .unwrap_err();
+        assert!(e.is_out_of_memory());
+        assert!(
+            e.to_string().starts_with(
+                "assembling the system would need about 3.0 GiB, more than the 1.0 GiB of memory \
+                 this process may take (use a coarser mesh"
+            ),
+            "{e}"
+        );
     }
 }
