@@ -22,7 +22,8 @@ Main names: :class:`Mesh`, :class:`Problem` (with :class:`CellData`, :class:`Edg
 :class:`VertexData`), :func:`solve` returning a :class:`Solution`, :class:`Rect`, the
 registries ``SCHEMES``, ``FAMILIES`` and ``BUILTIN_PROBLEMS`` (from the Rust library), and the
 exceptions, all subclasses of :class:`GradviError` (:class:`InvalidDataError` is also a
-``ValueError``, :class:`MeshIoError` an ``OSError``).
+``ValueError``, :class:`MeshIoError` an ``OSError``, :class:`OutOfMemoryError` a
+``MemoryError``).
 """
 
 from ._gradvi import (
@@ -42,6 +43,7 @@ from ._gradvi import (
     MaxIterationsError,
     MeshIoError,
     NoKktPointError,
+    OutOfMemoryError,
     ProblemFileError,
     SolverError,
 )
@@ -99,5 +101,6 @@ __all__ = [
     "ProblemFileError",
     "FileError",
     "InternalError",
+    "OutOfMemoryError",
     "__version__",
 ]

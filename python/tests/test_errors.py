@@ -1,4 +1,8 @@
 """Bad inputs raise gradvi.GradviError subclasses with the library's message (never a crash)."""
+import resource
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from conftest import ROOT, make_test3, psi
@@ -9,7 +13,7 @@ import gradvi
 def test_hierarchy():
     for cls in (gradvi.MeshIoError, gradvi.InvalidMeshError, gradvi.InvalidDataError, gradvi.InfeasibleError,
                 gradvi.LinearSolverError, gradvi.IllPosedError, gradvi.SolverError, gradvi.ProblemFileError,
-                gradvi.FileError, gradvi.InternalError):
+                gradvi.FileError, gradvi.InternalError, gradvi.OutOfMemoryError):
         assert issubclass(cls, gradvi.GradviError) and issubclass(cls, Exception)
     for cls in (gradvi.MaxIterationsError, gradvi.CyclingError, gradvi.NoKktPointError, gradvi.CertificateError):
         assert issubclass(cls, gradvi.SolverError)
@@ -18,6 +22,32 @@ def test_hierarchy():
     assert issubclass(gradvi.InvalidDataError, ValueError) and issubclass(gradvi.MeshIoError, OSError)
     assert gradvi.InvalidDataError.__module__ == "gradvi" and gradvi.MeshIoError.__module__ == "gradvi"
     assert not issubclass(gradvi.InvalidMeshError, (ValueError, OSError))
+    assert issubclass(gradvi.OutOfMemoryError, MemoryError) and gradvi.OutOfMemoryError.__module__ == "gradvi"
+
+
+_TOO_LARGE = """
+import gradvi
+try:
+    gradvi.Mesh.generate("cartesian", 11)
+except MemoryError as e:
+    assert isinstance(e, gradvi.OutOfMemoryError) and isinstance(e, gradvi.GradviError), type(e)
+    assert e.bytes > e.budget > 0 and "would need about" in str(e), str(e)
+    print("refused:", e)
+else:
+    raise AssertionError("no error")
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="RLIMIT_AS is a Linux limit")
+def test_a_mesh_too_large_for_the_address_space_limit_is_a_memory_error():
+    # in a child under a 3 GiB address-space limit: the budget sees it and refuses the 16.8M
+    # cells of the level-11 Cartesian mesh by their estimate, before allocating them
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+
+    out = subprocess.run([sys.executable, "-c", _TOO_LARGE], preexec_fn=limit, capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0 and "refused:" in out.stdout, out.stderr
 
 
 def test_builtin_bases_catch_the_library_errors(tmp_path):
