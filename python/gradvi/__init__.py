@@ -50,7 +50,7 @@ from ._gradvi import (
 from ._gradvi import __version__ as _rust_version
 from ._mesh import Mesh, Rect
 from ._problem import CellData, EdgeData, Problem, VertexData
-from ._solve import Certificate, IterationLog, Solution, solve
+from ._solve import Certificate, IterationLog, MarginalLoadWarning, Solution, solve
 
 __version__ = _rust_version
 
@@ -102,5 +102,6 @@ __all__ = [
     "FileError",
     "InternalError",
     "OutOfMemoryError",
+    "MarginalLoadWarning",
     "__version__",
 ]

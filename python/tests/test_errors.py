@@ -200,3 +200,19 @@ def test_solver_failures(test3_mesh):
     # Neumann everywhere and no barrier: u is defined up to a constant
     with pytest.raises(gradvi.IllPosedError, match="additive constant"):
         gradvi.solve(gradvi.Mesh.generate("cartesian", 1), gradvi.Problem(source=1.0, boundary={"neumann": "rest"}))
+
+
+def test_a_marginal_load_is_a_warning_or_named_in_the_error(tmp_path):
+    # the example: the paper's Test 2 data on (−1,0)×(0.2,0.8), every edge Signorini
+    # with the upper barrier 0; HMM refuses it, P1 solves it, both name the marginal load
+    test2 = (ROOT / "problems" / "test2.toml").read_text()
+    f = tmp_path / "marginal.toml"
+    f.write_text(test2[: test2.index("[dirichlet]")] + '\n[signorini]\nside = "upper"\nbarrier = 0\n')
+    pb = gradvi.Problem.from_file(f)
+    domain = [-1.0, 0.0, 0.2, 0.8]
+    with pytest.raises(gradvi.IllPosedError, match="marginal load"):
+        gradvi.solve(gradvi.Mesh.generate("cartesian", 2, domain), pb, scheme="hmm")
+    with pytest.warns(gradvi.MarginalLoadWarning, match="depends on the sign of that sum"):
+        sol = gradvi.solve(gradvi.Mesh.generate("triangles", 2, domain), pb, scheme="p1")
+    [part] = sol.marginal_load
+    assert 0 < part["ratio"] < 0.1 and part["sum"] > 0
