@@ -189,7 +189,10 @@ fn rlimit(which: Limit) -> Option<u64> {
     };
     // SAFETY: getrlimit writes one `rlimit` through a valid pointer and reads nothing else.
     let ok = unsafe { libc::getrlimit(resource, &mut lim) } == 0;
-    (ok && lim.rlim_cur != libc::RLIM_INFINITY).then(|| u64::try_from(lim.rlim_cur).ok())?
+    // `rlim_t` is u64 on Linux, of other widths on other Unix systems
+    #[allow(clippy::useless_conversion)]
+    let cur = u64::try_from(lim.rlim_cur).ok();
+    cur.filter(|_| ok && lim.rlim_cur != libc::RLIM_INFINITY)
 }
 
 /// No resource limits outside Unix.
