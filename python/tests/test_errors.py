@@ -39,14 +39,15 @@ else:
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="RLIMIT_AS is a Linux limit")
-def test_a_mesh_too_large_for_the_address_space_limit_is_a_memory_error():
+def test_a_mesh_too_large_for_the_address_space_limit_is_a_memory_error(tmp_path):
     # in a child under a 3 GiB address-space limit: the budget sees it and refuses the 16.8M
     # cells of the level-11 Cartesian mesh by their estimate, before allocating them
     def limit():
         resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
 
+    # run from tmp_path, so that the installed gradvi is imported, not the sources beside the tests
     out = subprocess.run([sys.executable, "-c", _TOO_LARGE], preexec_fn=limit, capture_output=True, text=True,
-                         timeout=120)
+                         timeout=120, cwd=tmp_path)
     assert out.returncode == 0 and "refused:" in out.stdout, out.stderr
 
 
