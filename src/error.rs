@@ -77,6 +77,45 @@ pub enum Error {
     /// an error instead of a wrong answer or a panic.
     #[error("internal error (please report): {0}")]
     Internal(String),
+    /// A computation would need more memory than the caller's budget
+    /// ([`MemoryBudget`](crate::mesh::MemoryBudget)): refused by its estimate before the
+    /// allocation, or an allocation that failed. A mesh too large to build is
+    /// [`MeshError::TooLarge`] instead.
+    #[error(
+        "{what} would need about {}, more than the {} of memory this process may take ({})",
+        human_bytes(*bytes),
+        human_bytes(*budget),
+        MEMORY_ADVICE
+    )]
+    OutOfMemory {
+        /// What needed the memory.
+        what: String,
+        /// The estimate (or the failed request), in bytes.
+        bytes: u64,
+        /// The budget it was compared with, in bytes.
+        budget: u64,
+    },
+}
+
+/// What to do when the memory runs out: the end of [`Error::OutOfMemory`]'s message, which the
+/// command line adds to a [`MeshError::TooLarge`].
+pub const MEMORY_ADVICE: &str = "use a coarser mesh, or give the process more memory: free \
+     some, or raise its limit, e.g. `ulimit -v` or the job's memory request";
+
+impl Error {
+    /// True for the errors that say the memory ran out: [`Error::OutOfMemory`] and a mesh
+    /// refused as [`MeshError::TooLarge`] (alone or from a file).
+    pub fn is_out_of_memory(&self) -> bool {
+        matches!(
+            self,
+            Error::OutOfMemory { .. }
+                | Error::InvalidMesh(MeshError::TooLarge { .. })
+                | Error::InvalidMeshFile {
+                    source: MeshError::TooLarge { .. },
+                    ..
+                }
+        )
+    }
 }
 
 /// `path:line:column`, `path:line` or `path`, whichever is known.

@@ -164,9 +164,26 @@ where
     match run(Cli::parse_from(args)) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", one_line(&e));
+            eprintln!("error: {}{}", one_line(&e), advice(&e));
             std::process::ExitCode::FAILURE
         }
+    }
+}
+
+/// What to do after a mesh refused as too large for the memory (the library's
+/// [`gradvi::Error::OutOfMemory`] says it already); empty for other errors.
+fn advice(e: &anyhow::Error) -> String {
+    let too_large = e.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<gradvi::Error>(),
+            Some(g @ (gradvi::Error::InvalidMesh(_) | gradvi::Error::InvalidMeshFile { .. }))
+                if g.is_out_of_memory()
+        )
+    });
+    if too_large {
+        format!(" ({})", gradvi::error::MEMORY_ADVICE)
+    } else {
+        String::new()
     }
 }
 

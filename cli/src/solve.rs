@@ -286,6 +286,9 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         scheme.n_unknowns()
     );
     let sol = solve_problem(scheme.as_ref(), &problem, &solve_options(a))?;
+    for m in &sol.marginal_load {
+        eprintln!("warning: {m}");
+    }
     println!("problem         {}", problem.name);
     println!("scheme          {kind}");
     println!(
@@ -330,6 +333,7 @@ pub fn run(a: &SolveArgs) -> Result<()> {
             "n_active": sol.result.active.iter().filter(|&&x| x).count(),
             "niter": sol.niter(),
             "warm_start": sol.warm_start,
+            "marginal_load": sol.marginal_load,
             "method": format!("{:?}", sol.result.method),
             "certificate": sol.result.certificate,
             "errors": errors,

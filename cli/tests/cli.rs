@@ -365,3 +365,49 @@ fn the_list_of_families() {
     let (ok, _, err) = gradvi(&words("solve problems/ex9.toml --scheme p1"));
     assert!(!ok && err.contains("--generate triangles"), "{err}");
 }
+
+/// The issue's example of a marginal load: the paper's Test 2 data on (−1,0)×(0.2,0.8), every
+/// edge Signorini with the upper barrier 0. HMM refuses it, P1 solves it; both say that the
+/// conclusion hangs on the sign of a small total load (P1: on stderr and in the JSON output).
+#[test]
+fn a_marginal_load_is_reported_on_stderr_and_in_the_json() {
+    let test2 = std::fs::read_to_string(Path::new(ROOT).join("problems/test2.toml")).unwrap();
+    let data = &test2[..test2.find("[dirichlet]").unwrap()];
+    let file = tmp("marginal.toml");
+    let json = tmp("marginal.json");
+    std::fs::write(
+        &file,
+        format!(
+            "{data}\n[mesh]\ngenerate = \"cartesian\"\nlevel = 2\ndomain = [-1, 0, 0.2, 0.8]\n\n\
+             [signorini]\nside = \"upper\"\nbarrier = 0\n"
+        ),
+    )
+    .unwrap();
+    let f = file.to_str().unwrap();
+    let (ok, _, err) = gradvi(&["solve", f, "--scheme", "hmm"]);
+    assert!(
+        !ok && err.contains("ill-posed") && err.contains("marginal load"),
+        "{err}"
+    );
+    let j = json.to_str().unwrap();
+    let (ok, _, err) = gradvi(&[
+        "solve",
+        f,
+        "--scheme",
+        "p1",
+        "--generate",
+        "triangles",
+        "--json",
+        j,
+    ]);
+    assert!(ok && err.contains("warning: marginal load"), "{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let m = &v["marginal_load"][0];
+    assert!(
+        m["ratio"].as_f64().unwrap() < 0.1 && m["sum"].as_f64().unwrap() > 0.0,
+        "{v}"
+    );
+    std::fs::remove_file(&file).ok();
+    std::fs::remove_file(&json).ok();
+}

@@ -22,7 +22,8 @@ Main names: :class:`Mesh`, :class:`Problem` (with :class:`CellData`, :class:`Edg
 :class:`VertexData`), :func:`solve` returning a :class:`Solution`, :class:`Rect`, the
 registries ``SCHEMES``, ``FAMILIES`` and ``BUILTIN_PROBLEMS`` (from the Rust library), and the
 exceptions, all subclasses of :class:`GradviError` (:class:`InvalidDataError` is also a
-``ValueError``, :class:`MeshIoError` an ``OSError``).
+``ValueError``, :class:`MeshIoError` an ``OSError``, :class:`OutOfMemoryError` a
+``MemoryError``).
 """
 
 from ._gradvi import (
@@ -42,13 +43,14 @@ from ._gradvi import (
     MaxIterationsError,
     MeshIoError,
     NoKktPointError,
+    OutOfMemoryError,
     ProblemFileError,
     SolverError,
 )
 from ._gradvi import __version__ as _rust_version
 from ._mesh import Mesh, Rect
 from ._problem import CellData, EdgeData, Problem, VertexData
-from ._solve import Certificate, IterationLog, Solution, solve
+from ._solve import Certificate, IterationLog, MarginalLoadWarning, Solution, solve
 
 __version__ = _rust_version
 
@@ -99,5 +101,7 @@ __all__ = [
     "ProblemFileError",
     "FileError",
     "InternalError",
+    "OutOfMemoryError",
+    "MarginalLoadWarning",
     "__version__",
 ]

@@ -59,6 +59,10 @@ class FileError(GradviError):
 
 class InternalError(GradviError): ...
 
+class OutOfMemoryError(GradviError, MemoryError):
+    bytes: int
+    budget: int
+
 class _Mesh:
     @staticmethod
     def read(path: str) -> _Mesh: ...

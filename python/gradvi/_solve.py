@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import asdict, dataclass, fields
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, Union
 
@@ -122,6 +123,10 @@ class Solution:
     errors: Optional[Dict[str, float]]
     #: What the nested warm start did (None: cold start or no barrier).
     warm_start: Optional[Dict[str, Any]]
+    #: Parts of the mesh without Dirichlet boundary whose well-posedness hangs on the sign of a
+    #: small total load, each ``{"cell", "sum", "ratio", "message"}`` (ratio = |Σb| / Σ|b|,
+    #: below 0.1); :func:`solve` also warns with :class:`MarginalLoadWarning`. Usually empty.
+    marginal_load: List[Dict[str, Any]]
     #: The scheme's name.
     scheme: str
     #: Points outside the evaluation table that the solve asked data at (only the coarse
@@ -134,7 +139,7 @@ class Solution:
 
     __slots__ = (
         "_r", "mesh", "problem", "certificate", "niter", "method", "log", "timings", "errors", "warm_start",
-        "scheme", "untabulated_points", "fallback_calls", "iterates",
+        "marginal_load", "scheme", "untabulated_points", "fallback_calls", "iterates",
     )
 
     def __init__(self, mesh: Mesh, problem: Problem, r: Dict[str, Any], data_seconds: float) -> None:
@@ -148,6 +153,7 @@ class Solution:
         self.timings = dict(r["timings"], data=data_seconds)
         self.errors = r["errors"]
         self.warm_start = r["warm_start"]
+        self.marginal_load = list(r["marginal_load"])
         self.scheme = str(r["scheme"])
         self.untabulated_points = int(r.get("untabulated_points", 0))
         self.fallback_calls = int(r.get("fallback_calls", 0))
@@ -500,4 +506,14 @@ def solve(
         factor_threads=str(factor_threads),
         linear=str(linear),
     )
-    return Solution(m, pb, r, seconds)
+    sol = Solution(m, pb, r, seconds)
+    for part in sol.marginal_load:
+        warnings.warn(part["message"], MarginalLoadWarning, stacklevel=2)
+    return sol
+
+
+class MarginalLoadWarning(UserWarning):
+    """A part of the mesh without Dirichlet boundary, held by a barrier, whose discrete load
+    nearly cancels (|Σb| / Σ|b| < 0.1): whether the problem is well-posed there depends on the
+    sign of that load, hence on its discretisation (another scheme or mesh may conclude
+    otherwise). See :attr:`Solution.marginal_load`."""

@@ -18,15 +18,17 @@
 //! │   └── CertificateError       SolverError::Certificate   (quantity, value, tol)
 //! ├── ProblemFileError       Error::ProblemFile       (path, line, column, kind)
 //! ├── FileError              Error::Io                (path, errno)
-//! └── InternalError          a panic inside gradvi (a bug): the interpreter survives
+//! ├── InternalError          a panic inside gradvi (a bug): the interpreter survives
+//! └── OutOfMemoryError       Error::OutOfMemory, and a mesh refused as MeshError::TooLarge
+//!                            (bytes, budget); also a MemoryError
 //! ```
 
-use gradvi::Error;
+use gradvi::{Error, MeshError};
 use gradvi::SolverError as Stall;
 use gradvi::error::ProblemFileErrorKind;
 use pyo3::BoundObject;
 use pyo3::create_exception;
-use pyo3::exceptions::{PyException, PyOSError, PyValueError};
+use pyo3::exceptions::{PyException, PyMemoryError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyTuple, PyType};
@@ -163,6 +165,14 @@ pub static MESH_IO: DualBase = DualBase {
     class: PyOnceLock::new(),
 };
 
+/// `OutOfMemoryError`, also a `MemoryError`.
+pub static OUT_OF_MEMORY: DualBase = DualBase {
+    name: "OutOfMemoryError",
+    doc: "The computation would need more memory than this process may take, refused by its estimate before allocating (attributes: bytes, budget; also a MemoryError).",
+    builtin: |py| py.get_type::<PyMemoryError>(),
+    class: PyOnceLock::new(),
+};
+
 /// Adds the exception classes to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
@@ -181,6 +191,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ProblemFileError", py.get_type::<ProblemFileError>())?;
     m.add("FileError", py.get_type::<FileError>())?;
     m.add("InternalError", py.get_type::<InternalError>())?;
+    m.add("OutOfMemoryError", OUT_OF_MEMORY.class(py)?)?;
     Ok(())
 }
 
@@ -214,6 +225,15 @@ fn kind_name(kind: ProblemFileErrorKind) -> &'static str {
 pub fn to_pyerr(py: Python<'_>, e: &Error) -> PyErr {
     let msg = e.to_string();
     let (err, attrs): (PyErr, Vec<(&str, Py<PyAny>)>) = match e {
+        Error::OutOfMemory { bytes, budget, .. }
+        | Error::InvalidMesh(MeshError::TooLarge { bytes, budget, .. })
+        | Error::InvalidMeshFile {
+            source: MeshError::TooLarge { bytes, budget, .. },
+            ..
+        } => (
+            OUT_OF_MEMORY.new_err(msg),
+            vec![("bytes", obj(py, *bytes)), ("budget", obj(py, *budget))],
+        ),
         Error::MeshIo { path, line, .. } => (
             MESH_IO.new_err(msg),
             vec![("path", path_obj(py, path)), ("line", obj(py, *line))],

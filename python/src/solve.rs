@@ -12,8 +12,8 @@ use gradvi::post::fields::EntityFields;
 use gradvi::post::{Errors, relative_errors};
 use gradvi::scheme::{Entity, SchemeKind, SchemeOptions, build_with};
 use gradvi::solver::{
-    ActiveSetOptions, Certificate, IterationLog, Method, SolveOptions, Timings, WarmStart,
-    WarmStartReport, solve_problem,
+    ActiveSetOptions, Certificate, IterationLog, MarginalLoad, Method, SolveOptions, Timings,
+    WarmStart, WarmStartReport, solve_problem,
 };
 use gradvi::vi::Side;
 use pyo3::prelude::*;
@@ -43,6 +43,7 @@ struct Output {
     certificate: Certificate,
     timings: Timings,
     warm_start: Option<WarmStartReport>,
+    marginal_load: Vec<MarginalLoad>,
     errors: Option<Errors>,
     exact_cell: Option<Vec<f64>>,
     iterates: Vec<Vec<f64>>,
@@ -186,6 +187,7 @@ fn run(
         certificate: sol.result.certificate,
         timings: sol.timings,
         warm_start: sol.warm_start.clone(),
+        marginal_load: sol.marginal_load.clone(),
         errors,
         exact_cell,
         iterates: sol.result.iterates.clone(),
@@ -245,6 +247,16 @@ fn to_dict<'py>(
     d.set_item("timings", json(py, &o.timings)?)?;
     d.set_item("log", json(py, &o.log)?)?;
     d.set_item("warm_start", json(py, &o.warm_start)?)?;
+    let marginal = PyList::empty(py);
+    for m in &o.marginal_load {
+        let x = PyDict::new(py);
+        x.set_item("cell", m.cell)?;
+        x.set_item("sum", m.sum)?;
+        x.set_item("ratio", m.ratio)?;
+        x.set_item("message", m.to_string())?;
+        marginal.append(x)?;
+    }
+    d.set_item("marginal_load", marginal)?;
     match o.errors {
         None => d.set_item("errors", py.None())?,
         Some(e) => {

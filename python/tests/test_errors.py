@@ -1,4 +1,8 @@
 """Bad inputs raise gradvi.GradviError subclasses with the library's message (never a crash)."""
+import resource
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from conftest import ROOT, make_test3, psi
@@ -9,7 +13,7 @@ import gradvi
 def test_hierarchy():
     for cls in (gradvi.MeshIoError, gradvi.InvalidMeshError, gradvi.InvalidDataError, gradvi.InfeasibleError,
                 gradvi.LinearSolverError, gradvi.IllPosedError, gradvi.SolverError, gradvi.ProblemFileError,
-                gradvi.FileError, gradvi.InternalError):
+                gradvi.FileError, gradvi.InternalError, gradvi.OutOfMemoryError):
         assert issubclass(cls, gradvi.GradviError) and issubclass(cls, Exception)
     for cls in (gradvi.MaxIterationsError, gradvi.CyclingError, gradvi.NoKktPointError, gradvi.CertificateError):
         assert issubclass(cls, gradvi.SolverError)
@@ -18,6 +22,33 @@ def test_hierarchy():
     assert issubclass(gradvi.InvalidDataError, ValueError) and issubclass(gradvi.MeshIoError, OSError)
     assert gradvi.InvalidDataError.__module__ == "gradvi" and gradvi.MeshIoError.__module__ == "gradvi"
     assert not issubclass(gradvi.InvalidMeshError, (ValueError, OSError))
+    assert issubclass(gradvi.OutOfMemoryError, MemoryError) and gradvi.OutOfMemoryError.__module__ == "gradvi"
+
+
+_TOO_LARGE = """
+import gradvi
+try:
+    gradvi.Mesh.generate("cartesian", 11)
+except MemoryError as e:
+    assert isinstance(e, gradvi.OutOfMemoryError) and isinstance(e, gradvi.GradviError), type(e)
+    assert e.bytes > e.budget > 0 and "would need about" in str(e), str(e)
+    print("refused:", e)
+else:
+    raise AssertionError("no error")
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="RLIMIT_AS is a Linux limit")
+def test_a_mesh_too_large_for_the_address_space_limit_is_a_memory_error(tmp_path):
+    # in a child under a 3 GiB address-space limit: the budget sees it and refuses the 16.8M
+    # cells of the level-11 Cartesian mesh by their estimate, before allocating them
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+
+    # run from tmp_path, so that the installed gradvi is imported, not the sources beside the tests
+    out = subprocess.run([sys.executable, "-c", _TOO_LARGE], preexec_fn=limit, capture_output=True, text=True,
+                         timeout=120, cwd=tmp_path)
+    assert out.returncode == 0 and "refused:" in out.stdout, out.stderr
 
 
 def test_builtin_bases_catch_the_library_errors(tmp_path):
@@ -170,3 +201,19 @@ def test_solver_failures(test3_mesh):
     # Neumann everywhere and no barrier: u is defined up to a constant
     with pytest.raises(gradvi.IllPosedError, match="additive constant"):
         gradvi.solve(gradvi.Mesh.generate("cartesian", 1), gradvi.Problem(source=1.0, boundary={"neumann": "rest"}))
+
+
+def test_a_marginal_load_is_a_warning_or_named_in_the_error(tmp_path):
+    # the issue's example: the paper's Test 2 data on (−1,0)×(0.2,0.8), every edge Signorini
+    # with the upper barrier 0; HMM refuses it, P1 solves it, both name the marginal load
+    test2 = (ROOT / "problems" / "test2.toml").read_text()
+    f = tmp_path / "marginal.toml"
+    f.write_text(test2[: test2.index("[dirichlet]")] + '\n[signorini]\nside = "upper"\nbarrier = 0\n')
+    pb = gradvi.Problem.from_file(f)
+    domain = [-1.0, 0.0, 0.2, 0.8]
+    with pytest.raises(gradvi.IllPosedError, match="marginal load"):
+        gradvi.solve(gradvi.Mesh.generate("cartesian", 2, domain), pb, scheme="hmm")
+    with pytest.warns(gradvi.MarginalLoadWarning, match="depends on the sign of that sum"):
+        sol = gradvi.solve(gradvi.Mesh.generate("triangles", 2, domain), pb, scheme="p1")
+    [part] = sol.marginal_load
+    assert 0 < part["ratio"] < 0.1 and part["sum"] > 0

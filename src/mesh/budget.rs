@@ -10,8 +10,10 @@
 //!
 //! * [`MemoryBudget::available`]: the memory the kernel reports as available (`MemAvailable` in
 //!   `/proc/meminfo`), or less if the control group of the process limits it (a container:
-//!   `/proc/meminfo` then shows the host's memory); [`MemoryBudget::DEFAULT`] where neither is
-//!   known. The command line and the Python module start from it.
+//!   `/proc/meminfo` then shows the host's memory) or if the process's own limits leave less
+//!   ([`rlimit_headroom`]: `RLIMIT_AS`, as `ulimit -v` and batch systems set it, and
+//!   `RLIMIT_DATA`); [`MemoryBudget::DEFAULT`] where none is known. The command line and the
+//!   Python module start from it.
 //! * [`mesh_bytes`]: the peak memory of building and validating a [`PolyMesh`](super::PolyMesh)
 //!   with given numbers of cells, cell sides, vertices and edges. The generators compare it with
 //!   the budget before allocating anything ([`MemoryBudget::check`]); a caller that needs memory
@@ -48,16 +50,13 @@ impl MemoryBudget {
         self.0
     }
 
-    /// The memory the machine has free now: the available memory ([`available_memory`]), or
-    /// what the control group's limit leaves ([`cgroup_remaining`]) if smaller;
-    /// [`MemoryBudget::DEFAULT`] where neither is known.
+    /// The memory this process may still take now: the least of the available memory
+    /// ([`available_memory`]), what the control group's limit leaves ([`cgroup_remaining`])
+    /// and what the process's own limits leave ([`rlimit_headroom`]);
+    /// [`MemoryBudget::DEFAULT`] where none is known.
     pub fn available() -> Self {
-        MemoryBudget(match (available_memory(), cgroup_remaining()) {
-            (Some(a), Some(c)) => a.min(c),
-            (Some(a), None) => a,
-            (None, Some(c)) => c,
-            (None, None) => Self::DEFAULT.0,
-        })
+        let known = [available_memory(), cgroup_remaining(), rlimit_headroom()];
+        MemoryBudget(known.into_iter().flatten().min().unwrap_or(Self::DEFAULT.0))
     }
 
     /// The largest mesh file the readers accept with this budget: a quarter of it.
@@ -71,6 +70,23 @@ impl MemoryBudget {
             Ok(())
         } else {
             Err(MeshError::TooLarge {
+                what: what.into(),
+                bytes,
+                budget: self.0,
+            })
+        }
+    }
+}
+
+impl MemoryBudget {
+    /// `Ok` if `bytes` fit in the budget, else [`Error::OutOfMemory`](crate::Error::OutOfMemory)
+    /// naming `what`: the check of a computation that is not the building of a mesh (assembly,
+    /// factorisation, multigrid).
+    pub fn check_computation(self, what: impl Into<String>, bytes: u64) -> crate::Result<()> {
+        if bytes <= self.0 {
+            Ok(())
+        } else {
+            Err(crate::Error::OutOfMemory {
                 what: what.into(),
                 bytes,
                 budget: self.0,
@@ -121,6 +137,70 @@ pub fn cgroup_remaining() -> Option<u64> {
     (limit < 1 << 60).then(|| limit.saturating_sub(usage))
 }
 
+/// What the process's resource limits still allow it to map, in bytes: the least of
+/// `RLIMIT_AS` less the current size of the address space (`VmSize` of `/proc/self/status`)
+/// and `RLIMIT_DATA` less the current data segment (`VmData`). A limit is read with
+/// `getrlimit` (Unix); where the current size cannot be read (no `/proc`, outside Linux) the
+/// headroom is the whole limit. `None` when neither limit is set (`RLIM_INFINITY`) or on a
+/// platform without `getrlimit`.
+///
+/// The address-space limit counts what is reserved, not only what is touched: the threads'
+/// stacks and the allocator's arenas are in `VmSize`, which is why a process can be refused an
+/// allocation well below its resident memory plus the limit.
+pub fn rlimit_headroom() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok();
+    let used = |key: &str| {
+        status
+            .as_deref()
+            .and_then(|s| status_kib(s, key))
+            .unwrap_or(0)
+    };
+    let as_room = rlimit(Limit::AddressSpace).map(|l| l.saturating_sub(used("VmSize:")));
+    let data_room = rlimit(Limit::Data).map(|l| l.saturating_sub(used("VmData:")));
+    as_room.into_iter().chain(data_room).min()
+}
+
+/// A line `key   N kB` of `/proc/self/status`, in bytes.
+fn status_kib(status: &str, key: &str) -> Option<u64> {
+    let line = status.lines().find(|l| l.starts_with(key))?;
+    let kib: u64 = line[key.len()..].split_whitespace().next()?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
+/// The resource limits [`rlimit_headroom`] reads.
+#[derive(Clone, Copy)]
+enum Limit {
+    /// `RLIMIT_AS`: the size of the address space.
+    AddressSpace,
+    /// `RLIMIT_DATA`: the data segment (on Linux since 4.7, every private writable mapping).
+    Data,
+}
+
+/// The soft limit `which` in bytes; `None` if unlimited or unknown.
+#[cfg(unix)]
+fn rlimit(which: Limit) -> Option<u64> {
+    let resource = match which {
+        Limit::AddressSpace => libc::RLIMIT_AS,
+        Limit::Data => libc::RLIMIT_DATA,
+    };
+    let mut lim = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit writes one `rlimit` through a valid pointer and reads nothing else.
+    let ok = unsafe { libc::getrlimit(resource, &mut lim) } == 0;
+    // `rlim_t` is u64 on Linux, of other widths on other Unix systems
+    #[allow(clippy::useless_conversion)]
+    let cur = u64::try_from(lim.rlim_cur).ok();
+    cur.filter(|_| ok && lim.rlim_cur != libc::RLIM_INFINITY)
+}
+
+/// No resource limits outside Unix.
+#[cfg(not(unix))]
+fn rlimit(_which: Limit) -> Option<u64> {
+    None
+}
+
 /// Estimated peak memory, in bytes, of building a mesh with `cells` cells whose vertex lists
 /// hold `sides` entries in all, `vertices` vertices and `edges` edges.
 ///
@@ -161,9 +241,55 @@ mod tests {
         if let Some(c) = cgroup_remaining() {
             assert!(b <= c);
         }
-        if available_memory().is_none() && cgroup_remaining().is_none() {
+        if let Some(r) = rlimit_headroom() {
+            assert!(b <= r);
+        }
+        let none = [available_memory(), cgroup_remaining(), rlimit_headroom()];
+        if none.iter().all(Option::is_none) {
             assert_eq!(b, MemoryBudget::DEFAULT.bytes());
         }
+    }
+
+    #[test]
+    fn status_lines_are_read_in_bytes() {
+        let status = "Name:\tgradvi\nVmSize:\t  123456 kB\nVmData:\t 42 kB\n";
+        assert_eq!(status_kib(status, "VmSize:"), Some(123456 * 1024));
+        assert_eq!(status_kib(status, "VmData:"), Some(42 * 1024));
+        assert_eq!(status_kib(status, "VmRSS:"), None);
+    }
+
+    /// Runs this test again in a child under `ulimit -v` (2 GiB of address space): there the
+    /// budget is at most the limit less what the child has mapped, whatever the machine has.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn the_available_budget_sees_the_address_space_limit() {
+        const LIMIT_KIB: u64 = 2 << 20;
+        if std::env::var_os("GRADVI_BUDGET_CHILD").is_some() {
+            let b = MemoryBudget::available().bytes();
+            let r = rlimit_headroom().expect("the child runs under a limit");
+            assert!(b <= r && r < LIMIT_KIB * 1024, "budget {b}, headroom {r}");
+            assert_eq!(rlimit(Limit::AddressSpace), Some(LIMIT_KIB * 1024));
+            return;
+        }
+        let exe = std::env::current_exe().unwrap();
+        let out = std::process::Command::new("sh")
+            .arg("-c")
+            .arg(format!("ulimit -v {LIMIT_KIB} && exec \"$0\" \"$@\""))
+            .arg(exe)
+            .args([
+                "--exact",
+                "mesh::budget::tests::the_available_budget_sees_the_address_space_limit",
+            ])
+            .args(["--test-threads", "1"])
+            .env("GRADVI_BUDGET_CHILD", "1")
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "the child under ulimit -v failed: {said}"
+        );
+        assert!(said.contains("1 passed"), "the child ran no test: {said}");
     }
 
     #[test]
@@ -182,5 +308,17 @@ mod tests {
             "a big mesh would need about 11.0 GiB, more than the memory budget of 8.0 GiB"
         );
         assert_eq!(mesh_bytes(u64::MAX, 1, 1, 1), u64::MAX);
+        assert!(budget.check_computation("y", 10).is_ok());
+        let e = MemoryBudget::new(1 << 30)
+            .check_computation("assembling the system", 3 << 30)
+            .unwrap_err();
+        assert!(e.is_out_of_memory());
+        assert!(
+            e.to_string().starts_with(
+                "assembling the system would need about 3.0 GiB, more than the 1.0 GiB of memory \
+                 this process may take (use a coarser mesh"
+            ),
+            "{e}"
+        );
     }
 }

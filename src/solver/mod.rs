@@ -31,6 +31,7 @@ use constraints::Constraints;
 use std::sync::Arc;
 use std::time::Instant;
 pub use warm_start::{WarmStart, WarmStartReport};
+pub use well_posed::MarginalLoad;
 
 /// Options of [`solve_problem`].
 #[derive(Debug, Clone, Default)]
@@ -95,6 +96,9 @@ pub struct Solution<'a> {
     /// them are skeleton unknowns ([`crate::assembly::two_point`]; `None`: they solved the
     /// skeleton system, or the solves were direct).
     pub cell_system: Option<(usize, usize)>,
+    /// The parts of the mesh without Dirichlet boundary whose well-posedness hangs on the
+    /// sign of a small total load (see [`well_posed`]): a warning, empty in the usual case.
+    pub marginal_load: Vec<well_posed::MarginalLoad>,
 }
 
 impl Solution<'_> {
@@ -224,7 +228,8 @@ fn solve_system<'a>(
     // what the solves of this system carry from one to the next: fresh for every problem
     let mut state = SolveState::default();
     let constraints = constraints::build(&system, problem)?;
-    let floating = well_posed::analyse(&system, constraints.as_ref())?;
+    let well_posed::Analysis { floating, marginal } =
+        well_posed::analyse(&system, constraints.as_ref())?;
     let mut warm = None;
     let result = match &constraints {
         Some(c) => {
@@ -275,5 +280,6 @@ fn solve_system<'a>(
         timings,
         warm_start: warm,
         cell_system,
+        marginal_load: marginal,
     })
 }

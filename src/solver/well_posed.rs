@@ -9,12 +9,65 @@
 //! - a barrier on C: E is bounded below along 1_C iff s Σ_{i∈C} b_i > 0; if s Σ b < 0 it is
 //!   unbounded, if Σ b = 0 (to round-off) the solution is not unique.
 //!
+//! **Marginal loads.** With a barrier, the sign of Σ_{i∈C} b_i decides between a solution and
+//! none, and that sign belongs to the discretisation: two schemes (or two quadratures) give
+//! discrete loads that differ by their consistency error, relative to Σ|b_i|. So where
+//! ρ_C = |Σ_{i∈C} b_i| / Σ_{i∈C} |b_i| is below [`MARGINAL_LOAD_RATIO`], the conclusion
+//! (solved, or refused as ill-posed) could change with the scheme or the mesh: [`analyse`]
+//! reports C as a [`MarginalLoad`], which the driver keeps in the solution and the ill-posed
+//! error names.
+//!
 //! In the well-posed case the monotony algorithm's first solve (A₀ = ∅) would still be singular
 //! on C; [`analyse`] returns the constrained unknowns of such parts, which the driver puts in
 //! the initial active set. Cost: one union–find pass over the local unknowns.
 
 use crate::assembly::DiscreteSystem;
 use crate::solver::constraints::Constraints;
+use std::fmt;
+
+/// Below this ratio |Σ b| / Σ |b| of a part of the mesh without Dirichlet boundary, held by a
+/// barrier, the sign of its total load (which decides whether the problem is well-posed) is
+/// reported as depending on the discretisation ([`MarginalLoad`]). A perturbation of the load
+/// of relative size ρ can flip that sign; 0.1 is larger than the consistency error of the
+/// discrete loads of the coarse meshes users start from (a few per cent), so that a
+/// conclusion that a finer mesh or another scheme could reverse is flagged.
+pub const MARGINAL_LOAD_RATIO: f64 = 0.1;
+
+/// A part of the mesh without Dirichlet boundary whose total discrete load nearly cancels, so
+/// that whether the problem is well-posed there depends on the discretisation of the load.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct MarginalLoad {
+    /// A cell of the part (the first in the mesh's order).
+    pub cell: usize,
+    /// Σ b over the unknowns of the part.
+    pub sum: f64,
+    /// |Σ b| / Σ |b| over the unknowns of the part (below [`MARGINAL_LOAD_RATIO`]).
+    pub ratio: f64,
+}
+
+impl fmt::Display for MarginalLoad {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "marginal load: on the part of the mesh containing cell {} (no Dirichlet \
+             boundary), the discrete load sums to {:e}, only {:.3} of the sum of its absolute \
+             values (below {MARGINAL_LOAD_RATIO}); whether the problem is well-posed there \
+             depends on the sign of that sum, hence on the discretisation of the load (another \
+             scheme or mesh may conclude otherwise)",
+            self.cell, self.sum, self.ratio
+        )
+    }
+}
+
+/// What [`analyse`] found on a problem it accepts.
+#[derive(Debug, Clone, Default)]
+pub struct Analysis {
+    /// The positions (in `cons.dofs`) of the constrained unknowns on parts of the mesh without
+    /// Dirichlet unknowns (empty in the usual case).
+    pub floating: Vec<usize>,
+    /// The parts without Dirichlet unknowns whose load nearly cancels.
+    pub marginal: Vec<MarginalLoad>,
+}
 
 /// Union–find with path halving.
 fn find(parent: &mut [usize], mut i: usize) -> usize {
@@ -25,10 +78,10 @@ fn find(parent: &mut [usize], mut i: usize) -> usize {
     i
 }
 
-/// Checks the problem on `system` (see the module docs). Returns the positions (in
-/// `cons.dofs`) of the constrained unknowns lying on parts of the mesh without Dirichlet
-/// unknowns (empty in the usual case), or a typed error saying why the problem is ill-posed.
-pub fn analyse(system: &DiscreteSystem, cons: Option<&Constraints>) -> crate::Result<Vec<usize>> {
+/// Checks the problem on `system` (see the module docs). Returns the floating constrained
+/// unknowns and the marginal parts ([`Analysis`]), or a typed error saying why the problem is
+/// ill-posed (naming the marginal load where there is one).
+pub fn analyse(system: &DiscreteSystem, cons: Option<&Constraints>) -> crate::Result<Analysis> {
     let n = system.n_unknowns();
     let dm = &system.symbolic().dof_map;
     let mut parent: Vec<usize> = (0..n).collect();
@@ -64,11 +117,16 @@ pub fn analyse(system: &DiscreteSystem, cons: Option<&Constraints>) -> crate::Re
             .find(|&k| dm.cell(k).0.first().is_some_and(|&d| root[d as usize] == r))
             .unwrap_or(0)
     };
+    let mut marginal = Vec::new();
     for r in (0..n).filter(|&i| root[i] == i && !anchored[i]) {
-        let part = format!(
-            "the part of the mesh containing cell {} has no Dirichlet boundary",
-            first_cell(r)
-        );
+        let cell = first_cell(r);
+        let part = format!("the part of the mesh containing cell {cell} has no Dirichlet boundary");
+        let ratio = sum_b[r].abs() / sum_abs[r];
+        let m = (sum_abs[r] > 0.0 && ratio < MARGINAL_LOAD_RATIO).then_some(MarginalLoad {
+            cell,
+            sum: sum_b[r],
+            ratio,
+        });
         let Some(c) = cons.filter(|_| barred[r]) else {
             return Err(crate::Error::IllPosed(format!(
                 "{part} and no barrier: u is determined only up to an additive constant \
@@ -92,12 +150,15 @@ pub fn analyse(system: &DiscreteSystem, cons: Option<&Constraints>) -> crate::Re
                 "the energy is constant along u + t·1 (Σ b = 0): the solution is not unique"
                     .to_string()
             };
-            return Err(crate::Error::IllPosed(format!("{part}; {why}")));
+            let note = m.map_or_else(String::new, |m| format!(" ({m})"));
+            return Err(crate::Error::IllPosed(format!("{part}; {why}{note}")));
         }
+        marginal.extend(m);
     }
-    Ok(cons.map_or_else(Vec::new, |c| {
+    let floating = cons.map_or_else(Vec::new, |c| {
         (0..c.dofs.len())
             .filter(|&j| !anchored[root[c.dofs[j].dof]])
             .collect()
-    }))
+    });
+    Ok(Analysis { floating, marginal })
 }

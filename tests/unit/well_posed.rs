@@ -85,3 +85,36 @@ fn a_barrier_that_holds_the_constants_is_solved_without_dirichlet_data() {
         assert_eq!(niter, 1, "{kind}");
     }
 }
+
+#[test]
+fn a_marginal_load_is_reported_by_both_schemes() {
+    // the example: the paper's Test 2 data on (−1,0)×(0.2,0.8), every edge Signorini
+    // with the upper barrier 0; ∫f = −0.015 is small against ∫|f|, so the sign of the discrete
+    // load (which decides between a solution and none) is the discretisation's
+    let p = paper_test2().with_boundary(|_, _| BoundaryKind::Signorini);
+    let square = cartesian_rect(12, 8, [-1.0, 0.0], [0.2, 0.8]).unwrap();
+    let triangles =
+        gradvi::mesh::generate::cartesian_triangles(12, 8, [-1.0, 0.0], [0.2, 0.8]).unwrap();
+    for (kind, mesh) in [(SchemeKind::Hmm, &square), (SchemeKind::P1, &triangles)] {
+        let s = build(kind, mesh).unwrap();
+        match solve_problem(s.as_ref(), &p, &SolveOptions::default()) {
+            Ok(sol) => {
+                let [m] = sol.marginal_load.as_slice() else {
+                    panic!("{kind}: solved, {} marginal parts", sol.marginal_load.len());
+                };
+                assert!(
+                    m.sum > 0.0 && m.ratio < well_posed::MARGINAL_LOAD_RATIO,
+                    "{kind}: {m:?}"
+                );
+                assert!(m.to_string().starts_with("marginal load"), "{m}");
+            }
+            Err(Error::IllPosed(msg)) => {
+                assert!(
+                    msg.contains("without bound") && msg.contains("marginal load"),
+                    "{kind}: {msg}"
+                );
+            }
+            Err(e) => panic!("{kind}: {e}"),
+        }
+    }
+}

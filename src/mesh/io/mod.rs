@@ -115,8 +115,9 @@ impl TextScan {
             let chunk = &rest[..run];
             if let Some(i) = chunk.iter().position(|&b| !is_text_byte(b)) {
                 let msg = format!(
-                    "byte 0x{:02x} is not text: is this a binary file?",
-                    chunk[i]
+                    "byte 0x{:02x} is not text (byte offset {}): is this a binary file?",
+                    chunk[i],
+                    self.pos + i
                 );
                 return stop(self, msg);
             }
@@ -125,7 +126,11 @@ impl TextScan {
             if self.pos - self.line_start > MAX_LINE_BYTES {
                 return stop(
                     self,
-                    format!("a line longer than {MAX_LINE_BYTES} bytes: not a mesh file"),
+                    format!(
+                        "a line longer than {MAX_LINE_BYTES} bytes (from byte offset {}): not \
+                         a mesh file",
+                        self.line_start
+                    ),
                 );
             }
             if run == rest.len() {
@@ -146,10 +151,16 @@ impl TextScan {
 
     /// The UTF-8 check of the line that ends at `self.pos`.
     fn end_line(&mut self, bytes: &[u8]) -> Option<(usize, NotText)> {
-        let bad = self.non_ascii && std::str::from_utf8(&bytes[self.line_start..self.pos]).is_err();
+        let bad = match self.non_ascii {
+            true => std::str::from_utf8(&bytes[self.line_start..self.pos]).err(),
+            false => None,
+        };
         self.non_ascii = false;
-        bad.then(|| {
-            let msg = "invalid text (not UTF-8): is this a binary file?".to_string();
+        bad.map(|e| {
+            let msg = format!(
+                "invalid text (not UTF-8) at byte offset {}: is this a binary file?",
+                self.line_start + e.valid_up_to()
+            );
             (
                 self.line_start,
                 NotText {
@@ -715,12 +726,25 @@ mod tests {
         let p = Path::new("t.msh");
         let mut long = b"a b\n".to_vec();
         long.extend(std::iter::repeat_n(b'7', MAX_LINE_BYTES + 1));
-        let cases: [(&[u8], usize, &str); 5] = [
-            (b"a b\nc \x00 d\ne\n", 2, "byte 0x00 is not text"),
-            (b"a b\n\xc3\xa9\n\xff\xfe\n", 3, "not UTF-8"),
-            (b"a b\n\x1b[0m\n", 2, "byte 0x1b"),
-            (b"a b\nc\n\xe9", 3, "not UTF-8"),
-            (&long, 2, "longer than"),
+        let cases: [(&[u8], usize, &str); 6] = [
+            (
+                b"a b\nc \x00 d\ne\n",
+                2,
+                "byte 0x00 is not text (byte offset 6)",
+            ),
+            (
+                b"a b\n\xc3\xa9\n\xff\xfe\n",
+                3,
+                "not UTF-8) at byte offset 7",
+            ),
+            (
+                b"a b\n\x1b[0m\n",
+                2,
+                "byte 0x1b is not text (byte offset 4)",
+            ),
+            (b"a b\nc\n\xe9", 3, "not UTF-8) at byte offset 6"),
+            (b"a b\nc\nd \xc3\xa9\xe9", 3, "not UTF-8) at byte offset 10"),
+            (&long, 2, "longer than 1048576 bytes (from byte offset 4)"),
         ];
         for (bytes, line, what) in cases {
             let mut t = Tokens::new(p, bytes);
@@ -763,7 +787,7 @@ mod tests {
         let e = msh::parse_msh(zero, &[0; 4096]).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "/dev/zero:1: byte 0x00 is not text: is this a binary file?"
+            "/dev/zero:1: byte 0x00 is not text (byte offset 0): is this a binary file?"
         );
         assert!(t0.elapsed().as_secs_f64() < 5.0);
     }

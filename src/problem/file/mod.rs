@@ -139,11 +139,31 @@ pub const BUILTIN: [(&str, &str); 4] = [
 /// is an error).
 pub fn load(path: impl AsRef<Path>, overrides: &[(String, f64)]) -> Result<ProblemFile> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
         source,
     })?;
+    let text =
+        String::from_utf8(bytes).map_err(|e| not_utf8(path, e.as_bytes(), e.utf8_error()))?;
     parse(&text, path, overrides)
+}
+
+/// The error of a problem file that is not UTF-8: the line and column (in characters) of the
+/// first byte that is not, and its byte offset.
+fn not_utf8(path: &Path, bytes: &[u8], e: std::str::Utf8Error) -> Error {
+    let offset = e.valid_up_to();
+    let valid = std::str::from_utf8(&bytes[..offset]).unwrap_or_default();
+    let line_start = valid.rfind('\n').map_or(0, |i| i + 1);
+    Error::ProblemFile {
+        path: path.to_path_buf(),
+        line: valid.matches('\n').count() + 1,
+        column: valid[line_start..].chars().count() + 1,
+        kind: K::Syntax,
+        msg: format!(
+            "byte 0x{:02x} at byte offset {offset} is not UTF-8 (a problem file is UTF-8 text)",
+            bytes[offset]
+        ),
+    }
 }
 
 /// One of the [`BUILTIN`] problems, by name.
@@ -263,5 +283,33 @@ impl ProblemFile {
             );
         }
         pb
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_that_is_not_utf8_is_refused_at_its_line_column_and_byte() {
+        let path =
+            std::env::temp_dir().join(format!("gradvi-not-utf8-{}.toml", std::process::id()));
+        // line 2, after "é = " (4 characters, 5 bytes): a Latin-1 é
+        std::fs::write(&path, b"[mesh]\n\xc3\xa9 = \xe9t\xe9\n").unwrap();
+        let e = load(&path, &[]).unwrap_err();
+        std::fs::remove_file(&path).ok();
+        match &e {
+            Error::ProblemFile {
+                line, column, kind, ..
+            } => assert_eq!((*line, *column, *kind), (2, 5, K::Syntax), "{e}"),
+            other => panic!("{other}"),
+        }
+        let said = e.to_string();
+        assert!(
+            said.ends_with(
+                ":2:5: byte 0xe9 at byte offset 12 is not UTF-8 (a problem file is UTF-8 text)"
+            ),
+            "{said}"
+        );
     }
 }
