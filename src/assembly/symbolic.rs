@@ -111,19 +111,16 @@ impl DofMap {
         entries.saturating_mul(32) + 64 * self.dofs.len() as u64
     }
 
-    /// An error ([`Error::Linear`](crate::Error::Linear), with the estimate) if
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory), with the estimate, if
     /// [`DofMap::setup_bytes`] exceeds `budget`.
     pub fn check_setup_memory(&self, budget: MemoryBudget) -> crate::Result<()> {
-        let bytes = self.setup_bytes();
-        if bytes <= budget.bytes() {
-            return Ok(());
-        }
-        Err(crate::Error::Linear(format!(
-            "assembling the system needs about {} (local matrices, pattern and scatter maps \
-             of {} cells), more than the memory budget of {budget}",
-            human_bytes(bytes),
-            self.n_cells(),
-        )))
+        budget.check_computation(
+            format!(
+                "assembling the system (local matrices, pattern and scatter maps of {} cells)",
+                self.n_cells()
+            ),
+            self.setup_bytes(),
+        )
     }
 
     /// The skeleton unknowns of cell k.
@@ -313,16 +310,13 @@ pub(super) fn check_numeric_memory(
     n: usize,
     budget: MemoryBudget,
 ) -> crate::Result<()> {
-    let bytes = numeric_bytes(pattern, maps, n);
-    if bytes <= budget.bytes() {
-        return Ok(());
-    }
-    Err(crate::Error::Linear(format!(
-        "the numeric factorisation needs about {} (a Cholesky factor of {} entries), more \
-         than the memory budget of {budget}",
-        human_bytes(bytes),
-        pattern.factor_len(),
-    )))
+    budget.check_computation(
+        format!(
+            "the numeric factorisation (a Cholesky factor of {} entries)",
+            pattern.factor_len()
+        ),
+        numeric_bytes(pattern, maps, n),
+    )
 }
 
 /// For each of the `n` unknowns, the cells where it appears, ascending (a counting sort of the
@@ -474,7 +468,7 @@ mod tests {
     }
 
     fn is_budget_error(e: &crate::Error) -> bool {
-        matches!(e, crate::Error::Linear(m) if m.contains("more than the memory budget of"))
+        matches!(e, crate::Error::OutOfMemory { .. })
     }
 
     /// The budget is the caller's: the same system passes with a large budget and is refused

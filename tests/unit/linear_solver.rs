@@ -345,7 +345,9 @@ fn a_solve_is_refused_beyond_the_callers_memory_budget() {
         sol.result.certificate.check(1e-10).unwrap();
         o.system.budget = gradvi::mesh::MemoryBudget::new(4096);
         match solve_problem(&hmm, &p, &o) {
-            Err(gradvi::Error::Linear(m)) => assert!(m.contains("memory budget of 4.0 KiB"), "{m}"),
+            Err(e @ gradvi::Error::OutOfMemory { budget: 4096, .. }) => {
+                assert!(e.to_string().contains("more than the 4.0 KiB of memory"), "{e}")
+            }
             other => panic!(
                 "expected the budget error, got {:?}",
                 other.map(|s| s.niter())
