@@ -21,7 +21,6 @@ use super::offsets::Offsets;
 use crate::linalg::SpdPattern;
 use crate::mesh::MemoryBudget;
 use crate::scheme::GradientDiscretisation;
-use crate::units::human_bytes;
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
