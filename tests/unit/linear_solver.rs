@@ -346,7 +346,10 @@ fn a_solve_is_refused_beyond_the_callers_memory_budget() {
         o.system.budget = gradvi::mesh::MemoryBudget::new(4096);
         match solve_problem(&hmm, &p, &o) {
             Err(e @ gradvi::Error::OutOfMemory { budget: 4096, .. }) => {
-                assert!(e.to_string().contains("more than the 4.0 KiB of memory"), "{e}")
+                assert!(
+                    e.to_string().contains("more than the 4.0 KiB of memory"),
+                    "{e}"
+                )
             }
             other => panic!(
                 "expected the budget error, got {:?}",
