@@ -40,7 +40,7 @@ impl PolyMesh3 {
     /// and [`validate`](super::validate) for the checks, each a typed error naming the cell,
     /// face, edge or vertex at fault). The memory needed ([`mesh3_bytes`]) is compared with
     /// `budget` before anything large is allocated.
-    pub fn from_polyhedra(p: Polyhedra, budget: MemoryBudget) -> Result<PolyMesh3, MeshError> {
+    pub fn from_polyhedra(mut p: Polyhedra, budget: MemoryBudget) -> Result<PolyMesh3, MeshError> {
         check_offsets(&p)?;
         check_cells(&p)?;
         let sides = p.face_ptr.len() - 1;
@@ -66,23 +66,31 @@ impl PolyMesh3 {
             &inward,
         )?;
         drop((side_cell, matched, inward));
+        // the mesh takes over the vertices and cell offsets; the face loops are no longer needed
+        m.vertices = std::mem::take(&mut p.vertices);
+        m.cell_ptr = std::mem::take(&mut p.cell_ptr);
+        drop((
+            std::mem::take(&mut p.face_ptr),
+            std::mem::take(&mut p.face_vertices),
+        ));
         m.compute_face_geometry()?;
         m.compute_cell_geometry()?;
         m.check_shapes()?;
         m.check_boundary_surface()?;
         m.check_overlap()?;
         m.cell_tags = if p.cell_tags.is_empty() {
-            vec![0; p.n_cells()]
+            vec![0; m.n_cells()]
         } else {
-            p.cell_tags.clone()
+            std::mem::take(&mut p.cell_tags)
         };
         m.set_face_tags(&p)?;
         Ok(m)
     }
 }
 
-/// The topology of the mesh (face loops, incidences, boundary list), geometry left empty:
-/// every face's loop is the outward loop of its first side, checked against its second.
+/// The topology of the mesh (face loops, incidences, boundary list), geometry left empty, and
+/// vertices and cell offsets left for the caller to move in from `p`: every face's loop is the
+/// outward loop of its first side, checked against its second.
 fn assemble(
     p: &Polyhedra,
     side_cell: &[u32],
@@ -135,8 +143,8 @@ fn assemble(
         .filter(|&f| face_cells[f as usize][1] == u32::MAX)
         .collect();
     Ok(PolyMesh3 {
-        vertices: p.vertices.clone(),
-        cell_ptr: p.cell_ptr.clone(),
+        vertices: Vec::new(),
+        cell_ptr: Vec::new(),
         cell_faces: face_of_side.to_vec(),
         face_ptr,
         face_verts,
@@ -155,30 +163,44 @@ fn assemble(
 }
 
 impl PolyMesh3 {
-    /// |σ|, x_σ and n_σ of every face; [`MeshError::BadFace`] for a face whose vector area is
-    /// negligible (|N_σ| ≤ 10⁻¹⁴ diam(σ)²: no normal).
+    /// |σ|, x_σ and n_σ of every face, in parallel, written in place; [`MeshError::BadFace`]
+    /// for the first face whose vector area is negligible (|N_σ| ≤ 10⁻¹⁴ diam(σ)²: no normal).
     fn compute_face_geometry(&mut self) -> Result<(), MeshError> {
-        let geo: Vec<_> = (0..self.n_faces())
+        let n = self.n_faces();
+        let mut area = vec![0.0; n];
+        let mut centroid = vec![[0.0; 3]; n];
+        // the vector areas N_σ, normalised once every face has passed the check
+        let mut normal = vec![[0.0; 3]; n];
+        (
+            area.par_iter_mut(),
+            centroid.par_iter_mut(),
+            normal.par_iter_mut(),
+        )
             .into_par_iter()
-            .map(|f| face_geometry(&self.vertices, self.face_vertices(f)))
-            .collect();
-        for (f, g) in geo.iter().enumerate() {
+            .enumerate()
+            .for_each(|(f, (a, c, nv))| {
+                let g = face_geometry(&self.vertices, self.face_vertices(f));
+                (*a, *c, *nv) = (g.area, g.centroid, g.vector_area);
+            });
+        let bad = (0..n).into_par_iter().find_first(|&f| {
             let d = diameter(&self.vertices, self.face_vertices(f));
-            if !(norm(g.vector_area) > 1e-14 * d * d) {
-                let k = self.face_cells[f][0] as usize;
-                return Err(MeshError::BadFace {
-                    cell: k,
-                    local_face: self.local_face(k, f),
-                    msg: format!("zero area ({:e})", norm(g.vector_area)),
-                });
-            }
+            !(norm(normal[f]) > 1e-14 * d * d)
+        });
+        if let Some(f) = bad {
+            let k = self.face_cells[f][0] as usize;
+            return Err(MeshError::BadFace {
+                cell: k,
+                local_face: self.local_face(k, f),
+                msg: format!("zero area ({:e})", norm(normal[f])),
+            });
         }
-        self.face_area = geo.iter().map(|g| g.area).collect();
-        self.face_centroid = geo.iter().map(|g| g.centroid).collect();
-        self.face_normal = geo
-            .iter()
-            .map(|g| g.vector_area.map(|x| x / norm(g.vector_area)))
-            .collect();
+        normal.par_iter_mut().for_each(|v| {
+            let l = norm(*v);
+            *v = v.map(|x| x / l);
+        });
+        self.face_area = area;
+        self.face_centroid = centroid;
+        self.face_normal = normal;
         Ok(())
     }
 
@@ -190,12 +212,21 @@ impl PolyMesh3 {
             .unwrap_or(usize::MAX)
     }
 
-    /// |K|, x_K and h_K of every cell, and h; [`MeshError::DegenerateVolume`] for
-    /// |K| ≤ 10⁻¹⁴ h_K³.
+    /// |K|, x_K and h_K of every cell, in parallel, written in place, and h;
+    /// [`MeshError::DegenerateVolume`] for the first cell with |K| ≤ 10⁻¹⁴ h_K³.
     fn compute_cell_geometry(&mut self) -> Result<(), MeshError> {
-        let geo: Vec<(f64, [f64; 3], f64)> = (0..self.n_cells())
+        let n = self.n_cells();
+        let mut volume = vec![0.0; n];
+        let mut centroid = vec![[0.0; 3]; n];
+        let mut diam = vec![0.0; n];
+        (
+            volume.par_iter_mut(),
+            centroid.par_iter_mut(),
+            diam.par_iter_mut(),
+        )
             .into_par_iter()
-            .map_init(Vec::new, |ids: &mut Vec<u32>, k| {
+            .enumerate()
+            .for_each_init(Vec::new, |ids: &mut Vec<u32>, (k, (vol, c, d))| {
                 ids.clear();
                 for &f in self.cell_faces(k) {
                     ids.extend_from_slice(self.face_vertices(f as usize));
@@ -207,20 +238,22 @@ impl PolyMesh3 {
                     let f = f as usize;
                     (self.face_vertices(f), self.face_cells[f][0] as usize != k)
                 });
-                let (vol, c) = cell_volume_centroid(&self.vertices, apex, sides);
-                (vol, c, diameter(&self.vertices, ids))
-            })
-            .collect();
-        if let Some(k) = geo.iter().position(|&(v, _, d)| !(v > 1e-14 * d * d * d)) {
+                (*vol, *c) = cell_volume_centroid(&self.vertices, apex, sides);
+                *d = diameter(&self.vertices, ids);
+            });
+        let bad = (0..n)
+            .into_par_iter()
+            .find_first(|&k| !(volume[k] > 1e-14 * diam[k] * diam[k] * diam[k]));
+        if let Some(k) = bad {
             return Err(MeshError::DegenerateVolume {
                 cell: k,
-                volume: geo[k].0,
+                volume: volume[k],
             });
         }
-        self.cell_volume = geo.iter().map(|g| g.0).collect();
-        self.cell_centroid = geo.iter().map(|g| g.1).collect();
-        self.cell_diameter = geo.iter().map(|g| g.2).collect();
-        self.h = self.cell_diameter.iter().copied().fold(0.0, f64::max);
+        self.h = diam.iter().copied().fold(0.0, f64::max);
+        self.cell_volume = volume;
+        self.cell_centroid = centroid;
+        self.cell_diameter = diam;
         Ok(())
     }
 }
