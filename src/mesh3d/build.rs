@@ -2,7 +2,7 @@
 //! matching, orientation, geometry, then the checks on the geometry (the list is in
 //! [`validate`](super::validate)).
 
-use super::faces::{NO_SIDE, match_faces, same_direction, side_cells};
+use super::faces::{FaceMatch, NO_SIDE, match_faces, same_direction, side_cells};
 use super::geometry::{cell_volume_centroid, diameter, face_geometry, norm, vertex_average};
 use super::orient::orient_cells;
 use super::validate::{check_cells, check_offsets, check_vertices};
@@ -56,16 +56,13 @@ impl PolyMesh3 {
         )?;
         check_vertices(&p)?;
         let side_cell = side_cells(&p);
-        let matched = match_faces(&p, &side_cell)?;
+        let FaceMatch {
+            face_of_side,
+            face_sides,
+        } = match_faces(&p, &side_cell)?;
         let inward = orient_cells(&p)?;
-        let mut m = assemble(
-            &p,
-            &side_cell,
-            &matched.face_of_side,
-            &matched.face_sides,
-            &inward,
-        )?;
-        drop((side_cell, matched, inward));
+        let mut m = assemble(&p, &side_cell, face_of_side, &face_sides, &inward)?;
+        drop((side_cell, face_sides, inward));
         // the mesh takes over the vertices and cell offsets; the face loops are no longer needed
         m.vertices = std::mem::take(&mut p.vertices);
         m.cell_ptr = std::mem::take(&mut p.cell_ptr);
@@ -94,58 +91,55 @@ impl PolyMesh3 {
 fn assemble(
     p: &Polyhedra,
     side_cell: &[u32],
-    face_of_side: &[u32],
+    face_of_side: Vec<u32>,
     face_sides: &[[u32; 2]],
     inward: &[bool],
 ) -> Result<PolyMesh3, MeshError> {
     let n_faces = face_sides.len();
     let mut face_ptr = Vec::with_capacity(n_faces + 1);
     face_ptr.push(0u32);
-    let mut face_verts = Vec::new();
-    let mut face_cells = Vec::with_capacity(n_faces);
-    for &[s, t] in face_sides {
-        let l = p.side_vertices(s as usize);
-        let start = face_verts.len();
-        if inward[s as usize] {
-            face_verts.extend(l.iter().rev());
-        } else {
-            face_verts.extend_from_slice(l);
-        }
-        face_ptr.push(face_verts.len() as u32);
-        let second = if t == NO_SIDE {
-            u32::MAX
-        } else {
-            let stored = &face_verts[start..];
-            let other = p.side_vertices(t as usize);
-            let cells = [
-                side_cell[s as usize] as usize,
-                side_cell[t as usize] as usize,
-            ];
-            let bad = |msg: &str| MeshError::InconsistentFace {
-                cells,
-                vertices: l.iter().map(|&v| v as usize).collect(),
-                msg: msg.into(),
-            };
-            match same_direction(stored, other) {
-                None => return Err(bad("list its vertices in different cyclic orders")),
-                // the second cell's outward loop must be the reverse of the first's
-                Some(same) if same != inward[t as usize] => {
-                    return Err(bad(
-                        "both lie on the same side of it (their outward normals agree)",
-                    ));
-                }
-                Some(_) => side_cell[t as usize],
-            }
-        };
-        face_cells.push([side_cell[s as usize], second]);
+    let mut end = 0u32;
+    for &[s, _] in face_sides {
+        end += p.side_vertices(s as usize).len() as u32;
+        face_ptr.push(end);
     }
+    let face_verts: Vec<u32> = face_sides
+        .par_iter()
+        .flat_map_iter(|&[s, _]| {
+            let l = p.side_vertices(s as usize);
+            let rev = inward[s as usize];
+            (0..l.len()).map(move |i| if rev { l[l.len() - 1 - i] } else { l[i] })
+        })
+        .collect();
+    let bad = face_sides
+        .par_iter()
+        .enumerate()
+        .filter(|(_, sides)| sides[1] != NO_SIDE)
+        .find_map_first(|(f, &[s, t])| {
+            let stored = &face_verts[face_ptr[f] as usize..face_ptr[f + 1] as usize];
+            pair_defect(p, side_cell, inward, stored, [s, t])
+        });
+    if let Some(e) = bad {
+        return Err(e);
+    }
+    let face_cells: Vec<[u32; 2]> = face_sides
+        .par_iter()
+        .map(|&[s, t]| {
+            let second = if t == NO_SIDE {
+                u32::MAX
+            } else {
+                side_cell[t as usize]
+            };
+            [side_cell[s as usize], second]
+        })
+        .collect();
     let boundary_faces = (0..n_faces as u32)
         .filter(|&f| face_cells[f as usize][1] == u32::MAX)
         .collect();
     Ok(PolyMesh3 {
         vertices: Vec::new(),
         cell_ptr: Vec::new(),
-        cell_faces: face_of_side.to_vec(),
+        cell_faces: face_of_side,
         face_ptr,
         face_verts,
         face_cells,
@@ -160,6 +154,37 @@ fn assemble(
         boundary_faces,
         h: 0.0,
     })
+}
+
+/// The defect of interior face [s, t] (its sides), whose loop as stored is `stored` (the
+/// outward loop of side s): [`MeshError::InconsistentFace`] unless side t lists the same loop
+/// in the opposite direction once turned outward.
+fn pair_defect(
+    p: &Polyhedra,
+    side_cell: &[u32],
+    inward: &[bool],
+    stored: &[u32],
+    [s, t]: [u32; 2],
+) -> Option<MeshError> {
+    let l = p.side_vertices(s as usize);
+    let other = p.side_vertices(t as usize);
+    let cells = [
+        side_cell[s as usize] as usize,
+        side_cell[t as usize] as usize,
+    ];
+    let bad = |msg: &str| MeshError::InconsistentFace {
+        cells,
+        vertices: l.iter().map(|&v| v as usize).collect(),
+        msg: msg.into(),
+    };
+    match same_direction(stored, other) {
+        None => Some(bad("list its vertices in different cyclic orders")),
+        // the second cell's outward loop must be the reverse of the first's
+        Some(same) if same != inward[t as usize] => Some(bad(
+            "both lie on the same side of it (their outward normals agree)",
+        )),
+        Some(_) => None,
+    }
 }
 
 impl PolyMesh3 {

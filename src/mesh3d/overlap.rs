@@ -35,10 +35,15 @@ impl Grid {
         (((x - self.lo[a]) / self.width[a]).floor().max(0.0) as usize).min(self.n - 1)
     }
 
-    /// The bucket holding point `p`.
-    fn bucket(&self, p: Point3) -> usize {
+    /// The slabs holding point `p` along each axis (below 1024: they fit 16 bits).
+    fn slabs(&self, p: Point3) -> [u16; 3] {
+        [0, 1, 2].map(|a| self.slab(p[a], a) as u16)
+    }
+
+    /// The bucket of slabs `s`.
+    fn bucket(&self, s: [u16; 3]) -> usize {
         let n = self.n;
-        self.slab(p[0], 0) + n * (self.slab(p[1], 1) + n * self.slab(p[2], 2))
+        s[0] as usize + n * (s[1] as usize + n * s[2] as usize)
     }
 }
 
@@ -64,10 +69,11 @@ impl PolyMesh3 {
             .collect();
         boundary_vertices.par_sort_unstable();
         boundary_vertices.dedup();
+        let slabs: Vec<[u16; 3]> = self.vertices.par_iter().map(|&p| grid.slabs(p)).collect();
         // the searched buckets, numbered in increasing order
         let mut slot = vec![u32::MAX; n * n * n];
         for &v in &boundary_vertices {
-            slot[grid.bucket(self.vertices[v as usize])] = 0;
+            slot[grid.bucket(slabs[v as usize])] = 0;
         }
         let mut n_slots = 0u32;
         for s in slot.iter_mut().filter(|s| **s == 0) {
@@ -78,7 +84,7 @@ impl PolyMesh3 {
         let pairs: Vec<(u32, u32)> = (0..self.n_cells())
             .into_par_iter()
             .flat_map_iter(|k| {
-                let r = self.bucket_range(&grid, k);
+                let r = self.bucket_range(&slabs, k);
                 let slot = &slot;
                 (r[2][0]..=r[2][1]).flat_map(move |z| {
                     (r[1][0]..=r[1][1]).flat_map(move |y| {
@@ -97,7 +103,7 @@ impl PolyMesh3 {
         );
         drop(pairs);
         let hit = boundary_vertices.par_iter().find_map_first(|&v| {
-            let b = slot[grid.bucket(self.vertices[v as usize])] as usize;
+            let b = slot[grid.bucket(slabs[v as usize])] as usize;
             cells[ptr[b]..ptr[b + 1]]
                 .iter()
                 .find(|&&k| self.strictly_inside(k as usize, v))
@@ -112,14 +118,15 @@ impl PolyMesh3 {
         }
     }
 
-    /// The ranges of slabs, along each axis, met by the bounding box of cell `k`'s vertices.
-    fn bucket_range(&self, grid: &Grid, k: usize) -> [[usize; 2]; 3] {
+    /// The ranges of slabs, along each axis, met by the bounding box of cell `k`'s vertices
+    /// (`slabs`: those of every vertex).
+    fn bucket_range(&self, slabs: &[[u16; 3]], k: usize) -> [[usize; 2]; 3] {
         let mut r = [[usize::MAX, 0]; 3];
         for &f in self.cell_faces(k) {
             for &v in self.face_vertices(f as usize) {
-                let p = self.vertices[v as usize];
+                let s = slabs[v as usize];
                 for a in 0..3 {
-                    let i = grid.slab(p[a], a);
+                    let i = s[a] as usize;
                     r[a] = [r[a][0].min(i), r[a][1].max(i)];
                 }
             }
