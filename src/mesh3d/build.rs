@@ -17,16 +17,18 @@ use rayon::prelude::*;
 ///
 /// Per vertex: 24 bytes of coordinates, 4 of sort order, 1 of use flag. Per cell: 4 (offset),
 /// 8 (volume), 24 (centroid), 8 (diameter), 4 (tag), 16 (its slice of the orientations while
-/// they are computed in parallel). Per side: 4 (its cell), 4 (sort order),
-/// 4 (partner side), 4 (its face), 1 (orientation), 4 (face id in the cell's list). Per face,
-/// counting as many faces as sides (an upper bound): 8 (sides), 4 (offset), 8 (cells), 4
-/// (tag), 8 (area), 24 (centroid), 24 (normal), 4 (boundary list). Per loop entry: 4 (sorted
-/// key), 4 (stored loop), and 16 for the directed boundary edges and 24 for the corners of the
-/// boundary surface checks (counting every loop entry as a boundary one, an upper bound).
+/// they are computed in parallel). Per side: 4 (its cell), 4 (place in its bucket), 1 (pair
+/// flag), 4 (partner side), 4 (its face), 1 (orientation), 4 (face id in the cell's list).
+/// Per face, counting as many faces as sides (an upper bound): 8 (sides), 4 (offset), 8
+/// (cells), 4 (tag), 8 (area), 24 (centroid), 24 (normal), 4 (boundary list). Per loop
+/// entry: 4 (stored loop), 4 (the pieces in which the loops are gathered in parallel, and the
+/// per-thread scratch of face matching), and 16 for the directed boundary edges and 24 for the
+/// corners of the boundary surface checks (counting every loop entry as a boundary one, an
+/// upper bound).
 pub fn mesh3_bytes(cells: u64, sides: u64, side_vertices: u64, vertices: u64) -> u64 {
     let per_vertex = 24 + 4 + 1;
     let per_cell = 4 + 8 + 24 + 8 + 4 + 16;
-    let per_side = (4 + 4 + 4 + 4 + 1 + 4) + (8 + 4 + 8 + 4 + 8 + 24 + 24 + 4);
+    let per_side = (4 + 4 + 1 + 4 + 4 + 1 + 4) + (8 + 4 + 8 + 4 + 8 + 24 + 24 + 4);
     let per_loop_entry = 4 + 4 + 16 + 24;
     cells
         .saturating_mul(per_cell)

@@ -175,6 +175,7 @@ mod tests {
     #[test]
     fn mesh_sizes_follow_the_inverse_cube_law() {
         assert!((mesh_size(1_014_275) - 0.0166).abs() < 1e-15);
-        assert!((mesh_size(1_014_275 / 8) - 0.0332).abs() < 1e-12);
+        // 1 014 275 / 8 rounds down by 3/8 of a cell: the size grows by about 10⁻⁶ of itself
+        assert!((mesh_size(1_014_275 / 8) - 0.0332).abs() < 1e-7);
     }
 }
