@@ -37,7 +37,7 @@
 //! Arguments: `--report-only` rewrites the report from the existing CSV; `--child FAMILY
 //! SCHEME VARIANT SIZE [FILE]` runs one case and prints its row as JSON; `--baseline EXE
 //! [--baseline-rev REV]` compares every gradvi case with the earlier build EXE in the same run
-//! ([`baseline`]).
+//! ([`baseline`]); `--mesh3d` times reading and building tetrahedral meshes ([`mesh3d`]).
 
 use gradvi::mesh::MemoryBudget;
 use gradvi::mesh::PolyMesh;
@@ -53,6 +53,7 @@ use std::process::{Command, Stdio};
 use std::time::Instant;
 
 pub mod baseline;
+pub mod mesh3d;
 pub mod peers;
 mod peers_report;
 mod report;
@@ -778,7 +779,14 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
     if let Some(i) = args.iter().position(|a| a == "--peer-child") {
         return peers::child_main(&args[i + 1..], root);
     }
+    if let Some(i) = args.iter().position(|a| a == "--mesh3d-child") {
+        return mesh3d::child_main(&args[i + 1..]);
+    }
     let mut cfg = Config::from_env(root)?;
+    if args.iter().any(|a| a == "--mesh3d") {
+        let exe = std::env::current_exe().map_err(|e| io_err(Path::new("current_exe"), e))?;
+        return mesh3d::run(&exe, &cfg.path(MESH_DIR), cfg.max_cells);
+    }
     if args.iter().any(|a| a == "--report-only") {
         if cfg.path(baseline::CSV).exists() {
             baseline::write_report(&cfg)?;

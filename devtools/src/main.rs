@@ -2,8 +2,9 @@
 //!
 //! - `gradvi-dev bench [ARGS]`: the benchmarks ([`mod@bench`]): the scaling benchmark (`make
 //!   bench`), the peer benchmark (`--peers`, `make bench-peers`), the regression check against
-//!   an earlier build (`--baseline EXE`, `make bench-baseline`) and the report writer
-//!   (`--report-only`); run from the repository root.
+//!   an earlier build (`--baseline EXE`, `make bench-baseline`), the report writer
+//!   (`--report-only`) and the 3D mesh benchmark (`--mesh3d`: reading and building
+//!   tetrahedral meshes); run from the repository root.
 //! - `gradvi-dev fuzz [OPTIONS]`: the seeded mutation fuzzer ([`fuzz`], `make fuzz`).
 //! - `gradvi-dev gradvi ARGS`: the `gradvi` command line itself ([`gradvi_cli`]), run by the
 //!   fuzzer's children unless it is given a `gradvi` binary.
@@ -33,7 +34,8 @@ enum DevCommand {
     /// The benchmarks, run from the repository root (see README "Performance"): no argument
     /// runs the scaling benchmark; `--peers` the peer benchmark; `--baseline EXE
     /// [--baseline-rev REV]` the regression check against an earlier gradvi build;
-    /// `--report-only` rewrites BENCHMARKS.md (and REGRESSION.md) from the CSV files.
+    /// `--report-only` rewrites BENCHMARKS.md (and REGRESSION.md) from the CSV files;
+    /// `--mesh3d` times reading and building tetrahedral meshes of the unit cube.
     Bench {
         /// Arguments passed to the benchmark driver.
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]

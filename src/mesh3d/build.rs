@@ -2,7 +2,7 @@
 //! matching, orientation, geometry, then the checks on the geometry (the list is in
 //! [`validate`](super::validate)).
 
-use super::faces::{NO_SIDE, match_faces, same_direction, side_cells};
+use super::faces::{FaceMatch, NO_SIDE, match_faces, same_direction, side_cells};
 use super::geometry::{cell_volume_centroid, diameter, face_geometry, norm, vertex_average};
 use super::orient::orient_cells;
 use super::validate::{check_cells, check_offsets, check_vertices};
@@ -17,16 +17,18 @@ use rayon::prelude::*;
 ///
 /// Per vertex: 24 bytes of coordinates, 4 of sort order, 1 of use flag. Per cell: 4 (offset),
 /// 8 (volume), 24 (centroid), 8 (diameter), 4 (tag), 16 (its slice of the orientations while
-/// they are computed in parallel). Per side: 4 (its cell), 4 (sort order),
-/// 4 (partner side), 4 (its face), 1 (orientation), 4 (face id in the cell's list). Per face,
-/// counting as many faces as sides (an upper bound): 8 (sides), 4 (offset), 8 (cells), 4
-/// (tag), 8 (area), 24 (centroid), 24 (normal), 4 (boundary list). Per loop entry: 4 (sorted
-/// key), 4 (stored loop), and 16 for the directed boundary edges and 24 for the corners of the
-/// boundary surface checks (counting every loop entry as a boundary one, an upper bound).
+/// they are computed in parallel). Per side: 4 (its cell), 4 (place in its bucket), 1 (pair
+/// flag), 4 (partner side), 4 (its face), 1 (orientation), 4 (face id in the cell's list).
+/// Per face, counting as many faces as sides (an upper bound): 8 (sides), 4 (offset), 8
+/// (cells), 4 (tag), 8 (area), 24 (centroid), 24 (normal), 4 (boundary list). Per loop
+/// entry: 4 (stored loop), 4 (the pieces in which the loops are gathered in parallel, and the
+/// per-thread scratch of face matching), and 16 for the directed boundary edges and 24 for the
+/// corners of the boundary surface checks (counting every loop entry as a boundary one, an
+/// upper bound).
 pub fn mesh3_bytes(cells: u64, sides: u64, side_vertices: u64, vertices: u64) -> u64 {
     let per_vertex = 24 + 4 + 1;
     let per_cell = 4 + 8 + 24 + 8 + 4 + 16;
-    let per_side = (4 + 4 + 4 + 4 + 1 + 4) + (8 + 4 + 8 + 4 + 8 + 24 + 24 + 4);
+    let per_side = (4 + 4 + 1 + 4 + 4 + 1 + 4) + (8 + 4 + 8 + 4 + 8 + 24 + 24 + 4);
     let per_loop_entry = 4 + 4 + 16 + 24;
     cells
         .saturating_mul(per_cell)
@@ -40,7 +42,7 @@ impl PolyMesh3 {
     /// and [`validate`](super::validate) for the checks, each a typed error naming the cell,
     /// face, edge or vertex at fault). The memory needed ([`mesh3_bytes`]) is compared with
     /// `budget` before anything large is allocated.
-    pub fn from_polyhedra(p: Polyhedra, budget: MemoryBudget) -> Result<PolyMesh3, MeshError> {
+    pub fn from_polyhedra(mut p: Polyhedra, budget: MemoryBudget) -> Result<PolyMesh3, MeshError> {
         check_offsets(&p)?;
         check_cells(&p)?;
         let sides = p.face_ptr.len() - 1;
@@ -56,88 +58,90 @@ impl PolyMesh3 {
         )?;
         check_vertices(&p)?;
         let side_cell = side_cells(&p);
-        let matched = match_faces(&p, &side_cell)?;
+        let FaceMatch {
+            face_of_side,
+            face_sides,
+        } = match_faces(&p, &side_cell)?;
         let inward = orient_cells(&p)?;
-        let mut m = assemble(
-            &p,
-            &side_cell,
-            &matched.face_of_side,
-            &matched.face_sides,
-            &inward,
-        )?;
-        drop((side_cell, matched, inward));
+        let mut m = assemble(&p, &side_cell, face_of_side, &face_sides, &inward)?;
+        drop((side_cell, face_sides, inward));
+        // the mesh takes over the vertices and cell offsets; the face loops are no longer needed
+        m.vertices = std::mem::take(&mut p.vertices);
+        m.cell_ptr = std::mem::take(&mut p.cell_ptr);
+        drop((
+            std::mem::take(&mut p.face_ptr),
+            std::mem::take(&mut p.face_vertices),
+        ));
         m.compute_face_geometry()?;
         m.compute_cell_geometry()?;
         m.check_shapes()?;
         m.check_boundary_surface()?;
         m.check_overlap()?;
         m.cell_tags = if p.cell_tags.is_empty() {
-            vec![0; p.n_cells()]
+            vec![0; m.n_cells()]
         } else {
-            p.cell_tags.clone()
+            std::mem::take(&mut p.cell_tags)
         };
         m.set_face_tags(&p)?;
         Ok(m)
     }
 }
 
-/// The topology of the mesh (face loops, incidences, boundary list), geometry left empty:
-/// every face's loop is the outward loop of its first side, checked against its second.
+/// The topology of the mesh (face loops, incidences, boundary list), geometry left empty, and
+/// vertices and cell offsets left for the caller to move in from `p`: every face's loop is the
+/// outward loop of its first side, checked against its second.
 fn assemble(
     p: &Polyhedra,
     side_cell: &[u32],
-    face_of_side: &[u32],
+    face_of_side: Vec<u32>,
     face_sides: &[[u32; 2]],
     inward: &[bool],
 ) -> Result<PolyMesh3, MeshError> {
     let n_faces = face_sides.len();
     let mut face_ptr = Vec::with_capacity(n_faces + 1);
     face_ptr.push(0u32);
-    let mut face_verts = Vec::new();
-    let mut face_cells = Vec::with_capacity(n_faces);
-    for &[s, t] in face_sides {
-        let l = p.side_vertices(s as usize);
-        let start = face_verts.len();
-        if inward[s as usize] {
-            face_verts.extend(l.iter().rev());
-        } else {
-            face_verts.extend_from_slice(l);
-        }
-        face_ptr.push(face_verts.len() as u32);
-        let second = if t == NO_SIDE {
-            u32::MAX
-        } else {
-            let stored = &face_verts[start..];
-            let other = p.side_vertices(t as usize);
-            let cells = [
-                side_cell[s as usize] as usize,
-                side_cell[t as usize] as usize,
-            ];
-            let bad = |msg: &str| MeshError::InconsistentFace {
-                cells,
-                vertices: l.iter().map(|&v| v as usize).collect(),
-                msg: msg.into(),
-            };
-            match same_direction(stored, other) {
-                None => return Err(bad("list its vertices in different cyclic orders")),
-                // the second cell's outward loop must be the reverse of the first's
-                Some(same) if same != inward[t as usize] => {
-                    return Err(bad(
-                        "both lie on the same side of it (their outward normals agree)",
-                    ));
-                }
-                Some(_) => side_cell[t as usize],
-            }
-        };
-        face_cells.push([side_cell[s as usize], second]);
+    let mut end = 0u32;
+    for &[s, _] in face_sides {
+        end += p.side_vertices(s as usize).len() as u32;
+        face_ptr.push(end);
     }
+    let face_verts: Vec<u32> = face_sides
+        .par_iter()
+        .flat_map_iter(|&[s, _]| {
+            let l = p.side_vertices(s as usize);
+            let rev = inward[s as usize];
+            (0..l.len()).map(move |i| if rev { l[l.len() - 1 - i] } else { l[i] })
+        })
+        .collect();
+    let bad = face_sides
+        .par_iter()
+        .enumerate()
+        .filter(|(_, sides)| sides[1] != NO_SIDE)
+        .find_map_first(|(f, &[s, t])| {
+            let stored = &face_verts[face_ptr[f] as usize..face_ptr[f + 1] as usize];
+            pair_defect(p, side_cell, inward, stored, [s, t])
+        });
+    if let Some(e) = bad {
+        return Err(e);
+    }
+    let face_cells: Vec<[u32; 2]> = face_sides
+        .par_iter()
+        .map(|&[s, t]| {
+            let second = if t == NO_SIDE {
+                u32::MAX
+            } else {
+                side_cell[t as usize]
+            };
+            [side_cell[s as usize], second]
+        })
+        .collect();
     let boundary_faces = (0..n_faces as u32)
         .filter(|&f| face_cells[f as usize][1] == u32::MAX)
         .collect();
     Ok(PolyMesh3 {
-        vertices: p.vertices.clone(),
-        cell_ptr: p.cell_ptr.clone(),
-        cell_faces: face_of_side.to_vec(),
+        vertices: Vec::new(),
+        cell_ptr: Vec::new(),
+        cell_faces: face_of_side,
         face_ptr,
         face_verts,
         face_cells,
@@ -154,31 +158,76 @@ fn assemble(
     })
 }
 
+/// The defect of interior face [s, t] (its sides), whose loop as stored is `stored` (the
+/// outward loop of side s): [`MeshError::InconsistentFace`] unless side t lists the same loop
+/// in the opposite direction once turned outward.
+fn pair_defect(
+    p: &Polyhedra,
+    side_cell: &[u32],
+    inward: &[bool],
+    stored: &[u32],
+    [s, t]: [u32; 2],
+) -> Option<MeshError> {
+    let l = p.side_vertices(s as usize);
+    let other = p.side_vertices(t as usize);
+    let cells = [
+        side_cell[s as usize] as usize,
+        side_cell[t as usize] as usize,
+    ];
+    let bad = |msg: &str| MeshError::InconsistentFace {
+        cells,
+        vertices: l.iter().map(|&v| v as usize).collect(),
+        msg: msg.into(),
+    };
+    match same_direction(stored, other) {
+        None => Some(bad("list its vertices in different cyclic orders")),
+        // the second cell's outward loop must be the reverse of the first's
+        Some(same) if same != inward[t as usize] => Some(bad(
+            "both lie on the same side of it (their outward normals agree)",
+        )),
+        Some(_) => None,
+    }
+}
+
 impl PolyMesh3 {
-    /// |σ|, x_σ and n_σ of every face; [`MeshError::BadFace`] for a face whose vector area is
-    /// negligible (|N_σ| ≤ 10⁻¹⁴ diam(σ)²: no normal).
+    /// |σ|, x_σ and n_σ of every face, in parallel, written in place; [`MeshError::BadFace`]
+    /// for the first face whose vector area is negligible (|N_σ| ≤ 10⁻¹⁴ diam(σ)²: no normal).
     fn compute_face_geometry(&mut self) -> Result<(), MeshError> {
-        let geo: Vec<_> = (0..self.n_faces())
+        let n = self.n_faces();
+        let mut area = vec![0.0; n];
+        let mut centroid = vec![[0.0; 3]; n];
+        // the vector areas N_σ, normalised once every face has passed the check
+        let mut normal = vec![[0.0; 3]; n];
+        (
+            area.par_iter_mut(),
+            centroid.par_iter_mut(),
+            normal.par_iter_mut(),
+        )
             .into_par_iter()
-            .map(|f| face_geometry(&self.vertices, self.face_vertices(f)))
-            .collect();
-        for (f, g) in geo.iter().enumerate() {
+            .enumerate()
+            .for_each(|(f, (a, c, nv))| {
+                let g = face_geometry(&self.vertices, self.face_vertices(f));
+                (*a, *c, *nv) = (g.area, g.centroid, g.vector_area);
+            });
+        let bad = (0..n).into_par_iter().find_first(|&f| {
             let d = diameter(&self.vertices, self.face_vertices(f));
-            if !(norm(g.vector_area) > 1e-14 * d * d) {
-                let k = self.face_cells[f][0] as usize;
-                return Err(MeshError::BadFace {
-                    cell: k,
-                    local_face: self.local_face(k, f),
-                    msg: format!("zero area ({:e})", norm(g.vector_area)),
-                });
-            }
+            !(norm(normal[f]) > 1e-14 * d * d)
+        });
+        if let Some(f) = bad {
+            let k = self.face_cells[f][0] as usize;
+            return Err(MeshError::BadFace {
+                cell: k,
+                local_face: self.local_face(k, f),
+                msg: format!("zero area ({:e})", norm(normal[f])),
+            });
         }
-        self.face_area = geo.iter().map(|g| g.area).collect();
-        self.face_centroid = geo.iter().map(|g| g.centroid).collect();
-        self.face_normal = geo
-            .iter()
-            .map(|g| g.vector_area.map(|x| x / norm(g.vector_area)))
-            .collect();
+        normal.par_iter_mut().for_each(|v| {
+            let l = norm(*v);
+            *v = v.map(|x| x / l);
+        });
+        self.face_area = area;
+        self.face_centroid = centroid;
+        self.face_normal = normal;
         Ok(())
     }
 
@@ -190,12 +239,21 @@ impl PolyMesh3 {
             .unwrap_or(usize::MAX)
     }
 
-    /// |K|, x_K and h_K of every cell, and h; [`MeshError::DegenerateVolume`] for
-    /// |K| ≤ 10⁻¹⁴ h_K³.
+    /// |K|, x_K and h_K of every cell, in parallel, written in place, and h;
+    /// [`MeshError::DegenerateVolume`] for the first cell with |K| ≤ 10⁻¹⁴ h_K³.
     fn compute_cell_geometry(&mut self) -> Result<(), MeshError> {
-        let geo: Vec<(f64, [f64; 3], f64)> = (0..self.n_cells())
+        let n = self.n_cells();
+        let mut volume = vec![0.0; n];
+        let mut centroid = vec![[0.0; 3]; n];
+        let mut diam = vec![0.0; n];
+        (
+            volume.par_iter_mut(),
+            centroid.par_iter_mut(),
+            diam.par_iter_mut(),
+        )
             .into_par_iter()
-            .map_init(Vec::new, |ids: &mut Vec<u32>, k| {
+            .enumerate()
+            .for_each_init(Vec::new, |ids: &mut Vec<u32>, (k, (vol, c, d))| {
                 ids.clear();
                 for &f in self.cell_faces(k) {
                     ids.extend_from_slice(self.face_vertices(f as usize));
@@ -207,20 +265,22 @@ impl PolyMesh3 {
                     let f = f as usize;
                     (self.face_vertices(f), self.face_cells[f][0] as usize != k)
                 });
-                let (vol, c) = cell_volume_centroid(&self.vertices, apex, sides);
-                (vol, c, diameter(&self.vertices, ids))
-            })
-            .collect();
-        if let Some(k) = geo.iter().position(|&(v, _, d)| !(v > 1e-14 * d * d * d)) {
+                (*vol, *c) = cell_volume_centroid(&self.vertices, apex, sides);
+                *d = diameter(&self.vertices, ids);
+            });
+        let bad = (0..n)
+            .into_par_iter()
+            .find_first(|&k| !(volume[k] > 1e-14 * diam[k] * diam[k] * diam[k]));
+        if let Some(k) = bad {
             return Err(MeshError::DegenerateVolume {
                 cell: k,
-                volume: geo[k].0,
+                volume: volume[k],
             });
         }
-        self.cell_volume = geo.iter().map(|g| g.0).collect();
-        self.cell_centroid = geo.iter().map(|g| g.1).collect();
-        self.cell_diameter = geo.iter().map(|g| g.2).collect();
-        self.h = self.cell_diameter.iter().copied().fold(0.0, f64::max);
+        self.h = diam.iter().copied().fold(0.0, f64::max);
+        self.cell_volume = volume;
+        self.cell_centroid = centroid;
+        self.cell_diameter = diam;
         Ok(())
     }
 }

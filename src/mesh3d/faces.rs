@@ -1,15 +1,23 @@
 //! Matching the face sides of a [`Polyhedra`] into faces: two sides are the same face when
 //! they have the same vertex set.
 //!
-//! Every side's vertex loop is copied and sorted (its key); the sides are sorted by key (in
-//! parallel, ties broken by side index), so that the sides of one face are consecutive. A key
-//! met once is a boundary face, twice an interior face (its two sides must belong to different
-//! cells), more often an error. Faces are numbered in the order of their first side, so that
-//! the faces of a cell are close in memory. O(S log S) for S sides, plus O(m log m) per side
-//! of m vertices.
+//! The key of a side is its vertex loop sorted. The sides are first put in buckets by their
+//! smallest vertex (a counting sort, O(S + V) for S sides and V vertices); within a bucket
+//! (a few dozen sides in a tetrahedral mesh), in parallel over the buckets, the sides are
+//! sorted by key, ties broken by side index, so that the sides of one face are consecutive.
+//! Taking the buckets in vertex order, the keys come out in lexicographic order, the order of
+//! a global sort. Keys are compared first by a `u128` packing their first four entries (each
+//! plus one, padded with zeros, so that a shorter key sorts first as in a slice comparison),
+//! which decides between faces of at most four vertices, then, on a tie, as slices. A key met
+//! once is a boundary face, twice an interior face (its two sides must belong to different
+//! cells), more often an error; the error reported is that of the smallest key. Faces are
+//! numbered in the order of their first side, so that the faces of a cell are close in memory.
+//! O(S + V) plus O(m log m) per bucket of m sides; scratch reused per thread, nothing
+//! allocated per side.
 
 use super::Polyhedra;
 use crate::error::MeshError;
+use crate::mesh::buckets::counting_sort;
 use rayon::prelude::*;
 
 /// No partner side: a boundary face.
@@ -32,47 +40,128 @@ pub(crate) fn side_cells(p: &Polyhedra) -> Vec<u32> {
     out
 }
 
-/// Matches the sides of `p` into faces (`side_cell`: [`side_cells`]).
-pub(crate) fn match_faces(p: &Polyhedra, side_cell: &[u32]) -> Result<FaceMatch, MeshError> {
-    let n_sides = side_cell.len();
-    let mut keys = p.face_vertices.clone();
-    for s in 0..n_sides {
-        keys[p.face_ptr[s] as usize..p.face_ptr[s + 1] as usize].sort_unstable();
+/// Reused buffers of [`match_bucket`].
+#[derive(Default)]
+struct BucketScratch {
+    /// The sorted loops of the bucket's sides, concatenated.
+    keys: Vec<u32>,
+    /// Per side of the bucket: packed key prefix, side, start of its key in `keys`, length.
+    entries: Vec<(u128, u32, u32, u32)>,
+}
+
+/// The first four entries of the sorted key `key`, each plus one, packed big-end first and
+/// padded with zeros: comparing packings compares the keys as slices, up to a tie between keys
+/// longer than four that agree on their first four entries.
+fn packed_prefix(key: &[u32]) -> u128 {
+    (0..4).fold(0u128, |acc, i| {
+        (acc << 32) | key.get(i).map_or(0, |&v| u128::from(v) + 1)
+    })
+}
+
+/// Sorts the sides of one bucket by key and side, and flags the first side of every interior
+/// face (`pair_start[i]`: sides `bucket[i]` and `bucket[i + 1]` form a face).
+fn match_bucket(
+    p: &Polyhedra,
+    side_cell: &[u32],
+    bucket: &mut [u32],
+    pair_start: &mut [bool],
+    scratch: &mut BucketScratch,
+) -> Result<(), MeshError> {
+    let BucketScratch { keys, entries } = scratch;
+    keys.clear();
+    entries.clear();
+    for &s in bucket.iter() {
+        let start = keys.len();
+        keys.extend_from_slice(p.side_vertices(s as usize));
+        keys[start..].sort_unstable();
+        let len = keys.len() - start;
+        entries.push((packed_prefix(&keys[start..]), s, start as u32, len as u32));
     }
-    let key = |s: u32| &keys[p.face_ptr[s as usize] as usize..p.face_ptr[s as usize + 1] as usize];
-    let mut order: Vec<u32> = (0..n_sides as u32).collect();
-    order.par_sort_unstable_by(|&a, &b| key(a).cmp(key(b)).then(a.cmp(&b)));
-    let mut partner = vec![NO_SIDE; n_sides];
+    let key = |e: &(u128, u32, u32, u32)| &keys[e.2 as usize..(e.2 + e.3) as usize];
+    entries.sort_unstable_by(|a, b| {
+        (a.0.cmp(&b.0))
+            .then_with(|| key(a).cmp(key(b)))
+            .then(a.1.cmp(&b.1))
+    });
     let mut i = 0;
-    while i < n_sides {
+    while i < entries.len() {
         let mut j = i + 1;
-        while j < n_sides && key(order[j]) == key(order[i]) {
+        while j < entries.len()
+            && entries[j].0 == entries[i].0
+            && key(&entries[j]) == key(&entries[i])
+        {
             j += 1;
         }
-        let group = &order[i..j];
-        let cell = |g: usize| side_cell[group[g] as usize] as usize;
-        match group.len() {
+        let cell = |g: usize| side_cell[entries[i + g].1 as usize] as usize;
+        match j - i {
             1 => {}
             2 if cell(0) == cell(1) => {
                 return Err(MeshError::BadCell {
                     cell: cell(0),
-                    msg: format!("it lists the face with vertices {:?} twice", key(group[0])),
+                    msg: format!(
+                        "it lists the face with vertices {:?} twice",
+                        key(&entries[i])
+                    ),
                 });
             }
-            2 => {
-                partner[group[0] as usize] = group[1];
-                partner[group[1] as usize] = group[0];
-            }
+            2 => pair_start[i] = true,
             _ => {
                 return Err(MeshError::OvercrowdedFace {
-                    vertices: key(group[0]).iter().map(|&v| v as usize).collect(),
+                    vertices: key(&entries[i]).iter().map(|&v| v as usize).collect(),
                     cells: [cell(0), cell(1), cell(2)],
                 });
             }
         }
         i = j;
     }
-    drop(keys);
+    for (b, e) in bucket.iter_mut().zip(entries.iter()) {
+        *b = e.1;
+    }
+    Ok(())
+}
+
+/// `data` cut into consecutive mutable pieces at the offsets `ptr`.
+fn split_at_offsets<'a, T>(mut data: &'a mut [T], ptr: &[usize]) -> Vec<&'a mut [T]> {
+    let mut out = Vec::with_capacity(ptr.len().saturating_sub(1));
+    for w in ptr.windows(2) {
+        let (head, tail) = data.split_at_mut(w[1] - w[0]);
+        out.push(head);
+        data = tail;
+    }
+    out
+}
+
+/// Per side, its partner side ([`NO_SIDE`] on the boundary), or the error of the smallest bad
+/// key (see the module docs).
+fn partners(p: &Polyhedra, side_cell: &[u32]) -> Result<Vec<u32>, MeshError> {
+    let n_sides = side_cell.len();
+    let smallest = |s: usize| p.side_vertices(s).iter().min().map(|&v| v as usize);
+    let (ptr, mut order) =
+        counting_sort(p.vertices.len(), (0..n_sides).map(smallest), |s| s as u32);
+    let mut pair_start = vec![false; n_sides];
+    let err = split_at_offsets(&mut order, &ptr)
+        .into_par_iter()
+        .zip(split_at_offsets(&mut pair_start, &ptr))
+        .map_init(BucketScratch::default, |scratch, (bucket, pairs)| {
+            match_bucket(p, side_cell, bucket, pairs, scratch)
+        })
+        .find_map_first(|r| r.err());
+    if let Some(e) = err {
+        return Err(e);
+    }
+    let mut partner = vec![NO_SIDE; n_sides];
+    for i in (0..n_sides).filter(|&i| pair_start[i]) {
+        let (a, b) = (order[i], order[i + 1]);
+        partner[a as usize] = b;
+        partner[b as usize] = a;
+    }
+    Ok(partner)
+}
+
+/// Matches the sides of `p` into faces (`side_cell`: [`side_cells`]).
+pub(crate) fn match_faces(p: &Polyhedra, side_cell: &[u32]) -> Result<FaceMatch, MeshError> {
+    let n_sides = side_cell.len();
+    let partner = partners(p, side_cell)?;
     let mut face_of_side = vec![0u32; n_sides];
     let mut face_sides = Vec::with_capacity(n_sides / 2 + 1);
     for s in 0..n_sides {

@@ -8,7 +8,8 @@
 //! other cells (a cell floating inside another, two meshes interpenetrating, a mesh folded
 //! over itself), so some boundary vertex lies strictly inside a cell. Each boundary vertex is
 //! tested against the cells whose bounding box holds it, found in a uniform grid of about one
-//! bucket per cell over the bounding box of the mesh; a cell, star-shaped with respect to x_K
+//! bucket per cell over the bounding box of the mesh (only the buckets holding a boundary
+//! vertex are filled); a cell, star-shaped with respect to x_K
 //! (check 10), is the union of the tetrahedra (x_K, T) over the fan triangles T of its faces,
 //! and a point is strictly inside it if it lies in one of these tetrahedra and not on its
 //! outer triangle (barycentric coordinates, to 10⁻⁹). Expected O(n) for meshes of cells of comparable sizes. (Overlaps in which no
@@ -21,55 +22,88 @@ use crate::error::MeshError;
 use crate::mesh::buckets::counting_sort;
 use rayon::prelude::*;
 
+/// A uniform grid of n × n × n buckets over a bounding box.
+struct Grid {
+    lo: [f64; 3],
+    width: [f64; 3],
+    n: usize,
+}
+
+impl Grid {
+    /// The index of the slab holding coordinate `x` along axis `a` (clamped to the grid).
+    fn slab(&self, x: f64, a: usize) -> usize {
+        (((x - self.lo[a]) / self.width[a]).floor().max(0.0) as usize).min(self.n - 1)
+    }
+
+    /// The slabs holding point `p` along each axis (below 1024: they fit 16 bits).
+    fn slabs(&self, p: Point3) -> [u16; 3] {
+        [0, 1, 2].map(|a| self.slab(p[a], a) as u16)
+    }
+
+    /// The bucket of slabs `s`.
+    fn bucket(&self, s: [u16; 3]) -> usize {
+        let n = self.n;
+        s[0] as usize + n * (s[1] as usize + n * s[2] as usize)
+    }
+}
+
 impl PolyMesh3 {
     /// [`MeshError::OverlappingPolyhedra`] naming a boundary vertex strictly inside a cell.
+    ///
+    /// Only the buckets holding a boundary vertex are filled (the others are never searched):
+    /// the candidates of a vertex are the cells whose bucket range meets its bucket, in
+    /// increasing order, and the error names the smallest boundary vertex inside a cell, and
+    /// the smallest such cell.
     pub(crate) fn check_overlap(&self) -> Result<(), MeshError> {
         let bb = self.bounding_box().ranges();
         let n = ((self.n_cells() as f64).cbrt().ceil() as usize).clamp(1, 1024);
-        let width: [f64; 3] = std::array::from_fn(|a| (bb[a][1] - bb[a][0]) / n as f64);
-        let cell_of = |x: f64, a: usize| -> usize {
-            (((x - bb[a][0]) / width[a]).floor().max(0.0) as usize).min(n - 1)
+        let grid = Grid {
+            lo: bb.map(|r| r[0]),
+            width: std::array::from_fn(|a| (bb[a][1] - bb[a][0]) / n as f64),
+            n,
         };
-        let boxes: Vec<[[usize; 2]; 3]> = (0..self.n_cells())
-            .map(|k| {
-                let mut r = [[usize::MAX, 0]; 3];
-                for &f in self.cell_faces(k) {
-                    for &v in self.face_vertices(f as usize) {
-                        let p = self.vertices[v as usize];
-                        for a in 0..3 {
-                            let i = cell_of(p[a], a);
-                            r[a] = [r[a][0].min(i), r[a][1].max(i)];
-                        }
-                    }
-                }
-                r
-            })
-            .collect();
-        // (bucket, cell) pairs, one per bucket a cell's box meets
-        let pairs: Vec<(usize, u32)> = boxes
-            .iter()
-            .enumerate()
-            .flat_map(|(k, r)| {
-                (r[2][0]..=r[2][1]).flat_map(move |z| {
-                    (r[1][0]..=r[1][1]).flat_map(move |y| {
-                        (r[0][0]..=r[0][1]).map(move |x| (x + n * (y + n * z), k as u32))
-                    })
-                })
-            })
-            .collect();
-        let (ptr, cells) =
-            counting_sort(n * n * n, pairs.iter().map(|p| Some(p.0)), |i| pairs[i].1);
-        drop(pairs);
         let mut boundary_vertices: Vec<u32> = self
             .boundary_faces
             .iter()
             .flat_map(|&f| self.face_vertices(f as usize).iter().copied())
             .collect();
-        boundary_vertices.sort_unstable();
+        boundary_vertices.par_sort_unstable();
         boundary_vertices.dedup();
+        let slabs: Vec<[u16; 3]> = self.vertices.par_iter().map(|&p| grid.slabs(p)).collect();
+        // the searched buckets, numbered in increasing order
+        let mut slot = vec![u32::MAX; n * n * n];
+        for &v in &boundary_vertices {
+            slot[grid.bucket(slabs[v as usize])] = 0;
+        }
+        let mut n_slots = 0u32;
+        for s in slot.iter_mut().filter(|s| **s == 0) {
+            *s = n_slots;
+            n_slots += 1;
+        }
+        // (searched bucket, cell) pairs, one per searched bucket a cell's box meets, by cell
+        let pairs: Vec<(u32, u32)> = (0..self.n_cells())
+            .into_par_iter()
+            .flat_map_iter(|k| {
+                let r = self.bucket_range(&slabs, k);
+                let slot = &slot;
+                (r[2][0]..=r[2][1]).flat_map(move |z| {
+                    (r[1][0]..=r[1][1]).flat_map(move |y| {
+                        (r[0][0]..=r[0][1]).filter_map(move |x| {
+                            let b = slot[x + n * (y + n * z)];
+                            (b != u32::MAX).then_some((b, k as u32))
+                        })
+                    })
+                })
+            })
+            .collect();
+        let (ptr, cells) = counting_sort(
+            n_slots as usize,
+            pairs.iter().map(|p| Some(p.0 as usize)),
+            |i| pairs[i].1,
+        );
+        drop(pairs);
         let hit = boundary_vertices.par_iter().find_map_first(|&v| {
-            let p = self.vertices[v as usize];
-            let b = cell_of(p[0], 0) + n * (cell_of(p[1], 1) + n * cell_of(p[2], 2));
+            let b = slot[grid.bucket(slabs[v as usize])] as usize;
             cells[ptr[b]..ptr[b + 1]]
                 .iter()
                 .find(|&&k| self.strictly_inside(k as usize, v))
@@ -82,6 +116,22 @@ impl PolyMesh3 {
             }),
             None => Ok(()),
         }
+    }
+
+    /// The ranges of slabs, along each axis, met by the bounding box of cell `k`'s vertices
+    /// (`slabs`: those of every vertex).
+    fn bucket_range(&self, slabs: &[[u16; 3]], k: usize) -> [[usize; 2]; 3] {
+        let mut r = [[usize::MAX, 0]; 3];
+        for &f in self.cell_faces(k) {
+            for &v in self.face_vertices(f as usize) {
+                let s = slabs[v as usize];
+                for a in 0..3 {
+                    let i = s[a] as usize;
+                    r[a] = [r[a][0].min(i), r[a][1].max(i)];
+                }
+            }
+        }
+        r
     }
 
     /// Whether vertex `v` lies strictly inside cell `k` (see the module docs).
