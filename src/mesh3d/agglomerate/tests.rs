@@ -239,12 +239,19 @@ fn bad_size_and_small_budget_are_errors() {
 fn measure_agglomeration_of_large_meshes() {
     let cases = [
         ("Kuhn tetrahedra, n = 26", tetrahedra(26, 31)),
-        ("cubes, n = 46, nodes moved by 0.05 h", perturbed_cubes(46, 0.05, 37)),
+        (
+            "cubes, n = 46, nodes moved by 0.05 h",
+            perturbed_cubes(46, 0.05, 37),
+        ),
     ];
     for (name, p) in cases {
         let t = std::time::Instant::now();
         let fine = mesh(p);
-        println!("{name}: {} cells, built in {:.2?}", fine.n_cells(), t.elapsed());
+        println!(
+            "{name}: {} cells, built in {:.2?}",
+            fine.n_cells(),
+            t.elapsed()
+        );
         for per_cell in [8, 16, 48, 384] {
             let size = (1.0 / (fine.n_cells() / per_cell) as f64).cbrt();
             let t = std::time::Instant::now();
