@@ -40,10 +40,14 @@
 //!      bijection from the boundary onto the sphere, so A is a topological ball (no cavity,
 //!      no handle, no pinched vertex).
 //!
-//!    An aggregate that fails is *dissolved*: its fine cells become coarse cells of their own
-//!    (a fine cell is a cell of a validated mesh, so it passes the mesh's checks). Whether an
-//!    aggregate passes depends on nothing but its own fine cells, so one round settles: the
-//!    aggregates kept stay admissible after a dissolution, and the new ones are single cells.
+//!    An aggregate that fails is *regrouped*: its cells are grouped again as in step 1, within
+//!    it, by boxes of half the size (the aggregates that pass keep their cells), and the new
+//!    aggregates are checked. Whether an aggregate passes depends on nothing but its own fine
+//!    cells, so those kept stay admissible and only the new ones are checked. After
+//!    [`MAX_SPLITS`] halvings the cells of the aggregates that still fail are *dissolved*:
+//!    each becomes a coarse cell of its own (a fine cell is a cell of a validated mesh, so it
+//!    passes the mesh's checks; aggregates of one cell are not checked). So the construction
+//!    ends after at most [`MAX_SPLITS`] + 1 rounds of checks.
 //! 3. The coarse mesh is then built and validated like any input mesh
 //!    ([`PolyMesh3::from_polyhedra`], after [`Polyhedra::drop_unused_vertices`]: the fine
 //!    vertices inside aggregates are dropped). Every fine boundary face is a coarse boundary face
@@ -81,6 +85,10 @@ pub const NO_FACE: u32 = u32::MAX;
 /// Aggregates smaller than this fraction of H³ are merged into a neighbour.
 const SMALL_FRACTION: f64 = 0.125;
 
+/// Times the size of the boxes is halved to regroup the cells of failed aggregates before
+/// those that still fail are dissolved into single cells.
+pub const MAX_SPLITS: usize = 8;
+
 /// Least number of items (fine cells, faces, aggregates) of one parallel task.
 const MIN_TASK: usize = 1 << 12;
 
@@ -94,7 +102,8 @@ pub struct Agglomeration3 {
     /// The coarse face of each fine boundary face (the same polygon, with the same tag);
     /// [`NO_FACE`] for interior fine faces. Indexed by fine face.
     pub boundary_face_of: Vec<u32>,
-    /// Fine cells left alone because their aggregate failed the checks.
+    /// Fine cells whose first aggregate failed the checks (regrouped into smaller aggregates
+    /// or left alone).
     pub dissolved_cells: usize,
 }
 
@@ -117,23 +126,30 @@ pub fn agglomerate3(
         format!("agglomerating a 3D mesh of {} cells", fine.n_cells()),
         agglomerate3_bytes(fine),
     )?;
-    let mut label = initial_aggregates(fine, size);
+    let mut label = keyed_components(fine, size, None);
     merge_small(fine, &mut label, SMALL_FRACTION * size * size * size);
-    let (ptr, cells) = members(&label);
-    let failed: Vec<bool> = (0..ptr.len() - 1)
-        .into_par_iter()
-        .with_min_len(MIN_TASK / 16)
-        .map_init(check::Scratch::default, |scratch, a| {
-            let m = &cells[ptr[a]..ptr[a + 1]];
-            m.len() > 1 && !check::admissible(fine, &label, a, m, scratch)
-        })
-        .collect();
-    drop((ptr, cells));
-    let mut dissolved = vec![false; fine.n_cells()];
-    dissolve(&mut label, &mut dissolved, &failed);
-    renumber(&mut label);
-    let n_dissolved = dissolved.iter().filter(|&&d| d).count();
-    drop(dissolved);
+    let mut regrouped = vec![false; fine.n_cells()];
+    let mut settled = vec![false; fine.n_cells()];
+    let mut level = size;
+    for round in 0..=MAX_SPLITS {
+        let failed = check_all(fine, &label, &settled);
+        if !failed.contains(&true) {
+            break;
+        }
+        for (k, &a) in label.iter().enumerate() {
+            regrouped[k] |= failed[a];
+            settled[k] = !failed[a];
+        }
+        if round == MAX_SPLITS {
+            dissolve(&mut label, &mut regrouped, &failed);
+            renumber(&mut label);
+            break;
+        }
+        level *= 0.5;
+        label = keyed_components(fine, level, Some((&label, &failed)));
+    }
+    let n_dissolved = regrouped.iter().filter(|&&d| d).count();
+    drop((regrouped, settled));
     build::build(fine, label, n_dissolved, budget)
 }
 
@@ -191,13 +207,37 @@ fn key_point(mesh: &PolyMesh3, k: usize) -> Point3 {
     }
 }
 
-/// Step 1: connected components of the cells with the same (box, tag) key.
-fn initial_aggregates(fine: &PolyMesh3, size: f64) -> Vec<usize> {
+/// Whether each aggregate of `label` fails the checks of step 2 (aggregates of one cell, and
+/// those whose cells are `settled`, being known to pass).
+fn check_all(fine: &PolyMesh3, label: &[usize], settled: &[bool]) -> Vec<bool> {
+    let (ptr, cells) = members(label);
+    (0..ptr.len() - 1)
+        .into_par_iter()
+        .with_min_len(MIN_TASK / 16)
+        .map_init(check::Scratch::default, |scratch, a| {
+            let m = &cells[ptr[a]..ptr[a + 1]];
+            m.len() > 1 && !settled[m[0] as usize] && !check::admissible(fine, label, a, m, scratch)
+        })
+        .collect()
+}
+
+/// The connected components (through interior faces) of the cells with the same key: for
+/// step 1 (`previous` = `None`), the box of size `size` and the tag; for a regrouping
+/// (`previous` = the labels and which aggregates failed), the cells of a kept aggregate keep
+/// it, those of a failed one are grouped by boxes of size `size` within it.
+fn keyed_components(
+    fine: &PolyMesh3,
+    size: f64,
+    previous: Option<(&[usize], &[bool])>,
+) -> Vec<usize> {
     let origin = fine.bounding_box().ranges().map(|r| r[0]);
     let keys: Vec<([i64; 3], i32)> = (0..fine.n_cells())
         .into_par_iter()
         .with_min_len(MIN_TASK)
         .map(|k| {
+            if previous.is_some_and(|(label, failed)| !failed[label[k]]) {
+                return ([0; 3], fine.cell_tag(k));
+            }
             let c = key_point(fine, k);
             (
                 std::array::from_fn(|r| floor_i64((c[r] - origin[r]) / size)),
@@ -210,7 +250,9 @@ fn initial_aggregates(fine: &PolyMesh3, size: f64) -> Vec<usize> {
         .with_min_len(MIN_TASK)
         .map(|f| {
             let [a, b] = fine.face_cells(f);
-            b != NO_CELL && keys[a] == keys[b]
+            b != NO_CELL
+                && keys[a] == keys[b]
+                && previous.is_none_or(|(label, _)| label[a] == label[b])
         })
         .collect();
     drop(keys);

@@ -1,6 +1,6 @@
 //! Tests of [`agglomerate3`](super::agglomerate3).
 
-use super::{Agglomeration3, NO_FACE, agglomerate3};
+use super::{Agglomeration3, MAX_SPLITS, NO_FACE, agglomerate3};
 use crate::error::MeshError;
 use crate::mesh::MemoryBudget;
 use crate::mesh3d::test_meshes::{cubes, perturbed_cubes, tetrahedra};
@@ -173,11 +173,31 @@ fn u_shape() -> PolyMesh3 {
 }
 
 #[test]
-fn aggregates_not_star_shaped_are_dissolved() {
-    // the U's centroid lies in its notch: not star-shaped, dissolved into its 40 cubes; the
-    // block is kept
+fn aggregates_not_star_shaped_are_regrouped() {
+    // the U's centroid lies in its notch: not star-shaped; regrouped by boxes of side 1/2
+    // into four pieces per layer of two cubes: straight bars of 4 cubes, kept, and L-shaped
+    // pieces of 6 cubes holding a corner of the U. In units of the cube an L piece has
+    // centroid (5/6, 5/6, 1) from its corner, so d = 1/6 on the faces of its notch, less
+    // than MIN_DIST_RATIO · r = 0.1 · (49/36 + 25/36 + 1)^(1/2) ≈ 0.175: boxes of side 1/4
+    // then leave its cubes alone. The block is kept.
     let fine = u_shape();
     let agg = agglomerate3(&fine, 1.0, MemoryBudget::DEFAULT).unwrap();
+    check(&fine, &agg);
+    assert_eq!(agg.dissolved_cells, 40);
+    let mut s = sizes(&agg);
+    s.sort_unstable();
+    let mut want = vec![1; 24];
+    want.extend([4, 4, 4, 4, 24]);
+    assert_eq!(s, want);
+}
+
+#[test]
+fn aggregates_failing_at_every_size_are_dissolved() {
+    // boxes of side 300 / 2^8 > 1 still hold the whole U after the last halving: its 40 cubes
+    // become coarse cells of their own
+    let fine = u_shape();
+    assert!(300.0 / (1 << MAX_SPLITS) as f64 > 1.0);
+    let agg = agglomerate3(&fine, 300.0, MemoryBudget::DEFAULT).unwrap();
     check(&fine, &agg);
     assert_eq!(agg.dissolved_cells, 40);
     assert_eq!(agg.mesh.n_cells(), 41);
@@ -191,7 +211,7 @@ fn agglomeration_does_not_depend_on_threads() {
     let cases = [
         (mesh(tetrahedra(10, 19)), [0.17, 0.3]),
         (mesh(perturbed_cubes(16, 0.1, 23)), [0.11, 0.2]),
-        (u_shape(), [1.0, 0.3]),
+        (u_shape(), [1.0, 300.0]),
     ];
     let pools: Vec<_> = [1, 2, 3]
         .iter()
