@@ -36,13 +36,13 @@
 //!    * its fan triangles, all seen positively from x_A, cover the sphere of directions once:
 //!      their solid angles Ω_T (Van Oosterom and Strackee's formula
 //!      tan(Ω_T/2) = a·(b × c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|), with a, b, c
-//!      the corners of T minus x_A) add up to 4π. The radial projection from x_A is then a
+//!      the corners of T minus x_A) add up to 4π (to 10⁻⁶). The radial projection from x_A is then a
 //!      bijection from the boundary onto the sphere, so A is a topological ball (no cavity,
 //!      no handle, no pinched vertex).
 //!
 //!    An aggregate that fails is *regrouped*: its cells are grouped again as in step 1, within
 //!    it, by boxes of half the size (the aggregates that pass keep their cells), and the new
-//!    aggregates are checked. Whether an aggregate passes depends on nothing but its own fine
+//!    aggregates are checked (small ones are not merged again). Whether an aggregate passes depends on nothing but its own fine
 //!    cells, so those kept stay admissible and only the new ones are checked. After
 //!    [`MAX_SPLITS`] halvings the cells of the aggregates that still fail are *dissolved*:
 //!    each becomes a coarse cell of its own (a fine cell is a cell of a validated mesh, so it
@@ -55,8 +55,8 @@
 //!    unknowns carry over one to one; every coarse cell has the tag of its fine cells. A failure
 //!    there is returned as an error: the caller then does without coarse meshes.
 //!
-//! Cost: linear in the fine mesh apart from sorting the boundary edges of each aggregate, and
-//! the build of the coarse mesh (O(n log n)).
+//! Cost: each round is linear in the fine mesh apart from sorting the boundary edges of each
+//! aggregate checked; then the build of the coarse mesh (O(n log n)).
 //!
 //! ## Parallelism
 //! The passes over all fine cells (keys), over all fine faces (which cells to join, the
