@@ -42,8 +42,9 @@
 //!
 //!    An aggregate that fails is *regrouped*: its cells are grouped again as in step 1, within
 //!    it, by boxes of half the size (the aggregates that pass keep their cells), and the new
-//!    aggregates are checked (small ones are not merged again). Whether an aggregate passes depends on nothing but its own fine
-//!    cells, so those kept stay admissible and only the new ones are checked. After
+//!    aggregates are checked (small ones are not merged again). Whether an aggregate passes
+//!    depends on nothing but its own fine cells, so those kept stay admissible and only the
+//!    new ones are checked. After
 //!    [`MAX_SPLITS`] halvings the cells of the aggregates that still fail are *dissolved*:
 //!    each becomes a coarse cell of its own (a fine cell is a cell of a validated mesh, so it
 //!    passes the mesh's checks; aggregates of one cell are not checked). So the construction
