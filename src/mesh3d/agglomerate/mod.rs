@@ -36,9 +36,9 @@
 //!    * its fan triangles, all seen positively from x_A, cover the sphere of directions once:
 //!      their solid angles Ω_T (Van Oosterom and Strackee's formula
 //!      tan(Ω_T/2) = a·(b × c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|), with a, b, c
-//!      the corners of T minus x_A) add up to 4π (to 10⁻⁶). The radial projection from x_A is then a
-//!      bijection from the boundary onto the sphere, so A is a topological ball (no cavity,
-//!      no handle, no pinched vertex).
+//!      the corners of T minus x_A) add up to 4π (to 10⁻⁶). The radial projection from x_A
+//!      is then a bijection from the boundary onto the sphere, so A is a topological ball (no
+//!      cavity, no handle, no pinched vertex).
 //!
 //!    An aggregate that fails is *regrouped*: its cells are grouped again as in step 1, within
 //!    it, by boxes of half the size (the aggregates that pass keep their cells), and the new
