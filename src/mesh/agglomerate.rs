@@ -154,7 +154,7 @@ fn labels_from_roots(parent: &mut [usize]) -> Vec<usize> {
 /// ⌊x⌋ as an integer: exactly `x.floor() as i64` (saturating, NaN → 0), without the call to
 /// libm's `floor` that the baseline x86-64 target makes.
 #[inline]
-fn floor_i64(x: f64) -> i64 {
+pub(crate) fn floor_i64(x: f64) -> i64 {
     let t = x as i64; // rounds towards zero, saturating
     if (t as f64) > x {
         t.saturating_sub(1)
@@ -247,9 +247,17 @@ fn initial_aggregates(fine: &PolyMesh, size: f64) -> Vec<usize> {
         })
         .collect();
     drop(keys);
-    let mut parent: Vec<usize> = (0..fine.n_cells()).collect();
-    for (e, _) in joins.iter().enumerate().filter(|(_, j)| **j) {
-        let [a, b] = fine.edge_cells(e);
+    let pairs = (joins.iter().enumerate())
+        .filter(|(_, j)| **j)
+        .map(|(e, _)| fine.edge_cells(e));
+    components(fine.n_cells(), pairs)
+}
+
+/// Dense labels 0.. (in order of first appearance) of the connected components of the graph
+/// on `n` nodes with the edges `pairs`, joined in the order given.
+pub(crate) fn components(n: usize, pairs: impl Iterator<Item = [usize; 2]>) -> Vec<usize> {
+    let mut parent: Vec<usize> = (0..n).collect();
+    for [a, b] in pairs {
         let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
         if ra != rb {
             parent[ra.max(rb)] = ra.min(rb);
@@ -282,8 +290,22 @@ fn merge_small(fine: &PolyMesh, label: &mut [usize], min_area: f64) {
                 .then(|| (a, b, fine.edge_measure(e)))
         })
         .collect();
+    merge_into_neighbours(label, &area, &small, min_area);
+}
+
+/// Merges each aggregate `a` with `area[a] < min_area` into the neighbour with which it shares
+/// the largest interface measure, from the interfaces `small` (a, b, measure) between
+/// aggregates of the same tag (each listed once, in a fixed order; at least one side small),
+/// then renumbers `label` densely in order of first appearance (one pass, in label order).
+pub(crate) fn merge_into_neighbours(
+    label: &mut [usize],
+    area: &[f64],
+    small: &[(usize, usize, f64)],
+    min_area: f64,
+) {
+    let na = area.len();
     let mut iface: Vec<(usize, usize, f64)> = Vec::with_capacity(2 * small.len());
-    for &(a, b, len) in &small {
+    for &(a, b, len) in small {
         iface.push((a, b, len));
         iface.push((b, a, len));
     }
@@ -329,7 +351,7 @@ fn merge_small(fine: &PolyMesh, label: &mut [usize], min_area: f64) {
 
 /// Renumbers `label` densely in order of first appearance; returns the new label of each old
 /// one (`usize::MAX` for those that do not appear).
-fn renumber(label: &mut [usize]) -> Vec<usize> {
+pub(crate) fn renumber(label: &mut [usize]) -> Vec<usize> {
     let na = label.iter().max().map_or(0, |m| m + 1);
     let mut id = vec![usize::MAX; na];
     let mut next = 0;
@@ -345,7 +367,7 @@ fn renumber(label: &mut [usize]) -> Vec<usize> {
 
 /// Gives each fine cell of the aggregates `a` with `failed[a]` a label of its own (fresh labels
 /// at the end), in one pass.
-fn dissolve(label: &mut [usize], dissolved: &mut [bool], failed: &[bool]) {
+pub(crate) fn dissolve(label: &mut [usize], dissolved: &mut [bool], failed: &[bool]) {
     let mut next = failed.len();
     for (k, l) in label.iter_mut().enumerate() {
         if failed[*l] {

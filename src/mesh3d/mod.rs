@@ -34,6 +34,7 @@
 //! unused vertices ([`Polyhedra::drop_unused_vertices`], for readers); `surface.rs` and
 //! `overlap.rs` check the boundary surface and overlaps.
 
+pub mod agglomerate;
 pub mod io;
 
 pub mod generate;

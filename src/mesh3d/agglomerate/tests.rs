@@ -1,0 +1,292 @@
+//! Tests of [`agglomerate3`](super::agglomerate3).
+
+use super::{Agglomeration3, MAX_SPLITS, NO_FACE, agglomerate3};
+use crate::error::MeshError;
+use crate::mesh::MemoryBudget;
+use crate::mesh3d::test_meshes::{cubes, perturbed_cubes, tetrahedra};
+use crate::mesh3d::{Point3, PolyMesh3, Polyhedra};
+
+fn mesh(p: Polyhedra) -> PolyMesh3 {
+    PolyMesh3::from_polyhedra(p, MemoryBudget::DEFAULT).unwrap()
+}
+
+/// The boundary of the unit cube tagged 1..6 by side (x = 0, x = 1, y = 0, ...).
+fn side_tags(m: &PolyMesh3) -> PolyMesh3 {
+    m.with_boundary_tags(|x: Point3| {
+        let (axis, d) = (0..3)
+            .map(|r| (r, x[r].min(1.0 - x[r])))
+            .fold((0, f64::INFINITY), |b, c| if c.1 < b.1 { c } else { b });
+        assert!(d < 1e-12, "{x:?} is not on the boundary");
+        1 + 2 * axis as i32 + i32::from(x[axis] > 0.5)
+    })
+}
+
+fn total_volume(m: &PolyMesh3) -> f64 {
+    (0..m.n_cells()).map(|k| m.measure(k)).sum()
+}
+
+/// The properties every agglomeration has: each coarse cell is the union of its fine cells
+/// (volumes and centroids add up, one tag), the volumes sum to the domain's, and the boundary
+/// faces carry over one to one with their area, centroid and tag.
+fn check(fine: &PolyMesh3, agg: &Agglomeration3) {
+    let coarse = &agg.mesh;
+    assert_eq!(agg.cell_of.len(), fine.n_cells());
+    let mut volume = vec![0.0; coarse.n_cells()];
+    let mut moment = vec![[0.0; 3]; coarse.n_cells()];
+    for (k, &c) in agg.cell_of.iter().enumerate() {
+        let c = c as usize;
+        assert_eq!(fine.cell_tag(k), coarse.cell_tag(c), "fine cell {k}");
+        volume[c] += fine.measure(k);
+        (0..3).for_each(|r| moment[c][r] += fine.measure(k) * fine.centroid(k)[r]);
+    }
+    for c in 0..coarse.n_cells() {
+        assert!(
+            (volume[c] - coarse.measure(c)).abs() < 1e-12,
+            "coarse cell {c}"
+        );
+        let x = coarse.centroid(c);
+        assert!((0..3).all(|r| (moment[c][r] / volume[c] - x[r]).abs() < 1e-12));
+    }
+    let v = total_volume(fine);
+    // both sums round off by at most about n ε relative (n the number of fine cells)
+    let tol = 4.0 * f64::EPSILON * fine.n_cells() as f64 * v;
+    let defect = (total_volume(coarse) - v).abs();
+    assert!(defect <= tol, "volumes differ by {defect:e}");
+    let mut seen = vec![false; coarse.n_faces()];
+    for f in 0..fine.n_faces() {
+        let cf = agg.boundary_face_of[f];
+        if !fine.is_boundary_face(f) {
+            assert_eq!(cf, NO_FACE, "fine face {f}");
+            continue;
+        }
+        let cf = cf as usize;
+        assert!(coarse.is_boundary_face(cf) && !seen[cf], "fine face {f}");
+        seen[cf] = true;
+        assert_eq!(fine.face_tag(f), coarse.face_tag(cf));
+        assert!((fine.face_measure(f) - coarse.face_measure(cf)).abs() < 1e-15);
+        assert!(
+            crate::mesh3d::geometry::dist(fine.face_centroid(f), coarse.face_centroid(cf)) < 1e-15
+        );
+    }
+    assert_eq!(fine.boundary_faces().len(), coarse.boundary_faces().len());
+}
+
+/// The number of fine cells in each coarse cell.
+fn sizes(agg: &Agglomeration3) -> Vec<usize> {
+    let mut n = vec![0; agg.mesh.n_cells()];
+    agg.cell_of.iter().for_each(|&c| n[c as usize] += 1);
+    n
+}
+
+#[test]
+fn cubes_agglomerate_to_blocks_of_cubes() {
+    let fine = side_tags(&mesh(cubes(8, 3)));
+    for (per, want) in [(2, 64), (4, 8)] {
+        let agg = agglomerate3(&fine, per as f64 / 8.0, MemoryBudget::DEFAULT).unwrap();
+        check(&fine, &agg);
+        assert_eq!(agg.mesh.n_cells(), want);
+        assert_eq!(agg.dissolved_cells, 0);
+        assert!(sizes(&agg).iter().all(|&n| n == per * per * per));
+        let side = per as f64 / 8.0;
+        for c in 0..want {
+            assert!((agg.mesh.measure(c) - side * side * side).abs() < 1e-15);
+            // a block of per³ cubes keeps the per² fine faces on each of its 6 sides
+            assert_eq!(agg.mesh.cell_faces(c).len(), 6 * per * per);
+        }
+        let area: f64 = (agg.mesh.boundary_faces().iter())
+            .map(|&f| agg.mesh.face_measure(f as usize))
+            .sum();
+        assert!((area - 6.0).abs() < 1e-13);
+    }
+}
+
+#[test]
+fn tetrahedra_and_perturbed_cubes_give_valid_coarser_meshes() {
+    let kuhn = side_tags(&mesh(tetrahedra(6, 5)));
+    // the six tetrahedra of a cube are placed by the cube: blocks of 2³ cubes
+    let agg = agglomerate3(&kuhn, 2.0 / 6.0, MemoryBudget::DEFAULT).unwrap();
+    check(&kuhn, &agg);
+    assert_eq!(agg.mesh.n_cells(), 27);
+    assert!(sizes(&agg).iter().all(|&n| n == 48));
+    for (fine, sizes) in [
+        (kuhn, [0.23, 0.5]),
+        (side_tags(&mesh(perturbed_cubes(8, 0.1, 7))), [0.25, 0.4]),
+    ] {
+        for size in sizes {
+            let agg = agglomerate3(&fine, size, MemoryBudget::DEFAULT).unwrap();
+            check(&fine, &agg);
+            assert!(
+                agg.mesh.n_cells() * 4 < fine.n_cells(),
+                "size {size}: {} of {} cells",
+                agg.mesh.n_cells(),
+                fine.n_cells()
+            );
+            // built from its own description, the coarse mesh is the same
+            let again = mesh(agg.mesh.to_polyhedra());
+            assert_eq!(again.n_faces(), agg.mesh.n_faces());
+        }
+    }
+}
+
+#[test]
+fn aggregates_never_mix_cell_tags() {
+    let fine = mesh(cubes(8, 11));
+    let tags = (0..fine.n_cells())
+        .map(|k| if fine.centroid(k)[0] < 0.4 { 1 } else { 2 })
+        .collect();
+    let fine = fine.with_cell_tags(tags).unwrap();
+    let agg = agglomerate3(&fine, 0.5, MemoryBudget::DEFAULT).unwrap();
+    check(&fine, &agg);
+    // the four blocks at x < 1/2 are cut at x = 3/8 into a tag 1 and a tag 2 slab
+    assert_eq!(agg.mesh.n_cells(), 12);
+    let ones = (0..12).filter(|&c| agg.mesh.cell_tag(c) == 1).count();
+    assert_eq!(ones, 4);
+}
+
+#[test]
+fn small_aggregates_are_merged() {
+    // H = 0.3 on 8³ cubes: blocks of 2, 3, 2 and 1 cubes along each axis; the single cube at
+    // the far corner (volume 8⁻³ < H³/8) is merged into a neighbour, the 1 × 1 × 2 blocks
+    // (2 · 8⁻³ > H³/8) are not
+    let fine = mesh(cubes(8, 13));
+    let agg = agglomerate3(&fine, 0.3, MemoryBudget::DEFAULT).unwrap();
+    check(&fine, &agg);
+    assert_eq!(agg.mesh.n_cells(), 63);
+    let corner = fine.n_cells() - 1;
+    assert!(sizes(&agg)[agg.cell_of[corner] as usize] > 1);
+}
+
+/// 4³ cubes tagged 1 on a U (i = 0, i = 3 or j = 0) and 2 on the 2 × 3 × 4 block inside it.
+fn u_shape() -> PolyMesh3 {
+    let fine = mesh(cubes(4, 17));
+    let tags = (0..fine.n_cells())
+        .map(|k| {
+            let c = fine.centroid(k).map(|x| (x * 4.0) as usize);
+            if c[0] == 0 || c[0] == 3 || c[1] == 0 {
+                1
+            } else {
+                2
+            }
+        })
+        .collect();
+    fine.with_cell_tags(tags).unwrap()
+}
+
+#[test]
+fn aggregates_not_star_shaped_are_regrouped() {
+    // the U's centroid lies in its notch: not star-shaped; regrouped by boxes of side 1/2
+    // into four pieces per layer of two cubes: straight bars of 4 cubes, kept, and L-shaped
+    // pieces of 6 cubes holding a corner of the U. In units of the cube an L piece has
+    // centroid (5/6, 5/6, 1) from its corner, so d = 1/6 on the faces of its notch, less
+    // than MIN_DIST_RATIO · r = 0.1 · (49/36 + 25/36 + 1)^(1/2) ≈ 0.175: boxes of side 1/4
+    // then leave its cubes alone. The block is kept.
+    let fine = u_shape();
+    let agg = agglomerate3(&fine, 1.0, MemoryBudget::DEFAULT).unwrap();
+    check(&fine, &agg);
+    assert_eq!(agg.dissolved_cells, 40);
+    let mut s = sizes(&agg);
+    s.sort_unstable();
+    let mut want = vec![1; 24];
+    want.extend([4, 4, 4, 4, 24]);
+    assert_eq!(s, want);
+}
+
+#[test]
+fn aggregates_failing_at_every_size_are_dissolved() {
+    // boxes of side 300 / 2^8 > 1 still hold the whole U after the last halving: its 40 cubes
+    // become coarse cells of their own
+    let fine = u_shape();
+    assert!(300.0 / (1 << MAX_SPLITS) as f64 > 1.0);
+    let agg = agglomerate3(&fine, 300.0, MemoryBudget::DEFAULT).unwrap();
+    check(&fine, &agg);
+    assert_eq!(agg.dissolved_cells, 40);
+    assert_eq!(agg.mesh.n_cells(), 41);
+    let s = sizes(&agg);
+    assert_eq!(s.iter().filter(|&&n| n == 24).count(), 1);
+    assert_eq!(s.iter().filter(|&&n| n == 1).count(), 40);
+}
+
+#[test]
+fn agglomeration_does_not_depend_on_threads() {
+    let cases = [
+        (mesh(tetrahedra(10, 19)), [0.17, 0.3]),
+        (mesh(perturbed_cubes(16, 0.1, 23)), [0.11, 0.2]),
+        (u_shape(), [1.0, 300.0]),
+    ];
+    let pools: Vec<_> = [1, 2, 3]
+        .iter()
+        .map(|&t| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .unwrap()
+        })
+        .collect();
+    for (c, (fine, sizes)) in cases.iter().enumerate() {
+        for size in sizes {
+            let one = pools[0].install(|| agglomerate3(fine, *size, MemoryBudget::DEFAULT));
+            let one = one.unwrap();
+            for (t, pool) in pools.iter().enumerate().skip(1) {
+                let got = pool
+                    .install(|| agglomerate3(fine, *size, MemoryBudget::DEFAULT))
+                    .unwrap();
+                let what = format!("case {c}, size {size}, {} threads", t + 1);
+                assert_eq!(got.cell_of, one.cell_of, "{what}");
+                assert_eq!(got.boundary_face_of, one.boundary_face_of, "{what}");
+                assert_eq!(got.dissolved_cells, one.dissolved_cells, "{what}");
+                assert_eq!(got.mesh.to_polyhedra(), one.mesh.to_polyhedra(), "{what}");
+                assert_eq!(got.mesh.face_cells, one.mesh.face_cells, "{what}");
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_size_and_small_budget_are_errors() {
+    let fine = mesh(cubes(2, 29));
+    for size in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let err = agglomerate3(&fine, size, MemoryBudget::DEFAULT).unwrap_err();
+        assert!(matches!(err, MeshError::NonConforming(_)), "{size}: {err}");
+    }
+    let err = agglomerate3(&fine, 0.5, MemoryBudget::new(100)).unwrap_err();
+    assert!(matches!(err, MeshError::TooLarge { .. }), "{err}");
+}
+
+/// The measurement of `replication/measurements/mesh3d.md` ("Agglomerating 10⁵ cells"): run
+/// with `cargo test --release -p gradvi --lib measure_agglomeration -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn measure_agglomeration_of_large_meshes() {
+    let cases = [
+        ("Kuhn tetrahedra, n = 26", tetrahedra(26, 31)),
+        (
+            "cubes, n = 46, nodes moved by 0.05 h",
+            perturbed_cubes(46, 0.05, 37),
+        ),
+    ];
+    for (name, p) in cases {
+        let t = std::time::Instant::now();
+        let fine = mesh(p);
+        println!(
+            "{name}: {} cells, built in {:.2?}",
+            fine.n_cells(),
+            t.elapsed()
+        );
+        for per_cell in [8, 16, 48, 384] {
+            let size = (1.0 / (fine.n_cells() / per_cell) as f64).cbrt();
+            let t = std::time::Instant::now();
+            let agg = agglomerate3(&fine, size, MemoryBudget::DEFAULT).unwrap();
+            let time = t.elapsed();
+            check(&fine, &agg);
+            assert!(agg.mesh.n_cells() < fine.n_cells());
+            let faces = (0..agg.mesh.n_cells()).map(|c| agg.mesh.cell_faces(c).len());
+            println!(
+                "| {per_cell} | {size:.4} | {} | {} | {} | {} | {time:.2?} |",
+                agg.mesh.n_cells(),
+                agg.mesh.n_faces(),
+                faces.max().unwrap_or(0),
+                agg.dissolved_cells
+            );
+        }
+    }
+}
