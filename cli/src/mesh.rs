@@ -75,6 +75,8 @@ pub fn run(c: &MeshCommand) -> Result<()> {
             domain,
             output,
         } => {
+            // the output format is checked before any work
+            check_format(family.parse::<Family3>().is_ok(), output)?;
             let m = generate(family, *level, domain.as_deref())?;
             write(&m, output)?;
             eprintln!(
@@ -184,33 +186,40 @@ fn generate(family: &str, level: usize, domain: Option<&[f64]>) -> Result<AnyMes
     }))
 }
 
-/// Writes `m` to `out` atomically, in the format of its extension: `.typ2` or `.vtu` in 2D,
-/// `.vtu` in 3D.
-fn write(m: &AnyMesh, out: &Path) -> Result<()> {
+/// The extension of `out`, lowercase, if it is a format a mesh of this dimension (3D if
+/// `three`) is written in: `.typ2` or `.vtu` in 2D, `.vtu` in 3D.
+fn check_format(three: bool, out: &Path) -> Result<String> {
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match (m, ext.as_deref()) {
-        (AnyMesh::Two(m), Some("typ2")) => output::atomic(out, |tmp| Ok(write_typ2(tmp, m)?)),
-        (AnyMesh::Two(m), Some("vtu")) => {
-            output::atomic(out, |tmp| Ok(write_vtu(tmp, m, &[], &[])?))
-        }
-        (AnyMesh::Two(_), _) => bail!(
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    match (three, ext.as_str()) {
+        (false, "typ2" | "vtu") | (true, "vtu") => Ok(ext),
+        (false, _) => bail!(
             "unknown output format for {} (use .typ2 or .vtu)",
             out.display()
         ),
-        (AnyMesh::Three(m), Some("vtu")) => {
-            output::atomic(out, |tmp| Ok(write_vtu3(tmp, &m.to_polyhedra(), &[], &[])?))
-        }
-        (AnyMesh::Three(_), Some("typ2")) => bail!(
-            "cannot write the 3D mesh to {}: .typ2 is a 2D format (use .vtu)",
+        (true, "typ2") => bail!(
+            "cannot write a 3D mesh to {}: .typ2 is a 2D format (use .vtu)",
             out.display()
         ),
-        (AnyMesh::Three(_), _) => bail!(
+        (true, _) => bail!(
             "unknown output format for the 3D mesh {} (use .vtu)",
             out.display()
         ),
+    }
+}
+
+/// Writes `m` to `out` atomically, in the format of its extension ([`check_format`]).
+fn write(m: &AnyMesh, out: &Path) -> Result<()> {
+    let ext = check_format(matches!(m, AnyMesh::Three(_)), out)?;
+    match m {
+        AnyMesh::Two(m) if ext == "typ2" => output::atomic(out, |tmp| Ok(write_typ2(tmp, m)?)),
+        AnyMesh::Two(m) => output::atomic(out, |tmp| Ok(write_vtu(tmp, m, &[], &[])?)),
+        AnyMesh::Three(m) => {
+            output::atomic(out, |tmp| Ok(write_vtu3(tmp, &m.to_polyhedra(), &[], &[])?))
+        }
     }
 }
 
