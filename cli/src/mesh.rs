@@ -170,11 +170,13 @@ fn generate(family: &str, level: usize, domain: Option<&[f64]>) -> Result<AnyMes
         };
         return Ok(AnyMesh::Three(f.generate_on(level, cuboid, budget)?));
     }
-    let Ok(f) = family.parse::<Family>() else {
-        bail!(
-            "unknown mesh family {family:?}: expected a 2D family (cartesian, hexagonal, \
-             kershaw, triangles) or a 3D one (cubes, kuhn or tetrahedra, prisms, refined, warped)"
-        );
+    let f = match family.parse::<Family>() {
+        Ok(f) => f,
+        // the 2D list, then the 3D one
+        Err(e) => bail!(
+            "{e} (2D), or one of \"cubes\", \"kuhn\" (or \"tetrahedra\"), \"prisms\", \
+             \"refined\" or \"warped\" (3D)"
+        ),
     };
     Ok(AnyMesh::Two(match domain {
         None => f.generate(level, budget)?,

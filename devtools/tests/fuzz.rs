@@ -4,11 +4,17 @@
 //! process under a memory and a time limit; every case must end with a certified solution, a
 //! validated 3D mesh or a one-line typed error, never a panic, an abort or a hang.
 
-/// Runs `gradvi-dev fuzz --seed 7 --iterations n` with `extra` arguments on the repository
+/// Runs `gradvi-dev fuzz --seed seed --iterations n` with `extra` arguments on the repository
 /// and returns its summary line, after checking that it succeeded with `n` cases.
-fn fuzz(n: usize, extra: &[&str]) -> String {
+fn fuzz(seed: u64, n: usize, extra: &[&str]) -> String {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_gradvi-dev"))
-        .args(["fuzz", "--seed", "7", "--iterations", &n.to_string()])
+        .args([
+            "fuzz",
+            "--seed",
+            &seed.to_string(),
+            "--iterations",
+            &n.to_string(),
+        ])
         .args([
             "--seconds",
             "240",
@@ -46,10 +52,14 @@ fn count(summary: &str, what: &str) -> usize {
 
 #[test]
 fn forty_seeded_mutations_end_cleanly() {
-    let summary = fuzz(40, &[]);
-    // the slice exercises both outcomes: some mutants are valid inputs, solved and certified;
-    // most are refused
+    // the slice exercises all outcomes: some mutants are valid inputs, solved and certified or
+    // (3D meshes) read and validated; most are refused
+    let summary = fuzz(6, 40, &[]);
     assert!(count(&summary, "solved and certified") > 0, "{summary}");
+    assert!(
+        count(&summary, "3D meshes read and validated") > 0,
+        "{summary}"
+    );
     assert!(
         count(&summary, "refused with a typed error") > 0,
         "{summary}"
@@ -58,7 +68,7 @@ fn forty_seeded_mutations_end_cleanly() {
 
 #[test]
 fn forty_seeded_mutations_of_3d_meshes_end_cleanly() {
-    let summary = fuzz(40, &["--only-3d"]);
+    let summary = fuzz(7, 40, &["--only-3d"]);
     assert!(
         count(&summary, "3D meshes read and validated") > 0,
         "{summary}"
