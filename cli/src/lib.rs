@@ -8,15 +8,14 @@
 
 pub mod crosscheck;
 pub mod markdown;
+pub mod mesh;
 pub mod output;
 pub mod plot;
 pub mod replication;
 pub mod solve;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
-use gradvi::mesh::MemoryBudget;
-use gradvi::mesh::io::{read_mesh, write_typ2, write_vtu};
 use std::ffi::OsString;
 use std::path::PathBuf;
 
@@ -30,9 +29,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Mesh tools: statistics, generation, conversion.
+    /// Mesh tools (2D and 3D): statistics, generation, conversion.
     #[command(subcommand)]
-    Mesh(MeshCommand),
+    Mesh(mesh::MeshCommand),
     /// Solve one problem on one mesh with one scheme; prints NITER, the certificate, errors and
     /// timings; optionally writes VTU and JSON.
     Solve(solve::SolveArgs),
@@ -40,28 +39,6 @@ enum Command {
     Replicate(ReplicateArgs),
     /// Compare gradvi's P1 and HMM with the dolfinx reference solves (CROSSCHECK.md).
     Crosscheck(crosscheck::CrosscheckArgs),
-}
-
-#[derive(Subcommand)]
-enum MeshCommand {
-    /// Print the statistics of a mesh file (.msh, .typ1, .typ2).
-    Info {
-        /// The mesh file.
-        file: PathBuf,
-    },
-    /// Generate a mesh of the unit square and write it (.typ2 or .vtu, by extension).
-    Generate {
-        /// cartesian, hexagonal, kershaw or triangles.
-        family: String,
-        /// Level (hexagonal k: the FVCA5 hexa1_k mesh; kershaw k: mesh4_1_k; cartesian k:
-        /// 2^(k+1) × 2^(k+1) squares; triangles k: those squares, each cut into two triangles
-        /// by its diagonal from lower left to upper right).
-        #[arg(long)]
-        level: usize,
-        /// Output file (.typ2 or .vtu).
-        #[arg(short, long)]
-        output: PathBuf,
-    },
 }
 
 #[derive(Args)]
@@ -84,39 +61,6 @@ struct ReplicateArgs {
     /// Only rewrite REPORT.md and the CSV-based plots from existing CSV files.
     #[arg(long)]
     report_only: bool,
-}
-
-fn mesh_info(file: &PathBuf) -> Result<()> {
-    let m = read_mesh(file, MemoryBudget::available())?;
-    let mut sides = std::collections::BTreeMap::new();
-    for k in 0..m.n_cells() {
-        *sides.entry(m.cell_vertices(k).len()).or_insert(0usize) += 1;
-    }
-    let area: f64 = (0..m.n_cells()).map(|k| m.measure(k)).sum();
-    let bb = m.bounding_box();
-    let mut tags = std::collections::BTreeMap::new();
-    for &e in m.boundary_edges() {
-        *tags.entry(m.edge_tag(e)).or_insert(0usize) += 1;
-    }
-    println!("file            {}", file.display());
-    println!("cells           {}", m.n_cells());
-    println!("vertices        {}", m.n_vertices());
-    println!(
-        "edges           {} ({} on the boundary)",
-        m.n_edges(),
-        m.boundary_edges().len()
-    );
-    println!("h (max diam.)   {:.6}", m.h());
-    println!("total area      {area:.12}");
-    println!(
-        "bounding box    [{}, {}] x [{}, {}]",
-        bb.x[0], bb.x[1], bb.y[0], bb.y[1]
-    );
-    let s: Vec<String> = sides.iter().map(|(n, c)| format!("{n}:{c}")).collect();
-    println!("cells by sides  {}", s.join(" "));
-    let t: Vec<String> = tags.iter().map(|(t, c)| format!("tag {t}: {c}")).collect();
-    println!("boundary edges  {}", t.join(", "));
-    Ok(())
 }
 
 fn replicate(a: &ReplicateArgs) -> Result<()> {
@@ -233,29 +177,7 @@ pub fn limit_malloc_arenas() {
 
 fn run(cli: Cli) -> Result<()> {
     match &cli.command {
-        Command::Mesh(MeshCommand::Info { file }) => mesh_info(file),
-        Command::Mesh(MeshCommand::Generate {
-            family,
-            level,
-            output,
-        }) => {
-            let m = solve::generate(family, *level)?;
-            match output.extension().and_then(|e| e.to_str()) {
-                Some("typ2") => output::atomic(output, |tmp| Ok(write_typ2(tmp, &m)?))?,
-                Some("vtu") => output::atomic(output, |tmp| Ok(write_vtu(tmp, &m, &[], &[])?))?,
-                _ => bail!(
-                    "unknown output format for {} (use .typ2 or .vtu)",
-                    output.display()
-                ),
-            }
-            eprintln!(
-                "wrote {} ({} cells, h = {:.6})",
-                output.display(),
-                m.n_cells(),
-                m.h()
-            );
-            Ok(())
-        }
+        Command::Mesh(c) => mesh::run(c),
         Command::Solve(a) => solve::run(a),
         Command::Replicate(a) => replicate(a),
         Command::Crosscheck(a) => crosscheck::run(a),

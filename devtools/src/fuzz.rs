@@ -3,15 +3,19 @@
 //! that panics, aborts, hangs and memory exhaustion are all observed.
 //!
 //! Each case takes a good input (the small meshes of `tests/data/good/` and `meshes/test*_1.msh`,
-//! and the problem files of `problems/` when present), mutates it with a seeded generator (bit
-//! flips, byte and line deletion, duplication and swaps, truncation, numbers replaced by
-//! extreme values, NaN, huge counts), writes it to a scratch directory and runs
-//! `gradvi solve` on it under a memory limit (`ulimit -v`) and a wall-clock limit: the binary
-//! given by `--gradvi` (`make fuzz` gives the release build), else this program's `gradvi` mode
-//! (the same command line, [`gradvi_cli`]). A case passes when the child exits with 0 (then
-//! the CLI has checked the certificate) or 1 (a typed error, one line on stderr), in time, with
-//! no panic message. Anything else is a failure, and its input is kept in the scratch
-//! directory for reproduction.
+//! the problem files of `problems/` when present, and the 3D meshes of `tests/data/mesh3d/`:
+//! gmsh files, RF `.node`/`.ele` pairs, and VTU files the fuzzed `gradvi` writes into the
+//! scratch directory first, from those files and a generated family), mutates it with a seeded
+//! generator (bit flips, byte and line deletion, duplication and swaps, truncation, numbers
+//! replaced by extreme values, NaN, huge counts), writes it to a scratch directory and runs
+//! `gradvi solve` on it (2D meshes and problem files) or `gradvi mesh info` (3D meshes, which
+//! cannot be solved on yet; of an RF pair one file is mutated, the other copied) under a
+//! memory limit (`ulimit -v`) and a wall-clock limit: the binary given by `--gradvi`
+//! (`make fuzz` gives the release build), else this program's `gradvi` mode (the same command
+//! line, [`gradvi_cli`]). A case passes when the child exits with 0 (then the CLI has checked
+//! the certificate, or read and validated the 3D mesh) or 1 (a typed error, one line on
+//! stderr), in time, with no panic message. Anything else is a failure, and its input is kept
+//! in the scratch directory for reproduction.
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -46,6 +50,9 @@ pub struct FuzzArgs {
     /// The `gradvi` binary to fuzz (default: this program's `gradvi` mode).
     #[arg(long)]
     pub gradvi: Option<PathBuf>,
+    /// Mutate the 3D meshes only.
+    #[arg(long)]
+    pub only_3d: bool,
 }
 
 /// A small deterministic generator (SplitMix64).
@@ -64,8 +71,72 @@ impl Rng {
     }
 }
 
-/// The seed inputs: (path, kind) with kind "mesh" or "problem".
-fn corpus(root: &Path) -> Result<Vec<(PathBuf, &'static str)>> {
+/// What a seed input is, which says how a case runs it.
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    /// A 2D mesh: `gradvi solve --problem test3 --mesh`.
+    Mesh,
+    /// A problem file: `gradvi solve`.
+    Problem,
+    /// A 3D mesh: `gradvi mesh info`.
+    Mesh3,
+}
+
+/// The extension of `p`, or "".
+fn ext(p: &Path) -> &str {
+    p.extension().and_then(|e| e.to_str()).unwrap_or("")
+}
+
+/// The 3D seed inputs: the gmsh files and the RF `.node`/`.ele` files of `tests/data/mesh3d`,
+/// and VTU files written into `scratch` by `gradvi` (`exe` after `prefix`) from the first gmsh
+/// file, the first RF pair (polyhedra) and the level-1 prisms (written as polyhedra).
+fn corpus_3d(root: &Path, exe: &Path, prefix: &[&str], scratch: &Path) -> Result<Vec<PathBuf>> {
+    let Ok(entries) = std::fs::read_dir(root.join("tests/data/mesh3d")) else {
+        return Ok(Vec::new());
+    };
+    let mut files: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();
+    files.sort();
+    files.retain(|f| ["msh", "node", "ele"].contains(&ext(f)));
+    let msh = files.iter().find(|f| ext(f) == "msh").cloned();
+    let rf = files
+        .iter()
+        .find(|f| ext(f) == "node")
+        .map(|f| f.with_extension(""));
+    let mut commands: Vec<(Vec<String>, PathBuf)> = Vec::new();
+    for (i, src) in msh.into_iter().chain(rf).enumerate() {
+        let out = scratch.join(format!("seed{i}.vtu"));
+        let args = ["mesh", "convert"].map(String::from);
+        let args = [
+            &args[..],
+            &[src.display().to_string(), out.display().to_string()],
+        ]
+        .concat();
+        commands.push((args, out));
+    }
+    let out = scratch.join("seed-prisms.vtu");
+    let args = ["mesh", "generate", "prisms", "--level", "1", "-o"].map(String::from);
+    commands.push(([&args[..], &[out.display().to_string()]].concat(), out));
+    for (args, out) in commands {
+        let status = Command::new(exe)
+            .args(prefix)
+            .args(&args)
+            .stderr(Stdio::null())
+            .status()
+            .context("starting gradvi")?;
+        if !status.success() {
+            bail!(
+                "writing the 3D seed {} failed: gradvi {}",
+                out.display(),
+                args.join(" ")
+            );
+        }
+        files.push(out);
+    }
+    Ok(files)
+}
+
+/// The seed inputs: (path, kind).
+fn corpus(root: &Path) -> Result<Vec<(PathBuf, Kind)>> {
     let mut out = Vec::new();
     let good = root.join("tests/data/good");
     for dir in [good, root.join("meshes")] {
@@ -79,7 +150,7 @@ fn corpus(root: &Path) -> Result<Vec<(PathBuf, &'static str)>> {
             let small = !name.starts_with("test") || name.ends_with("_1.msh");
             let ext = f.extension().and_then(|e| e.to_str()).unwrap_or("");
             if small && ["msh", "typ1", "typ2"].contains(&ext) {
-                out.push((f, "mesh"));
+                out.push((f, Kind::Mesh));
             }
         }
     }
@@ -90,11 +161,8 @@ fn corpus(root: &Path) -> Result<Vec<(PathBuf, &'static str)>> {
             files
                 .into_iter()
                 .filter(|f| f.extension().is_some_and(|e| e == "toml"))
-                .map(|f| (f, "problem")),
+                .map(|f| (f, Kind::Problem)),
         );
-    }
-    if out.is_empty() {
-        bail!("no seed inputs under {}", root.display());
     }
     Ok(out)
 }
@@ -235,6 +303,49 @@ fn run_case(exe: &Path, args: &[String], a: &FuzzArgs) -> Result<Verdict> {
     })
 }
 
+/// Writes the mutant of `src` as `scratch/case{n}.ext` (and, for one file of an RF pair, the
+/// other file of the pair unchanged beside it): the files written and the command line that
+/// runs the case.
+fn prepare_case(
+    src: &Path,
+    kind: Kind,
+    n: usize,
+    scratch: &Path,
+    rng: &mut Rng,
+) -> Result<(Vec<PathBuf>, Vec<String>)> {
+    let data = std::fs::read(src).with_context(|| format!("reading {}", src.display()))?;
+    let e = if ext(src).is_empty() { "txt" } else { ext(src) };
+    let input = scratch.join(format!("case{n:05}.{e}"));
+    std::fs::write(&input, mutate(&data, rng))?;
+    let mut files = vec![input.clone()];
+    let partner = match e {
+        "node" => Some("ele"),
+        "ele" => Some("node"),
+        _ => None,
+    };
+    if let Some(p) = partner {
+        let other = input.with_extension(p);
+        std::fs::copy(src.with_extension(p), &other)
+            .with_context(|| format!("copying the RF partner of {}", src.display()))?;
+        files.push(other);
+    }
+    let input_s = input.display().to_string();
+    let args: &[&str] = match kind {
+        Kind::Mesh => &[
+            "solve",
+            "--problem",
+            "test3",
+            "--mesh",
+            &input_s,
+            "--max-solves",
+            "60",
+        ],
+        Kind::Problem => &["solve", &input_s, "--max-solves", "60"],
+        Kind::Mesh3 => &["mesh", "info", &input_s],
+    };
+    Ok((files, args.iter().map(|s| s.to_string()).collect()))
+}
+
 /// `gradvi-dev fuzz` (see the module docs). Fails (nonzero exit) if any case failed.
 pub fn run(a: &FuzzArgs) -> Result<()> {
     if !(a.seconds > 0.0 && a.case_seconds > 0.0 && a.seconds.is_finite()) {
@@ -245,57 +356,56 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
         Some(g) => (g.clone(), &[]),
         None => (std::env::current_exe()?, &["gradvi"]),
     };
-    let seeds = corpus(&a.root)?;
     let scratch = a.scratch.clone().unwrap_or_else(|| {
         std::env::temp_dir().join(format!("gradvi-fuzz-{}", std::process::id()))
     });
     std::fs::create_dir_all(&scratch)?;
+    let seeds_3d = corpus_3d(&a.root, &exe, prefix, &scratch)?;
+    let mut seeds = if a.only_3d {
+        Vec::new()
+    } else {
+        corpus(&a.root)?
+    };
+    seeds.extend(seeds_3d.iter().map(|f| (f.clone(), Kind::Mesh3)));
+    if seeds.is_empty() {
+        bail!("no seed inputs under {}", a.root.display());
+    }
     let mut rng = Rng(a.seed);
     let (t0, mut cases, mut failures) = (Instant::now(), 0usize, Vec::new());
-    let mut solved = 0usize;
+    let (mut solved, mut read) = (0usize, 0usize);
     while (a.iterations == 0 || cases < a.iterations) && t0.elapsed().as_secs_f64() < a.seconds {
         let (src, kind) = &seeds[rng.below(seeds.len())];
-        let data = std::fs::read(src).with_context(|| format!("reading {}", src.display()))?;
-        let ext = src.extension().and_then(|e| e.to_str()).unwrap_or("txt");
-        let input = scratch.join(format!("case{cases:05}.{ext}"));
-        std::fs::write(&input, mutate(&data, &mut rng))?;
-        let input_s = input.display().to_string();
-        let solve: Vec<String> = match *kind {
-            "mesh" => [
-                "solve",
-                "--problem",
-                "test3",
-                "--mesh",
-                &input_s,
-                "--max-solves",
-                "60",
-            ]
-            .map(String::from)
-            .to_vec(),
-            _ => ["solve", &input_s, "--max-solves", "60"]
-                .map(String::from)
-                .to_vec(),
-        };
-        let args: Vec<String> = prefix.iter().map(|p| p.to_string()).chain(solve).collect();
+        let (files, case) = prepare_case(src, *kind, cases, &scratch, &mut rng)?;
+        let args: Vec<String> = prefix.iter().map(|p| p.to_string()).chain(case).collect();
         let verdict = run_case(&exe, &args, a)?;
         match &verdict {
             Verdict::Solved | Verdict::Refused => {
-                solved += usize::from(matches!(verdict, Verdict::Solved));
-                let _ = std::fs::remove_file(&input);
+                if matches!(verdict, Verdict::Solved) {
+                    *(if *kind == Kind::Mesh3 {
+                        &mut read
+                    } else {
+                        &mut solved
+                    }) += 1;
+                }
+                files.iter().for_each(|f| drop(std::fs::remove_file(f)));
             }
             Verdict::Fail(why) => {
-                eprintln!("FAIL {} (from {}): {why}", input.display(), src.display());
-                failures.push(input);
+                eprintln!(
+                    "FAIL {} (from {}): {why}",
+                    files[0].display(),
+                    src.display()
+                );
+                failures.push(files[0].clone());
             }
         }
         cases += 1;
     }
     eprintln!(
-        "fuzz: {cases} cases in {:.1} s, seed {}: {solved} solved and certified, {} refused \
-         with a typed error, {} failures",
+        "fuzz: {cases} cases in {:.1} s, seed {}: {solved} solved and certified, {read} 3D \
+         meshes read and validated, {} refused with a typed error, {} failures",
         t0.elapsed().as_secs_f64(),
         a.seed,
-        cases - solved - failures.len(),
+        cases - solved - read - failures.len(),
         failures.len()
     );
     if !failures.is_empty() {
@@ -304,6 +414,9 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
             failures.len(),
             scratch.display()
         );
+    }
+    for f in seeds_3d.iter().filter(|f| f.starts_with(&scratch)) {
+        let _ = std::fs::remove_file(f);
     }
     let _ = std::fs::remove_dir(&scratch);
     Ok(())
