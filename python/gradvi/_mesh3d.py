@@ -331,6 +331,9 @@ class Mesh3:
             path = os.path.join(tmp, "mesh.vtu")
             self.write_vtu(path)
             out = meshio.read(path)
+        if any(b.type.startswith("polyhedron") for b in out.cells):
+            # meshio's VTU reader groups polyhedra by vertex count, out of the mesh's order
+            out = self._polyhedra_meshio(meshio)
         spans = np.cumsum([0] + [len(b.data) for b in out.cells])
         for name, arr in (point_data or {}).items():
             a = np.asarray(arr)
@@ -343,6 +346,27 @@ class Mesh3:
                 raise InvalidDataError(f"cell data {name!r} must have one entry per cell ({self.n_cells}), got shape {a.shape}")
             out.cell_data[name] = [a[s:e] for s, e in zip(spans[:-1], spans[1:])]
         return out
+
+    def _polyhedra_meshio(self, meshio: Any) -> "meshio.Mesh":
+        """The cells as meshio ``polyhedron<n>`` blocks (n: the cell's number of vertices), one
+        block per run of cells with the same n, each cell its faces' loops counter-clockwise
+        seen from outside it (the loops of :meth:`write_vtu`)."""
+        off, conn, first = self.face_offsets, self.face_connectivity, self.face_cells[:, 0]
+        blocks: List[Tuple[str, List[List[np.ndarray]]]] = []
+        for k in range(self.n_cells):
+            faces = []
+            for f in self.faces_of(k).tolist():
+                loop = conn[off[f] : off[f + 1]]
+                faces.append(loop.copy() if first[f] == k else loop[::-1].copy())
+            kind = f"polyhedron{np.unique(np.concatenate(faces)).size}"
+            if not blocks or blocks[-1][0] != kind:
+                blocks.append((kind, []))
+            blocks[-1][1].append(faces)
+        cd = {}
+        if np.any(self.cell_tags):
+            spans = np.cumsum([0] + [len(b) for _, b in blocks])
+            cd["cell_tag"] = [self.cell_tags[s:e].copy() for s, e in zip(spans[:-1], spans[1:])]
+        return meshio.Mesh(self.points.copy(), blocks, cell_data=cd)
 
     def with_face_tags(self, tags: ArrayLike) -> "Mesh3":
         """A copy whose boundary faces carry ``tags[f]`` (one entry per face; interior entries
