@@ -19,8 +19,10 @@ The pipeline is mesh → problem → solve::
     sol.write_vtu("u.vtu")                                   # or sol.to_meshio()
 
 Main names: :class:`Mesh`, :class:`Problem` (with :class:`CellData`, :class:`EdgeData`,
-:class:`VertexData`), :func:`solve` returning a :class:`Solution`, :class:`Rect`, the
-registries ``SCHEMES``, ``FAMILIES`` and ``BUILTIN_PROBLEMS`` (from the Rust library), and the
+:class:`VertexData`), :func:`solve` returning a :class:`Solution`, :class:`Rect`, the 3D
+polyhedral :class:`Mesh3` with its :class:`Box` (read, generated, converted; not solved on
+yet), the registries ``SCHEMES``, ``FAMILIES``, ``FAMILIES3`` and ``BUILTIN_PROBLEMS`` (from
+the Rust library), and the
 exceptions, all subclasses of :class:`GradviError` (:class:`InvalidDataError` is also a
 ``ValueError``, :class:`MeshIoError` an ``OSError``, :class:`OutOfMemoryError` a
 ``MemoryError``).
@@ -29,6 +31,7 @@ exceptions, all subclasses of :class:`GradviError` (:class:`InvalidDataError` is
 from ._gradvi import (
     BUILTIN_PROBLEMS,
     FAMILIES,
+    FAMILIES3,
     SCHEMES,
     CertificateError,
     CyclingError,
@@ -49,14 +52,15 @@ from ._gradvi import (
 )
 from ._gradvi import __version__ as _rust_version
 from ._mesh import Mesh, Rect
+from ._mesh3d import Box, Mesh3
 from ._problem import CellData, EdgeData, Problem, VertexData
 from ._solve import Certificate, IterationLog, MarginalLoadWarning, Solution, solve
 
 __version__ = _rust_version
 
 # The registries come from the Rust library: SCHEMES (schemes of :func:`solve`), FAMILIES (mesh
-# families of :meth:`Mesh.generate`) and BUILTIN_PROBLEMS (problems of :meth:`Problem.builtin`),
-# tuples of names in registration order.
+# families of :meth:`Mesh.generate`), FAMILIES3 (3D families of :meth:`Mesh3.generate`) and
+# BUILTIN_PROBLEMS (problems of :meth:`Problem.builtin`), tuples of names in registration order.
 
 
 def fitted_slope(h, e) -> float:
@@ -74,6 +78,8 @@ def fitted_slope(h, e) -> float:
 __all__ = [
     "Mesh",
     "Rect",
+    "Mesh3",
+    "Box",
     "Problem",
     "CellData",
     "EdgeData",
@@ -85,6 +91,7 @@ __all__ = [
     "fitted_slope",
     "SCHEMES",
     "FAMILIES",
+    "FAMILIES3",
     "BUILTIN_PROBLEMS",
     "GradviError",
     "MeshIoError",

@@ -11,6 +11,8 @@ __version__: str
 SCHEMES: Tuple[str, ...]
 #: gradvi::mesh::generate::Family::ALL, by name
 FAMILIES: Tuple[str, ...]
+#: gradvi::mesh3d::generate::Family3::ALL, by name
+FAMILIES3: Tuple[str, ...]
 #: gradvi::problem::file::BUILTIN, by name
 BUILTIN_PROBLEMS: Tuple[str, ...]
 
@@ -91,6 +93,36 @@ class _Mesh:
         cell_data: List[Tuple[str, npt.NDArray[np.float64]]],
     ) -> None: ...
     def write_typ2(self, path: str) -> None: ...
+
+class _Mesh3:
+    @staticmethod
+    def read(path: str) -> _Mesh3: ...
+    @staticmethod
+    def from_arrays(
+        points: npt.NDArray[np.float64],
+        cell_ptr: npt.NDArray[np.int64],
+        face_ptr: npt.NDArray[np.int64],
+        face_vertices: npt.NDArray[np.int64],
+        cell_tags: Optional[npt.NDArray[np.int32]] = None,
+        tagged: Optional[Tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int32]]] = None,
+    ) -> _Mesh3: ...
+    @staticmethod
+    def generate(family: str, level: int, domain: Optional[Sequence[float]] = None) -> _Mesh3: ...
+    def with_face_tags(self, tags: npt.NDArray[np.int32]) -> _Mesh3: ...
+    def with_cell_tags(self, tags: npt.NDArray[np.int32]) -> _Mesh3: ...
+    # n_vertices, n_cells, n_faces, h, bounding_box (x0, x1, y0, y1, z0, z1)
+    def scalars(self) -> Dict[str, Any]: ...
+    def same_as(self, other: _Mesh3) -> bool: ...
+    # points, cell_face_offsets, cell_faces, cell_dists, face_offsets, face_connectivity,
+    # face_cells, volumes, diameters, centroids, face_areas, face_centroids, face_normals,
+    # face_tags, cell_tags, boundary_faces
+    def geometry(self) -> Dict[str, np.ndarray]: ...
+    def write_vtu(
+        self,
+        path: str,
+        point_data: List[Tuple[str, npt.NDArray[np.float64]]],
+        cell_data: List[Tuple[str, npt.NDArray[np.float64]]],
+    ) -> None: ...
 
 class _Problem:
     @staticmethod

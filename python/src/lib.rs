@@ -5,10 +5,13 @@
 //! opaque handles and exchanges flat numpy arrays with the Python layer:
 //!
 //! - [`mesh`]: `_Mesh` (read, build from arrays, generate, geometry arrays, VTU/typ2 output);
+//! - [`mesh3d`]: `_Mesh3`, the same for 3D polyhedral meshes (read, build from arrays,
+//!   generate, geometry arrays, VTU output);
 //! - [`problem`]: `_Problem` (built-in problems, problem files, and problems tabulated by the
 //!   Python layer on the points a scheme evaluates data at);
 //! - [`solve`]: `solve`, which returns every result as numpy arrays and plain values;
-//! - the registries `SCHEMES`, `FAMILIES` and `BUILTIN_PROBLEMS` (names, from the library).
+//! - the registries `SCHEMES`, `FAMILIES`, `FAMILIES3` and `BUILTIN_PROBLEMS` (names, from the
+//!   library).
 //!
 //! Every gradvi error becomes an exception of the `GradviError` hierarchy with the same message
 //! ([`errors`]); every call into the library runs under [`guard`], which turns a panic into
@@ -17,6 +20,7 @@
 
 mod errors;
 mod mesh;
+mod mesh3d;
 mod problem;
 mod solve;
 
@@ -57,6 +61,7 @@ where
 fn _gradvi(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     mesh::register(m)?;
+    mesh3d::register(m)?;
     problem::register(m)?;
     solve::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
@@ -64,14 +69,19 @@ fn _gradvi(m: &Bound<'_, PyModule>) -> PyResult<()> {
 }
 
 /// The library's registries, as tuples of names in registration order: `SCHEMES`
-/// (`gradvi::scheme::SchemeKind::ALL`), `FAMILIES` (`gradvi::mesh::generate::Family::ALL`) and
-/// `BUILTIN_PROBLEMS` (`gradvi::problem::file::BUILTIN`).
+/// (`gradvi::scheme::SchemeKind::ALL`), `FAMILIES` (`gradvi::mesh::generate::Family::ALL`),
+/// `FAMILIES3` (`gradvi::mesh3d::generate::Family3::ALL`) and `BUILTIN_PROBLEMS`
+/// (`gradvi::problem::file::BUILTIN`).
 fn register_registries(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     let schemes = gradvi::scheme::SchemeKind::ALL.iter().map(|k| k.name());
     m.add("SCHEMES", PyTuple::new(py, schemes)?)?;
     let families = gradvi::mesh::generate::Family::ALL.iter().map(|f| f.name());
     m.add("FAMILIES", PyTuple::new(py, families)?)?;
+    let families3 = gradvi::mesh3d::generate::Family3::ALL
+        .iter()
+        .map(|f| f.name());
+    m.add("FAMILIES3", PyTuple::new(py, families3)?)?;
     let problems = gradvi::problem::file::BUILTIN.iter().map(|(n, _)| *n);
     m.add("BUILTIN_PROBLEMS", PyTuple::new(py, problems)?)?;
     Ok(())
