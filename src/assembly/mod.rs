@@ -48,7 +48,7 @@ pub mod two_point;
 pub mod values;
 
 use crate::linalg::{FactorThreads, Ordering};
-use crate::mesh::MemoryBudget;
+use crate::mesh::{MemoryBudget, PolyMesh, SolveMesh};
 use crate::problem::Problem;
 use crate::scheme::{GradientDiscretisation, PointDof};
 use condense::{CellSystem, SymMatrix};
@@ -86,9 +86,12 @@ static NEXT_SYSTEM_ID: AtomicU64 = AtomicU64::new(1);
 
 /// The assembled discrete problem (see the module docs): immutable once built; the solves
 /// keep what they carry from one to the next in a [`SolveState`].
-pub struct DiscreteSystem<'a> {
-    sym: Arc<SymbolicSystem<'a>>,
-    values: ProblemValues,
+pub struct DiscreteSystem<'a, M = PolyMesh, const D: usize = 2>
+where
+    M: SolveMesh<D> + ?Sized,
+{
+    sym: Arc<SymbolicSystem<'a, M, D>>,
+    values: ProblemValues<D>,
     n_skel: usize,
     n: usize,
     /// See [`NEXT_SYSTEM_ID`].
@@ -100,11 +103,11 @@ pub struct DiscreteSystem<'a> {
     pub symbolic_seconds: f64,
 }
 
-impl<'a> DiscreteSystem<'a> {
+impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'a, M, D> {
     /// Builds the symbolic system of `scheme` and the values of `problem`, side by side.
     pub fn new(
-        scheme: &'a dyn GradientDiscretisation,
-        problem: &Problem,
+        scheme: &'a dyn GradientDiscretisation<M, D>,
+        problem: &Problem<D>,
         options: SystemOptions,
     ) -> crate::Result<Self> {
         let t0 = Instant::now();
@@ -124,7 +127,10 @@ impl<'a> DiscreteSystem<'a> {
     }
 
     /// The values of `problem` on a symbolic system built before (and shared).
-    pub fn with_symbolic(sym: Arc<SymbolicSystem<'a>>, problem: &Problem) -> crate::Result<Self> {
+    pub fn with_symbolic(
+        sym: Arc<SymbolicSystem<'a, M, D>>,
+        problem: &Problem<D>,
+    ) -> crate::Result<Self> {
         let t0 = Instant::now();
         let values = ProblemValues::evaluate(sym.scheme(), &sym.dof_map, problem)?;
         let mut s = Self::from_parts(sym, values);
@@ -132,7 +138,7 @@ impl<'a> DiscreteSystem<'a> {
         Ok(s)
     }
 
-    fn from_parts(sym: Arc<SymbolicSystem<'a>>, values: ProblemValues) -> Self {
+    fn from_parts(sym: Arc<SymbolicSystem<'a, M, D>>, values: ProblemValues<D>) -> Self {
         DiscreteSystem {
             n_skel: sym.n_condensed(),
             n: sym.n_unknowns(),
@@ -145,11 +151,11 @@ impl<'a> DiscreteSystem<'a> {
     }
 
     /// The symbolic system (shareable with other problems on the same scheme).
-    pub fn symbolic(&self) -> &Arc<SymbolicSystem<'a>> {
+    pub fn symbolic(&self) -> &Arc<SymbolicSystem<'a, M, D>> {
         &self.sym
     }
     /// The scheme.
-    pub fn scheme(&self) -> &'a dyn GradientDiscretisation {
+    pub fn scheme(&self) -> &'a dyn GradientDiscretisation<M, D> {
         self.sym.scheme()
     }
     /// Number of unknowns (skeleton and interior).
@@ -174,7 +180,7 @@ impl<'a> DiscreteSystem<'a> {
     }
     /// The unknowns carrying the trace on Γ3, including those that are also Dirichlet unknowns
     /// (P1 vertices at Γ1 ∩ Γ3), which are never constrained but must satisfy the barrier.
-    pub fn signorini_dofs(&self) -> &[PointDof] {
+    pub fn signorini_dofs(&self) -> &[PointDof<D>] {
         &self.values.signorini
     }
     /// The full load vector b.
@@ -212,7 +218,7 @@ impl<'a> DiscreteSystem<'a> {
 
     /// This system paired with `state`: the [`crate::vi::QuadraticEnergy`] the algorithms
     /// minimise, its solves carrying what they learn in `state`.
-    pub fn with_state<'s>(&'s self, state: &'s mut SolveState) -> Solving<'s, 'a> {
+    pub fn with_state<'s>(&'s self, state: &'s mut SolveState) -> Solving<'s, 'a, M, D> {
         self.bind(state);
         Solving {
             system: self,

@@ -14,6 +14,7 @@
 //! the initial active set. Cost: one union–find pass over the local unknowns.
 
 use crate::assembly::DiscreteSystem;
+use crate::mesh::SolveMesh;
 use crate::solver::constraints::Constraints;
 
 /// Union–find with path halving.
@@ -28,7 +29,10 @@ fn find(parent: &mut [usize], mut i: usize) -> usize {
 /// Checks the problem on `system` (see the module docs). Returns the positions (in
 /// `cons.dofs`) of the constrained unknowns lying on parts of the mesh without Dirichlet
 /// unknowns (empty in the usual case), or a typed error saying why the problem is ill-posed.
-pub fn analyse(system: &DiscreteSystem, cons: Option<&Constraints>) -> crate::Result<Vec<usize>> {
+pub fn analyse<M: SolveMesh<D> + ?Sized, const D: usize>(
+    system: &DiscreteSystem<M, D>,
+    cons: Option<&Constraints<D>>,
+) -> crate::Result<Vec<usize>> {
     let n = system.n_unknowns();
     let dm = &system.symbolic().dof_map;
     let mut parent: Vec<usize> = (0..n).collect();
