@@ -19,6 +19,8 @@
 pub mod constraints;
 pub mod magnitude;
 pub mod start;
+#[cfg(test)]
+mod tests_3d;
 pub mod warm_start;
 pub mod well_posed;
 
