@@ -25,6 +25,11 @@
 //!   cheaper, never different beyond the solver tolerance. [`Solving`] pairs a system with a
 //!   state as the [`crate::vi::QuadraticEnergy`] the algorithms minimise.
 //!
+//! Every type here is generic over the mesh `M` and the dimension `D` (defaults `PolyMesh`
+//! and 2): the data evaluation reads the mesh through [`crate::mesh::SolveMesh<D>`] (cell
+//! tags, boundary faces, their tags and centres), and nothing else depends on D. The scheme
+//! stays a trait object; the solve paths are compiled once per mesh type used.
+//!
 //! When every local matrix couples each skeleton unknown with its cell's unknown only (HMM on
 //! rectangles with a diagonal tensor, where it is the two-point flux scheme), the iterative
 //! solves eliminate the skeleton unknowns instead and solve on the cells ([`two_point`]).

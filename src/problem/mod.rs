@@ -238,10 +238,11 @@ fn positive_definite<const D: usize>(a: &Tensor<D>, scale: f64) -> bool {
             return false;
         }
         det *= m[p][p];
-        for i in p + 1..D {
-            let l = m[i][p] / m[p][p];
-            for j in p..D {
-                m[i][j] -= l * m[p][j];
+        let pivot_row = m[p];
+        for row in m.iter_mut().skip(p + 1) {
+            let l = row[p] / pivot_row[p];
+            for (x, y) in row.iter_mut().zip(&pivot_row).skip(p) {
+                *x -= l * y;
             }
         }
     }
