@@ -158,9 +158,11 @@ pub fn solve_with_symbolic<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
     solve_system(system, problem, opts, t0)
 }
 
+/// What [`warm_start`] returns: the predicted initial active set and the report.
+type Start = (Option<Vec<bool>>, Option<WarmStartReport>);
+
 /// The initial active set that the warm start predicts (None: cold), and its report (None:
 /// no warm start was asked for); an error if the mesh type has no nested start.
-type Start = (Option<Vec<bool>>, Option<WarmStartReport>);
 fn warm_start<M: SolverMesh<D> + ?Sized, const D: usize>(
     system: &DiscreteSystem<M, D>,
     state: &mut SolveState,
