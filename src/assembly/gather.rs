@@ -5,6 +5,7 @@
 
 use super::condense::{self, condense};
 use super::{DiscreteSystem, SolveState};
+use crate::mesh::SolveMesh;
 use rayon::prelude::*;
 
 /// Cells per parallel task in the cell loops (large enough to amortise the task, small enough
@@ -74,7 +75,7 @@ impl FixedValues {
     }
 }
 
-impl DiscreteSystem<'_> {
+impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// The lower-triangular CSC pattern (column pointers, row indices) of the condensed matrix.
     pub fn condensed_pattern(&self) -> (&[usize], &[usize]) {
         (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx())

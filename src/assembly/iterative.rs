@@ -9,6 +9,7 @@ use super::linear::{
 };
 use super::{DiscreteSystem, SolveState};
 use crate::linalg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, CsrMatrix};
+use crate::mesh::SolveMesh;
 use crate::vi::SolveTimings;
 use std::time::Instant;
 
@@ -148,7 +149,7 @@ pub(super) fn fingerprint(fixed: &[Option<f64>]) -> u64 {
     h.finish()
 }
 
-impl DiscreteSystem<'_> {
+impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// Where the hierarchy of the next iterative solve (of the cell system if `cells`) comes
     /// from: the kept hierarchy's coarse levels are reused unless they went stale, were built
     /// for the other system, or too many unknowns changed status since; its matrix (and a

@@ -25,6 +25,11 @@
 //!   cheaper, never different beyond the solver tolerance. [`Solving`] pairs a system with a
 //!   state as the [`crate::vi::QuadraticEnergy`] the algorithms minimise.
 //!
+//! Every type here is generic over the mesh `M` and the dimension `D` (defaults `PolyMesh`
+//! and 2): the data evaluation reads the mesh through [`crate::mesh::SolveMesh<D>`] (cell
+//! tags, boundary faces, their tags and centres), and nothing else depends on D. The scheme
+//! stays a trait object; the solve paths are compiled once per mesh type used.
+//!
 //! When every local matrix couples each skeleton unknown with its cell's unknown only (HMM on
 //! rectangles with a diagonal tensor, where it is the two-point flux scheme), the iterative
 //! solves eliminate the skeleton unknowns instead and solve on the cells ([`two_point`]).
@@ -48,7 +53,7 @@ pub mod two_point;
 pub mod values;
 
 use crate::linalg::{FactorThreads, Ordering};
-use crate::mesh::MemoryBudget;
+use crate::mesh::{MemoryBudget, PolyMesh, SolveMesh};
 use crate::problem::Problem;
 use crate::scheme::{GradientDiscretisation, PointDof};
 use condense::{CellSystem, SymMatrix};
@@ -86,9 +91,12 @@ static NEXT_SYSTEM_ID: AtomicU64 = AtomicU64::new(1);
 
 /// The assembled discrete problem (see the module docs): immutable once built; the solves
 /// keep what they carry from one to the next in a [`SolveState`].
-pub struct DiscreteSystem<'a> {
-    sym: Arc<SymbolicSystem<'a>>,
-    values: ProblemValues,
+pub struct DiscreteSystem<'a, M = PolyMesh, const D: usize = 2>
+where
+    M: SolveMesh<D> + ?Sized,
+{
+    sym: Arc<SymbolicSystem<'a, M, D>>,
+    values: ProblemValues<D>,
     n_skel: usize,
     n: usize,
     /// See [`NEXT_SYSTEM_ID`].
@@ -100,11 +108,11 @@ pub struct DiscreteSystem<'a> {
     pub symbolic_seconds: f64,
 }
 
-impl<'a> DiscreteSystem<'a> {
+impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'a, M, D> {
     /// Builds the symbolic system of `scheme` and the values of `problem`, side by side.
     pub fn new(
-        scheme: &'a dyn GradientDiscretisation,
-        problem: &Problem,
+        scheme: &'a dyn GradientDiscretisation<M, D>,
+        problem: &Problem<D>,
         options: SystemOptions,
     ) -> crate::Result<Self> {
         let t0 = Instant::now();
@@ -124,7 +132,10 @@ impl<'a> DiscreteSystem<'a> {
     }
 
     /// The values of `problem` on a symbolic system built before (and shared).
-    pub fn with_symbolic(sym: Arc<SymbolicSystem<'a>>, problem: &Problem) -> crate::Result<Self> {
+    pub fn with_symbolic(
+        sym: Arc<SymbolicSystem<'a, M, D>>,
+        problem: &Problem<D>,
+    ) -> crate::Result<Self> {
         let t0 = Instant::now();
         let values = ProblemValues::evaluate(sym.scheme(), &sym.dof_map, problem)?;
         let mut s = Self::from_parts(sym, values);
@@ -132,7 +143,7 @@ impl<'a> DiscreteSystem<'a> {
         Ok(s)
     }
 
-    fn from_parts(sym: Arc<SymbolicSystem<'a>>, values: ProblemValues) -> Self {
+    fn from_parts(sym: Arc<SymbolicSystem<'a, M, D>>, values: ProblemValues<D>) -> Self {
         DiscreteSystem {
             n_skel: sym.n_condensed(),
             n: sym.n_unknowns(),
@@ -145,11 +156,11 @@ impl<'a> DiscreteSystem<'a> {
     }
 
     /// The symbolic system (shareable with other problems on the same scheme).
-    pub fn symbolic(&self) -> &Arc<SymbolicSystem<'a>> {
+    pub fn symbolic(&self) -> &Arc<SymbolicSystem<'a, M, D>> {
         &self.sym
     }
     /// The scheme.
-    pub fn scheme(&self) -> &'a dyn GradientDiscretisation {
+    pub fn scheme(&self) -> &'a dyn GradientDiscretisation<M, D> {
         self.sym.scheme()
     }
     /// Number of unknowns (skeleton and interior).
@@ -174,7 +185,7 @@ impl<'a> DiscreteSystem<'a> {
     }
     /// The unknowns carrying the trace on Γ3, including those that are also Dirichlet unknowns
     /// (P1 vertices at Γ1 ∩ Γ3), which are never constrained but must satisfy the barrier.
-    pub fn signorini_dofs(&self) -> &[PointDof] {
+    pub fn signorini_dofs(&self) -> &[PointDof<D>] {
         &self.values.signorini
     }
     /// The full load vector b.
@@ -212,7 +223,7 @@ impl<'a> DiscreteSystem<'a> {
 
     /// This system paired with `state`: the [`crate::vi::QuadraticEnergy`] the algorithms
     /// minimise, its solves carrying what they learn in `state`.
-    pub fn with_state<'s>(&'s self, state: &'s mut SolveState) -> Solving<'s, 'a> {
+    pub fn with_state<'s>(&'s self, state: &'s mut SolveState) -> Solving<'s, 'a, M, D> {
         self.bind(state);
         Solving {
             system: self,

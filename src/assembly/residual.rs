@@ -3,9 +3,10 @@
 
 use super::DiscreteSystem;
 use super::gather::local_index;
+use crate::mesh::SolveMesh;
 use rayon::prelude::*;
 
-impl DiscreteSystem<'_> {
+impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// The residual r = b − M u of the full (uncondensed) system, and for each unknown the
     /// scale |b_i| + Σ_j |M_ij u_j| against which it is small. On Dirichlet unknowns r is the
     /// reaction, not a balance; on constrained unknowns it is the multiplier (up to sign).

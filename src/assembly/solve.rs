@@ -9,6 +9,7 @@ use super::linear::{ITERATIVE_RTOL, LinearSolver, SCREENING_RTOL};
 use super::symbolic::check_numeric_memory;
 use super::{DiscreteSystem, SolveState};
 use crate::linalg::{CholeskyWork, SpdPattern};
+use crate::mesh::SolveMesh;
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -38,7 +39,7 @@ pub(super) fn check_finite(u: Vec<f64>) -> crate::Result<Vec<f64>> {
     }
 }
 
-impl DiscreteSystem<'_> {
+impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// Solves the linear system in which the unknowns with `fixed[d] = Some(v)` (and the
     /// Dirichlet unknowns) are fixed. Returns the full unknown vector. What carries to the next
     /// solve (initial guess, multigrid hierarchy, buffers) is kept in `state`; a fresh state

@@ -12,6 +12,7 @@ use super::DiscreteSystem;
 use super::iterative::KeptHierarchy;
 use super::two_point::CellSystemAll;
 use crate::linalg::{AmgWork, CholeskyWork, SpdPattern};
+use crate::mesh::{PolyMesh, SolveMesh};
 use crate::vi::{QuadraticEnergy, SolveTimings};
 use std::sync::Arc;
 
@@ -66,14 +67,17 @@ impl SolveState {
 
 /// A [`DiscreteSystem`] with the [`SolveState`] its solves go through: the
 /// [`QuadraticEnergy`] of the algorithms ([`DiscreteSystem::with_state`]).
-pub struct Solving<'s, 'a> {
+pub struct Solving<'s, 'a, M = PolyMesh, const D: usize = 2>
+where
+    M: SolveMesh<D> + ?Sized,
+{
     /// The system.
-    pub system: &'s DiscreteSystem<'a>,
+    pub system: &'s DiscreteSystem<'a, M, D>,
     /// The state of its solves.
     pub state: &'s mut SolveState,
 }
 
-impl QuadraticEnergy for Solving<'_, '_> {
+impl<M: SolveMesh<D> + ?Sized, const D: usize> QuadraticEnergy for Solving<'_, '_, M, D> {
     fn n_unknowns(&self) -> usize {
         self.system.n_unknowns()
     }

@@ -20,6 +20,8 @@ use super::linear::{AUTO_ITERATIVE_MIN, LinearSolver};
 use super::offsets::Offsets;
 use crate::linalg::SpdPattern;
 use crate::mesh::MemoryBudget;
+use crate::mesh::complex::CellComplex;
+use crate::mesh::{PolyMesh, SolveMesh};
 use crate::scheme::GradientDiscretisation;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -40,7 +42,9 @@ pub struct DofMap {
 
 impl DofMap {
     /// Asks the scheme for the unknowns of every cell (in parallel over chunks of cells).
-    pub fn new(scheme: &dyn GradientDiscretisation) -> crate::Result<Self> {
+    pub fn new<M: CellComplex<D> + ?Sized, const D: usize>(
+        scheme: &dyn GradientDiscretisation<M, D>,
+    ) -> crate::Result<Self> {
         let nc = scheme.mesh().n_cells();
         // per chunk of cells: the number of unknowns of each cell, the unknowns, the interior counts
         type Chunk = (Vec<usize>, Vec<u32>, Vec<u8>);
@@ -178,8 +182,11 @@ pub struct ScatterMaps {
 }
 
 /// The symbolic system of a scheme (see the module docs).
-pub struct SymbolicSystem<'a> {
-    scheme: &'a dyn GradientDiscretisation,
+pub struct SymbolicSystem<'a, M = PolyMesh, const D: usize = 2>
+where
+    M: SolveMesh<D> + ?Sized,
+{
+    scheme: &'a dyn GradientDiscretisation<M, D>,
     /// The unknowns of each cell (shared with whoever built it alongside, e.g. the data
     /// evaluation of [`super::DiscreteSystem::new`]).
     pub dof_map: Arc<DofMap>,
@@ -200,10 +207,10 @@ pub struct SymbolicSystem<'a> {
     pub setup_seconds: f64,
 }
 
-impl<'a> SymbolicSystem<'a> {
+impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
     /// Builds the symbolic system of `scheme`.
     pub fn new(
-        scheme: &'a dyn GradientDiscretisation,
+        scheme: &'a dyn GradientDiscretisation<M, D>,
         options: SystemOptions,
     ) -> crate::Result<Self> {
         let dof_map = DofMap::new(scheme)?;
@@ -213,7 +220,7 @@ impl<'a> SymbolicSystem<'a> {
 
     /// As [`SymbolicSystem::new`], from the dof map of `scheme`.
     pub fn with_dof_map(
-        scheme: &'a dyn GradientDiscretisation,
+        scheme: &'a dyn GradientDiscretisation<M, D>,
         dof_map: Arc<DofMap>,
         options: SystemOptions,
     ) -> crate::Result<Self> {
@@ -277,7 +284,7 @@ impl<'a> SymbolicSystem<'a> {
     }
 
     /// The scheme.
-    pub fn scheme(&self) -> &'a dyn GradientDiscretisation {
+    pub fn scheme(&self) -> &'a dyn GradientDiscretisation<M, D> {
         self.scheme
     }
     /// Number of unknowns (skeleton and interior).

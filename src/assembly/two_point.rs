@@ -51,6 +51,7 @@ use super::iterative::hierarchy;
 use super::solve::check_finite;
 use super::{DiscreteSystem, SolveState};
 use crate::linalg::CsrMatrix;
+use crate::mesh::SolveMesh;
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -97,7 +98,7 @@ impl CellSystemAll {
     }
 }
 
-impl DiscreteSystem<'_> {
+impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// The cell system of this problem, if its local matrices have the two-point structure
     /// (built on first use and kept in `state`).
     pub(super) fn cell_system(

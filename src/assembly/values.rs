@@ -6,7 +6,7 @@
 use super::gather::cell_chunks;
 use super::offsets::Offsets;
 use super::symbolic::DofMap;
-use crate::mesh::Point;
+use crate::mesh::SolveMesh;
 use crate::problem::{BoundaryKind, Problem, check_finite, check_tensor};
 use crate::scheme::{GradientDiscretisation, PointDof};
 use nalgebra::{DMatrix, DVector};
@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 /// The local matrices and loads of every cell, and the boundary data, for one problem.
 #[derive(Debug, Clone)]
-pub struct ProblemValues {
+pub struct ProblemValues<const D: usize = 2> {
     /// Offsets into `mats`, one per cell plus one.
     pub mat_ptr: Offsets,
     /// The local matrices (symmetric), their lower triangles column by column
@@ -29,7 +29,7 @@ pub struct ProblemValues {
     /// Dirichlet unknowns and their values.
     pub dirichlet: Vec<Option<f64>>,
     /// Unknowns carrying the trace on Γ3, with their points and measures (Dirichlet ones too).
-    pub signorini: Vec<PointDof>,
+    pub signorini: Vec<PointDof<D>>,
 }
 
 /// What one parallel task of [`local_data`] computes for its cells.
@@ -42,12 +42,12 @@ struct LocalChunk {
     bad_source: Option<String>,
 }
 
-impl ProblemValues {
+impl<const D: usize> ProblemValues<D> {
     /// Evaluates the data of `problem` on `scheme` (whose dof map is `dm`).
-    pub fn evaluate(
-        scheme: &dyn GradientDiscretisation,
+    pub fn evaluate<M: SolveMesh<D> + ?Sized>(
+        scheme: &dyn GradientDiscretisation<M, D>,
         dm: &DofMap,
-        problem: &Problem,
+        problem: &Problem<D>,
     ) -> crate::Result<Self> {
         let (mat_ptr, mats, loads) = local_data(scheme, problem)?;
         let n = scheme.n_unknowns();
@@ -68,20 +68,22 @@ impl ProblemValues {
         Ok(values)
     }
 
-    /// Dirichlet values, Neumann loads and the Signorini unknowns, edge by edge of ∂Ω.
-    fn boundary_conditions(
+    /// Dirichlet values, Neumann loads and the Signorini unknowns, face by face of ∂Ω (edges
+    /// in 2D), the boundary kind and the Neumann flux taken at the face centre x_σ.
+    fn boundary_conditions<M: SolveMesh<D> + ?Sized>(
         &mut self,
-        scheme: &dyn GradientDiscretisation,
-        problem: &Problem,
+        scheme: &dyn GradientDiscretisation<M, D>,
+        problem: &Problem<D>,
     ) -> crate::Result<()> {
         let mesh = scheme.mesh();
         let n = scheme.n_unknowns();
         let mut sig_meas: Vec<f64> = vec![0.0; n];
-        let mut sig_point: Vec<Option<Point>> = vec![None; n];
+        let mut sig_point: Vec<Option<[f64; D]>> = vec![None; n];
         let mut tr = Vec::new();
-        for &e in mesh.boundary_edges() {
-            let xs = mesh.edge_midpoint(e);
-            let kind = (problem.boundary)(xs, mesh.edge_tag(e));
+        for i in 0..mesh.n_boundary_faces() {
+            let e = mesh.boundary_face(i);
+            let xs = mesh.face_centre(e);
+            let kind = (problem.boundary)(xs, mesh.face_tag(e));
             scheme.face_trace_dofs(e, &mut tr);
             match kind {
                 BoundaryKind::Dirichlet => {
@@ -128,9 +130,9 @@ impl ProblemValues {
 /// The local matrices (for A_K = A(x_K)) and loads of every cell, in parallel over chunks of
 /// cells, concatenated in cell order; the first bad tensor or non-finite load in cell order is
 /// the error, as in a sequential loop.
-fn local_data(
-    scheme: &dyn GradientDiscretisation,
-    problem: &Problem,
+fn local_data<M: SolveMesh<D> + ?Sized, const D: usize>(
+    scheme: &dyn GradientDiscretisation<M, D>,
+    problem: &Problem<D>,
 ) -> crate::Result<(Offsets, Vec<f64>, Vec<f64>)> {
     let mesh = scheme.mesh();
     let nc = mesh.n_cells();
@@ -141,7 +143,7 @@ fn local_data(
             let mut m = DMatrix::zeros(0, 0);
             let mut b = DVector::zeros(0);
             for k in c0..c1 {
-                let xk = mesh.centroid(k);
+                let xk = mesh.cell_centre(k);
                 let tag = mesh.cell_tag(k);
                 let a = problem.diffusion_in(xk, tag);
                 // the message is formatted only for a bad tensor
@@ -150,7 +152,7 @@ fn local_data(
                     break;
                 }
                 scheme.local_matrix(k, &a, &mut m);
-                let f = |p: Point| -> f64 { problem.source_in(p, xk, tag) };
+                let f = |p: [f64; D]| -> f64 { problem.source_in(p, xk, tag) };
                 scheme.local_load(k, &f, &mut b);
                 if out.bad_source.is_none() && b.iter().any(|x| !x.is_finite()) {
                     out.bad_source = Some(format!(

@@ -51,14 +51,15 @@
 //! [`GradientDiscretisation<M, D>`](crate::scheme::GradientDiscretisation) is generic over the
 //! mesh type `M: CellComplex<D>` and the dimension (points and gradients `[f64; D]`, tensors
 //! `[[f64; D]; D]`), with defaults `PolyMesh` and 2; its tests implement it in 3-D (HMM on
-//! boxes, `scheme/hmm.rs`) and solve a 3-D patch test through it. What is still 2-D above the
-//! scheme layer: the problem data (closures of `[f64; 2]`, 2×2 tensors, the expression
-//! variables x and y), the assembler's boundary conditions and data evaluation (instantiated
-//! at `PolyMesh`: cell tags, boundary edges and their tags, edge midpoints), P1 and
-//! Crouzeix–Raviart (triangles), the warm start (planar agglomeration) and the VTU writer
-//! (polygons). A 3-D mesh type implements `CellComplex<3>` plus those tags and boundary faces;
-//! the problem and the assembler then gain the dimension as a const parameter, as the scheme
-//! trait has.
+//! boxes, `scheme/hmm.rs`). The problem data ([`crate::problem::Problem<D>`]), the assembly
+//! and the solve driver are generic over the dimension too: what they read from a mesh beyond
+//! its complex (cell tags, boundary faces and their tags, the domain's diameter) is the trait
+//! [`SolveMesh<D>`](solve_mesh::SolveMesh), implemented by `PolyMesh` (edge midpoints and edge
+//! tags, as always) and by [`crate::mesh3d::PolyMesh3`], on which HMM solves through the whole
+//! pipeline. What is still 2-D: the problem-file compiler (expression variables x and y, 2×2
+//! tensors), P1 and Crouzeix–Raviart (triangles), the nested warm start (planar
+//! agglomeration; in 3-D the solver starts cold, [`crate::solver::start`]) and the VTU writer
+//! of `PolyMesh` (polygons).
 
 pub mod agglomerate;
 pub(crate) mod buckets;
@@ -72,6 +73,7 @@ pub mod io;
 mod poly_mesh;
 mod predicates;
 mod renumber;
+pub mod solve_mesh;
 mod sweep;
 mod tags;
 pub mod validate;
@@ -86,6 +88,7 @@ pub use geometry::{Rect, polygon_area_centroid};
 use geometry::{dist, sub};
 pub use renumber::drop_unused_vertices;
 pub(crate) use renumber::drop_unused_vertices_flat;
+pub use solve_mesh::SolveMesh;
 pub(crate) use tags::NonBoundaryTag;
 pub use validate::MAX_CELL_VERTICES;
 

@@ -50,6 +50,7 @@ mod orient;
 mod overlap;
 mod renumber;
 mod shape;
+mod solve_mesh;
 mod surface;
 mod tags;
 #[cfg(test)]

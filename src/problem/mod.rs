@@ -16,16 +16,21 @@ use crate::mesh::Point;
 use crate::scheme::Tensor;
 use std::f64::consts::PI;
 
-/// A scalar field on Ω.
-pub type ScalarFn = Box<dyn Fn(Point) -> f64 + Send + Sync>;
+/// A scalar field on Ω ⊂ ℝᴰ.
+pub type ScalarFn<const D: usize = 2> = Box<dyn Fn([f64; D]) -> f64 + Send + Sync>;
 /// A tensor field on Ω.
-pub type TensorFn = Box<dyn Fn(Point) -> Tensor + Send + Sync>;
+pub type TensorFn<const D: usize = 2> = Box<dyn Fn([f64; D]) -> Tensor<D> + Send + Sync>;
 /// A vector field on Ω.
-pub type VectorFn = Box<dyn Fn(Point) -> Point + Send + Sync>;
+pub type VectorFn<const D: usize = 2> = Box<dyn Fn([f64; D]) -> [f64; D] + Send + Sync>;
 /// A tensor field given by cell: A(x_K, cell tag).
-pub type TaggedTensorFn = Box<dyn Fn(Point, i32) -> Tensor + Send + Sync>;
+pub type TaggedTensorFn<const D: usize = 2> = Box<dyn Fn([f64; D], i32) -> Tensor<D> + Send + Sync>;
 /// A source given by cell: f(x, x_K, cell tag).
-pub type TaggedScalarFn = Box<dyn Fn(Point, Point, i32) -> f64 + Send + Sync>;
+pub type TaggedScalarFn<const D: usize = 2> =
+    Box<dyn Fn([f64; D], [f64; D], i32) -> f64 + Send + Sync>;
+/// A source given by the cell's centroid: f(x, x_K) (see [`Problem::source_in_cell`]).
+pub type CellScalarFn<const D: usize = 2> = Box<dyn Fn([f64; D], [f64; D]) -> f64 + Send + Sync>;
+/// The boundary partition: the kind of a boundary face from its centre x_σ and its mesh tag.
+pub type BoundaryFn<const D: usize = 2> = Box<dyn Fn([f64; D], i32) -> BoundaryKind + Send + Sync>;
 
 /// The kind of boundary condition on an edge.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -53,60 +58,61 @@ pub enum ConstraintKind {
 }
 
 /// A barrier.
-pub struct Constraint {
+pub struct Constraint<const D: usize = 2> {
     /// Obstacle or Signorini.
     pub kind: ConstraintKind,
     /// Upper or lower.
     pub side: Side,
     /// The barrier function (g, ψ or a).
-    pub barrier: ScalarFn,
+    pub barrier: ScalarFn<D>,
 }
 
 /// An exact solution, for error computations.
-pub struct Exact {
+pub struct Exact<const D: usize = 2> {
     /// ū.
-    pub u: ScalarFn,
+    pub u: ScalarFn<D>,
     /// ∇ū.
-    pub grad: VectorFn,
+    pub grad: VectorFn<D>,
 }
 
-/// Full problem data. Build with [`Problem::new`] and the `with_*` methods.
-pub struct Problem {
+/// Full problem data on Ω ⊂ ℝᴰ (D = 2 unless said: points `[f64; D]`, D×D tensors). Build
+/// with [`Problem::new`] and the `with_*` methods.
+pub struct Problem<const D: usize = 2> {
     /// Name, used in outputs.
     pub name: String,
     /// A(x), symmetric positive definite.
-    pub diffusion: TensorFn,
+    pub diffusion: TensorFn<D>,
     /// f(x).
-    pub source: ScalarFn,
+    pub source: ScalarFn<D>,
     /// For data that are smooth by pieces (Test 2): f(x) on the piece of the cell whose
     /// centroid is x_K, called as `f(x, x_K)`. The schemes evaluate the source of cell K with
     /// it, so that a vertex on a discontinuity takes the value of the cell being assembled.
     /// `None`: `source` is used everywhere.
-    pub source_in_cell: Option<Box<dyn Fn(Point, Point) -> f64 + Send + Sync>>,
+    pub source_in_cell: Option<CellScalarFn<D>>,
     /// For media given by subdomains: A on the cell with centroid x_K and cell tag t (its gmsh
     /// physical surface), called as `A(x_K, t)`. `None`: `diffusion` is used.
-    pub diffusion_by_tag: Option<TaggedTensorFn>,
+    pub diffusion_by_tag: Option<TaggedTensorFn<D>>,
     /// For sources given by subdomains: f(x) on the cell with centroid x_K and tag t, called as
     /// `f(x, x_K, t)`; takes precedence over `source_in_cell` and `source`.
-    pub source_by_tag: Option<TaggedScalarFn>,
-    /// Boundary kind of an edge from its midpoint and its mesh tag.
-    pub boundary: Box<dyn Fn(Point, i32) -> BoundaryKind + Send + Sync>,
+    pub source_by_tag: Option<TaggedScalarFn<D>>,
+    /// Boundary kind of a boundary face (an edge in 2D) from its centre x_σ and its mesh tag.
+    pub boundary: BoundaryFn<D>,
     /// Dirichlet value u_D on Γ1.
-    pub dirichlet: ScalarFn,
+    pub dirichlet: ScalarFn<D>,
     /// Neumann flux g_N = A∇u·n on Γ2.
-    pub neumann: ScalarFn,
+    pub neumann: ScalarFn<D>,
     /// Optional barrier.
-    pub constraint: Option<Constraint>,
+    pub constraint: Option<Constraint<D>>,
     /// Optional exact solution.
-    pub exact: Option<Exact>,
+    pub exact: Option<Exact<D>>,
 }
 
-impl Problem {
+impl<const D: usize> Problem<D> {
     /// −Δu = f with homogeneous Dirichlet conditions on the whole boundary and no barrier.
-    pub fn new(name: &str, source: ScalarFn) -> Self {
+    pub fn new(name: &str, source: ScalarFn<D>) -> Self {
         Problem {
             name: name.to_string(),
-            diffusion: Box::new(|_| [[1.0, 0.0], [0.0, 1.0]]),
+            diffusion: Box::new(|_| identity()),
             source,
             source_in_cell: None,
             diffusion_by_tag: None,
@@ -119,15 +125,12 @@ impl Problem {
         }
     }
     /// Sets the cell-wise source f(x, x_K) (see [`Problem::source_in_cell`]).
-    pub fn with_source_in_cell(
-        mut self,
-        f: Box<dyn Fn(Point, Point) -> f64 + Send + Sync>,
-    ) -> Self {
+    pub fn with_source_in_cell(mut self, f: CellScalarFn<D>) -> Self {
         self.source_in_cell = Some(f);
         self
     }
     /// A on the cell with centroid x_K and cell tag t (see [`Problem::diffusion_by_tag`]).
-    pub fn diffusion_in(&self, xk: Point, tag: i32) -> Tensor {
+    pub fn diffusion_in(&self, xk: [f64; D], tag: i32) -> Tensor<D> {
         match &self.diffusion_by_tag {
             Some(a) => a(xk, tag),
             None => (self.diffusion)(xk),
@@ -135,7 +138,7 @@ impl Problem {
     }
     /// f at x for the cell with centroid x_K and cell tag t: the most specific of
     /// [`Problem::source_by_tag`], [`Problem::source_in_cell`] and [`Problem::source`].
-    pub fn source_in(&self, x: Point, xk: Point, tag: i32) -> f64 {
+    pub fn source_in(&self, x: [f64; D], xk: [f64; D], tag: i32) -> f64 {
         match (&self.source_by_tag, &self.source_in_cell) {
             (Some(f), _) => f(x, xk, tag),
             (None, Some(f)) => f(x, xk),
@@ -143,40 +146,45 @@ impl Problem {
         }
     }
     /// Sets A by cell tag (see [`Problem::diffusion_by_tag`]).
-    pub fn with_diffusion_by_tag(mut self, a: TaggedTensorFn) -> Self {
+    pub fn with_diffusion_by_tag(mut self, a: TaggedTensorFn<D>) -> Self {
         self.diffusion_by_tag = Some(a);
         self
     }
     /// Sets f by cell tag (see [`Problem::source_by_tag`]).
-    pub fn with_source_by_tag(mut self, f: TaggedScalarFn) -> Self {
+    pub fn with_source_by_tag(mut self, f: TaggedScalarFn<D>) -> Self {
         self.source_by_tag = Some(f);
         self
     }
     /// Sets A(x).
-    pub fn with_diffusion(mut self, a: TensorFn) -> Self {
+    pub fn with_diffusion(mut self, a: TensorFn<D>) -> Self {
         self.diffusion = a;
         self
     }
     /// Sets the boundary partition.
     pub fn with_boundary(
         mut self,
-        b: impl Fn(Point, i32) -> BoundaryKind + Send + Sync + 'static,
+        b: impl Fn([f64; D], i32) -> BoundaryKind + Send + Sync + 'static,
     ) -> Self {
         self.boundary = Box::new(b);
         self
     }
     /// Sets the Dirichlet data.
-    pub fn with_dirichlet(mut self, g: ScalarFn) -> Self {
+    pub fn with_dirichlet(mut self, g: ScalarFn<D>) -> Self {
         self.dirichlet = g;
         self
     }
     /// Sets the Neumann data (outward flux A∇u·n).
-    pub fn with_neumann(mut self, g: ScalarFn) -> Self {
+    pub fn with_neumann(mut self, g: ScalarFn<D>) -> Self {
         self.neumann = g;
         self
     }
     /// Sets the barrier.
-    pub fn with_constraint(mut self, kind: ConstraintKind, side: Side, barrier: ScalarFn) -> Self {
+    pub fn with_constraint(
+        mut self,
+        kind: ConstraintKind,
+        side: Side,
+        barrier: ScalarFn<D>,
+    ) -> Self {
         self.constraint = Some(Constraint {
             kind,
             side,
@@ -185,24 +193,60 @@ impl Problem {
         self
     }
     /// Sets the exact solution.
-    pub fn with_exact(mut self, u: ScalarFn, grad: VectorFn) -> Self {
+    pub fn with_exact(mut self, u: ScalarFn<D>, grad: VectorFn<D>) -> Self {
         self.exact = Some(Exact { u, grad });
         self
     }
 }
 
+/// The D×D identity, the default diffusion tensor.
+fn identity<const D: usize>() -> Tensor<D> {
+    let mut a = [[0.0; D]; D];
+    for (i, row) in a.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    a
+}
+
 /// Checks that `a` is symmetric positive definite and finite; `what` names the place.
-pub fn check_tensor(a: &Tensor, what: &str) -> crate::Result<()> {
+///
+/// With s = max |a_ij|: symmetric to 1e-12 s, and positive definite with det A > 1e-14 sᴰ
+/// (the pivots of Gaussian elimination, without pivoting, all positive; their product is
+/// det A; in 2D the determinant a₀₀a₁₁ − a₀₁a₁₀ is formed directly).
+pub fn check_tensor<const D: usize>(a: &Tensor<D>, what: &str) -> crate::Result<()> {
     let finite = a.iter().flatten().all(|x| x.is_finite());
     let scale = a.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-    let sym = (a[0][1] - a[1][0]).abs() <= 1e-12 * scale;
-    let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
-    if !finite || !sym || !(a[0][0] > 0.0) || !(det > 1e-14 * scale * scale) {
+    let sym = (0..D).all(|i| (0..i).all(|j| (a[i][j] - a[j][i]).abs() <= 1e-12 * scale));
+    if !finite || !sym || !positive_definite(a, scale) {
         return Err(crate::Error::InvalidData(format!(
             "diffusion tensor {a:?} at {what} is not symmetric positive definite and finite"
         )));
     }
     Ok(())
+}
+
+/// The definiteness test of [`check_tensor`] on a finite symmetric tensor of scale `scale`.
+fn positive_definite<const D: usize>(a: &Tensor<D>, scale: f64) -> bool {
+    if D == 2 {
+        let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        return a[0][0] > 0.0 && det > 1e-14 * scale * scale;
+    }
+    let mut m = *a;
+    let mut det = 1.0;
+    for p in 0..D {
+        if !(m[p][p] > 0.0) {
+            return false;
+        }
+        det *= m[p][p];
+        let pivot_row = m[p];
+        for row in m.iter_mut().skip(p + 1) {
+            let l = row[p] / pivot_row[p];
+            for (x, y) in row.iter_mut().zip(&pivot_row).skip(p) {
+                *x -= l * y;
+            }
+        }
+    }
+    det > 1e-14 * scale.powi(D as i32)
 }
 
 /// Checks that a data value is finite; `what` names the datum and the place.
@@ -495,5 +539,11 @@ mod tests {
         assert!(check_tensor(&[[1.0, 0.5], [0.0, 1.0]], "x").is_err());
         assert!(check_tensor(&[[1.0, 2.0], [2.0, 1.0]], "x").is_err());
         assert!(check_tensor(&[[f64::NAN, 0.0], [0.0, 1.0]], "x").is_err());
+        let a3 = [[2.0, 0.3, 0.1], [0.3, 1.0, 0.2], [0.1, 0.2, 3.0]];
+        assert!(check_tensor(&a3, "x").is_ok());
+        // indefinite (a leading 2×2 minor is negative), unsymmetric, singular
+        assert!(check_tensor(&[[1.0, 2.0, 0.0], [2.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "x").is_err());
+        assert!(check_tensor(&[[1.0, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "x").is_err());
+        assert!(check_tensor(&[[1.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "x").is_err());
     }
 }

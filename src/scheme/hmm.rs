@@ -28,8 +28,8 @@ use nalgebra::{DMatrix, DVector};
 ///
 /// Nothing here depends on D: G is D × n_σ, X is n_σ × D, and the only geometry read is
 /// |K|, x_K, |σ|, x_σ, n_{K,σ} and d_{K,σ}. The 2-D scheme ([`Hmm`]) calls it on a
-/// [`PolyMesh`]; the tests also run it on a 3-D mesh of boxes (the patch test: affine
-/// solutions reproduced exactly), which is all a 3-D mesh type will need from this file.
+/// [`PolyMesh`], the 3-D one (`Hmm<PolyMesh3, 3>`) on a
+/// [`PolyMesh3`](crate::mesh3d::PolyMesh3); the tests also run it on a 3-D mesh of boxes.
 pub fn local_form<const D: usize, M: CellComplex<D> + ?Sized>(
     mesh: &M,
     k: usize,
@@ -82,8 +82,9 @@ pub fn local_form<const D: usize, M: CellComplex<D> + ?Sized>(
 }
 
 /// HMM on a mesh `M` of dimension `D`: by default the polygonal meshes of this crate
-/// ([`PolyMesh`], D = 2); any [`CellComplex<D>`] with [`VertexAverage`] (for output) will do,
-/// and the tests run it on a 3-D mesh of boxes.
+/// ([`PolyMesh`], D = 2); any [`CellComplex<D>`] with [`VertexAverage`] (for output) will do:
+/// `Hmm::<PolyMesh3, 3>::with_alpha(&mesh, 1.0)` is HMM on general polyhedra (exact on
+/// affine solutions where the faces are planar), and the tests run it on a 3-D mesh of boxes.
 #[derive(Debug, Clone)]
 pub struct Hmm<'a, M: ?Sized = PolyMesh, const D: usize = 2> {
     mesh: &'a M,

@@ -65,10 +65,12 @@ pub enum Entity {
 ///
 /// A scheme is defined on a mesh type `M` of dimension `D`; both default to the planar
 /// polygonal meshes of this crate (`PolyMesh`, D = 2), on which every registered scheme and
-/// everything above this layer (assembly, solvers, outputs) works today. Nothing in the
-/// trait assumes D = 2: points and gradients are `Vector<D>`, tensors `Tensor<D>`, and the
-/// mesh is any [`CellComplex<D>`] (cells, faces, measures, centres, normals). Its tests
-/// implement it in 3-D (HMM on boxes, solved by a small dense assembly: see `hmm.rs`).
+/// the outputs work. Nothing in the trait assumes D = 2: points and gradients are
+/// `Vector<D>`, tensors `Tensor<D>`, and the mesh is any [`CellComplex<D>`] (cells, faces,
+/// measures, centres, normals). The assembly and the solve driver take it for any mesh with
+/// tags and boundary faces ([`crate::mesh::SolveMesh<D>`]): HMM on
+/// [`PolyMesh3`](crate::mesh3d::PolyMesh3) (`Hmm::<PolyMesh3, 3>::with_alpha`) solves 3-D
+/// problems through them (`solver/tests_3d.rs`).
 pub trait GradientDiscretisation<M: ?Sized = PolyMesh, const D: usize = 2>: Sync
 where
     M: CellComplex<D>,

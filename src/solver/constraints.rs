@@ -3,7 +3,7 @@
 //! a(x_σ), nodal values), and the check that the discrete convex set is not empty.
 
 use crate::assembly::DiscreteSystem;
-use crate::mesh::Point;
+use crate::mesh::SolveMesh;
 use crate::problem::{ConstraintKind, Problem, check_finite};
 use crate::scheme::PointDof;
 use crate::vi::ConstrainedDof;
@@ -12,11 +12,14 @@ use rayon::prelude::*;
 /// The barrier of a problem on the unknowns of a discrete system: the algorithms' constraints
 /// ([`crate::vi::Constraints`]) with, for each constrained unknown, the point where the barrier
 /// was evaluated (read by the warm start and the post-processing, never by the algorithms).
-pub type Constraints = crate::vi::Constraints<Point>;
+pub type Constraints<const D: usize = 2> = crate::vi::Constraints<[f64; D]>;
 
 /// Builds the barrier of `problem` on the unknowns of the system, checking the data and the
 /// non-emptiness of the discrete convex set.
-pub fn build(system: &DiscreteSystem, problem: &Problem) -> crate::Result<Option<Constraints>> {
+pub fn build<M: SolveMesh<D> + ?Sized, const D: usize>(
+    system: &DiscreteSystem<M, D>,
+    problem: &Problem<D>,
+) -> crate::Result<Option<Constraints<D>>> {
     let Some(c) = &problem.constraint else {
         return Ok(None);
     };
@@ -29,7 +32,7 @@ pub fn build(system: &DiscreteSystem, problem: &Problem) -> crate::Result<Option
         ConstraintKind::Signorini => {
             if system.signorini_dofs().is_empty() {
                 return Err(crate::Error::InvalidData(
-                    "a Signorini barrier is given but no boundary edge is of Signorini type".into(),
+                    "a Signorini barrier is given but no boundary face is of Signorini type".into(),
                 ));
             }
             system.signorini_dofs().to_vec()
@@ -39,10 +42,11 @@ pub fn build(system: &DiscreteSystem, problem: &Problem) -> crate::Result<Option
     // Dirichlet trace unknown (u_D must satisfy the barrier on ∂Ω); Signorini: the Dirichlet
     // unknowns that also carry the trace on Γ3.
     let mut tr = Vec::new();
-    let mut checks: Vec<PointDof> = Vec::new();
+    let mut checks: Vec<PointDof<D>> = Vec::new();
     match c.kind {
         ConstraintKind::Obstacle => {
-            for &e in mesh.boundary_edges() {
+            for i in 0..mesh.n_boundary_faces() {
+                let e = mesh.boundary_face(i);
                 scheme.face_trace_dofs(e, &mut tr);
                 checks.extend(tr.iter().filter(|t| dir[t.dof].is_some()));
             }
@@ -52,7 +56,7 @@ pub fn build(system: &DiscreteSystem, problem: &Problem) -> crate::Result<Option
         }
     }
     // the message is formatted only for a non-finite value
-    let finite = |g: f64, p: Point| -> crate::Result<f64> {
+    let finite = |g: f64, p: [f64; D]| -> crate::Result<f64> {
         if g.is_finite() {
             Ok(g)
         } else {
@@ -72,7 +76,7 @@ pub fn build(system: &DiscreteSystem, problem: &Problem) -> crate::Result<Option
     }
     // the barrier at the unknowns off the Dirichlet boundary, evaluated in parallel; the first
     // non-finite value in their order is reported
-    let dofs: Vec<PointDof> = candidates
+    let dofs: Vec<PointDof<D>> = candidates
         .into_iter()
         .filter(|pd| dir[pd.dof].is_none())
         .collect();
@@ -102,6 +106,7 @@ pub fn build(system: &DiscreteSystem, problem: &Problem) -> crate::Result<Option
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::Point;
     use crate::problem::Side;
 
     /// The barrier is evaluated at every constrained unknown; the first non-finite value (in

@@ -13,37 +13,40 @@
 //! on data of size 1 cannot pass.
 
 use crate::assembly::DiscreteSystem;
+use crate::mesh::SolveMesh;
 use crate::problem::{BoundaryKind, Problem};
+use crate::scheme::Tensor;
 use crate::solver::constraints::Constraints;
 use rayon::prelude::*;
 
 pub use crate::vi::certificate::MAGNITUDE_LIMIT;
 
 /// U of the module docs, from the data evaluated where the scheme evaluates it.
-pub fn data_scale(system: &DiscreteSystem, problem: &Problem, cons: Option<&Constraints>) -> f64 {
+pub fn data_scale<M: SolveMesh<D> + ?Sized, const D: usize>(
+    system: &DiscreteSystem<M, D>,
+    problem: &Problem<D>,
+    cons: Option<&Constraints<D>>,
+) -> f64 {
     let mesh = system.scheme().mesh();
     let (f_max, lambda) = (0..mesh.n_cells())
         .into_par_iter()
         .map(|k| {
-            let x = mesh.centroid(k);
+            let x = mesh.cell_centre(k);
             let tag = mesh.cell_tag(k);
             let f = problem.source_in(x, x, tag);
             let a = problem.diffusion_in(x, tag);
-            // smallest eigenvalue of the symmetric 2×2 tensor
-            let (m, d) = (0.5 * (a[0][0] + a[1][1]), 0.5 * (a[0][0] - a[1][1]));
-            let l = m - (d * d + a[0][1] * a[1][0]).max(0.0).sqrt();
-            (f.abs(), l)
+            (f.abs(), smallest_eigenvalue(&a))
         })
         .reduce(|| (0.0, f64::INFINITY), |a, b| (a.0.max(b.0), a.1.min(b.1)));
     let mut q_max = 0.0f64;
-    for &e in mesh.boundary_edges() {
-        let x = mesh.edge_midpoint(e);
-        if (problem.boundary)(x, mesh.edge_tag(e)) == BoundaryKind::Neumann {
+    for i in 0..mesh.n_boundary_faces() {
+        let e = mesh.boundary_face(i);
+        let x = mesh.face_centre(e);
+        if (problem.boundary)(x, mesh.face_tag(e)) == BoundaryKind::Neumann {
             q_max = q_max.max((problem.neumann)(x).abs());
         }
     }
-    let bb = mesh.bounding_box();
-    let diam = (bb.width().powi(2) + bb.height().powi(2)).sqrt();
+    let diam = mesh.domain_diameter();
     let dirichlet = system
         .dirichlet()
         .iter()
@@ -53,6 +56,18 @@ pub fn data_scale(system: &DiscreteSystem, problem: &Problem, cons: Option<&Cons
         c.barrier.iter().fold(0.0f64, |m, v| m.max(v.abs()))
     });
     dirichlet.max(barrier) + (diam * diam * f_max + diam * q_max) / lambda
+}
+
+/// λ, the smallest eigenvalue of the symmetric tensor `a`: in 2D m − √(d² + a₀₁a₁₀) with m
+/// and d the half sum and half difference of the diagonal; otherwise from nalgebra's
+/// symmetric eigendecomposition.
+fn smallest_eigenvalue<const D: usize>(a: &Tensor<D>) -> f64 {
+    if D == 2 {
+        let (m, d) = (0.5 * (a[0][0] + a[1][1]), 0.5 * (a[0][0] - a[1][1]));
+        return m - (d * d + a[0][1] * a[1][0]).max(0.0).sqrt();
+    }
+    let m = nalgebra::DMatrix::from_fn(D, D, |i, j| a[i][j]);
+    m.symmetric_eigenvalues().min()
 }
 
 /// ‖u‖∞ / U (0 when u = 0).

@@ -18,16 +18,21 @@
 
 pub mod constraints;
 pub mod magnitude;
+pub mod start;
+#[cfg(test)]
+mod tests_3d;
 pub mod warm_start;
 pub mod well_posed;
 
 use crate::assembly::{DiscreteSystem, SolveState, SymbolicSystem, SystemOptions};
+use crate::mesh::{PolyMesh, SolveMesh};
 use crate::problem::Problem;
 use crate::scheme::GradientDiscretisation;
 use crate::vi::active_set::{self, Outcome};
 pub use crate::vi::{ActiveSetOptions, Certificate, IterationLog, IterationStep, Method};
 use crate::vi::{VariationalSolution, pgs};
 use constraints::Constraints;
+pub use start::SolverMesh;
 use std::sync::Arc;
 use std::time::Instant;
 pub use warm_start::{WarmStart, WarmStartReport};
@@ -81,11 +86,14 @@ pub struct Timings {
 }
 
 /// A certified discrete solution and what it took.
-pub struct Solution<'a> {
+pub struct Solution<'a, M = PolyMesh, const D: usize = 2>
+where
+    M: SolveMesh<D> + ?Sized,
+{
     /// The assembled system (gives access to the scheme, the mesh and the symbolic system).
-    pub system: DiscreteSystem<'a>,
+    pub system: DiscreteSystem<'a, M, D>,
     /// The barrier, if any.
-    pub constraints: Option<Constraints>,
+    pub constraints: Option<Constraints<D>>,
     /// The solver outcome (u, multipliers, active set, NITER, log, certificate).
     pub result: VariationalSolution,
     /// Timings.
@@ -101,7 +109,7 @@ pub struct Solution<'a> {
     pub marginal_load: Vec<well_posed::MarginalLoad>,
 }
 
-impl Solution<'_> {
+impl<M: SolveMesh<D> + ?Sized, const D: usize> Solution<'_, M, D> {
     /// The full unknown vector.
     pub fn u(&self) -> &[f64] {
         &self.result.u
@@ -131,12 +139,12 @@ impl Solution<'_> {
 
 /// Assembles and solves `problem` with `scheme`: a linear solve if there is no barrier, the
 /// active-set method otherwise, started as `opts.warm_start` says. The result is certified
-/// (see [`Certificate`]).
-pub fn solve_problem<'a>(
-    scheme: &'a dyn GradientDiscretisation,
-    problem: &Problem,
+/// (see [`Certificate`]). In 3D only the cold start is available ([`start`]).
+pub fn solve_problem<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
+    scheme: &'a dyn GradientDiscretisation<M, D>,
+    problem: &Problem<D>,
     opts: &SolveOptions,
-) -> crate::Result<Solution<'a>> {
+) -> crate::Result<Solution<'a, M, D>> {
     let t0 = Instant::now();
     let system = DiscreteSystem::new(scheme, problem, opts.system)?;
     solve_system(system, problem, opts, t0)
@@ -144,31 +152,36 @@ pub fn solve_problem<'a>(
 
 /// As [`solve_problem`], on a symbolic system built before for the same scheme (its
 /// `opts.system` is then ignored): only the values are computed for `problem`.
-pub fn solve_with_symbolic<'a>(
-    symbolic: Arc<SymbolicSystem<'a>>,
-    problem: &Problem,
+pub fn solve_with_symbolic<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
+    symbolic: Arc<SymbolicSystem<'a, M, D>>,
+    problem: &Problem<D>,
     opts: &SolveOptions,
-) -> crate::Result<Solution<'a>> {
+) -> crate::Result<Solution<'a, M, D>> {
     let t0 = Instant::now();
     let system = DiscreteSystem::with_symbolic(symbolic, problem)?;
     solve_system(system, problem, opts, t0)
 }
 
+/// What [`warm_start`] returns: the predicted initial active set and the report.
+type Start = (Option<Vec<bool>>, Option<WarmStartReport>);
+
 /// The initial active set that the warm start predicts (None: cold), and its report (None:
-/// no warm start was asked for).
-fn warm_start(
-    system: &DiscreteSystem,
+/// no warm start was asked for); an error if the mesh type has no nested start.
+fn warm_start<M: SolverMesh<D> + ?Sized, const D: usize>(
+    system: &DiscreteSystem<M, D>,
     state: &mut SolveState,
-    problem: &Problem,
-    cons: &Constraints,
+    problem: &Problem<D>,
+    cons: &Constraints<D>,
     opts: &SolveOptions,
-) -> (Option<Vec<bool>>, Option<WarmStartReport>) {
+) -> crate::Result<Start> {
     if opts.warm_start != WarmStart::Nested || opts.active_set.initial_active.is_some() {
-        return (None, None);
+        return Ok((None, None));
     }
     let t = Instant::now();
     let budget = system.symbolic().options.budget;
-    match warm_start::predict(system.scheme(), problem, cons, budget) {
+    let prediction = M::nested_start(system.scheme(), problem, cons, budget)
+        .ok_or_else(|| start::nested_start_unavailable(D))?;
+    Ok(match prediction {
         Ok(p) => {
             system.set_initial_guess(state, p.guess);
             (Some(p.active), Some(p.report))
@@ -181,15 +194,15 @@ fn warm_start(
                 ..Default::default()
             }),
         ),
-    }
+    })
 }
 
 /// The active-set method on `system` (its solves through `state`), with the fallback of
 /// `opts`.
-fn solve_constrained(
-    system: &DiscreteSystem,
+fn solve_constrained<M: SolverMesh<D> + ?Sized, const D: usize>(
+    system: &DiscreteSystem<M, D>,
     state: &mut SolveState,
-    cons: &Constraints,
+    cons: &Constraints<D>,
     opts: &SolveOptions,
     initial: Option<Vec<bool>>,
 ) -> crate::Result<VariationalSolution> {
@@ -219,12 +232,12 @@ fn solve_constrained(
     }
 }
 
-fn solve_system<'a>(
-    system: DiscreteSystem<'a>,
-    problem: &Problem,
+fn solve_system<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
+    system: DiscreteSystem<'a, M, D>,
+    problem: &Problem<D>,
     opts: &SolveOptions,
     t0: Instant,
-) -> crate::Result<Solution<'a>> {
+) -> crate::Result<Solution<'a, M, D>> {
     // what the solves of this system carry from one to the next: fresh for every problem
     let mut state = SolveState::default();
     let constraints = constraints::build(&system, problem)?;
@@ -233,7 +246,7 @@ fn solve_system<'a>(
     let mut warm = None;
     let result = match &constraints {
         Some(c) => {
-            let (mut initial, report) = warm_start(&system, &mut state, problem, c, opts);
+            let (mut initial, report) = warm_start(&system, &mut state, problem, c, opts)?;
             warm = report;
             if !floating.is_empty() {
                 // parts without Dirichlet unknowns: start with their barrier active, or the

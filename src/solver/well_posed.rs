@@ -22,6 +22,7 @@
 //! the initial active set. Cost: one union–find pass over the local unknowns.
 
 use crate::assembly::DiscreteSystem;
+use crate::mesh::SolveMesh;
 use crate::solver::constraints::Constraints;
 use std::fmt;
 
@@ -81,7 +82,10 @@ fn find(parent: &mut [usize], mut i: usize) -> usize {
 /// Checks the problem on `system` (see the module docs). Returns the floating constrained
 /// unknowns and the marginal parts ([`Analysis`]), or a typed error saying why the problem is
 /// ill-posed (naming the marginal load where there is one).
-pub fn analyse(system: &DiscreteSystem, cons: Option<&Constraints>) -> crate::Result<Analysis> {
+pub fn analyse<M: SolveMesh<D> + ?Sized, const D: usize>(
+    system: &DiscreteSystem<M, D>,
+    cons: Option<&Constraints<D>>,
+) -> crate::Result<Analysis> {
     let n = system.n_unknowns();
     let dm = &system.symbolic().dof_map;
     let mut parent: Vec<usize> = (0..n).collect();

@@ -1,0 +1,58 @@
+//! The mesh types the solve driver accepts, and the warm start each offers.
+//!
+//! The driver ([`super::solve_problem`]) is written once for every dimension: it needs from a
+//! mesh what assembly needs ([`SolveMesh`]), and a way to predict the initial active set when
+//! [`WarmStart::Nested`](super::WarmStart::Nested) is asked for. That prediction agglomerates
+//! planar polygonal meshes ([`super::warm_start`]), so only [`PolyMesh`] offers it; on a 3D
+//! mesh ([`PolyMesh3`]) the active-set iteration runs from the cold start A₀ = ∅, and asking
+//! for the nested start is an error ([`nested_start_unavailable`]), not a silent fallback.
+
+use super::constraints::Constraints;
+use super::warm_start::{self, Prediction};
+use crate::mesh::{MemoryBudget, PolyMesh, SolveMesh};
+use crate::mesh3d::PolyMesh3;
+use crate::problem::Problem;
+use crate::scheme::GradientDiscretisation;
+
+/// A mesh the solve driver accepts (see the module docs).
+pub trait SolverMesh<const D: usize>: SolveMesh<D> {
+    /// The nested warm start's prediction of the active set of `cons` for `problem` on
+    /// `scheme` (`Some(Err(reason))`: no prediction could be made, the iteration starts cold
+    /// and the report says why), or `None` if this mesh type has no nested start.
+    fn nested_start(
+        scheme: &dyn GradientDiscretisation<Self, D>,
+        problem: &Problem<D>,
+        cons: &Constraints<D>,
+        budget: MemoryBudget,
+    ) -> Option<Result<Prediction, String>>;
+}
+
+impl SolverMesh<2> for PolyMesh {
+    fn nested_start(
+        scheme: &dyn GradientDiscretisation,
+        problem: &Problem,
+        cons: &Constraints,
+        budget: MemoryBudget,
+    ) -> Option<Result<Prediction, String>> {
+        Some(warm_start::predict(scheme, problem, cons, budget))
+    }
+}
+
+impl SolverMesh<3> for PolyMesh3 {
+    fn nested_start(
+        _scheme: &dyn GradientDiscretisation<PolyMesh3, 3>,
+        _problem: &Problem<3>,
+        _cons: &Constraints<3>,
+        _budget: MemoryBudget,
+    ) -> Option<Result<Prediction, String>> {
+        None
+    }
+}
+
+/// The error of a nested warm start asked for on a mesh of dimension `d` that has none.
+pub fn nested_start_unavailable(d: usize) -> crate::Error {
+    crate::Error::InvalidData(format!(
+        "the nested warm start agglomerates planar meshes and is not available on a {d}D \
+         mesh: solve with the cold start (WarmStart::Cold, --warm-start cold)"
+    ))
+}
