@@ -7,6 +7,7 @@
 //! helpers.
 
 pub mod crosscheck;
+pub mod interrupt;
 pub mod markdown;
 pub mod output;
 pub mod plot;
@@ -164,6 +165,10 @@ where
     match run(Cli::parse_from(args)) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
+            if let Some((msg, status)) = interrupt::report(&e) {
+                eprintln!("{msg}");
+                return std::process::ExitCode::from(status);
+            }
             eprintln!("error: {}{}", one_line(&e), advice(&e));
             std::process::ExitCode::FAILURE
         }

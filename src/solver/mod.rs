@@ -25,7 +25,7 @@ use crate::assembly::{DiscreteSystem, SolveState, SymbolicSystem, SystemOptions}
 use crate::problem::Problem;
 use crate::scheme::GradientDiscretisation;
 use crate::vi::active_set::{self, Outcome};
-pub use crate::vi::{ActiveSetOptions, Certificate, IterationLog, IterationStep, Method};
+pub use crate::vi::{ActiveSetOptions, Cancel, Certificate, IterationLog, IterationStep, Method};
 use crate::vi::{VariationalSolution, pgs};
 use constraints::Constraints;
 use std::sync::Arc;
@@ -168,7 +168,8 @@ fn warm_start(
     }
     let t = Instant::now();
     let budget = system.symbolic().options.budget;
-    match warm_start::predict(system.scheme(), problem, cons, budget) {
+    let cancel = opts.active_set.cancel.as_ref();
+    match warm_start::predict(system.scheme(), problem, cons, budget, cancel) {
         Ok(p) => {
             system.set_initial_guess(state, p.guess);
             (Some(p.active), Some(p.report))
@@ -235,6 +236,8 @@ fn solve_system<'a>(
         Some(c) => {
             let (mut initial, report) = warm_start(&system, &mut state, problem, c, opts);
             warm = report;
+            // a warm start cut short by the hook is skipped: stop before the first fine solve
+            Cancel::check(opts.active_set.cancel.as_ref())?;
             if !floating.is_empty() {
                 // parts without Dirichlet unknowns: start with their barrier active, or the
                 // first solve would be singular (see well_posed)
