@@ -95,6 +95,10 @@ pub enum Error {
         /// The budget it was compared with, in bytes.
         budget: u64,
     },
+    /// The caller's cancellation hook ([`Cancel`](crate::vi::Cancel)) asked the solve to stop;
+    /// it stopped between two linear solves, with no result.
+    #[error("the solve was interrupted")]
+    Interrupted,
 }
 
 /// What to do when the memory runs out: the end of [`Error::OutOfMemory`]'s message, which the

@@ -7,6 +7,7 @@
 //! helpers.
 
 pub mod crosscheck;
+pub mod interrupt;
 pub mod markdown;
 pub mod mesh;
 pub mod output;
@@ -108,6 +109,10 @@ where
     match run(Cli::parse_from(args)) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
+            if let Some((msg, status)) = interrupt::report(&e) {
+                eprintln!("{msg}");
+                return std::process::ExitCode::from(status);
+            }
             eprintln!("error: {}{}", one_line(&e), advice(&e));
             std::process::ExitCode::FAILURE
         }

@@ -1,5 +1,6 @@
 //! Output files of the command line: never an input, never another output of the same run, and
-//! never half written (each is written to a temporary file beside it, then renamed).
+//! never half written (each is written to a temporary file beside it, then renamed; not
+//! renamed, and removed, on an error or after SIGINT or SIGTERM).
 
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
@@ -64,10 +65,13 @@ pub fn atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()
         )),
         None => tmp,
     };
-    let result = write(&tmp).and_then(|()| {
-        std::fs::rename(&tmp, path)
-            .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
-    });
+    // an interrupted run (SIGINT, SIGTERM) puts no output in place
+    let result = write(&tmp)
+        .and_then(|()| Ok(crate::interrupt::check()?))
+        .and_then(|()| {
+            std::fs::rename(&tmp, path)
+                .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
+        });
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }

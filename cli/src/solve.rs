@@ -254,6 +254,8 @@ fn resolve_mesh(
 
 /// `gradvi solve`.
 pub fn run(a: &SolveArgs) -> Result<()> {
+    // Ctrl-C and SIGTERM stop the solve between linear solves, leaving no output
+    crate::interrupt::install();
     // the mesh time printed: from here (the problem file included) to the validated mesh
     let t0 = std::time::Instant::now();
     check_options(a)?;
@@ -378,6 +380,7 @@ fn solve_options(a: &SolveArgs) -> SolveOptions {
         max_solves: a.max_solves,
         tol: a.tol,
         progress: Some(print_progress),
+        cancel: Some(crate::interrupt::cancel()),
         ..Default::default()
     };
     SolveOptions {

@@ -12,15 +12,15 @@ use gradvi::post::fields::EntityFields;
 use gradvi::post::{Errors, relative_errors};
 use gradvi::scheme::{Entity, SchemeKind, SchemeOptions, build_with};
 use gradvi::solver::{
-    ActiveSetOptions, Certificate, IterationLog, MarginalLoad, Method, SolveOptions, Timings,
-    WarmStart, WarmStartReport, solve_problem,
+    ActiveSetOptions, Cancel, Certificate, IterationLog, MarginalLoad, Method, SolveOptions,
+    Timings, WarmStart, WarmStartReport, solve_problem,
 };
 use gradvi::vi::Side;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::str::FromStr;
-use std::sync::Arc;
 use std::sync::atomic::Ordering as AtomicOrdering;
+use std::sync::{Arc, Mutex};
 
 /// Everything a solve produces, owned (no borrow of the mesh or the scheme).
 struct Output {
@@ -355,6 +355,22 @@ fn solve<'py>(
     linear: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let initial_active = initial_active.map(|a| a.as_array().to_vec());
+    // Ctrl-C: Python's pending signals are checked between linear solves; the exception a
+    // signal handler raised (KeyboardInterrupt) is kept and raised instead of the library's
+    // Interrupted
+    let raised: Arc<Mutex<Option<PyErr>>> = Arc::default();
+    let cancel = {
+        let raised = Arc::clone(&raised);
+        Cancel::new(move || match Python::attach(|py| py.check_signals()) {
+            Ok(()) => false,
+            Err(e) => {
+                if let Ok(mut r) = raised.lock() {
+                    r.get_or_insert(e);
+                }
+                true
+            }
+        })
+    };
     let options = || -> gradvi::Result<Options> {
         check_numbers(c, max_solves, tol)?;
         let system = SystemOptions {
@@ -374,6 +390,7 @@ fn solve<'py>(
                     initial_active,
                     keep_iterates,
                     progress: None,
+                    cancel: Some(cancel),
                     // screening on, look-ahead as the driver decides (with the nested start)
                     ..Default::default()
                 },
@@ -395,6 +412,12 @@ fn solve<'py>(
     });
     let out = match out {
         Ok(Ok(v)) => v,
+        Ok(Err(gradvi::Error::Interrupted)) => {
+            let e = raised.lock().ok().and_then(|mut r| r.take());
+            return Err(e.unwrap_or_else(|| {
+                pyo3::exceptions::PyKeyboardInterrupt::new_err("the solve was interrupted")
+            }));
+        }
         Ok(Err(e)) => {
             if let Some(err) = misses.as_ref().and_then(|m| miss_error(py, &e, m)) {
                 return Err(err);

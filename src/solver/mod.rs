@@ -29,7 +29,7 @@ use crate::mesh::{PolyMesh, SolveMesh};
 use crate::problem::Problem;
 use crate::scheme::GradientDiscretisation;
 use crate::vi::active_set::{self, Outcome};
-pub use crate::vi::{ActiveSetOptions, Certificate, IterationLog, IterationStep, Method};
+pub use crate::vi::{ActiveSetOptions, Cancel, Certificate, IterationLog, IterationStep, Method};
 use crate::vi::{VariationalSolution, pgs};
 use constraints::Constraints;
 pub use start::SolverMesh;
@@ -179,7 +179,8 @@ fn warm_start<M: SolverMesh<D> + ?Sized, const D: usize>(
     }
     let t = Instant::now();
     let budget = system.symbolic().options.budget;
-    let prediction = M::nested_start(system.scheme(), problem, cons, budget)
+    let cancel = opts.active_set.cancel.as_ref();
+    let prediction = M::nested_start(system.scheme(), problem, cons, budget, cancel)
         .ok_or_else(|| start::nested_start_unavailable(D))?;
     Ok(match prediction {
         Ok(p) => {
@@ -248,6 +249,8 @@ fn solve_system<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
         Some(c) => {
             let (mut initial, report) = warm_start(&system, &mut state, problem, c, opts)?;
             warm = report;
+            // a warm start cut short by the hook is skipped: stop before the first fine solve
+            Cancel::check(opts.active_set.cancel.as_ref())?;
             if !floating.is_empty() {
                 // parts without Dirichlet unknowns: start with their barrier active, or the
                 // first solve would be singular (see well_posed)

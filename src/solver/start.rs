@@ -13,6 +13,7 @@ use crate::mesh::{MemoryBudget, PolyMesh, SolveMesh};
 use crate::mesh3d::PolyMesh3;
 use crate::problem::Problem;
 use crate::scheme::GradientDiscretisation;
+use crate::vi::Cancel;
 
 /// A mesh the solve driver accepts (see the module docs).
 pub trait SolverMesh<const D: usize>: SolveMesh<D> {
@@ -24,6 +25,7 @@ pub trait SolverMesh<const D: usize>: SolveMesh<D> {
         problem: &Problem<D>,
         cons: &Constraints<D>,
         budget: MemoryBudget,
+        cancel: Option<&Cancel>,
     ) -> Option<Result<Prediction, String>>;
 }
 
@@ -33,8 +35,9 @@ impl SolverMesh<2> for PolyMesh {
         problem: &Problem,
         cons: &Constraints,
         budget: MemoryBudget,
+        cancel: Option<&Cancel>,
     ) -> Option<Result<Prediction, String>> {
-        Some(warm_start::predict(scheme, problem, cons, budget))
+        Some(warm_start::predict(scheme, problem, cons, budget, cancel))
     }
 }
 
@@ -44,6 +47,7 @@ impl SolverMesh<3> for PolyMesh3 {
         _problem: &Problem<3>,
         _cons: &Constraints<3>,
         _budget: MemoryBudget,
+        _cancel: Option<&Cancel>,
     ) -> Option<Result<Prediction, String>> {
         None
     }

@@ -51,7 +51,7 @@ use crate::mesh::{MemoryBudget, NO_CELL, Point, PolyMesh};
 use crate::problem::{ConstraintKind, Problem};
 use crate::scheme::{Entity, GradientDiscretisation, Hmm};
 use crate::solver::constraints::Constraints;
-use crate::vi::ActiveSetOptions;
+use crate::vi::{ActiveSetOptions, Cancel};
 use std::time::Instant;
 
 /// How the monotony algorithm starts (`--warm-start nested|cold` on the command line).
@@ -131,12 +131,14 @@ struct CoarseState {
 }
 
 /// Predicts the active set of the constrained unknowns `cons` of `scheme` for `problem`, the
-/// coarse systems assembled within `budget`. `Err(reason)` when no prediction can be made.
+/// coarse systems assembled within `budget`, the coarse solves polling `cancel` between their
+/// linear solves. `Err(reason)` when no prediction can be made (or `cancel` stopped it).
 pub fn predict(
     scheme: &dyn GradientDiscretisation,
     problem: &Problem,
     cons: &Constraints,
     budget: MemoryBudget,
+    cancel: Option<&Cancel>,
 ) -> Result<Prediction, String> {
     let t0 = Instant::now();
     let kind = problem
@@ -154,6 +156,7 @@ pub fn predict(
         let mesh = &levels[l].mesh;
         let hmm = Hmm::new(mesh);
         let fail = |e: crate::Error| format!("coarse solve ({} cells): {e}", mesh.n_cells());
+        Cancel::check(cancel).map_err(fail)?;
         let system_options = SystemOptions {
             budget,
             ..Default::default()
@@ -169,6 +172,7 @@ pub fn predict(
             active_set: ActiveSetOptions {
                 initial_active: initial,
                 look_ahead: Some(Default::default()),
+                cancel: cancel.cloned(),
                 ..Default::default()
             },
             warm_start: WarmStart::Cold,

@@ -49,6 +49,7 @@ use super::{
     VariationalSolution,
 };
 use crate::error::SolverError;
+use std::sync::Arc;
 
 /// Options of the active-set solver.
 #[derive(Debug, Clone)]
@@ -77,6 +78,40 @@ pub struct ActiveSetOptions {
     /// Propose each next active set after a look-ahead on a patch around its changes
     /// ([`super::look_ahead`]; `None`, the default: the paper's algorithm).
     pub look_ahead: Option<LookAheadOptions>,
+    /// The caller's cancellation hook, polled after every linear solve that is not the last
+    /// (`None`, the default: never cancelled).
+    pub cancel: Option<Cancel>,
+}
+
+/// A cancellation hook owned by the caller: a function polled between linear solves; when it
+/// returns true the solve stops with [`crate::Error::Interrupted`]. The command line's hook
+/// reads the flag its SIGINT and SIGTERM handlers set; the Python bindings' checks Python's
+/// pending signals (so that Ctrl-C raises `KeyboardInterrupt`).
+#[derive(Clone)]
+pub struct Cancel(Arc<dyn Fn() -> bool + Send + Sync>);
+
+impl Cancel {
+    /// The hook `f`.
+    pub fn new(f: impl Fn() -> bool + Send + Sync + 'static) -> Self {
+        Cancel(Arc::new(f))
+    }
+    /// Whether the caller asks the solve to stop.
+    pub fn requested(&self) -> bool {
+        (self.0)()
+    }
+    /// `Err(Interrupted)` if the optional hook `cancel` asks the solve to stop.
+    pub fn check(cancel: Option<&Cancel>) -> crate::Result<()> {
+        match cancel {
+            Some(c) if c.requested() => Err(crate::Error::Interrupted),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl std::fmt::Debug for Cancel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Cancel(..)")
+    }
 }
 
 impl Default for ActiveSetOptions {
@@ -90,6 +125,7 @@ impl Default for ActiveSetOptions {
             progress: None,
             screening: true,
             look_ahead: None,
+            cancel: None,
         }
     }
 }
@@ -344,6 +380,10 @@ pub fn run<P>(
             q.release();
             return Ok(Outcome::Stalled(Stalled { error, log }));
         }
+        if let Err(e) = Cancel::check(opts.cancel.as_ref()) {
+            q.release();
+            return Err(e);
+        }
         entered = (0..m).filter(|&j| next[j] && !active[j]).count();
         left = (0..m).filter(|&j| !next[j] && active[j]).count();
         history.push(next.clone());
@@ -467,6 +507,49 @@ mod tests {
                 let exact: Vec<usize> = reference.log.iter().map(|l| l.step.active).collect();
                 assert_ne!(sizes, exact);
                 assert!(q.refinements >= 1);
+            }
+        }
+    }
+
+    /// The hook is polled after each linear solve that is not the last: true stops the
+    /// iteration after the first one; false changes nothing, bit for bit.
+    #[test]
+    fn the_cancellation_hook_stops_between_solves() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let n = 40;
+        let m = laplacian_1d(n);
+        let barrier: Vec<f64> = (0..n)
+            .map(|i| 0.5 - 0.02 * (i as f64 - 20.0).abs())
+            .collect();
+        let cons = all_constrained(n, barrier, Side::Upper);
+        let mut q = Dense {
+            m,
+            b: vec![0.01; n],
+            dir: vec![None; n],
+        };
+        let plain = solve(&mut q, &cons, &ActiveSetOptions::default()).unwrap();
+        assert!(plain.niter >= 3, "{}", plain.niter);
+        for stop in [false, true] {
+            let polls = Arc::new(AtomicUsize::new(0));
+            let counter = Arc::clone(&polls);
+            let o = ActiveSetOptions {
+                cancel: Some(Cancel::new(move || {
+                    counter.fetch_add(1, Ordering::SeqCst);
+                    stop
+                })),
+                ..Default::default()
+            };
+            let r = solve(&mut q, &cons, &o);
+            if stop {
+                assert!(matches!(r, Err(crate::Error::Interrupted)), "{r:?}");
+                assert_eq!(polls.load(Ordering::SeqCst), 1);
+            } else {
+                let r = r.unwrap();
+                assert_eq!(polls.load(Ordering::SeqCst), plain.niter - 1);
+                assert_eq!(r.niter, plain.niter);
+                assert_eq!(r.active, plain.active);
+                let bits = |u: &[f64]| u.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&r.u), bits(&plain.u));
             }
         }
     }

@@ -27,7 +27,7 @@ pub mod exhaustive;
 pub mod look_ahead;
 pub mod pgs;
 
-pub use active_set::ActiveSetOptions;
+pub use active_set::{ActiveSetOptions, Cancel};
 pub use certificate::{Certificate, Evaluation};
 
 /// Timings of one constrained minimisation (a linear solve), in seconds.

@@ -180,7 +180,7 @@ fn the_prediction_carries_a_first_guess() {
     for scheme in [&p1 as &dyn GradientDiscretisation, &hmm] {
         let system = DiscreteSystem::new(scheme, &p, Default::default()).unwrap();
         let cons = constraints::build(&system, &p).unwrap().unwrap();
-        let pred = warm_start::predict(scheme, &p, &cons, MemoryBudget::DEFAULT).unwrap();
+        let pred = warm_start::predict(scheme, &p, &cons, MemoryBudget::DEFAULT, None).unwrap();
         assert_eq!(pred.guess.len(), scheme.n_skeleton());
         let fine = solve_problem(scheme, &p, &opts(WarmStart::Cold)).unwrap();
         let u = &fine.u()[..scheme.n_skeleton()];
