@@ -35,6 +35,8 @@ pub type Vector<const D: usize> = [f64; D];
 pub trait CellComplex<const D: usize>: Sync {
     /// Number of cells.
     fn n_cells(&self) -> usize;
+    /// Number of vertices.
+    fn n_vertices(&self) -> usize;
     /// Number of faces (edges in 2-D).
     fn n_faces(&self) -> usize;
     /// The faces of cell `k`, in its local order (local face i is `cell_faces(k)[i]`), as 32-bit
@@ -89,6 +91,9 @@ impl VertexAverage for PolyMesh {
 impl CellComplex<2> for PolyMesh {
     fn n_cells(&self) -> usize {
         PolyMesh::n_cells(self)
+    }
+    fn n_vertices(&self) -> usize {
+        PolyMesh::n_vertices(self)
     }
     fn n_faces(&self) -> usize {
         self.n_edges()

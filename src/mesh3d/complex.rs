@@ -8,6 +8,9 @@ impl CellComplex<3> for PolyMesh3 {
     fn n_cells(&self) -> usize {
         PolyMesh3::n_cells(self)
     }
+    fn n_vertices(&self) -> usize {
+        PolyMesh3::n_vertices(self)
+    }
     fn n_faces(&self) -> usize {
         PolyMesh3::n_faces(self)
     }

@@ -4,7 +4,7 @@
 pub mod contact;
 pub mod fields;
 
-use crate::mesh::Point;
+use crate::mesh::complex::{CellComplex, Vector};
 use crate::scheme::GradientDiscretisation;
 
 /// Relative discrete L² errors, as in the paper's Table 2:
@@ -21,11 +21,11 @@ pub struct Errors {
 /// Computes [`Errors`] of `u` for the scheme against the exact solution. The exact solution
 /// is evaluated at the centroids in parallel; the sums run in cell order, so the result does
 /// not depend on the number of threads.
-pub fn relative_errors(
-    scheme: &dyn GradientDiscretisation,
+pub fn relative_errors<M: CellComplex<D> + ?Sized, const D: usize>(
+    scheme: &dyn GradientDiscretisation<M, D>,
     u: &[f64],
-    exact: &(dyn Fn(Point) -> f64 + Sync),
-    exact_grad: &(dyn Fn(Point) -> Point + Sync),
+    exact: &(dyn Fn(Vector<D>) -> f64 + Sync),
+    exact_grad: &(dyn Fn(Vector<D>) -> Vector<D> + Sync),
 ) -> Errors {
     use rayon::prelude::*;
     let mesh = scheme.mesh();
@@ -35,16 +35,13 @@ pub fn relative_errors(
         .into_par_iter()
         .with_min_len(4096)
         .map(|k| {
-            let x = mesh.centroid(k);
-            let a = mesh.measure(k);
+            let x = mesh.cell_centre(k);
+            let a = mesh.cell_measure(k);
             let ue = exact(x);
             let ge = exact_grad(x);
-            [
-                a * (cv[k] - ue).powi(2),
-                a * ue * ue,
-                a * ((cg[k][0] - ge[0]).powi(2) + (cg[k][1] - ge[1]).powi(2)),
-                a * (ge[0] * ge[0] + ge[1] * ge[1]),
-            ]
+            let dg: f64 = (0..D).map(|i| (cg[k][i] - ge[i]).powi(2)).sum();
+            let g2: f64 = (0..D).map(|i| ge[i] * ge[i]).sum();
+            [a * (cv[k] - ue).powi(2), a * ue * ue, a * dg, a * g2]
         })
         .collect();
     drop((cv, cg));

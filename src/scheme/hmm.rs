@@ -383,6 +383,9 @@ mod tests_3d {
         fn n_cells(&self) -> usize {
             self.cell_faces.len()
         }
+        fn n_vertices(&self) -> usize {
+            self.nodes.iter().map(|x| x.len()).product()
+        }
         fn n_faces(&self) -> usize {
             self.faces.len()
         }

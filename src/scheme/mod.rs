@@ -26,6 +26,7 @@ mod triangle;
 
 use crate::mesh::PolyMesh;
 use crate::mesh::complex::{CellComplex, Vector};
+use crate::mesh3d::PolyMesh3;
 use nalgebra::{DMatrix, DVector};
 
 pub use cr::Cr;
@@ -145,10 +146,17 @@ impl Default for SchemeOptions {
     }
 }
 
+/// The refusal of a scheme that has no 3-D version.
+fn not_in_3d(name: &str) -> crate::Error {
+    crate::Error::InvalidData(format!(
+        "the {name} scheme is defined on triangles only; on a 3-D mesh use --scheme hmm"
+    ))
+}
+
 /// Declares the registered schemes: the [`SchemeKind`] enum, its names, and [`build`]. One line
-/// per scheme.
+/// per scheme: its 2-D constructor, then its 3-D constructor.
 macro_rules! register_schemes {
-    ($($(#[$doc:meta])* $variant:ident = $name:literal => $ctor:expr,)*) => {
+    ($($(#[$doc:meta])* $variant:ident = $name:literal => $ctor:expr, $ctor3:expr;)*) => {
         /// The registered schemes (`--scheme NAME` on the command line).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
         #[serde(rename_all = "lowercase")]
@@ -180,6 +188,22 @@ macro_rules! register_schemes {
                 })*
             }
         }
+
+        /// Builds the scheme of kind `kind` on the 3-D mesh `mesh` with `options` (a typed
+        /// error if the mesh does not suit the scheme or an option is invalid).
+        pub fn build_with3<'a>(
+            kind: SchemeKind,
+            mesh: &'a PolyMesh3,
+            options: &SchemeOptions,
+        ) -> crate::Result<Box<dyn GradientDiscretisation<PolyMesh3, 3> + 'a>> {
+            match kind {
+                $(SchemeKind::$variant => {
+                    let ctor: fn(&'a PolyMesh3, &SchemeOptions)
+                        -> crate::Result<Box<dyn GradientDiscretisation<PolyMesh3, 3> + 'a>> = $ctor3;
+                    ctor(mesh, options)
+                })*
+            }
+        }
     };
 }
 
@@ -197,10 +221,13 @@ fn no_alpha(name: &str, o: &SchemeOptions) -> crate::Result<()> {
 register_schemes! {
     /// Hybrid Mimetic Mixed (SUSHI stabilisation).
     Hmm = "hmm" => |m, o| Ok(Box::new(Hmm::with_alpha(m, o.alpha)?)),
+        |m, o| Ok(Box::new(Hmm::with_alpha(m, o.alpha)?));
     /// Conforming P1 finite elements on triangles.
     P1 = "p1" => |m, o| { no_alpha("p1", o)?; Ok(Box::new(P1::new(m)?)) },
+        |_, _| Err(not_in_3d("p1"));
     /// Crouzeix–Raviart (non-conforming P1) with mass lumping, on triangles.
     Cr = "cr" => |m, o| { no_alpha("cr", o)?; Ok(Box::new(Cr::new(m)?)) },
+        |_, _| Err(not_in_3d("cr"));
 }
 
 impl std::str::FromStr for SchemeKind {
