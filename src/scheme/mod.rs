@@ -70,7 +70,7 @@ pub enum Entity {
 /// `Vector<D>`, tensors `Tensor<D>`, and the mesh is any [`CellComplex<D>`] (cells, faces,
 /// measures, centres, normals). The assembly and the solve driver take it for any mesh with
 /// tags and boundary faces ([`crate::mesh::SolveMesh<D>`]): HMM on
-/// [`PolyMesh3`](crate::mesh3d::PolyMesh3) (`Hmm::<PolyMesh3, 3>::with_alpha`) solves 3-D
+/// [`PolyMesh3`] (`Hmm::<PolyMesh3, 3>::with_alpha`) solves 3-D
 /// problems through them (`solver/tests_3d.rs`).
 pub trait GradientDiscretisation<M: ?Sized = PolyMesh, const D: usize = 2>: Sync
 where
