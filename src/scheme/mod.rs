@@ -24,6 +24,8 @@ pub mod hmm;
 pub mod p1;
 pub mod points;
 mod simplex;
+#[cfg(test)]
+mod tests_simplex3;
 
 use crate::mesh::PolyMesh;
 use crate::mesh::complex::{CellComplex, Vector};

@@ -110,10 +110,12 @@ impl super::simplex::SimplexScheme<PolyMesh3, 3> for P1<'_, PolyMesh3, 3> {
     /// The gradients of the four barycentric functions λ_i of tetrahedron `k`: the rows of
     /// J⁻¹ (module docs), in the order of [`PolyMesh3::tetrahedron`].
     fn basis_gradients(&self, k: usize) -> Local<Point3> {
-        let p = self.mesh.simplex_vertices(k).map(|v| self.mesh.vertices()[v as usize]);
-        let e: [Point3; 3] = std::array::from_fn(|j| {
-            std::array::from_fn(|c| p[j + 1][c] - p[0][c])
-        });
+        let p = self
+            .mesh
+            .simplex_vertices(k)
+            .map(|v| self.mesh.vertices()[v as usize]);
+        let e: [Point3; 3] =
+            std::array::from_fn(|j| std::array::from_fn(|c| p[j + 1][c] - p[0][c]));
         let rows = [cross(e[1], e[2]), cross(e[2], e[0]), cross(e[0], e[1])];
         let det = e[0][0] * rows[0][0] + e[0][1] * rows[0][1] + e[0][2] * rows[0][2];
         let mut g = [[0.0; 3]; 4];
