@@ -73,9 +73,10 @@ pub enum Entity {
 /// the outputs work. Nothing in the trait assumes D = 2: points and gradients are
 /// `Vector<D>`, tensors `Tensor<D>`, and the mesh is any [`CellComplex<D>`] (cells, faces,
 /// measures, centres, normals). The assembly and the solve driver take it for any mesh with
-/// tags and boundary faces ([`crate::mesh::SolveMesh<D>`]): HMM on
-/// [`PolyMesh3`](crate::mesh3d::PolyMesh3) (`Hmm::<PolyMesh3, 3>::with_alpha`) solves 3-D
-/// problems through them (`solver/tests_3d.rs`).
+/// tags and boundary faces ([`crate::mesh::SolveMesh<D>`]): on a [`PolyMesh3`], HMM on
+/// general polyhedra (`Hmm::<PolyMesh3, 3>::with_alpha`) and P1 and Crouzeix–Raviart on
+/// tetrahedra (`P1::<PolyMesh3, 3>::new`, `Cr::<PolyMesh3, 3>::new`) solve 3-D problems
+/// through them (`solver/tests_3d.rs`, `tests/unit/schemes3d.rs`, `tests/convergence3d.rs`).
 pub trait GradientDiscretisation<M: ?Sized = PolyMesh, const D: usize = 2>: Sync
 where
     M: CellComplex<D>,

@@ -76,7 +76,9 @@ fn check_against_reference(kind: SchemeKind, m: &PolyMesh3, p: &Problem<3>, exha
             tol: 1e-15,
             ..Default::default()
         };
-        pgs::solve(&sys.with_state(&mut state), &cons, &o).unwrap().u
+        pgs::solve(&sys.with_state(&mut state), &cons, &o)
+            .unwrap()
+            .u
     };
     let umax = reference.iter().fold(0.0f64, |a, x| a.max(x.abs()));
     for (a, b) in sol.u().iter().zip(&reference) {
