@@ -24,8 +24,10 @@ build:
 test:
 	$(CARGO) test --workspace
 
-## test-external: the tests that need what a fresh machine may lack (#[ignore]d in `make test`):
-## the FVCA5 files in ../shared/meshes/fvca5 and dolfinx (installed here if missing). CI runs it.
+## test-external: the tests that need what a fresh machine may lack or that take longer
+## (#[ignore]d in `make test`): the FVCA5 files in ../shared/meshes/fvca5, HArDCore3D's files in
+## ../shared/meshes/hardcore3d (3D patch tests and slopes of HMM, P1, CR: tests/convergence3d.rs),
+## the larger 3D convergence levels, and dolfinx (installed here if missing). CI runs it.
 test-external: build reference-deps
 	$(CARGO) test --workspace -- --ignored
 

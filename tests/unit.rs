@@ -11,6 +11,8 @@ mod linear_solver;
 mod mesh_io;
 #[path = "unit/mesh_validity.rs"]
 mod mesh_validity;
+#[path = "unit/schemes3d.rs"]
+mod schemes3d;
 #[path = "unit/solver.rs"]
 mod solver;
 #[path = "unit/warm_start.rs"]

@@ -32,7 +32,8 @@
 //! holds the type and its accessors; `tags.rs` the tags; `complex.rs` the
 //! [`CellComplex<3>`](crate::mesh::CellComplex) view a scheme reads; `renumber.rs` drops
 //! unused vertices ([`Polyhedra::drop_unused_vertices`], for readers); `surface.rs` and
-//! `overlap.rs` check the boundary surface and overlaps.
+//! `overlap.rs` check the boundary surface and overlaps; `simplex.rs` gives the vertices of a
+//! tetrahedral cell ([`PolyMesh3::tetrahedron`]) to the schemes on simplices.
 
 pub mod agglomerate;
 pub mod io;
@@ -50,6 +51,7 @@ mod orient;
 mod overlap;
 mod renumber;
 mod shape;
+mod simplex;
 mod solve_mesh;
 mod surface;
 mod tags;

@@ -1,4 +1,5 @@
-//! The Crouzeix–Raviart (non-conforming P1) scheme with mass lumping, on triangles
+//! The Crouzeix–Raviart (non-conforming P1) scheme with mass lumping, on triangles and on
+//! tetrahedra
 //! (GDM book, Droniou–Eymard–Gallouët–Guichard–Herbin, Chapter 9: non-conforming P1, its
 //! mass-lumped gradient discretisation).
 //!
@@ -44,25 +45,51 @@
 //! of each triangle at that vertex, u_{σ₁} + u_{σ₂} − u_{σ₀} (σ₁, σ₂ the edges through the
 //! vertex, σ₀ the opposite one): exact for affine functions, unlike a mean of centroid values.
 
+//!
+//! ## Tetrahedra
+//! The same scheme on a tetrahedron K (D = 3), one unknown u_σ per face σ, the value at its
+//! centroid x_σ; everything above holds with 3 in place of 2 where it is the dimension:
+//! - φ_σ = 1 − 3λ_{v_σ} (λ_{v_σ} is 0 on σ, so at x_σ, and 1/3 at the centroids of the three
+//!   other faces), ∇φ_σ = −3∇λ_{v_σ} = |σ| n_{K,σ}/|K| (as ∇λ_{v_σ} = −|σ| n_{K,σ}/(3|K|)),
+//!   so ∇_K u = (1/|K|) Σ_σ |σ| u_σ n_{K,σ} as in 2-D (G is 3×4);
+//! - Π_D u = u_σ on the pyramid D_{K,σ} = co(σ ∪ {x_K}); x_K is the barycentre, so
+//!   λ_{v_σ}(x_K) = 1/4 and the height of D_{K,σ} over σ is a quarter of that of K:
+//!   |D_{K,σ}| = |K|/4 (each face unknown carries a quarter of the cell), and the four
+//!   D_{K,σ} tile K. The obstacle measure of a face is |D_σ| = Σ_{K∋σ} |K|/4;
+//! - load: Σ_σ v_σ (|K|/4) f(x_{K,σ}), x_{K,σ} = (s₁ + s₂ + s₃ + x_K)/4 the centroid of
+//!   D_{K,σ} (s₁, s₂, s₃ the vertices of σ, in the order of its loop): exact for f affine on K,
+//!   |K| f(x_K) in total;
+//! - trace, Dirichlet and Signorini data: at x_σ with weight |σ|, as in 2-D;
+//! - output: Π_D u at x_K is the mean of the four face values (φ_σ(x_K) = 1/4); at a vertex v
+//!   of K the Crouzeix–Raviart function of K is Σ_{σ∋v} u_σ − 2u_{σ_v} (φ_σ(v) = 1 on the
+//!   three faces through v, 1 − 3 = −2 on the face σ_v opposite v), averaged over the
+//!   tetrahedra around v with their volumes as weights.
+
 use super::PointDof;
-use super::triangle::TriangleUnknowns;
+use super::simplex::{Local, SimplexMesh, SimplexUnknowns};
+use crate::mesh::complex::{CellComplex, Vector};
 use crate::mesh::{Point, PolyMesh};
+use crate::mesh3d::{Point3, PolyMesh3};
 use nalgebra::DVector;
 
-/// The mass-lumped Crouzeix–Raviart scheme on a triangle mesh: a triangle scheme (see
-/// `scheme/triangle.rs`) with an unknown on every edge.
+/// The mass-lumped Crouzeix–Raviart scheme on a mesh of simplices: by default a triangle mesh
+/// ([`PolyMesh`], D = 2); `Cr<PolyMesh3, 3>` on a tetrahedral [`PolyMesh3`]. A simplex scheme
+/// (see `scheme/simplex.rs`) with an unknown on every face (an edge in 2-D).
 #[derive(Debug, Clone)]
-pub struct Cr<'a> {
-    mesh: &'a PolyMesh,
+pub struct Cr<'a, M = PolyMesh, const D: usize = 2> {
+    mesh: &'a M,
 }
 
-impl<'a> Cr<'a> {
-    /// Crouzeix–Raviart on `mesh`; an error if some cell is not a triangle.
-    pub fn new(mesh: &'a PolyMesh) -> crate::Result<Self> {
-        super::triangle::require_triangles(mesh, "the Crouzeix–Raviart scheme")?;
+impl<'a, M: SimplexMesh<D>, const D: usize> Cr<'a, M, D> {
+    /// Crouzeix–Raviart on `mesh`; an error naming the first cell that is not a simplex (a
+    /// triangle in 2-D, a tetrahedron in 3-D).
+    pub fn new(mesh: &'a M) -> crate::Result<Self> {
+        mesh.require_simplices("the Crouzeix–Raviart scheme")?;
         Ok(Cr { mesh })
     }
+}
 
+impl Cr<'_> {
     /// The centroid x_{K,σ} of the sub-triangle D_{K,σ} = co(σ ∪ {x_K}) of local edge `i` of
     /// triangle `k` (local edge i joins local vertices i and i+1).
     pub fn sub_centroid(&self, k: usize, i: usize) -> Point {
@@ -74,20 +101,36 @@ impl<'a> Cr<'a> {
     }
 }
 
-impl super::triangle::TriangleScheme for Cr<'_> {
-    const NAME: &'static str = "cr";
-    const UNKNOWNS: TriangleUnknowns = TriangleUnknowns::Edges;
-    /// ∇φ_σ = |σ| n_{K,σ} / |K|, in the order of the local edges (the columns of G).
-    fn basis_gradients(&self, k: usize) -> [Point; 3] {
+impl Cr<'_, PolyMesh3, 3> {
+    /// The centroid x_{K,σ} = (s₁ + s₂ + s₃ + x_K)/4 of the pyramid D_{K,σ} = co(σ ∪ {x_K}) of
+    /// local face `i` of tetrahedron `k`.
+    pub fn sub_centroid(&self, k: usize, i: usize) -> Point3 {
         let m = self.mesh;
-        let area = m.measure(k);
-        let mut g = [[0.0; 2]; 3];
-        for (i, &e) in m.cell_edges(k).iter().enumerate() {
-            let s = m.edge_measure(e as usize) / area;
-            let nrm = m.cell_normal(k, i);
-            g[i] = [s * nrm[0], s * nrm[1]];
-        }
-        g
+        let s = m.face_vertices(m.cell_faces(k)[i] as usize);
+        let p = |j: usize| m.vertices()[s[j] as usize];
+        let (a, b, c, xk) = (p(0), p(1), p(2), m.centroid(k));
+        std::array::from_fn(|r| (a[r] + b[r] + c[r] + xk[r]) / 4.0)
+    }
+}
+
+/// ∇φ_σ = |σ| n_{K,σ} / |K| for the D + 1 faces of simplex `k`, in the order of its local
+/// faces (the columns of G).
+fn face_basis_gradients<const D: usize>(m: &impl CellComplex<D>, k: usize) -> Local<Vector<D>> {
+    let vol = m.cell_measure(k);
+    let mut g = [[0.0; D]; 4];
+    for (i, &e) in m.cell_faces(k).iter().enumerate() {
+        let s = m.face_measure(e as usize) / vol;
+        let nrm = m.cell_face_normal(k, i);
+        g[i] = nrm.map(|c| s * c);
+    }
+    g
+}
+
+impl super::simplex::SimplexScheme<PolyMesh, 2> for Cr<'_> {
+    const NAME: &'static str = "cr";
+    const UNKNOWNS: SimplexUnknowns = SimplexUnknowns::Faces;
+    fn basis_gradients(&self, k: usize) -> Local<Point> {
+        face_basis_gradients(self.mesh, k)
     }
     fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>) {
         let third = self.mesh.measure(k) / 3.0;
@@ -114,6 +157,49 @@ impl super::triangle::TriangleScheme for Cr<'_> {
         sum.iter().zip(&weight).map(|(s, w)| s / w).collect()
     }
     fn mesh(&self) -> &PolyMesh {
+        self.mesh
+    }
+}
+
+impl super::simplex::SimplexScheme<PolyMesh3, 3> for Cr<'_, PolyMesh3, 3> {
+    const NAME: &'static str = "cr";
+    const UNKNOWNS: SimplexUnknowns = SimplexUnknowns::Faces;
+    fn basis_gradients(&self, k: usize) -> Local<Point3> {
+        face_basis_gradients(self.mesh, k)
+    }
+    fn local_load(&self, k: usize, f: &dyn Fn(Point3) -> f64, b: &mut DVector<f64>) {
+        let quarter = self.mesh.measure(k) / 4.0;
+        *b = DVector::from_fn(4, |i, _| quarter * f(self.sub_centroid(k, i)));
+    }
+    fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof<3>>) {
+        super::face_unknown_trace(self.mesh, e, out);
+    }
+    fn vertex_values(&self, u: &[f64]) -> Vec<f64> {
+        let m = self.mesh;
+        let mut sum = vec![0.0; m.n_vertices()];
+        let mut weight = vec![0.0; m.n_vertices()];
+        for k in 0..m.n_cells() {
+            let (faces, vol) = (m.cell_faces(k), m.measure(k));
+            for v in m.simplex_vertices(k) {
+                // Σ_{σ∋v} u_σ − 2 u_{σ_v}: φ_σ(v) is 1 on the faces through v, −2 opposite it
+                let value: f64 = faces
+                    .iter()
+                    .map(|&f| {
+                        let uf = u[f as usize];
+                        if m.face_vertices(f as usize).contains(&v) {
+                            uf
+                        } else {
+                            -2.0 * uf
+                        }
+                    })
+                    .sum();
+                sum[v as usize] += vol * value;
+                weight[v as usize] += vol;
+            }
+        }
+        sum.iter().zip(&weight).map(|(s, w)| s / w).collect()
+    }
+    fn mesh(&self) -> &PolyMesh3 {
         self.mesh
     }
 }

@@ -13,16 +13,19 @@
 //! `local_dofs(k)` lists the interior unknowns of K first, then its skeleton unknowns; the local
 //! matrix and load follow that order.
 //!
-//! P1 and Crouzeix–Raviart are both schemes on triangles with three skeleton unknowns per cell
-//! and a gradient constant on each: what follows from that (local matrix, gradients, cell values,
-//! lumped obstacle measures) is written once, in `triangle.rs`, and each of the two files states
-//! only its basis gradients, its quadratures and its vertex values.
+//! P1 and Crouzeix–Raviart are both schemes on simplices (triangles in 2-D, tetrahedra in 3-D)
+//! with D + 1 skeleton unknowns per cell and a gradient constant on each: what follows from that
+//! (local matrix, gradients, cell values, lumped obstacle measures) is written once, for any D,
+//! in `simplex.rs`, and each of the two files states only its basis gradients, its quadratures
+//! and its vertex values, for triangles and for tetrahedra.
 
 pub mod cr;
 pub mod hmm;
 pub mod p1;
 pub mod points;
-mod triangle;
+mod simplex;
+#[cfg(test)]
+mod tests_simplex3;
 
 use crate::mesh::PolyMesh;
 use crate::mesh::complex::{CellComplex, Vector};
@@ -32,6 +35,7 @@ use nalgebra::{DMatrix, DVector};
 pub use cr::Cr;
 pub use hmm::Hmm;
 pub use p1::P1;
+pub use simplex::{Local, SimplexMesh};
 
 /// A D×D diffusion tensor (row-major), symmetric positive definite; 2×2 unless said.
 pub type Tensor<const D: usize = 2> = [[f64; D]; D];
@@ -69,9 +73,10 @@ pub enum Entity {
 /// the outputs work. Nothing in the trait assumes D = 2: points and gradients are
 /// `Vector<D>`, tensors `Tensor<D>`, and the mesh is any [`CellComplex<D>`] (cells, faces,
 /// measures, centres, normals). The assembly and the solve driver take it for any mesh with
-/// tags and boundary faces ([`crate::mesh::SolveMesh<D>`]): HMM on
-/// [`PolyMesh3`] (`Hmm::<PolyMesh3, 3>::with_alpha`) solves 3-D
-/// problems through them (`solver/tests_3d.rs`).
+/// tags and boundary faces ([`crate::mesh::SolveMesh<D>`]): on a [`PolyMesh3`], HMM on
+/// general polyhedra (`Hmm::<PolyMesh3, 3>::with_alpha`) and P1 and Crouzeix–Raviart on
+/// tetrahedra (`P1::<PolyMesh3, 3>::new`, `Cr::<PolyMesh3, 3>::new`) solve 3-D problems
+/// through them (`solver/tests_3d.rs`, `tests/unit/schemes3d.rs`, `tests/convergence3d.rs`).
 pub trait GradientDiscretisation<M: ?Sized = PolyMesh, const D: usize = 2>: Sync
 where
     M: CellComplex<D>,
@@ -146,13 +151,6 @@ impl Default for SchemeOptions {
     }
 }
 
-/// The refusal of a scheme that has no 3-D version.
-fn not_in_3d(name: &str) -> crate::Error {
-    crate::Error::InvalidData(format!(
-        "the {name} scheme is defined on triangles only; on a 3-D mesh use --scheme hmm"
-    ))
-}
-
 /// Declares the registered schemes: the [`SchemeKind`] enum, its names, and [`build`]. One line
 /// per scheme: its 2-D constructor, then its 3-D constructor.
 macro_rules! register_schemes {
@@ -222,12 +220,12 @@ register_schemes! {
     /// Hybrid Mimetic Mixed (SUSHI stabilisation).
     Hmm = "hmm" => |m, o| Ok(Box::new(Hmm::with_alpha(m, o.alpha)?)),
         |m, o| Ok(Box::new(Hmm::with_alpha(m, o.alpha)?));
-    /// Conforming P1 finite elements on triangles.
+    /// Conforming P1 finite elements on triangles and tetrahedra.
     P1 = "p1" => |m, o| { no_alpha("p1", o)?; Ok(Box::new(P1::new(m)?)) },
-        |_, _| Err(not_in_3d("p1"));
-    /// Crouzeix–Raviart (non-conforming P1) with mass lumping, on triangles.
+        |m, o| { no_alpha("p1", o)?; Ok(Box::new(P1::new(m)?)) };
+    /// Crouzeix–Raviart (non-conforming P1) with mass lumping, on triangles and tetrahedra.
     Cr = "cr" => |m, o| { no_alpha("cr", o)?; Ok(Box::new(Cr::new(m)?)) },
-        |_, _| Err(not_in_3d("cr"));
+        |m, o| { no_alpha("cr", o)?; Ok(Box::new(Cr::new(m)?)) };
 }
 
 impl std::str::FromStr for SchemeKind {
