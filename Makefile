@@ -25,7 +25,8 @@ test:
 	$(CARGO) test --workspace
 
 ## test-external: the tests that need what a fresh machine may lack (#[ignore]d in `make test`):
-## the FVCA5 files in ../shared/meshes/fvca5 and dolfinx (installed here if missing). CI runs it.
+## the FVCA5 files in ../shared/meshes/fvca5 and dolfinx (installed here if missing), and the
+## slow ones (the bigger levels of the 3D obstacle problems, tests/obstacle3d.rs). CI runs it.
 test-external: build reference-deps
 	$(CARGO) test --workspace -- --ignored
 

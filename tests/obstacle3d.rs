@@ -199,7 +199,7 @@ fn run(ex: &Example, generate: Generator, n: usize, opts: &SolveOptions) -> Run 
     // one line per run, for `replication/measurements/solver3d.md` (--nocapture)
     println!(
         "{} n = {n}: NITER {}, coarse levels {:?} ({} coarse solves), errors u {:.4e} grad {:.4e}, \
-         radius {:.4}, CG iterations {:?}, {:.2} s (warm start {:.2} s)",
+         radius {:.4}, CG iterations {:?} (cell system {:?}), {:.2} s (warm start {:.2} s)",
         p.name,
         r.niter,
         r.coarse_levels,
@@ -208,77 +208,127 @@ fn run(ex: &Example, generate: Generator, n: usize, opts: &SolveOptions) -> Run 
         r.l2_grad,
         r.radius,
         r.krylov,
+        sol.cell_system,
         r.seconds,
         sol.timings.warm_start
     );
     r
 }
 
-/// The checks of a refinement sequence: NITER at most `max_niter` on every level (and not
-/// growing by more than one from level to level), the fitted slopes of the errors in their
-/// bands, the contact radius within `radius_tol` · h of r₀ and approaching it.
-fn check_sequence(
-    ex: &Example,
-    runs: &[Run],
-    max_niter: usize,
-    u_band: [f64; 2],
-    grad_band: [f64; 2],
-    radius_tol: f64,
-) {
+/// The expected fitted slopes of the relative errors of u and of its gradient, each within a
+/// band `[low, high]`. The exact solutions are C^{1,1} across the free boundary (H^{5/2−ε}), so
+/// the gradient converges at order 1 at least (the obstacle problem's estimate); on cubes HMM
+/// superconverges at the centroids (order 2 for both where u is smooth: DiSk++'s test), and
+/// the radial test's contact ball, a staircase of cubes at these sizes, stays in between. The
+/// bands are the slopes measured on these sequences (`replication/measurements/solver3d.md`)
+/// give or take 0.3 to 0.4.
+struct Bands {
+    u: [f64; 2],
+    grad: [f64; 2],
+}
+
+const RADIAL_CUBES: Bands = Bands {
+    u: [1.1, 2.0],
+    grad: [1.0, 1.9],
+};
+const DISKPP_CUBES: Bands = Bands {
+    u: [1.7, 2.3],
+    grad: [1.4, 2.1],
+};
+const DISKPP_KUHN: Bands = Bands {
+    u: [1.5, 2.3],
+    grad: [0.7, 1.3],
+};
+
+/// NITER with the nested start is at most this on every level (from A₀ = ∅ it grows with the
+/// level: 5, 7, 9, 9 on Kuhn tetrahedra n = 8, 12, 16, 20 for DiSk++'s test).
+const MAX_NITER: usize = 5;
+
+/// The checks of a refinement sequence: the nested start made a coarse level and NITER is at
+/// most [`MAX_NITER`] on every level, the errors decrease, their fitted slopes are in `bands`,
+/// and the contact radius is within h of r₀ and closer on the finest level than on the
+/// coarsest.
+fn check_sequence(ex: &Example, runs: &[Run], bands: &Bands) {
     let h: Vec<f64> = runs.iter().map(|r| r.h).collect();
     for (i, r) in runs.iter().enumerate() {
-        assert!(r.niter <= max_niter, "NITER {} > {max_niter}: {r:?}", r.niter);
+        assert!(
+            !r.coarse_levels.is_empty() && r.coarse_solves > 0,
+            "no coarse level: {r:?}"
+        );
+        assert!(
+            r.niter <= MAX_NITER,
+            "NITER {} > {MAX_NITER}: {r:?}",
+            r.niter
+        );
         if i > 0 {
-            assert!(r.niter <= runs[i - 1].niter + 1, "NITER grows: {runs:?}");
-            assert!(r.l2_u < runs[i - 1].l2_u && r.l2_grad < runs[i - 1].l2_grad);
+            let before = &runs[i - 1];
+            assert!(
+                r.l2_u < before.l2_u && r.l2_grad < before.l2_grad,
+                "{runs:?}"
+            );
         }
         let dr = (r.radius - ex.r0).abs();
-        assert!(dr <= radius_tol * r.h, "contact radius {} vs {}", r.radius, ex.r0);
+        assert!(
+            dr <= r.h,
+            "contact radius {} vs {} (h = {})",
+            r.radius,
+            ex.r0,
+            r.h
+        );
     }
+    let gap = |r: &Run| (r.radius - ex.r0).abs();
+    assert!(gap(&runs[runs.len() - 1]) < gap(&runs[0]), "{runs:?}");
     let su = fitted_slope(&h, &runs.iter().map(|r| r.l2_u).collect::<Vec<_>>());
     let sg = fitted_slope(&h, &runs.iter().map(|r| r.l2_grad).collect::<Vec<_>>());
     println!("slopes: u {su:.3}, grad {sg:.3}");
-    assert!(su >= u_band[0] && su <= u_band[1], "slope of u {su}");
-    assert!(sg >= grad_band[0] && sg <= grad_band[1], "slope of the gradient {sg}");
+    let [lo, hi] = bands.u;
+    assert!(
+        (lo..=hi).contains(&su),
+        "slope of u {su} not in [{lo}, {hi}]"
+    );
+    let [lo, hi] = bands.grad;
+    assert!(
+        (lo..=hi).contains(&sg),
+        "slope of the gradient {sg} not in [{lo}, {hi}]"
+    );
 }
 
 fn nested() -> SolveOptions {
     SolveOptions::default()
 }
 
+fn sequence(ex: &Example, generate: Generator, ns: &[usize]) -> Vec<Run> {
+    ns.iter()
+        .map(|&n| run(ex, generate, n, &nested()))
+        .collect()
+}
+
 #[test]
 fn radial_obstacle_on_cubes() {
-    let runs: Vec<Run> = [8, 16]
-        .iter()
-        .map(|&n| run(&RADIAL, cubes, n, &nested()))
-        .collect();
-    for r in &runs {
-        assert!(!r.coarse_levels.is_empty(), "no coarse level: {r:?}");
-    }
-    check_sequence(&RADIAL, &runs, 4, [1.5, 2.5], [0.8, 2.0], 1.0);
+    check_sequence(
+        &RADIAL,
+        &sequence(&RADIAL, cubes, &[12, 16, 24]),
+        &RADIAL_CUBES,
+    );
 }
 
 #[test]
 fn diskpp_obstacle_on_cubes_and_kuhn_tetrahedra() {
-    let runs: Vec<Run> = [8, 16]
-        .iter()
-        .map(|&n| run(&DISKPP, cubes, n, &nested()))
-        .collect();
-    check_sequence(&DISKPP, &runs, 4, [1.5, 2.5], [0.8, 2.0], 1.0);
-    let runs: Vec<Run> = [4, 8]
-        .iter()
-        .map(|&n| run(&DISKPP, kuhn, n, &nested()))
-        .collect();
-    check_sequence(&DISKPP, &runs, 4, [1.5, 2.5], [0.8, 2.0], 1.0);
+    check_sequence(
+        &DISKPP,
+        &sequence(&DISKPP, cubes, &[12, 16, 24]),
+        &DISKPP_CUBES,
+    );
+    check_sequence(&DISKPP, &sequence(&DISKPP, kuhn, &[8, 12]), &DISKPP_KUHN);
 }
 
 /// The nested start and the cold one reach the same discrete solution (the warm start
 /// changes the path, not the answer), the nested one in fewer fine solves.
 #[test]
 fn the_nested_start_reaches_the_cold_solution_in_fewer_solves() {
-    let m = mesh(&RADIAL, cubes, 12);
+    let m = mesh(&DISKPP, cubes, 16);
     let s = Hmm::<PolyMesh3, 3>::with_alpha(&m, 1.0).unwrap();
-    let p = radial();
+    let p = diskpp();
     let warm = solve_problem(&s, &p, &nested()).unwrap();
     let cold = solve_problem(&s, &p, &SolveOptions::paper()).unwrap();
     let report = warm.warm_start.as_ref().unwrap();
@@ -296,30 +346,28 @@ fn the_nested_start_reaches_the_cold_solution_in_fewer_solves() {
     );
 }
 
-/// The iterative solver (multigrid-preconditioned conjugate gradients), forced, gives the
-/// direct solver's solution on a 3D HMM system, within a bounded number of iterations per
-/// solve.
-#[test]
-fn the_iterative_solver_agrees_with_the_direct_one_in_3d() {
-    let iterative = SolveOptions {
+/// The iterative solver (multigrid-preconditioned conjugate gradients), forced on 3D HMM
+/// systems, gives the direct solver's active sets and errors, each solve within a bounded
+/// number of iterations; `ns` gives the meshes (cubes, then Kuhn tetrahedra).
+fn check_iterative(ns: [usize; 2], max_cg: usize) {
+    let with = |linear| SolveOptions {
         system: SystemOptions {
-            linear: LinearSolver::Iterative,
+            linear,
             ..Default::default()
         },
         ..nested()
     };
-    let direct = SolveOptions {
-        system: SystemOptions {
-            linear: LinearSolver::Direct,
-            ..Default::default()
-        },
-        ..nested()
-    };
-    for (ex, generate, n) in [(&RADIAL, cubes as Generator, 16), (&DISKPP, kuhn, 8)] {
+    let (iterative, direct) = (with(LinearSolver::Iterative), with(LinearSolver::Direct));
+    let cases = [(&RADIAL, cubes as Generator, ns[0]), (&DISKPP, kuhn, ns[1])];
+    for (ex, generate, n) in cases {
         let it = run(ex, generate, n, &iterative);
         let di = run(ex, generate, n, &direct);
-        assert!(it.krylov.iter().all(|&k| k <= 60), "{:?}", it.krylov);
-        assert!(it.krylov.iter().any(|&k| k > 0), "{:?}", it.krylov);
+        assert!(
+            it.krylov.iter().all(|&k| k > 0 && k <= max_cg),
+            "{:?}",
+            it.krylov
+        );
+        assert!(di.krylov.iter().all(|&k| k == 0), "{:?}", di.krylov);
         assert_eq!(it.niter, di.niter);
         assert!((it.l2_u - di.l2_u).abs() <= 1e-8 * di.l2_u);
         assert!((it.l2_grad - di.l2_grad).abs() <= 1e-8 * di.l2_grad);
@@ -327,41 +375,37 @@ fn the_iterative_solver_agrees_with_the_direct_one_in_3d() {
 }
 
 #[test]
+fn the_iterative_solver_agrees_with_the_direct_one_in_3d() {
+    check_iterative([16, 8], 30);
+}
+
+#[test]
+#[ignore = "bigger levels: make test-external"]
+fn the_iterative_solver_agrees_with_the_direct_one_on_bigger_3d_meshes() {
+    check_iterative([32, 16], 30);
+}
+
+#[test]
 #[ignore = "bigger levels: make test-external"]
 fn radial_obstacle_on_cubes_bigger_levels() {
-    let runs: Vec<Run> = [8, 16, 32]
-        .iter()
-        .map(|&n| run(&RADIAL, cubes, n, &nested()))
-        .collect();
-    check_sequence(&RADIAL, &runs, 4, [1.5, 2.5], [0.8, 2.0], 1.0);
+    check_sequence(
+        &RADIAL,
+        &sequence(&RADIAL, cubes, &[16, 24, 32]),
+        &RADIAL_CUBES,
+    );
 }
 
 #[test]
 #[ignore = "bigger levels: make test-external"]
 fn diskpp_obstacle_bigger_levels() {
-    let runs: Vec<Run> = [8, 16, 32]
-        .iter()
-        .map(|&n| run(&DISKPP, cubes, n, &nested()))
-        .collect();
-    check_sequence(&DISKPP, &runs, 4, [1.5, 2.5], [0.8, 2.0], 1.0);
-    let runs: Vec<Run> = [4, 8, 16]
-        .iter()
-        .map(|&n| run(&DISKPP, kuhn, n, &nested()))
-        .collect();
-    check_sequence(&DISKPP, &runs, 4, [1.5, 2.5], [0.8, 2.0], 1.0);
-}
-
-#[test]
-#[ignore]
-fn explore_tmp() {
-    let n: Vec<usize> = std::env::var("NS").unwrap().split(',').map(|s| s.parse().unwrap()).collect();
-    let which = std::env::var("EX").unwrap();
-    let ex = if which.starts_with('r') { &RADIAL } else { &DISKPP };
-    let g: Generator = if which.ends_with('k') { kuhn } else { cubes };
-    for &n in &n {
-        run(ex, g, n, &nested());
-        if std::env::var("COLD").is_ok() {
-            run(ex, g, n, &SolveOptions::paper());
-        }
-    }
+    check_sequence(
+        &DISKPP,
+        &sequence(&DISKPP, cubes, &[12, 16, 24, 32]),
+        &DISKPP_CUBES,
+    );
+    check_sequence(
+        &DISKPP,
+        &sequence(&DISKPP, kuhn, &[8, 12, 16, 20]),
+        &DISKPP_KUHN,
+    );
 }

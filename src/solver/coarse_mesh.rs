@@ -252,11 +252,18 @@ mod tests {
     /// A point above the middle of the unit square face of a cube, and one beside it.
     #[test]
     fn face_distance_on_a_cube() {
-        let m = PolyMesh3::from_polyhedra(crate::mesh3d::test_meshes::cubes(1, 1), MemoryBudget::DEFAULT)
-            .unwrap();
+        let m = PolyMesh3::from_polyhedra(
+            crate::mesh3d::test_meshes::cubes(1, 1),
+            MemoryBudget::DEFAULT,
+        )
+        .unwrap();
         // the face on x = 1
         let f = (0..m.n_faces())
-            .find(|&f| m.face_vertices(f).iter().all(|&v| m.vertices()[v as usize][0] == 1.0))
+            .find(|&f| {
+                m.face_vertices(f)
+                    .iter()
+                    .all(|&v| m.vertices()[v as usize][0] == 1.0)
+            })
             .unwrap();
         assert!((m.face_distance(f, [1.5, 0.5, 0.5]) - 0.5).abs() < 1e-14);
         assert!((m.face_distance(f, [1.0, 2.0, 0.5]) - 1.0).abs() < 1e-14);
