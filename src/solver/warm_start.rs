@@ -14,7 +14,7 @@
 //! hexahedra), made by agglomerating the fine cells ([`crate::mesh::agglomerate`] in
 //! 2D, [`crate::mesh3d::agglomerate`] in 3D: any domain, any mesh, material interfaces and
 //! boundary faces kept; what the prediction needs of a mesh is
-//! [`CoarseMesh`](super::coarse_mesh::CoarseMesh), and the code below is written once for
+//! [`CoarseMesh`], and the code below is written once for
 //! both dimensions), itself warm-started in the same way from a mesh [`RATIO`] times coarser while
 //! that one has at least [`MIN_CELLS`] cells, and starts the fine iteration from the predicted
 //! active set.
