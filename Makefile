@@ -27,7 +27,8 @@ test:
 ## test-external: the tests that need what a fresh machine may lack or that take longer
 ## (#[ignore]d in `make test`): the FVCA5 files in ../shared/meshes/fvca5, HArDCore3D's files in
 ## ../shared/meshes/hardcore3d (3D patch tests and slopes of HMM, P1, CR: tests/convergence3d.rs),
-## the larger 3D convergence levels, and dolfinx (installed here if missing). CI runs it.
+## the larger 3D convergence levels and 3D obstacle problems (tests/obstacle3d.rs), and dolfinx
+## (installed here if missing). CI runs it.
 test-external: build reference-deps
 	$(CARGO) test --workspace -- --ignored
 

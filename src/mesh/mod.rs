@@ -57,9 +57,8 @@
 //! [`SolveMesh<D>`](solve_mesh::SolveMesh), implemented by `PolyMesh` (edge midpoints and edge
 //! tags, as always) and by [`crate::mesh3d::PolyMesh3`], on which HMM solves through the whole
 //! pipeline. What is still 2-D: the problem-file compiler (expression variables x and y, 2×2
-//! tensors), P1 and Crouzeix–Raviart (triangles), the nested warm start (planar
-//! agglomeration; in 3-D the solver starts cold, [`crate::solver::start`]) and the VTU writer
-//! of `PolyMesh` (polygons).
+//! tensors), P1 and Crouzeix–Raviart (triangles) and the VTU writer of `PolyMesh` (polygons);
+//! the nested warm start agglomerates both ([`crate::solver::coarse_mesh`]).
 
 pub mod agglomerate;
 pub(crate) mod buckets;

@@ -16,6 +16,7 @@
 //! ```
 //! [`solve_with_symbolic`] reuses the symbolic system of an earlier solve on the same scheme.
 
+pub mod coarse_mesh;
 pub mod constraints;
 pub mod magnitude;
 pub mod start;
@@ -139,7 +140,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> Solution<'_, M, D> {
 
 /// Assembles and solves `problem` with `scheme`: a linear solve if there is no barrier, the
 /// active-set method otherwise, started as `opts.warm_start` says. The result is certified
-/// (see [`Certificate`]). In 3D only the cold start is available ([`start`]).
+/// (see [`Certificate`]).
 pub fn solve_problem<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
     scheme: &'a dyn GradientDiscretisation<M, D>,
     problem: &Problem<D>,

@@ -2,10 +2,11 @@
 //!
 //! The driver ([`super::solve_problem`]) is written once for every dimension: it needs from a
 //! mesh what assembly needs ([`SolveMesh`]), and a way to predict the initial active set when
-//! [`WarmStart::Nested`](super::WarmStart::Nested) is asked for. That prediction agglomerates
-//! planar polygonal meshes ([`super::warm_start`]), so only [`PolyMesh`] offers it; on a 3D
-//! mesh ([`PolyMesh3`]) the active-set iteration runs from the cold start A₀ = ∅, and asking
-//! for the nested start is an error ([`nested_start_unavailable`]), not a silent fallback.
+//! [`WarmStart::Nested`](super::WarmStart::Nested) is asked for. That prediction
+//! ([`super::warm_start`]) is written once for every mesh that can be agglomerated
+//! ([`CoarseMesh`](super::coarse_mesh::CoarseMesh)): [`PolyMesh`] and [`PolyMesh3`] both offer
+//! it. A mesh type without one returns `None`, and asking it for the nested start is then an
+//! error ([`nested_start_unavailable`]), not a silent fallback.
 
 use super::constraints::Constraints;
 use super::warm_start::{self, Prediction};
@@ -43,20 +44,20 @@ impl SolverMesh<2> for PolyMesh {
 
 impl SolverMesh<3> for PolyMesh3 {
     fn nested_start(
-        _scheme: &dyn GradientDiscretisation<PolyMesh3, 3>,
-        _problem: &Problem<3>,
-        _cons: &Constraints<3>,
-        _budget: MemoryBudget,
-        _cancel: Option<&Cancel>,
+        scheme: &dyn GradientDiscretisation<PolyMesh3, 3>,
+        problem: &Problem<3>,
+        cons: &Constraints<3>,
+        budget: MemoryBudget,
+        cancel: Option<&Cancel>,
     ) -> Option<Result<Prediction, String>> {
-        None
+        Some(warm_start::predict(scheme, problem, cons, budget, cancel))
     }
 }
 
-/// The error of a nested warm start asked for on a mesh of dimension `d` that has none.
+/// The error of a nested warm start asked for on a mesh type of dimension `d` that has none.
 pub fn nested_start_unavailable(d: usize) -> crate::Error {
     crate::Error::InvalidData(format!(
-        "the nested warm start agglomerates planar meshes and is not available on a {d}D \
-         mesh: solve with the cold start (WarmStart::Cold, --warm-start cold)"
+        "the nested warm start is not available on this {d}D mesh type: solve with the cold \
+         start (WarmStart::Cold, --warm-start cold)"
     ))
 }

@@ -1,7 +1,8 @@
 //! The solve pipeline (assembly, constraints, checks, active-set method, certificate) on 3D
 //! meshes ([`PolyMesh3`]) with HMM: the patch test on cubes, Kuhn tetrahedra and perturbed
 //! cubes, an obstacle and a Signorini problem against exhaustive enumeration and projected
-//! Gauss–Seidel, and the typed error of the nested warm start, which is planar.
+//! Gauss–Seidel, and the nested warm start (skipped on a mesh too coarse for it, otherwise
+//! reaching the cold start's solution; its convergence tests: `tests/obstacle3d.rs`).
 
 use super::{SolveOptions, constraints, solve_problem};
 use crate::assembly::{DiscreteSystem, SolveState};
@@ -179,15 +180,44 @@ fn a_3d_signorini_problem_agrees_with_exhaustive_enumeration_and_gauss_seidel() 
     );
 }
 
+/// On a mesh too coarse for a coarse level the nested start is skipped, with the reason in
+/// the report, and the iteration runs from A₀ = ∅ to the cold start's solution.
 #[test]
-fn the_nested_warm_start_is_refused_in_3d() {
+fn the_nested_warm_start_is_skipped_on_a_coarse_3d_mesh() {
     let m = mesh(test_meshes::cubes(2, 10));
     let s = hmm(&m);
-    let Err(e) = solve_problem(&s, &obstacle(), &SolveOptions::default()) else {
-        panic!("the nested warm start was accepted on a 3D mesh");
-    };
-    assert!(
-        matches!(&e, crate::Error::InvalidData(msg) if msg.contains("nested warm start")),
-        "{e}"
-    );
+    let nested = solve_problem(&s, &obstacle(), &SolveOptions::default()).unwrap();
+    let report = nested.warm_start.as_ref().unwrap();
+    let why = report.skipped.as_deref().unwrap_or_default();
+    assert!(why.contains("too coarse"), "{report:?}");
+    let cold = solve_problem(&s, &obstacle(), &SolveOptions::paper()).unwrap();
+    assert_eq!(nested.result.active, cold.result.active);
+    for (a, b) in nested.u().iter().zip(cold.u()) {
+        assert!((a - b).abs() <= 1e-12, "{a} vs {b}");
+    }
+}
+
+/// The nested start on the obstacle problem and on the Signorini problem (its unknowns on
+/// boundary faces, which the coarse meshes keep one to one) makes a coarse level and reaches
+/// the cold start's solution, in no more fine solves.
+#[test]
+fn the_nested_warm_start_reaches_the_cold_solution_in_3d() {
+    let m = mesh(test_meshes::cubes(12, 11));
+    let s = hmm(&m);
+    for p in [obstacle(), signorini()] {
+        let nested = solve_problem(&s, &p, &SolveOptions::default()).unwrap();
+        let report = nested.warm_start.as_ref().unwrap();
+        assert!(
+            report.skipped.is_none() && !report.levels.is_empty() && report.predicted_active > 0,
+            "{}: {report:?}",
+            p.name
+        );
+        let cold = solve_problem(&s, &p, &SolveOptions::paper()).unwrap();
+        assert_eq!(nested.result.active, cold.result.active, "{}", p.name);
+        assert!(nested.niter() <= cold.niter(), "{}", p.name);
+        let umax = cold.u().iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        for (a, b) in nested.u().iter().zip(cold.u()) {
+            assert!((a - b).abs() <= 1e-10 * umax, "{}: {a} vs {b}", p.name);
+        }
+    }
 }

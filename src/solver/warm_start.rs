@@ -3,26 +3,31 @@
 //! From A₀ = ∅ the monotony algorithm puts every violated unknown in the active set at once
 //! and then frees one layer of cells along the free boundary per solve, so that NITER grows
 //! like the number of cell layers between the first contact zone and the final one,
-//! ∝ 1/h ∝ N^½ (`replication/BENCHMARKS.md` measures it). Every solve costs a linear solve of
-//! the whole system, so the total grows like N^1.5.
+//! ∝ 1/h ∝ N^{1/D} (`replication/BENCHMARKS.md` measures it in 2D). Every solve costs a linear
+//! solve of the whole system, so the total grows like N^{1+1/D}.
 //!
 //! [`WarmStart::Nested`] (the default) bounds NITER instead: it solves the *same problem*
-//! (same A, f, boundary conditions and barrier) with HMM on a coarse polygonal mesh of the
-//! same domain with about (fine unknowns)/[`FIRST_LEVEL_UNKNOWNS_PER_CELL`] cells (N/8 for HMM
-//! on quadrilaterals, N/48 for P1 on triangles), made by agglomerating the fine cells
-//! ([`crate::mesh::agglomerate`]: any domain, any mesh, material interfaces and boundary
-//! edges kept), itself warm-started in the same way from a mesh [`RATIO`] times coarser while
+//! (same A, f, boundary conditions and barrier) with HMM on a coarse polygonal (polyhedral)
+//! mesh of the same domain with about (fine unknowns)/[`FIRST_LEVEL_UNKNOWNS_PER_CELL`] cells
+//! in 2D (N/8 for HMM on quadrilaterals, N/48 for P1 on triangles) and
+//! (fine unknowns)/[`FIRST_LEVEL_UNKNOWNS_PER_CELL_3D`] in 3D (a 24th of the cells for HMM on
+//! hexahedra), made by agglomerating the fine cells ([`crate::mesh::agglomerate`] in
+//! 2D, [`crate::mesh3d::agglomerate`] in 3D: any domain, any mesh, material interfaces and
+//! boundary faces kept; what the prediction needs of a mesh is
+//! [`CoarseMesh`], and the code below is written once for
+//! both dimensions), itself warm-started in the same way from a mesh [`RATIO`] times coarser while
 //! that one has at least [`MIN_CELLS`] cells, and starts the fine iteration from the predicted
 //! active set.
 //!
 //! **Prediction.** A fine unknown of the obstacle barrier lies in one or more coarse cells (a
-//! cell unknown in the aggregate of its cell; a vertex or edge unknown in those of the fine
+//! cell unknown in the aggregate of its cell; a vertex or face unknown in those of the fine
 //! cells around it). It is predicted active if all of them are active *and* it is farther than
-//! [`EROSION`] · √|K| from every face of such a K whose neighbour is free. This erodes the
+//! [`EROSION`] · |K|^{1/D} from every face of such a K whose neighbour is free (in 3D, a face
+//! of K is a fine face and the distance is to its fan triangles). This erodes the
 //! coarse contact zone a little, so that the fine iteration mostly *adds* unknowns, which it
 //! does in one step, rather than freeing them, which it does one layer of cells per step. A
-//! Signorini unknown sits on boundary edges, which the coarse meshes keep: it is predicted
-//! active if the coarse unknowns of all its boundary edges are.
+//! Signorini unknown sits on boundary faces (edges in 2D), which the coarse meshes keep: it is
+//! predicted active if the coarse unknowns of all its boundary faces are.
 //!
 //! **First guess.** The prediction also carries the finest coarse solution to the fine
 //! skeleton unknowns (each takes the mean of Π_D u over the coarse cells of the fine cells
@@ -41,13 +46,16 @@
 //! one of the cold iteration (the same discrete variational inequality has one solution); only
 //! NITER and the time differ. NITER then counts the fine solves only; the coarse ones are
 //! reported in [`WarmStartReport`]. When no coarse mesh can be made (a mesh with fewer than
-//! 64 · [`FIRST_LEVEL_UNKNOWNS_PER_CELL`] unknowns, or an agglomeration that fails validation)
+//! 64 · [`FIRST_LEVEL_UNKNOWNS_PER_CELL`] unknowns in 2D, 64 ·
+//! [`FIRST_LEVEL_UNKNOWNS_PER_CELL_3D`] in 3D, or an agglomeration that fails validation)
 //! or a coarse solve fails, the
 //! iteration starts cold and [`WarmStartReport::skipped`] says why.
 
+use super::coarse_mesh::{CoarseMesh, Level};
+use super::start::SolverMesh;
 use crate::assembly::{DiscreteSystem, SystemOptions};
-use crate::mesh::agglomerate::{Agglomeration, agglomerate};
-use crate::mesh::{MemoryBudget, NO_CELL, Point, PolyMesh};
+use crate::mesh::complex::Vector;
+use crate::mesh::{MemoryBudget, NO_CELL};
 use crate::problem::{ConstraintKind, Problem};
 use crate::scheme::{Entity, GradientDiscretisation, Hmm};
 use crate::solver::constraints::Constraints;
@@ -105,19 +113,30 @@ pub struct WarmStartReport {
     pub skipped: Option<String>,
 }
 
-/// Each coarse level has about 1/RATIO of the cells of the level below (H ≈ 4h).
+/// Each coarse level has about 1/RATIO of the cells of the level below (H ≈ 4h in 2D, H ≈ 2.5h
+/// in 3D).
 pub const RATIO: usize = 16;
 
-/// The first coarse level has about (fine unknowns) / FIRST_LEVEL_UNKNOWNS_PER_CELL cells.
-/// HMM has about 3 unknowns per cell, so that is N/8 cells for an HMM fine mesh; P1 on
-/// triangles has about one unknown per two cells, so N/48. A finer first level makes the
-/// coarse solves cost more, a coarser one predicts less well and costs fine solves.
+/// On planar meshes, the first coarse level has about (fine unknowns) /
+/// FIRST_LEVEL_UNKNOWNS_PER_CELL cells. HMM has about 3 unknowns per cell, so that is N/8
+/// cells for an HMM fine mesh; P1 on triangles has about one unknown per two cells, so N/48.
+/// A finer first level makes the coarse solves cost more, a coarser one predicts less well and
+/// costs fine solves.
 pub const FIRST_LEVEL_UNKNOWNS_PER_CELL: usize = 24;
+
+/// On 3D meshes, the first coarse level has about (fine unknowns) /
+/// FIRST_LEVEL_UNKNOWNS_PER_CELL_3D cells: N/96, a 24th of the cells for HMM on hexahedra
+/// (about 4 unknowns per cell), H ≈ 2.9h. Coarser than in 2D because a 3D agglomerate keeps
+/// the fine faces on its boundary ([`crate::mesh3d::agglomerate`]): a coarse HMM system has
+/// about 3/m of the fine face unknowns for aggregates of m³ cells, with dense blocks of
+/// (6m²)² entries per cell, so the coarse solves cost nearly as much as fine ones unless m is
+/// large enough (`replication/measurements/solver3d.md`).
+pub const FIRST_LEVEL_UNKNOWNS_PER_CELL_3D: usize = 96;
 
 /// A coarser level is made while it would have at least this many cells.
 pub const MIN_CELLS: usize = 256;
 
-/// Erosion of the coarse contact zone, in units of √|K| (see the module docs): 1/4 erodes it
+/// Erosion of the coarse contact zone, in units of |K|^{1/D} (see the module docs): 1/4 erodes it
 /// by about a quarter of a coarse cell. Larger values cost the fine iteration more solves
 /// (it frees cells one layer per solve but adds them all at once).
 pub const EROSION: f64 = 0.25;
@@ -126,17 +145,17 @@ pub const EROSION: f64 = 0.25;
 struct CoarseState {
     /// Obstacle: active coarse cells.
     cell: Vec<bool>,
-    /// Signorini: active coarse edges.
-    edge: Vec<bool>,
+    /// Signorini: active coarse faces.
+    face: Vec<bool>,
 }
 
 /// Predicts the active set of the constrained unknowns `cons` of `scheme` for `problem`, the
 /// coarse systems assembled within `budget`, the coarse solves polling `cancel` between their
 /// linear solves. `Err(reason)` when no prediction can be made (or `cancel` stopped it).
-pub fn predict(
-    scheme: &dyn GradientDiscretisation,
-    problem: &Problem,
-    cons: &Constraints,
+pub fn predict<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
+    scheme: &dyn GradientDiscretisation<M, D>,
+    problem: &Problem<D>,
+    cons: &Constraints<D>,
     budget: MemoryBudget,
     cancel: Option<&Cancel>,
 ) -> Result<Prediction, String> {
@@ -147,51 +166,20 @@ pub fn predict(
         .ok_or_else(|| "the problem has no barrier".to_string())?
         .kind;
     let fine = scheme.mesh();
-    let levels = hierarchy(fine, scheme.n_unknowns())?;
+    let levels = hierarchy(fine, scheme.n_unknowns(), budget)?;
     // from the coarsest level to the finest coarse one, each warm-started by the one above
     let mut state: Option<CoarseState> = None;
     let mut finest_values: Vec<f64> = Vec::new();
     let mut solves = 0;
     for l in (0..levels.len()).rev() {
-        let mesh = &levels[l].mesh;
-        let hmm = Hmm::new(mesh);
-        let fail = |e: crate::Error| format!("coarse solve ({} cells): {e}", mesh.n_cells());
-        Cancel::check(cancel).map_err(fail)?;
-        let system_options = SystemOptions {
-            budget,
-            ..Default::default()
+        let initial = |hmm: &Hmm<'_, M, D>, c: &Constraints<D>| {
+            state
+                .as_ref()
+                .map(|s| map_down(s, &levels[l + 1], hmm, c, kind, None))
         };
-        let system = DiscreteSystem::new(&hmm, problem, system_options).map_err(fail)?;
-        let c = super::constraints::build(&system, problem)
-            .map_err(fail)?
-            .ok_or_else(|| "the problem has no barrier".to_string())?;
-        let initial = state
-            .as_ref()
-            .map(|s| map_down(s, &levels[l + 1], &hmm, &c, kind, None));
-        let opts = super::SolveOptions {
-            active_set: ActiveSetOptions {
-                initial_active: initial,
-                look_ahead: Some(Default::default()),
-                cancel: cancel.cloned(),
-                ..Default::default()
-            },
-            warm_start: WarmStart::Cold,
-            ..Default::default()
-        };
-        let sol = super::solve_system(system, problem, &opts, Instant::now()).map_err(fail)?;
-        solves += sol.niter();
-        finest_values = hmm.cell_values(sol.u());
-        let mut s = CoarseState {
-            cell: vec![false; mesh.n_cells()],
-            edge: vec![false; mesh.n_edges()],
-        };
-        for (d, &a) in c.dofs.iter().zip(&sol.result.active) {
-            match hmm.dof_entity(d.dof) {
-                Entity::Cell(k) => s.cell[k] = a,
-                Entity::Edge(e) => s.edge[e] = a,
-                Entity::Vertex(_) => {}
-            }
-        }
+        let (sol_values, s, n) = coarse_solve(&levels[l].mesh, problem, budget, cancel, initial)?;
+        solves += n;
+        finest_values = sol_values;
         state = Some(s);
     }
     let state = state.ok_or_else(|| "no coarse level".to_string())?;
@@ -199,7 +187,7 @@ pub fn predict(
         (0..scheme.n_unknowns()).any(|d| matches!(scheme.dof_entity(d), Entity::Vertex(_)));
     let incidence = needs_vertices.then(|| VertexIncidence::new(fine));
     let active = map_down(&state, &levels[0], scheme, cons, kind, incidence.as_ref());
-    let guess = prolong(&finest_values, &levels[0], scheme, incidence.as_ref());
+    let guess = prolong(&finest_values, &levels[0], scheme, incidence.is_some());
     let report = WarmStartReport {
         levels: levels.iter().map(|a| a.mesh.n_cells()).collect(),
         coarse_solves: solves,
@@ -212,6 +200,52 @@ pub fn predict(
         guess,
         report,
     })
+}
+
+/// The solve of `problem` with HMM on the coarse mesh `mesh`, started from the active set
+/// `initial` gives for its scheme and constraints: Π_D u at the cells, the active states and
+/// the number of linear solves.
+fn coarse_solve<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
+    mesh: &M,
+    problem: &Problem<D>,
+    budget: MemoryBudget,
+    cancel: Option<&Cancel>,
+    initial: impl Fn(&Hmm<'_, M, D>, &Constraints<D>) -> Option<Vec<bool>>,
+) -> Result<(Vec<f64>, CoarseState, usize), String> {
+    let fail = |e: crate::Error| format!("coarse solve ({} cells): {e}", mesh.n_cells());
+    let hmm = Hmm::<M, D>::with_alpha(mesh, 1.0).map_err(fail)?;
+    Cancel::check(cancel).map_err(fail)?;
+    let system_options = SystemOptions {
+        budget,
+        ..Default::default()
+    };
+    let system = DiscreteSystem::new(&hmm, problem, system_options).map_err(fail)?;
+    let c = super::constraints::build(&system, problem)
+        .map_err(fail)?
+        .ok_or_else(|| "the problem has no barrier".to_string())?;
+    let opts = super::SolveOptions {
+        active_set: ActiveSetOptions {
+            initial_active: initial(&hmm, &c),
+            look_ahead: Some(Default::default()),
+            cancel: cancel.cloned(),
+            ..Default::default()
+        },
+        warm_start: WarmStart::Cold,
+        ..Default::default()
+    };
+    let sol = super::solve_system(system, problem, &opts, Instant::now()).map_err(fail)?;
+    let mut s = CoarseState {
+        cell: vec![false; mesh.n_cells()],
+        face: vec![false; mesh.n_faces()],
+    };
+    for (d, &a) in c.dofs.iter().zip(&sol.result.active) {
+        match hmm.dof_entity(d.dof) {
+            Entity::Cell(k) => s.cell[k] = a,
+            Entity::Edge(e) => s.face[e] = a,
+            Entity::Vertex(_) => {}
+        }
+    }
+    Ok((hmm.cell_values(sol.u()), s, sol.niter()))
 }
 
 /// What the coarse solves predict on the fine problem.
@@ -229,42 +263,42 @@ pub struct Prediction {
 
 /// The coarse cell values `values` (on the coarse mesh of `agg`) carried to the skeleton
 /// unknowns of `scheme` (on its fine mesh): each unknown takes the mean over the fine cells
-/// around its entity (the cell, the one or two cells of an edge, the cells of a vertex) of
-/// the value of their coarse cell.
-fn prolong(
+/// around its entity (the cell, the one or two cells of a face, the cells of a vertex) of
+/// the value of their coarse cell. `at_vertices`: the scheme has vertex unknowns.
+fn prolong<M: CoarseMesh<D>, const D: usize>(
     values: &[f64],
-    agg: &Agglomeration,
-    scheme: &dyn GradientDiscretisation,
-    incidence: Option<&VertexIncidence>,
+    agg: &Level<M>,
+    scheme: &dyn GradientDiscretisation<M, D>,
+    at_vertices: bool,
 ) -> Vec<f64> {
     let fine = scheme.mesh();
     let of = |k: usize| values.get(agg.cell_of[k]).copied().unwrap_or(0.0);
     // the mean around each vertex, by one pass over the cells: each sum adds the values of
     // the cells in increasing order from the starting value of `Sum`, as summing a gathered
     // list of the vertex's cells would
-    let vertex_mean: Vec<f64> = match incidence {
-        Some(_) => {
-            let zero: f64 = std::iter::empty::<f64>().sum();
-            let mut sum = vec![zero; fine.n_vertices()];
-            let mut count = vec![0u32; fine.n_vertices()];
-            for k in 0..fine.n_cells() {
-                let x = of(k);
-                for &v in fine.cell_vertices(k) {
-                    sum[v as usize] += x;
-                    count[v as usize] += 1;
-                }
+    let vertex_mean: Vec<f64> = if at_vertices {
+        let zero: f64 = std::iter::empty::<f64>().sum();
+        let mut sum = vec![zero; fine.n_vertices()];
+        let mut count = vec![0u32; fine.n_vertices()];
+        let mut scratch = Vec::new();
+        for k in 0..fine.n_cells() {
+            let x = of(k);
+            for &v in fine.cell_vertex_ids(k, &mut scratch) {
+                sum[v as usize] += x;
+                count[v as usize] += 1;
             }
-            sum.iter()
-                .zip(&count)
-                .map(|(&s, &n)| if n == 0 { 0.0 } else { s / n as f64 })
-                .collect()
         }
-        None => Vec::new(),
+        sum.iter()
+            .zip(&count)
+            .map(|(&s, &n)| if n == 0 { 0.0 } else { s / n as f64 })
+            .collect()
+    } else {
+        Vec::new()
     };
     (0..scheme.n_skeleton())
         .map(|d| match scheme.dof_entity(d) {
             Entity::Cell(k) => of(k),
-            Entity::Edge(e) => match fine.edge_cells(e) {
+            Entity::Edge(e) => match fine.face_cells(e) {
                 [a, NO_CELL] => of(a),
                 [a, b] => 0.5 * (of(a) + of(b)),
             },
@@ -273,26 +307,30 @@ fn prolong(
         .collect()
 }
 
-/// Whether a fine problem with this many unknowns is too small to have a coarse level (the
-/// first would have fewer than 64 cells): the nested start is then skipped.
+/// Whether a fine problem on a planar mesh with this many unknowns is too small to have a
+/// coarse level (the first would have fewer than 64 cells): the nested start is then skipped.
 pub fn too_coarse(unknowns: usize) -> bool {
     unknowns / FIRST_LEVEL_UNKNOWNS_PER_CELL < 64
 }
 
 /// The coarse meshes, finest first: the first has about `unknowns` /
-/// [`FIRST_LEVEL_UNKNOWNS_PER_CELL`] cells, each further one agglomerates the one below into
+/// [`CoarseMesh::UNKNOWNS_PER_COARSE_CELL`] cells, each further one agglomerates the one below into
 /// about 1/[`RATIO`] of its cells, while that leaves at least [`MIN_CELLS`] cells (and the
 /// first at least 64).
-fn hierarchy(fine: &PolyMesh, unknowns: usize) -> Result<Vec<Agglomeration>, String> {
-    let area: f64 = (0..fine.n_cells()).map(|k| fine.measure(k)).sum();
-    let first = unknowns / FIRST_LEVEL_UNKNOWNS_PER_CELL;
-    if too_coarse(unknowns) {
+fn hierarchy<M: CoarseMesh<D>, const D: usize>(
+    fine: &M,
+    unknowns: usize,
+    budget: MemoryBudget,
+) -> Result<Vec<Level<M>>, String> {
+    let measure: f64 = (0..fine.n_cells()).map(|k| fine.cell_measure(k)).sum();
+    let first = unknowns / M::UNKNOWNS_PER_COARSE_CELL;
+    if first < 64 {
         return Err(format!(
             "the mesh ({} cells) is too coarse for a nested warm start",
             fine.n_cells()
         ));
     }
-    let mut levels: Vec<Agglomeration> = Vec::new();
+    let mut levels: Vec<Level<M>> = Vec::new();
     loop {
         let below = levels.last().map_or(fine, |a| &a.mesh);
         let target = if levels.is_empty() {
@@ -300,8 +338,9 @@ fn hierarchy(fine: &PolyMesh, unknowns: usize) -> Result<Vec<Agglomeration>, Str
         } else {
             below.n_cells() / RATIO
         };
-        let size = (area / target as f64).sqrt();
-        let agg = agglomerate(below, size)
+        let size = M::cell_size(measure, target);
+        let agg = below
+            .coarsen(size, budget)
             .map_err(|e| format!("agglomerating {} cells into {target}: {e}", below.n_cells()))?;
         if agg.mesh.n_cells() * 2 > below.n_cells() {
             break; // no real coarsening (a mesh of slivers): stop here
@@ -320,11 +359,11 @@ fn hierarchy(fine: &PolyMesh, unknowns: usize) -> Result<Vec<Agglomeration>, Str
 
 /// The prediction on the constrained unknowns `cons` of `scheme` (on the fine mesh of `agg`)
 /// from the coarse active states `s` on `agg.mesh` (see the module docs).
-fn map_down(
+fn map_down<M: CoarseMesh<D>, const D: usize>(
     s: &CoarseState,
-    agg: &Agglomeration,
-    scheme: &dyn GradientDiscretisation,
-    cons: &Constraints,
+    agg: &Level<M>,
+    scheme: &dyn GradientDiscretisation<M, D>,
+    cons: &Constraints<D>,
     kind: ConstraintKind,
     incidence: Option<&VertexIncidence>,
 ) -> Vec<bool> {
@@ -335,26 +374,26 @@ fn map_down(
         _ => Vec::new(),
     };
     let mut cells = Vec::new();
-    let mut edges = Vec::new();
+    let mut faces = Vec::new();
     cons.dofs
         .iter()
         .enumerate()
         .map(|(j, d)| {
             cells.clear();
-            edges.clear();
+            faces.clear();
             match scheme.dof_entity(d.dof) {
                 Entity::Cell(k) => cells.push(k),
                 Entity::Edge(e) => {
-                    let [a, b] = fine.edge_cells(e);
+                    let [a, b] = fine.face_cells(e);
                     cells.push(a);
                     if b != NO_CELL {
                         cells.push(b);
                     }
-                    edges.push(e);
+                    faces.push(e);
                 }
                 Entity::Vertex(v) => {
                     if let Some(inc) = incidence {
-                        edges.extend_from_slice(inc.boundary_edges(v));
+                        faces.extend_from_slice(inc.boundary_faces(v));
                         if kind == ConstraintKind::Obstacle {
                             return at_vertices[j];
                         }
@@ -369,11 +408,11 @@ fn map_down(
                             .all(|&k| active_inside(s, coarse, agg.cell_of[k], d.point))
                 }
                 ConstraintKind::Signorini => {
-                    edges.retain(|&e| fine.is_boundary_edge(e));
-                    !edges.is_empty()
-                        && edges.iter().all(|&e| {
-                            let ce = agg.boundary_edge_of[e];
-                            s.edge.get(ce).copied().unwrap_or(false)
+                    faces.retain(|&e| fine.face_cells(e)[1] == NO_CELL);
+                    !faces.is_empty()
+                        && faces.iter().all(|&e| {
+                            let ce = agg.boundary_face_of[e];
+                            s.face.get(ce).copied().unwrap_or(false)
                         })
                 }
             }
@@ -385,11 +424,11 @@ fn map_down(
 /// fine cells around its vertex are [`active_inside`] (and there is one), found by one pass
 /// over the fine cells rather than by gathering the cells of each vertex (`false` for the
 /// unknowns not at a vertex).
-fn vertex_obstacle(
+fn vertex_obstacle<M: CoarseMesh<D>, const D: usize>(
     s: &CoarseState,
-    agg: &Agglomeration,
-    scheme: &dyn GradientDiscretisation,
-    cons: &Constraints,
+    agg: &Level<M>,
+    scheme: &dyn GradientDiscretisation<M, D>,
+    cons: &Constraints<D>,
 ) -> Vec<bool> {
     let fine = scheme.mesh();
     let nv = fine.n_vertices();
@@ -408,9 +447,10 @@ fn vertex_obstacle(
     const PASS: u8 = 1;
     const FAIL: u8 = 2;
     let mut state = vec![UNSEEN; cons.dofs.len()];
+    let mut scratch = Vec::new();
     for k in 0..fine.n_cells() {
         let c = agg.cell_of[k];
-        for &v in fine.cell_vertices(k) {
+        for &v in fine.cell_vertex_ids(k, &mut scratch) {
             let v = v as usize;
             for &j in &at[ptr[v]..ptr[v + 1]] {
                 if state[j] != FAIL {
@@ -426,62 +466,53 @@ fn vertex_obstacle(
     state.into_iter().map(|x| x == PASS).collect()
 }
 
-/// Whether coarse cell `k` is active and `p` is at least [`EROSION`] · √|K| away from each of
-/// its faces across which the neighbour is free.
-fn active_inside(s: &CoarseState, coarse: &PolyMesh, k: usize, p: Point) -> bool {
+/// Whether coarse cell `k` is active and `p` is at least [`EROSION`] · |K|^{1/D} away from
+/// each of its faces across which the neighbour is free.
+fn active_inside<M: CoarseMesh<D>, const D: usize>(
+    s: &CoarseState,
+    coarse: &M,
+    k: usize,
+    p: Vector<D>,
+) -> bool {
     if !s.cell[k] {
         return false;
     }
-    let reach = EROSION * coarse.measure(k).sqrt();
-    coarse.cell_edges(k).iter().all(|&e| {
+    let reach = EROSION * M::cell_length(coarse.cell_measure(k));
+    coarse.cell_faces(k).iter().all(|&e| {
         let e = e as usize;
-        let [a, b] = coarse.edge_cells(e);
+        let [a, b] = coarse.face_cells(e);
         let other = if a == k { b } else { a };
-        other == NO_CELL || s.cell[other] || {
-            let [v, w] = coarse.edge_vertices(e);
-            segment_distance(p, coarse.vertex(v), coarse.vertex(w)) >= reach
-        }
+        other == NO_CELL || s.cell[other] || coarse.face_distance(e, p) >= reach
     })
 }
 
-/// Distance from p to the segment [a, b].
-fn segment_distance(p: Point, a: Point, b: Point) -> f64 {
-    let (d, q) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
-    let len2 = d[0] * d[0] + d[1] * d[1];
-    let t = if len2 > 0.0 {
-        ((q[0] * d[0] + q[1] * d[1]) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (q[0] - t * d[0]).hypot(q[1] - t * d[1])
-}
-
-/// The boundary edges around each vertex of a mesh (for vertex unknowns; the cells around
+/// The boundary faces around each vertex of a mesh (for vertex unknowns; the cells around
 /// the vertices are visited by passes over the cells, [`vertex_obstacle`] and [`prolong`]).
 struct VertexIncidence {
-    /// Up to two boundary edges per vertex (NO_CELL-padded).
-    boundary: Vec<[usize; 2]>,
+    /// Offsets of each vertex's faces in `faces` (CSR).
+    ptr: Vec<usize>,
+    /// The boundary faces of each vertex, ascending.
+    faces: Vec<usize>,
 }
 
 impl VertexIncidence {
-    fn new(mesh: &PolyMesh) -> Self {
-        let mut boundary = vec![[NO_CELL; 2]; mesh.n_vertices()];
-        for &e in mesh.boundary_edges() {
-            for v in mesh.edge_vertices(e) {
-                let slot = &mut boundary[v];
-                if slot[0] == NO_CELL {
-                    slot[0] = e;
-                } else {
-                    slot[1] = e;
-                }
+    fn new<M: CoarseMesh<D>, const D: usize>(mesh: &M) -> Self {
+        let mut pairs: Vec<(usize, usize)> = Vec::new();
+        let mut scratch = Vec::new();
+        for f in mesh.boundary_faces_iter() {
+            for &v in mesh.face_vertex_ids(f, &mut scratch) {
+                pairs.push((v as usize, f));
             }
         }
-        VertexIncidence { boundary }
+        let (ptr, faces) = crate::mesh::buckets::counting_sort(
+            mesh.n_vertices(),
+            pairs.iter().map(|&(v, _)| Some(v)),
+            |i| pairs[i].1,
+        );
+        VertexIncidence { ptr, faces }
     }
-    fn boundary_edges(&self, v: usize) -> &[usize] {
-        let b = &self.boundary[v];
-        let n = b.iter().take_while(|&&e| e != NO_CELL).count();
-        &b[..n]
+    fn boundary_faces(&self, v: usize) -> &[usize] {
+        &self.faces[self.ptr[v]..self.ptr[v + 1]]
     }
 }
 
@@ -497,7 +528,7 @@ mod tests {
     fn vertex_passes_are_the_gathered_definitions() {
         let fine = cartesian_triangles(64, 48, [-2.0, 2.0], [-1.5, 1.5]).unwrap();
         let scheme = P1::new(&fine).unwrap();
-        let agg = agglomerate(&fine, 0.3).unwrap();
+        let agg = fine.coarsen(0.3, MemoryBudget::DEFAULT).unwrap();
         let coarse = &agg.mesh;
         // a coarse contact zone (a disc) and coarse values
         let s = CoarseState {
@@ -507,7 +538,7 @@ mod tests {
                     c[0] * c[0] + c[1] * c[1] < 1.0
                 })
                 .collect(),
-            edge: vec![false; coarse.n_edges()],
+            face: vec![false; coarse.n_edges()],
         };
         assert!(s.cell.iter().any(|&a| a) && !s.cell.iter().all(|&a| a));
         let values: Vec<f64> = (0..coarse.n_cells())
@@ -516,7 +547,7 @@ mod tests {
         let incidence = VertexIncidence::new(&fine);
         let (ptr, ids) = fine.vertex_cells();
         let cells = |v: usize| &ids[ptr[v]..ptr[v + 1]];
-        let guess = prolong(&values, &agg, &scheme, Some(&incidence));
+        let guess = prolong(&values, &agg, &scheme, true);
         assert_eq!(guess.len(), scheme.n_skeleton());
         let mut dofs = Vec::new();
         for (d, g) in guess.iter().enumerate() {
