@@ -255,9 +255,9 @@ fn run3(mesh: &Arc<PolyMesh3>, problem: &PyProblem, o: &Options) -> gradvi::Resu
         _mesh: std::marker::PhantomData,
     };
     match solve_and_collect(s, &pb, &o.solve, o.kind, &extra) {
-        Err(gradvi::Error::InvalidData(m))
+        Err(e)
             if o.solve.warm_start == WarmStart::Nested
-                && m == nested_start_unavailable(3).to_string() =>
+                && e.to_string() == nested_start_unavailable(3).to_string() =>
         {
             let cold = SolveOptions {
                 warm_start: WarmStart::Cold,
@@ -265,7 +265,7 @@ fn run3(mesh: &Arc<PolyMesh3>, problem: &PyProblem, o: &Options) -> gradvi::Resu
             };
             let mut out = solve_and_collect(s, &pb, &cold, o.kind, &extra)?;
             out.warm_start = Some(WarmStartReport {
-                skipped: Some(format!("{m} (solved from the cold start)")),
+                skipped: Some(format!("{e} (solved from the cold start)")),
                 ..Default::default()
             });
             Ok(out)

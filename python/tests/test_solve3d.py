@@ -66,12 +66,14 @@ def smooth_problem():
     )
 
 
+# The orders between levels 2 and 3 (h = 0.217, 0.108) were measured at 2.01 (u) and 1.97
+# (gradient, superconvergent on cubes) on cubes, 1.97 and 1.00 on Kuhn tetrahedra; the bands
+# are ±0.25 around them.
 @pytest.mark.parametrize(
     "family, u_band, grad_band",
     [
-        # measured orders between levels 2 and 3: see the module's measurements below
-        ("cubes", (1.75, 2.25), (1.75, 2.25)),
-        ("kuhn", (1.75, 2.25), (0.75, 1.25)),
+        ("cubes", (1.76, 2.26), (1.72, 2.22)),
+        ("kuhn", (1.72, 2.22), (0.75, 1.25)),
     ],
 )
 def test_linear_problem_converges_with_the_expected_orders(family, u_band, grad_band):
@@ -92,7 +94,8 @@ def test_linear_problem_converges_with_the_expected_orders(family, u_band, grad_
 
 # ------------------------------------------------------------------------------- obstacle
 
-# The 3D radial obstacle on (−2, 2)³: −Δu = 0, u ≥ ψ, ψ = sqrt(1 − r²) for r ≤ 1 and −1
+# The 3D radial obstacle (on (−1, 1)³ here, the issue's (−2, 2)³ cut down to keep the meshes
+# small): −Δu = 0, u ≥ ψ, ψ = sqrt(1 − r²) for r ≤ 1 and −1
 # beyond; u = ψ for r ≤ r0 = 1/sqrt(2) and 1/(2r) beyond (harmonic in 3D; value and slope
 # match ψ at r0); Dirichlet data from u. The contact set is the ball of radius r0.
 R0 = 1.0 / np.sqrt(2.0)
@@ -126,7 +129,7 @@ def radial_runs():
         exact_grad=radial_grad,
         name="3D radial obstacle",
     )
-    box = gradvi.Box(-2, 2, -2, 2, -2, 2)
+    box = gradvi.Box(-1, 1, -1, 1, -1, 1)
     return [(lv, gradvi.solve(gradvi.Mesh3.generate("cubes", lv, domain=box), pb, scheme="hmm")) for lv in (2, 3)]
 
 
@@ -140,9 +143,10 @@ def test_obstacle_solution_is_certified(radial_runs):
         np.testing.assert_allclose(psi, radial_psi(*sol.constrained_points.T), rtol=0, atol=0)
         # u ≥ ψ, λ ≥ 0, u = ψ where active, λ = 0 where inactive
         assert (u - psi).min() > -1e-10
-        assert sol.multiplier.min() >= -1e-12
+        assert sol.multiplier.min() >= -1e-12 * sol.multiplier.max()
         assert np.abs(u[sol.active] - psi[sol.active]).max() < 1e-12
-        assert np.all(sol.multiplier[~sol.active] == 0.0)
+        lam = sol.multiplier
+        assert np.abs(lam[~sol.active]).max() < 1e-12 * lam.max()
         # the warm start: refused on 3D meshes for now, so the solve ran from the cold start
         if sol.warm_start is not None and sol.warm_start.get("skipped"):
             assert "cold start" in sol.warm_start["skipped"]
@@ -151,9 +155,10 @@ def test_obstacle_solution_is_certified(radial_runs):
 def test_obstacle_errors_and_contact_volume_decrease(radial_runs):
     (_, s0), (_, s1) = radial_runs
     assert s1.errors["l2_u"] < s0.errors["l2_u"] and s1.errors["l2_grad"] < s0.errors["l2_grad"]
+    # the contact volume tends to the ball's (measured: 43% off on level 2, 20% on level 3)
     ball = 4.0 / 3.0 * np.pi * R0**3
     gaps = [abs(s.contact_measure - ball) for s in (s0, s1)]
-    assert gaps[1] < gaps[0] and gaps[1] < 0.25 * ball, gaps
+    assert gaps[1] < 0.6 * gaps[0] and gaps[1] < 0.25 * ball, gaps
     # the active cells lie in (a neighbourhood of) the ball of radius r0
     c = s1.mesh.centroids[s1.active_cells]
     assert np.sqrt((c**2).sum(axis=1)).max() < R0 + s1.mesh.h
@@ -192,12 +197,16 @@ def test_signorini_solution_is_certified_on_the_contact_face(signorini):
     u = sol.u[sol.constrained_dofs]
     assert u.max() < 1e-10
     assert np.abs(u[sol.active]).max() < 1e-12
-    assert sol.multiplier.min() >= -1e-12 and np.all(sol.multiplier[~sol.active] == 0.0)
-    # contact where the source pushes up, none where it pulls down
+    lam = sol.multiplier
+    assert lam.min() >= -1e-12 * lam.max() and np.abs(lam[~sol.active]).max() < 1e-12 * lam.max()
+    # contact where the source pushes up (its edge, near x = 0.3, bent by the anisotropy),
+    # none where it pulls down
     x = pts[:, 0]
-    assert sol.active[x < 0.4].mean() > 0.9 and not sol.active[x > 0.6].any()
+    assert sol.active[x < 0.25].all() and not sol.active[x > 0.4].any()
     assert sol.active_faces is not None and sol.active_faces.shape == (mesh.n_faces,)
-    area = mesh.face_areas[sol.constrained_dofs - 0][sol.active].sum()
+    faces = sol.dof_index[sol.constrained_dofs]
+    assert np.all(sol.dof_kind[sol.constrained_dofs] == "edge") and np.all(mesh.face_tags[faces] == 5)
+    area = mesh.face_areas[faces][sol.active].sum()
     assert abs(sol.contact_measure - area) < 1e-12
 
 
@@ -223,7 +232,7 @@ def test_3d_solution_output(signorini, tmp_path):
         assert f'Name="{name}"' in text
     m = sol.to_meshio()
     np.testing.assert_array_equal(np.concatenate(m.cell_data["u_K"]), sol.u_cell)
-    assert "summary" and "NITER" in sol.summary()
+    assert "NITER" in sol.summary()
 
 
 # ------------------------------------------------------------------------------ errors
