@@ -93,6 +93,9 @@ impl<T: Copy> Column<T> {
     }
 }
 
+/// The exact solution ū and its gradient ∇ū, tabulated.
+type Exact<const D: usize> = (Column<f64>, Column<[f64; D]>);
+
 /// A problem tabulated on a mesh of type `M` in dimension `D` (see the module docs).
 pub struct Tabulated<M, const D: usize> {
     pub name: String,
@@ -112,7 +115,7 @@ pub struct Tabulated<M, const D: usize> {
     /// Boundary face centres and codes, for the nearest-face rule on unknown points.
     boundary_points: Vec<([f64; D], u8)>,
     constraint: Option<(ConstraintKind, Side, Column<f64>)>,
-    exact: Option<(Column<f64>, Column<[f64; D]>)>,
+    exact: Option<Exact<D>>,
     pub misses: Arc<Misses>,
 }
 
@@ -149,7 +152,9 @@ fn tensor_of<const D: usize>(v: &[f64]) -> PyResult<Tensor<D>> {
             v.len()
         )));
     }
-    Ok(std::array::from_fn(|i| std::array::from_fn(|j| v[D * i + j])))
+    Ok(std::array::from_fn(|i| {
+        std::array::from_fn(|j| v[D * i + j])
+    }))
 }
 
 /// The D values of `v` as a point (a gradient).
@@ -337,7 +342,8 @@ impl PyProblem {
                 Ok((t.problem(), Some(Arc::clone(&t.misses))))
             }
             Spec::Tabulated3(_) => Err(gradvi::Error::InvalidData(
-                "this problem was tabulated on a 3D mesh, and the mesh to solve on is planar".into(),
+                "this problem was tabulated on a 3D mesh, and the mesh to solve on is planar"
+                    .into(),
             )),
         }
     }
@@ -463,9 +469,11 @@ fn diffusion_column<const D: usize>(
     let Some(v) = item(data, "diffusion")? else {
         return Ok(None);
     };
-    let a: PyReadonlyArray3<'_, f64> = v
-        .extract()
-        .map_err(|_| invalid(format!("diffusion: expected a float64 array of shape (m, {D}, {D})")))?;
+    let a: PyReadonlyArray3<'_, f64> = v.extract().map_err(|_| {
+        invalid(format!(
+            "diffusion: expected a float64 array of shape (m, {D}, {D})"
+        ))
+    })?;
     let a = a.as_array();
     if a.shape() != [m, D, D] {
         return Err(invalid(format!(
@@ -527,17 +535,16 @@ fn constraint_column(
 
 /// The exact solution of `data`: `exact_u` and its gradient `exact_grad` (m, D); `None` when
 /// there is no `exact_u`.
-fn exact_columns<const D: usize>(
-    data: &Bound<'_, PyDict>,
-    m: usize,
-) -> PyResult<Option<(Column<f64>, Column<[f64; D]>)>> {
+fn exact_columns<const D: usize>(data: &Bound<'_, PyDict>, m: usize) -> PyResult<Option<Exact<D>>> {
     let Some(u) = scalar_col(data, "exact_u", m)? else {
         return Ok(None);
     };
     let g = item(data, "exact_grad")?.ok_or_else(|| invalid("exact_grad: missing"))?;
-    let g: PyReadonlyArray2<'_, f64> = g
-        .extract()
-        .map_err(|_| invalid(format!("exact_grad: expected a float64 array of shape (m, {D})")))?;
+    let g: PyReadonlyArray2<'_, f64> = g.extract().map_err(|_| {
+        invalid(format!(
+            "exact_grad: expected a float64 array of shape (m, {D})"
+        ))
+    })?;
     let g = g.as_array();
     if g.shape() != [m, D] {
         return Err(invalid(format!(
@@ -746,7 +753,9 @@ fn tabulate<M, const D: usize>(
         }
         let m = pts.nrows();
         let index = point_index(
-            pts.rows().into_iter().map(|r| std::array::from_fn(|i| r[i])),
+            pts.rows()
+                .into_iter()
+                .map(|r| std::array::from_fn(|i| r[i])),
             m,
         );
         let noun = if D == 2 { "edge" } else { "face" };

@@ -8,10 +8,10 @@ use crate::to_pyerr;
 use gradvi::assembly::SystemOptions;
 use gradvi::linalg::{FactorThreads, Ordering};
 use gradvi::mesh3d::PolyMesh3;
-use gradvi::problem::Problem;
 use gradvi::post::contact::{free_boundary, neighbours};
 use gradvi::post::fields::EntityFields;
 use gradvi::post::{Errors, relative_errors};
+use gradvi::problem::Problem;
 use gradvi::scheme::{
     Entity, GradientDiscretisation, SchemeKind, SchemeOptions, build_with, build_with3,
 };
@@ -120,12 +120,14 @@ fn factor_threads(name: &str) -> gradvi::Result<FactorThreads> {
     }
 }
 
+/// The points of the discrete free boundary of an active set.
+type FreeBoundary<'s, const D: usize> = &'s dyn Fn(&Constraints<D>, &[bool]) -> Vec<[f64; D]>;
+
 /// What a solve on one mesh type adds to the common output: the points of the discrete free
 /// boundary, and an entity field summed over the faces of each cell.
-struct MeshOutput<'s, M: ?Sized, const D: usize> {
-    free_boundary: &'s dyn Fn(&Constraints<D>, &[bool]) -> Vec<[f64; D]>,
+struct MeshOutput<'s, const D: usize> {
+    free_boundary: FreeBoundary<'s, D>,
     face_sums: &'s dyn Fn(&EntityFields) -> Option<Vec<f64>>,
-    _mesh: std::marker::PhantomData<M>,
 }
 
 /// Solves `pb` with `s`, and collects the output.
@@ -134,7 +136,7 @@ fn solve_and_collect<M: SolverMesh<D> + ?Sized, const D: usize>(
     pb: &Problem<D>,
     o: &SolveOptions,
     kind: SchemeKind,
-    extra: &MeshOutput<'_, M, D>,
+    extra: &MeshOutput<'_, D>,
 ) -> gradvi::Result<Output<D>> {
     let sol = solve_problem(s, pb, o)?;
     let mesh = s.mesh();
@@ -229,7 +231,6 @@ fn run(
     let extra = MeshOutput {
         free_boundary: &|c, active| free_boundary(c, active, &neighbours(s, c)),
         face_sums: &|f| f.edge_sums_per_cell(s),
-        _mesh: std::marker::PhantomData,
     };
     solve_and_collect(s, &pb, &o.solve, o.kind, &extra)
 }
@@ -252,7 +253,6 @@ fn run3(mesh: &Arc<PolyMesh3>, problem: &PyProblem, o: &Options) -> gradvi::Resu
     let extra = MeshOutput {
         free_boundary: &|_, _| Vec::new(),
         face_sums: &face_sums,
-        _mesh: std::marker::PhantomData,
     };
     match solve_and_collect(s, &pb, &o.solve, o.kind, &extra) {
         Err(e)
@@ -282,7 +282,11 @@ fn miss_error(py: Python<'_>, e: &gradvi::Error, misses: &Misses) -> Option<PyEr
         pe.set_cause(py, Some(cause));
         return Some(pe);
     }
-    let (what, p) = misses.first_unresolved.lock().ok().and_then(|g| g.clone())?;
+    let (what, p) = misses
+        .first_unresolved
+        .lock()
+        .ok()
+        .and_then(|g| g.clone())?;
     let p: Vec<String> = p.iter().map(f64::to_string).collect();
     Some(INVALID_DATA.new_err(format!(
         "{e} ({what} was asked at ({}), a point where no value was given: array data is \
