@@ -41,15 +41,17 @@ except ImportError as e:
         "`pip install gmsh matplotlib` (`make python-examples` does)"
     )
 
-work = Path(tempfile.mkdtemp(prefix="gradvi-signorini3d-"))
-png = Path(sys.argv[1]) if len(sys.argv) > 1 else work / "signorini3d.png"
+if len(sys.argv) > 1:
+    png = Path(sys.argv[1])
+else:
+    png = Path(tempfile.mkdtemp(prefix="gradvi-signorini3d-")) / "signorini3d.png"
 
 # %% [markdown]
 # ## The mesh, with gmsh
 # A box with the ball of the inclusion embedded (so that its surface is made of mesh faces).
 # Boundary surfaces get physical tags: 1 top, 2 sides, 3 bottom. gmsh writes a `.msh` file
-# (format 4.1, ASCII) in a temporary directory, and `gradvi.Mesh3.read` reads it with the
-# physical surfaces as face tags.
+# (format 4.1, ASCII) in a temporary directory (removed once read), and `gradvi.Mesh3.read`
+# reads it with the physical surfaces as face tags.
 
 # %%
 gmsh.initialize()
@@ -76,11 +78,11 @@ gmsh.option.setNumber("Mesh.MeshSizeMax", 0.1)
 gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
 gmsh.option.setNumber("Mesh.Binary", 0)
 gmsh.model.mesh.generate(3)
-msh = work / "slab.msh"
-gmsh.write(str(msh))
-gmsh.finalize()
-
-mesh = gradvi.Mesh3.read(msh)
+with tempfile.TemporaryDirectory(prefix="gradvi-") as tmp:
+    msh = Path(tmp) / "slab.msh"
+    gmsh.write(str(msh))
+    gmsh.finalize()
+    mesh = gradvi.Mesh3.read(msh)
 print(mesh)
 
 # %% [markdown]
