@@ -172,11 +172,13 @@ def test_obstacle_errors_and_contact_volume_decrease(radial_runs):
 
 @pytest.fixture(scope="module")
 def signorini():
-    """On the unit cube: u = 0 on the top z = 1, zero flux on the sides, and on the bottom
-    z = 0 (tag 5) the Signorini condition u ≤ 0, A∇u·n ≤ 0; the source f = 10 sin(2πx) pushes
-    u up where x < 1/2 (the bottom touches the barrier there) and down where x > 1/2."""
+    """On the unit cube: u = 0 on the top z = 1, zero flux on the sides and on the half
+    y > 1/2 of the bottom, and on the other half of the bottom, z = 0 and y < 1/2 (tag 5),
+    the Signorini condition u ≤ 0, A∇u·n ≤ 0; the source f = 10 sin(2πx) pushes u up where
+    x < 1/2 (Γ3 touches the barrier there) and down where x > 1/2."""
     mesh = gradvi.Mesh3.generate("cubes", 2)
-    bottom = np.abs(mesh.face_centroids[:, 2]) < 1e-12
+    c = mesh.face_centroids
+    bottom = (np.abs(c[:, 2]) < 1e-12) & (c[:, 1] < 0.5)
     mesh = mesh.with_face_tags(np.where(bottom, 5, 0).astype(np.int32))
     pb = gradvi.Problem(
         source=lambda x, y, z: 10.0 * np.sin(2.0 * np.pi * x),
@@ -194,10 +196,10 @@ def test_signorini_solution_is_certified_on_the_contact_face(signorini):
     assert sol.constraint == ("signorini", "upper")
     assert sol.untabulated_points == 0
     assert sol.certificate.ok(1e-10), sol.certificate
-    # the constrained unknowns are the faces of the bottom, at their centroids
+    # the constrained unknowns are the faces of Γ3, at their centroids
     pts = sol.constrained_points
-    assert pts.shape == (int((mesh.face_tags == 5).sum()), 3)
-    assert np.abs(pts[:, 2]).max() == 0.0
+    assert pts.shape == (int((mesh.face_tags == 5).sum()), 3) == (32, 3)
+    assert np.abs(pts[:, 2]).max() == 0.0 and pts[:, 1].max() < 0.5
     u = sol.u[sol.constrained_dofs]
     assert u.max() < 1e-10
     assert np.abs(u[sol.active]).max() < 1e-12
