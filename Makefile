@@ -132,15 +132,25 @@ clean:
 ## python-test: the Python package (python/: PyO3 + maturin). Creates python/.venv, installs
 ## maturin, numpy, meshio, pytest, matplotlib and gmsh from PyPI, builds and installs the package
 ## (`pip install ./python`, release build in python/target) and runs its pytest suite, which also
-## runs python/examples/. The comparison with the command line uses target/release/gradvi when
-## it has been built (this target builds it first).
+## runs python/examples/test3.py and gmsh_signorini.py. The comparison with the command line
+## uses target/release/gradvi when it has been built (this target builds it first).
 PYTHON3 ?= python3
 PYVENV := python/.venv
-.PHONY: python-test
-python-test: build
+.PHONY: python-test python-install python-examples
+python-test: build python-install
+	cd python && .venv/bin/pytest tests
+
+## python-install: the venv python/.venv with the package and the tools of python-test
+python-install:
 	test -x $(PYVENV)/bin/python || $(PYTHON3) -m venv $(PYVENV)
 	printf '*\n' > $(PYVENV)/.gitignore
 	$(PYVENV)/bin/python -m pip install -q --upgrade pip
 	$(PYVENV)/bin/python -m pip install -q maturin numpy meshio pytest matplotlib gmsh
 	$(PYVENV)/bin/python -m pip install -q ./python
-	cd python && .venv/bin/pytest tests
+
+## python-examples: runs the examples of python/examples/ that the test suite does not
+## (signorini3d.py: a 3D mesh from gmsh, a Signorini solve, the contact zone plotted with
+## matplotlib), each writing its figure into a new temporary directory; fails if one fails
+python-examples: python-install
+	out=$$(mktemp -d) && $(PYVENV)/bin/python python/examples/signorini3d.py $$out/signorini3d.png \
+		&& test -s $$out/signorini3d.png && echo "figures in $$out"

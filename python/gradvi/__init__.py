@@ -20,8 +20,8 @@ The pipeline is mesh → problem → solve::
 
 Main names: :class:`Mesh`, :class:`Problem` (with :class:`CellData`, :class:`EdgeData`,
 :class:`VertexData`), :func:`solve` returning a :class:`Solution`, :class:`Rect`, the 3D
-polyhedral :class:`Mesh3` with its :class:`Box` (read, generated, converted; not solved on
-yet), the registries ``SCHEMES``, ``FAMILIES``, ``FAMILIES3`` and ``BUILTIN_PROBLEMS`` (from
+polyhedral :class:`Mesh3` with its :class:`Box` (read, generated, converted, and solved on
+with HMM: a :class:`Problem` then takes callables of (x, y, z)), the registries ``SCHEMES``, ``FAMILIES``, ``FAMILIES3`` and ``BUILTIN_PROBLEMS`` (from
 the Rust library), and the
 exceptions, all subclasses of :class:`GradviError` (:class:`InvalidDataError` is also a
 ``ValueError``, :class:`MeshIoError` an ``OSError``, :class:`OutOfMemoryError` a

@@ -1,7 +1,7 @@
 """Type stubs of the private extension module ``gradvi._gradvi`` (PyO3). The public API is the
 ``gradvi`` package, which wraps these handles; see ``help(gradvi)``."""
 
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -117,6 +117,8 @@ class _Mesh3:
     # face_cells, volumes, diameters, centroids, face_areas, face_centroids, face_normals,
     # face_tags, cell_tags, boundary_faces
     def geometry(self) -> Dict[str, np.ndarray]: ...
+    # points (m, 3); rows: {datum: int64 rows}
+    def evaluation_points(self, scheme: str) -> Dict[str, Any]: ...
     def write_vtu(
         self,
         path: str,
@@ -131,6 +133,8 @@ class _Problem:
     def from_file(path: str, params: List[Tuple[str, float]]) -> _Problem: ...
     @staticmethod
     def tabulated(name: str, mesh: _Mesh, points: npt.NDArray[np.float64], data: Dict[str, Any]) -> _Problem: ...
+    @staticmethod
+    def tabulated3(name: str, mesh: _Mesh3, points: npt.NDArray[np.float64], data: Dict[str, Any]) -> _Problem: ...
     name: str
     source: str
     description: Optional[str]
@@ -144,7 +148,7 @@ class _Problem:
 
 # every option is given (their defaults are those of gradvi.solve)
 def solve(
-    mesh: _Mesh,
+    mesh: Union[_Mesh, _Mesh3],
     problem: _Problem,
     scheme: str,
     alpha: float,

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Dict, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _gradvi
 from ._gradvi import InvalidDataError
 from ._mesh import Mesh
+from ._mesh3d import Mesh3
 
 __all__ = ["Problem", "CellData", "EdgeData", "VertexData"]
 
@@ -86,6 +87,17 @@ class _Points:
         self.site_weights = np.asarray(p["site_weights"])
         #: for each datum, the rows of its points (each once, ascending)
         self.rows: Dict[str, np.ndarray] = dict(p["rows"])
+
+    dim = 2
+
+    def at(self, rows: np.ndarray) -> List[np.ndarray]:
+        """The coordinate arrays (x, y) of the points ``rows``."""
+        return [self.x[rows], self.y[rows]]
+
+    def faces(self) -> "_Faces":
+        """The boundary edges, for the boundary partition."""
+        m, be = self.mesh, self.mesh.boundary_edges
+        return _Faces(self.ne, be, m.edge_midpoints[be], m.edge_tags[be], "edge", 2)
 
     # means over incidences -------------------------------------------------------------
     def _cell_to_edges(self, a: np.ndarray) -> np.ndarray:
@@ -169,6 +181,45 @@ class _Points:
         return {"cell": CellData, "edge": EdgeData, "vertex": VertexData}[kinds[0]](a)
 
 
+_PLANAR_ONLY = (
+    "{what}: per-entity arrays (CellData, EdgeData, VertexData) are taken on planar meshes only; "
+    "on a 3D mesh give a number or a vectorised callable of (x, y, z)"
+)
+
+
+class _Points3:
+    """The points where the scheme evaluates data on one 3D mesh (``_Mesh3.evaluation_points``:
+    the scheme's own lists, as the solve computes them): each point once (``xy``, (m, 3)) and
+    for each datum the rows where the solve reads it (``rows``, as in :class:`_Points`). Data
+    are numbers or callables of (x, y, z) there; per-entity arrays are refused."""
+
+    dim = 3
+
+    def __init__(self, mesh: "Mesh3", scheme: str) -> None:
+        p = mesh._m.evaluation_points(scheme)
+        self.mesh = mesh
+        self.nc = mesh.n_cells
+        self.xy = np.ascontiguousarray(p["points"])
+        self.m = len(self.xy)
+        self.coords = [self.xy[:, i].copy() for i in range(3)]
+        self.rows: Dict[str, np.ndarray] = dict(p["rows"])
+
+    def at(self, rows: np.ndarray) -> List[np.ndarray]:
+        """The coordinate arrays (x, y, z) of the points ``rows``."""
+        return [c[rows] for c in self.coords]
+
+    def faces(self) -> "_Faces":
+        """The boundary faces, for the boundary partition."""
+        m, bf = self.mesh, self.mesh.boundary_faces
+        return _Faces(m.n_faces, bf, m.face_centroids[bf], m.face_tags[bf], "face", 3)
+
+    def entity(self, values: ArrayLike, what: str) -> _EntityData:
+        raise InvalidDataError(_PLANAR_ONLY.format(what=what))
+
+    def spread(self, d: _EntityData, what: str, rows: np.ndarray, boundary: bool = False) -> np.ndarray:
+        raise InvalidDataError(_PLANAR_ONLY.format(what=what))
+
+
 def _call(f: Callable[..., Any], what: str, *args: Any) -> Any:
     """Calls a user callable; an exception it raises propagates, with a note naming the datum."""
     try:
@@ -187,41 +238,74 @@ def _scalar_result(r: Any, m: int, what: str) -> np.ndarray:
         raise InvalidDataError(f"{what}: the callable returned shape {a.shape}, expected ({m},) or a scalar") from None
 
 
-def _point_adapter(f: Callable[..., Any], what: str) -> Callable[[float, float], float]:
-    """f(x, y) on one point (for points outside the table: the nested warm start)."""
+def _point_adapter(f: Callable[..., Any], what: str) -> Callable[..., float]:
+    """f(x, y[, z]) on one point (for points outside the table: the nested warm start)."""
 
-    def g(x: float, y: float) -> float:
-        return float(_scalar_result(f(np.array([x]), np.array([y])), 1, what)[0])
+    def g(*c: float) -> float:
+        return float(_scalar_result(f(*[np.array([v]) for v in c]), 1, what)[0])
 
     return g
 
 
-def _const_adapter(c: float) -> Callable[[float, float], float]:
-    return lambda x, y: c
+def _const_adapter(c: float) -> Callable[..., float]:
+    return lambda *_: c
 
 
-def _tensor_result(r: Any, m: int, what: str) -> np.ndarray:
-    """(m, 2, 2) from a scalar, (m,), (2, 2), (m, 2, 2), (2, 2, m) or nested lists of those."""
+#: The coordinate names of a callable's arguments, by dimension.
+_COORDS = {2: ("x", "y"), 3: ("x", "y", "z")}
+
+
+def _check_arity(f: Any, what: str, dim: int, extra: Tuple[str, ...] = ()) -> None:
+    """Raises InvalidDataError if the callable ``f`` cannot be called with the ``dim``
+    coordinates (and ``extra`` arguments) of a ``dim``-D mesh; callables whose signature
+    Python cannot tell (some built-ins) are not checked here."""
+    import inspect
+
+    try:
+        sig = inspect.signature(f)
+    except (TypeError, ValueError):
+        return
+    args = _COORDS[dim] + extra
+    try:
+        sig.bind(*args)
+    except TypeError:
+        raise InvalidDataError(
+            f"{what}: the callable has the signature {sig}, but on a {dim}D mesh it is called as "
+            f"{what}({', '.join(args)})"
+        ) from None
+
+
+def _tensor_result(r: Any, m: int, what: str, dim: int = 2) -> np.ndarray:
+    """(m, d, d) from a scalar, (m,), (d, d), (m, d, d), (d, d, m) or nested lists of those,
+    d = ``dim``."""
+    d = dim
     if isinstance(r, (list, tuple)):
         try:
             r = [[np.broadcast_to(np.asarray(e, dtype=np.float64), (m,)) for e in row] for row in r]
         except ValueError:
             raise InvalidDataError(f"{what}: the entries of the returned tensor do not broadcast to ({m},)") from None
-        a = np.asarray(r, dtype=np.float64)  # (2, 2, m)
+        a = np.asarray(r, dtype=np.float64)  # (d, d, m)
     else:
         a = np.asarray(r, dtype=np.float64)
     if a.ndim == 0 or a.shape == (m,):
-        out = np.zeros((m, 2, 2))
-        out[:, 0, 0] = a
-        out[:, 1, 1] = a
+        out = np.zeros((m, d, d))
+        for i in range(d):
+            out[:, i, i] = a
         return out
-    if a.shape == (2, 2):
-        return np.ascontiguousarray(np.broadcast_to(a, (m, 2, 2)))
-    if a.shape == (m, 2, 2):
+    if a.shape == (d, d):
+        return np.ascontiguousarray(np.broadcast_to(a, (m, d, d)))
+    if a.shape == (m, d, d):
         return np.ascontiguousarray(a)
-    if a.shape == (2, 2, m):
+    if a.shape == (d, d, m):
         return np.ascontiguousarray(np.moveaxis(a, 2, 0))
-    raise InvalidDataError(f"{what}: expected a scalar, (n,), (2, 2), (n, 2, 2) or (2, 2, n) values, got shape {a.shape}")
+    other = 5 - d
+    if a.shape in ((other, other), (m, other, other), (other, other, m)):
+        raise InvalidDataError(
+            f"{what}: a {other}×{other} tensor on a {d}D mesh (shape {a.shape}); give a {d}×{d} tensor"
+        )
+    raise InvalidDataError(
+        f"{what}: expected a scalar, (n,), ({d}, {d}), (n, {d}, {d}) or ({d}, {d}, n) values, got shape {a.shape}"
+    )
 
 
 class Problem:
@@ -246,6 +330,18 @@ class Problem:
       the values from that table, by point. (Only the coarse meshes of ``warm_start="nested"`` ask for other points:
       callables are then called point by point there, array data cannot be, and the warm start
       is skipped with the reason in :attr:`Solution.warm_start`.)
+
+    **On a 3D mesh** (:class:`Mesh3`) the same problem object takes callables of
+    ``(x, y, z)`` (the dimension comes from the mesh it is solved on): A is a number, a 3×3
+    matrix or a callable returning (n,), (n, 3, 3) or (3, 3, n) values; ``exact_grad`` returns
+    three components; ``boundary`` selects boundary *faces* (tags of gmsh physical surfaces,
+    predicates ``sel(x, y, z)`` on the face centroids, masks per face, or a callable
+    ``boundary(x, y, z, tag)``); a Signorini barrier acts on the boundary faces of Γ3. The
+    points are the scheme's own (HMM: A, f and ū at x_K, u_D, g_N and a Signorini barrier at
+    the boundary face centroids x_σ, an obstacle at x_K). Per-entity arrays, built-in problems
+    and problem files are planar only. A callable with the wrong number of arguments, a 2×2
+    tensor or a 2-component gradient on a 3D mesh (or the converse) raises
+    :class:`gradvi.InvalidDataError` naming the datum.
 
     Example (the paper's Test 3, an obstacle problem u ≥ ψ with f = C)::
 
@@ -311,7 +407,7 @@ class Problem:
             raise InvalidDataError("exact_grad= is given without exact=")
         for key, v in (("exact", exact), ("exact_grad", exact_grad)):
             if v is not None and not callable(v):
-                raise InvalidDataError(f"{key}= must be a vectorised callable of (x, y)")
+                raise InvalidDataError(f"{key}= must be a vectorised callable of (x, y) or (x, y, z)")
         self._handle: Any = None
         self._name = str(name)
         self._spec: Dict[str, Any] = dict(
@@ -405,30 +501,35 @@ class Problem:
 
     # ---------------------------------------------------------------- tabulation
 
-    def _for_mesh(self, mesh: Mesh, scheme: str) -> Tuple[Any, float]:
-        """The Rust handle for a solve on ``mesh`` with ``scheme``, and the seconds spent
-        evaluating Python data."""
+    def _for_mesh(self, mesh: Union[Mesh, "Mesh3"], scheme: str) -> Tuple[Any, float]:
+        """The Rust handle for a solve on ``mesh`` (planar or 3D) with ``scheme``, and the
+        seconds spent evaluating Python data."""
         if self._handle is not None:
             return self._handle, 0.0
         import time
 
         t0 = time.perf_counter()
-        pts = _Points(mesh, scheme)
+        pts = _points_of(mesh, scheme)
         data = self.tabulate(mesh, scheme, _points=pts)
-        h = _gradvi._Problem.tabulated(self._name, mesh._m, pts.xy, data)
+        make = _gradvi._Problem.tabulated3 if pts.dim == 3 else _gradvi._Problem.tabulated
+        h = make(self._name, mesh._m, pts.xy, data)
         return h, time.perf_counter() - t0
 
-    def tabulate(self, mesh: Mesh, scheme: str = "hmm", *, _points: Optional[_Points] = None) -> Dict[str, Any]:
+    def tabulate(
+        self, mesh: Union[Mesh, "Mesh3"], scheme: str = "hmm", *, _points: Optional[Union[_Points, _Points3]] = None
+    ) -> Dict[str, Any]:
         """The data of a Python-built problem on the evaluation points of ``scheme`` on ``mesh``
-        (what :func:`gradvi.solve` hands to the Rust assembly): a dict with ``points`` (m, 2),
-        the points the Rust library lists for ``scheme`` (``gradvi::scheme::points``), and one
-        array per datum over those rows, with ``<datum>_rows``: the rows where the solve reads
-        it (NaN on the others; a constant has every row). Each callable is called once here, on
-        its datum's points."""
+        (what :func:`gradvi.solve` hands to the Rust assembly): a dict with ``points`` (m, d),
+        d = 2 or 3 the dimension of the mesh, the points the Rust library lists for ``scheme``
+        (``gradvi::scheme::points`` in 2D, the scheme's own lists in 3D), and one array per
+        datum over those rows, with ``<datum>_rows``: the rows where the solve reads it (NaN on
+        the others; a constant has every row). Each callable is called once here, on its
+        datum's points, with the d coordinate arrays (x, y) or (x, y, z); a callable that cannot
+        take them raises :class:`gradvi.InvalidDataError`."""
         if self._handle is not None:
             raise InvalidDataError("only problems built in Python are tabulated")
         s = self._spec
-        pts = _points or _Points(mesh, scheme)
+        pts = _points or _points_of(mesh, scheme)
         m = pts.m
         out: Dict[str, Any] = {}
 
@@ -438,8 +539,9 @@ class Problem:
             what = {"barrier": f"{s['constraint']} barrier", "exact_u": "exact"}.get(key, key)
             rows = pts.rows[at]
             if callable(v):
+                _check_arity(v, what, pts.dim)
                 vals = np.full(m, np.nan)
-                vals[rows] = _scalar_result(_call(v, what, pts.x[rows], pts.y[rows]), rows.size, what)
+                vals[rows] = _scalar_result(_call(v, what, *pts.at(rows)), rows.size, what)
                 out[key] = vals
                 out[key + "_rows"] = rows
                 out[key + "_fallback"] = _point_adapter(v, what)
@@ -473,35 +575,41 @@ class Problem:
         if s["exact"] is not None:
             scalar("exact_u", s["exact"], "exact")
             g = s["exact_grad"]
-            out["exact_grad"] = np.full((m, 2), np.nan)
+            out["exact_grad"] = np.full((m, pts.dim), np.nan)
             if g is not None:
+                _check_arity(g, "exact_grad", pts.dim)
                 rows = pts.rows["exact"]
-                out["exact_grad"][rows] = _grad_result(_call(g, "exact_grad", pts.x[rows], pts.y[rows]), rows.size)
+                out["exact_grad"][rows] = _grad_result(_call(g, "exact_grad", *pts.at(rows)), rows.size, pts.dim)
                 out["exact_grad_rows"] = rows
 
-                def gfb(x: float, y: float) -> Tuple[float, float]:
-                    r = _grad_result(g(np.array([x]), np.array([y])), 1)
-                    return float(r[0, 0]), float(r[0, 1])
+                def gfb(*c: float) -> Tuple[float, ...]:
+                    r = _grad_result(g(*[np.array([v]) for v in c]), 1, pts.dim)
+                    return tuple(float(v) for v in r[0])
 
                 out["exact_grad_fallback"] = gfb
         out["points"] = pts.xy
         return out
 
-    def _diffusion(self, pts: _Points) -> Dict[str, Any]:
+    def _diffusion(self, pts: Union[_Points, _Points3]) -> Dict[str, Any]:
         a = self._spec["diffusion"]
         m = pts.m
         if a is None:
             return {}
+        d = pts.dim
         if callable(a):
-            def fb(x: float, y: float) -> Tuple[float, float, float, float]:
-                t = _tensor_result(a(np.array([x]), np.array([y])), 1, "diffusion")[0]
-                return float(t[0, 0]), float(t[0, 1]), float(t[1, 0]), float(t[1, 1])
+            _check_arity(a, "diffusion", d)
+
+            def fb(*c: float) -> Tuple[float, ...]:
+                t = _tensor_result(a(*[np.array([v]) for v in c]), 1, "diffusion", d)[0]
+                return tuple(float(v) for v in t.reshape(-1))
 
             rows = pts.rows["diffusion"]  # A_K = A(x_K)
-            out = np.full((m, 2, 2), np.nan)
-            out[rows] = _tensor_result(_call(a, "diffusion", pts.x[rows], pts.y[rows]), rows.size, "diffusion")
+            out = np.full((m, d, d), np.nan)
+            out[rows] = _tensor_result(_call(a, "diffusion", *pts.at(rows)), rows.size, "diffusion", d)
             return {"diffusion": out, "diffusion_rows": rows, "diffusion_fallback": fb}
-        if isinstance(a, CellData) or (isinstance(a, np.ndarray) and a.shape[:1] == (pts.nc,) and a.shape != (2, 2)):
+        if isinstance(a, CellData) or (isinstance(a, np.ndarray) and a.shape[:1] == (pts.nc,) and a.shape != (d, d)):
+            if d != 2:
+                raise InvalidDataError(_PLANAR_ONLY.format(what="diffusion"))
             v = a.values if isinstance(a, CellData) else np.asarray(a, dtype=np.float64)
             if v.shape not in ((pts.nc,), (pts.nc, 2, 2)):
                 raise InvalidDataError(f"diffusion: per-cell values must have shape ({pts.nc},) or ({pts.nc}, 2, 2), got {v.shape}")
@@ -511,118 +619,156 @@ class Problem:
             out = np.full((m, 2, 2), np.nan)
             out[rows] = _tensor_result(v, pts.nc, "diffusion")[pts.site_index[rows]]
             return {"diffusion": out, "diffusion_rows": rows}
-        t = _tensor_result(a, m, "diffusion")
-        c = t[0].copy() if m else np.eye(2)
-        return {
-            "diffusion": t,
-            "diffusion_fallback": lambda x, y: (float(c[0, 0]), float(c[0, 1]), float(c[1, 0]), float(c[1, 1])),
-        }
+        t = _tensor_result(a, m, "diffusion", d)
+        c = tuple(float(v) for v in (t[0] if m else np.eye(d)).reshape(-1))
+        return {"diffusion": t, "diffusion_fallback": lambda *_: c}
 
-    def _boundary(self, pts: _Points) -> Dict[str, Any]:
-        b = self._spec["boundary"]
-        mesh = pts.mesh
-        ne = pts.ne
-        be = mesh.boundary_edges
-        codes = np.zeros(ne, dtype=np.uint8)
-        if b is None:
-            return {"boundary": codes}
-        mid = mesh.edge_midpoints[be]
-        tags = mesh.edge_tags[be]
-        if isinstance(b, Mapping):
-            return self._boundary_rules(b, pts, be, mid, tags)
-        if callable(b):
-            kinds = _kind_codes(_call(b, "boundary", mid[:, 0].copy(), mid[:, 1].copy(), tags.copy()), be.size)
-            codes[be] = kinds
+    def _boundary(self, pts: Union[_Points, "_Points3"]) -> Dict[str, Any]:
+        return _boundary_data(self._spec["boundary"], pts.faces())
 
-            def fb(x: float, y: float, tag: int) -> int:
-                return int(_kind_codes(b(np.array([x]), np.array([y]), np.array([tag], dtype=np.int32)), 1)[0])
 
-            return {"boundary": codes, "boundary_fallback": fb}
-        v = b.values if isinstance(b, EdgeData) else np.asarray(b)
-        if v.shape != (ne,):
-            raise InvalidDataError(f"boundary: expected a dict, a callable, or one kind per edge ({ne}), got shape {v.shape}")
-        codes[be] = _kind_codes(v[be], be.size)
+def _points_of(mesh: Union[Mesh, "Mesh3"], scheme: str) -> Union[_Points, _Points3]:
+    """The evaluation points of ``scheme`` on a planar or 3D mesh."""
+    if isinstance(mesh, Mesh3):
+        return _Points3(mesh, scheme)
+    if isinstance(mesh, Mesh):
+        return _Points(mesh, scheme)
+    raise InvalidDataError(f"expected a gradvi.Mesh or gradvi.Mesh3, got {type(mesh).__name__}")
+
+
+class _Faces(NamedTuple):
+    """The boundary of a mesh as the boundary partition sees it: faces (edges in 2D)."""
+
+    #: Faces (edges) of the mesh.
+    n: int
+    #: The boundary faces.
+    be: np.ndarray
+    #: Their centres x_σ, (nb, dim).
+    mid: np.ndarray
+    #: Their tags (gmsh physical lines / surfaces).
+    tags: np.ndarray
+    #: "edge" or "face".
+    noun: str
+    dim: int
+
+    def coords(self) -> List[np.ndarray]:
+        """The coordinate arrays of the centres (x, y[, z])."""
+        return [self.mid[:, i].copy() for i in range(self.dim)]
+
+    def at(self, i: int) -> str:
+        """``"face f at (x, y, z) (tag t)"`` for the i-th boundary face."""
+        c = ", ".join(str(v) for v in self.mid[i])
+        return f"{self.noun} {self.be[i]} at ({c}) (tag {self.tags[i]})"
+
+
+def _boundary_data(b: Any, faces: _Faces) -> Dict[str, Any]:
+    """The ``boundary`` codes per face (and a point-wise fallback) of the partition ``b``."""
+    codes = np.zeros(faces.n, dtype=np.uint8)
+    if b is None:
         return {"boundary": codes}
+    be = faces.be
+    if isinstance(b, Mapping):
+        return _boundary_rules(b, faces)
+    if callable(b):
+        _check_arity(b, "boundary", faces.dim, ("tag",))
+        kinds = _kind_codes(_call(b, "boundary", *faces.coords(), faces.tags.copy()), be.size)
+        codes[be] = kinds
 
-    def _boundary_rules(self, rules: Mapping[str, Any], pts: _Points, be: np.ndarray, mid: np.ndarray, tags: np.ndarray) -> Dict[str, Any]:
-        unknown = set(rules) - set(_KINDS)
-        if unknown:
-            raise InvalidDataError(f"boundary: unknown part(s) {sorted(unknown)} (expected dirichlet, neumann, signorini)")
-        count = np.zeros(be.size, dtype=np.int64)
-        codes_b = np.zeros(be.size, dtype=np.uint8)
-        rest = [k for k, sel in rules.items() if isinstance(sel, str) and sel == "rest"]
-        if len(rest) > 1:
-            raise InvalidDataError(f"boundary: only one part may be 'rest', got {rest}")
-        pointwise = True
-        masks: Dict[str, Any] = {}
-        for kind, sel in rules.items():
-            if isinstance(sel, str):
-                if sel != "rest":
-                    raise InvalidDataError(f"boundary[{kind!r}]: the only string selector is 'rest', got {sel!r}")
-                continue
-            mask = self._select(kind, sel, pts, be, mid, tags)
-            if not (callable(sel) or _is_tags(sel)):
-                pointwise = False
-            masks[kind] = sel
-            count += mask
-            codes_b[mask] = _KINDS[kind]
-        present = set(int(t) for t in np.unique(tags))
-        for kind, sel in masks.items():
-            if _is_tags(sel):
-                missing = sorted(set(_tag_list(sel)) - present)
-                if missing:
-                    raise InvalidDataError(
-                        f"boundary[{kind!r}]: tag(s) {missing} are on no boundary edge of the mesh "
-                        f"(its boundary tags: {sorted(present)})"
-                    )
-        two = np.nonzero(count > 1)[0]
-        if two.size:
-            e = be[two[0]]
-            raise InvalidDataError(
-                f"boundary: edge {e} at ({mid[two[0], 0]}, {mid[two[0], 1]}) (tag {tags[two[0]]}) is selected by two parts"
-            )
-        none = np.nonzero(count == 0)[0]
-        if none.size:
-            if rest:
-                codes_b[none] = _KINDS[rest[0]]
-            else:
-                i = none[0]
-                raise InvalidDataError(
-                    f"boundary: {none.size} boundary edge(s) are selected by no part, e.g. edge {be[i]} at "
-                    f"({mid[i, 0]}, {mid[i, 1]}) (tag {tags[i]}); add them to a part or mark one part 'rest'"
-                )
-        codes = np.zeros(pts.ne, dtype=np.uint8)
-        codes[be] = codes_b
-        out: Dict[str, Any] = {"boundary": codes}
-        if pointwise:
-            def fb(x: float, y: float, tag: int) -> int:
-                for kind, sel in masks.items():
-                    hit = (tag in _tag_list(sel)) if _is_tags(sel) else bool(
-                        np.broadcast_to(np.asarray(sel(np.array([x]), np.array([y]))), (1,))[0]
-                    )
-                    if hit:
-                        return _KINDS[kind]
-                return _KINDS[rest[0]] if rest else 0
+        def fb(*c: Any) -> int:
+            *xs, tag = c
+            pts = [np.array([v]) for v in xs]
+            return int(_kind_codes(b(*pts, np.array([tag], dtype=np.int32)), 1)[0])
 
-            out["boundary_fallback"] = fb
-        return out
+        return {"boundary": codes, "boundary_fallback": fb}
+    v = b.values if isinstance(b, EdgeData) else np.asarray(b)
+    if v.shape != (faces.n,):
+        raise InvalidDataError(
+            f"boundary: expected a dict, a callable, or one kind per {faces.noun} ({faces.n}), got shape {v.shape}"
+        )
+    codes[be] = _kind_codes(v[be], be.size)
+    return {"boundary": codes}
 
-    @staticmethod
-    def _select(kind: str, sel: Any, pts: _Points, be: np.ndarray, mid: np.ndarray, tags: np.ndarray) -> np.ndarray:
+
+def _boundary_rules(rules: Mapping[str, Any], faces: _Faces) -> Dict[str, Any]:
+    be, tags, noun = faces.be, faces.tags, faces.noun
+    unknown = set(rules) - set(_KINDS)
+    if unknown:
+        raise InvalidDataError(f"boundary: unknown part(s) {sorted(unknown)} (expected dirichlet, neumann, signorini)")
+    count = np.zeros(be.size, dtype=np.int64)
+    codes_b = np.zeros(be.size, dtype=np.uint8)
+    rest = [k for k, sel in rules.items() if isinstance(sel, str) and sel == "rest"]
+    if len(rest) > 1:
+        raise InvalidDataError(f"boundary: only one part may be 'rest', got {rest}")
+    pointwise = True
+    masks: Dict[str, Any] = {}
+    for kind, sel in rules.items():
+        if isinstance(sel, str):
+            if sel != "rest":
+                raise InvalidDataError(f"boundary[{kind!r}]: the only string selector is 'rest', got {sel!r}")
+            continue
+        mask = _select(kind, sel, faces)
+        if not (callable(sel) or _is_tags(sel)):
+            pointwise = False
+        masks[kind] = sel
+        count += mask
+        codes_b[mask] = _KINDS[kind]
+    present = set(int(t) for t in np.unique(tags))
+    for kind, sel in masks.items():
         if _is_tags(sel):
-            return np.isin(tags, _tag_list(sel))
-        if callable(sel):
-            r = np.asarray(_call(sel, f"boundary[{kind!r}]", mid[:, 0].copy(), mid[:, 1].copy()))
-            try:
-                return np.broadcast_to(r, (be.size,)).astype(bool)
-            except ValueError:
-                raise InvalidDataError(f"boundary[{kind!r}]: the predicate returned shape {r.shape}, expected ({be.size},)") from None
-        v = sel.values if isinstance(sel, EdgeData) else np.asarray(sel)
-        if v.shape != (pts.ne,):
+            missing = sorted(set(_tag_list(sel)) - present)
+            if missing:
+                raise InvalidDataError(
+                    f"boundary[{kind!r}]: tag(s) {missing} are on no boundary {noun} of the mesh "
+                    f"(its boundary tags: {sorted(present)})"
+                )
+    two = np.nonzero(count > 1)[0]
+    if two.size:
+        raise InvalidDataError(f"boundary: {faces.at(two[0])} is selected by two parts")
+    none = np.nonzero(count == 0)[0]
+    if none.size:
+        if rest:
+            codes_b[none] = _KINDS[rest[0]]
+        else:
             raise InvalidDataError(
-                f"boundary[{kind!r}]: expected tags, a predicate (x, y) -> bool, 'rest' or a mask per edge ({pts.ne}), got {sel!r}"
+                f"boundary: {none.size} boundary {noun}(s) are selected by no part, e.g. {faces.at(none[0])}; "
+                "add them to a part or mark one part 'rest'"
             )
-        return v.astype(bool)[be]
+    codes = np.zeros(faces.n, dtype=np.uint8)
+    codes[be] = codes_b
+    out: Dict[str, Any] = {"boundary": codes}
+    if pointwise:
+        def fb(*c: Any) -> int:
+            *xs, tag = c
+            for kind, sel in masks.items():
+                hit = (tag in _tag_list(sel)) if _is_tags(sel) else bool(
+                    np.broadcast_to(np.asarray(sel(*[np.array([v]) for v in xs])), (1,))[0]
+                )
+                if hit:
+                    return _KINDS[kind]
+            return _KINDS[rest[0]] if rest else 0
+
+        out["boundary_fallback"] = fb
+    return out
+
+
+def _select(kind: str, sel: Any, faces: _Faces) -> np.ndarray:
+    be = faces.be
+    if _is_tags(sel):
+        return np.isin(faces.tags, _tag_list(sel))
+    if callable(sel):
+        _check_arity(sel, f"boundary[{kind!r}]", faces.dim)
+        r = np.asarray(_call(sel, f"boundary[{kind!r}]", *faces.coords()))
+        try:
+            return np.broadcast_to(r, (be.size,)).astype(bool)
+        except ValueError:
+            raise InvalidDataError(f"boundary[{kind!r}]: the predicate returned shape {r.shape}, expected ({be.size},)") from None
+    v = sel.values if isinstance(sel, EdgeData) else np.asarray(sel)
+    if v.shape != (faces.n,):
+        args = ", ".join(_COORDS[faces.dim])
+        raise InvalidDataError(
+            f"boundary[{kind!r}]: expected tags, a predicate ({args}) -> bool, 'rest' or a mask per {faces.noun} ({faces.n}), got {sel!r}"
+        )
+    return v.astype(bool)[be]
 
 
 def _is_tags(sel: Any) -> bool:
@@ -654,15 +800,20 @@ def _kind_codes(r: Any, n: int) -> np.ndarray:
     return ai.astype(np.uint8)
 
 
-def _grad_result(r: Any, m: int) -> np.ndarray:
-    if isinstance(r, (list, tuple)) and len(r) == 2:
+def _grad_result(r: Any, m: int, dim: int = 2) -> np.ndarray:
+    """(m, dim) from ``dim`` component arrays (or scalars), an (m, dim) or a (dim, m) array."""
+    if isinstance(r, (list, tuple)) and len(r) == dim:
         try:
             return np.ascontiguousarray(np.column_stack([np.broadcast_to(np.asarray(c, dtype=np.float64), (m,)) for c in r]))
         except ValueError:
             pass
     a = np.asarray(r, dtype=np.float64)
-    if a.shape == (m, 2):
+    if a.shape == (m, dim):
         return np.ascontiguousarray(a)
-    if a.shape == (2, m):
+    if a.shape == (dim, m):
         return np.ascontiguousarray(a.T)
-    raise InvalidDataError(f"exact_grad: expected (gx, gy) arrays of shape ({m},) or an ({m}, 2) array, got shape {a.shape}")
+    names = ", ".join("g" + c for c in _COORDS[dim])
+    got = f"{len(r)} components" if isinstance(r, (list, tuple)) else f"shape {a.shape}"
+    raise InvalidDataError(
+        f"exact_grad: on a {dim}D mesh expected ({names}) arrays of shape ({m},) or an ({m}, {dim}) array, got {got}"
+    )

@@ -12,6 +12,7 @@ import numpy as np
 from . import _gradvi
 from ._gradvi import SCHEMES, InternalError, InvalidDataError
 from ._mesh import Mesh
+from ._mesh3d import Mesh3
 from ._problem import Problem
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -102,10 +103,16 @@ class Solution:
     ``active_cells``/``active_vertices``/``active_edges`` lay the active set on the mesh.
     ``contact_measure`` is Σ m_j over the active constrained unknowns (the contact area of an
     obstacle problem, the contact length of a Signorini problem).
+
+    On a 3D mesh (:class:`Mesh3`) the same fields hold with d = 3: the "edges" of the names
+    are the faces (``u_edge``/``u_face``, ``active_edges``/``active_faces``: one value per
+    face), ``gradient`` and ``constrained_points`` have 3 columns, ``contact_measure`` is a
+    volume (obstacle) or an area (Signorini), and ``free_boundary`` is empty (computed on
+    planar meshes only).
     """
 
     #: The mesh solved on.
-    mesh: Mesh
+    mesh: Union[Mesh, Mesh3]
     #: The problem solved.
     problem: Problem
     #: The certificate of u.
@@ -142,7 +149,7 @@ class Solution:
         "marginal_load", "scheme", "untabulated_points", "fallback_calls", "iterates",
     )
 
-    def __init__(self, mesh: Mesh, problem: Problem, r: Dict[str, Any], data_seconds: float) -> None:
+    def __init__(self, mesh: Union[Mesh, Mesh3], problem: Problem, r: Dict[str, Any], data_seconds: float) -> None:
         self.mesh = mesh
         self.problem = problem
         self._r = r
@@ -178,12 +185,22 @@ class Solution:
 
     @property
     def u_edge(self) -> Optional[np.ndarray]:
-        """The face unknowns u_σ per edge (HMM, CR), else None."""
+        """The face unknowns u_σ per edge (HMM, CR; per face in 3D), else None."""
         return self._r["u_fields"].get("edge")
 
     @property
+    def u_face(self) -> Optional[np.ndarray]:
+        """The face unknowns u_σ per face (edges in 2D): the same array as :attr:`u_edge`."""
+        return self.u_edge
+
+    @property
+    def dim(self) -> int:
+        """The dimension of the mesh, 2 or 3."""
+        return 3 if isinstance(self.mesh, Mesh3) else 2
+
+    @property
     def gradient(self) -> np.ndarray:
-        """The cell gradient (HMM: ∇_K u; P1, CR: the exact gradient), (n_cells, 2)."""
+        """The cell gradient (HMM: ∇_K u; P1, CR: the exact gradient), (n_cells, d)."""
         return self._r["gradient"]
 
     @property
@@ -231,9 +248,9 @@ class Solution:
 
     @property
     def constrained_points(self) -> np.ndarray:
-        """Where the barrier was evaluated for each constrained unknown, (n, 2)."""
+        """Where the barrier was evaluated for each constrained unknown, (n, d)."""
         v = self._c("points")
-        return np.zeros((0, 2)) if v is None else v
+        return np.zeros((0, self.dim)) if v is None else v
 
     @property
     def constrained_measures(self) -> np.ndarray:
@@ -301,8 +318,14 @@ class Solution:
 
     @property
     def active_edges(self) -> Optional[np.ndarray]:
-        """Per edge: whether its constrained unknown is active (HMM Signorini, CR), else None."""
+        """Per edge (per face in 3D): whether its constrained unknown is active (HMM
+        Signorini, CR), else None."""
         return self._entity("active_fields", "edge")
+
+    @property
+    def active_faces(self) -> Optional[np.ndarray]:
+        """Per face (edge in 2D): the same array as :attr:`active_edges`."""
+        return self.active_edges
 
     @property
     def contact_measure(self) -> float:
@@ -314,21 +337,24 @@ class Solution:
     @property
     def free_boundary(self) -> np.ndarray:
         """Midpoints between neighbouring active and inactive constrained unknowns: points of the
-        discrete free boundary, (n, 2)."""
+        discrete free boundary, (n, 2); empty, (0, 3), on a 3D mesh."""
         v = self._c("free_boundary")
-        return np.zeros((0, 2)) if v is None else v
+        return np.zeros((0, self.dim)) if v is None else v
 
     # ---------------------------------------------------------------- output
 
     def fields(self) -> tuple:
         """``(point_data, cell_data)``: the arrays ``gradvi solve --vtu`` writes (``u_vertex``;
-        ``u_K``, ``grad_x``, ``grad_y``; the active set and the multiplier on the entities of the
-        constrained unknowns: ``active``/``multiplier`` per vertex, ``active_cell``/
-        ``multiplier_cell`` per cell, ``active_edges``/``multiplier_edges`` summed over each
-        cell's edges), plus ``u_exact`` per cell when known."""
+        ``u_K``, ``grad_x``, ``grad_y`` (and ``grad_z`` in 3D); the active set and the
+        multiplier on the entities of the constrained unknowns: ``active``/``multiplier`` per
+        vertex, ``active_cell``/``multiplier_cell`` per cell, ``active_edges``/
+        ``multiplier_edges`` summed over each cell's edges (faces in 3D)), plus ``u_exact``
+        per cell when known."""
         pd: Dict[str, np.ndarray] = {"u_vertex": self.u_vertex}
         g = self.gradient
-        cd: Dict[str, np.ndarray] = {"u_K": self.u_cell, "grad_x": g[:, 0].copy(), "grad_y": g[:, 1].copy()}
+        cd: Dict[str, np.ndarray] = {"u_K": self.u_cell}
+        for i, c in enumerate("xyz"[: self.dim]):
+            cd["grad_" + c] = g[:, i].copy()
         c = self._r["constraint"]
         if c is not None:
             a, lam = c["active_fields"], c["multiplier_fields"]
@@ -354,6 +380,8 @@ class Solution:
     def to_meshio(self) -> "meshio.Mesh":
         """The mesh with the arrays of :meth:`fields` as point and cell data (needs meshio)."""
         pd, cd = self.fields()
+        if isinstance(self.mesh, Mesh3):
+            return self.mesh.to_meshio(point_data=pd, cell_data=cd)
         return self.mesh.to_meshio(point_data=pd, cell_data=cd, boundary_lines=False)
 
     def summary(self) -> str:
@@ -394,14 +422,14 @@ class Solution:
         )
 
 
-def _as_mesh(mesh: Any) -> Mesh:
-    if isinstance(mesh, Mesh):
+def _as_mesh(mesh: Any) -> Union[Mesh, Mesh3]:
+    if isinstance(mesh, (Mesh, Mesh3)):
         return mesh
     if isinstance(mesh, (str, os.PathLike)):
         return Mesh.read(mesh)
     if type(mesh).__name__ == "Mesh" and hasattr(mesh, "cells") and hasattr(mesh, "points"):
         return Mesh.from_meshio(mesh)
-    raise InvalidDataError(f"mesh must be a gradvi.Mesh, a file path or a meshio.Mesh, got {type(mesh).__name__}")
+    raise InvalidDataError(f"mesh must be a gradvi.Mesh, a gradvi.Mesh3, a file path or a meshio.Mesh, got {type(mesh).__name__}")
 
 
 def _as_problem(problem: Any) -> Problem:
@@ -414,7 +442,7 @@ def _as_problem(problem: Any) -> Problem:
 
 
 def solve(
-    mesh: Union[Mesh, str, "os.PathLike[str]", "meshio.Mesh", None],
+    mesh: Union[Mesh, Mesh3, str, "os.PathLike[str]", "meshio.Mesh", None],
     problem: Union[Problem, str],
     *,
     scheme: Optional[str] = None,
@@ -445,11 +473,14 @@ def solve(
         print(sol.niter, sol.contact_measure, sol.certificate)
 
     Args:
-        mesh: a :class:`Mesh`, a mesh file path, a ``meshio.Mesh``, or None for a problem
-            file with a ``[mesh]`` section.
-        problem: a :class:`Problem`, a built-in name (``"test3"``) or a ``.toml`` path.
-        scheme: ``"hmm"`` (any polygonal mesh), ``"p1"`` or ``"cr"`` (triangles); default: the
-            problem file's ``scheme``, else ``"hmm"``.
+        mesh: a :class:`Mesh`, a 3D :class:`Mesh3`, a mesh file path (planar), a
+            ``meshio.Mesh`` (planar), or None for a problem file with a ``[mesh]`` section.
+        problem: a :class:`Problem`, a built-in name (``"test3"``) or a ``.toml`` path (both
+            planar); on a :class:`Mesh3`, a :class:`Problem` built from callables of
+            (x, y, z).
+        scheme: ``"hmm"`` (any polygonal or polyhedral mesh), ``"p1"`` or ``"cr"`` (triangles;
+            the library refuses them on 3D meshes for now, with an
+            :class:`InvalidDataError`); default: the problem file's ``scheme``, else ``"hmm"``.
         alpha: HMM stabilisation parameter α > 0 (the other schemes accept only 1).
         c: the active-set parameter c > 0.
         max_solves: cap on the number of linear solves.
@@ -457,7 +488,9 @@ def solve(
         fallback: on cycling or the cap, fall back to projected Gauss–Seidel instead of raising.
         warm_start: ``"nested"`` (the default: an active set predicted by coarse HMM solves
             of the same problem on agglomerated meshes of the domain: same solution, fewer
-            solves on fine meshes) or ``"cold"`` (A₀ = ∅, the paper's NITER).
+            solves on fine meshes) or ``"cold"`` (A₀ = ∅, the paper's NITER). On a 3D mesh,
+            while the library refuses the nested start there, ``"nested"`` solves from the cold
+            start and :attr:`Solution.warm_start` says so (``skipped``).
         initial_active: an initial active set, one flag per constrained unknown.
         keep_iterates: keep every iterate in :attr:`Solution.iterates`.
         ordering: fill-reducing ordering of the Cholesky factorisation, ``"amd"`` or

@@ -23,9 +23,9 @@
 //!                            (bytes, budget); also a MemoryError
 //! ```
 
-use gradvi::{Error, MeshError};
 use gradvi::SolverError as Stall;
 use gradvi::error::ProblemFileErrorKind;
+use gradvi::{Error, MeshError};
 use pyo3::BoundObject;
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyMemoryError, PyOSError, PyValueError};

@@ -34,21 +34,52 @@ impl PyMesh {
 }
 
 /// The key of a point in hash tables: its bits (−0 taken as +0).
-pub fn point_key(p: Point) -> [u64; 2] {
-    [(p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits()]
+pub fn point_key<const D: usize>(p: [f64; D]) -> [u64; D] {
+    p.map(|v| (v + 0.0).to_bits())
 }
 
-/// An (n, 2) array of points.
-pub fn points_array<'py>(
+/// An (n, N) array of the rows `rows` (points, index pairs, ...).
+pub fn points_array<'py, T: numpy::Element + Copy, const N: usize>(
     py: Python<'py>,
-    pts: impl ExactSizeIterator<Item = Point>,
+    rows: impl ExactSizeIterator<Item = [T; N]>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let n = pts.len();
-    let mut flat = Vec::with_capacity(2 * n);
-    for p in pts {
-        flat.extend_from_slice(&p);
+    let n = rows.len();
+    let mut flat = Vec::with_capacity(N * n);
+    for r in rows {
+        flat.extend_from_slice(&r);
     }
-    Ok(PyArray1::from_vec(py, flat).reshape([n, 2])?.into_any())
+    Ok(PyArray1::from_vec(py, flat).reshape([n, N])?.into_any())
+}
+
+/// The evaluation points of several data, each point once: `lists` gives, for each datum, the
+/// items (points with whatever they carry) where the solve reads it, and `point` the point of
+/// an item. Returns the unique items in the order of first appearance and, for each datum, the
+/// rows of its points (each once, ascending) as a dict of int64 arrays.
+pub fn unique_rows<'py, T: Copy, const D: usize>(
+    py: Python<'py>,
+    lists: Vec<(&'static str, Vec<T>)>,
+    point: impl Fn(&T) -> [f64; D],
+) -> PyResult<(Vec<T>, Bound<'py, PyDict>)> {
+    let total = lists.iter().map(|(_, l)| l.len()).sum();
+    let mut row_of: FxHashMap<[u64; D], usize> =
+        FxHashMap::with_capacity_and_hasher(total, Default::default());
+    let mut unique: Vec<T> = Vec::with_capacity(total);
+    let rows = PyDict::new(py);
+    for (name, list) in lists {
+        let mut r: Vec<i64> = list
+            .iter()
+            .map(|q| {
+                *row_of.entry(point_key(point(q))).or_insert_with(|| {
+                    unique.push(*q);
+                    unique.len() - 1
+                }) as i64
+            })
+            .collect();
+        r.sort_unstable();
+        r.dedup();
+        rows.set_item(name, vec_array(py, r))?;
+    }
+    Ok((unique, rows))
 }
 
 /// `f(m, k)` for every cell k of `m`.
@@ -352,25 +383,7 @@ impl PyMesh {
                 ("exact", points::exact_points(m)),
             ])
         })?;
-        let total = lists.iter().map(|(_, l)| l.len()).sum();
-        let mut row_of: FxHashMap<[u64; 2], usize> =
-            FxHashMap::with_capacity_and_hasher(total, Default::default());
-        let mut unique: Vec<points::EvaluationPoint> = Vec::with_capacity(total);
-        let rows = PyDict::new(py);
-        for (name, list) in lists {
-            let mut r: Vec<i64> = list
-                .iter()
-                .map(|q| {
-                    *row_of.entry(point_key(q.point)).or_insert_with(|| {
-                        unique.push(*q);
-                        unique.len() - 1
-                    }) as i64
-                })
-                .collect();
-            r.sort_unstable();
-            r.dedup();
-            rows.set_item(name, vec_array(py, r))?;
-        }
+        let (unique, rows) = unique_rows(py, lists.into(), |q| q.point)?;
         let m = unique.len();
         let (mut kind, mut index, mut edge) = (Vec::with_capacity(m), Vec::new(), Vec::new());
         let mut weights = Vec::with_capacity(3 * m);

@@ -6,14 +6,17 @@
 
 use crate::errors::invalid;
 use crate::guard;
-use crate::mesh::vec_array;
-use gradvi::mesh::{MemoryBudget, NO_CELL};
+use crate::mesh::{point_key, points_array, unique_rows, vec_array};
+use gradvi::mesh::{MemoryBudget, NO_CELL, SolveMesh};
 use gradvi::mesh3d::generate::Family3;
 use gradvi::mesh3d::io::{read_mesh3, write_vtu3};
 use gradvi::mesh3d::{Cuboid, Point3, PolyMesh3, Polyhedra};
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with3};
+use nalgebra::DVector;
+use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -31,19 +34,6 @@ impl PyMesh3 {
             mesh: Arc::new(mesh),
         }
     }
-}
-
-/// An (n, N) array of the rows `rows`.
-fn rows_array<'py, T: numpy::Element + Copy, const N: usize>(
-    py: Python<'py>,
-    rows: impl ExactSizeIterator<Item = [T; N]>,
-) -> PyResult<Bound<'py, PyAny>> {
-    let n = rows.len();
-    let mut flat = Vec::with_capacity(N * n);
-    for r in rows {
-        flat.extend_from_slice(&r);
-    }
-    Ok(PyArray1::from_vec(py, flat).reshape([n, N])?.into_any())
 }
 
 /// `a` as 32-bit ids or offsets, else `InvalidDataError` naming `what` and the entry.
@@ -73,11 +63,6 @@ fn borrow(v: &[(String, Vec<f64>)]) -> Vec<(&str, &[f64])> {
 /// `domain` (x0, x1, y0, y1, z0, z1) as a [`Cuboid`].
 fn cuboid(d: [f64; 6]) -> Cuboid {
     Cuboid::new([d[0], d[1]], [d[2], d[3]], [d[4], d[5]])
-}
-
-/// The key of a point in hash tables: its bits (−0 taken as +0).
-fn point_key(p: Point3) -> [u64; 3] {
-    p.map(|v| (v + 0.0).to_bits())
 }
 
 #[pymethods]
@@ -218,7 +203,7 @@ impl PyMesh3 {
         let m = &*self.mesh;
         let (nc, nf) = (m.n_cells(), m.n_faces());
         let d = PyDict::new(py);
-        d.set_item("points", rows_array(py, m.vertices().iter().copied())?)?;
+        d.set_item("points", points_array(py, m.vertices().iter().copied())?)?;
         let (mut cell_ptr, mut cell_faces) = (Vec::with_capacity(nc + 1), Vec::new());
         let mut dists = Vec::new();
         cell_ptr.push(0i64);
@@ -241,7 +226,7 @@ impl PyMesh3 {
         d.set_item("face_connectivity", vec_array(py, face_verts))?;
         let side = |k: usize| if k == NO_CELL { -1 } else { k as i64 };
         let cells = (0..nf).map(|f| m.face_cells(f).map(side));
-        d.set_item("face_cells", rows_array(py, cells)?)?;
+        d.set_item("face_cells", points_array(py, cells)?)?;
         let per_cell = |g: fn(&PolyMesh3, usize) -> f64| (0..nc).map(|k| g(m, k)).collect();
         let per_face = |g: fn(&PolyMesh3, usize) -> f64| (0..nf).map(|f| g(m, f)).collect();
         d.set_item(
@@ -253,19 +238,45 @@ impl PyMesh3 {
             vec_array::<f64>(py, per_cell(PolyMesh3::diameter)),
         )?;
         let centroids = (0..nc).map(|k| m.centroid(k));
-        d.set_item("centroids", rows_array(py, centroids)?)?;
+        d.set_item("centroids", points_array(py, centroids)?)?;
         let areas = per_face(PolyMesh3::face_measure);
         d.set_item("face_areas", vec_array::<f64>(py, areas))?;
         let fc = (0..nf).map(|f| m.face_centroid(f));
-        d.set_item("face_centroids", rows_array(py, fc)?)?;
+        d.set_item("face_centroids", points_array(py, fc)?)?;
         let normals = (0..nf).map(|f| m.face_normal(f));
-        d.set_item("face_normals", rows_array(py, normals)?)?;
+        d.set_item("face_normals", points_array(py, normals)?)?;
         let face_tags: Vec<i32> = (0..nf).map(|f| m.face_tag(f)).collect();
         d.set_item("face_tags", vec_array(py, face_tags))?;
         let cell_tags: Vec<i32> = (0..nc).map(|k| m.cell_tag(k)).collect();
         d.set_item("cell_tags", vec_array(py, cell_tags))?;
         let boundary: Vec<i64> = m.boundary_faces().iter().map(|&f| f as i64).collect();
         d.set_item("boundary_faces", vec_array(py, boundary))?;
+        Ok(d)
+    }
+
+    /// The points where `scheme` (`gradvi::scheme::build_with3`) evaluates problem data on this
+    /// mesh, as the solve computes them (bit for bit): `points` (m, 3), each point once (in
+    /// the order of first appearance in the lists below), and `rows`: for each datum, the
+    /// rows of its points (each once, ascending): `diffusion` x_K; `source` the points of the
+    /// scheme's local load, cell by cell, then x_K (the data scale); `boundary` x_σ of the
+    /// boundary faces (the kind and g_N); `trace` the points of the trace unknowns of the
+    /// boundary faces (u_D, a Signorini barrier); `obstacle` the points of the obstacle
+    /// unknowns, then the trace points; `exact` x_K (the errors).
+    fn evaluation_points<'py>(
+        &self,
+        py: Python<'py>,
+        scheme: &str,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let kind = SchemeKind::from_str(scheme).map_err(|e| crate::to_pyerr(py, &e))?;
+        let mesh = Arc::clone(&self.mesh);
+        let lists = guard(py, move || {
+            let s = build_with3(kind, &mesh, &SchemeOptions::default())?;
+            Ok(evaluation_lists(s.as_ref()))
+        })?;
+        let (unique, rows) = unique_rows(py, lists, |p: &Point3| *p)?;
+        let d = PyDict::new(py);
+        d.set_item("points", points_array(py, unique.into_iter())?)?;
+        d.set_item("rows", rows)?;
         Ok(d)
     }
 
@@ -304,4 +315,46 @@ impl PyMesh3 {
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyMesh3>()
+}
+
+/// The evaluation lists of [`PyMesh3::evaluation_points`] for the scheme `s`, read off the
+/// scheme's own methods (its local load is run with a datum that records where it is called).
+fn evaluation_lists<M: SolveMesh<D> + ?Sized, const D: usize>(
+    s: &dyn GradientDiscretisation<M, D>,
+) -> Vec<(&'static str, Vec<[f64; D]>)> {
+    let mesh = s.mesh();
+    let centres: Vec<[f64; D]> = (0..mesh.n_cells()).map(|k| mesh.cell_centre(k)).collect();
+    let called = RefCell::new(Vec::new());
+    let mut b = DVector::zeros(0);
+    for k in 0..mesh.n_cells() {
+        s.local_load(
+            k,
+            &|p| {
+                called.borrow_mut().push(p);
+                0.0
+            },
+            &mut b,
+        );
+    }
+    let mut source = called.into_inner();
+    source.extend_from_slice(&centres);
+    let faces: Vec<usize> = (0..mesh.n_boundary_faces())
+        .map(|i| mesh.boundary_face(i))
+        .collect();
+    let boundary = faces.iter().map(|&f| mesh.face_centre(f)).collect();
+    let (mut trace, mut tr) = (Vec::new(), Vec::new());
+    for &f in &faces {
+        s.face_trace_dofs(f, &mut tr);
+        trace.extend(tr.iter().map(|t| t.point));
+    }
+    let mut obstacle: Vec<[f64; D]> = s.obstacle_dofs().iter().map(|d| d.point).collect();
+    obstacle.extend_from_slice(&trace);
+    vec![
+        ("diffusion", centres.clone()),
+        ("source", source),
+        ("boundary", boundary),
+        ("trace", trace),
+        ("obstacle", obstacle),
+        ("exact", centres),
+    ]
 }

@@ -12,13 +12,15 @@
 use crate::errors::invalid;
 use crate::guard;
 use crate::mesh::{PyMesh, point_key};
-use gradvi::mesh::{Point, PolyMesh};
+use crate::mesh3d::PyMesh3;
+use gradvi::mesh::{CellComplex, PolyMesh, SolveMesh};
+use gradvi::mesh3d::PolyMesh3;
 use gradvi::problem::file::{ProblemFile, builtin, load};
 use gradvi::problem::{BoundaryKind, ConstraintKind, Problem, Side};
 use gradvi::scheme::Tensor;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -33,8 +35,10 @@ pub enum Spec {
     },
     /// A problem file.
     File(Box<ProblemFile>),
-    /// Data tabulated on one mesh by the Python layer.
-    Tabulated(Arc<Tabulated>),
+    /// Data tabulated on one planar mesh by the Python layer.
+    Tabulated(Arc<Tabulated<PolyMesh, 2>>),
+    /// Data tabulated on one 3D mesh by the Python layer.
+    Tabulated3(Arc<Tabulated<PolyMesh3, 3>>),
 }
 
 /// A problem (private handle; see `gradvi.Problem`).
@@ -50,16 +54,16 @@ pub struct Misses {
     pub count: AtomicUsize,
     /// Calls of Python fallbacks.
     pub calls: AtomicUsize,
-    /// The first point without a value and without a fallback (datum, point).
-    pub first_unresolved: Mutex<Option<(&'static str, Point)>>,
+    /// The first point without a value and without a fallback (datum, its coordinates).
+    pub first_unresolved: Mutex<Option<(&'static str, Vec<f64>)>>,
     /// The first exception raised by a Python fallback.
     pub py_error: Mutex<Option<PyErr>>,
 }
 
 impl Misses {
-    fn unresolved(&self, what: &'static str, p: Point) {
+    fn unresolved(&self, what: &'static str, p: &[f64]) {
         if let Ok(mut g) = self.first_unresolved.lock() {
-            g.get_or_insert((what, p));
+            g.get_or_insert_with(|| (what, p.to_vec()));
         }
     }
     fn py_error(&self, e: PyErr) {
@@ -89,25 +93,29 @@ impl<T: Copy> Column<T> {
     }
 }
 
-/// A problem tabulated on a mesh (see the module docs).
-pub struct Tabulated {
+/// The exact solution ū and its gradient ∇ū, tabulated.
+type Exact<const D: usize> = (Column<f64>, Column<[f64; D]>);
+
+/// A problem tabulated on a mesh of type `M` in dimension `D` (see the module docs).
+pub struct Tabulated<M, const D: usize> {
     pub name: String,
-    pub mesh: Arc<PolyMesh>,
-    index: HashMap<[u64; 2], usize>,
-    diffusion: Option<Column<Tensor>>,
+    pub mesh: Arc<M>,
+    index: HashMap<[u64; D], usize>,
+    diffusion: Option<Column<Tensor<D>>>,
     source: Column<f64>,
     source_per_cell: bool,
     dirichlet: Column<f64>,
     neumann: Column<f64>,
-    /// One code per edge (0 Dirichlet, 1 Neumann, 2 Signorini; interior edges ignored).
+    /// One code per face (edge in 2D: 0 Dirichlet, 1 Neumann, 2 Signorini; interior faces
+    /// ignored).
     boundary: Vec<u8>,
     boundary_fallback: Option<Py<PyAny>>,
-    /// The boundary edge of each boundary midpoint.
-    edge_by_midpoint: HashMap<[u64; 2], usize>,
-    /// Boundary edge midpoints and codes, for the nearest-edge rule on unknown points.
-    boundary_points: Vec<(Point, u8)>,
+    /// The boundary face of each boundary face centre x_σ.
+    face_by_centre: HashMap<[u64; D], usize>,
+    /// Boundary face centres and codes, for the nearest-face rule on unknown points.
+    boundary_points: Vec<([f64; D], u8)>,
     constraint: Option<(ConstraintKind, Side, Column<f64>)>,
-    exact: Option<(Column<f64>, Column<Point>)>,
+    exact: Option<Exact<D>>,
     pub misses: Arc<Misses>,
 }
 
@@ -119,8 +127,48 @@ fn kind_of(code: u8) -> BoundaryKind {
     }
 }
 
-impl Tabulated {
-    fn row(&self, p: Point) -> Option<usize> {
+/// `p` and `tag` as the arguments of a Python fallback: (x, y[, z][, tag]).
+fn point_args<'py, const D: usize>(
+    py: Python<'py>,
+    p: [f64; D],
+    tag: Option<i32>,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let mut v: Vec<Bound<'py, PyAny>> = Vec::with_capacity(D + 1);
+    for c in p {
+        v.push(c.into_pyobject(py)?.into_any());
+    }
+    if let Some(t) = tag {
+        v.push(t.into_pyobject(py)?.into_any());
+    }
+    PyTuple::new(py, v)
+}
+
+/// The D×D tensor of the D² values `v` (row by row).
+fn tensor_of<const D: usize>(v: &[f64]) -> PyResult<Tensor<D>> {
+    if v.len() != D * D {
+        return Err(invalid(format!(
+            "the diffusion tensor: expected {} values on a {D}D mesh, got {}",
+            D * D,
+            v.len()
+        )));
+    }
+    Ok(std::array::from_fn(|i| {
+        std::array::from_fn(|j| v[D * i + j])
+    }))
+}
+
+/// The D values of `v` as a point (a gradient).
+fn vector_of<const D: usize>(v: &[f64]) -> PyResult<[f64; D]> {
+    <[f64; D]>::try_from(v).map_err(|_| {
+        invalid(format!(
+            "the exact gradient: expected {D} components on a {D}D mesh, got {}",
+            v.len()
+        ))
+    })
+}
+
+impl<M: Send + Sync + 'static, const D: usize> Tabulated<M, D> {
+    fn row(&self, p: [f64; D]) -> Option<usize> {
         self.index.get(&point_key(p)).copied()
     }
 
@@ -128,7 +176,7 @@ impl Tabulated {
     fn lookup<T: Copy>(
         &self,
         col: &Column<T>,
-        p: Point,
+        p: [f64; D],
         what: &'static str,
         convert: impl Fn(&Bound<'_, PyAny>) -> PyResult<T>,
         nan: T,
@@ -141,7 +189,10 @@ impl Tabulated {
             Some(cb) => {
                 self.misses.calls.fetch_add(1, Ordering::Relaxed);
                 Python::attach(|py| {
-                    match cb.call1(py, (p[0], p[1])).and_then(|r| convert(r.bind(py))) {
+                    match point_args(py, p, None)
+                        .and_then(|a| cb.call1(py, a))
+                        .and_then(|r| convert(r.bind(py)))
+                    {
                         Ok(v) => v,
                         Err(e) => {
                             self.misses.py_error(e);
@@ -151,26 +202,26 @@ impl Tabulated {
                 })
             }
             None => {
-                self.misses.unresolved(what, p);
+                self.misses.unresolved(what, &p);
                 nan
             }
         }
     }
 
-    fn scalar(&self, col: &Column<f64>, p: Point, what: &'static str) -> f64 {
+    fn scalar(&self, col: &Column<f64>, p: [f64; D], what: &'static str) -> f64 {
         self.lookup(col, p, what, |r| r.extract::<f64>(), f64::NAN)
     }
 
-    fn boundary_at(&self, x: Point, tag: i32) -> BoundaryKind {
-        if let Some(&e) = self.edge_by_midpoint.get(&point_key(x)) {
+    fn boundary_at(&self, x: [f64; D], tag: i32) -> BoundaryKind {
+        if let Some(&e) = self.face_by_centre.get(&point_key(x)) {
             return kind_of(self.boundary[e]);
         }
         self.misses.count.fetch_add(1, Ordering::Relaxed);
         if let Some(cb) = &self.boundary_fallback {
             self.misses.calls.fetch_add(1, Ordering::Relaxed);
             return Python::attach(|py| {
-                match cb
-                    .call1(py, (x[0], x[1], tag))
+                match point_args(py, x, Some(tag))
+                    .and_then(|a| cb.call1(py, a))
                     .and_then(|r| r.bind(py).extract::<u8>())
                 {
                     Ok(c) => kind_of(c),
@@ -181,10 +232,10 @@ impl Tabulated {
                 }
             });
         }
-        // nearest boundary edge of the tabulated mesh (the warm start's coarse meshes)
+        // nearest boundary face of the tabulated mesh (the warm start's coarse meshes)
         let mut best = (f64::INFINITY, 0u8);
         for &(m, c) in &self.boundary_points {
-            let d = (m[0] - x[0]).powi(2) + (m[1] - x[1]).powi(2);
+            let d: f64 = (0..D).map(|i| (m[i] - x[i]).powi(2)).sum();
             if d < best.0 {
                 best = (d, c);
             }
@@ -193,7 +244,7 @@ impl Tabulated {
     }
 
     /// The `gradvi::problem::Problem` whose closures read this table.
-    pub fn problem(self: &Arc<Self>) -> Problem {
+    pub fn problem(self: &Arc<Self>) -> Problem<D> {
         let t = Arc::clone(self);
         let mut pb = Problem::new(
             &self.name,
@@ -213,11 +264,8 @@ impl Tabulated {
                     col,
                     p,
                     "the diffusion tensor A",
-                    |r| {
-                        let v: [f64; 4] = r.extract()?;
-                        Ok([[v[0], v[1]], [v[2], v[3]]])
-                    },
-                    [[f64::NAN; 2]; 2],
+                    |r| tensor_of::<D>(&r.extract::<Vec<f64>>()?),
+                    [[f64::NAN; D]; D],
                 )
             }));
         }
@@ -258,8 +306,8 @@ impl Tabulated {
                         col,
                         p,
                         "the exact gradient",
-                        |r| r.extract::<[f64; 2]>(),
-                        [f64::NAN; 2],
+                        |r| vector_of::<D>(&r.extract::<Vec<f64>>()?),
+                        [f64::NAN; D],
                     )
                 }),
             );
@@ -293,6 +341,39 @@ impl PyProblem {
                 }
                 Ok((t.problem(), Some(Arc::clone(&t.misses))))
             }
+            Spec::Tabulated3(_) => Err(gradvi::Error::InvalidData(
+                "this problem was tabulated on a 3D mesh, and the mesh to solve on is planar"
+                    .into(),
+            )),
+        }
+    }
+
+    /// As [`PyProblem::instantiate`], on a 3D mesh: only problems built in Python (callables
+    /// of (x, y, z)) are defined there; built-in problems and problem files are planar.
+    pub fn instantiate3(
+        &self,
+        mesh: &Arc<PolyMesh3>,
+    ) -> gradvi::Result<(Problem<3>, Option<Arc<Misses>>)> {
+        match &self.spec {
+            Spec::Tabulated3(t) if Arc::ptr_eq(&t.mesh, mesh) => {
+                Ok((t.problem(), Some(Arc::clone(&t.misses))))
+            }
+            Spec::Tabulated3(_) => Err(gradvi::Error::InvalidData(
+                "this problem was tabulated on another mesh".into(),
+            )),
+            Spec::Tabulated(_) => Err(gradvi::Error::InvalidData(
+                "this problem was tabulated on a planar mesh, and the mesh to solve on is 3D"
+                    .into(),
+            )),
+            Spec::Builtin { name, .. } => Err(gradvi::Error::InvalidData(format!(
+                "the built-in problem {name:?} is planar and cannot be solved on a 3D mesh; \
+                 build a 3D problem with gradvi.Problem(...) and callables of (x, y, z)"
+            ))),
+            Spec::File(pf) => Err(gradvi::Error::InvalidData(format!(
+                "the problem file {} is planar (x, y) and cannot be solved on a 3D mesh yet; \
+                 build a 3D problem with gradvi.Problem(...) and callables of (x, y, z)",
+                pf.path.display()
+            ))),
         }
     }
 
@@ -301,7 +382,7 @@ impl PyProblem {
         match &self.spec {
             Spec::Builtin { name, params } => builtin(name, params).ok().map(|pf| pf.problem()),
             Spec::File(pf) => Some(pf.problem()),
-            Spec::Tabulated(_) => None,
+            Spec::Tabulated(_) | Spec::Tabulated3(_) => None,
         }
     }
 }
@@ -368,7 +449,10 @@ fn side_of(s: &str) -> PyResult<Side> {
 }
 
 /// The row of each tabulated point (the first row where a point is repeated).
-fn point_index(points: impl Iterator<Item = Point>, m: usize) -> HashMap<[u64; 2], usize> {
+fn point_index<const D: usize>(
+    points: impl Iterator<Item = [f64; D]>,
+    m: usize,
+) -> HashMap<[u64; D], usize> {
     let mut index = HashMap::with_capacity(m);
     for (i, p) in points.enumerate() {
         index.entry(point_key(p)).or_insert(i);
@@ -376,24 +460,29 @@ fn point_index(points: impl Iterator<Item = Point>, m: usize) -> HashMap<[u64; 2
     index
 }
 
-/// The `diffusion` column of `data` (m, 2, 2), with its `given` rows and fallback; `None`
+/// The `diffusion` column of `data` (m, D, D), with its `given` rows and fallback; `None`
 /// when absent.
-fn diffusion_column(data: &Bound<'_, PyDict>, m: usize) -> PyResult<Option<Column<Tensor>>> {
+fn diffusion_column<const D: usize>(
+    data: &Bound<'_, PyDict>,
+    m: usize,
+) -> PyResult<Option<Column<Tensor<D>>>> {
     let Some(v) = item(data, "diffusion")? else {
         return Ok(None);
     };
-    let a: PyReadonlyArray3<'_, f64> = v
-        .extract()
-        .map_err(|_| invalid("diffusion: expected a float64 array of shape (m, 2, 2)"))?;
+    let a: PyReadonlyArray3<'_, f64> = v.extract().map_err(|_| {
+        invalid(format!(
+            "diffusion: expected a float64 array of shape (m, {D}, {D})"
+        ))
+    })?;
     let a = a.as_array();
-    if a.shape() != [m, 2, 2] {
+    if a.shape() != [m, D, D] {
         return Err(invalid(format!(
-            "diffusion: expected shape ({m}, 2, 2), got {:?}",
+            "diffusion: expected shape ({m}, {D}, {D}), got {:?}",
             a.shape()
         )));
     }
     let values = (0..m)
-        .map(|i| [[a[[i, 0, 0]], a[[i, 0, 1]]], [a[[i, 1, 0]], a[[i, 1, 1]]]])
+        .map(|i| std::array::from_fn(|r| std::array::from_fn(|c| a[[i, r, c]])))
         .collect();
     Ok(Some(Column {
         values,
@@ -402,11 +491,11 @@ fn diffusion_column(data: &Bound<'_, PyDict>, m: usize) -> PyResult<Option<Colum
     }))
 }
 
-/// The `boundary` codes of `data`, one per edge (0 Dirichlet, 1 Neumann, 2 Signorini; all 0
-/// when absent).
-fn boundary_codes(data: &Bound<'_, PyDict>, n_edges: usize) -> PyResult<Vec<u8>> {
+/// The `boundary` codes of `data`, one per face (edge in 2D: 0 Dirichlet, 1 Neumann, 2
+/// Signorini; all 0 when absent).
+fn boundary_codes(data: &Bound<'_, PyDict>, n_faces: usize, noun: &str) -> PyResult<Vec<u8>> {
     let boundary: Vec<u8> = match item(data, "boundary")? {
-        None => vec![0; n_edges],
+        None => vec![0; n_faces],
         Some(v) => {
             let a: PyReadonlyArray1<'_, u8> = v
                 .extract()
@@ -414,9 +503,9 @@ fn boundary_codes(data: &Bound<'_, PyDict>, n_edges: usize) -> PyResult<Vec<u8>>
             a.as_array().to_vec()
         }
     };
-    if boundary.len() != n_edges || boundary.iter().any(|&c| c > 2) {
+    if boundary.len() != n_faces || boundary.iter().any(|&c| c > 2) {
         return Err(invalid(format!(
-            "boundary: expected one code 0, 1 or 2 per edge ({n_edges} edges)"
+            "boundary: expected one code 0, 1 or 2 per {noun} ({n_faces} {noun}s)"
         )));
     }
     Ok(boundary)
@@ -444,27 +533,30 @@ fn constraint_column(
     Ok(Some((kind, side, required_scalar(data, "barrier", m)?)))
 }
 
-/// The exact solution of `data`: `exact_u` and its gradient `exact_grad` (m, 2); `None` when
+/// The exact solution of `data`: `exact_u` and its gradient `exact_grad` (m, D); `None` when
 /// there is no `exact_u`.
-fn exact_columns(
-    data: &Bound<'_, PyDict>,
-    m: usize,
-) -> PyResult<Option<(Column<f64>, Column<Point>)>> {
+fn exact_columns<const D: usize>(data: &Bound<'_, PyDict>, m: usize) -> PyResult<Option<Exact<D>>> {
     let Some(u) = scalar_col(data, "exact_u", m)? else {
         return Ok(None);
     };
     let g = item(data, "exact_grad")?.ok_or_else(|| invalid("exact_grad: missing"))?;
-    let g: PyReadonlyArray2<'_, f64> = g
-        .extract()
-        .map_err(|_| invalid("exact_grad: expected a float64 array of shape (m, 2)"))?;
+    let g: PyReadonlyArray2<'_, f64> = g.extract().map_err(|_| {
+        invalid(format!(
+            "exact_grad: expected a float64 array of shape (m, {D})"
+        ))
+    })?;
     let g = g.as_array();
-    if g.shape() != [m, 2] {
+    if g.shape() != [m, D] {
         return Err(invalid(format!(
-            "exact_grad: expected shape ({m}, 2), got {:?}",
+            "exact_grad: expected shape ({m}, {D}), got {:?}",
             g.shape()
         )));
     }
-    let values = g.rows().into_iter().map(|r| [r[0], r[1]]).collect();
+    let values = g
+        .rows()
+        .into_iter()
+        .map(|r| std::array::from_fn(|i| r[i]))
+        .collect();
     let grad = Column {
         values,
         given: given_rows(data, "exact_grad", m)?,
@@ -495,8 +587,8 @@ impl PyProblem {
         })
     }
 
-    /// A problem tabulated on `mesh` at the rows of `points` (m, 2); see the module docs for
-    /// the keys of `data`.
+    /// A problem tabulated on the planar `mesh` at the rows of `points` (m, 2); see the
+    /// module docs for the keys of `data`.
     #[staticmethod]
     fn tabulated(
         name: String,
@@ -504,49 +596,37 @@ impl PyProblem {
         points: PyReadonlyArray2<'_, f64>,
         data: &Bound<'_, PyDict>,
     ) -> PyResult<Self> {
-        crate::guard_attached(|| {
-            let pts = points.as_array();
-            if pts.ncols() != 2 {
-                return Err(invalid("points must have shape (m, 2)"));
-            }
-            let m = pts.nrows();
-            let index = point_index(pts.rows().into_iter().map(|r| [r[0], r[1]]), m);
-            let mesh_ref = Arc::clone(&mesh.mesh);
-            let diffusion = diffusion_column(data, m)?;
-            let boundary = boundary_codes(data, mesh_ref.n_edges())?;
-            let constraint = constraint_column(data, m)?;
-            let exact = exact_columns(data, m)?;
-            let boundary_points = mesh_ref
-                .boundary_edges()
-                .iter()
-                .map(|&e| (mesh_ref.edge_midpoint(e), boundary[e]))
-                .collect();
-            let edge_by_midpoint = mesh_ref
-                .boundary_edges()
-                .iter()
-                .map(|&e| (point_key(mesh_ref.edge_midpoint(e)), e))
-                .collect();
-            let t = Tabulated {
-                name,
-                index,
-                edge_by_midpoint,
-                diffusion,
-                source: required_scalar(data, "source", m)?,
-                source_per_cell: item(data, "source_per_cell")?
-                    .map_or(Ok(false), |v| v.extract::<bool>())?,
-                dirichlet: required_scalar(data, "dirichlet", m)?,
-                neumann: required_scalar(data, "neumann", m)?,
-                boundary,
-                boundary_fallback: item(data, "boundary_fallback")?.map(Bound::unbind),
-                boundary_points,
-                constraint,
-                exact,
-                mesh: mesh_ref,
-                misses: Arc::new(Misses::default()),
-            };
-            Ok(PyProblem {
-                spec: Spec::Tabulated(Arc::new(t)),
+        let m = &mesh.mesh;
+        let faces = m
+            .boundary_edges()
+            .iter()
+            .map(|&e| (e, m.edge_midpoint(e)))
+            .collect();
+        let t = tabulate(name, Arc::clone(m), m.n_edges(), faces, points, data)?;
+        Ok(PyProblem {
+            spec: Spec::Tabulated(Arc::new(t)),
+        })
+    }
+
+    /// A problem tabulated on the 3D `mesh` at the rows of `points` (m, 3), as `tabulated`
+    /// (the boundary codes are per face, the tensors 3×3, the gradients have 3 components).
+    #[staticmethod]
+    fn tabulated3(
+        name: String,
+        mesh: &PyMesh3,
+        points: PyReadonlyArray2<'_, f64>,
+        data: &Bound<'_, PyDict>,
+    ) -> PyResult<Self> {
+        let m = &mesh.mesh;
+        let faces = (0..m.n_boundary_faces())
+            .map(|i| {
+                let f = m.boundary_face(i);
+                (f, m.face_centre(f))
             })
+            .collect();
+        let t = tabulate(name, Arc::clone(m), m.n_faces(), faces, points, data)?;
+        Ok(PyProblem {
+            spec: Spec::Tabulated3(Arc::new(t)),
         })
     }
 
@@ -556,6 +636,7 @@ impl PyProblem {
             Spec::Builtin { .. } => self.describe().map(|p| p.name).unwrap_or_default(),
             Spec::File(pf) => pf.name.clone(),
             Spec::Tabulated(t) => t.name.clone(),
+            Spec::Tabulated3(t) => t.name.clone(),
         }
     }
     #[getter]
@@ -563,7 +644,7 @@ impl PyProblem {
         match &self.spec {
             Spec::Builtin { .. } => "builtin",
             Spec::File(_) => "file",
-            Spec::Tabulated(_) => "python",
+            Spec::Tabulated(_) | Spec::Tabulated3(_) => "python",
         }
     }
     #[getter]
@@ -586,7 +667,7 @@ impl PyProblem {
         match &self.spec {
             Spec::Builtin { params, .. } => params.clone(),
             Spec::File(pf) => pf.parameters.clone(),
-            Spec::Tabulated(_) => Vec::new(),
+            Spec::Tabulated(_) | Spec::Tabulated3(_) => Vec::new(),
         }
     }
     /// The scheme the file asks for (`scheme = ...`), if any.
@@ -640,6 +721,7 @@ impl PyProblem {
         };
         match &self.spec {
             Spec::Tabulated(t) => t.constraint.as_ref().map(|(k, s, _)| name(*k, *s)),
+            Spec::Tabulated3(t) => t.constraint.as_ref().map(|(k, s, _)| name(*k, *s)),
             _ => self.describe()?.constraint.map(|c| name(c.kind, c.side)),
         }
     }
@@ -648,9 +730,55 @@ impl PyProblem {
     fn has_exact(&self) -> bool {
         match &self.spec {
             Spec::Tabulated(t) => t.exact.is_some(),
+            Spec::Tabulated3(t) => t.exact.is_some(),
             _ => self.describe().is_some_and(|p| p.exact.is_some()),
         }
     }
+}
+
+/// The table of `data` at the rows of `points` (m, D) on `mesh`, which has `n_faces` faces
+/// (edges in 2D), `boundary` listing its boundary faces with their centres x_σ.
+fn tabulate<M, const D: usize>(
+    name: String,
+    mesh: Arc<M>,
+    n_faces: usize,
+    boundary: Vec<(usize, [f64; D])>,
+    points: PyReadonlyArray2<'_, f64>,
+    data: &Bound<'_, PyDict>,
+) -> PyResult<Tabulated<M, D>> {
+    crate::guard_attached(|| {
+        let pts = points.as_array();
+        if pts.ncols() != D {
+            return Err(invalid(format!("points must have shape (m, {D})")));
+        }
+        let m = pts.nrows();
+        let index = point_index(
+            pts.rows()
+                .into_iter()
+                .map(|r| std::array::from_fn(|i| r[i])),
+            m,
+        );
+        let noun = if D == 2 { "edge" } else { "face" };
+        let codes = boundary_codes(data, n_faces, noun)?;
+        Ok(Tabulated {
+            name,
+            index,
+            face_by_centre: boundary.iter().map(|&(f, x)| (point_key(x), f)).collect(),
+            boundary_points: boundary.iter().map(|&(f, x)| (x, codes[f])).collect(),
+            diffusion: diffusion_column(data, m)?,
+            source: required_scalar(data, "source", m)?,
+            source_per_cell: item(data, "source_per_cell")?
+                .map_or(Ok(false), |v| v.extract::<bool>())?,
+            dirichlet: required_scalar(data, "dirichlet", m)?,
+            neumann: required_scalar(data, "neumann", m)?,
+            boundary: codes,
+            boundary_fallback: item(data, "boundary_fallback")?.map(Bound::unbind),
+            constraint: constraint_column(data, m)?,
+            exact: exact_columns(data, m)?,
+            mesh,
+            misses: Arc::new(Misses::default()),
+        })
+    })
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -2,18 +2,24 @@
 
 use crate::errors::INVALID_DATA;
 use crate::mesh::{PyMesh, points_array, vec_array};
+use crate::mesh3d::PyMesh3;
 use crate::problem::{Misses, PyProblem};
 use crate::to_pyerr;
 use gradvi::assembly::SystemOptions;
 use gradvi::linalg::{FactorThreads, Ordering};
-use gradvi::mesh::Point;
-use gradvi::post::contact::{contact_measure, free_boundary, neighbours};
+use gradvi::mesh3d::PolyMesh3;
+use gradvi::post::contact::{free_boundary, neighbours};
 use gradvi::post::fields::EntityFields;
 use gradvi::post::{Errors, relative_errors};
-use gradvi::scheme::{Entity, SchemeKind, SchemeOptions, build_with};
+use gradvi::problem::Problem;
+use gradvi::scheme::{
+    Entity, GradientDiscretisation, SchemeKind, SchemeOptions, build_with, build_with3,
+};
+use gradvi::solver::constraints::Constraints;
+use gradvi::solver::start::nested_start_unavailable;
 use gradvi::solver::{
     ActiveSetOptions, Cancel, Certificate, IterationLog, MarginalLoad, Method, SolveOptions,
-    Timings, WarmStart, WarmStartReport, solve_problem,
+    SolverMesh, Timings, WarmStart, WarmStartReport, solve_problem,
 };
 use gradvi::vi::Side;
 use pyo3::prelude::*;
@@ -22,8 +28,8 @@ use std::str::FromStr;
 use std::sync::atomic::Ordering as AtomicOrdering;
 use std::sync::{Arc, Mutex};
 
-/// Everything a solve produces, owned (no borrow of the mesh or the scheme).
-struct Output {
+/// Everything a solve in dimension `D` produces, owned (no borrow of the mesh or the scheme).
+struct Output<const D: usize> {
     problem: String,
     scheme: &'static str,
     n_unknowns: usize,
@@ -32,11 +38,11 @@ struct Output {
     u: Vec<f64>,
     u_cell: Vec<f64>,
     u_vertex: Vec<f64>,
-    gradient: Vec<Point>,
+    gradient: Vec<[f64; D]>,
     entity_kind: Vec<u8>,
     entity_index: Vec<i64>,
     u_fields: EntityFields,
-    constrained: Option<Constrained>,
+    constrained: Option<Constrained<D>>,
     niter: usize,
     method: Method,
     log: Vec<IterationLog>,
@@ -49,11 +55,11 @@ struct Output {
     iterates: Vec<Vec<f64>>,
 }
 
-struct Constrained {
+struct Constrained<const D: usize> {
     kind: &'static str,
     side: Side,
     dofs: Vec<i64>,
-    points: Vec<Point>,
+    points: Vec<[f64; D]>,
     measures: Vec<f64>,
     barrier: Vec<f64>,
     multiplier: Vec<f64>,
@@ -65,7 +71,7 @@ struct Constrained {
     active_edge_sums: Option<Vec<f64>>,
     multiplier_edge_sums: Option<Vec<f64>>,
     contact_measure: f64,
-    free_boundary: Vec<Point>,
+    free_boundary: Vec<[f64; D]>,
 }
 
 /// The options of one solve, checked.
@@ -114,15 +120,26 @@ fn factor_threads(name: &str) -> gradvi::Result<FactorThreads> {
     }
 }
 
-fn run(
-    mesh: &Arc<gradvi::mesh::PolyMesh>,
-    problem: &PyProblem,
-    o: &Options,
-) -> gradvi::Result<Output> {
-    let (pb, _) = problem.instantiate(mesh)?;
-    let scheme = build_with(o.kind, mesh, &o.scheme)?;
-    let s = scheme.as_ref();
-    let sol = solve_problem(s, &pb, &o.solve)?;
+/// The points of the discrete free boundary of an active set.
+type FreeBoundary<'s, const D: usize> = &'s dyn Fn(&Constraints<D>, &[bool]) -> Vec<[f64; D]>;
+
+/// What a solve on one mesh type adds to the common output: the points of the discrete free
+/// boundary, and an entity field summed over the faces of each cell.
+struct MeshOutput<'s, const D: usize> {
+    free_boundary: FreeBoundary<'s, D>,
+    face_sums: &'s dyn Fn(&EntityFields) -> Option<Vec<f64>>,
+}
+
+/// Solves `pb` with `s`, and collects the output.
+fn solve_and_collect<M: SolverMesh<D> + ?Sized, const D: usize>(
+    s: &dyn GradientDiscretisation<M, D>,
+    pb: &Problem<D>,
+    o: &SolveOptions,
+    kind: SchemeKind,
+    extra: &MeshOutput<'_, D>,
+) -> gradvi::Result<Output<D>> {
+    let sol = solve_problem(s, pb, o)?;
+    let mesh = s.mesh();
     let u = sol.u().to_vec();
     let n = u.len();
     let (entity_kind, entity_index) = (0..n)
@@ -151,10 +168,17 @@ fn run(
             active: r.active.clone(),
             multiplier_field: sol.multiplier_field(),
             active_field: sol.active_field(),
-            contact_measure: contact_measure(c, &r.active),
-            free_boundary: free_boundary(c, &r.active, &neighbours(s, c)),
-            active_edge_sums: active_fields.edge_sums_per_cell(s),
-            multiplier_edge_sums: multiplier_fields.edge_sums_per_cell(s),
+            // Σ_j m_j over the active constrained unknowns
+            contact_measure: c
+                .dofs
+                .iter()
+                .zip(&r.active)
+                .filter(|(_, a)| **a)
+                .map(|(d, _)| d.measure)
+                .sum(),
+            free_boundary: (extra.free_boundary)(c, &r.active),
+            active_edge_sums: (extra.face_sums)(&active_fields),
+            multiplier_edge_sums: (extra.face_sums)(&multiplier_fields),
             active_fields,
             multiplier_fields,
         }
@@ -165,12 +189,12 @@ fn run(
         .map(|ex| relative_errors(s, &u, &*ex.u, &*ex.grad));
     let exact_cell = pb.exact.as_ref().map(|ex| {
         (0..mesh.n_cells())
-            .map(|k| (ex.u)(mesh.centroid(k)))
+            .map(|k| (ex.u)(mesh.cell_centre(k)))
             .collect()
     });
     Ok(Output {
         problem: pb.name.clone(),
-        scheme: o.kind.name(),
+        scheme: kind.name(),
         n_unknowns: n,
         n_skeleton: s.n_skeleton(),
         n_condensed: sol.system.n_condensed(),
@@ -195,6 +219,61 @@ fn run(
     })
 }
 
+/// A solve on a planar mesh.
+fn run(
+    mesh: &Arc<gradvi::mesh::PolyMesh>,
+    problem: &PyProblem,
+    o: &Options,
+) -> gradvi::Result<Output<2>> {
+    let (pb, _) = problem.instantiate(mesh)?;
+    let scheme = build_with(o.kind, mesh, &o.scheme)?;
+    let s = scheme.as_ref();
+    let extra = MeshOutput {
+        free_boundary: &|c, active| free_boundary(c, active, &neighbours(s, c)),
+        face_sums: &|f| f.edge_sums_per_cell(s),
+    };
+    solve_and_collect(s, &pb, &o.solve, o.kind, &extra)
+}
+
+/// A solve on a 3D mesh. The nested warm start is asked for by default; while the library
+/// refuses it on 3D meshes ([`gradvi::solver::start::nested_start_unavailable`]), the solve
+/// runs from the cold start and the solution's warm-start report says so.
+fn run3(mesh: &Arc<PolyMesh3>, problem: &PyProblem, o: &Options) -> gradvi::Result<Output<3>> {
+    let (pb, _) = problem.instantiate3(mesh)?;
+    let scheme = build_with3(o.kind, mesh, &o.scheme)?;
+    let s = scheme.as_ref();
+    // the field of each face unknown summed over the faces of each cell (VTU cell data)
+    let face_sums = |f: &EntityFields| {
+        f.edge.as_ref().map(|e| {
+            (0..mesh.n_cells())
+                .map(|k| mesh.cell_faces(k).iter().map(|&s| e[s as usize]).sum())
+                .collect()
+        })
+    };
+    let extra = MeshOutput {
+        free_boundary: &|_, _| Vec::new(),
+        face_sums: &face_sums,
+    };
+    match solve_and_collect(s, &pb, &o.solve, o.kind, &extra) {
+        Err(e)
+            if o.solve.warm_start == WarmStart::Nested
+                && e.to_string() == nested_start_unavailable(3).to_string() =>
+        {
+            let cold = SolveOptions {
+                warm_start: WarmStart::Cold,
+                ..o.solve.clone()
+            };
+            let mut out = solve_and_collect(s, &pb, &cold, o.kind, &extra)?;
+            out.warm_start = Some(WarmStartReport {
+                skipped: Some(format!("{e} (solved from the cold start)")),
+                ..Default::default()
+            });
+            Ok(out)
+        }
+        r => r,
+    }
+}
+
 /// The exception of a failed solve of a tabulated problem whose data was missing somewhere:
 /// the exception of a Python fallback, or an `InvalidDataError` that says which datum and point.
 fn miss_error(py: Python<'_>, e: &gradvi::Error, misses: &Misses) -> Option<PyErr> {
@@ -203,11 +282,16 @@ fn miss_error(py: Python<'_>, e: &gradvi::Error, misses: &Misses) -> Option<PyEr
         pe.set_cause(py, Some(cause));
         return Some(pe);
     }
-    let (what, p) = misses.first_unresolved.lock().ok().and_then(|g| *g)?;
+    let (what, p) = misses
+        .first_unresolved
+        .lock()
+        .ok()
+        .and_then(|g| g.clone())?;
+    let p: Vec<String> = p.iter().map(f64::to_string).collect();
     Some(INVALID_DATA.new_err(format!(
-        "{e} ({what} was asked at ({}, {}), a point where no value was given: array data is \
+        "{e} ({what} was asked at ({}), a point where no value was given: array data is \
          known only on the mesh it was given for)",
-        p[0], p[1]
+        p.join(", ")
     )))
 }
 
@@ -221,9 +305,9 @@ fn entity_fields<'py>(py: Python<'py>, f: EntityFields) -> PyResult<Bound<'py, P
     Ok(d)
 }
 
-fn to_dict<'py>(
+fn to_dict<'py, const D: usize>(
     py: Python<'py>,
-    o: Output,
+    o: Output<D>,
     misses: Option<&Misses>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -339,7 +423,7 @@ fn json<'py, T: serde::Serialize>(py: Python<'py>, v: &T) -> PyResult<Bound<'py,
 #[allow(clippy::too_many_arguments)]
 fn solve<'py>(
     py: Python<'py>,
-    mesh: &PyMesh,
+    mesh: AnyMesh<'py>,
     problem: &PyProblem,
     scheme: &str,
     alpha: f64,
@@ -401,15 +485,50 @@ fn solve<'py>(
         })
     };
     let o = options().map_err(|e| to_pyerr(py, &e))?;
-    let mesh = Arc::clone(&mesh.mesh);
     let misses = match &problem.spec {
         crate::problem::Spec::Tabulated(t) => Some(Arc::clone(&t.misses)),
+        crate::problem::Spec::Tabulated3(t) => Some(Arc::clone(&t.misses)),
         _ => None,
     };
-    // the solve runs detached from the interpreter; panics become InternalError
-    let out = py.detach(|| {
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(&mesh, problem, &o)))
-    });
+    match mesh {
+        AnyMesh::Two(m) => {
+            let m = Arc::clone(&m.mesh);
+            let out = detached(py, || run(&m, problem, &o));
+            finish(py, out, &raised, misses.as_deref())
+        }
+        AnyMesh::Three(m) => {
+            let m = Arc::clone(&m.mesh);
+            let out = detached(py, || run3(&m, problem, &o));
+            finish(py, out, &raised, misses.as_deref())
+        }
+    }
+}
+
+/// A mesh of either dimension.
+#[derive(FromPyObject)]
+enum AnyMesh<'py> {
+    Two(PyRef<'py, PyMesh>),
+    Three(PyRef<'py, PyMesh3>),
+}
+
+/// The result of `f`, run detached from the interpreter (other Python threads, and the signal
+/// checks of the cancel hook, run meanwhile); a panic is kept as its payload.
+fn detached<T: Send>(
+    py: Python<'_>,
+    f: impl FnOnce() -> gradvi::Result<T> + Send,
+) -> std::thread::Result<gradvi::Result<T>> {
+    py.detach(|| std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)))
+}
+
+/// The dict of a solve's output, or its exception: the exception a signal handler raised
+/// during the solve (`raised`: KeyboardInterrupt for Ctrl-C), the exception of a Python
+/// fallback or a missing tabulated value, the gradvi error's, or `InternalError` for a panic.
+fn finish<'py, const D: usize>(
+    py: Python<'py>,
+    out: std::thread::Result<gradvi::Result<Output<D>>>,
+    raised: &Mutex<Option<PyErr>>,
+    misses: Option<&Misses>,
+) -> PyResult<Bound<'py, PyDict>> {
     let out = match out {
         Ok(Ok(v)) => v,
         Ok(Err(gradvi::Error::Interrupted)) => {
@@ -419,14 +538,14 @@ fn solve<'py>(
             }));
         }
         Ok(Err(e)) => {
-            if let Some(err) = misses.as_ref().and_then(|m| miss_error(py, &e, m)) {
+            if let Some(err) = misses.and_then(|m| miss_error(py, &e, m)) {
                 return Err(err);
             }
             return Err(to_pyerr(py, &e));
         }
         Err(p) => return Err(crate::errors::panic_error(p)),
     };
-    crate::guard_attached(|| to_dict(py, out, misses.as_deref()))
+    crate::guard_attached(|| to_dict(py, out, misses))
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

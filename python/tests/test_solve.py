@@ -156,7 +156,7 @@ def test_solution_attributes_are_declared_and_typed(test3_mesh):
         "u", "u_cell", "u_vertex", "u_edge", "gradient", "dof_kind", "dof_index", "n_unknowns", "n_condensed",
         "u_exact_cell", "constraint", "constrained_dofs", "constrained_points", "constrained_measures", "barrier",
         "multiplier", "active", "active_set", "n_active", "multiplier_field", "active_field", "active_cells",
-        "active_vertices", "active_edges", "contact_measure", "free_boundary",
+        "active_vertices", "active_edges", "contact_measure", "free_boundary", "u_face", "active_faces", "dim",
     }
     assert documented <= properties
     assert "__getattr__" not in vars(gradvi.Solution) and "__getattr__" not in vars(gradvi.Certificate)
@@ -165,7 +165,8 @@ def test_solution_attributes_are_declared_and_typed(test3_mesh):
              "untabulated_points", "fallback_calls", "iterates"}
     hints = typing.get_type_hints(gradvi.Solution)
     assert plain <= set(hints)
-    assert hints["niter"] is int and hints["certificate"] is gradvi.Certificate and hints["mesh"] is gradvi.Mesh
+    assert hints["niter"] is int and hints["certificate"] is gradvi.Certificate
+    assert hints["mesh"] == typing.Union[gradvi.Mesh, gradvi.Mesh3]
     for name in documented | plain:
         assert hasattr(sol, name), name
     assert typing.get_type_hints(gradvi.Solution.n_active.fget)["return"] is int
