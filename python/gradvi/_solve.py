@@ -478,9 +478,9 @@ def solve(
         problem: a :class:`Problem`, a built-in name (``"test3"``) or a ``.toml`` path (both
             planar); on a :class:`Mesh3`, a :class:`Problem` built from callables of
             (x, y, z).
-        scheme: ``"hmm"`` (any polygonal or polyhedral mesh), ``"p1"`` or ``"cr"`` (triangles;
-            the library refuses them on 3D meshes for now, with an
-            :class:`InvalidDataError`); default: the problem file's ``scheme``, else ``"hmm"``.
+        scheme: ``"hmm"`` (any polygonal or polyhedral mesh), ``"p1"`` or ``"cr"`` (triangles
+            or tetrahedra; other cells are refused with an :class:`InvalidDataError`);
+            default: the problem file's ``scheme``, else ``"hmm"``.
         alpha: HMM stabilisation parameter α > 0 (the other schemes accept only 1).
         c: the active-set parameter c > 0.
         max_solves: cap on the number of linear solves.
@@ -488,9 +488,7 @@ def solve(
         fallback: on cycling or the cap, fall back to projected Gauss–Seidel instead of raising.
         warm_start: ``"nested"`` (the default: an active set predicted by coarse HMM solves
             of the same problem on agglomerated meshes of the domain: same solution, fewer
-            solves on fine meshes) or ``"cold"`` (A₀ = ∅, the paper's NITER). On a 3D mesh,
-            while the library refuses the nested start there, ``"nested"`` solves from the cold
-            start and :attr:`Solution.warm_start` says so (``skipped``).
+            solves on fine meshes; 2D and 3D) or ``"cold"`` (A₀ = ∅, the paper's NITER).
         initial_active: an initial active set, one flag per constrained unknown.
         keep_iterates: keep every iterate in :attr:`Solution.iterates`.
         ordering: fill-reducing ordering of the Cholesky factorisation, ``"amd"`` or

@@ -16,7 +16,6 @@ use gradvi::scheme::{
     Entity, GradientDiscretisation, SchemeKind, SchemeOptions, build_with, build_with3,
 };
 use gradvi::solver::constraints::Constraints;
-use gradvi::solver::start::nested_start_unavailable;
 use gradvi::solver::{
     ActiveSetOptions, Cancel, Certificate, IterationLog, MarginalLoad, Method, SolveOptions,
     SolverMesh, Timings, WarmStart, WarmStartReport, solve_problem,
@@ -235,9 +234,7 @@ fn run(
     solve_and_collect(s, &pb, &o.solve, o.kind, &extra)
 }
 
-/// A solve on a 3D mesh. The nested warm start is asked for by default; while the library
-/// refuses it on 3D meshes ([`gradvi::solver::start::nested_start_unavailable`]), the solve
-/// runs from the cold start and the solution's warm-start report says so.
+/// A solve on a 3D mesh (the nested warm start agglomerates the polyhedral mesh, as in 2D).
 fn run3(mesh: &Arc<PolyMesh3>, problem: &PyProblem, o: &Options) -> gradvi::Result<Output<3>> {
     let (pb, _) = problem.instantiate3(mesh)?;
     let scheme = build_with3(o.kind, mesh, &o.scheme)?;
@@ -254,24 +251,7 @@ fn run3(mesh: &Arc<PolyMesh3>, problem: &PyProblem, o: &Options) -> gradvi::Resu
         free_boundary: &|_, _| Vec::new(),
         face_sums: &face_sums,
     };
-    match solve_and_collect(s, &pb, &o.solve, o.kind, &extra) {
-        Err(e)
-            if o.solve.warm_start == WarmStart::Nested
-                && e.to_string() == nested_start_unavailable(3).to_string() =>
-        {
-            let cold = SolveOptions {
-                warm_start: WarmStart::Cold,
-                ..o.solve.clone()
-            };
-            let mut out = solve_and_collect(s, &pb, &cold, o.kind, &extra)?;
-            out.warm_start = Some(WarmStartReport {
-                skipped: Some(format!("{e} (solved from the cold start)")),
-                ..Default::default()
-            });
-            Ok(out)
-        }
-        r => r,
-    }
+    solve_and_collect(s, &pb, &o.solve, o.kind, &extra)
 }
 
 /// The exception of a failed solve of a tabulated problem whose data was missing somewhere:
