@@ -17,6 +17,7 @@
 use super::{Counts, check_cell_count, check_memory};
 use crate::error::{Error, Result};
 use crate::mesh::budget::MemoryBudget;
+use crate::mesh::budget::try_vec;
 use crate::mesh::{Overlap, Point, PolyMesh};
 
 /// The nx × ny uniform mesh of \[0,1\]² (see the module docs for the numbering), within the
@@ -99,7 +100,7 @@ fn grid_mesh(
     let vertices = grid_vertices(nx, ny, x, y)?;
     let v = |i: usize, j: usize| j * (nx + 1) + i;
     let n_cells = shape[0] * nx * ny;
-    let mut cell_verts = Vec::with_capacity(shape[1] * n_cells);
+    let mut cell_verts = try_vec(shape[1] * n_cells, "the vertices of the cells")?;
     for j in 0..ny {
         for i in 0..nx {
             square(
@@ -109,7 +110,8 @@ fn grid_mesh(
         }
     }
     debug_assert_eq!(cell_verts.len(), shape[1] * n_cells);
-    let cell_ptr: Vec<usize> = (0..=n_cells).map(|k| shape[1] * k).collect();
+    let mut cell_ptr = try_vec(n_cells + 1, "the cell offsets")?;
+    cell_ptr.extend((0..=n_cells).map(|k| shape[1] * k));
     Ok(PolyMesh::from_flat_cells(
         vertices,
         cell_ptr,
@@ -179,7 +181,7 @@ fn grid_vertices(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<Vec<P
             )));
         }
     }
-    let mut vertices = Vec::with_capacity((nx + 1) * (ny + 1));
+    let mut vertices = try_vec((nx + 1) * (ny + 1), "the vertices")?;
     for &yj in &ys {
         vertices.extend(xs.iter().map(|&xi| [xi, yj]));
     }
