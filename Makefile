@@ -38,10 +38,10 @@ fuzz: build
 	$(DEV) fuzz --seconds $(FUZZ_SECONDS) --seed $(FUZZ_SEED) --gradvi $(BIN)
 
 ## determinism: the same solves (2D HMM and P1, 3D HMM, direct and iterative) in pools of 1, 2
-## and 4 threads, compared bit for bit with their NITER (tests/determinism.rs, #[ignore]d in
-## `make test`; `make test-external`, which CI runs, runs them too)
+## and 4 threads, compared bit for bit with their NITER (tests/determinism.rs, also part of
+## `make test`)
 determinism:
-	$(CARGO) test --test determinism -- --ignored
+	$(CARGO) test --test determinism
 
 ## lint: formatting, clippy with warnings as errors (the workspace, then the library alone:
 ## nothing of the other members' dependencies), and documentation

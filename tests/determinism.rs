@@ -12,8 +12,8 @@
 //! matrix (`linalg::csr`, chunks of 16384 rows) and more than 2^15 keys for the parallel sorts
 //! of the mesh build.
 //!
-//! The 2D cases take about a minute and the 3D case longer in the test profile: `#[ignore]`d,
-//! run by `make test-external` (CI) and `make determinism`.
+//! The four tests take about 25 s together in the test profile; they run in `make test` (and
+//! alone in `make determinism`).
 
 use gradvi::assembly::{LinearSolver, SystemOptions};
 use gradvi::mesh::MemoryBudget;
@@ -46,12 +46,14 @@ fn same_in_every_pool(what: &str, solve: impl Fn() -> Run + Sync) -> usize {
     let (u1, n1) = &runs[0];
     assert!(!u1.is_empty(), "{what}: no unknowns");
     for (t, (u, n)) in THREADS.iter().zip(&runs).skip(1) {
-        assert_eq!(n, n1, "{what}: NITER with {t} threads differs from 1 thread");
+        assert_eq!(
+            n, n1,
+            "{what}: NITER with {t} threads differs from 1 thread"
+        );
         assert_eq!(u.len(), u1.len(), "{what}: {t} threads");
         let first = u.iter().zip(u1).position(|(a, b)| a != b);
         assert_eq!(
-            first,
-            None,
+            first, None,
             "{what}: with {t} threads u differs from 1 thread at unknown {first:?}"
         );
     }
@@ -81,7 +83,6 @@ const LINEAR: [LinearSolver; 2] = [LinearSolver::Direct, LinearSolver::Iterative
 /// iterative on the cell system (rectangles, isotropic tensor); the nested start and the cold
 /// start.
 #[test]
-#[ignore = "about 20 s in the test profile: run by make test-external and make determinism"]
 fn hmm_on_squares_is_deterministic_in_the_thread_count() {
     for linear in LINEAR {
         for ws in [WarmStart::Nested, WarmStart::Cold] {
@@ -103,7 +104,6 @@ fn hmm_on_squares_is_deterministic_in_the_thread_count() {
 /// Test 3 on the Kershaw mesh of level 8 (136² distorted quadrangles) with HMM: direct, and
 /// iterative on the skeleton system.
 #[test]
-#[ignore = "about 20 s in the test profile: run by make test-external and make determinism"]
 fn hmm_on_kershaw_quadrangles_is_deterministic_in_the_thread_count() {
     for linear in LINEAR {
         let what = format!("HMM, Kershaw level 8, {linear}");
@@ -121,7 +121,6 @@ fn hmm_on_kershaw_quadrangles_is_deterministic_in_the_thread_count() {
 
 /// Test 3 on 200 × 200 squares cut into 80000 triangles (40401 vertices) with P1.
 #[test]
-#[ignore = "about 20 s in the test profile: run by make test-external and make determinism"]
 fn p1_on_triangles_is_deterministic_in_the_thread_count() {
     for linear in LINEAR {
         let what = format!("P1, 200² × 2 triangles, {linear}");
@@ -140,7 +139,6 @@ fn p1_on_triangles_is_deterministic_in_the_thread_count() {
 /// 3D solver tests) with HMM on the Kuhn tetrahedra of level 3 (6 · 16³ = 24576 cells, 50688
 /// faces), cold start (the nested start is planar), direct and iterative.
 #[test]
-#[ignore = "about a minute in the test profile: run by make test-external and make determinism"]
 fn hmm_on_tetrahedra_is_deterministic_in_the_thread_count() {
     for linear in LINEAR {
         let what = format!("HMM, Kuhn tetrahedra level 3, {linear}");

@@ -501,3 +501,25 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
     let _ = std::fs::remove_dir(&scratch);
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The status of `sh -c script`.
+    fn status_of(script: &str) -> std::process::ExitStatus {
+        Command::new("sh").arg("-c").arg(script).status().unwrap()
+    }
+
+    /// A child killed by SIGABRT (what a failed allocation ends with) and a shell's 134 are
+    /// aborts; a typed error (1), a success and another signal are not.
+    #[cfg(unix)]
+    #[test]
+    fn aborts_are_recognised() {
+        assert!(aborted(status_of("kill -ABRT $$")));
+        assert!(aborted(status_of("exit 134")));
+        assert!(!aborted(status_of("exit 1")));
+        assert!(!aborted(status_of("exit 0")));
+        assert!(!aborted(status_of("kill -TERM $$")));
+    }
+}

@@ -6,7 +6,7 @@
 use super::condense::{self, condense};
 use super::{DiscreteSystem, SolveState};
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{try_filled, try_reserve};
+use crate::mesh::budget::{try_filled, try_resize};
 use rayon::prelude::*;
 
 /// Cells per parallel task in the cell loops (large enough to amortise the task, small enough
@@ -111,10 +111,8 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         // buffers kept between calls (they are entirely rewritten where read)
         let (sbuf, gbuf) = &mut state.scratch;
         let (blocks, local) = (self.sym.maps.block_ptr.total(), self.sym.dof_map.dofs.len());
-        try_reserve(sbuf, blocks.saturating_sub(sbuf.len()), "the condensed blocks")?;
-        try_reserve(gbuf, local.saturating_sub(gbuf.len()), "the condensed loads")?;
-        sbuf.resize(blocks, 0.0);
-        gbuf.resize(local, 0.0);
+        try_resize(sbuf, blocks, 0.0, "the condensed blocks")?;
+        try_resize(gbuf, local, 0.0, "the condensed loads")?;
         self.condense_cells(&fixed, sbuf, gbuf)?;
         let values = self.gather_matrix(&fixed, sbuf)?;
         let dof_ptr = &self.sym.dof_map.dof_ptr;
@@ -208,6 +206,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// `blocks` (the condensed blocks, or the local matrices when they coincide), listed in cell
     /// order (the order of a sequential scatter, whatever the number of
     /// threads); zero in the rows and columns of fixed unknowns, whose diagonal is 1.
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if the values cannot be allocated.
     fn gather_matrix(&self, fixed: &FixedValues, blocks: &[f64]) -> crate::Result<Vec<f64>> {
         let (col_ptr, row_idx) = (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx());
         let src = &self.sym.maps.src;

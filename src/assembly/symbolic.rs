@@ -437,18 +437,18 @@ fn scatter_maps(
     // entry lands on the condensed entry (max, min) of its two unknowns
     let mut pos: Vec<u32> = try_vec(pos_ptr.total(), "the scatter positions")?;
     pos.par_extend(cell_chunks(nc).into_par_iter().flat_map_iter(|(c0, c1)| {
-            let mut out = Vec::with_capacity(pos_ptr.at(c1) - pos_ptr.at(c0));
-            for k in c0..c1 {
-                let sk = dm.skeleton(k);
-                for (b, &j) in sk.iter().enumerate() {
-                    for &i in &sk[b..] {
-                        let (i, j) = (i as usize, j as usize);
-                        out.push(find(i.max(j), i.min(j)));
-                    }
+        let mut out = Vec::with_capacity(pos_ptr.at(c1) - pos_ptr.at(c0));
+        for k in c0..c1 {
+            let sk = dm.skeleton(k);
+            for (b, &j) in sk.iter().enumerate() {
+                for &i in &sk[b..] {
+                    let (i, j) = (i as usize, j as usize);
+                    out.push(find(i.max(j), i.min(j)));
                 }
             }
-            out
-        }));
+        }
+        out
+    }));
     // condensed entry -> the local entries landing on it, in cell order
     let src = counting_sort(row_idx.len(), pos.iter().map(|&q| Some(q as usize)))?;
     Ok(ScatterMaps {

@@ -79,8 +79,7 @@ impl<const D: usize> ProblemValues<D> {
         let mesh = scheme.mesh();
         let n = scheme.n_unknowns();
         let mut sig_meas: Vec<f64> = try_filled(n, 0.0, "the Signorini measures")?;
-        let mut sig_point: Vec<Option<[f64; D]>> =
-            try_filled(n, None, "the Signorini points")?;
+        let mut sig_point: Vec<Option<[f64; D]>> = try_filled(n, None, "the Signorini points")?;
         let mut tr = Vec::new();
         for i in 0..mesh.n_boundary_faces() {
             let e = mesh.boundary_face(i);

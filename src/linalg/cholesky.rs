@@ -4,7 +4,7 @@
 //! ([`SpdFactor::solve_in_place`]).
 
 use super::ordering::{Ordering, nested_dissection};
-use crate::mesh::budget::{AllocFailure, try_reserve};
+use crate::mesh::budget::{AllocFailure, try_resize};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{
     LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
@@ -227,8 +227,7 @@ impl SpdPattern {
         let len = symbolic.len_val();
         let l_values = &mut work.values;
         l_values.clear();
-        try_reserve(l_values, len, "the Cholesky factor")?;
-        l_values.resize(len, 0.0);
+        try_resize(l_values, len, 0.0, "the Cholesky factor")?;
         let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
         let kept = work.scratch.take();
         let mem = work.scratch.insert(scratch_for(kept, req)?);

@@ -216,7 +216,8 @@ impl CsrMatrix {
     /// The full symmetric n × n matrix whose lower triangle is given in CSC form (column
     /// pointers, row indices strictly increasing within a column and ≥ the column, values), as
     /// [`crate::assembly::DiscreteSystem::condensed_pattern`] and `assemble_condensed` produce
-    /// it. See the module documentation for the sweep.
+    /// it. See the module documentation for the sweep. Its arrays are allocated fallibly:
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if they cannot be.
     ///
     /// For large matrices (at least 32768 rows) the checks and the sweep run in parallel,
     /// by chunks of rows, each gathering the left parts of its rows from the columns that reach

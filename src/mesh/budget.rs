@@ -167,6 +167,19 @@ pub fn try_reserve<T>(v: &mut Vec<T>, additional: usize, what: &str) -> Result<(
     })
 }
 
+/// `v` resized to `n` elements, new ones `value` (the fallible `Vec::resize`), or
+/// [`AllocFailure`] as [`try_reserve`]: for buffers kept from one call to the next.
+pub fn try_resize<T: Clone>(
+    v: &mut Vec<T>,
+    n: usize,
+    value: T,
+    what: &str,
+) -> Result<(), AllocFailure> {
+    try_reserve(v, n.saturating_sub(v.len()), what)?;
+    v.resize(n, value);
+    Ok(())
+}
+
 /// `n` copies of `value` (the fallible `vec![value; n]`), or [`AllocFailure`] as [`try_vec`].
 pub fn try_filled<T: Clone>(n: usize, value: T, what: &str) -> Result<Vec<T>, AllocFailure> {
     let mut v = try_vec(n, what)?;
@@ -365,6 +378,11 @@ mod tests {
         let v = try_filled(5, 1.5f64, "five values").unwrap();
         assert_eq!(v, vec![1.5; 5]);
         assert_eq!(try_vec::<u32>(7, "seven").unwrap().capacity(), 7);
+        let mut w = vec![1u8, 2];
+        try_resize(&mut w, 4, 9, "four").unwrap();
+        assert_eq!(w, [1, 2, 9, 9]);
+        assert!(try_resize(&mut w, usize::MAX, 0, "too many").is_err());
+        assert_eq!(w, [1, 2, 9, 9]);
         let n = usize::MAX / 16;
         let f = try_vec::<[f64; 2]>(n, "the centroids of the cells").unwrap_err();
         assert_eq!(f.bytes, n as u64 * 16);

@@ -17,8 +17,8 @@
 
 use super::Polyhedra;
 use crate::error::MeshError;
-use crate::mesh::budget::{try_filled, try_vec};
 use crate::mesh::buckets::counting_sort;
+use crate::mesh::budget::{try_filled, try_vec};
 use rayon::prelude::*;
 
 /// No partner side: a boundary face.
@@ -34,7 +34,10 @@ pub(crate) struct FaceMatch {
 
 /// Per side, the cell it belongs to.
 pub(crate) fn side_cells(p: &Polyhedra) -> Result<Vec<u32>, MeshError> {
-    let mut out = try_vec(p.face_ptr.len().saturating_sub(1), "the cells of the face sides")?;
+    let mut out = try_vec(
+        p.face_ptr.len().saturating_sub(1),
+        "the cells of the face sides",
+    )?;
     for k in 0..p.n_cells() {
         out.extend(p.cell_sides(k).map(|_| k as u32));
     }

@@ -203,6 +203,42 @@ mod tests {
 
     use crate::mesh::generate::total_area;
 
+    /// Runs this test again in a child under `ulimit -v` of 1 GiB, where a 5000 × 5000 mesh
+    /// passes the estimate against a budget of 1 TiB (the caller's choice) but its arrays
+    /// cannot be mapped: the vertices (400 MB) fit, the cells' vertex list (800 MB) does not,
+    /// and its allocation fails as a typed out-of-memory error naming it, not an abort.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn an_allocation_the_address_space_refuses_is_a_typed_error() {
+        const NAME: &str = "mesh::generate::cartesian::tests::an_allocation_the_address_space_refuses_is_a_typed_error";
+        if std::env::var_os("GRADVI_ALLOC_CHILD").is_some() {
+            let big = MemoryBudget::new(1 << 40);
+            let e = cartesian_rect_within(5000, 5000, [0.0, 1.0], [0.0, 1.0], big).unwrap_err();
+            assert!(e.is_out_of_memory(), "{e}");
+            assert!(
+                e.to_string()
+                    .starts_with("the vertices of the cells would need about 762.9 MiB"),
+                "{e}"
+            );
+            return;
+        }
+        let out = std::process::Command::new("sh")
+            .arg("-c")
+            .arg("ulimit -v 1048576 && exec \"$0\" \"$@\"")
+            .arg(std::env::current_exe().unwrap())
+            .args(["--exact", NAME, "--test-threads", "1"])
+            .env("GRADVI_ALLOC_CHILD", "1")
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "the child under ulimit -v failed ({}): {said}",
+            out.status
+        );
+        assert!(said.contains("1 passed"), "the child ran no test: {said}");
+    }
+
     #[test]
     fn unit_square_counts_area_and_h() {
         for (nx, ny) in [(1, 1), (4, 4), (3, 5), (64, 64)] {

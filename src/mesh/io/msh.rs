@@ -17,9 +17,9 @@
 //!
 //! Binary files and the formats 4.0 and 3.0 are rejected with a clear message.
 
-use crate::mesh::budget::{try_reserve, try_vec};
 use super::{Tokens, capacity, read_text};
 use crate::error::Result;
+use crate::mesh::budget::{try_reserve, try_vec};
 use crate::mesh::{
     MemoryBudget, NonBoundaryTag, Overlap, Point, PolyMesh, drop_unused_vertices_flat,
 };

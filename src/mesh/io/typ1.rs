@@ -22,9 +22,9 @@
 //! the mesh: every listed edge must be an edge of the mesh between the cells it names, and every
 //! edge (boundary edge) of the mesh must be listed exactly once.
 
-use crate::mesh::budget::{try_filled, try_reserve, try_vec};
 use super::{Tokens, capacity, read_text};
 use crate::error::Result;
+use crate::mesh::budget::{try_filled, try_reserve, try_vec};
 use crate::mesh::{MemoryBudget, NO_CELL, Point, PolyMesh};
 use std::path::Path;
 

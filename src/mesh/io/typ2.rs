@@ -16,9 +16,9 @@
 //! Edges are derived from consecutive vertices; hanging nodes must be listed as cell vertices
 //! (180° angles), as in every typ2 file of the FVCA5 benchmark.
 
-use crate::mesh::budget::try_vec;
 use super::{Tokens, capacity, read_text};
 use crate::error::{Error, Result};
+use crate::mesh::budget::try_vec;
 use crate::mesh::{MAX_CELL_VERTICES, MemoryBudget, Point, PolyMesh};
 use std::io::Write;
 use std::path::Path;

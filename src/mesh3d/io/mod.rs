@@ -68,6 +68,7 @@ pub(crate) fn too_large(path: &Path, source: MeshError) -> Error {
 
 /// Keeps the vertices that `cells` uses, in their order, and renumbers `cells` and `faces`
 /// (ids into `nodes`) accordingly; a face vertex no cell uses becomes `u32::MAX`.
+/// [`Error::OutOfMemory`] if the renumbering or the vertices cannot be allocated.
 pub(crate) fn compact_vertices(
     nodes: &[Point3],
     cells: &mut [u32],
