@@ -11,7 +11,7 @@ FVCA5_MESHES ?=
 PYTHON := /usr/bin/python3
 REFDIR := replication/results/reference
 
-.PHONY: all build test test-external fuzz lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-amg bench-baseline clean
+.PHONY: all build test test-external fuzz determinism lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-amg bench-baseline clean
 
 all: build
 
@@ -39,6 +39,12 @@ FUZZ_SECONDS ?= 300
 FUZZ_SEED ?= 1
 fuzz: build
 	$(DEV) fuzz --seconds $(FUZZ_SECONDS) --seed $(FUZZ_SEED) --gradvi $(BIN)
+
+## determinism: the same solves (2D HMM and P1, 3D HMM, direct and iterative) in pools of 1, 2
+## and 4 threads, compared bit for bit with their NITER (tests/determinism.rs, also part of
+## `make test`)
+determinism:
+	$(CARGO) test --test determinism
 
 ## lint: formatting, clippy with warnings as errors (the workspace, then the library alone:
 ## nothing of the other members' dependencies), and documentation

@@ -14,8 +14,14 @@
 //! (`make fuzz` gives the release build), else this program's `gradvi` mode (the same command
 //! line, [`gradvi_cli`]). A case passes when the child exits with 0 (then the CLI has checked
 //! the certificate, or read and validated the 3D mesh) or 1 (a typed error, one line on
-//! stderr), in time, with no panic message. Anything else is a failure, and its input is kept
+//! stderr), in time, with no panic message. Anything else is a failure (an abort, status 134
+//! or signal 6, as a failed allocation gives, a crash, a panic, a hang), and its input is kept
 //! in the scratch directory for reproduction.
+//!
+//! Before the mutations, the fixed cases of [`HUGE_REQUESTS`] ask for meshes far larger than the
+//! memory limit (a 2D solve and a 3D mesh on generated meshes of a huge level): each must be
+//! refused with the typed out-of-memory error (exit status 1, `would need about …`), which
+//! shows that the limit is there and that a request it cannot hold ends cleanly.
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -243,6 +249,52 @@ fn mutate(data: &[u8], rng: &mut Rng) -> Vec<u8> {
     t
 }
 
+/// The fixed cases run before the mutations (see the module docs): the arguments of `gradvi`
+/// (`{scratch}` stands for the scratch directory). Level 11 of the Cartesian family has 16.8M
+/// cells and 50M unknowns (about 6 GB for the mesh alone); level 6 of the Kuhn family 12.6M
+/// tetrahedra.
+pub const HUGE_REQUESTS: [&[&str]; 2] = [
+    &[
+        "solve",
+        "--problem",
+        "test3",
+        "--generate",
+        "cartesian",
+        "--level",
+        "11",
+    ],
+    &[
+        "mesh",
+        "generate",
+        "kuhn",
+        "--level",
+        "6",
+        "-o",
+        "{scratch}/huge-kuhn.vtu",
+    ],
+];
+
+/// Runs the [`HUGE_REQUESTS`] under the limits: the failures (any end other than a one-line
+/// typed out-of-memory error with exit status 1).
+fn huge_requests(exe: &Path, prefix: &[&str], scratch: &Path, a: &FuzzArgs) -> Result<Vec<String>> {
+    let mut failures = Vec::new();
+    for case in HUGE_REQUESTS {
+        let args: Vec<String> = prefix
+            .iter()
+            .chain(case)
+            .map(|s| s.replace("{scratch}", &scratch.display().to_string()))
+            .collect();
+        let why = match run_case(exe, &args, a)? {
+            (Verdict::Refused, err) if err.contains("would need about") => continue,
+            (Verdict::Refused, err) => format!("refused, but not for memory: {err}"),
+            (Verdict::Solved, _) => "accepted, but it cannot fit in the memory limit".into(),
+            (Verdict::Fail(why), _) => why,
+        };
+        failures.push(format!("gradvi {}: {why}", args.join(" ")));
+    }
+    Ok(failures)
+}
+
 /// How one case ended.
 enum Verdict {
     /// A certified solution (exit 0).
@@ -253,8 +305,9 @@ enum Verdict {
     Fail(String),
 }
 
-/// Runs `gradvi args` under the limits and judges it.
-fn run_case(exe: &Path, args: &[String], a: &FuzzArgs) -> Result<Verdict> {
+/// Runs `gradvi args` under the limits (`ulimit -v`: `RLIMIT_AS`, and the wall-clock limit)
+/// and judges it; also returns its stderr.
+fn run_case(exe: &Path, args: &[String], a: &FuzzArgs) -> Result<(Verdict, String)> {
     let mut child = Command::new("sh")
         .arg("-c")
         .arg(format!(
@@ -285,9 +338,10 @@ fn run_case(exe: &Path, args: &[String], a: &FuzzArgs) -> Result<Verdict> {
         use std::io::Read;
         let _ = e.read_to_string(&mut err);
     }
-    Ok(match status {
+    let verdict = match status {
         None => Verdict::Fail(format!("no answer within {} s", a.case_seconds)),
         Some(_) if err.contains("panicked") => Verdict::Fail(format!("panic: {err}")),
+        Some(s) if aborted(s) => Verdict::Fail(format!("abort ({s}): {}", err.trim_end())),
         Some(s) if s.code() == Some(0) => Verdict::Solved,
         Some(s)
             if s.code() == Some(1)
@@ -300,7 +354,22 @@ fn run_case(exe: &Path, args: &[String], a: &FuzzArgs) -> Result<Verdict> {
             Verdict::Refused
         }
         Some(s) => Verdict::Fail(format!("exit {s}: {}", err.trim_end())),
-    })
+    };
+    Ok((verdict, err))
+}
+
+/// Whether `s` is an abort: killed by SIGABRT (what `memory allocation of … failed` ends
+/// with), or status 134 (128 + 6, as a shell reports it).
+fn aborted(s: std::process::ExitStatus) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::ExitStatusExt;
+        // SIGABRT is 6 on Linux and the BSDs
+        if s.signal() == Some(6) {
+            return true;
+        }
+    }
+    s.code() == Some(134)
 }
 
 /// Writes the mutant of `src` as `scratch/case{n}.ext` (and, for one file of an RF pair, the
@@ -370,14 +439,19 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
     if seeds.is_empty() {
         bail!("no seed inputs under {}", a.root.display());
     }
+    let t0 = Instant::now();
+    let huge = huge_requests(&exe, prefix, &scratch, a)?;
+    for why in &huge {
+        eprintln!("FAIL {why}");
+    }
     let mut rng = Rng(a.seed);
-    let (t0, mut cases, mut failures) = (Instant::now(), 0usize, Vec::new());
+    let (mut cases, mut failures) = (0usize, Vec::new());
     let (mut solved, mut read) = (0usize, 0usize);
     while (a.iterations == 0 || cases < a.iterations) && t0.elapsed().as_secs_f64() < a.seconds {
         let (src, kind) = &seeds[rng.below(seeds.len())];
         let (files, case) = prepare_case(src, *kind, cases, &scratch, &mut rng)?;
         let args: Vec<String> = prefix.iter().map(|p| p.to_string()).chain(case).collect();
-        let verdict = run_case(&exe, &args, a)?;
+        let (verdict, _) = run_case(&exe, &args, a)?;
         match &verdict {
             Verdict::Solved | Verdict::Refused => {
                 if matches!(verdict, Verdict::Solved) {
@@ -402,16 +476,22 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
     }
     eprintln!(
         "fuzz: {cases} cases in {:.1} s, seed {}: {solved} solved and certified, {read} 3D \
-         meshes read and validated, {} refused with a typed error, {} failures",
+         meshes read and validated, {} refused with a typed error, {} failures; {} of {} huge \
+         requests refused for memory under the limit of {} MiB",
         t0.elapsed().as_secs_f64(),
         a.seed,
         cases - solved - read - failures.len(),
-        failures.len()
+        failures.len(),
+        HUGE_REQUESTS.len() - huge.len(),
+        HUGE_REQUESTS.len(),
+        a.memory_mib
     );
-    if !failures.is_empty() {
+    if !failures.is_empty() || !huge.is_empty() {
         bail!(
-            "{} of {cases} cases failed (inputs kept in {})",
+            "{} of {cases} cases and {} of {} huge requests failed (inputs kept in {})",
             failures.len(),
+            huge.len(),
+            HUGE_REQUESTS.len(),
             scratch.display()
         );
     }
@@ -420,4 +500,26 @@ pub fn run(a: &FuzzArgs) -> Result<()> {
     }
     let _ = std::fs::remove_dir(&scratch);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The status of `sh -c script`.
+    fn status_of(script: &str) -> std::process::ExitStatus {
+        Command::new("sh").arg("-c").arg(script).status().unwrap()
+    }
+
+    /// A child killed by SIGABRT (what a failed allocation ends with) and a shell's 134 are
+    /// aborts; a typed error (1), a success and another signal are not.
+    #[cfg(unix)]
+    #[test]
+    fn aborts_are_recognised() {
+        assert!(aborted(status_of("kill -ABRT $$")));
+        assert!(aborted(status_of("exit 134")));
+        assert!(!aborted(status_of("exit 1")));
+        assert!(!aborted(status_of("exit 0")));
+        assert!(!aborted(status_of("kill -TERM $$")));
+    }
 }

@@ -2,7 +2,8 @@
 //! mutations of the good meshes and problem files through `gradvi solve`, and of the 3D meshes
 //! through `gradvi mesh info` (the command line run by `gradvi-dev gradvi`), each in a child
 //! process under a memory and a time limit; every case must end with a certified solution, a
-//! validated 3D mesh or a one-line typed error, never a panic, an abort or a hang.
+//! validated 3D mesh or a one-line typed error, never a panic, an abort or a hang; and requests
+//! of huge generated meshes, run first, must be refused for memory under the limit.
 
 /// Runs `gradvi-dev fuzz --seed seed --iterations n` with `extra` arguments on the repository
 /// and returns its summary line, after checking that it succeeded with `n` cases.
@@ -32,6 +33,12 @@ fn fuzz(seed: u64, n: usize, extra: &[&str]) -> String {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(err.contains(&format!("fuzz: {n} cases")), "{err}");
+    // the fixed cases: a 2D solve and a 3D mesh of huge generated levels, refused with the
+    // typed out-of-memory error under the memory limit (never an abort)
+    assert!(
+        err.contains("2 of 2 huge requests refused for memory under the limit of 4096 MiB"),
+        "{err}"
+    );
     err.lines()
         .find(|l| l.starts_with("fuzz: "))
         .unwrap_or_default()

@@ -6,6 +6,7 @@
 use super::condense::{self, condense};
 use super::{DiscreteSystem, SolveState};
 use crate::mesh::SolveMesh;
+use crate::mesh::budget::{try_filled, try_resize};
 use rayon::prelude::*;
 
 /// Cells per parallel task in the cell loops (large enough to amortise the task, small enough
@@ -103,16 +104,17 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         // without interior unknowns S_K = M_K, laid out like the local matrices, and the
         // cells' right-hand sides are computed where they are gathered: no buffer at all
         if self.sym.no_interior {
-            let values = self.gather_matrix(&fixed, &self.values.mats);
+            let values = self.gather_matrix(&fixed, &self.values.mats)?;
             let rhs = self.gather_rhs(&fixed, |k, i| self.cell_rhs(k, i, &fixed))?;
             return Ok((values, rhs));
         }
         // buffers kept between calls (they are entirely rewritten where read)
         let (sbuf, gbuf) = &mut state.scratch;
-        sbuf.resize(self.sym.maps.block_ptr.total(), 0.0);
-        gbuf.resize(self.sym.dof_map.dofs.len(), 0.0);
+        let (blocks, local) = (self.sym.maps.block_ptr.total(), self.sym.dof_map.dofs.len());
+        try_resize(sbuf, blocks, 0.0, "the condensed blocks")?;
+        try_resize(gbuf, local, 0.0, "the condensed loads")?;
         self.condense_cells(&fixed, sbuf, gbuf)?;
-        let values = self.gather_matrix(&fixed, sbuf);
+        let values = self.gather_matrix(&fixed, sbuf)?;
         let dof_ptr = &self.sym.dof_map.dof_ptr;
         let rhs = self.gather_rhs(&fixed, |k, i| gbuf[dof_ptr.at(k) + i])?;
         Ok((values, rhs))
@@ -204,7 +206,8 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// `blocks` (the condensed blocks, or the local matrices when they coincide), listed in cell
     /// order (the order of a sequential scatter, whatever the number of
     /// threads); zero in the rows and columns of fixed unknowns, whose diagonal is 1.
-    fn gather_matrix(&self, fixed: &FixedValues, blocks: &[f64]) -> Vec<f64> {
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if the values cannot be allocated.
+    fn gather_matrix(&self, fixed: &FixedValues, blocks: &[f64]) -> crate::Result<Vec<f64>> {
         let (col_ptr, row_idx) = (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx());
         let src = &self.sym.maps.src;
         let is_fixed: Vec<bool> = (0..self.n_skel)
@@ -212,7 +215,8 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             .with_min_len(4096)
             .map(|d| fixed.get(d).is_some())
             .collect();
-        let mut values = vec![0.0; self.sym.pattern.nnz()];
+        let nnz = self.sym.pattern.nnz();
+        let mut values = try_filled(nnz, 0.0, "the values of the condensed matrix")?;
         let ranges = chunks(self.n_skel, CHUNK * 4);
         let slices = split_by_ranges(&mut values, &ranges, |k| col_ptr[k]);
         let tasks: Vec<_> = ranges.into_iter().zip(slices).collect();
@@ -234,7 +238,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                 }
             }
         });
-        values
+        Ok(values)
     }
 
     /// The right-hand side of the condensed system, gathered row by row: the Neumann load plus
@@ -246,7 +250,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         cell_value: impl Fn(usize, usize) -> f64 + Sync,
     ) -> crate::Result<Vec<f64>> {
         let inc = &self.sym.maps.inc;
-        let mut rhs = vec![0.0; self.n_skel];
+        let mut rhs = try_filled(self.n_skel, 0.0, "the right-hand side")?;
         rhs.par_iter_mut()
             .enumerate()
             .with_min_len(4096)

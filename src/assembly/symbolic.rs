@@ -20,6 +20,7 @@ use super::linear::{AUTO_ITERATIVE_MIN, LinearSolver};
 use super::offsets::Offsets;
 use crate::linalg::SpdPattern;
 use crate::mesh::MemoryBudget;
+use crate::mesh::budget::{try_filled, try_vec};
 use crate::mesh::complex::CellComplex;
 use crate::mesh::{PolyMesh, SolveMesh};
 use crate::scheme::GradientDiscretisation;
@@ -76,8 +77,8 @@ impl DofMap {
             .collect();
         let chunks = chunks?;
         let dof_ptr = Offsets::from_lengths(chunks.iter().flat_map(|c| c.0.iter().copied()))?;
-        let mut dofs = Vec::with_capacity(dof_ptr.total());
-        let mut n_int = Vec::with_capacity(nc);
+        let mut dofs = try_vec(dof_ptr.total(), "the unknowns of the cells")?;
+        let mut n_int = try_vec(nc, "the interior counts of the cells")?;
         for (_, all, ni) in chunks {
             dofs.extend_from_slice(&all);
             n_int.extend_from_slice(&ni);
@@ -328,7 +329,7 @@ pub(super) fn check_numeric_memory(
 /// For each of the `n` unknowns, the cells where it appears, ascending (a counting sort of the
 /// positions of `dofs`, each stored as its cell).
 fn incidence(dm: &DofMap, n: usize) -> crate::Result<Ragged<u32>> {
-    let mut cell_of = vec![0u32; dm.dofs.len()];
+    let mut cell_of = try_filled(dm.dofs.len(), 0u32, "the cells of the local unknowns")?;
     let ranges = cell_chunks(dm.n_cells());
     let slices = split_by_ranges(&mut cell_of, &ranges, |k| dm.dof_ptr.at(k));
     ranges
@@ -385,9 +386,10 @@ fn condensed_pattern(
             (counts, rows)
         })
         .collect();
-    let mut col_ptr = Vec::with_capacity(n_skel + 1);
+    let mut col_ptr = try_vec(n_skel + 1, "the column offsets of the condensed matrix")?;
     col_ptr.push(0);
-    let mut row_idx = Vec::with_capacity(columns.iter().map(|c| c.1.len()).sum());
+    let nnz = columns.iter().map(|c| c.1.len()).sum();
+    let mut row_idx = try_vec(nnz, "the pattern of the condensed matrix")?;
     for (counts, rows) in columns {
         for n in counts {
             col_ptr.push(col_ptr.last().copied().unwrap_or(0) + n);
@@ -433,22 +435,20 @@ fn scatter_maps(
     }
     // the packed lower triangle of each block (column b, rows a ≥ b, local indices): the
     // entry lands on the condensed entry (max, min) of its two unknowns
-    let pos: Vec<u32> = cell_chunks(nc)
-        .into_par_iter()
-        .flat_map_iter(|(c0, c1)| {
-            let mut out = Vec::with_capacity(pos_ptr.at(c1) - pos_ptr.at(c0));
-            for k in c0..c1 {
-                let sk = dm.skeleton(k);
-                for (b, &j) in sk.iter().enumerate() {
-                    for &i in &sk[b..] {
-                        let (i, j) = (i as usize, j as usize);
-                        out.push(find(i.max(j), i.min(j)));
-                    }
+    let mut pos: Vec<u32> = try_vec(pos_ptr.total(), "the scatter positions")?;
+    pos.par_extend(cell_chunks(nc).into_par_iter().flat_map_iter(|(c0, c1)| {
+        let mut out = Vec::with_capacity(pos_ptr.at(c1) - pos_ptr.at(c0));
+        for k in c0..c1 {
+            let sk = dm.skeleton(k);
+            for (b, &j) in sk.iter().enumerate() {
+                for &i in &sk[b..] {
+                    let (i, j) = (i as usize, j as usize);
+                    out.push(find(i.max(j), i.min(j)));
                 }
             }
-            out
-        })
-        .collect();
+        }
+        out
+    }));
     // condensed entry -> the local entries landing on it, in cell order
     let src = counting_sort(row_idx.len(), pos.iter().map(|&q| Some(q as usize)))?;
     Ok(ScatterMaps {

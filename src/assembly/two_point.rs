@@ -52,6 +52,7 @@ use super::solve::check_finite;
 use super::{DiscreteSystem, SolveState};
 use crate::linalg::CsrMatrix;
 use crate::mesh::SolveMesh;
+use crate::mesh::budget::{try_filled, try_vec};
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -315,10 +316,11 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             .collect();
         let chunks = chunks.into_iter().collect::<crate::Result<Vec<Rows>>>()?;
         let nnz: usize = chunks.iter().map(|c| c.1.len()).sum();
-        let mut row_ptr = Vec::with_capacity(n + 1);
+        let mut row_ptr = try_vec(n + 1, "the row offsets of the cell system")?;
         row_ptr.push(0);
-        let (mut cols, mut vals) = (Vec::with_capacity(nnz), Vec::with_capacity(nnz));
-        let mut r = Vec::with_capacity(n);
+        let mut cols = try_vec(nnz, "the column indices of the cell system")?;
+        let mut vals = try_vec(nnz, "the entries of the cell system")?;
+        let mut r = try_vec(n, "the right-hand side of the cell system")?;
         for (lens, c, v, rk) in chunks {
             for len in lens {
                 row_ptr.push(row_ptr[row_ptr.len() - 1] + len);
@@ -420,13 +422,15 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                     .count(),
             })
             .collect();
-        let mut row_ptr = Vec::with_capacity(nc + 1);
+        let mut row_ptr = try_vec(nc + 1, "the row offsets of the cell system")?;
         row_ptr.push(0);
         for len in lens {
             row_ptr.push(row_ptr[row_ptr.len() - 1] + len);
         }
         let nnz = row_ptr[nc];
-        let (mut cols, mut vals, mut rhs) = (vec![0u32; nnz], vec![0.0; nnz], vec![0.0; nc]);
+        let mut cols = try_filled(nnz, 0u32, "the column indices of the cell system")?;
+        let mut vals = try_filled(nnz, 0.0, "the entries of the cell system")?;
+        let mut rhs = try_filled(nc, 0.0, "the right-hand side of the cell system")?;
         let ranges = chunks(nc, 4 * CHUNK);
         let c_slices = split_by_ranges(&mut cols, &ranges, |k| row_ptr[k]);
         let v_slices = split_by_ranges(&mut vals, &ranges, |k| row_ptr[k]);

@@ -7,6 +7,7 @@ use super::gather::cell_chunks;
 use super::offsets::Offsets;
 use super::symbolic::DofMap;
 use crate::mesh::SolveMesh;
+use crate::mesh::budget::{try_filled, try_vec};
 use crate::problem::{BoundaryKind, Problem, check_finite, check_tensor};
 use crate::scheme::{GradientDiscretisation, PointDof};
 use nalgebra::{DMatrix, DVector};
@@ -51,7 +52,7 @@ impl<const D: usize> ProblemValues<D> {
     ) -> crate::Result<Self> {
         let (mat_ptr, mats, loads) = local_data(scheme, problem)?;
         let n = scheme.n_unknowns();
-        let mut load = vec![0.0; n];
+        let mut load = try_filled(n, 0.0, "the load vector")?;
         for (i, &d) in dm.dofs.iter().enumerate() {
             load[d as usize] += loads[i];
         }
@@ -60,8 +61,8 @@ impl<const D: usize> ProblemValues<D> {
             mats,
             loads,
             load,
-            neumann_load: vec![0.0; scheme.n_skeleton()],
-            dirichlet: vec![None; n],
+            neumann_load: try_filled(scheme.n_skeleton(), 0.0, "the Neumann load")?,
+            dirichlet: try_filled(n, None, "the Dirichlet values")?,
             signorini: Vec::new(),
         };
         values.boundary_conditions(scheme, problem)?;
@@ -77,8 +78,8 @@ impl<const D: usize> ProblemValues<D> {
     ) -> crate::Result<()> {
         let mesh = scheme.mesh();
         let n = scheme.n_unknowns();
-        let mut sig_meas: Vec<f64> = vec![0.0; n];
-        let mut sig_point: Vec<Option<[f64; D]>> = vec![None; n];
+        let mut sig_meas: Vec<f64> = try_filled(n, 0.0, "the Signorini measures")?;
+        let mut sig_point: Vec<Option<[f64; D]>> = try_filled(n, None, "the Signorini points")?;
         let mut tr = Vec::new();
         for i in 0..mesh.n_boundary_faces() {
             let e = mesh.boundary_face(i);
@@ -178,8 +179,9 @@ fn local_data<M: SolveMesh<D> + ?Sized, const D: usize>(
         return Err(crate::Error::InvalidData(msg));
     }
     let mat_ptr = Offsets::from_lengths(chunks.iter().flat_map(|c| c.mat_len.iter().copied()))?;
-    let mut mats = Vec::with_capacity(mat_ptr.total());
-    let mut loads = Vec::with_capacity(chunks.iter().map(|c| c.loads.len()).sum());
+    let mut mats = try_vec(mat_ptr.total(), "the local matrices")?;
+    let loads_len = chunks.iter().map(|c| c.loads.len()).sum();
+    let mut loads = try_vec(loads_len, "the local loads")?;
     for c in chunks {
         mats.extend_from_slice(&c.mats);
         loads.extend_from_slice(&c.loads);

@@ -4,6 +4,7 @@
 //! ([`SpdFactor::solve_in_place`]).
 
 use super::ordering::{Ordering, nested_dissection};
+use crate::mesh::budget::{AllocFailure, try_resize};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{
     LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
@@ -134,8 +135,10 @@ fn scratch_for(kept: Option<Scratch>, req: StackReq) -> crate::Result<Scratch> {
             Ok((m, size, align))
         }
         _ => Ok((
-            MemBuffer::try_new(req)
-                .map_err(|e| crate::Error::Linear(format!("numeric Cholesky: {e:?}")))?,
+            MemBuffer::try_new(req).map_err(|_| AllocFailure {
+                what: "the scratch memory of the numeric Cholesky factorisation".into(),
+                bytes: req.size_bytes() as u64,
+            })?,
             req.size_bytes(),
             req.align_bytes(),
         )),
@@ -224,7 +227,7 @@ impl SpdPattern {
         let len = symbolic.len_val();
         let l_values = &mut work.values;
         l_values.clear();
-        l_values.resize(len, 0.0);
+        try_resize(l_values, len, 0.0, "the Cholesky factor")?;
         let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
         let kept = work.scratch.take();
         let mem = work.scratch.insert(scratch_for(kept, req)?);

@@ -24,6 +24,7 @@
 //! r0..r1 comes from the columns j < r1 whose last row reaches r0, scanned in increasing j
 //! (so again sorted), once to count and once to fill the chunk's own part of the arrays.
 
+use crate::mesh::budget::{try_filled, try_vec};
 use rayon::prelude::*;
 
 /// Rows per task of the parallel products: large enough that spreading the work costs nothing
@@ -215,7 +216,8 @@ impl CsrMatrix {
     /// The full symmetric n × n matrix whose lower triangle is given in CSC form (column
     /// pointers, row indices strictly increasing within a column and ≥ the column, values), as
     /// [`crate::assembly::DiscreteSystem::condensed_pattern`] and `assemble_condensed` produce
-    /// it. See the module documentation for the sweep.
+    /// it. See the module documentation for the sweep. Its arrays are allocated fallibly:
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if they cannot be.
     ///
     /// For large matrices (at least 32768 rows) the checks and the sweep run in parallel,
     /// by chunks of rows, each gathering the left parts of its rows from the columns that reach
@@ -230,11 +232,11 @@ impl CsrMatrix {
         values: &[f64],
     ) -> crate::Result<Self> {
         let parallel = check_lower_csc(n, col_ptr, row_idx, values)?;
-        if parallel && let Some(a) = Self::from_lower_csc_par(n, col_ptr, row_idx, values) {
+        if parallel && let Some(a) = Self::from_lower_csc_par(n, col_ptr, row_idx, values)? {
             return Ok(a);
         }
         // left[i] = number of entries (i, j), j < i
-        let mut left = vec![0usize; n];
+        let mut left = try_filled(n, 0usize, "the row lengths of the matrix")?;
         for &r in row_idx {
             left[r] += 1;
         }
@@ -245,7 +247,7 @@ impl CsrMatrix {
                 left[j] -= 1;
             }
         }
-        let mut row_ptr = Vec::with_capacity(n + 1);
+        let mut row_ptr = try_vec(n + 1, "the row offsets of the matrix")?;
         row_ptr.push(0usize);
         let mut acc = 0;
         for j in 0..n {
@@ -253,8 +255,8 @@ impl CsrMatrix {
             row_ptr.push(acc);
         }
         let nnz = acc;
-        let mut col_idx = vec![0u32; nnz];
-        let mut vals = vec![0.0f64; nnz];
+        let mut col_idx = try_filled(nnz, 0u32, "the column indices of the matrix")?;
+        let mut vals = try_filled(nnz, 0.0f64, "the entries of the matrix")?;
         // next[i]: where the next left entry of row i goes (reuses `left`)
         let mut next = left;
         next.copy_from_slice(&row_ptr[..n]);
@@ -291,14 +293,17 @@ impl CsrMatrix {
     /// columns j < r1 whose last row reaches r0, i.e. from the first such column on (found
     /// from the running maximum of the last rows). Each chunk counts its rows, then (after a
     /// prefix sum) fills its own part of the arrays, scanning those columns twice. `None` when
-    /// the columns to scan exceed 4 n in all (a wide band: the sequential sweep is cheaper).
+    /// the columns to scan exceed 4 n in all (a wide band: the sequential sweep is cheaper);
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if the arrays cannot be allocated.
     fn from_lower_csc_par(
         n: usize,
         col_ptr: &[usize],
         row_idx: &[usize],
         values: &[f64],
-    ) -> Option<Self> {
-        let first = first_columns(n, col_ptr, row_idx)?;
+    ) -> crate::Result<Option<Self>> {
+        let Some(first) = first_columns(n, col_ptr, row_idx) else {
+            return Ok(None);
+        };
         let n_chunks = first.len();
         // the entries (r, j), r0 ≤ r < r1, of the columns j < r1 from `first` on, below the
         // diagonal, in increasing j: f(r, j, v)
@@ -317,7 +322,7 @@ impl CsrMatrix {
             }
         };
         // row lengths, then pointers
-        let mut row_ptr = vec![0usize; n + 1];
+        let mut row_ptr = try_filled(n + 1, 0usize, "the row offsets of the matrix")?;
         row_ptr[1..]
             .par_chunks_mut(CSC_CHUNK)
             .enumerate()
@@ -332,8 +337,8 @@ impl CsrMatrix {
             row_ptr[i + 1] += row_ptr[i];
         }
         let nnz = row_ptr[n];
-        let mut col_idx = vec![0u32; nnz];
-        let mut vals = vec![0.0f64; nnz];
+        let mut col_idx = try_filled(nnz, 0u32, "the column indices of the matrix")?;
+        let mut vals = try_filled(nnz, 0.0f64, "the entries of the matrix")?;
         let mut pieces = Vec::with_capacity(n_chunks);
         let (mut ci, mut va) = (&mut col_idx[..], &mut vals[..]);
         for c in 0..n_chunks {
@@ -369,13 +374,13 @@ impl CsrMatrix {
                     }
                 }
             });
-        Some(CsrMatrix {
+        Ok(Some(CsrMatrix {
             n_rows: n,
             n_cols: n,
             row_ptr,
             col_idx,
             values: vals,
-        })
+        }))
     }
 
     /// A matrix from arrays already known to be well formed (built by this module or the

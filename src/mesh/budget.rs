@@ -18,6 +18,12 @@
 //!   with given numbers of cells, cell sides, vertices and edges. The generators compare it with
 //!   the budget before allocating anything ([`MemoryBudget::check`]); a caller that needs memory
 //!   for more than the mesh (a solve) passes a smaller budget.
+//! * [`try_vec`] and [`try_filled`]: the large buffers whose size the input decides (the
+//!   arrays of a mesh, a matrix pattern, a factor) are allocated fallibly, so that a request
+//!   the estimates let through but the process cannot map (an address-space limit reached by
+//!   what is already allocated, an estimate that fell short) becomes a typed error instead of
+//!   an abort: [`AllocFailure`], which converts into [`MeshError::TooLarge`] and
+//!   [`Error::OutOfMemory`](crate::Error::OutOfMemory).
 //! * [`MemoryBudget::max_file_bytes`]: the largest mesh file the readers read, a quarter of the
 //!   budget (the mesh built from a text file needs several times the size of the text). A
 //!   larger file, or an endless stream, is refused after reading at most that much.
@@ -106,6 +112,79 @@ impl fmt::Display for MemoryBudget {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(&human_bytes(self.0))
     }
+}
+
+/// An allocation that failed: `bytes` bytes for `what`. Converts into the error of the
+/// caller's layer, [`MeshError::TooLarge`] (building a mesh) or
+/// [`Error::OutOfMemory`](crate::Error::OutOfMemory) (a computation), whose budget is then
+/// what [`MemoryBudget::available`] says at the time of the failure.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AllocFailure {
+    /// What the buffer was for.
+    pub what: String,
+    /// The size asked for, in bytes.
+    pub bytes: u64,
+}
+
+impl From<AllocFailure> for MeshError {
+    fn from(f: AllocFailure) -> Self {
+        MeshError::TooLarge {
+            what: f.what,
+            bytes: f.bytes,
+            budget: MemoryBudget::available().bytes(),
+        }
+    }
+}
+
+impl From<AllocFailure> for crate::Error {
+    fn from(f: AllocFailure) -> Self {
+        crate::Error::OutOfMemory {
+            what: f.what,
+            bytes: f.bytes,
+            budget: MemoryBudget::available().bytes(),
+        }
+    }
+}
+
+/// An empty vector with room for exactly `n` elements, or [`AllocFailure`] naming `what` if
+/// the memory cannot be had (`Vec::try_reserve_exact`: a size beyond `isize::MAX` bytes, or
+/// the allocator refusing, as under `ulimit -v`). For the buffers whose length the input
+/// decides; filling it with `push` or `extend` then allocates nothing more.
+pub fn try_vec<T>(n: usize, what: &str) -> Result<Vec<T>, AllocFailure> {
+    let mut v = Vec::new();
+    try_reserve(&mut v, n, what)?;
+    Ok(v)
+}
+
+/// Room for `additional` more elements in `v` (`Vec::try_reserve_exact`), or [`AllocFailure`]
+/// naming `what` with the size of the whole buffer.
+pub fn try_reserve<T>(v: &mut Vec<T>, additional: usize, what: &str) -> Result<(), AllocFailure> {
+    v.try_reserve_exact(additional).map_err(|_| AllocFailure {
+        what: what.to_string(),
+        bytes: (v.len() as u64)
+            .saturating_add(additional as u64)
+            .saturating_mul(std::mem::size_of::<T>() as u64),
+    })
+}
+
+/// `v` resized to `n` elements, new ones `value` (the fallible `Vec::resize`), or
+/// [`AllocFailure`] as [`try_reserve`]: for buffers kept from one call to the next.
+pub fn try_resize<T: Clone>(
+    v: &mut Vec<T>,
+    n: usize,
+    value: T,
+    what: &str,
+) -> Result<(), AllocFailure> {
+    try_reserve(v, n.saturating_sub(v.len()), what)?;
+    v.resize(n, value);
+    Ok(())
+}
+
+/// `n` copies of `value` (the fallible `vec![value; n]`), or [`AllocFailure`] as [`try_vec`].
+pub fn try_filled<T: Clone>(n: usize, value: T, what: &str) -> Result<Vec<T>, AllocFailure> {
+    let mut v = try_vec(n, what)?;
+    v.resize(n, value);
+    Ok(v)
 }
 
 /// The memory the kernel reports as available (`MemAvailable` of `/proc/meminfo`), in bytes;
@@ -290,6 +369,35 @@ mod tests {
             "the child under ulimit -v failed: {said}"
         );
         assert!(said.contains("1 passed"), "the child ran no test: {said}");
+    }
+
+    /// A request beyond what any address space holds is a typed error in both layers, with
+    /// the size asked for; a request that fits gives the vector asked for.
+    #[test]
+    fn failed_allocations_are_typed_errors() {
+        let v = try_filled(5, 1.5f64, "five values").unwrap();
+        assert_eq!(v, vec![1.5; 5]);
+        assert_eq!(try_vec::<u32>(7, "seven").unwrap().capacity(), 7);
+        let mut w = vec![1u8, 2];
+        try_resize(&mut w, 4, 9, "four").unwrap();
+        assert_eq!(w, [1, 2, 9, 9]);
+        assert!(try_resize(&mut w, usize::MAX, 0, "too many").is_err());
+        assert_eq!(w, [1, 2, 9, 9]);
+        let n = usize::MAX / 16;
+        let f = try_vec::<[f64; 2]>(n, "the centroids of the cells").unwrap_err();
+        assert_eq!(f.bytes, n as u64 * 16);
+        let e = crate::Error::from(f.clone());
+        assert!(e.is_out_of_memory(), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("the centroids of the cells would need about"),
+            "{e}"
+        );
+        assert!(matches!(
+            MeshError::from(f),
+            MeshError::TooLarge { bytes, .. } if bytes == n as u64 * 16
+        ));
+        assert!(try_filled(usize::MAX / 4, 0u64, "x").is_err());
     }
 
     #[test]

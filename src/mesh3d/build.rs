@@ -9,6 +9,7 @@ use super::validate::{check_cells, check_offsets, check_vertices};
 use super::{PolyMesh3, Polyhedra};
 use crate::error::MeshError;
 use crate::mesh::MemoryBudget;
+use crate::mesh::budget::{try_filled, try_vec};
 use rayon::prelude::*;
 
 /// Estimated peak memory, in bytes, of [`PolyMesh3::from_polyhedra`] on a [`Polyhedra`] with
@@ -57,7 +58,7 @@ impl PolyMesh3 {
             bytes,
         )?;
         check_vertices(&p)?;
-        let side_cell = side_cells(&p);
+        let side_cell = side_cells(&p)?;
         let FaceMatch {
             face_of_side,
             face_sides,
@@ -78,7 +79,7 @@ impl PolyMesh3 {
         m.check_boundary_surface()?;
         m.check_overlap()?;
         m.cell_tags = if p.cell_tags.is_empty() {
-            vec![0; m.n_cells()]
+            try_filled(m.n_cells(), 0, "the cell tags")?
         } else {
             std::mem::take(&mut p.cell_tags)
         };
@@ -98,21 +99,20 @@ fn assemble(
     inward: &[bool],
 ) -> Result<PolyMesh3, MeshError> {
     let n_faces = face_sides.len();
-    let mut face_ptr = Vec::with_capacity(n_faces + 1);
+    let mut face_ptr = try_vec(n_faces + 1, "the face offsets")?;
     face_ptr.push(0u32);
     let mut end = 0u32;
     for &[s, _] in face_sides {
         end += p.side_vertices(s as usize).len() as u32;
         face_ptr.push(end);
     }
-    let face_verts: Vec<u32> = face_sides
-        .par_iter()
-        .flat_map_iter(|&[s, _]| {
-            let l = p.side_vertices(s as usize);
-            let rev = inward[s as usize];
-            (0..l.len()).map(move |i| if rev { l[l.len() - 1 - i] } else { l[i] })
-        })
-        .collect();
+    // the loops are gathered in per-thread pieces, appended to the buffer reserved here
+    let mut face_verts: Vec<u32> = try_vec(end as usize, "the face loops")?;
+    face_verts.par_extend(face_sides.par_iter().flat_map_iter(|&[s, _]| {
+        let l = p.side_vertices(s as usize);
+        let rev = inward[s as usize];
+        (0..l.len()).map(move |i| if rev { l[l.len() - 1 - i] } else { l[i] })
+    }));
     let bad = face_sides
         .par_iter()
         .enumerate()
@@ -124,17 +124,15 @@ fn assemble(
     if let Some(e) = bad {
         return Err(e);
     }
-    let face_cells: Vec<[u32; 2]> = face_sides
-        .par_iter()
-        .map(|&[s, t]| {
-            let second = if t == NO_SIDE {
-                u32::MAX
-            } else {
-                side_cell[t as usize]
-            };
-            [side_cell[s as usize], second]
-        })
-        .collect();
+    let mut face_cells: Vec<[u32; 2]> = try_vec(n_faces, "the cells of the faces")?;
+    face_cells.par_extend(face_sides.par_iter().map(|&[s, t]| {
+        let second = if t == NO_SIDE {
+            u32::MAX
+        } else {
+            side_cell[t as usize]
+        };
+        [side_cell[s as usize], second]
+    }));
     let boundary_faces = (0..n_faces as u32)
         .filter(|&f| face_cells[f as usize][1] == u32::MAX)
         .collect();
@@ -145,7 +143,7 @@ fn assemble(
         face_ptr,
         face_verts,
         face_cells,
-        face_tags: vec![0; n_faces],
+        face_tags: try_filled(n_faces, 0, "the face tags")?,
         cell_tags: Vec::new(),
         cell_volume: Vec::new(),
         cell_centroid: Vec::new(),
@@ -194,10 +192,10 @@ impl PolyMesh3 {
     /// for the first face whose vector area is negligible (|N_σ| ≤ 10⁻¹⁴ diam(σ)²: no normal).
     fn compute_face_geometry(&mut self) -> Result<(), MeshError> {
         let n = self.n_faces();
-        let mut area = vec![0.0; n];
-        let mut centroid = vec![[0.0; 3]; n];
+        let mut area = try_filled(n, 0.0, "the face areas")?;
+        let mut centroid = try_filled(n, [0.0; 3], "the face centroids")?;
         // the vector areas N_σ, normalised once every face has passed the check
-        let mut normal = vec![[0.0; 3]; n];
+        let mut normal = try_filled(n, [0.0; 3], "the face normals")?;
         (
             area.par_iter_mut(),
             centroid.par_iter_mut(),
@@ -243,9 +241,9 @@ impl PolyMesh3 {
     /// [`MeshError::DegenerateVolume`] for the first cell with |K| ≤ 10⁻¹⁴ h_K³.
     fn compute_cell_geometry(&mut self) -> Result<(), MeshError> {
         let n = self.n_cells();
-        let mut volume = vec![0.0; n];
-        let mut centroid = vec![[0.0; 3]; n];
-        let mut diam = vec![0.0; n];
+        let mut volume = try_filled(n, 0.0, "the cell volumes")?;
+        let mut centroid = try_filled(n, [0.0; 3], "the cell centroids")?;
+        let mut diam = try_filled(n, 0.0, "the cell diameters")?;
         (
             volume.par_iter_mut(),
             centroid.par_iter_mut(),

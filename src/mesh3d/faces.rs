@@ -18,6 +18,7 @@
 use super::Polyhedra;
 use crate::error::MeshError;
 use crate::mesh::buckets::counting_sort;
+use crate::mesh::budget::{try_filled, try_vec};
 use rayon::prelude::*;
 
 /// No partner side: a boundary face.
@@ -32,12 +33,15 @@ pub(crate) struct FaceMatch {
 }
 
 /// Per side, the cell it belongs to.
-pub(crate) fn side_cells(p: &Polyhedra) -> Vec<u32> {
-    let mut out = Vec::with_capacity(p.face_ptr.len().saturating_sub(1));
+pub(crate) fn side_cells(p: &Polyhedra) -> Result<Vec<u32>, MeshError> {
+    let mut out = try_vec(
+        p.face_ptr.len().saturating_sub(1),
+        "the cells of the face sides",
+    )?;
     for k in 0..p.n_cells() {
         out.extend(p.cell_sides(k).map(|_| k as u32));
     }
-    out
+    Ok(out)
 }
 
 /// Reused buffers of [`match_bucket`].
@@ -138,7 +142,7 @@ fn partners(p: &Polyhedra, side_cell: &[u32]) -> Result<Vec<u32>, MeshError> {
     let smallest = |s: usize| p.side_vertices(s).iter().min().map(|&v| v as usize);
     let (ptr, mut order) =
         counting_sort(p.vertices.len(), (0..n_sides).map(smallest), |s| s as u32);
-    let mut pair_start = vec![false; n_sides];
+    let mut pair_start = try_filled(n_sides, false, "the pairs of face sides")?;
     let err = split_at_offsets(&mut order, &ptr)
         .into_par_iter()
         .zip(split_at_offsets(&mut pair_start, &ptr))
@@ -149,7 +153,7 @@ fn partners(p: &Polyhedra, side_cell: &[u32]) -> Result<Vec<u32>, MeshError> {
     if let Some(e) = err {
         return Err(e);
     }
-    let mut partner = vec![NO_SIDE; n_sides];
+    let mut partner = try_filled(n_sides, NO_SIDE, "the partners of the face sides")?;
     for i in (0..n_sides).filter(|&i| pair_start[i]) {
         let (a, b) = (order[i], order[i + 1]);
         partner[a as usize] = b;
@@ -162,8 +166,8 @@ fn partners(p: &Polyhedra, side_cell: &[u32]) -> Result<Vec<u32>, MeshError> {
 pub(crate) fn match_faces(p: &Polyhedra, side_cell: &[u32]) -> Result<FaceMatch, MeshError> {
     let n_sides = side_cell.len();
     let partner = partners(p, side_cell)?;
-    let mut face_of_side = vec![0u32; n_sides];
-    let mut face_sides = Vec::with_capacity(n_sides / 2 + 1);
+    let mut face_of_side = try_filled(n_sides, 0u32, "the faces of the face sides")?;
+    let mut face_sides = try_vec(n_sides / 2 + 1, "the sides of the faces")?;
     for s in 0..n_sides {
         let q = partner[s];
         if q == NO_SIDE || q as usize > s {

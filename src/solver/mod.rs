@@ -223,7 +223,11 @@ fn solve_constrained<M: SolverMesh<D> + ?Sized, const D: usize>(
         Outcome::Solved(s) => Ok(s),
         Outcome::Stalled(stall) if opts.fallback => {
             let q = system.with_state(state);
-            let mut sol = pgs::solve(&q, cons, &pgs::PgsOptions::default())?;
+            let po = pgs::PgsOptions {
+                cancel: o.cancel.clone(),
+                ..Default::default()
+            };
+            let mut sol = pgs::solve(&q, cons, &po)?;
             sol.niter += stall.log.len();
             let mut log = stall.log;
             log.extend(sol.log);

@@ -17,6 +17,7 @@
 use super::{Counts, check_cell_count, check_memory};
 use crate::error::{Error, Result};
 use crate::mesh::budget::MemoryBudget;
+use crate::mesh::budget::try_vec;
 use crate::mesh::{Overlap, Point, PolyMesh};
 
 /// The nx × ny uniform mesh of \[0,1\]² (see the module docs for the numbering), within the
@@ -99,7 +100,7 @@ fn grid_mesh(
     let vertices = grid_vertices(nx, ny, x, y)?;
     let v = |i: usize, j: usize| j * (nx + 1) + i;
     let n_cells = shape[0] * nx * ny;
-    let mut cell_verts = Vec::with_capacity(shape[1] * n_cells);
+    let mut cell_verts = try_vec(shape[1] * n_cells, "the vertices of the cells")?;
     for j in 0..ny {
         for i in 0..nx {
             square(
@@ -109,7 +110,8 @@ fn grid_mesh(
         }
     }
     debug_assert_eq!(cell_verts.len(), shape[1] * n_cells);
-    let cell_ptr: Vec<usize> = (0..=n_cells).map(|k| shape[1] * k).collect();
+    let mut cell_ptr = try_vec(n_cells + 1, "the cell offsets")?;
+    cell_ptr.extend((0..=n_cells).map(|k| shape[1] * k));
     Ok(PolyMesh::from_flat_cells(
         vertices,
         cell_ptr,
@@ -179,7 +181,7 @@ fn grid_vertices(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2]) -> Result<Vec<P
             )));
         }
     }
-    let mut vertices = Vec::with_capacity((nx + 1) * (ny + 1));
+    let mut vertices = try_vec((nx + 1) * (ny + 1), "the vertices")?;
     for &yj in &ys {
         vertices.extend(xs.iter().map(|&xi| [xi, yj]));
     }
@@ -200,6 +202,42 @@ mod tests {
     use super::*;
 
     use crate::mesh::generate::total_area;
+
+    /// Runs this test again in a child under `ulimit -v` of 1 GiB, where a 5000 × 5000 mesh
+    /// passes the estimate against a budget of 1 TiB (the caller's choice) but its arrays
+    /// cannot be mapped: the vertices (400 MB) fit, the cells' vertex list (800 MB) does not,
+    /// and its allocation fails as a typed out-of-memory error naming it, not an abort.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn an_allocation_the_address_space_refuses_is_a_typed_error() {
+        const NAME: &str = "mesh::generate::cartesian::tests::an_allocation_the_address_space_refuses_is_a_typed_error";
+        if std::env::var_os("GRADVI_ALLOC_CHILD").is_some() {
+            let big = MemoryBudget::new(1 << 40);
+            let e = cartesian_rect_within(5000, 5000, [0.0, 1.0], [0.0, 1.0], big).unwrap_err();
+            assert!(e.is_out_of_memory(), "{e}");
+            assert!(
+                e.to_string()
+                    .starts_with("the vertices of the cells would need about 762.9 MiB"),
+                "{e}"
+            );
+            return;
+        }
+        let out = std::process::Command::new("sh")
+            .arg("-c")
+            .arg("ulimit -v 1048576 && exec \"$0\" \"$@\"")
+            .arg(std::env::current_exe().unwrap())
+            .args(["--exact", NAME, "--test-threads", "1"])
+            .env("GRADVI_ALLOC_CHILD", "1")
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "the child under ulimit -v failed ({}): {said}",
+            out.status
+        );
+        assert!(said.contains("1 passed"), "the child ran no test: {said}");
+    }
 
     #[test]
     fn unit_square_counts_area_and_h() {

@@ -57,6 +57,7 @@
 use super::{Counts, check_cell_count, check_memory};
 use crate::error::{Error, Result};
 use crate::mesh::budget::MemoryBudget;
+use crate::mesh::budget::{try_filled, try_vec};
 use crate::mesh::{Point, PolyMesh};
 use std::f64::consts::PI;
 
@@ -99,7 +100,7 @@ pub fn hexagonal_grid_within(n: usize, budget: MemoryBudget) -> Result<PolyMesh>
     let what = format!("a hexagonal mesh on a {n} × {n} lattice");
     check_cell_count(&what, n.checked_add(1).and_then(|m| m.checked_mul(m)))?;
     check_memory(&what, counts(n), budget)?;
-    let (vertices, cells) = hexagonal_data(n);
+    let (vertices, cells) = hexagonal_data(n)?;
     Ok(PolyMesh::from_cells(vertices, cells)?)
 }
 
@@ -194,7 +195,7 @@ fn sin_2pi(i: usize, n: usize) -> f64 {
 }
 
 /// The vertices of the n × n construction, in the file numbering.
-fn hexagonal_vertices(num: &Numbering) -> Vec<Point> {
+fn hexagonal_vertices(num: &Numbering) -> Result<Vec<Point>> {
     let n = num.n;
     let nf = n as f64;
     let coord = |i: usize| i as f64 / nf;
@@ -208,7 +209,7 @@ fn hexagonal_vertices(num: &Numbering) -> Vec<Point> {
         [(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0]
     };
     let nv = 2 * n * n + 8 * n;
-    let mut vertices = vec![[0.0; 2]; nv];
+    let mut vertices = try_filled(nv, [0.0; 2], "the vertices")?;
     for j in 0..n {
         for i in 0..n {
             let (p00, p10, p11, p01) = (t(i, j), t(i + 1, j), t(i + 1, j + 1), t(i, j + 1));
@@ -227,7 +228,7 @@ fn hexagonal_vertices(num: &Numbering) -> Vec<Point> {
         vertices[num.node(n, k + 1)] = [1.0, coord(k + 1)];
         vertices[num.node(k, n)] = [coord(k), 1.0];
     }
-    vertices
+    Ok(vertices)
 }
 
 /// The vertices of the cell around node (i, j) of the n × n construction (0 ≤ i, j ≤ n),
@@ -314,11 +315,11 @@ fn hexagonal_cell(num: &Numbering, i: usize, j: usize) -> Vec<usize> {
 }
 
 /// Vertices and cells of the n × n construction, in the file numbering.
-fn hexagonal_data(n: usize) -> (Vec<Point>, Vec<Vec<usize>>) {
+fn hexagonal_data(n: usize) -> Result<(Vec<Point>, Vec<Vec<usize>>)> {
     let num = Numbering { n };
-    let vertices = hexagonal_vertices(&num);
+    let vertices = hexagonal_vertices(&num)?;
     let cell = |i: usize, j: usize| hexagonal_cell(&num, i, j);
-    let mut cells = Vec::with_capacity((n + 1) * (n + 1));
+    let mut cells = try_vec((n + 1) * (n + 1), "the cells")?;
     for m in 0..=n {
         for j in 0..=m {
             cells.push(cell(m, j));
@@ -327,7 +328,7 @@ fn hexagonal_data(n: usize) -> (Vec<Point>, Vec<Vec<usize>>) {
             cells.push(cell(i, m));
         }
     }
-    (vertices, cells)
+    Ok((vertices, cells))
 }
 
 #[cfg(test)]

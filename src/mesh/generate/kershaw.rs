@@ -52,6 +52,7 @@
 
 use crate::error::Result;
 use crate::mesh::budget::MemoryBudget;
+use crate::mesh::budget::{try_filled, try_vec};
 use crate::mesh::{Point, PolyMesh};
 use std::f64::consts::PI;
 
@@ -96,7 +97,7 @@ pub fn kershaw_within(level: usize, budget: MemoryBudget) -> Result<PolyMesh> {
         counts(level),
         budget,
     )?;
-    let (vertices, cells) = kershaw_data(level);
+    let (vertices, cells) = kershaw_data(level)?;
     Ok(PolyMesh::from_cells(vertices, cells)?)
 }
 
@@ -119,7 +120,7 @@ fn lerp(a: f64, b: f64, s: f64) -> f64 {
 }
 
 /// Vertices and cells of level k ≥ 1, in the file numbering.
-fn kershaw_data(k: usize) -> (Vec<Point>, Vec<Vec<usize>>) {
+fn kershaw_data(k: usize) -> Result<(Vec<Point>, Vec<Vec<usize>>)> {
     let nc = COARSE_N;
     let n = nc * k;
     let sin_j: Vec<f64> = (0..=nc)
@@ -163,7 +164,7 @@ fn kershaw_data(k: usize) -> (Vec<Point>, Vec<Vec<usize>>) {
     };
 
     let kf = k as f64;
-    let mut vertices = vec![[0.0; 2]; (n + 1) * (n + 1)];
+    let mut vertices = try_filled((n + 1) * (n + 1), [0.0; 2], "the vertices")?;
     for jj in 0..=n {
         let cj = (jj / k).min(nc - 1);
         let t = (jj - cj * k) as f64 / kf;
@@ -178,7 +179,7 @@ fn kershaw_data(k: usize) -> (Vec<Point>, Vec<Vec<usize>>) {
         }
     }
 
-    let mut cells = Vec::with_capacity(n * n);
+    let mut cells = try_vec(n * n, "the cells")?;
     for cj in 0..nc {
         for ci in 0..nc {
             for a in 0..k {
@@ -194,7 +195,7 @@ fn kershaw_data(k: usize) -> (Vec<Point>, Vec<Vec<usize>>) {
             }
         }
     }
-    (vertices, cells)
+    Ok((vertices, cells))
 }
 
 #[cfg(test)]

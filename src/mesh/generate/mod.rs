@@ -50,7 +50,7 @@ pub use hexagonal::{hexagonal, hexagonal_grid, hexagonal_grid_within};
 pub use kershaw::{kershaw, kershaw_within};
 
 use crate::error::{Error, Result};
-use crate::mesh::budget::{MemoryBudget, mesh_bytes};
+use crate::mesh::budget::{MemoryBudget, mesh_bytes, try_vec};
 use crate::mesh::{Overlap, PolyMesh, Rect};
 use std::fmt;
 use std::str::FromStr;
@@ -280,9 +280,10 @@ pub fn map_unit_square(m: &PolyMesh, domain: Rect) -> Result<PolyMesh> {
         .iter()
         .map(|p| [x0 + (x1 - x0) * p[0], y0 + (y1 - y0) * p[1]])
         .collect();
-    let mut cell_ptr = Vec::with_capacity(m.n_cells() + 1);
+    let mut cell_ptr = try_vec(m.n_cells() + 1, "the cell offsets")?;
     cell_ptr.push(0);
-    let mut cell_verts: Vec<usize> = Vec::new();
+    let sides = (0..m.n_cells()).map(|k| m.cell_vertices(k).len()).sum();
+    let mut cell_verts: Vec<usize> = try_vec(sides, "the vertices of the cells")?;
     for k in 0..m.n_cells() {
         cell_verts.extend(m.cell_vertices(k).iter().map(|&v| v as usize));
         cell_ptr.push(cell_verts.len());

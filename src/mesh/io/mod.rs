@@ -33,6 +33,7 @@ pub use typ2::{read_typ2, write_typ2};
 pub use vtu::write_vtu;
 
 use crate::error::{Error, Result};
+use crate::mesh::budget::{AllocFailure, try_vec};
 use crate::mesh::{MemoryBudget, PolyMesh};
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
@@ -206,11 +207,17 @@ pub(crate) fn read_text(path: &Path, budget: MemoryBudget) -> Result<Text> {
     if let Some(len) = known.filter(|&len| len > limit as u64) {
         return Err(too_large(format!("the file has {len} bytes")));
     }
-    let mut bytes = Vec::with_capacity(known.map_or(0, |l| l as usize).saturating_add(1));
-    let mut scan = TextScan::default();
     const CHUNK: usize = 1 << 20;
+    let what = || format!("reading {}", path.display());
+    let first = known.map_or(0, |l| l as usize).saturating_add(1);
+    let mut bytes: Vec<u8> = try_vec(first, &what())?;
+    let mut scan = TextScan::default();
     loop {
         let len = bytes.len();
+        bytes.try_reserve(CHUNK).map_err(|_| AllocFailure {
+            what: what(),
+            bytes: (len + CHUNK) as u64,
+        })?;
         bytes.resize(len + CHUNK, 0);
         let n = match file.read(&mut bytes[len..]) {
             Ok(n) => n,

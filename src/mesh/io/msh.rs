@@ -19,6 +19,7 @@
 
 use super::{Tokens, capacity, read_text};
 use crate::error::Result;
+use crate::mesh::budget::{try_reserve, try_vec};
 use crate::mesh::{
     MemoryBudget, NonBoundaryTag, Overlap, Point, PolyMesh, drop_unused_vertices_flat,
 };
@@ -93,14 +94,14 @@ impl NodeIndex {
 
     /// An index for `count` nodes announced in a section of `len` bytes: dense for tags below
     /// 2·min(`count`, `len`/8) + 1024 (a node takes at least 8 bytes in either format).
-    fn new(count: usize, len: usize) -> Self {
+    fn new(count: usize, len: usize) -> Result<Self> {
         let expected = count.min(len / 8);
         let limit = expected.saturating_mul(2).saturating_add(1024);
-        NodeIndex {
-            dense: Vec::with_capacity(expected.saturating_add(1)),
+        Ok(NodeIndex {
+            dense: try_vec(expected.saturating_add(1), "the index of the nodes")?,
             dense_limit: u64::try_from(limit).unwrap_or(u64::MAX),
             sparse: HashMap::new(),
-        }
+        })
     }
 
     /// Records node `tag` at position `pos`; `false` (and no change) if the tag is already known.
@@ -443,8 +444,8 @@ fn read_xyz(t: &mut Tokens, tag: u64) -> Result<[f64; 3]> {
 
 fn read_nodes22<P>(t: &mut Tokens, raw: &mut Sections<P>, point: fn([f64; 3]) -> P) -> Result<()> {
     let n = t.count("the number of nodes")?;
-    raw.nodes.reserve(capacity(n, t.remaining()));
-    raw.node_index = NodeIndex::new(n, t.remaining());
+    try_reserve(&mut raw.nodes, capacity(n, t.remaining()), "the nodes")?;
+    raw.node_index = NodeIndex::new(n, t.remaining())?;
     for i in 1..=n {
         let tag = t.parse_u64_with(format_args!("the tag of node {i}"))?;
         let p = read_xyz(t, tag)?;
@@ -466,8 +467,8 @@ fn read_block_header41(t: &mut Tokens, what: &str) -> Result<(usize, usize, usiz
 
 fn read_nodes41<P>(t: &mut Tokens, raw: &mut Sections<P>, point: fn([f64; 3]) -> P) -> Result<()> {
     let (nblocks, n, header_line) = read_block_header41(t, "node")?;
-    raw.nodes.reserve(capacity(n, t.remaining()));
-    raw.node_index = NodeIndex::new(n, t.remaining());
+    try_reserve(&mut raw.nodes, capacity(n, t.remaining()), "the nodes")?;
+    raw.node_index = NodeIndex::new(n, t.remaining())?;
     let mut tags = Vec::new();
     for b in 1..=nblocks {
         let dim: i32 = t.parse_with(format_args!("the entity dimension of node block {b}"))?;
@@ -485,7 +486,7 @@ fn read_nodes41<P>(t: &mut Tokens, raw: &mut Sections<P>, point: fn([f64; 3]) ->
             }
         };
         tags.clear();
-        tags.reserve(capacity(m, t.remaining()));
+        try_reserve(&mut tags, capacity(m, t.remaining()), "the node tags")?;
         for _ in 0..m {
             tags.push(t.parse_u64_with(format_args!("a node tag of block {b}"))?);
         }
@@ -646,7 +647,7 @@ fn build(path: &Path, sections: Sections<Point>, raw: Raw) -> Result<MshMesh> {
     }
     // cells, flat: the node tags of cell k are cell_nodes[cell_ptr[k]..cell_ptr[k + 1]], and
     // cell_ptr has nc + 1 entries starting at 0 (read_elements* push them)
-    let mut cell_verts = Vec::with_capacity(cell_nodes.len());
+    let mut cell_verts = try_vec(cell_nodes.len(), "the vertices of the cells")?;
     for (k, &line) in cell_line.iter().enumerate() {
         let tags = cell_ptr
             .get(k)
@@ -777,7 +778,7 @@ mod tests {
                 format!("t.msh:10: node {tag} is defined twice")
             );
         }
-        let mut index = NodeIndex::new(3, 1000);
+        let mut index = NodeIndex::new(3, 1000).unwrap();
         assert!(index.insert(2, 0) && index.insert(u64::MAX, 1) && index.insert(1 << 40, 2));
         assert!(!index.insert(2, 3) && !index.insert(u64::MAX, 3));
         assert_eq!(

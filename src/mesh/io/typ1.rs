@@ -24,6 +24,7 @@
 
 use super::{Tokens, capacity, read_text};
 use crate::error::Result;
+use crate::mesh::budget::{try_filled, try_reserve, try_vec};
 use crate::mesh::{MemoryBudget, NO_CELL, Point, PolyMesh};
 use std::path::Path;
 
@@ -58,7 +59,7 @@ pub(crate) fn parse_typ1(path: &Path, bytes: &[u8]) -> Result<PolyMesh> {
 fn parse_tokens(path: &Path, mut t: Tokens) -> Result<PolyMesh> {
     t.expect_header(&["vertices"])?;
     let nv = t.count("the number of vertices")?;
-    let mut vertices: Vec<Point> = Vec::with_capacity(capacity(nv, t.remaining()));
+    let mut vertices: Vec<Point> = try_vec(capacity(nv, t.remaining()), "the vertices")?;
     for i in 1..=nv {
         let x = t.coord(&format!("x of vertex {i}"))?;
         let y = t.coord(&format!("y of vertex {i}"))?;
@@ -74,8 +75,8 @@ fn parse_tokens(path: &Path, mut t: Tokens) -> Result<PolyMesh> {
         t.expect_header(&[header])?;
         let n = t.count(&format!("the number of {header}"))?;
         let cap = capacity(n, t.remaining());
-        corners.reserve(cap);
-        cell_line.reserve(cap);
+        try_reserve(&mut corners, cap, "the cells")?;
+        try_reserve(&mut cell_line, cap, "the cells")?;
         for i in 1..=n {
             let mut c = Vec::with_capacity(n_corners);
             for _ in 0..n_corners {
@@ -89,7 +90,8 @@ fn parse_tokens(path: &Path, mut t: Tokens) -> Result<PolyMesh> {
 
     t.expect_header(&["edges of the boundary"])?;
     let nb = t.count("the number of boundary edges")?;
-    let mut boundary: Vec<(usize, usize, usize)> = Vec::with_capacity(capacity(nb, t.remaining()));
+    let mut boundary: Vec<(usize, usize, usize)> =
+        try_vec(capacity(nb, t.remaining()), "the boundary edges")?;
     for i in 1..=nb {
         let a = t.index1(&format!("a vertex id of boundary edge {i}"), nv)?;
         let b = t.index1(&format!("a vertex id of boundary edge {i}"), nv)?;
@@ -98,7 +100,7 @@ fn parse_tokens(path: &Path, mut t: Tokens) -> Result<PolyMesh> {
 
     t.expect_header(&["all edges"])?;
     let ne = t.count("the number of edges")?;
-    let mut all: Vec<EdgeRecord> = Vec::with_capacity(capacity(ne, t.remaining()));
+    let mut all: Vec<EdgeRecord> = try_vec(capacity(ne, t.remaining()), "the edges")?;
     for i in 1..=ne {
         let a = t.index1(&format!("a vertex id of edge {i}"), nv)?;
         let b = t.index1(&format!("a vertex id of edge {i}"), nv)?;
@@ -156,7 +158,7 @@ fn insert_hanging_nodes(
 ) -> Result<Vec<Vec<usize>>> {
     let nc = corners.len();
     // CSR: the records of the edges of every cell
-    let mut ptr = vec![0usize; nc + 1];
+    let mut ptr = try_filled(nc + 1, 0usize, "the edges of the cells")?;
     for r in all {
         for c in [r.k, r.l] {
             if c < nc {
@@ -168,7 +170,7 @@ fn insert_hanging_nodes(
         ptr[i + 1] += ptr[i];
     }
     let mut fill = ptr.clone();
-    let mut ids = vec![0usize; ptr[nc]];
+    let mut ids = try_filled(ptr[nc], 0usize, "the edges of the cells")?;
     for (i, r) in all.iter().enumerate() {
         for c in [r.k, r.l] {
             if c < nc {
@@ -179,8 +181,8 @@ fn insert_hanging_nodes(
     }
 
     // scratch adjacency of the current cell's edges, reset after each cell
-    let mut nbr = vec![[NONE; 2]; vertices.len()];
-    let mut cells = Vec::with_capacity(nc);
+    let mut nbr = try_filled(vertices.len(), [NONE; 2], "the neighbours of the vertices")?;
+    let mut cells = try_vec(nc, "the cells")?;
     for (k, c) in corners.iter().enumerate() {
         let recs = &ids[ptr[k]..ptr[k + 1]];
         let mut result = Ok(());

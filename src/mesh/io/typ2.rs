@@ -18,6 +18,7 @@
 
 use super::{Tokens, capacity, read_text};
 use crate::error::{Error, Result};
+use crate::mesh::budget::try_vec;
 use crate::mesh::{MAX_CELL_VERTICES, MemoryBudget, Point, PolyMesh};
 use std::io::Write;
 use std::path::Path;
@@ -66,7 +67,7 @@ fn parse_tokens(path: &Path, mut t: Tokens) -> Result<PolyMesh> {
 fn parse_records(t: &mut Tokens) -> Result<(Vec<Point>, Vec<Vec<usize>>)> {
     t.expect_header(&["vertices"])?;
     let nv = t.count("the number of vertices")?;
-    let mut vertices = Vec::with_capacity(capacity(nv, t.remaining()));
+    let mut vertices = try_vec(capacity(nv, t.remaining()), "the vertices")?;
     for i in 1..=nv {
         let x = t.coord(&format!("x of vertex {i}"))?;
         let y = t.coord(&format!("y of vertex {i}"))?;
@@ -75,7 +76,7 @@ fn parse_records(t: &mut Tokens) -> Result<(Vec<Point>, Vec<Vec<usize>>)> {
     t.expect_header(&["cells", "control volumes"])?;
     let nc = t.count("the number of cells")?;
     // a cell record takes at least 8 bytes ("3 1 2 3\n")
-    let mut cells = Vec::with_capacity(capacity(nc, t.remaining() / 2));
+    let mut cells = try_vec(capacity(nc, t.remaining() / 2), "the cells")?;
     for k in 1..=nc {
         let n = t.count(&format!("the number of vertices of cell {k}"))?;
         if n < 3 {

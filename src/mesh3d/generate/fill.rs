@@ -9,6 +9,7 @@
 //! Each layer writes absolute offsets (its own plus the sums of the layers before it), so the
 //! layers are independent and the result does not depend on how rayon schedules them.
 
+use crate::mesh::budget::{AllocFailure, try_filled};
 use rayon::prelude::*;
 
 /// Where a generator describes the cells of one layer.
@@ -78,18 +79,18 @@ pub(crate) fn count_layers(
 
 /// The flat arrays `cell_ptr`, `face_ptr`, `face_vertices` of the layers whose sizes are
 /// `counts` (from [`count_layers`], whose sums must fit 32-bit offsets), each layer `l` written
-/// by `describe(l, ..)`. Panics if a layer describes other counts than it was counted with (a
+/// by `describe(l, ..)`; [`AllocFailure`] if the arrays cannot be allocated. Panics if a layer describes other counts than it was counted with (a
 /// broken generator, not bad input).
 pub(crate) fn fill_layers(
     counts: &[[usize; 3]],
     describe: impl Fn(usize, &mut Layer) + Sync,
-) -> [Vec<u32>; 3] {
+) -> Result<[Vec<u32>; 3], AllocFailure> {
     let total = counts
         .iter()
         .fold([0; 3], |t, c| [0, 1, 2].map(|i| t[i] + c[i]));
-    let mut cell_ptr = vec![0u32; total[0] + 1];
-    let mut face_ptr = vec![0u32; total[1] + 1];
-    let mut face_vertices = vec![0u32; total[2]];
+    let mut cell_ptr = try_filled(total[0] + 1, 0u32, "the cell offsets")?;
+    let mut face_ptr = try_filled(total[1] + 1, 0u32, "the face offsets")?;
+    let mut face_vertices = try_filled(total[2], 0u32, "the face loops")?;
     let cells = split_by(&mut cell_ptr[1..], counts.iter().map(|c| c[0]));
     let faces = split_by(&mut face_ptr[1..], counts.iter().map(|c| c[1]));
     let verts = split_by(&mut face_vertices, counts.iter().map(|c| c[2]));
@@ -113,7 +114,7 @@ pub(crate) fn fill_layers(
             describe(l, &mut layer);
             assert_eq!(layer.written, counts[l], "layer {l} described other counts");
         });
-    [cell_ptr, face_ptr, face_vertices]
+    Ok([cell_ptr, face_ptr, face_vertices])
 }
 
 /// `slice` cut into consecutive pieces of the given lengths (which must sum to its length).
@@ -149,7 +150,7 @@ mod tests {
     fn layers_are_counted_then_written_at_their_offsets() {
         let counts = count_layers(4, describe);
         assert_eq!(counts[2], [3, 6, 18]);
-        let [cell_ptr, face_ptr, fv] = fill_layers(&counts, |l, s| describe(l, s));
+        let [cell_ptr, face_ptr, fv] = fill_layers(&counts, |l, s| describe(l, s)).unwrap();
         assert_eq!(cell_ptr, [0, 1, 2, 4, 5, 7, 10, 11, 13, 16, 20]);
         assert_eq!(face_ptr.len(), 21);
         assert!(

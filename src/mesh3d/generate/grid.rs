@@ -12,6 +12,7 @@
 //! the local corners 0 … 7, corner `dx + 2·dy + 4·dz` being grid point (i+dx, j+dy, k+dz).
 
 use crate::error::{Error, Result};
+use crate::mesh::budget::try_filled;
 use crate::mesh3d::{Cuboid, Point3};
 use rayon::prelude::*;
 
@@ -52,14 +53,15 @@ pub(crate) fn point_id(n: usize, [i, j, k]: [usize; 3]) -> u32 {
 }
 
 /// The grid points of `axes` in the order of their ids, each moved by `shift(id, [i, j, k])`
-/// (filled plane by plane in parallel; `shift` must depend on its arguments only).
+/// (filled plane by plane in parallel; `shift` must depend on its arguments only);
+/// [`Error::OutOfMemory`] if they cannot be allocated.
 pub(crate) fn points(
     axes: &[Vec<f64>; 3],
     shift: impl Fn(usize, [usize; 3]) -> Point3 + Sync,
-) -> Vec<Point3> {
+) -> Result<Vec<Point3>> {
     let [xs, ys, zs] = axes;
     let plane = xs.len() * ys.len();
-    let mut out = vec![[0.0; 3]; plane * zs.len()];
+    let mut out = try_filled(plane * zs.len(), [0.0; 3], "the grid points")?;
     out.par_chunks_mut(plane).enumerate().for_each(|(k, p)| {
         for (j, row) in p.chunks_mut(xs.len()).enumerate() {
             for (i, v) in row.iter_mut().enumerate() {
@@ -68,7 +70,7 @@ pub(crate) fn points(
             }
         }
     });
-    out
+    Ok(out)
 }
 
 /// The ids of the eight corners of cube (i, j, k), corner `dx + 2·dy + 4·dz` first to last.
@@ -86,7 +88,7 @@ mod tests {
         let a = axes(d, 3).unwrap();
         assert_eq!(a[0][3], 0.7);
         assert_eq!(a[1], [-1.0, 0.0, 1.0, 2.0]);
-        let p = points(&a, |_, _| [0.0; 3]);
+        let p = points(&a, |_, _| [0.0; 3]).unwrap();
         assert_eq!(p.len(), 64);
         assert_eq!(p[point_id(3, [1, 2, 3]) as usize], [a[0][1], 1.0, 1.0]);
         assert_eq!(cube_corners(3, [0, 0, 0]), [0, 1, 4, 5, 16, 17, 20, 21]);

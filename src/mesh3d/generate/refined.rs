@@ -30,6 +30,7 @@ use super::fill::{Sink, count_layers, fill_layers};
 use super::{Counts3, check_request, grid};
 use crate::error::{Error, Result};
 use crate::mesh::MemoryBudget;
+use crate::mesh::budget::try_filled;
 use crate::mesh3d::{Cuboid, Point3, Polyhedra};
 use rayon::prelude::*;
 
@@ -53,10 +54,10 @@ pub fn refined(n: usize, domain: Cuboid, budget: MemoryBudget) -> Result<Polyhed
     let what = format!("a locally refined mesh of {n}³ coarse cubes");
     check_request(&what, n, domain, counts(n), table_bytes(n), budget)?;
     let axes = grid::axes(domain, 2 * n)?;
-    let (ids, vertices) = fine_points(n, &axes);
+    let (ids, vertices) = fine_points(n, &axes)?;
     let fine = Fine { n, ids };
     let layer_counts = count_layers(n, |k, s| fine.layer(k, s));
-    let [cell_ptr, face_ptr, face_vertices] = fill_layers(&layer_counts, |k, s| fine.layer(k, s));
+    let [cell_ptr, face_ptr, face_vertices] = fill_layers(&layer_counts, |k, s| fine.layer(k, s))?;
     Ok(Polyhedra {
         vertices,
         cell_ptr,
@@ -117,7 +118,7 @@ fn used(n: usize, p: [usize; 3]) -> bool {
 /// The id of every fine point ([`UNUSED`] if no cell uses it), and the used points' coordinates
 /// in the order of their ids; both filled plane by plane (fixed c) in parallel, at offsets from
 /// a first counting pass.
-fn fine_points(n: usize, axes: &[Vec<f64>; 3]) -> (Vec<u32>, Vec<Point3>) {
+fn fine_points(n: usize, axes: &[Vec<f64>; 3]) -> Result<(Vec<u32>, Vec<Point3>)> {
     let m = 2 * n + 1;
     let per_plane: Vec<usize> = (0..m)
         .into_par_iter()
@@ -127,8 +128,8 @@ fn fine_points(n: usize, axes: &[Vec<f64>; 3]) -> (Vec<u32>, Vec<Point3>) {
                 .count()
         })
         .collect();
-    let mut ids = vec![UNUSED; m * m * m];
-    let mut points = vec![[0.0; 3]; per_plane.iter().sum()];
+    let mut ids = try_filled(m * m * m, UNUSED, "the ids of the fine points")?;
+    let mut points = try_filled(per_plane.iter().sum(), [0.0; 3], "the fine points")?;
     let first: Vec<usize> = per_plane
         .iter()
         .scan(0, |acc, &k| {
@@ -152,7 +153,7 @@ fn fine_points(n: usize, axes: &[Vec<f64>; 3]) -> (Vec<u32>, Vec<Point3>) {
                 }
             }
         });
-    (ids, points)
+    Ok((ids, points))
 }
 
 /// The fine-point ids of the mesh with n coarse cubes per side.

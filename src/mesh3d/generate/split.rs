@@ -45,7 +45,7 @@ pub(crate) fn counts(n: usize, split: CubeSplit) -> Counts3 {
 /// The mesh of the n × n × n grid with these `vertices` (numbered as the grid points) whose
 /// cubes are cut by `split`, filled one z-layer of cubes at a time in parallel. The counts must
 /// have been checked to fit 32-bit offsets.
-pub(crate) fn split_cubes(n: usize, vertices: Vec<Point3>, split: CubeSplit) -> Polyhedra {
+pub(crate) fn split_cubes(n: usize, vertices: Vec<Point3>, split: CubeSplit) -> Result<Polyhedra> {
     let [c, s, v] = per_cube(split).map(|x| x as usize * n * n);
     let layer_counts = vec![[c, s, v]; n];
     let [cell_ptr, face_ptr, face_vertices] = fill_layers(&layer_counts, |k, sink| {
@@ -64,14 +64,14 @@ pub(crate) fn split_cubes(n: usize, vertices: Vec<Point3>, split: CubeSplit) -> 
                 }
             }
         }
-    });
-    Polyhedra {
+    })?;
+    Ok(Polyhedra {
         vertices,
         cell_ptr,
         face_ptr,
         face_vertices,
         ..Polyhedra::default()
-    }
+    })
 }
 
 /// The checked request (`what`, n, `domain`, `budget`: see [`check_request`]) built: the grid
@@ -86,5 +86,5 @@ pub(crate) fn build(
 ) -> Result<Polyhedra> {
     check_request(what, n, domain, counts(n, split), 0, budget)?;
     let axes = grid::axes(domain, n)?;
-    Ok(split_cubes(n, grid::points(&axes, shift), split))
+    split_cubes(n, grid::points(&axes, shift)?, split)
 }

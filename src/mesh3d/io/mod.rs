@@ -30,6 +30,7 @@ pub use vtu_read::read_vtu3;
 
 use crate::error::{Error, MeshError, Result};
 use crate::mesh::MemoryBudget;
+use crate::mesh::budget::{try_filled, try_vec};
 use crate::mesh3d::{Point3, Polyhedra};
 use std::path::Path;
 
@@ -67,16 +68,18 @@ pub(crate) fn too_large(path: &Path, source: MeshError) -> Error {
 
 /// Keeps the vertices that `cells` uses, in their order, and renumbers `cells` and `faces`
 /// (ids into `nodes`) accordingly; a face vertex no cell uses becomes `u32::MAX`.
+/// [`Error::OutOfMemory`] if the renumbering or the vertices cannot be allocated.
 pub(crate) fn compact_vertices(
     nodes: &[Point3],
     cells: &mut [u32],
     faces: &mut [u32],
-) -> Vec<Point3> {
-    let mut new_id = vec![u32::MAX; nodes.len()];
+) -> Result<Vec<Point3>> {
+    let mut new_id = try_filled(nodes.len(), u32::MAX, "the renumbering of the nodes")?;
     for &v in cells.iter() {
         new_id[v as usize] = 0;
     }
-    let mut vertices = Vec::new();
+    let used = new_id.iter().filter(|&&id| id == 0).count();
+    let mut vertices = try_vec(used, "the vertices")?;
     for (v, id) in new_id.iter_mut().enumerate() {
         if *id == 0 {
             *id = vertices.len() as u32;
@@ -86,5 +89,5 @@ pub(crate) fn compact_vertices(
     for v in cells.iter_mut().chain(faces.iter_mut()) {
         *v = new_id[*v as usize];
     }
-    vertices
+    Ok(vertices)
 }

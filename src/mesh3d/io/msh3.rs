@@ -16,6 +16,7 @@
 use super::{compact_vertices, too_large};
 use crate::error::Result;
 use crate::mesh::MemoryBudget;
+use crate::mesh::budget::{try_reserve, try_vec};
 use crate::mesh::io::msh::{ElementSink, ElementTag, Sections, nodes_of_type, parse_sections};
 use crate::mesh::io::{Tokens, read_text};
 use crate::mesh3d::io::cells::{HEX_FACES, PRISM_FACES, PYRAMID_FACES, TET_FACES, push_shape};
@@ -158,7 +159,7 @@ fn build(
     };
     // node tags → positions in $Nodes, in place
     let resolve = |e: &Elements| -> Result<Vec<u32>> {
-        let mut out = Vec::with_capacity(e.nodes.len());
+        let mut out = try_vec(e.nodes.len(), "the vertices of the elements")?;
         let mut at = 0;
         for k in 0..e.len() {
             let n = if e.ty[k] <= 3 {
@@ -191,15 +192,15 @@ fn build(
     budget
         .check("the 3D mesh", bytes)
         .map_err(|e| too_large(path, e))?;
-    let vertices = compact_vertices(&nodes, &mut cell_nodes, &mut face_nodes);
+    let vertices = compact_vertices(&nodes, &mut cell_nodes, &mut face_nodes)?;
     drop(nodes);
     let mut p = Polyhedra {
         vertices,
         ..Polyhedra::default()
     };
-    p.cell_ptr.reserve(cells.len() + 1);
-    p.face_ptr.reserve(sides + 1);
-    p.face_vertices.reserve(verts);
+    try_reserve(&mut p.cell_ptr, cells.len() + 1, "the cell offsets")?;
+    try_reserve(&mut p.face_ptr, sides + 1, "the face offsets")?;
+    try_reserve(&mut p.face_vertices, verts, "the face loops")?;
     let mut scratch = Vec::new();
     let mut at = 0;
     for k in 0..cells.len() {

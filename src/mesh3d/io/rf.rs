@@ -11,6 +11,7 @@
 
 use crate::error::{Error, Result};
 use crate::mesh::MemoryBudget;
+use crate::mesh::budget::{try_reserve, try_vec};
 use crate::mesh::io::{Tokens, capacity, read_text};
 use crate::mesh3d::{Point3, Polyhedra};
 use std::ffi::OsString;
@@ -113,7 +114,7 @@ pub(crate) fn parse_node(t: Tokens) -> Result<(Vec<Point3>, u64)> {
     }
     t.count("the first flag")?;
     t.count("the second flag")?;
-    let mut vertices = Vec::with_capacity(capacity(nv, t.t.remaining()));
+    let mut vertices = try_vec(capacity(nv, t.t.remaining()), "the vertices")?;
     let mut base = 0;
     for i in 0..nv {
         let id: u64 = t.parse("a vertex id")?;
@@ -138,8 +139,8 @@ pub(crate) fn parse_ele(path: &Path, t: Tokens, nv: usize, base: u64) -> Result<
     let nc = t.count("the number of cells")?;
     t.count("the flag of the header")?;
     let mut p = Polyhedra::default();
-    p.cell_ptr
-        .reserve(capacity(nc, t.t.remaining()).saturating_add(1));
+    let cap = capacity(nc, t.t.remaining()).saturating_add(1);
+    try_reserve(&mut p.cell_ptr, cap, "the cell offsets")?;
     let (mut loops, mut ends) = (Vec::new(), Vec::new());
     for k in 0..nc {
         t.parse::<u64>(&format!("the id of cell {k}"))?;
