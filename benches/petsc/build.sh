@@ -24,8 +24,8 @@ cmp -s "$SRC" "$OUT/ex9.c" || cp "$SRC" "$OUT/ex9.c"
   { echo "$0: $SRC does not have the one bounds call and VI type that ex9_linear removes" >&2; exit 1; }
 sed -e '/SNESVISetComputeVariableBounds(snes/d' -e 's/SNESSetType(snes, SNESVINEWTONRSLS)/SNESSetType(snes, SNESNEWTONLS)/' \
   "$OUT/ex9.c" >"$OUT/ex9_linear.c.new"
-cmp -s "$OUT/ex9_linear.c.new" "$OUT/ex9_linear.c" && rm "$OUT/ex9_linear.c.new" ||
-  mv "$OUT/ex9_linear.c.new" "$OUT/ex9_linear.c"
+if cmp -s "$OUT/ex9_linear.c.new" "$OUT/ex9_linear.c"; then rm "$OUT/ex9_linear.c.new"
+else mv "$OUT/ex9_linear.c.new" "$OUT/ex9_linear.c"; fi
 CC=${MPICC:-$(pkg-config --variable=ccompiler PETSc)}   # mpicc for Debian's PETSc
 for name in ex9 ex9_linear; do
   BIN=$OUT/$name

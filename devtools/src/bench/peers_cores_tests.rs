@@ -8,10 +8,7 @@ const HEADER: &str = "family,code,scheme,linear,grid,cells,unknowns,niter,coarse
 /// Rows of a CSV written with `HEADER` plus `extra` columns, through the real reader (`tag`
 /// names the temporary directory of the calling test).
 fn rows_of(tag: &str, extra: &str, lines: &[&str]) -> Vec<PeerRow> {
-    let dir = std::env::temp_dir().join(format!(
-        "gradvi-peers-cores-{}-{tag}",
-        std::process::id()
-    ));
+    let dir = std::env::temp_dir().join(format!("gradvi-peers-cores-{}-{tag}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("bench_peers.csv");
     let mut text = format!("{HEADER}{extra}\n");
