@@ -653,34 +653,8 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
     if repeat > 1 {
         eprintln!("[bench] {repeat} runs of every case, interleaved; rows: the median time");
     }
-    let cores = core_counts();
     for g in ex9_grids(if do_ex9 { max_grid } else { 0 }) {
-        let mut group: Vec<Case> = Vec::new();
-        for &n in &cores {
-            if let Ok(bin) = &petsc {
-                let linear_bin = bin.with_file_name("ex9_linear");
-                group.push((
-                    format!("ex9 PETSc gs+mg, {g}² grid, {n} processes (+ linear variant)"),
-                    Box::new(move || {
-                        let obstacle = run_petsc(cfg, bin, g, n)?;
-                        Ok(with_linear(obstacle, &run_petsc(cfg, &linear_bin, g, n)?))
-                    }),
-                ));
-            }
-            for (scheme, linear) in ex9_variants(g) {
-                let run = move |barrier| {
-                    let threads = Some(n);
-                    let what = ("ex9", scheme, linear);
-                    gradvi_child(exe, what, g, None, ChildRun { threads, barrier })
-                };
-                group.push((
-                    format!(
-                        "ex9 gradvi {scheme} {linear}, {g}² grid, {n} threads (+ linear variant)"
-                    ),
-                    Box::new(move || Ok(with_linear(run(true)?, &run(false)?))),
-                ));
-            }
-        }
+        let group = ex9_group(cfg, exe, petsc.as_deref().ok(), g);
         for row in run_group(&group, repeat)? {
             push(row, &mut rows)?;
         }
@@ -713,6 +687,41 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The ex9 cases of grid `g` (PETSc's when its binary `petsc` is there, then gradvi's), on each
+/// of the [`core_counts`], each followed by its linear variant.
+fn ex9_group<'a>(
+    cfg: &'a Config,
+    exe: &'a Path,
+    petsc: Option<&'a Path>,
+    g: usize,
+) -> Vec<Case<'a>> {
+    let mut group: Vec<Case> = Vec::new();
+    for n in core_counts() {
+        if let Some(bin) = petsc {
+            let linear_bin = bin.with_file_name("ex9_linear");
+            group.push((
+                format!("ex9 PETSc gs+mg, {g}² grid, {n} processes (+ linear variant)"),
+                Box::new(move || {
+                    let obstacle = run_petsc(cfg, bin, g, n)?;
+                    Ok(with_linear(obstacle, &run_petsc(cfg, &linear_bin, g, n)?))
+                }),
+            ));
+        }
+        for (scheme, linear) in ex9_variants(g) {
+            let run = move |barrier| {
+                let threads = Some(n);
+                let what = ("ex9", scheme, linear);
+                gradvi_child(exe, what, g, None, ChildRun { threads, barrier })
+            };
+            group.push((
+                format!("ex9 gradvi {scheme} {linear}, {g}² grid, {n} threads (+ linear variant)"),
+                Box::new(move || Ok(with_linear(run(true)?, &run(false)?))),
+            ));
+        }
+    }
+    group
 }
 
 /// A case of this benchmark: what it is, and how to run it once.
