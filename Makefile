@@ -123,8 +123,11 @@ bench-amg:
 	$(CARGO) bench --bench amg
 
 ## bench-peers: PETSc ex9 (installed and built from Debian's packages by benches/petsc/) next to
-##        gradvi at equal unknowns (grids up to GRADVI_BENCH_EX9_MAX_GRID, default 4097: the 4097²
-##        grid, PETSc and gradvi P1 only, where 21 GiB are available; about 8 minutes more), and
+##        gradvi at equal unknowns and equal cores: 1 and N (the machine's cores), PETSc on 1
+##        process and under mpiexec -n N (memory summed over the ranks), gradvi on 1 and N rayon
+##        threads; every case also without the obstacle (its linear variant, for the cost ratio
+##        R), so four runs per case; grids up to GRADVI_BENCH_EX9_MAX_GRID (default 4097: the
+##        4097² grid, PETSc and gradvi P1 only, where 21 GiB are available), and
 ##        the L-shape/disk/hole family (meshed by gmsh: reference-deps installs it);
 ##        GRADVI_BENCH_PEER_REPEAT=N runs every case N times, interleaved, keeping the median
 ##        (about N times as long); GRADVI_BENCH_PEERS=ex9 or =domains runs one part

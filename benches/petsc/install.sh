@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what benches/petsc/{build,run_ex9}.sh need, from Debian, unless all is present:
 # PETSc headers/library with pkg-config (petsc-dev), the PETSc examples (ex9.c, in
-# libpetsc<X.Y>-dev-examples), mpicc (libopenmpi-dev, pulled in by petsc-dev), cc, /usr/bin/time.
+# libpetsc<X.Y>-dev-examples), mpicc and mpiexec (Open MPI, pulled in by petsc-dev), cc,
+# /usr/bin/time.
 set -euo pipefail
 ex9_src() {  # where Debian puts ex9.c for the installed PETSc version
   local v
@@ -10,6 +11,7 @@ ex9_src() {  # where Debian puts ex9.c for the installed PETSc version
 }
 have_all() {
   pkg-config --exists PETSc 2>/dev/null && command -v mpicc >/dev/null 2>&1 &&
+    command -v mpiexec >/dev/null 2>&1 &&
     command -v cc >/dev/null 2>&1 && [ -x /usr/bin/time ] && [ -f "$(ex9_src)" ]
 }
 have_all && exit 0

@@ -55,6 +55,7 @@ use std::time::Instant;
 pub mod baseline;
 pub mod mesh3d;
 pub mod peers;
+mod peers_cores;
 mod peers_report;
 mod report;
 pub use report::write_report;

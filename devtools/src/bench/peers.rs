@@ -13,6 +13,21 @@
 //!    disk and a square with a hole (`benches/domains/*.geo`) from 10⁴ to 10⁶ cells, HMM and
 //!    P1 with the default (nested) start: NITER and the growth of the total time.
 //!
+//! **Equal cores.** Every ex9 case runs on 1 core and on N, the machine's cores
+//! ([`core_counts`]): PETSc on 1 process and under `mpiexec -n N` (`benches/petsc/run_ex9.sh`;
+//! its peak memory is then the sum of the ranks' peaks), gradvi with 1 and N rayon threads
+//! (`RAYON_NUM_THREADS` of the child: the assembly, the multigrid and every other parallel loop
+//! run on rayon's global pool). The report compares the codes at equal cores only. The domain
+//! cases run on N cores.
+//!
+//! **The cost ratio R.** Every ex9 case is followed by its linear variant: the same mesh,
+//! Dirichlet data, solver and cores without the barrier (gradvi: the problem with its
+//! constraint dropped, `--peer-child --no-barrier`; PETSc: `ex9_linear`, ex9 without the bounds
+//! and with Newton line search instead of the VI solver, built by `benches/petsc/build.sh`).
+//! Its total time is the row's `linear_seconds`, and R = `total_s / linear_seconds`, both
+//! measured the same way (PETSc: the whole process or MPI job; gradvi: the child from the mesh
+//! to the freeing of everything).
+//!
 //! Every case runs in a child process, as in the scaling benchmark, so that peak memory is the
 //! case's own. `GRADVI_BENCH_PEERS` (default `ex9,domains`) selects the parts; the rows of the
 //! other part are kept from the existing CSV. `GRADVI_BENCH_PEER_REPEAT` (1 to 20, default 1)
@@ -140,6 +155,17 @@ pub struct PeerRow {
     /// median time, its peak memory the largest of all runs.
     #[serde(default = "one")]
     pub runs: usize,
+    /// Cores of the run: gradvi's rayon threads, PETSc's MPI processes (0 in rows written
+    /// before this column, when gradvi ran on every core and PETSc on one process).
+    #[serde(default)]
+    pub cores: usize,
+    /// Total time of the linear variant of the case (the same mesh, data, solver and cores,
+    /// without the barrier), measured like `total_s`; NaN where it was not run.
+    #[serde(deserialize_with = "nullable", default = "nan")]
+    pub linear_seconds: f64,
+    /// The cost ratio R = `total_s / linear_seconds` (NaN without the linear variant).
+    #[serde(deserialize_with = "nullable", default = "nan")]
+    pub r: f64,
 }
 
 fn one() -> usize {
@@ -297,7 +323,8 @@ fn log_solve(sol: &gradvi::solver::Solution) {
     }
 }
 
-/// Solves one gradvi case in this process (the body of a `--peer-child` process).
+/// Solves one gradvi case in this process (the body of a `--peer-child` process); without the
+/// `barrier`, its linear variant (the problem's constraint dropped).
 fn run_gradvi(
     family: &str,
     scheme: SchemeKind,
@@ -305,9 +332,13 @@ fn run_gradvi(
     size: usize,
     file: Option<&Path>,
     root: &Path,
+    barrier: bool,
 ) -> gradvi::Result<PeerRow> {
     let t0 = Instant::now();
-    let (mesh, problem, grid) = case_of(family, scheme, size, file, root)?;
+    let (mesh, mut problem, grid) = case_of(family, scheme, size, file, root)?;
+    if !barrier {
+        problem.constraint = None;
+    }
     let mesh_s = t0.elapsed().as_secs_f64();
     let scheme_obj = gradvi::scheme::build(scheme, &mesh)?;
     let sol = solve_problem(scheme_obj.as_ref(), &problem, &options(linear)?)?;
@@ -353,6 +384,9 @@ fn run_gradvi(
             .max(c.complementarity)
             .max(c.balance_residual),
         runs: 1,
+        cores: rayon_threads(),
+        linear_seconds: f64::NAN,
+        r: f64::NAN,
     };
     // PETSc's time is its whole process, finalisation (freeing) included: so is this one
     drop(sol);
@@ -364,10 +398,20 @@ fn run_gradvi(
     Ok(row)
 }
 
-/// Arguments of a child process: `FAMILY SCHEME LINEAR SIZE [FILE]`.
+/// The threads of rayon's global pool in this process (`RAYON_NUM_THREADS`, or every core).
+fn rayon_threads() -> usize {
+    rayon::current_num_threads()
+}
+
+/// Arguments of a child process: `[--no-barrier] FAMILY SCHEME LINEAR SIZE [FILE]`
+/// (`--no-barrier`: the linear variant).
 pub fn child_main(args: &[String], root: &Path) -> gradvi::Result<()> {
+    let barrier = args.first().is_none_or(|a| a != NO_BARRIER);
+    let args = if barrier { args } else { &args[1..] };
     if args.len() < 4 {
-        return Err(bad("--peer-child FAMILY SCHEME LINEAR SIZE [FILE]".into()));
+        return Err(bad(format!(
+            "--peer-child [{NO_BARRIER}] FAMILY SCHEME LINEAR SIZE [FILE]"
+        )));
     }
     let size = args[3]
         .parse()
@@ -379,6 +423,7 @@ pub fn child_main(args: &[String], root: &Path) -> gradvi::Result<()> {
         size,
         args.get(4).map(Path::new),
         root,
+        barrier,
     )?;
     println!(
         "{}",
@@ -387,15 +432,21 @@ pub fn child_main(args: &[String], root: &Path) -> gradvi::Result<()> {
     Ok(())
 }
 
-/// PETSc's ex9 at grid G through `benches/petsc/run_ex9.sh` (built once by `build.sh`).
-fn run_petsc(cfg: &Config, bin: &Path, grid: usize) -> gradvi::Result<PeerRow> {
+/// The flag of a child process that runs the linear variant of its case.
+const NO_BARRIER: &str = "--no-barrier";
+
+/// PETSc's ex9 at grid G on `nproc` MPI processes through `benches/petsc/run_ex9.sh` (built
+/// once by `build.sh`); `bin` is `ex9` or `ex9_linear`.
+fn run_petsc(cfg: &Config, bin: &Path, grid: usize, nproc: usize) -> gradvi::Result<PeerRow> {
     let mut cmd = Command::new("bash");
     cmd.arg(cfg.path("benches/petsc/run_ex9.sh"))
         .arg(bin)
-        .arg(grid.to_string());
+        .arg(grid.to_string())
+        .arg(nproc.to_string());
     let text = stdout_of(cmd, Path::new("benches/petsc/run_ex9.sh"), "PETSc ex9")?;
     #[derive(Deserialize)]
     struct Ex9 {
+        processes: usize,
         unknowns: usize,
         seconds: f64,
         peak_mib: f64,
@@ -431,7 +482,24 @@ fn run_petsc(cfg: &Config, bin: &Path, grid: usize) -> gradvi::Result<PeerRow> {
         err_mean: r.err_mean,
         certificate: f64::NAN,
         runs: 1,
+        cores: r.processes,
+        linear_seconds: f64::NAN,
+        r: f64::NAN,
     })
+}
+
+/// `obstacle` with the time of its linear variant `linear` and the cost ratio R.
+fn with_linear(mut obstacle: PeerRow, linear: &PeerRow) -> PeerRow {
+    obstacle.linear_seconds = linear.total_s;
+    obstacle.r = obstacle.total_s / linear.total_s;
+    obstacle
+}
+
+/// The core counts of the ex9 comparison: 1 and N, the cores of this machine
+/// (`std::thread::available_parallelism`).
+pub fn core_counts() -> Vec<usize> {
+    let n = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if n > 1 { vec![1, n] } else { vec![1] }
 }
 
 /// Installs (if missing) and builds PETSc's ex9; its path, or why not.
@@ -479,18 +547,35 @@ fn domain_mesh(cfg: &Config, domain: &str, lc: f64) -> gradvi::Result<PathBuf> {
     Ok(msh)
 }
 
+/// How a gradvi child runs: its rayon threads (`None`: every core) and whether the problem
+/// keeps its barrier (`false`: the linear variant).
+#[derive(Debug, Clone, Copy)]
+struct ChildRun {
+    threads: Option<usize>,
+    barrier: bool,
+}
+
 /// One gradvi case run in a child process.
 fn gradvi_child(
     exe: &Path,
-    family: &str,
-    scheme: SchemeKind,
-    linear: &str,
+    (family, scheme, linear): (&str, SchemeKind, &str),
     size: usize,
     file: Option<&Path>,
+    run: ChildRun,
 ) -> gradvi::Result<PeerRow> {
     let mut cmd = Command::new(exe);
-    cmd.args(child_args(family, scheme, linear, size, file));
-    let what = format!("{family} {scheme} {linear} {size}");
+    let mut args = child_args(family, scheme, linear, size, file);
+    if !run.barrier {
+        args.insert(2, NO_BARRIER.into());
+    }
+    cmd.args(args);
+    if let Some(t) = run.threads {
+        cmd.env("RAYON_NUM_THREADS", t.to_string());
+    }
+    let what = format!(
+        "{family} {scheme} {linear} {size}{}",
+        if run.barrier { "" } else { " (linear variant)" }
+    );
     let text = stdout_of(cmd, exe, &what)?;
     json_row(&text, &format!("{what}: bad child output"))
 }
@@ -537,18 +622,21 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
         .collect();
     let push = |row: PeerRow, rows: &mut Vec<PeerRow>| -> gradvi::Result<()> {
         eprintln!(
-            "[bench]   {} {} {} {}: {} unknowns, NITER {} (+{} coarse), {:.2} s, {:.0} MiB, errors {:.3e} / {:.3e}",
+            "[bench]   {} {} {} {}, {} cores: {} unknowns, NITER {} (+{} coarse), {:.2} s, {:.0} MiB, errors {:.3e} / {:.3e}, linear variant {:.2} s (R {:.2})",
             row.family,
             row.code,
             row.scheme,
             row.linear,
+            row.cores,
             row.unknowns,
             row.niter,
             row.coarse_niter,
             row.total_s,
             row.peak_mib,
             row.err_max,
-            row.err_mean
+            row.err_mean,
+            row.linear_seconds,
+            row.r
         );
         rows.push(row);
         write_csv(&csv, rows)
@@ -566,19 +654,7 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
         eprintln!("[bench] {repeat} runs of every case, interleaved; rows: the median time");
     }
     for g in ex9_grids(if do_ex9 { max_grid } else { 0 }) {
-        let mut group: Vec<Case> = Vec::new();
-        if let Ok(bin) = &petsc {
-            group.push((
-                format!("ex9 PETSc gs+mg, {g}² grid"),
-                Box::new(move || run_petsc(cfg, bin, g)),
-            ));
-        }
-        for (scheme, linear) in ex9_variants(g) {
-            group.push((
-                format!("ex9 gradvi {scheme} {linear}, {g}² grid"),
-                Box::new(move || gradvi_child(exe, "ex9", scheme, linear, g, None)),
-            ));
-        }
+        let group = ex9_group(cfg, exe, petsc.as_deref().ok(), g);
         for row in run_group(&group, repeat)? {
             push(row, &mut rows)?;
         }
@@ -596,7 +672,12 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
                 (
                     format!("{domain} ({}) gradvi {scheme} {linear}", file.display()),
                     Box::new(move || {
-                        gradvi_child(exe, domain, *scheme, linear, 0, Some(file.as_path()))
+                        let what = (*domain, *scheme, *linear);
+                        let run = ChildRun {
+                            threads: None,
+                            barrier: true,
+                        };
+                        gradvi_child(exe, what, 0, Some(file.as_path()), run)
                     }),
                 )
             })
@@ -606,6 +687,41 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The ex9 cases of grid `g` (PETSc's when its binary `petsc` is there, then gradvi's), on each
+/// of the [`core_counts`], each followed by its linear variant.
+fn ex9_group<'a>(
+    cfg: &'a Config,
+    exe: &'a Path,
+    petsc: Option<&'a Path>,
+    g: usize,
+) -> Vec<Case<'a>> {
+    let mut group: Vec<Case> = Vec::new();
+    for n in core_counts() {
+        if let Some(bin) = petsc {
+            let linear_bin = bin.with_file_name("ex9_linear");
+            group.push((
+                format!("ex9 PETSc gs+mg, {g}² grid, {n} processes (+ linear variant)"),
+                Box::new(move || {
+                    let obstacle = run_petsc(cfg, bin, g, n)?;
+                    Ok(with_linear(obstacle, &run_petsc(cfg, &linear_bin, g, n)?))
+                }),
+            ));
+        }
+        for (scheme, linear) in ex9_variants(g) {
+            let run = move |barrier| {
+                let threads = Some(n);
+                let what = ("ex9", scheme, linear);
+                gradvi_child(exe, what, g, None, ChildRun { threads, barrier })
+            };
+            group.push((
+                format!("ex9 gradvi {scheme} {linear}, {g}² grid, {n} threads (+ linear variant)"),
+                Box::new(move || Ok(with_linear(run(true)?, &run(false)?))),
+            ));
+        }
+    }
+    group
 }
 
 /// A case of this benchmark: what it is, and how to run it once.

@@ -1,9 +1,11 @@
 //! The first sections of `BENCHMARKS.md` and `figures/bench_peers.png`, written from
-//! `replication/results/bench_peers.csv` only ([`super::peers`]): PETSc's ex9 side by side,
-//! the targets of the performance issue, and the "any domain" family.
+//! `replication/results/bench_peers.csv` only ([`super::peers`]): ex9 at equal cores
+//! ([`super::peers_cores`]), PETSc's ex9 side by side, the targets of the performance issue,
+//! and the "any domain" family.
 
 use super::Config;
 use super::peers::PeerRow;
+use super::peers_cores::{linear_us_per_unknown, petsc_at};
 use gradvi_cli::markdown::{Doc, NONE, Table, cells, fixed, met, seconds};
 use gradvi_cli::plot::{LineOptions, LineSeries, Marker, data_range, plot_panels};
 
@@ -23,27 +25,38 @@ fn slope(pts: &[(f64, f64)]) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
-fn find<'a>(
-    rows: &'a [PeerRow],
-    code: &str,
-    scheme: &str,
-    linear: &str,
-    grid: usize,
-) -> Option<&'a PeerRow> {
-    rows.iter().find(|r| {
-        r.family == "ex9"
-            && r.code == code
-            && r.scheme == scheme
-            && r.linear == linear
-            && r.grid == grid
-    })
+/// The fastest gradvi row of `scheme` at `grid` on `cores` cores (over the linear solvers).
+fn best<'a>(rows: &'a [PeerRow], scheme: &str, grid: usize, cores: usize) -> Option<&'a PeerRow> {
+    rows.iter()
+        .filter(|r| {
+            r.family == "ex9"
+                && r.code == "gradvi"
+                && r.scheme == scheme
+                && r.grid == grid
+                && r.cores == cores
+        })
+        .min_by(|a, b| a.total_s.total_cmp(&b.total_s))
 }
 
-/// The fastest gradvi row of `scheme` at `grid` (over the linear solvers).
-fn best<'a>(rows: &'a [PeerRow], scheme: &str, grid: usize) -> Option<&'a PeerRow> {
-    rows.iter()
-        .filter(|r| r.family == "ex9" && r.code == "gradvi" && r.scheme == scheme && r.grid == grid)
-        .min_by(|a, b| a.total_s.total_cmp(&b.total_s))
+/// The core counts of the ex9 rows (0 for rows without one), in increasing order.
+fn ex9_cores(rows: &[PeerRow]) -> Vec<usize> {
+    let mut c: Vec<usize> = rows
+        .iter()
+        .filter(|r| r.family == "ex9")
+        .map(|r| r.cores)
+        .collect();
+    c.sort_unstable();
+    c.dedup();
+    c
+}
+
+/// A core count for a table (0, not recorded, as [`NONE`]).
+fn cores_cell(cores: usize) -> String {
+    if cores == 0 {
+        NONE.into()
+    } else {
+        cores.to_string()
+    }
 }
 
 /// Writes the sections into `md` and the figure (nothing when there are no rows).
@@ -54,6 +67,7 @@ pub fn write(cfg: &Config, md: &mut Doc, rows: &[PeerRow]) -> gradvi::Result<()>
         );
         return Ok(());
     }
+    super::peers_cores::write(md, rows);
     ex9_section(md, rows);
     targets(cfg, md, rows);
     profile(md, rows);
@@ -66,12 +80,12 @@ fn ex9_section(md: &mut Doc, rows: &[PeerRow]) {
     md.section(
         2,
         "PETSc's obstacle example (ex9) side by side",
-        "Bueler's radial obstacle problem (`problems/ex9.toml`), solved in one run by PETSc's `snes/tutorials/ex9.c` (Debian's PETSc, built by `benches/petsc/build.sh`, run by `benches/petsc/run_ex9.sh` with `-snes_grid_sequence K -pc_type mg` from a 5 × 5 grid: Newton RSLS with grid sequencing and geometric multigrid, GMRES at relative tolerance 1e-5 inside Newton at 1e-8) and by gradvi with its defaults (nested start on agglomerated coarse meshes; linear solver as the column says). P1 runs on the G × G grid's squares cut into triangles, the same five-point discrete problem as ex9 with the same G² unknowns (boundary included); HMM on the (G − 1)² squares. Errors against the exact solution are computed as ex9 does: max and mean over all nodes (P1, PETSc) or cell centres (HMM). Time is wall clock: for gradvi from the start of the mesh to the certified solution, its errors computed and everything freed (the benchmark's own timing of the data evaluation, below, taken out); for PETSc the whole process, whose finalisation also frees everything; memory is the peak resident set. NITER: gradvi's fine solves (+ coarse solves), PETSc's Newton steps on the finest grid (+ on the coarser grids); Krylov: CG (gradvi) or GMRES (PETSc) iterations in all.",
+        "Bueler's radial obstacle problem (`problems/ex9.toml`), solved in one run by PETSc's `snes/tutorials/ex9.c` (Debian's PETSc, built by `benches/petsc/build.sh`, run by `benches/petsc/run_ex9.sh` with `-snes_grid_sequence K -pc_type mg` from a 5 × 5 grid: Newton RSLS with grid sequencing and geometric multigrid, GMRES at relative tolerance 1e-5 inside Newton at 1e-8) and by gradvi with its defaults (nested start on agglomerated coarse meshes; linear solver as the column says). P1 runs on the G × G grid's squares cut into triangles, the same five-point discrete problem as ex9 with the same G² unknowns (boundary included); HMM on the (G − 1)² squares. Errors against the exact solution are computed as ex9 does: max and mean over all nodes (P1, PETSc) or cell centres (HMM). Time is wall clock: for gradvi from the start of the mesh to the certified solution, its errors computed and everything freed (the benchmark's own timing of the data evaluation, below, taken out); for PETSc the whole process, whose finalisation also frees everything; memory is the peak resident set. NITER: gradvi's fine solves (+ coarse solves), PETSc's Newton steps on the finest grid (+ on the coarser grids); Krylov: CG (gradvi) or GMRES (PETSc) iterations in all. Cores: gradvi's rayon threads, PETSc's MPI processes (– in rows measured before the core count was recorded, when gradvi ran on every core and PETSc on one process); the ratios to PETSc are taken at equal cores only. R: the cost ratio (obstacle solve over its linear variant, previous section), with the linear variant's time per unknown.",
     );
     md.para(runs_note(rows.iter().filter(|r| r.family == "ex9")));
     let mut t = Table::new(
-        "G | code | scheme | linear | unknowns | time [s] | peak [MiB] | NITER (+coarse) | Krylov | max error | mean error | time / PETSc | memory / PETSc",
-        "rlllrrrrrrrrr",
+        "G | cores | code | scheme | linear | unknowns | time [s] | peak [MiB] | NITER (+coarse) | Krylov | max error | mean error | time / PETSc | memory / PETSc | R | linear [µs/unknown]",
+        "rrlllrrrrrrrrrrr",
     );
     let mut grids: Vec<usize> = rows
         .iter()
@@ -81,14 +95,20 @@ fn ex9_section(md: &mut Doc, rows: &[PeerRow]) {
     grids.sort_unstable();
     grids.dedup();
     for g in grids {
-        let petsc = find(rows, "petsc", "fd", "gs+mg", g);
-        for r in rows.iter().filter(|r| r.family == "ex9" && r.grid == g) {
+        let mut at_g: Vec<&PeerRow> = rows
+            .iter()
+            .filter(|r| r.family == "ex9" && r.grid == g)
+            .collect();
+        at_g.sort_by_key(|r| r.cores);
+        for r in at_g {
+            let petsc = petsc_at(rows, g, r.cores);
             let ratio = |f: fn(&PeerRow) -> f64| match petsc {
                 Some(p) if r.code != "petsc" => fixed(f(r) / f(p), 2),
                 _ => NONE.into(),
             };
             t.row(cells![
                 g,
+                cores_cell(r.cores),
                 r.code,
                 r.scheme,
                 r.linear,
@@ -100,7 +120,9 @@ fn ex9_section(md: &mut Doc, rows: &[PeerRow]) {
                 format!("{:.4e}", r.err_max),
                 format!("{:.4e}", r.err_mean),
                 ratio(|r| r.total_s),
-                ratio(|r| r.peak_mib)
+                ratio(|r| r.peak_mib),
+                fixed(r.r, 2),
+                fixed(linear_us_per_unknown(r), 2)
             ]);
         }
     }
@@ -120,13 +142,53 @@ fn targets(cfg: &Config, md: &mut Doc, rows: &[PeerRow]) {
     md.table(&t);
 }
 
-/// The ex9 targets: P1 against PETSc at 1M and 4M unknowns, HMM at 1M, the 4097² grid.
+/// The ex9 targets at each core count: P1 against PETSc at 1M and 4M unknowns, HMM at 1M; then
+/// the 4097² grid.
 fn ex9_targets(t: &mut Table, rows: &[PeerRow]) {
+    let cores: Vec<usize> = ex9_cores(rows).into_iter().filter(|&c| c > 0).collect();
+    for &n in &cores {
+        ex9_targets_at(t, rows, n);
+    }
+    if cores.is_empty() {
+        t.row(cells![
+            "ex9 against PETSc at equal cores",
+            "not run (no row with a core count)",
+            NONE
+        ]);
+    }
+    let big = rows
+        .iter()
+        .filter(|r| r.family == "ex9" && r.code == "gradvi" && r.scheme == "p1" && r.grid == 4097)
+        .max_by_key(|r| r.cores);
+    let limit_mib = 24.0 * 1024.0;
+    t.row(cells![
+        "ex9 at 4097² (16.8M P1 unknowns) within 24 GiB",
+        match big {
+            Some(r) => format!(
+                "gradvi P1 ({}, {} cores) {:.0} s, peak {:.0} MiB (limit {limit_mib:.0}), certificate {:.1e}, max error {:.4e}{}",
+                r.linear,
+                cores_cell(r.cores),
+                r.total_s,
+                r.peak_mib,
+                r.certificate,
+                r.err_max,
+                petsc_at(rows, 4097, r.cores).map_or(String::new(), |p| format!(
+                    "; PETSc {:.0} s, {:.0} MiB, {:.4e}",
+                    p.total_s, p.peak_mib, p.err_max
+                ))
+            ),
+            None => "not run (the benchmark runs it where 21 GiB are available)".into(),
+        },
+        met(big.is_some_and(|r| r.peak_mib <= limit_mib))
+    ]);
+}
+
+/// The ex9 targets against PETSc on `n` cores (gradvi on `n` threads, PETSc on `n` processes).
+fn ex9_targets_at(t: &mut Table, rows: &[PeerRow], n: usize) {
     for (g, label) in [(1025, "1M"), (2049, "4M")] {
-        let (Some(p), Some(b)) = (find(rows, "petsc", "fd", "gs+mg", g), best(rows, "p1", g))
-        else {
+        let (Some(p), Some(b)) = (petsc_at(rows, g, n), best(rows, "p1", g, n)) else {
             t.row(cells![
-                format!("ex9 P1 at {label} unknowns: time and memory ≤ PETSc, errors no larger"),
+                format!("ex9 P1 at {label} unknowns, {n} cores: time and memory ≤ PETSc, errors no larger"),
                 "not run",
                 NONE
             ]);
@@ -136,17 +198,14 @@ fn ex9_targets(t: &mut Table, rows: &[PeerRow]) {
             && b.peak_mib <= p.peak_mib
             && b.err_max <= p.err_max * (1.0 + 1e-3);
         t.row(cells![
-            format!("ex9 P1 at {label} unknowns ({g}²): time and memory ≤ PETSc gs+mg, errors no larger"),
+            format!("ex9 P1 at {label} unknowns ({g}²), {n} cores: time and memory ≤ PETSc gs+mg, errors no larger"),
             format!("gradvi P1 ({}) {:.2} s, {:.0} MiB, max error {:.4e}; PETSc {:.2} s, {:.0} MiB, {:.4e}", b.linear, b.total_s, b.peak_mib, b.err_max, p.total_s, p.peak_mib, p.err_max),
             met(ok)
         ]);
     }
-    match (
-        find(rows, "petsc", "fd", "gs+mg", 1025),
-        best(rows, "hmm", 1025),
-    ) {
+    match (petsc_at(rows, 1025, n), best(rows, "hmm", 1025, n)) {
         (Some(p), Some(h)) => t.row(cells![
-            "ex9 HMM on 1024² cells: time ≤ PETSc gs+mg at 1M unknowns",
+            format!("ex9 HMM on 1024² cells, {n} cores: time ≤ PETSc gs+mg at 1M unknowns"),
             format!(
                 "gradvi HMM ({}) {:.2} s; PETSc {:.2} s",
                 h.linear, h.total_s, p.total_s
@@ -154,34 +213,11 @@ fn ex9_targets(t: &mut Table, rows: &[PeerRow]) {
             met(h.total_s <= p.total_s)
         ]),
         _ => t.row(cells![
-            "ex9 HMM on 1024² cells: time ≤ PETSc at 1M unknowns",
+            format!("ex9 HMM on 1024² cells, {n} cores: time ≤ PETSc at 1M unknowns"),
             "not run",
             NONE
         ]),
     }
-    let big = rows
-        .iter()
-        .find(|r| r.family == "ex9" && r.code == "gradvi" && r.scheme == "p1" && r.grid == 4097);
-    let limit_mib = 24.0 * 1024.0;
-    t.row(cells![
-        "ex9 at 4097² (16.8M P1 unknowns) within 24 GiB",
-        match big {
-            Some(r) => format!(
-                "gradvi P1 ({}) {:.0} s, peak {:.0} MiB (limit {limit_mib:.0}), certificate {:.1e}, max error {:.4e}{}",
-                r.linear,
-                r.total_s,
-                r.peak_mib,
-                r.certificate,
-                r.err_max,
-                find(rows, "petsc", "fd", "gs+mg", 4097).map_or(String::new(), |p| format!(
-                    "; PETSc {:.0} s, {:.0} MiB, {:.4e}",
-                    p.total_s, p.peak_mib, p.err_max
-                ))
-            ),
-            None => "not run (the benchmark runs it where 21 GiB are available)".into(),
-        },
-        met(big.is_some_and(|r| r.peak_mib <= limit_mib))
-    ]);
 }
 
 /// The any-domain targets, per scheme: NITER and the steepest growth of the total time.
@@ -258,19 +294,20 @@ fn profile(md: &mut Doc, rows: &[PeerRow]) {
         "Seconds per phase of gradvi's ex9 runs (the largest grids): mesh generation; setup (data, local matrices, pattern, symbolic factorisation); the nested start's coarse solves; assembly of the condensed systems; factorisation (direct) or multigrid setup (iterative); triangular solves or conjugate gradients (with the interior recovery); the rest (constraints, residuals, certificates, the look-aheads of the active set, errors, freeing the memory). Data: an upper bound of the time spent evaluating the problem's expressions (every datum at every centroid, edge midpoint and vertex, sequentially; `problems/ex9.toml` is a problem file, so this is the cost of its parsed expressions), and its share of the total.",
     );
     let mut t = Table::new(
-        "G | scheme | linear | mesh | setup | coarse | assembly | factor / AMG setup | solve / CG | rest | total | data (share)",
-        "rllrrrrrrrrr",
+        "G | cores | scheme | linear | mesh | setup | coarse | assembly | factor / AMG setup | solve / CG | rest | total | data (share)",
+        "rrllrrrrrrrrr",
     );
     let mut ex9: Vec<&PeerRow> = rows
         .iter()
         .filter(|r| r.family == "ex9" && r.code == "gradvi" && r.grid >= 1025)
         .collect();
-    ex9.sort_by_key(|r| (r.grid, r.scheme.clone(), r.linear.clone()));
+    ex9.sort_by_key(|r| (r.grid, r.scheme.clone(), r.linear.clone(), r.cores));
     for r in ex9 {
         let solve = r.linear_s - r.factor_s;
         let rest = r.total_s - r.mesh_s - r.setup_s - r.coarse_s - r.assemble_s - r.linear_s;
         t.row(cells![
             r.grid,
+            cores_cell(r.cores),
             r.scheme,
             r.linear,
             seconds(r.mesh_s),
@@ -363,24 +400,25 @@ fn style(code: &str, linear: &str) -> ([u8; 3], Marker) {
     }
 }
 
-fn figure(cfg: &Config, rows: &[PeerRow]) -> gradvi::Result<()> {
-    let mut charts = Vec::new();
-    for (scheme, title) in [
-        ("p1", "ex9: P1 (same problem as PETSc)"),
-        ("hmm", "ex9: HMM"),
+/// The ex9 series of `scheme` (and PETSc's): one per code, linear solver and core count, the
+/// largest core count solid, the others dashed.
+fn ex9_series(rows: &[PeerRow], scheme: &str) -> Vec<LineSeries> {
+    let cores = ex9_cores(rows);
+    let most = cores.last().copied().unwrap_or(0);
+    let mut series = Vec::new();
+    for (code, linear) in [
+        ("petsc", "gs+mg"),
+        ("gradvi", "direct"),
+        ("gradvi", "iterative"),
     ] {
-        let mut series = Vec::new();
-        for (code, linear) in [
-            ("petsc", "gs+mg"),
-            ("gradvi", "direct"),
-            ("gradvi", "iterative"),
-        ] {
+        for &n in &cores {
             let mut pts: Vec<[f64; 2]> = rows
                 .iter()
                 .filter(|r| {
                     r.family == "ex9"
                         && r.code == code
                         && r.linear == linear
+                        && r.cores == n
                         && (code == "petsc" || r.scheme == scheme)
                 })
                 .map(|r| [r.unknowns as f64, r.total_s])
@@ -390,17 +428,34 @@ fn figure(cfg: &Config, rows: &[PeerRow]) -> gradvi::Result<()> {
                 continue;
             }
             let (color, marker) = style(code, linear);
-            let label = if code == "petsc" {
+            let name = if code == "petsc" {
                 "PETSc gs+mg".to_string()
             } else {
                 format!("gradvi {linear}")
             };
+            let label = match n {
+                0 => name,
+                1 => format!("{name}, 1 core"),
+                n => format!("{name}, {n} cores"),
+            };
             series.push(LineSeries {
                 color: Some(color),
                 marker,
+                dashed: n != most,
                 ..LineSeries::new(&label, pts)
             });
         }
+    }
+    series
+}
+
+fn figure(cfg: &Config, rows: &[PeerRow]) -> gradvi::Result<()> {
+    let mut charts = Vec::new();
+    for (scheme, title) in [
+        ("p1", "ex9: P1 (same problem as PETSc)"),
+        ("hmm", "ex9: HMM"),
+    ] {
+        let series = ex9_series(rows, scheme);
         if !series.is_empty() {
             charts.push((
                 series,
