@@ -267,7 +267,11 @@ fn resolve_mesh(
 
 /// The generated mesh `--generate g` at `level`: a 2D or 3D family, on the domain of the
 /// problem file's generated mesh when it has one of the same dimension.
-fn family_spec(g: &str, level: usize, file_mesh: Option<&file::MeshSpec>) -> Result<file::MeshSpec> {
+fn family_spec(
+    g: &str,
+    level: usize,
+    file_mesh: Option<&file::MeshSpec>,
+) -> Result<file::MeshSpec> {
     use file::MeshSpec;
     let other_domain = |d: usize| {
         anyhow::anyhow!(
@@ -318,9 +322,14 @@ fn check_level(spec: &file::MeshSpec, origin: &str) -> Result<()> {
         file::MeshSpec::Generated { family, level, .. } => family
             .check_level(level)
             .with_context(|| format!("the level {level} ({origin}) of the {family} mesh")),
-        file::MeshSpec::Generated3 { family, level, .. } => family
-            .check_level(level)
-            .with_context(|| format!("the level {level} ({origin}) of the 3D {} mesh", family.name())),
+        file::MeshSpec::Generated3 { family, level, .. } => {
+            family.check_level(level).with_context(|| {
+                format!(
+                    "the level {level} ({origin}) of the 3D {} mesh",
+                    family.name()
+                )
+            })
+        }
         file::MeshSpec::File(_) => Ok(()),
     }
 }
@@ -421,10 +430,7 @@ pub(crate) fn report<M: SolveMesh<D> + ?Sized, const D: usize>(
     }
     println!("problem         {}", case.problem);
     println!("scheme          {}", case.kind);
-    println!(
-        "mesh            {} cells, h = {:.6}",
-        case.n_cells, case.h
-    );
+    println!("mesh            {} cells, h = {:.6}", case.n_cells, case.h);
     print_solution(sol, a.tol);
     if let Some(e) = errors {
         println!(
@@ -435,7 +441,15 @@ pub(crate) fn report<M: SolveMesh<D> + ?Sized, const D: usize>(
     let t = sol.timings;
     println!(
         "timings [s]     mesh {:.3}, setup {:.3} (symbolic {:.3}), warm start {:.3}, assembly {:.3}, factorisation {:.3}, solves {:.3}, look-ahead {:.3}, total {:.3} (mesh excluded)",
-        case.mesh_seconds, t.setup, t.symbolic, t.warm_start, t.assemble, t.factor, t.solve, t.look_ahead, t.total
+        case.mesh_seconds,
+        t.setup,
+        t.symbolic,
+        t.warm_start,
+        t.assemble,
+        t.factor,
+        t.solve,
+        t.look_ahead,
+        t.total
     );
     Ok(())
 }

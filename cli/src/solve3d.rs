@@ -50,9 +50,7 @@ pub fn case_mesh(spec: &MeshSpec, pf: &ProblemFile) -> Result<AnyMesh> {
         ext.eq_ignore_ascii_case("typ1") || ext.eq_ignore_ascii_case("typ2")
     };
     Ok(match spec {
-        MeshSpec::Generated3 { .. } => {
-            AnyMesh::Three(gradvi::case::build_mesh3(spec, budget)?)
-        }
+        MeshSpec::Generated3 { .. } => AnyMesh::Three(gradvi::case::build_mesh3(spec, budget)?),
         MeshSpec::File(p) if pf.compiles_for(3) && !two_d_format(p) => read_any(p)?,
         _ => AnyMesh::Two(gradvi::case::build_mesh(spec, budget)?),
     })

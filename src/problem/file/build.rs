@@ -433,9 +433,8 @@ impl Cx<'_> {
             }
             TensorSrc::Matrix(m) if m.len() != D => {
                 let n = m.len();
-                let msg = format!(
-                    "a {n}x{n} tensor on a {D}D mesh: give a {D}x{D} array or a scalar"
-                );
+                let msg =
+                    format!("a {n}x{n} tensor on a {D}D mesh: give a {D}x{D} array or a scalar");
                 Err(self.at(K::Dimension, &self.loc(key, span.clone()), msg))
             }
             TensorSrc::Matrix(m) => {
@@ -686,7 +685,10 @@ mod tests {
         let a2 = "\n[diffusion]\nA = [[1, 0], [0, 1]]\n";
         let (line, column, kind, msg) = error_in::<3>(a2);
         assert_eq!((line, column, kind), (3, 5, K::Dimension));
-        assert!(msg.contains("diffusion.A: a 2x2 tensor on a 3D mesh"), "{msg}");
+        assert!(
+            msg.contains("diffusion.A: a 2x2 tensor on a 3D mesh"),
+            "{msg}"
+        );
         let a3 = "[diffusion]\nA = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\n";
         let (line, column, kind, msg) = error_in::<2>(a3);
         assert_eq!((line, column, kind), (2, 5, K::Dimension));
@@ -695,7 +697,10 @@ mod tests {
         let g = "[exact]\nu = \"x*y\"\ngrad = [\"y\", \"x\"]\n";
         let (line, column, kind, msg) = error_in::<3>(g);
         assert_eq!((line, column, kind), (3, 8, K::Dimension));
-        assert!(msg.contains("exact.grad: 2 components on a 3D mesh"), "{msg}");
+        assert!(
+            msg.contains("exact.grad: 2 components on a 3D mesh"),
+            "{msg}"
+        );
         // a file whose own mesh is 3D must compile for 3D when it is loaded
         let (line, column, kind, _) =
             error(&format!("[mesh]\ngenerate = \"cubes\"\nlevel = 1\n{a2}"));

@@ -92,11 +92,7 @@ pub(super) struct Piece<T> {
 
 /// The first piece that applies at centroid `p` of a cell tagged `tag`; `None` if none does,
 /// or if a condition is NaN there.
-pub(super) fn select<T, const D: usize>(
-    pieces: &[Piece<T>],
-    p: [f64; D],
-    tag: i32,
-) -> Option<&T> {
+pub(super) fn select<T, const D: usize>(pieces: &[Piece<T>], p: [f64; D], tag: i32) -> Option<&T> {
     for piece in pieces {
         if !piece.tags.is_empty() && !piece.tags.contains(&tag) {
             continue;
@@ -294,6 +290,9 @@ mod tests {
         );
         let a = m.at([0.0, 0.0, 4.0]);
         assert_eq!(a, [[2.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 3.0]]);
-        assert_eq!(TensorField::<3>::Scalar(f("z")).at([0.0, 0.0, 2.0])[2][2], 2.0);
+        assert_eq!(
+            TensorField::<3>::Scalar(f("z")).at([0.0, 0.0, 2.0])[2][2],
+            2.0
+        );
     }
 }

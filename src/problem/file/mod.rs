@@ -382,9 +382,8 @@ impl ProblemFile {
     /// 2D problem (a `z`, a 3×3 tensor) with its place; built without that check, such a file
     /// gives a problem whose source is NaN everywhere, which the assembler rejects.
     pub fn problem(&self) -> Problem {
-        self.problem_in::<2>().unwrap_or_else(|_| {
-            Problem::new(&self.name, Box::new(|_| f64::NAN))
-        })
+        self.problem_in::<2>()
+            .unwrap_or_else(|_| Problem::new(&self.name, Box::new(|_| f64::NAN)))
     }
 
     /// Builds the [`Problem<D>`]: closures that evaluate the compiled expressions (cheap; call
