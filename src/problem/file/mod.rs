@@ -319,13 +319,16 @@ pub fn parse(text: &str, path: &Path, overrides: &[(String, f64)]) -> Result<Pro
         compile::<3>(&cx, &raw, &parameters),
     );
     // the error of the dimension the file's mesh has; else the file must compile for one
-    let scope = match (wanted, &c2, &c3) {
-        (Some(3), _, Err(_)) => return Err(c3.err().expect("matched")),
-        (_, Err(_), Err(_)) | (Some(2), Err(_), _) => return Err(c2.err().expect("matched")),
-        (_, Ok((_, s)), _) | (_, Err(_), Ok((_, s))) => s.clone(),
+    let (c2, c3) = match (wanted, c2, c3) {
+        (Some(3), _, Err(e)) | (Some(2), Err(e), _) | (_, Err(e), Err(_)) => return Err(e),
+        (_, c2, c3) => (c2, c3),
+    };
+    let scope = match (&c2, &c3) {
+        (Ok((_, s)), _) | (Err(_), Ok((_, s))) => s,
+        (Err(e), Err(_)) => return Err(Error::Internal(format!("both dimensions failed: {e}"))),
     };
     let name = match &raw.name {
-        Some(n) => cx.name(n, &scope)?,
+        Some(n) => cx.name(n, scope)?,
         None => path
             .file_stem()
             .map_or_else(|| "problem".into(), |s| s.to_string_lossy().into_owned()),
