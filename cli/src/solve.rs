@@ -816,4 +816,51 @@ mod tests {
             "{e}"
         );
     }
+
+    #[test]
+    fn three_d_families_are_generated_keeping_a_3d_domain() {
+        use gradvi::mesh3d::Cuboid;
+        let cube = Cuboid::new([-2.0, 2.0], [-2.0, 2.0], [-2.0, 2.0]);
+        let file3 = MeshSpec::Generated3 {
+            family: Family3::Cubes,
+            level: 2,
+            domain: Some(cube),
+        };
+        let spec = resolve(None, Some("kuhn"), Some(3), Some(&file3)).unwrap();
+        let kuhn = |level| MeshSpec::Generated3 {
+            family: Family3::Kuhn,
+            level,
+            domain: Some(cube),
+        };
+        assert_eq!(spec, kuhn(3));
+        assert_eq!(
+            spec.to_string(),
+            "3D kuhn level 3 on [-2, 2]x[-2, 2]x[-2, 2]"
+        );
+        // --level alone keeps the 3D family; --generate alone the level
+        let spec = resolve(None, None, Some(1), Some(&file3)).unwrap();
+        assert!(matches!(
+            spec,
+            MeshSpec::Generated3 {
+                family: Family3::Cubes,
+                level: 1,
+                ..
+            }
+        ));
+        assert_eq!(
+            resolve(None, Some("tetrahedra"), None, Some(&file3)).unwrap(),
+            kuhn(2)
+        );
+        // a domain of the other dimension cannot be kept
+        let e = error(None, Some("cubes"), Some(1), Some(&ex9_mesh()));
+        assert!(e.contains("--generate cubes is a 3D family"), "{e}");
+        let e = error(None, Some("cartesian"), Some(1), Some(&file3));
+        assert!(e.contains("--generate cartesian is a 2D family"), "{e}");
+        // 3D levels are checked against the 3D family
+        let e = error(None, Some("kuhn"), Some(9), None);
+        assert!(e.contains("(--level) of the 3D kuhn mesh"), "{e}");
+        // an unknown name lists both kinds of families
+        let e = error(None, Some("octagonal"), Some(1), None);
+        assert!(e.contains("\"cubes\", \"kuhn\""), "{e}");
+    }
 }
