@@ -11,7 +11,7 @@ FVCA5_MESHES ?=
 PYTHON := /usr/bin/python3
 REFDIR := replication/results/reference
 
-.PHONY: all build test test-external fuzz determinism lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-amg bench-baseline clean
+.PHONY: all build test test-external test-solve3d fuzz determinism lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-amg bench-baseline clean
 
 all: build
 
@@ -31,6 +31,11 @@ test:
 ## (installed here if missing). CI runs it.
 test-external: build reference-deps
 	$(CARGO) test --workspace -- --ignored
+
+## test-solve3d: the 3D solves of problems/*-3d.toml through the command line, with the
+## Signorini example on gmsh tetrahedra (meshes/signorini3d.geo; installs gmsh if missing)
+test-solve3d: reference-deps
+	$(CARGO) test -p gradvi-cli --test solve3d -- --include-ignored
 
 ## fuzz: seeded mutation fuzzing of meshes and problem files through the readers, validation
 ## and a small solve of the release gradvi, in child processes under memory and time limits

@@ -5,8 +5,9 @@
 //! is the job of this module, above the problem layer, so that `problem` depends on no mesh
 //! reader or generator.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::mesh::{MemoryBudget, PolyMesh};
+use crate::mesh3d::PolyMesh3;
 use crate::problem::file::MeshSpec;
 
 /// The mesh `spec` describes: the file read ([`crate::mesh::io::read_mesh`], which knows the
@@ -25,6 +26,32 @@ pub fn build_mesh(spec: &MeshSpec, budget: MemoryBudget) -> Result<PolyMesh> {
             None => family.generate(*level, budget),
             Some(d) => family.generate_on(*level, *d, budget),
         },
+        MeshSpec::Generated3 { .. } => Err(Error::InvalidData(format!(
+            "the mesh {spec} is 3D: build it with case::build_mesh3"
+        ))),
+    }
+}
+
+/// The 3D mesh `spec` describes: the file read ([`crate::mesh3d::io::read_mesh3`]), or the 3D
+/// family generated at its level on `domain` (the unit cube if none), within `budget`.
+pub fn build_mesh3(spec: &MeshSpec, budget: MemoryBudget) -> Result<PolyMesh3> {
+    match spec {
+        MeshSpec::File(p) => {
+            let poly = crate::mesh3d::io::read_mesh3(p, budget)?;
+            Ok(PolyMesh3::from_polyhedra(poly, budget)?)
+        }
+        MeshSpec::Generated3 {
+            family,
+            level,
+            domain,
+        } => family.generate_on(
+            *level,
+            domain.unwrap_or(crate::mesh3d::Cuboid::UNIT),
+            budget,
+        ),
+        MeshSpec::Generated { .. } => Err(Error::InvalidData(format!(
+            "the mesh {spec} is 2D: build it with case::build_mesh"
+        ))),
     }
 }
 

@@ -159,6 +159,11 @@ pub enum ProblemFileErrorKind {
     NotSpd,
     /// A datum that is NaN or infinite at some evaluation point.
     NonFinite,
+    /// The file and the mesh have different dimensions: a 2×2 tensor or a 2-component
+    /// gradient on a 3D mesh, a 3×3 tensor or 3 components on a 2D mesh, a 3D `[mesh]` for a
+    /// 2D problem. (A `z` in a 2D problem is an [`Expression`](Self::Expression) error: an
+    /// unknown variable there, at its character.)
+    Dimension,
 }
 
 /// Invalid mesh: each variant names the cell, edge or vertex at fault.

@@ -636,3 +636,130 @@ fn example_ex9_with_p1_on_generated_triangles() {
     assert!(close(e.l2_u, 5.3948e-3, 1e-3), "{}", e.l2_u);
     assert!(e.l2_grad < 0.05, "{}", e.l2_grad);
 }
+
+// ------------------------------------------------------------------------------------------
+// 3D
+
+/// The unit cube in cubes of level `level`, tagged as meshes/signorini3d.geo tags it: cells
+/// 1 (y < 1/2) and 2; boundary faces 10 (x = 0), 11 (x = 1), 12 (y = 0 or 1), 14 (z = 0),
+/// 15 (z = 1).
+fn signorini3d_cubes(level: usize) -> gradvi::mesh3d::PolyMesh3 {
+    use gradvi::mesh3d::generate::Family3;
+    let m = Family3::Cubes
+        .generate(level, gradvi::mesh::MemoryBudget::DEFAULT)
+        .unwrap();
+    let on = |a: f64, b: f64| (a - b).abs() < 1e-12;
+    let m = m.with_boundary_tags(|x| match x {
+        [x, _, _] if on(x, 0.0) => 10,
+        [x, _, _] if on(x, 1.0) => 11,
+        [_, y, _] if on(y, 0.0) || on(y, 1.0) => 12,
+        [_, _, z] if on(z, 0.0) => 14,
+        _ => 15,
+    });
+    let tags = (0..m.n_cells())
+        .map(|k| if m.centroid(k)[1] < 0.5 { 1 } else { 2 })
+        .collect();
+    m.with_cell_tags(tags).unwrap()
+}
+
+/// The 3D Signorini example with its materials and boundary parts selected by cell and face
+/// tags gives the same data and the same solution as with them selected by `where`; its
+/// exact solution meets the data it was derived from.
+#[test]
+fn signorini_3d_by_tags_equals_by_conditions() {
+    use gradvi::scheme::{SchemeKind, SchemeOptions, build_with3};
+    let mesh = signorini3d_cubes(1);
+    let path = problems().join("signorini-3d.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let by_tags = file::parse(&text, &path, &[]).unwrap();
+    let rewritten = text
+        .replace("tags = [1]\n", "where = \"y < 0.5\"\n")
+        .replace("tags = [2]\n", "")
+        .replace(
+            "tags = [12, 15]",
+            "where = \"y < 1e-9 or y > 1 - 1e-9 or z > 1 - 1e-9\"",
+        )
+        .replace("tags = [11, 14]", "where = \"x > 1 - 1e-9 or z < 1e-9\"")
+        .replace("tags = [10]", "where = \"x < 1e-9\"");
+    assert!(
+        !rewritten.contains("tags ="),
+        "the rewrite must remove every tag"
+    );
+    let by_where = file::parse(&rewritten, &path, &[]).unwrap();
+    assert!(!by_tags.compiles_for(2) && by_tags.compiles_for(3));
+    by_tags.check_against_mesh3(&mesh).unwrap();
+    by_where.check_against_mesh3(&mesh).unwrap();
+    let (a, b) = (
+        by_tags.problem_in::<3>().unwrap(),
+        by_where.problem_in::<3>().unwrap(),
+    );
+    assert!(a.diffusion_by_tag.is_some() && b.diffusion_by_tag.is_none());
+    let scheme = build_with3(SchemeKind::Hmm, &mesh, &SchemeOptions { alpha: 1.0 }).unwrap();
+    let opts = SolveOptions::paper();
+    let (sa, sb) = (
+        solve_problem(scheme.as_ref(), &a, &opts).unwrap(),
+        solve_problem(scheme.as_ref(), &b, &opts).unwrap(),
+    );
+    assert_eq!(sa.niter(), sb.niter());
+    assert_close(sa.u(), sb.u(), 1e-12, "signorini-3d, tags against where");
+    assert!(sa.result.certificate.check(1e-10).is_ok());
+    // ū against its derivation: the Signorini conditions on x = 0 and the Neumann flux on
+    // z = 0 (−A₃₂ ∂ᵧū), at sample points
+    let ex = a.exact.as_ref().unwrap();
+    for &(y, z) in &[(0.2, 0.3), (0.45, 0.9), (0.7, 0.1), (0.9, 0.5)] {
+        let u = (ex.u)([0.0, y, z]);
+        assert!(
+            u <= 0.0 && (y < 0.5 || u.abs() < 1e-15),
+            "u(0, {y}, {z}) = {u}"
+        );
+        assert!((ex.grad)([0.0, y, z])[0].abs() < 1e-14);
+        let g = (ex.grad)([0.4, y, 0.0]);
+        let a32 = if y < 0.5 { 30.0 } else { 0.5 };
+        assert!(
+            ((a.neumann)([0.4, y, 0.0]) + a32 * g[1]).abs() < 1e-12,
+            "flux at y = {y}"
+        );
+    }
+}
+
+/// Every 3D example compiles for 3D only or for both, and its exact gradient is the gradient
+/// of its exact solution (central differences at sample points).
+#[test]
+fn exact_gradients_of_the_3d_examples_are_gradients() {
+    for name in ["ex9-3d", "disk-obstacle-3d", "signorini-3d", "poisson-3d"] {
+        let pf = file::load(problems().join(format!("{name}.toml")), &[]).unwrap();
+        let p = pf.problem_in::<3>().unwrap();
+        let ex = p.exact.as_ref().unwrap();
+        for x in [[0.31, 0.62, 0.17], [0.83, 0.44, 0.56], [0.12, 0.91, 0.73]] {
+            let g = (ex.grad)(x);
+            for d in 0..3 {
+                let (mut xp, mut xm) = (x, x);
+                xp[d] += 1e-6;
+                xm[d] -= 1e-6;
+                let fd = ((ex.u)(xp) - (ex.u)(xm)) / 2e-6;
+                assert!(
+                    (fd - g[d]).abs() < 1e-6 * (1.0 + g[d].abs()),
+                    "{name} {x:?} {d}"
+                );
+            }
+        }
+    }
+}
+
+/// A tag of a 3D file that no boundary face carries, named with the file's place.
+#[test]
+fn absent_tags_on_3d_meshes_are_reported() {
+    let mesh = signorini3d_cubes(1);
+    let pf = file::parse(
+        "[dirichlet]\ntags = [99]\n[neumann]\n",
+        Path::new("t.toml"),
+        &[],
+    )
+    .unwrap();
+    let e = pf.check_against_mesh3(&mesh).unwrap_err();
+    let said = e.to_string();
+    assert!(
+        said.contains("t.toml:2:8: dirichlet.tags: tag 99 is on no boundary face of the mesh (its boundary tags: 10, 11, 12, 14, 15)"),
+        "{said}"
+    );
+}

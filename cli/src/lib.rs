@@ -14,6 +14,7 @@ pub mod output;
 pub mod plot;
 pub mod replication;
 pub mod solve;
+pub mod solve3d;
 
 use anyhow::Result;
 use clap::{Args, Parser, Subcommand};

@@ -1,6 +1,7 @@
 //! `gradvi solve`: one problem on one mesh with one scheme; prints NITER, the iteration log,
 //! the certificate, errors and timings; optionally writes VTU and JSON.
 
+use super::mesh::AnyMesh;
 use super::output::{atomic, check_distinct};
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -8,7 +9,10 @@ use clap::builder::{PossibleValuesParser, TypedValueParser};
 use gradvi::assembly::LinearSolver;
 use gradvi::mesh::generate::Family;
 use gradvi::mesh::io::write_vtu;
+use gradvi::mesh::solve_mesh::SolveMesh;
 use gradvi::mesh::{MemoryBudget, PolyMesh};
+use gradvi::mesh3d::generate::Family3;
+use gradvi::post::Errors;
 use gradvi::post::fields::EntityFields;
 use gradvi::problem::file;
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with};
@@ -33,13 +37,15 @@ pub struct SolveArgs {
     /// Problem parameter name=value (repeatable), e.g. --param C=-10 for test3.
     #[arg(long = "param", value_parser = parse_param)]
     params: Vec<(String, f64)>,
-    /// Mesh file (.msh, .typ1, .typ2); replaces the problem file's [mesh] entirely (its
-    /// `domain` is not applied).
+    /// Mesh file, 2D (.msh, .typ1, .typ2) or 3D (.msh of 3D elements, .vtu, HArDCore RF
+    /// .node/.ele), as `gradvi mesh info` reads it; replaces the problem file's [mesh]
+    /// entirely (its `domain` is not applied). A 3D mesh gives a 3D solve.
     #[arg(long, conflicts_with = "generate")]
-    mesh: Option<PathBuf>,
-    /// Generate the mesh instead: cartesian, hexagonal, kershaw or triangles (the Cartesian
-    /// squares cut by a diagonal, for P1). Keeps the problem file's `domain`, and its `level`
-    /// unless --level is given.
+    pub(crate) mesh: Option<PathBuf>,
+    /// Generate the mesh instead: 2D cartesian, hexagonal, kershaw or triangles (the Cartesian
+    /// squares cut by a diagonal, for P1); 3D cubes, kuhn (or tetrahedra), prisms, refined or
+    /// warped (a 3D solve). Keeps the problem file's `domain` (of the same dimension), and its
+    /// `level` unless --level is given.
     #[arg(long)]
     generate: Option<String>,
     /// Level of the generated mesh: with --generate, or alone to change the level of the
@@ -48,10 +54,10 @@ pub struct SolveArgs {
     level: Option<usize>,
     /// The scheme (default: the problem file's `scheme`, else hmm).
     #[arg(long, value_parser = named::<SchemeKind>(SchemeKind::ALL.iter().map(|k| k.name())))]
-    scheme: Option<SchemeKind>,
+    pub(crate) scheme: Option<SchemeKind>,
     /// HMM stabilisation parameter α.
     #[arg(long, default_value_t = 1.0)]
-    alpha: f64,
+    pub(crate) alpha: f64,
     /// Active-set parameter c (> 0).
     #[arg(long, default_value_t = 1.0)]
     c: f64,
@@ -60,7 +66,7 @@ pub struct SolveArgs {
     max_solves: usize,
     /// Tolerance of the certificate.
     #[arg(long, default_value_t = 1e-10)]
-    tol: f64,
+    pub(crate) tol: f64,
     /// On cycling or non-convergence, fall back to projected Gauss–Seidel.
     #[arg(long)]
     fallback: bool,
@@ -68,18 +74,20 @@ pub struct SolveArgs {
     /// coarse HMM solves of the same problem on agglomerated meshes of the domain, and each
     /// next active set looked ahead by local solves near its changes; same solution, far fewer
     /// solves on fine meshes) or cold (A₀ = ∅, no look-ahead: the paper's algorithm and NITER).
-    #[arg(long, default_value_t = WarmStart::Nested,
-          value_parser = named::<WarmStart>(["cold", "nested"]))]
-    warm_start: WarmStart,
+    /// On a 3D mesh, where the nested start is not available yet, the default is the cold
+    /// start (the output says so); an explicit --warm-start nested there is an error.
+    #[arg(long, value_parser = named::<WarmStart>(["cold", "nested"]))]
+    pub(crate) warm_start: Option<WarmStart>,
     /// Linear solver of the condensed systems: auto (direct below 250 000 condensed unknowns,
     /// iterative above), direct (sparse Cholesky) or iterative (algebraic-multigrid
     /// preconditioned conjugate gradients, memory linear in the size).
     #[arg(long, default_value_t = LinearSolver::Auto,
           value_parser = named::<LinearSolver>(["auto", "direct", "iterative"]))]
     linear: LinearSolver,
-    /// Write the solution (u, active set, multiplier) to this VTU file.
+    /// Write the solution (u, active set, multiplier) to this VTU file (2D and 3D; the
+    /// fields are listed in README.md, "Outputs").
     #[arg(long)]
-    vtu: Option<PathBuf>,
+    pub(crate) vtu: Option<PathBuf>,
     /// Write a JSON summary to this file.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -177,9 +185,10 @@ fn check_paths(a: &SolveArgs, pf: &file::ProblemFile) -> Result<()> {
 /// | `--generate G --level K` | G level K on D | G level K | G level K |
 /// | `--level K` | F level K on D | error (a file has no level) | error |
 ///
-/// The level is checked against the family here, so that an error says where it came from.
-/// `--mesh` with `--level` or `--generate` is an error (also refused earlier, by
-/// `check_options` and by clap).
+/// F and G are 2D or 3D families; the domain D is kept for a family of its dimension (a 2D
+/// domain with a 3D family, or the converse, is an error). The level is checked against the
+/// family here, so that an error says where it came from. `--mesh` with `--level` or
+/// `--generate` is an error (also refused earlier, by `check_options` and by clap).
 fn resolve_mesh(
     mesh: Option<&Path>,
     generate: Option<&str>,
@@ -188,30 +197,24 @@ fn resolve_mesh(
     problem: &Path,
 ) -> Result<file::MeshSpec> {
     use file::MeshSpec;
-    // the family, level and domain of the problem file's mesh, when it is generated
-    let generated = match file_mesh {
-        Some(&MeshSpec::Generated {
-            family,
-            level,
-            domain,
-        }) => Some((family, level, domain)),
+    // the level of the problem file's mesh, when it is generated
+    let file_level = match file_mesh {
+        Some(MeshSpec::Generated { level, .. } | MeshSpec::Generated3 { level, .. }) => {
+            Some(*level)
+        }
         _ => None,
     };
-    let (family, level, domain, origin) = match (mesh, generate, level) {
+    let (spec, origin) = match (mesh, generate, level) {
         (Some(_), _, Some(_)) => {
             bail!("--level is only meaningful with --generate (the mesh comes from --mesh)")
         }
         (Some(_), Some(_), None) => bail!("give --mesh FILE or --generate FAMILY, not both"),
         (Some(m), None, None) => return Ok(MeshSpec::File(m.to_path_buf())),
         (None, Some(g), level) => {
-            let family: Family = g.parse().context("--generate")?;
-            let domain = generated.and_then(|(_, _, d)| d);
-            match (level, generated) {
-                (Some(k), _) => (family, k, domain, "--level".to_string()),
-                (None, Some((_, l, _))) => (
-                    family,
+            let (k, origin) = match (level, file_level) {
+                (Some(k), _) => (k, "--level".to_string()),
+                (None, Some(l)) => (
                     l,
-                    domain,
                     format!("the level of the [mesh] of {}", problem.display()),
                 ),
                 (None, None) => bail!(
@@ -219,17 +222,33 @@ fn resolve_mesh(
                      could be kept",
                     problem.display()
                 ),
-            }
+            };
+            (family_spec(g, k, file_mesh)?, origin)
         }
-        (None, None, Some(k)) => match (generated, file_mesh) {
-            (Some((family, _, domain)), _) => (family, k, domain, "--level".to_string()),
-            (None, Some(MeshSpec::File(m))) => bail!(
+        (None, None, Some(k)) => match file_mesh {
+            Some(&MeshSpec::Generated { family, domain, .. }) => (
+                MeshSpec::Generated {
+                    family,
+                    level: k,
+                    domain,
+                },
+                "--level".to_string(),
+            ),
+            Some(&MeshSpec::Generated3 { family, domain, .. }) => (
+                MeshSpec::Generated3 {
+                    family,
+                    level: k,
+                    domain,
+                },
+                "--level".to_string(),
+            ),
+            Some(MeshSpec::File(m)) => bail!(
                 "--level needs --generate FAMILY: the mesh of {} is the file {}, which has no \
                  level",
                 problem.display(),
                 m.display()
             ),
-            (None, _) => bail!(
+            None => bail!(
                 "--level needs --generate FAMILY: {} has no [mesh]",
                 problem.display()
             ),
@@ -242,14 +261,77 @@ fn resolve_mesh(
             ),
         },
     };
-    family
-        .check_level(level)
-        .with_context(|| format!("the level {level} ({origin}) of the {family} mesh"))?;
-    Ok(MeshSpec::Generated {
-        family,
-        level,
-        domain,
-    })
+    check_level(&spec, &origin)?;
+    Ok(spec)
+}
+
+/// The generated mesh `--generate g` at `level`: a 2D or 3D family, on the domain of the
+/// problem file's generated mesh when it has one of the same dimension.
+fn family_spec(
+    g: &str,
+    level: usize,
+    file_mesh: Option<&file::MeshSpec>,
+) -> Result<file::MeshSpec> {
+    use file::MeshSpec;
+    let other_domain = |d: usize| {
+        anyhow::anyhow!(
+            "--generate {g} is a {d}D family, but the [mesh] of the problem file is generated on \
+             a {}D domain, which a {d}D mesh cannot keep (give --mesh, or --generate a {}D \
+             family)",
+            5 - d,
+            5 - d
+        )
+    };
+    match (g.parse::<Family>(), g.parse::<Family3>()) {
+        (Ok(family), _) => {
+            let domain = match file_mesh {
+                Some(MeshSpec::Generated { domain, .. }) => *domain,
+                Some(MeshSpec::Generated3 {
+                    domain: Some(_), ..
+                }) => return Err(other_domain(2)),
+                _ => None,
+            };
+            Ok(MeshSpec::Generated {
+                family,
+                level,
+                domain,
+            })
+        }
+        (Err(_), Ok(family)) => {
+            let domain = match file_mesh {
+                Some(MeshSpec::Generated3 { domain, .. }) => *domain,
+                Some(MeshSpec::Generated {
+                    domain: Some(_), ..
+                }) => return Err(other_domain(3)),
+                _ => None,
+            };
+            Ok(MeshSpec::Generated3 {
+                family,
+                level,
+                domain,
+            })
+        }
+        (Err(e), Err(e3)) => Err(anyhow::anyhow!("{e}; {e3}")).context("--generate"),
+    }
+}
+
+/// The level of a generated `spec` checked against its family; `origin` says where it came
+/// from.
+fn check_level(spec: &file::MeshSpec, origin: &str) -> Result<()> {
+    match *spec {
+        file::MeshSpec::Generated { family, level, .. } => family
+            .check_level(level)
+            .with_context(|| format!("the level {level} ({origin}) of the {family} mesh")),
+        file::MeshSpec::Generated3 { family, level, .. } => {
+            family.check_level(level).with_context(|| {
+                format!(
+                    "the level {level} ({origin}) of the 3D {} mesh",
+                    family.name()
+                )
+            })
+        }
+        file::MeshSpec::File(_) => Ok(()),
+    }
 }
 
 /// `gradvi solve`.
@@ -274,12 +356,27 @@ pub fn run(a: &SolveArgs) -> Result<()> {
     )?;
     // the resolved mesh, as the JSON output records it
     let mesh_desc = spec.to_string();
-    let mesh = gradvi::case::build_mesh(&spec, MemoryBudget::available())?;
-    let mesh_seconds = t0.elapsed().as_secs_f64();
-    pf.check_against_mesh(&mesh)?;
+    match crate::solve3d::case_mesh(&spec, &pf)? {
+        AnyMesh::Two(mesh) => run2(a, &pf, &mesh, &mesh_desc, t0.elapsed().as_secs_f64()),
+        AnyMesh::Three(mesh) => {
+            let seconds = t0.elapsed().as_secs_f64();
+            crate::solve3d::run3(a, &pf, &mesh, &mesh_desc, seconds)
+        }
+    }
+}
+
+/// The solve on a 2D mesh (read or generated in `mesh_seconds`).
+fn run2(
+    a: &SolveArgs,
+    pf: &file::ProblemFile,
+    mesh: &PolyMesh,
+    mesh_desc: &str,
+    mesh_seconds: f64,
+) -> Result<()> {
+    pf.check_against_mesh(mesh)?;
     let problem = pf.problem();
     let kind = a.scheme.or(pf.scheme).unwrap_or(SchemeKind::Hmm);
-    let scheme = scheme_on(kind, &mesh, a.alpha, &mesh_desc)?;
+    let scheme = scheme_on(kind, mesh, a.alpha, mesh_desc)?;
     eprintln!(
         "solving {} with {} on {} cells ({} unknowns)...",
         problem.name,
@@ -288,21 +385,53 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         scheme.n_unknowns()
     );
     let sol = solve_problem(scheme.as_ref(), &problem, &solve_options(a))?;
-    for m in &sol.marginal_load {
-        eprintln!("warning: {m}");
-    }
-    println!("problem         {}", problem.name);
-    println!("scheme          {kind}");
-    println!(
-        "mesh            {} cells, h = {:.6}",
-        mesh.n_cells(),
-        mesh.h()
-    );
-    print_solution(&sol, a.tol);
     let errors = problem
         .exact
         .as_ref()
         .map(|ex| gradvi::post::relative_errors(scheme.as_ref(), sol.u(), &ex.u, &ex.grad));
+    let case = Case {
+        pf,
+        problem: &problem.name,
+        kind,
+        mesh_desc,
+        n_cells: mesh.n_cells(),
+        h: mesh.h(),
+        mesh_seconds,
+    };
+    report(a, &case, &sol, errors.as_ref())?;
+    if let Some(path) = &a.vtu {
+        atomic(path, |tmp| write_solution_vtu(tmp, scheme.as_ref(), &sol))?;
+        println!("wrote           {}", path.display());
+    }
+    write_json(a, &case, &sol, errors.as_ref())
+}
+
+/// What the report of a solve says about its problem and mesh.
+pub(crate) struct Case<'a> {
+    pub(crate) pf: &'a file::ProblemFile,
+    pub(crate) problem: &'a str,
+    pub(crate) kind: SchemeKind,
+    pub(crate) mesh_desc: &'a str,
+    pub(crate) n_cells: usize,
+    pub(crate) h: f64,
+    pub(crate) mesh_seconds: f64,
+}
+
+/// The solve's summary on stdout (2D and 3D): the problem, the mesh, the iteration, the
+/// certificate, the errors and the timings.
+pub(crate) fn report<M: SolveMesh<D> + ?Sized, const D: usize>(
+    a: &SolveArgs,
+    case: &Case,
+    sol: &Solution<M, D>,
+    errors: Option<&Errors>,
+) -> Result<()> {
+    for m in &sol.marginal_load {
+        eprintln!("warning: {m}");
+    }
+    println!("problem         {}", case.problem);
+    println!("scheme          {}", case.kind);
+    println!("mesh            {} cells, h = {:.6}", case.n_cells, case.h);
+    print_solution(sol, a.tol);
     if let Some(e) = errors {
         println!(
             "errors          relative L2 of u at centroids {:.6e}, of the gradient {:.6e}",
@@ -311,44 +440,60 @@ pub fn run(a: &SolveArgs) -> Result<()> {
     }
     let t = sol.timings;
     println!(
-        "timings [s]     mesh {mesh_seconds:.3}, setup {:.3} (symbolic {:.3}), warm start {:.3}, assembly {:.3}, factorisation {:.3}, solves {:.3}, look-ahead {:.3}, total {:.3} (mesh excluded)",
-        t.setup, t.symbolic, t.warm_start, t.assemble, t.factor, t.solve, t.look_ahead, t.total
+        "timings [s]     mesh {:.3}, setup {:.3} (symbolic {:.3}), warm start {:.3}, assembly {:.3}, factorisation {:.3}, solves {:.3}, look-ahead {:.3}, total {:.3} (mesh excluded)",
+        case.mesh_seconds,
+        t.setup,
+        t.symbolic,
+        t.warm_start,
+        t.assemble,
+        t.factor,
+        t.solve,
+        t.look_ahead,
+        t.total
     );
-    if let Some(path) = &a.vtu {
-        atomic(path, |tmp| write_solution_vtu(tmp, scheme.as_ref(), &sol))?;
-        println!("wrote           {}", path.display());
-    }
-    if let Some(path) = &a.json {
-        let j = serde_json::json!({
-            "problem": problem.name,
-            "problem_file": {
-                "path": pf.path.display().to_string(),
-                "name": pf.name,
-                "parameters": pf.parameters.iter().cloned().collect::<std::collections::BTreeMap<_, _>>(),
-            },
-            "mesh": mesh_desc,
-            "scheme": kind,
-            "n_cells": mesh.n_cells(),
-            "h": mesh.h(),
-            "n_unknowns": sol.system.n_unknowns(),
-            "n_constrained": sol.constraints.as_ref().map_or(0, |c| c.dofs.len()),
-            "n_active": sol.result.active.iter().filter(|&&x| x).count(),
-            "niter": sol.niter(),
-            "warm_start": sol.warm_start,
-            "marginal_load": sol.marginal_load,
-            "method": format!("{:?}", sol.result.method),
-            "certificate": sol.result.certificate,
-            "errors": errors,
-            "timings": t,
-            "mesh_seconds": mesh_seconds,
-            "log": sol.result.log,
-        });
-        let text = serde_json::to_string_pretty(&j)?;
-        atomic(path, |tmp| {
-            std::fs::write(tmp, &text).with_context(|| format!("writing {}", path.display()))
-        })?;
-        println!("wrote           {}", path.display());
-    }
+    Ok(())
+}
+
+/// The JSON summary (2D and 3D), if --json was given.
+pub(crate) fn write_json<M: SolveMesh<D> + ?Sized, const D: usize>(
+    a: &SolveArgs,
+    case: &Case,
+    sol: &Solution<M, D>,
+    errors: Option<&Errors>,
+) -> Result<()> {
+    let Some(path) = &a.json else {
+        return Ok(());
+    };
+    let pf = case.pf;
+    let j = serde_json::json!({
+        "problem": case.problem,
+        "problem_file": {
+            "path": pf.path.display().to_string(),
+            "name": pf.name,
+            "parameters": pf.parameters.iter().cloned().collect::<std::collections::BTreeMap<_, _>>(),
+        },
+        "mesh": case.mesh_desc,
+        "scheme": case.kind,
+        "n_cells": case.n_cells,
+        "h": case.h,
+        "n_unknowns": sol.system.n_unknowns(),
+        "n_constrained": sol.constraints.as_ref().map_or(0, |c| c.dofs.len()),
+        "n_active": sol.result.active.iter().filter(|&&x| x).count(),
+        "niter": sol.niter(),
+        "warm_start": sol.warm_start,
+        "marginal_load": sol.marginal_load,
+        "method": format!("{:?}", sol.result.method),
+        "certificate": sol.result.certificate,
+        "errors": errors,
+        "timings": sol.timings,
+        "mesh_seconds": case.mesh_seconds,
+        "log": sol.result.log,
+    });
+    let text = serde_json::to_string_pretty(&j)?;
+    atomic(path, |tmp| {
+        std::fs::write(tmp, &text).with_context(|| format!("writing {}", path.display()))
+    })?;
+    println!("wrote           {}", path.display());
     Ok(())
 }
 
@@ -374,7 +519,7 @@ fn scheme_on<'a>(
 }
 
 /// The solver options of the command line, the iteration's progress printed to stderr.
-fn solve_options(a: &SolveArgs) -> SolveOptions {
+pub(crate) fn solve_options(a: &SolveArgs) -> SolveOptions {
     let active_set = ActiveSetOptions {
         c: a.c,
         max_solves: a.max_solves,
@@ -385,7 +530,7 @@ fn solve_options(a: &SolveArgs) -> SolveOptions {
     };
     SolveOptions {
         active_set,
-        warm_start: a.warm_start,
+        warm_start: a.warm_start.unwrap_or(WarmStart::Nested),
         fallback: a.fallback,
         system: gradvi::assembly::SystemOptions {
             linear: a.linear,
@@ -436,7 +581,7 @@ fn print_progress(l: &IterationLog) {
 
 /// The system, the warm start, the iteration log and the certificate (tolerance `tol`) of a
 /// solve, on stdout.
-fn print_solution(sol: &Solution, tol: f64) {
+fn print_solution<M: SolveMesh<D> + ?Sized, const D: usize>(sol: &Solution<M, D>, tol: f64) {
     let on_cells = match sol.cell_system.unzip() {
         (Some(n), Some(0)) => {
             format!("; the iterative solves on the {n} cells, the local matrices being two-point")
@@ -670,5 +815,52 @@ mod tests {
             e.contains("the level of the [mesh] of") && e.contains("levels go from 1 to 10"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn three_d_families_are_generated_keeping_a_3d_domain() {
+        use gradvi::mesh3d::Cuboid;
+        let cube = Cuboid::new([-2.0, 2.0], [-2.0, 2.0], [-2.0, 2.0]);
+        let file3 = MeshSpec::Generated3 {
+            family: Family3::Cubes,
+            level: 2,
+            domain: Some(cube),
+        };
+        let spec = resolve(None, Some("kuhn"), Some(3), Some(&file3)).unwrap();
+        let kuhn = |level| MeshSpec::Generated3 {
+            family: Family3::Kuhn,
+            level,
+            domain: Some(cube),
+        };
+        assert_eq!(spec, kuhn(3));
+        assert_eq!(
+            spec.to_string(),
+            "3D kuhn level 3 on [-2, 2]x[-2, 2]x[-2, 2]"
+        );
+        // --level alone keeps the 3D family; --generate alone the level
+        let spec = resolve(None, None, Some(1), Some(&file3)).unwrap();
+        assert!(matches!(
+            spec,
+            MeshSpec::Generated3 {
+                family: Family3::Cubes,
+                level: 1,
+                ..
+            }
+        ));
+        assert_eq!(
+            resolve(None, Some("tetrahedra"), None, Some(&file3)).unwrap(),
+            kuhn(2)
+        );
+        // a domain of the other dimension cannot be kept
+        let e = error(None, Some("cubes"), Some(1), Some(&ex9_mesh()));
+        assert!(e.contains("--generate cubes is a 3D family"), "{e}");
+        let e = error(None, Some("cartesian"), Some(1), Some(&file3));
+        assert!(e.contains("--generate cartesian is a 2D family"), "{e}");
+        // 3D levels are checked against the 3D family
+        let e = error(None, Some("kuhn"), Some(9), None);
+        assert!(e.contains("(--level) of the 3D kuhn mesh"), "{e}");
+        // an unknown name lists both kinds of families
+        let e = error(None, Some("octagonal"), Some(1), None);
+        assert!(e.contains("\"cubes\", \"kuhn\""), "{e}");
     }
 }

@@ -2,10 +2,12 @@
 //! file (line, column and key).
 
 use super::MeshSpec;
-use super::data::{Data, Field, Loc, Part, Piece, TensorField};
+use super::data::{Data, Field, Loc, Part, Piece, TensorField, scaled_identity};
 use super::schema::{Piecewise, RawFile, RawMesh, RawSide, Src, TensorSrc};
 use crate::error::{Error, ProblemFileErrorKind as K, Result};
 use crate::mesh::{Family, Rect};
+use crate::mesh3d::Cuboid;
+use crate::mesh3d::generate::Family3;
 use crate::problem::expr::{Expr, ExprError, ExprErrorKind, Kind, Scope};
 use crate::problem::{BoundaryKind, ConstraintKind, Side, format_parameter};
 use std::collections::BTreeMap;
@@ -91,11 +93,17 @@ impl Cx<'_> {
         } else {
             (loc.line, loc.column)
         };
+        let hint = match &e.kind {
+            ExprErrorKind::UnknownVariable(v) if v == "z" => {
+                " (z is a coordinate of 3D meshes; this problem is compiled for a 2D mesh)"
+            }
+            _ => "",
+        };
         self.error(
             K::Expression,
             line,
             column,
-            format!("{}: \"{text}\" {e}", loc.key),
+            format!("{}: \"{text}\" {e}{hint}", loc.key),
         )
     }
 
@@ -231,10 +239,15 @@ impl Cx<'_> {
             let value = Expr::parse(inner, scope)
                 .map_err(|e| self.at(K::Expression, &loc, format!("\"{inner}\" {e}")))?;
             let Some(v) = value.as_constant() else {
+                let vars = if scope.contains("z") {
+                    "x, y or z"
+                } else {
+                    "x or y"
+                };
                 return Err(self.at(
                     K::Expression,
                     &loc,
-                    format!("\"{inner}\" depends on x or y: a name needs a constant"),
+                    format!("\"{inner}\" depends on {vars}: a name needs a constant"),
                 ));
             };
             out.push_str(&format_parameter(v));
@@ -259,15 +272,26 @@ impl Cx<'_> {
                 Ok(MeshSpec::File(dir.join(file)))
             }
             (None, Some(g)) => {
-                let family: Family = g.parse().map_err(|e: Error| bad(&e.to_string()))?;
                 let level = m.level.ok_or_else(|| bad("'generate' needs a 'level'"))?;
+                // a 2D family name first (the names are distinct), then a 3D one
+                let family = match (g.parse::<Family>(), g.parse::<Family3>()) {
+                    (Ok(f), _) => f,
+                    (Err(_), Ok(f3)) => return self.mesh3(f3, level, m.domain.as_deref(), &loc),
+                    (Err(e), Err(e3)) => return Err(bad(&format!("{e}; {e3}"))),
+                };
                 family.check_level(level).map_err(|e| bad(&e.to_string()))?;
                 // the file writes the x range, then the y range
-                let domain = m
-                    .domain
-                    .as_ref()
-                    .map(|d| d.0)
-                    .map(|[x0, x1, y0, y1]| Rect::new([x0, x1], [y0, y1]));
+                let domain = match m.domain.as_deref() {
+                    None => None,
+                    Some(&[x0, x1, y0, y1]) => Some(Rect::new([x0, x1], [y0, y1])),
+                    Some(d) => {
+                        return Err(bad(&format!(
+                            "'domain' of a 2D family is [x0, x1, y0, y1] (4 values), not {} \
+                             values",
+                            d.len()
+                        )));
+                    }
+                };
                 if domain.is_some_and(|d| !d.is_proper()) {
                     return Err(bad("'domain' = [x0, x1, y0, y1] needs x0 < x1 and y0 < y1"));
                 }
@@ -281,7 +305,42 @@ impl Cx<'_> {
         }
     }
 
-    pub(super) fn data(&self, raw: &RawFile, scope: &Scope) -> Result<Data> {
+    /// `[mesh]` with a 3D family: its level, and `domain` = \[x0, x1, y0, y1, z0, z1\].
+    fn mesh3(
+        &self,
+        family: Family3,
+        level: usize,
+        domain: Option<&[f64]>,
+        loc: &Loc,
+    ) -> Result<MeshSpec> {
+        let bad = |msg: String| self.at(K::Mesh, loc, msg);
+        family.check_level(level).map_err(|e| bad(e.to_string()))?;
+        let domain = match domain {
+            None => None,
+            Some(&[x0, x1, y0, y1, z0, z1]) => Some(Cuboid::new([x0, x1], [y0, y1], [z0, z1])),
+            Some(d) => {
+                return Err(bad(format!(
+                    "'domain' of a 3D family is [x0, x1, y0, y1, z0, z1] (6 values), not {} \
+                     values",
+                    d.len()
+                )));
+            }
+        };
+        if domain.is_some_and(|d| !d.is_proper()) {
+            return Err(bad(
+                "'domain' = [x0, x1, y0, y1, z0, z1] needs x0 < x1, y0 < y1 and z0 < z1".into(),
+            ));
+        }
+        Ok(MeshSpec::Generated3 {
+            family,
+            level,
+            domain,
+        })
+    }
+
+    /// The data compiled for meshes of dimension D, in `scope` (whose variables are the first
+    /// D of x, y, z): D×D tensors and D components of the exact gradient.
+    pub(super) fn data<const D: usize>(&self, raw: &RawFile, scope: &Scope) -> Result<Data<D>> {
         let (parts, rest) = self.boundary(raw, scope)?;
         let constraint = match (&raw.obstacle, &raw.signorini) {
             (Some(_), Some(_)) => {
@@ -308,10 +367,7 @@ impl Cx<'_> {
         let exact = match &raw.exact {
             Some(e) => Some((
                 self.expr("exact.u", &e.u, scope, Kind::Number)?,
-                [
-                    self.expr("exact.grad[0]", &e.grad.0[0], scope, Kind::Number)?,
-                    self.expr("exact.grad[1]", &e.grad.0[1], scope, Kind::Number)?,
-                ],
+                self.gradient::<D>(&e.grad, scope)?,
             )),
             None => None,
         };
@@ -336,25 +392,63 @@ impl Cx<'_> {
         })
     }
 
-    fn tensor(&self, key: &str, raw: &Spanned<TensorSrc>, scope: &Scope) -> Result<TensorField> {
+    /// `exact.grad`: exactly D components.
+    fn gradient<const D: usize>(
+        &self,
+        raw: &Spanned<Vec<Spanned<Src>>>,
+        scope: &Scope,
+    ) -> Result<[Field; D]> {
+        let g = raw.get_ref();
+        if g.len() != D {
+            let loc = self.loc("exact.grad", raw.span());
+            let msg = format!(
+                "{} components on a {D}D mesh: the gradient has {D} components there",
+                g.len()
+            );
+            return Err(self.at(K::Dimension, &loc, msg));
+        }
+        let fields = g
+            .iter()
+            .enumerate()
+            .map(|(i, c)| self.expr(&format!("exact.grad[{i}]"), c, scope, Kind::Number))
+            .collect::<Result<Vec<Field>>>()?;
+        Ok(to_array(fields))
+    }
+
+    fn tensor<const D: usize>(
+        &self,
+        key: &str,
+        raw: &Spanned<TensorSrc>,
+        scope: &Scope,
+    ) -> Result<TensorField<D>> {
         let span = raw.span();
         let sub = |s: &Src| Spanned::new(span.clone(), s.clone());
         match raw.get_ref() {
             TensorSrc::Scalar(s) => {
                 let a = self.expr(key, &sub(s), scope, Kind::Number)?;
                 Ok(match a.expr.as_constant() {
-                    Some(c) => TensorField::Constant([[c, 0.0], [0.0, c]], a.loc),
+                    Some(c) => TensorField::Constant(scaled_identity(c), a.loc),
                     None => TensorField::Scalar(a),
                 })
             }
+            TensorSrc::Matrix(m) if m.len() != D => {
+                let n = m.len();
+                let msg =
+                    format!("a {n}x{n} tensor on a {D}D mesh: give a {D}x{D} array or a scalar");
+                Err(self.at(K::Dimension, &self.loc(key, span.clone()), msg))
+            }
             TensorSrc::Matrix(m) => {
-                let e = |i: usize, j: usize| {
-                    self.expr(&format!("{key}[{i}][{j}]"), &m[i][j], scope, Kind::Number)
-                };
-                Ok(TensorField::matrix(
-                    [[e(0, 0)?, e(0, 1)?], [e(1, 0)?, e(1, 1)?]],
-                    self.loc(key, span.clone()),
-                ))
+                let mut rows = Vec::with_capacity(D);
+                for (i, row) in m.iter().enumerate() {
+                    let mut entries = Vec::with_capacity(D);
+                    for (j, a) in row.iter().enumerate() {
+                        let k = format!("{key}[{i}][{j}]");
+                        entries.push(self.expr(&k, a, scope, Kind::Number)?);
+                    }
+                    rows.push(to_array::<Field, D>(entries));
+                }
+                let loc = self.loc(key, span.clone());
+                Ok(TensorField::matrix(to_array(rows), loc))
             }
         }
     }
@@ -493,6 +587,12 @@ impl Cx<'_> {
     }
 }
 
+/// A vector of length D (checked by the caller) as an array.
+fn to_array<T, const D: usize>(v: Vec<T>) -> [T; D] {
+    v.try_into()
+        .unwrap_or_else(|_| unreachable!("the length was checked"))
+}
+
 /// The side of a barrier as written.
 fn side(s: RawSide) -> Side {
     match s {
@@ -539,16 +639,76 @@ mod tests {
 
     #[test]
     fn expression_errors_point_at_the_character_when_the_string_is_verbatim() {
-        let (line, column, kind, msg) = error("[source]\nf = \"x + z\"\n");
+        let (line, column, kind, msg) = error("[source]\nf = \"x + w\"\n");
         assert_eq!((line, column, kind), (2, 10, K::Expression));
         assert_eq!(
             msg,
-            "source.f: \"x + z\" at character 5: unknown variable 'z'"
+            "source.f: \"x + w\" at character 5: unknown variable 'w'"
         );
         // with an escape, the string is not the text: the error points at the value
-        let (line, column, _, msg) = error("[source]\nf = \"x + \\u007a\"\n");
+        let (line, column, _, msg) = error("[source]\nf = \"x + \\u0077\"\n");
         assert_eq!((line, column), (2, 5));
-        assert!(msg.ends_with("unknown variable 'z'"), "{msg}");
+        assert!(msg.ends_with("unknown variable 'w'"), "{msg}");
+    }
+
+    /// The error of building the file `text` for dimension D.
+    fn error_in<const D: usize>(text: &str) -> (usize, usize, K, String) {
+        let pf = parse(text, Path::new("t.toml"), &[]).unwrap();
+        match pf.problem_in::<D>() {
+            Err(Error::ProblemFile {
+                line,
+                column,
+                kind,
+                msg,
+                ..
+            }) => (line, column, kind, msg),
+            Err(e) => panic!("{e:?}"),
+            Ok(_) => panic!("{text}: no error in {D}D"),
+        }
+    }
+
+    #[test]
+    fn a_dimension_mismatch_is_an_error_at_its_place() {
+        // a z in a 2D problem: an unknown variable there, at its character
+        let text = "[source]\nf = \"x + z\"\n";
+        let (line, column, kind, msg) = error_in::<2>(text);
+        assert_eq!((line, column, kind), (2, 10, K::Expression));
+        assert_eq!(
+            msg,
+            "source.f: \"x + z\" at character 5: unknown variable 'z' (z is a coordinate of 3D \
+             meshes; this problem is compiled for a 2D mesh)"
+        );
+        let f = parse(text, Path::new("t.toml"), &[]).unwrap();
+        assert!(!f.compiles_for(2) && f.compiles_for(3));
+        assert_eq!((f.problem_in::<3>().unwrap().source)([1.0, 2.0, 3.0]), 4.0);
+        // a 2x2 tensor on a 3D mesh, a 3x3 one on a 2D mesh, at the value
+        let a2 = "\n[diffusion]\nA = [[1, 0], [0, 1]]\n";
+        let (line, column, kind, msg) = error_in::<3>(a2);
+        assert_eq!((line, column, kind), (3, 5, K::Dimension));
+        assert!(
+            msg.contains("diffusion.A: a 2x2 tensor on a 3D mesh"),
+            "{msg}"
+        );
+        let a3 = "[diffusion]\nA = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\n";
+        let (line, column, kind, msg) = error_in::<2>(a3);
+        assert_eq!((line, column, kind), (2, 5, K::Dimension));
+        assert!(msg.contains("a 3x3 tensor on a 2D mesh"), "{msg}");
+        // two gradient components on a 3D mesh
+        let g = "[exact]\nu = \"x*y\"\ngrad = [\"y\", \"x\"]\n";
+        let (line, column, kind, msg) = error_in::<3>(g);
+        assert_eq!((line, column, kind), (3, 8, K::Dimension));
+        assert!(
+            msg.contains("exact.grad: 2 components on a 3D mesh"),
+            "{msg}"
+        );
+        // a file whose own mesh is 3D must compile for 3D when it is loaded
+        let (line, column, kind, _) =
+            error(&format!("[mesh]\ngenerate = \"cubes\"\nlevel = 1\n{a2}"));
+        assert_eq!((line, column, kind), (6, 5, K::Dimension));
+        // and a file that compiles for neither reports its 2D error
+        let (_, _, kind, msg) = error(&format!("{a2}[source]\nf = \"z\"\n"));
+        assert_eq!(kind, K::Expression, "{msg}");
+        assert!(msg.contains("unknown variable 'z'"), "{msg}");
     }
 
     #[test]

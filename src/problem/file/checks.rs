@@ -1,17 +1,138 @@
-//! The checks of a problem file against a mesh (see [`ProblemFile::check_against_mesh`]).
+//! The checks of a problem file against a mesh (see [`ProblemFile::check_against_mesh`]), the
+//! same in 2D and 3D: a 2D mesh's boundary faces are its edges (centre: the midpoint), a 3D
+//! mesh's are polygons (centre: the centroid x_σ).
 
 use super::ProblemFile;
-use super::data::{Field, Loc, Part, Piece, select};
+use super::data::{Data, Field, Loc, Part, Piece, select};
 use crate::error::{Error, ProblemFileErrorKind as K, Result};
-use crate::mesh::{Point, PolyMesh};
+use crate::mesh::PolyMesh;
+use crate::mesh3d::PolyMesh3;
 use crate::problem::{BoundaryKind, ConstraintKind, check_tensor};
 use rayon::prelude::*;
 
+/// What the checks read from a mesh of dimension D.
+trait CheckMesh<const D: usize>: Sync {
+    /// What a face is called in messages ("edge", "face").
+    const FACE: &'static str;
+    /// What its centre is called ("midpoint", "centroid").
+    const CENTRE: &'static str;
+    fn n_cells(&self) -> usize;
+    fn centroid(&self, k: usize) -> [f64; D];
+    fn cell_tag(&self, k: usize) -> i32;
+    /// The vertices of cell `k`.
+    fn cell_points(&self, k: usize) -> Vec<[f64; D]>;
+    fn n_vertices(&self) -> usize;
+    fn vertex(&self, v: usize) -> [f64; D];
+    fn n_faces(&self) -> usize;
+    /// x_σ.
+    fn face_centre(&self, f: usize) -> [f64; D];
+    /// The vertices of face `f`.
+    fn face_points(&self, f: usize) -> Vec<[f64; D]>;
+    fn boundary_faces(&self) -> Vec<usize>;
+    fn face_tag(&self, f: usize) -> i32;
+}
+
+impl CheckMesh<2> for PolyMesh {
+    const FACE: &'static str = "edge";
+    const CENTRE: &'static str = "midpoint";
+    fn n_cells(&self) -> usize {
+        PolyMesh::n_cells(self)
+    }
+    fn centroid(&self, k: usize) -> [f64; 2] {
+        PolyMesh::centroid(self, k)
+    }
+    fn cell_tag(&self, k: usize) -> i32 {
+        PolyMesh::cell_tag(self, k)
+    }
+    fn cell_points(&self, k: usize) -> Vec<[f64; 2]> {
+        let vs = self.cell_vertices(k);
+        vs.iter().map(|&v| self.vertex(v as usize)).collect()
+    }
+    fn n_vertices(&self) -> usize {
+        PolyMesh::n_vertices(self)
+    }
+    fn vertex(&self, v: usize) -> [f64; 2] {
+        PolyMesh::vertex(self, v)
+    }
+    fn n_faces(&self) -> usize {
+        self.n_edges()
+    }
+    fn face_centre(&self, f: usize) -> [f64; 2] {
+        self.edge_midpoint(f)
+    }
+    fn face_points(&self, f: usize) -> Vec<[f64; 2]> {
+        self.edge_vertices(f).map(|v| self.vertex(v)).to_vec()
+    }
+    fn boundary_faces(&self) -> Vec<usize> {
+        self.boundary_edges().to_vec()
+    }
+    fn face_tag(&self, f: usize) -> i32 {
+        self.edge_tag(f)
+    }
+}
+
+impl CheckMesh<3> for PolyMesh3 {
+    const FACE: &'static str = "face";
+    const CENTRE: &'static str = "centroid";
+    fn n_cells(&self) -> usize {
+        PolyMesh3::n_cells(self)
+    }
+    fn centroid(&self, k: usize) -> [f64; 3] {
+        PolyMesh3::centroid(self, k)
+    }
+    fn cell_tag(&self, k: usize) -> i32 {
+        PolyMesh3::cell_tag(self, k)
+    }
+    fn cell_points(&self, k: usize) -> Vec<[f64; 3]> {
+        let mut vs: Vec<u32> = self
+            .cell_faces(k)
+            .iter()
+            .flat_map(|&f| self.face_vertices(f as usize).iter().copied())
+            .collect();
+        vs.sort_unstable();
+        vs.dedup();
+        vs.iter().map(|&v| self.vertices()[v as usize]).collect()
+    }
+    fn n_vertices(&self) -> usize {
+        PolyMesh3::n_vertices(self)
+    }
+    fn vertex(&self, v: usize) -> [f64; 3] {
+        self.vertices()[v]
+    }
+    fn n_faces(&self) -> usize {
+        PolyMesh3::n_faces(self)
+    }
+    fn face_centre(&self, f: usize) -> [f64; 3] {
+        self.face_centroid(f)
+    }
+    fn face_points(&self, f: usize) -> Vec<[f64; 3]> {
+        let vs = self.face_vertices(f);
+        vs.iter().map(|&v| self.vertices()[v as usize]).collect()
+    }
+    fn boundary_faces(&self) -> Vec<usize> {
+        PolyMesh3::boundary_faces(self)
+            .iter()
+            .map(|&f| f as usize)
+            .collect()
+    }
+    fn face_tag(&self, f: usize) -> i32 {
+        PolyMesh3::face_tag(self, f)
+    }
+}
+
+/// `(a, b)` or `(a, b, c)`.
+fn point(p: &[f64]) -> String {
+    let parts: Vec<String> = p.iter().map(|v| v.to_string()).collect();
+    format!("({})", parts.join(", "))
+}
+
 impl ProblemFile {
-    /// Checks the problem against `mesh`: every tag of the file is on some boundary edge; every
-    /// boundary edge is selected by exactly one boundary section (or taken by the rest); a piece
-    /// of A and of f applies at every cell; A is symmetric positive definite at every centroid;
-    /// and every datum is finite at every point where a scheme evaluates it:
+    /// Checks the problem against the 2D `mesh`: the file is a 2D problem (no `z`, 2×2
+    /// tensors, 2 gradient components; else the error of compiling it for 2D, with its place);
+    /// every tag of the file is on some boundary edge; every boundary edge is selected by
+    /// exactly one boundary section (or taken by the rest); a piece of A and of f applies at
+    /// every cell; A is symmetric positive definite at every centroid; and every datum is
+    /// finite at every point where a scheme evaluates it:
     ///
     /// | datum | points | used there by |
     /// |---|---|---|
@@ -26,16 +147,43 @@ impl ProblemFile {
     /// key, the cell, vertex or edge, and the point. Cost: a few evaluations per cell, in
     /// parallel.
     pub fn check_against_mesh(&self, mesh: &PolyMesh) -> Result<()> {
-        self.check_tags(mesh)?;
-        let kinds = self.check_boundary(mesh)?;
-        self.check_cells(mesh)?;
-        self.check_vertices_and_edges(mesh)?;
-        self.check_boundary_values(mesh, &kinds)
+        self.check_against::<2, _>(mesh)
     }
 
+    /// [`ProblemFile::check_against_mesh`] on a 3D mesh: the file is a 3D problem, tags are
+    /// boundary-face tags (gmsh physical surfaces) and cell tags (physical volumes), boundary
+    /// data is checked at the face centroids x_σ and the face vertices, the obstacle barrier
+    /// at x_K, the vertices and every face centroid.
+    pub fn check_against_mesh3(&self, mesh: &PolyMesh3) -> Result<()> {
+        self.check_against::<3, _>(mesh)
+    }
+
+    fn check_against<const D: usize, M: CheckMesh<D>>(&self, mesh: &M) -> Result<()> {
+        let d = self.data::<D>()?;
+        let c = Checker {
+            pf: self,
+            d: &d,
+            mesh,
+        };
+        c.check_tags()?;
+        let kinds = c.check_boundary()?;
+        c.check_cells()?;
+        c.check_vertices_and_faces()?;
+        c.check_boundary_values(&kinds)
+    }
+}
+
+/// A file's data for dimension D and a mesh being checked.
+struct Checker<'a, const D: usize, M> {
+    pf: &'a ProblemFile,
+    d: &'a Data<D>,
+    mesh: &'a M,
+}
+
+impl<const D: usize, M: CheckMesh<D>> Checker<'_, D, M> {
     fn fail(&self, kind: K, loc: &Loc, msg: String) -> Error {
         Error::ProblemFile {
-            path: self.path.clone(),
+            path: self.pf.path.clone(),
             line: loc.line,
             column: loc.column,
             kind,
@@ -43,15 +191,16 @@ impl ProblemFile {
         }
     }
 
-    fn check_tags(&self, mesh: &PolyMesh) -> Result<()> {
+    fn check_tags(&self) -> Result<()> {
+        let mesh = self.mesh;
         let mut present: Vec<i32> = mesh
-            .boundary_edges()
+            .boundary_faces()
             .iter()
-            .map(|&e| mesh.edge_tag(e))
+            .map(|&e| mesh.face_tag(e))
             .collect();
         present.sort_unstable();
         present.dedup();
-        for part in &self.data.parts {
+        for part in &self.d.parts {
             for t in &part.tags {
                 if present.binary_search(t).is_err() {
                     let loc = part.tags_loc.clone().unwrap_or_else(|| Loc {
@@ -64,22 +213,24 @@ impl ProblemFile {
                         K::Tag,
                         &loc,
                         format!(
-                            "tag {t} is on no boundary edge of the mesh (its boundary tags: {})",
+                            "tag {t} is on no boundary {} of the mesh (its boundary tags: {})",
+                            M::FACE,
                             list.join(", ")
                         ),
                     ));
                 }
             }
         }
-        self.check_cell_tags(mesh)
+        self.check_cell_tags()
     }
 
     /// Every cell tag named by a piece of A or f is the tag of some cell of the mesh.
-    fn check_cell_tags(&self, mesh: &PolyMesh) -> Result<()> {
+    fn check_cell_tags(&self) -> Result<()> {
+        let mesh = self.mesh;
         let mut present: Vec<i32> = (0..mesh.n_cells()).map(|k| mesh.cell_tag(k)).collect();
         present.sort_unstable();
         present.dedup();
-        let d = &self.data;
+        let d = self.d;
         let named = d
             .diffusion
             .iter()
@@ -110,24 +261,26 @@ impl ProblemFile {
         Ok(())
     }
 
-    /// The kind of every boundary edge (in the order of `mesh.boundary_edges()`).
-    fn check_boundary(&self, mesh: &PolyMesh) -> Result<Vec<BoundaryKind>> {
-        let d = &self.data;
-        let edges = mesh.boundary_edges();
+    /// The kind of every boundary face (in the order of `mesh.boundary_faces()`).
+    fn check_boundary(&self) -> Result<Vec<BoundaryKind>> {
+        let d = self.d;
+        let faces = self.mesh.boundary_faces();
         if !d.has_boundary_sections() {
-            return Ok(vec![BoundaryKind::Dirichlet; edges.len()]);
+            return Ok(vec![BoundaryKind::Dirichlet; faces.len()]);
         }
         let kinds: Vec<std::result::Result<BoundaryKind, Error>> =
-            edges.par_iter().map(|&e| self.edge_kind(mesh, e)).collect();
+            faces.par_iter().map(|&e| self.face_kind(e)).collect();
         kinds.into_iter().collect()
     }
 
-    fn edge_kind(&self, mesh: &PolyMesh, e: usize) -> Result<BoundaryKind> {
-        let d = &self.data;
-        let (x, tag) = (mesh.edge_midpoint(e), mesh.edge_tag(e));
+    fn face_kind(&self, e: usize) -> Result<BoundaryKind> {
+        let d = self.d;
+        let (x, tag) = (self.mesh.face_centre(e), self.mesh.face_tag(e));
         let place = format!(
-            "boundary edge {e} (midpoint ({}, {}), tag {tag})",
-            x[0], x[1]
+            "boundary {} {e} ({} {}, tag {tag})",
+            M::FACE,
+            M::CENTRE,
+            point(&x)
         );
         let mut chosen: Option<&Part> = None;
         for p in &d.parts {
@@ -189,18 +342,18 @@ impl ProblemFile {
 
     /// Per cell: the pieces of A and f apply, A is SPD; f (piecewise: also at the vertices of
     /// the cell, with its piece), the obstacle barrier and the exact solution are finite at x_K.
-    fn check_cells(&self, mesh: &PolyMesh) -> Result<()> {
-        let bad = (0..mesh.n_cells())
+    fn check_cells(&self) -> Result<()> {
+        let bad = (0..self.mesh.n_cells())
             .into_par_iter()
-            .find_map_first(|k| self.cell_error(mesh, k).err());
+            .find_map_first(|k| self.cell_error(k).err());
         bad.map_or(Ok(()), Err)
     }
 
-    fn cell_error(&self, mesh: &PolyMesh, k: usize) -> Result<()> {
-        let d = &self.data;
+    fn cell_error(&self, k: usize) -> Result<()> {
+        let (d, mesh) = (self.d, self.mesh);
         let xk = mesh.centroid(k);
         // formatted only on failure
-        let place = || format!("cell {k} (x_K = ({}, {}))", xk[0], xk[1]);
+        let place = || format!("cell {k} (x_K = {})", point(&xk));
         let uncovered = |key: &str| {
             let loc = Loc {
                 key: key.into(),
@@ -229,12 +382,12 @@ impl ProblemFile {
         if !d.source.is_empty() {
             let f = select(&d.source, xk, mesh.cell_tag(k)).ok_or_else(|| uncovered("source"))?;
             let piecewise = d.source.iter().any(|p| p.cond.is_some());
-            let verts = mesh
-                .cell_vertices(k)
-                .iter()
-                .map(|&v| mesh.vertex(v as usize));
-            let n = if piecewise { usize::MAX } else { 0 };
-            for p in std::iter::once(xk).chain(verts.take(n)) {
+            let verts = if piecewise {
+                mesh.cell_points(k)
+            } else {
+                Vec::new()
+            };
+            for p in std::iter::once(xk).chain(verts) {
                 self.finite(f, p, &place)?;
             }
         }
@@ -250,9 +403,9 @@ impl ProblemFile {
     }
 
     /// An unpiecewise source and the obstacle barrier at every vertex (P1), and the obstacle
-    /// barrier at every edge midpoint (Crouzeix–Raviart).
-    fn check_vertices_and_edges(&self, mesh: &PolyMesh) -> Result<()> {
-        let d = &self.data;
+    /// barrier at every face centre (Crouzeix–Raviart).
+    fn check_vertices_and_faces(&self) -> Result<()> {
+        let (d, mesh) = (self.d, self.mesh);
         let source = match d.source.as_slice() {
             [
                 Piece {
@@ -277,8 +430,8 @@ impl ProblemFile {
             bad.map_or(Ok(()), Err)?;
         }
         if let Some(b) = obstacle {
-            let bad = (0..mesh.n_edges()).into_par_iter().find_map_first(|e| {
-                self.finite(b, mesh.edge_midpoint(e), &|| format!("edge {e}"))
+            let bad = (0..mesh.n_faces()).into_par_iter().find_map_first(|e| {
+                self.finite(b, mesh.face_centre(e), &|| format!("{} {e}", M::FACE))
                     .err()
             });
             bad.map_or(Ok(()), Err)?;
@@ -287,31 +440,30 @@ impl ProblemFile {
     }
 
     /// `Err` naming the datum, the point and the place if `f` is not finite at `p`.
-    fn finite(&self, f: &Field, p: Point, place: &dyn Fn() -> String) -> Result<()> {
+    fn finite(&self, f: &Field, p: [f64; D], place: &dyn Fn() -> String) -> Result<()> {
         let v = f.at(p);
         if v.is_finite() {
             return Ok(());
         }
         let msg = format!(
-            "\"{}\" is {v} at ({}, {}), {}",
+            "\"{}\" is {v} at {}, {}",
             f.expr.source(),
-            p[0],
-            p[1],
+            point(&p),
             place()
         );
         Err(self.fail(K::NonFinite, &f.loc, msg))
     }
 
-    /// Dirichlet values, Neumann fluxes and the Signorini barrier on the edges of their kind
-    /// (the Dirichlet value and the barrier also at the end points, for P1).
-    fn check_boundary_values(&self, mesh: &PolyMesh, kinds: &[BoundaryKind]) -> Result<()> {
-        let d = &self.data;
+    /// Dirichlet values, Neumann fluxes and the Signorini barrier on the faces of their kind
+    /// (the Dirichlet value and the barrier also at the vertices of the face, for P1).
+    fn check_boundary_values(&self, kinds: &[BoundaryKind]) -> Result<()> {
+        let (d, mesh) = (self.d, self.mesh);
         let sig = match &d.constraint {
             Some((ConstraintKind::Signorini, _, b)) => Some(b),
             _ => None,
         };
         let bad = mesh
-            .boundary_edges()
+            .boundary_faces()
             .par_iter()
             .zip(kinds)
             .find_map_first(|(&e, kind)| {
@@ -321,13 +473,15 @@ impl ProblemFile {
                     BoundaryKind::Signorini => (sig, true),
                 };
                 let f = field?;
-                let place = || format!("boundary edge {e}");
-                let [a, b] = mesh.edge_vertices(e).map(|v| mesh.vertex(v));
-                let pts = [mesh.edge_midpoint(e), a, b];
-                let n = if ends { 3 } else { 1 };
-                pts[..n]
-                    .iter()
-                    .find_map(|&p| self.finite(f, p, &place).err())
+                let place = || format!("boundary {} {e}", M::FACE);
+                let ends = if ends {
+                    mesh.face_points(e)
+                } else {
+                    Vec::new()
+                };
+                std::iter::once(mesh.face_centre(e))
+                    .chain(ends)
+                    .find_map(|p| self.finite(f, p, &place).err())
             });
         bad.map_or(Ok(()), Err)
     }

@@ -1,7 +1,6 @@
 //! The compiled data of a problem file: expressions with the place they were written, pieces
 //! of A and f, boundary parts, and their evaluation at a point.
 
-use crate::mesh::Point;
 use crate::problem::expr::Expr;
 use crate::problem::{BoundaryKind, ConstraintKind, Side};
 use crate::scheme::Tensor;
@@ -22,42 +21,52 @@ pub(super) struct Field {
 }
 
 impl Field {
+    /// Its value at the point `p` of ℝᴰ (the expression was compiled in the scope of the
+    /// first D coordinates x, y, z).
     #[inline]
-    pub(super) fn at(&self, p: Point) -> f64 {
+    pub(super) fn at<const D: usize>(&self, p: [f64; D]) -> f64 {
         self.expr.eval(&p)
     }
 }
 
-/// A(x): a I, a full matrix of expressions, or a constant matrix (when every entry is
-/// constant); `Loc` is where the whole value is written.
+/// A(x) in ℝᴰˣᴰ: a I, a full D×D matrix of expressions, or a constant matrix (when every
+/// entry is constant); `Loc` is where the whole value is written.
 #[derive(Debug, Clone)]
-pub(super) enum TensorField {
+pub(super) enum TensorField<const D: usize> {
     Scalar(Field),
-    Matrix(Box<[[Field; 2]; 2]>, Loc),
-    Constant(Tensor, Loc),
+    Matrix(Box<[[Field; D]; D]>, Loc),
+    Constant(Tensor<D>, Loc),
 }
 
-impl TensorField {
+/// a I in ℝᴰˣᴰ.
+pub(super) fn scaled_identity<const D: usize>(a: f64) -> Tensor<D> {
+    let mut t = [[0.0; D]; D];
+    for (i, row) in t.iter_mut().enumerate() {
+        row[i] = a;
+    }
+    t
+}
+
+impl<const D: usize> TensorField<D> {
     /// A full matrix, or a constant one if every entry is.
-    pub(super) fn matrix(m: [[Field; 2]; 2], loc: Loc) -> TensorField {
-        let c = |i: usize, j: usize| m[i][j].expr.as_constant();
-        match (c(0, 0), c(0, 1), c(1, 0), c(1, 1)) {
-            (Some(a), Some(b), Some(c), Some(d)) => TensorField::Constant([[a, b], [c, d]], loc),
-            _ => TensorField::Matrix(Box::new(m), loc),
+    pub(super) fn matrix(m: [[Field; D]; D], loc: Loc) -> TensorField<D> {
+        let mut c = [[0.0; D]; D];
+        for (row, fields) in c.iter_mut().zip(&m) {
+            for (v, f) in row.iter_mut().zip(fields) {
+                match f.expr.as_constant() {
+                    Some(x) => *v = x,
+                    None => return TensorField::Matrix(Box::new(m), loc),
+                }
+            }
         }
+        TensorField::Constant(c, loc)
     }
 
     #[inline]
-    pub(super) fn at(&self, p: Point) -> Tensor {
+    pub(super) fn at(&self, p: [f64; D]) -> Tensor<D> {
         match self {
-            TensorField::Scalar(a) => {
-                let c = a.at(p);
-                [[c, 0.0], [0.0, c]]
-            }
-            TensorField::Matrix(m, _) => [
-                [m[0][0].at(p), m[0][1].at(p)],
-                [m[1][0].at(p), m[1][1].at(p)],
-            ],
+            TensorField::Scalar(a) => scaled_identity(a.at(p)),
+            TensorField::Matrix(m, _) => m.each_ref().map(|row| row.each_ref().map(|f| f.at(p))),
             TensorField::Constant(a, _) => *a,
         }
     }
@@ -83,7 +92,7 @@ pub(super) struct Piece<T> {
 
 /// The first piece that applies at centroid `p` of a cell tagged `tag`; `None` if none does,
 /// or if a condition is NaN there.
-pub(super) fn select<T>(pieces: &[Piece<T>], p: Point, tag: i32) -> Option<&T> {
+pub(super) fn select<T, const D: usize>(pieces: &[Piece<T>], p: [f64; D], tag: i32) -> Option<&T> {
     for piece in pieces {
         if !piece.tags.is_empty() && !piece.tags.contains(&tag) {
             continue;
@@ -108,8 +117,9 @@ pub(super) struct Part {
 }
 
 impl Part {
-    /// Whether it selects the edge with midpoint `x` and tag `tag` (`None`: its condition is NaN).
-    pub(super) fn selects(&self, x: Point, tag: i32) -> Option<bool> {
+    /// Whether it selects the boundary face (an edge in 2D) with centre `x` and tag `tag`
+    /// (`None`: its condition is NaN).
+    pub(super) fn selects<const D: usize>(&self, x: [f64; D], tag: i32) -> Option<bool> {
         if self.tags.contains(&tag) {
             return Some(true);
         }
@@ -120,11 +130,13 @@ impl Part {
     }
 }
 
-/// Everything the closures of the [`Problem`](crate::problem::Problem) evaluate.
+/// Everything the closures of the [`Problem<D>`](crate::problem::Problem) evaluate: the file
+/// compiled for meshes of dimension D (expressions in the first D of x, y, z; D×D tensors; D
+/// components of the exact gradient).
 #[derive(Debug)]
-pub(super) struct Data {
+pub(super) struct Data<const D: usize> {
     /// Empty: A = I.
-    pub(super) diffusion: Vec<Piece<TensorField>>,
+    pub(super) diffusion: Vec<Piece<TensorField<D>>>,
     /// Empty: f = 0.
     pub(super) source: Vec<Piece<Field>>,
     pub(super) parts: Vec<Part>,
@@ -133,19 +145,19 @@ pub(super) struct Data {
     pub(super) dirichlet: Option<Field>,
     pub(super) neumann: Option<Field>,
     pub(super) constraint: Option<(ConstraintKind, Side, Field)>,
-    pub(super) exact: Option<(Field, [Field; 2])>,
+    pub(super) exact: Option<(Field, [Field; D])>,
 }
 
-impl Data {
-    pub(super) fn diffusion_at(&self, p: Point, tag: i32) -> Tensor {
+impl<const D: usize> Data<D> {
+    pub(super) fn diffusion_at(&self, p: [f64; D], tag: i32) -> Tensor<D> {
         if self.diffusion.is_empty() {
-            return [[1.0, 0.0], [0.0, 1.0]];
+            return scaled_identity(1.0);
         }
-        select(&self.diffusion, p, tag).map_or([[f64::NAN; 2]; 2], |a| a.at(p))
+        select(&self.diffusion, p, tag).map_or([[f64::NAN; D]; D], |a| a.at(p))
     }
 
     /// f at `p` with the piece chosen at `xk` (NaN where no piece applies).
-    pub(super) fn source_at(&self, p: Point, xk: Point, tag: i32) -> f64 {
+    pub(super) fn source_at(&self, p: [f64; D], xk: [f64; D], tag: i32) -> f64 {
         if self.source.is_empty() {
             return 0.0;
         }
@@ -169,9 +181,9 @@ impl Data {
             || self.source.iter().any(|p| tagged(&p.tags))
     }
 
-    /// The section that takes the edge (midpoint `x`, tag `tag`): the first explicit one that
-    /// selects it, else the rest; `None` if none does.
-    pub(super) fn boundary_at(&self, x: Point, tag: i32) -> Option<BoundaryKind> {
+    /// The section that takes the boundary face (centre `x`, tag `tag`): the first explicit
+    /// one that selects it, else the rest; `None` if none does.
+    pub(super) fn boundary_at(&self, x: [f64; D], tag: i32) -> Option<BoundaryKind> {
         self.parts
             .iter()
             .find(|p| p.selects(x, tag) == Some(true))
@@ -261,6 +273,26 @@ mod tests {
         assert_eq!(
             TensorField::Scalar(field("x")).at([4.0, 0.0]),
             [[4.0, 0.0], [0.0, 4.0]]
+        );
+        // 3×3, in the scope x, y, z
+        let scope = Scope::new(&["x", "y", "z"]);
+        let f = |s: &str| Field {
+            expr: Expr::parse(s, &scope).unwrap(),
+            loc: field("1").loc,
+        };
+        let m = TensorField::matrix(
+            [
+                [f("2"), f("0"), f("0")],
+                [f("0"), f("1 + z"), f("0")],
+                [f("0"), f("0"), f("3")],
+            ],
+            field("1").loc,
+        );
+        let a = m.at([0.0, 0.0, 4.0]);
+        assert_eq!(a, [[2.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 3.0]]);
+        assert_eq!(
+            TensorField::<3>::Scalar(f("z")).at([0.0, 0.0, 2.0])[2][2],
+            2.0
         );
     }
 }

@@ -59,13 +59,20 @@ use super::expr::Scope;
 use super::{BoundaryKind, Problem};
 use crate::error::{Error, ProblemFileErrorKind as K, Result};
 use crate::mesh::{Family, Rect};
+use crate::mesh3d::Cuboid;
+use crate::mesh3d::generate::Family3;
 use crate::scheme::SchemeKind;
 use build::Cx;
 use data::Data;
 use schema::RawFile;
+use std::any::Any;
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+
+/// The coordinates, in the order of a point's components: a D-dimensional problem's
+/// expressions use the first D.
+const COORDINATES: [&str; 3] = ["x", "y", "z"];
 
 /// How the mesh of a problem file is obtained (`[mesh]`).
 #[derive(Debug, Clone, PartialEq)]
@@ -82,6 +89,27 @@ pub enum MeshSpec {
         /// The rectangle \[x0, x1\] × \[y0, y1\] the unit square is mapped onto.
         domain: Option<Rect>,
     },
+    /// A generated 3D mesh of the unit cube, optionally mapped affinely onto
+    /// `domain` = \[x0, x1, y0, y1, z0, z1\].
+    Generated3 {
+        /// The family.
+        family: Family3,
+        /// Its level (checked by [`Family3::check_level`] when the file is loaded).
+        level: usize,
+        /// The box the unit cube is mapped onto.
+        domain: Option<Cuboid>,
+    },
+}
+
+impl MeshSpec {
+    /// The dimension of the mesh, when the spec says it (a generated mesh); `None` for a file.
+    pub fn dimension(&self) -> Option<usize> {
+        match self {
+            MeshSpec::File(_) => None,
+            MeshSpec::Generated { .. } => Some(2),
+            MeshSpec::Generated3 { .. } => Some(3),
+        }
+    }
 }
 
 impl fmt::Display for MeshSpec {
@@ -99,12 +127,30 @@ impl fmt::Display for MeshSpec {
                 }
                 Ok(())
             }
+            MeshSpec::Generated3 {
+                family,
+                level,
+                domain,
+            } => {
+                write!(f, "3D {} level {level}", family.name())?;
+                if let Some(d) = domain {
+                    write!(f, " on {d}")?;
+                }
+                Ok(())
+            }
         }
     }
 }
 
-/// A loaded, checked problem file. Build the [`Problem`] with [`ProblemFile::problem`] after
-/// [`ProblemFile::check_against_mesh`].
+/// A loaded, checked problem file. Build the [`Problem`] with [`ProblemFile::problem`] (2D)
+/// or [`ProblemFile::problem_in`] (2D or 3D) after [`ProblemFile::check_against_mesh`] or
+/// [`ProblemFile::check_against_mesh3`].
+///
+/// The file is compiled for both dimensions when it is loaded: expressions in x, y (2D) and in
+/// x, y, z (3D), tensors and exact gradients of the matching size. It loads if it compiles for
+/// at least one (for the dimension of its `[mesh]` when that is a generated family); the error
+/// of the other dimension is kept and reported, with its place in the file, when the problem
+/// is checked against or built for a mesh of that dimension.
 #[derive(Debug, Clone)]
 pub struct ProblemFile {
     /// The file (for built-in problems, `problems/NAME.toml`).
@@ -120,7 +166,71 @@ pub struct ProblemFile {
     pub mesh: Option<MeshSpec>,
     /// `scheme`, if given.
     pub scheme: Option<SchemeKind>,
-    data: Arc<Data>,
+    data2: std::result::Result<Arc<Data<2>>, Stored>,
+    data3: std::result::Result<Arc<Data<3>>, Stored>,
+}
+
+/// A problem-file error kept for later (the file did not compile for one dimension).
+#[derive(Debug, Clone)]
+struct Stored {
+    line: usize,
+    column: usize,
+    kind: K,
+    msg: String,
+}
+
+impl Stored {
+    fn new(e: Error) -> Stored {
+        match e {
+            Error::ProblemFile {
+                line,
+                column,
+                kind,
+                msg,
+                ..
+            } => Stored {
+                line,
+                column,
+                kind,
+                msg,
+            },
+            other => Stored {
+                line: 0,
+                column: 0,
+                kind: K::Schema,
+                msg: other.to_string(),
+            },
+        }
+    }
+
+    fn error(&self, path: &Path) -> Error {
+        Error::ProblemFile {
+            path: path.to_path_buf(),
+            line: self.line,
+            column: self.column,
+            kind: self.kind,
+            msg: self.msg.clone(),
+        }
+    }
+}
+
+/// The file compiled for meshes of dimension D: the scope of the first D coordinates with the
+/// parameters and definitions, then the data.
+fn compile<const D: usize>(
+    cx: &Cx,
+    raw: &RawFile,
+    parameters: &[(String, f64)],
+) -> Result<(Data<D>, Scope)> {
+    let mut scope = Scope::new(&COORDINATES[..D]);
+    for (name, v) in parameters {
+        let loc = cx.loc(&format!("parameters.{name}"), raw.parameters[name].span());
+        scope
+            .set_constant(name, *v)
+            .map_err(|m| cx.at(K::Parameter, &loc, m))?;
+    }
+    cx.definitions(&raw.definitions, &mut scope)?;
+    let data = cx.data::<D>(raw, &scope)?;
+    Ok((data, scope))
 }
 
 /// The built-in problems, as problem files compiled into the library: `(name, TOML text)`.
@@ -198,17 +308,27 @@ pub fn parse(text: &str, path: &Path, overrides: &[(String, f64)]) -> Result<Pro
         cx.toml_error(kind, &e)
     })?;
     let parameters = cx.parameters(&raw.parameters, overrides)?;
-    let mut scope = Scope::new(&["x", "y"]);
-    for (name, v) in &parameters {
-        let loc = cx.loc(&format!("parameters.{name}"), raw.parameters[name].span());
-        scope
-            .set_constant(name, *v)
-            .map_err(|m| cx.at(K::Parameter, &loc, m))?;
-    }
-    cx.definitions(&raw.definitions, &mut scope)?;
-    let data = cx.data(&raw, &scope)?;
+    let mesh = raw.mesh.as_ref().map(|m| cx.mesh(m)).transpose();
+    let wanted = mesh
+        .as_ref()
+        .ok()
+        .and_then(|m| m.as_ref())
+        .and_then(MeshSpec::dimension);
+    let (c2, c3) = (
+        compile::<2>(&cx, &raw, &parameters),
+        compile::<3>(&cx, &raw, &parameters),
+    );
+    // the error of the dimension the file's mesh has; else the file must compile for one
+    let (c2, c3) = match (wanted, c2, c3) {
+        (Some(3), _, Err(e)) | (Some(2), Err(e), _) | (_, Err(e), Err(_)) => return Err(e),
+        (_, c2, c3) => (c2, c3),
+    };
+    let scope = match (&c2, &c3) {
+        (Ok((_, s)), _) | (Err(_), Ok((_, s))) => s,
+        (Err(e), Err(_)) => return Err(Error::Internal(format!("both dimensions failed: {e}"))),
+    };
     let name = match &raw.name {
-        Some(n) => cx.name(n, &scope)?,
+        Some(n) => cx.name(n, scope)?,
         None => path
             .file_stem()
             .map_or_else(|| "problem".into(), |s| s.to_string_lossy().into_owned()),
@@ -218,9 +338,10 @@ pub fn parse(text: &str, path: &Path, overrides: &[(String, f64)]) -> Result<Pro
         name,
         description: raw.description.clone(),
         parameters,
-        mesh: raw.mesh.as_ref().map(|m| cx.mesh(m)).transpose()?,
+        mesh: mesh?,
         scheme: raw.scheme,
-        data: Arc::new(data),
+        data2: c2.map(|(d, _)| Arc::new(d)).map_err(Stored::new),
+        data3: c3.map(|(d, _)| Arc::new(d)).map_err(Stored::new),
     })
 }
 
@@ -233,57 +354,100 @@ impl ProblemFile {
             .map(|(_, v)| *v)
     }
 
-    /// Builds the [`Problem`]: closures that evaluate the compiled expressions (cheap; call it
-    /// once per solve). Run [`ProblemFile::check_against_mesh`] on the mesh first: on a mesh
-    /// it has not checked, a boundary edge no section selects is taken as Dirichlet, and a
-    /// point no piece covers gets NaN data (which the assembler rejects).
+    /// Whether the file compiled for meshes of dimension `d` (2 or 3).
+    pub fn compiles_for(&self, d: usize) -> bool {
+        match d {
+            2 => self.data2.is_ok(),
+            3 => self.data3.is_ok(),
+            _ => false,
+        }
+    }
+
+    /// The data compiled for dimension D, or the error (with its place in the file) that
+    /// prevented it.
+    fn data<const D: usize>(&self) -> Result<Arc<Data<D>>> {
+        let any: std::result::Result<Arc<dyn Any + Send + Sync>, &Stored> = match D {
+            2 => self.data2.as_ref().map(|d| Arc::clone(d) as _),
+            3 => self.data3.as_ref().map(|d| Arc::clone(d) as _),
+            _ => {
+                return Err(Error::InvalidData(format!(
+                    "problems are posed in 2 or 3 dimensions, not {D}"
+                )));
+            }
+        };
+        any.map_err(|s| s.error(&self.path))?
+            .downcast::<Data<D>>()
+            .map_err(|_| Error::Internal("problem data of the wrong dimension".into()))
+    }
+
+    /// Builds the 2D [`Problem`] ([`ProblemFile::problem_in`] for D = 2). Run
+    /// [`ProblemFile::check_against_mesh`] on the mesh first: that reports a file that is not a
+    /// 2D problem (a `z`, a 3×3 tensor) with its place; built without that check, such a file
+    /// gives a problem whose source is NaN everywhere, which the assembler rejects.
     pub fn problem(&self) -> Problem {
-        let d = Arc::clone(&self.data);
-        let mut pb = match self.data.constant_source() {
+        self.problem_in::<2>()
+            .unwrap_or_else(|_| Problem::new(&self.name, Box::new(|_| f64::NAN)))
+    }
+
+    /// Builds the [`Problem<D>`]: closures that evaluate the compiled expressions (cheap; call
+    /// it once per solve). `Err` (a [`Error::ProblemFile`] with its place) if the file is not
+    /// a D-dimensional problem. Run [`ProblemFile::check_against_mesh`] (2D) or
+    /// [`ProblemFile::check_against_mesh3`] (3D) on the mesh first: on a mesh it has not
+    /// checked, a boundary face no section selects is taken as Dirichlet, and a point no piece
+    /// covers gets NaN data (which the assembler rejects).
+    pub fn problem_in<const D: usize>(&self) -> Result<Problem<D>> {
+        let data = self.data::<D>()?;
+        let d = Arc::clone(&data);
+        let mut pb = match data.constant_source() {
             Some(c) => Problem::new(&self.name, Box::new(move |_| c)),
             None => Problem::new(&self.name, Box::new(move |p| d.source_at(p, p, 0))),
         };
-        if self.data.source.iter().any(|p| p.cond.is_some()) {
-            let d = Arc::clone(&self.data);
+        if data.source.iter().any(|p| p.cond.is_some()) {
+            let d = Arc::clone(&data);
             pb = pb.with_source_in_cell(Box::new(move |p, xk| d.source_at(p, xk, 0)));
         }
-        if !self.data.diffusion.is_empty() {
-            let d = Arc::clone(&self.data);
+        if !data.diffusion.is_empty() {
+            let d = Arc::clone(&data);
             pb = pb.with_diffusion(Box::new(move |p| d.diffusion_at(p, 0)));
         }
-        if self.data.uses_cell_tags() {
-            let (d, e) = (Arc::clone(&self.data), Arc::clone(&self.data));
+        if data.uses_cell_tags() {
+            let (d, e) = (Arc::clone(&data), Arc::clone(&data));
             pb = pb
                 .with_diffusion_by_tag(Box::new(move |xk, t| d.diffusion_at(xk, t)))
                 .with_source_by_tag(Box::new(move |p, xk, t| e.source_at(p, xk, t)));
         }
-        if self.data.has_boundary_sections() {
-            let d = Arc::clone(&self.data);
+        if data.has_boundary_sections() {
+            let d = Arc::clone(&data);
             pb = pb.with_boundary(move |x, tag| {
                 d.boundary_at(x, tag).unwrap_or(BoundaryKind::Dirichlet)
             });
         }
-        if let Some(g) = &self.data.dirichlet {
-            let g = g.expr.clone();
-            pb = pb.with_dirichlet(Box::new(move |p| g.eval(&p)));
-        }
-        if let Some(g) = &self.data.neumann {
-            let g = g.expr.clone();
-            pb = pb.with_neumann(Box::new(move |p| g.eval(&p)));
-        }
-        if let Some((kind, side, b)) = &self.data.constraint {
-            let b = b.expr.clone();
-            pb = pb.with_constraint(*kind, *side, Box::new(move |p| b.eval(&p)));
-        }
-        if let Some((u, [gx, gy])) = &self.data.exact {
-            let (u, gx, gy) = (u.expr.clone(), gx.expr.clone(), gy.expr.clone());
-            pb = pb.with_exact(
-                Box::new(move |p| u.eval(&p)),
-                Box::new(move |p| [gx.eval(&p), gy.eval(&p)]),
-            );
-        }
-        pb
+        Ok(with_values(pb, &data))
     }
+}
+
+/// The Dirichlet and Neumann data, the barrier and the exact solution of `data` set on `pb`.
+fn with_values<const D: usize>(mut pb: Problem<D>, data: &Data<D>) -> Problem<D> {
+    if let Some(g) = &data.dirichlet {
+        let g = g.expr.clone();
+        pb = pb.with_dirichlet(Box::new(move |p| g.eval(&p)));
+    }
+    if let Some(g) = &data.neumann {
+        let g = g.expr.clone();
+        pb = pb.with_neumann(Box::new(move |p| g.eval(&p)));
+    }
+    if let Some((kind, side, b)) = &data.constraint {
+        let b = b.expr.clone();
+        pb = pb.with_constraint(*kind, *side, Box::new(move |p| b.eval(&p)));
+    }
+    if let Some((u, grad)) = &data.exact {
+        let (u, grad) = (u.expr.clone(), grad.clone());
+        pb = pb.with_exact(
+            Box::new(move |p| u.eval(&p)),
+            Box::new(move |p| grad.each_ref().map(|g| g.at(p))),
+        );
+    }
+    pb
 }
 
 #[cfg(test)]

@@ -6,7 +6,6 @@ use serde::Deserialize;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use std::collections::BTreeMap;
 use std::fmt;
-use std::marker::PhantomData;
 use toml::Spanned;
 
 #[derive(Deserialize)]
@@ -35,7 +34,8 @@ pub(super) struct RawMesh {
     pub(super) file: Option<String>,
     pub(super) generate: Option<String>,
     pub(super) level: Option<usize>,
-    pub(super) domain: Option<Exactly<f64, 4>>,
+    /// \[x0, x1, y0, y1\] for a 2D family, \[x0, x1, y0, y1, z0, z1\] for a 3D one.
+    pub(super) domain: Option<Vec<f64>>,
 }
 
 /// A datum given whole (`KEY = ...`) or by pieces (`[[SECTION.piece]]`, each with `where`,
@@ -133,7 +133,8 @@ pub(super) struct RawObstacle {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawExact {
     pub(super) u: Spanned<Src>,
-    pub(super) grad: Exactly<Spanned<Src>, 2>,
+    /// D components on a D-dimensional mesh (checked when compiling for D).
+    pub(super) grad: Spanned<Vec<Spanned<Src>>>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -177,10 +178,11 @@ impl<'de> Deserialize<'de> for Src {
     }
 }
 
-/// A diffusion coefficient as written: a scalar a (A = a I) or a 2×2 array.
+/// A diffusion coefficient as written: a scalar a (A = a I), or a square array of size 2 or 3
+/// (rows of entries; the size must be the mesh's dimension, checked when compiling for it).
 pub(super) enum TensorSrc {
     Scalar(Src),
-    Matrix([[Spanned<Src>; 2]; 2]),
+    Matrix(Vec<Vec<Spanned<Src>>>),
 }
 
 struct TensorVisitor;
@@ -188,7 +190,10 @@ struct TensorVisitor;
 impl<'de> Visitor<'de> for TensorVisitor {
     type Value = TensorSrc;
     fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str("a number, an expression in a string, or a 2x2 array [[a11, a12], [a21, a22]]")
+        f.write_str(
+            "a number, an expression in a string, or a 2x2 array [[a11, a12], [a21, a22]] \
+             (2D) or a 3x3 array (3D)",
+        )
     }
     fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<TensorSrc, E> {
         SrcVisitor.visit_str(v).map(TensorSrc::Scalar)
@@ -203,16 +208,22 @@ impl<'de> Visitor<'de> for TensorVisitor {
         SrcVisitor.visit_u64(v).map(TensorSrc::Scalar)
     }
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> std::result::Result<TensorSrc, A::Error> {
-        let Exactly(r0) = seq
-            .next_element()?
-            .ok_or_else(|| de::Error::invalid_length(0, &self))?;
-        let Exactly(r1) = seq
-            .next_element()?
-            .ok_or_else(|| de::Error::invalid_length(1, &self))?;
-        if seq.next_element::<de::IgnoredAny>()?.is_some() {
-            return Err(de::Error::invalid_length(3, &self));
+        let mut rows: Vec<Vec<Spanned<Src>>> = Vec::new();
+        while let Some(row) = seq.next_element::<Vec<Spanned<Src>>>()? {
+            if rows.len() == 3 {
+                return Err(de::Error::invalid_length(4, &self));
+            }
+            rows.push(row);
         }
-        Ok(TensorSrc::Matrix([r0, r1]))
+        let n = rows.len();
+        if n < 2 {
+            return Err(de::Error::invalid_length(n, &self));
+        }
+        if let Some(row) = rows.iter().find(|r| r.len() != n) {
+            let what = format!("rows of length {n} (a square array)");
+            return Err(de::Error::invalid_length(row.len(), &what.as_str()));
+        }
+        Ok(TensorSrc::Matrix(rows))
     }
 }
 
@@ -222,53 +233,9 @@ impl<'de> Deserialize<'de> for TensorSrc {
     }
 }
 
-/// An array of exactly `N` values. serde's `[T; N]` takes the first `N` values of a TOML array
-/// and drops the rest without a word (`domain = [0, 1, 0, 1, 9]` would read as the unit
-/// square); this refuses a longer array as it refuses a shorter one, with the same message.
-pub(super) struct Exactly<T, const N: usize>(pub(super) [T; N]);
-
-impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Exactly<T, N> {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        d.deserialize_tuple(N, ExactlyVisitor(PhantomData))
-    }
-}
-
-struct ExactlyVisitor<T, const N: usize>(PhantomData<T>);
-
-impl<'de, T: Deserialize<'de>, const N: usize> Visitor<'de> for ExactlyVisitor<T, N> {
-    type Value = Exactly<T, N>;
-    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        write!(f, "an array of length {N}")
-    }
-    fn visit_seq<A: SeqAccess<'de>>(
-        self,
-        mut seq: A,
-    ) -> std::result::Result<Self::Value, A::Error> {
-        let mut values = Vec::with_capacity(N);
-        while values.len() < N {
-            match seq.next_element()? {
-                Some(v) => values.push(v),
-                None => return Err(de::Error::invalid_length(values.len(), &self)),
-            }
-        }
-        let mut extra = 0;
-        while seq.next_element::<de::IgnoredAny>()?.is_some() {
-            extra += 1;
-        }
-        if extra > 0 {
-            return Err(de::Error::invalid_length(N + extra, &self));
-        }
-        let n = values.len();
-        values
-            .try_into()
-            .map(Exactly)
-            .map_err(|_| de::Error::invalid_length(n, &self))
-    }
-}
-
 #[cfg(test)]
 mod tests {
-    use super::{Exactly, RawFile, Src, TensorSrc};
+    use super::{RawFile, Src, TensorSrc};
     use serde::Deserialize;
 
     #[derive(Deserialize)]
@@ -294,7 +261,7 @@ mod tests {
     }
 
     #[test]
-    fn tensors_are_scalars_or_two_by_two_arrays() {
+    fn tensors_are_scalars_or_square_arrays_of_size_two_or_three() {
         assert!(matches!(
             value::<TensorSrc>("3"),
             Ok(TensorSrc::Scalar(Src::Number(3.0)))
@@ -304,37 +271,38 @@ mod tests {
         };
         assert!(matches!(m[0][1].get_ref(), Src::Text(t) if t == "x"));
         assert!(matches!(m[1][1].get_ref(), Src::Number(4.0)));
-        for bad in ["[[1, 0]]", "[[1, 0], [0, 1], [0, 0]]", "[[1], [0, 1]]"] {
-            assert!(value::<TensorSrc>(bad).is_err(), "{bad}");
+        let Ok(TensorSrc::Matrix(m)) = value::<TensorSrc>("[[1, 0, 0], [0, 1, 0], [0, 0, \"z\"]]")
+        else {
+            panic!("a 3x3 array is a matrix");
+        };
+        assert!(m.len() == 3 && matches!(m[2][2].get_ref(), Src::Text(t) if t == "z"));
+        for bad in [
+            "[[1, 0]]",
+            "[[1, 0], [0, 1], [0, 0]]",
+            "[[1], [0, 1]]",
+            "[[1, 0, 0], [0, 1, 0]]",
+            "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]",
+        ] {
+            let e = value::<TensorSrc>(bad).err().unwrap();
+            assert!(e.message().contains("invalid length"), "{bad}: {e}");
         }
     }
 
     #[test]
-    fn fixed_size_arrays_refuse_more_values_as_they_refuse_fewer() {
+    fn domains_gradients_and_tensors_are_read_whatever_their_dimension() {
         let domain = |d: &str| toml::from_str::<RawFile>(&format!("[mesh]\ndomain = {d}"));
         let Ok(RawFile { mesh: Some(m), .. }) = domain("[0, 1, -2, 2]") else {
             panic!("a domain of four values is read");
         };
-        assert!(matches!(
-            m.get_ref().domain,
-            Some(Exactly([0.0, 1.0, -2.0, 2.0]))
-        ));
-        for (d, len) in [("[0, 1, 0]", 3), ("[0, 1, 0, 1, 9]", 5)] {
-            let e = domain(d).err().unwrap();
-            let msg = format!("invalid length {len}, expected an array of length 4");
-            assert_eq!(e.message(), msg, "{d}");
-        }
+        // its length is checked against the family's dimension when the mesh is compiled
+        assert_eq!(m.get_ref().domain, Some(vec![0.0, 1.0, -2.0, 2.0]));
         let grad = |g: &str| toml::from_str::<RawFile>(&format!("[exact]\nu = 0\ngrad = {g}"));
         assert!(grad("[\"y\", \"x\"]").is_ok());
-        let e = grad("[0, 0, 5]").err().unwrap();
-        assert_eq!(
-            e.message(),
-            "invalid length 3, expected an array of length 2"
-        );
+        assert!(grad("[\"y\", \"x\", \"z\"]").is_ok());
         let e = value::<TensorSrc>("[[1, 0, 7], [0, 1]]").err().unwrap();
         assert_eq!(
             e.message(),
-            "invalid length 3, expected an array of length 2"
+            "invalid length 3, expected rows of length 2 (a square array)"
         );
     }
 

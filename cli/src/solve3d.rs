@@ -1,0 +1,168 @@
+//! `gradvi solve` on a 3D mesh, and the choice of the mesh's dimension.
+//!
+//! The dimension of a solve is the mesh's: a generated 3D family (cubes, kuhn, prisms, refined,
+//! warped), or a mesh file read as `gradvi mesh info` reads it ([`crate::mesh::read_any`]:
+//! a `.msh` with 3D elements, `.vtu`, HArDCore RF). The problem file must compile for that
+//! dimension ([`gradvi::problem::file::ProblemFile::check_against_mesh3`] reports a `z` on a
+//! 2D mesh or a 2×2 tensor on a 3D one, at its place in the file).
+//!
+//! ## Warm start
+//! The nested warm start agglomerates planar meshes; until it exists in 3D, the default start
+//! of a 3D solve is cold: a solve asked with the default start that the solver refuses with
+//! its "no nested start on a 3D mesh" error is run again cold, and the output says so. An
+//! explicit `--warm-start nested` is not overridden.
+//!
+//! ## The VTU file in 3D
+//! One unstructured grid of the polyhedral cells ([`write_vtu3`]): cell data `u_K`, `grad_x`,
+//! `grad_y`, `grad_z`; point data `u_vertex` (cell values averaged at the vertices); and,
+//! with a barrier, the active set and the multiplier on the entities of the constrained
+//! unknowns: cell unknowns (HMM obstacle) as cell data `active_cell`/`multiplier_cell`, vertex
+//! unknowns as point data `active`/`multiplier`, face unknowns (HMM Signorini) as cell data
+//! summed over the faces of each cell, `active_faces` (the number of active faces of the cell)
+//! and `multiplier_faces` (the sum of their multipliers), so that the contact zone shows on the
+//! cells along the contact boundary.
+
+use super::mesh::{AnyMesh, read_any};
+use super::output::atomic;
+use super::solve::{Case, SolveArgs, report, solve_options, write_json};
+use anyhow::{Context, Result};
+use gradvi::mesh::MemoryBudget;
+use gradvi::mesh3d::PolyMesh3;
+use gradvi::mesh3d::io::write_vtu3;
+use gradvi::post::fields::EntityFields;
+use gradvi::problem::Problem;
+use gradvi::problem::file::{MeshSpec, ProblemFile};
+use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with3};
+use gradvi::solver::start::nested_start_unavailable;
+use gradvi::solver::{Solution, WarmStart, solve_problem};
+
+/// The 3D scheme trait object.
+type Scheme3<'a> = dyn GradientDiscretisation<PolyMesh3, 3> + 'a;
+
+/// The mesh `spec` describes, 2D or 3D. A mesh file is read as 2D, exactly as before 3D
+/// solves existed ([`gradvi::case::build_mesh`]), when the problem file is not a 3D problem or
+/// the format is 2D only (`.typ1`, `.typ2`); else by [`read_any`], which tells the dimension
+/// from the file.
+pub fn case_mesh(spec: &MeshSpec, pf: &ProblemFile) -> Result<AnyMesh> {
+    let budget = MemoryBudget::available();
+    let two_d_format = |p: &std::path::Path| {
+        let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
+        ext.eq_ignore_ascii_case("typ1") || ext.eq_ignore_ascii_case("typ2")
+    };
+    Ok(match spec {
+        MeshSpec::Generated3 { .. } => AnyMesh::Three(gradvi::case::build_mesh3(spec, budget)?),
+        MeshSpec::File(p) if pf.compiles_for(3) && !two_d_format(p) => read_any(p)?,
+        _ => AnyMesh::Two(gradvi::case::build_mesh(spec, budget)?),
+    })
+}
+
+/// The solve on a 3D mesh (read or generated in `mesh_seconds`).
+pub fn run3(
+    a: &SolveArgs,
+    pf: &ProblemFile,
+    mesh: &PolyMesh3,
+    mesh_desc: &str,
+    mesh_seconds: f64,
+) -> Result<()> {
+    pf.check_against_mesh3(mesh)?;
+    let problem = pf.problem_in::<3>()?;
+    let kind = a.scheme.or(pf.scheme).unwrap_or(SchemeKind::Hmm);
+    let scheme = build_with3(kind, mesh, &SchemeOptions { alpha: a.alpha })
+        .with_context(|| format!("the {kind} scheme on the 3D mesh {mesh_desc}"))?;
+    eprintln!(
+        "solving {} with {} on {} cells ({} unknowns, 3D)...",
+        problem.name,
+        kind,
+        mesh.n_cells(),
+        scheme.n_unknowns()
+    );
+    let sol = solve3(a, scheme.as_ref(), &problem)?;
+    let errors = problem
+        .exact
+        .as_ref()
+        .map(|ex| gradvi::post::relative_errors(scheme.as_ref(), sol.u(), &ex.u, &ex.grad));
+    let case = Case {
+        pf,
+        problem: &problem.name,
+        kind,
+        mesh_desc,
+        n_cells: mesh.n_cells(),
+        h: mesh.h(),
+        mesh_seconds,
+    };
+    report(a, &case, &sol, errors.as_ref())?;
+    if let Some(path) = &a.vtu {
+        atomic(path, |tmp| write_solution_vtu3(tmp, scheme.as_ref(), &sol))?;
+        println!("wrote           {}", path.display());
+    }
+    write_json(a, &case, &sol, errors.as_ref())
+}
+
+/// The solve with the command line's options; with the default start, a refused nested start
+/// (no nested start on 3D meshes yet) is replaced by the cold start (see the module docs).
+fn solve3<'a>(
+    a: &SolveArgs,
+    scheme: &'a Scheme3<'a>,
+    problem: &Problem<3>,
+) -> Result<Solution<'a, PolyMesh3, 3>> {
+    let opts = solve_options(a);
+    match solve_problem(scheme, problem, &opts) {
+        Err(e)
+            if a.warm_start.is_none()
+                && e.to_string() == nested_start_unavailable(3).to_string() =>
+        {
+            println!("warm start      cold: the nested start is not available on 3D meshes yet");
+            let mut cold = solve_options(a);
+            cold.warm_start = WarmStart::Cold;
+            Ok(solve_problem(scheme, problem, &cold)?)
+        }
+        r => Ok(r?),
+    }
+}
+
+/// Writes u, its cell gradients, the active set and the multiplier to a 3D VTU file (the
+/// fields are listed in the module docs).
+fn write_solution_vtu3(
+    path: &std::path::Path,
+    scheme: &Scheme3,
+    sol: &Solution<PolyMesh3, 3>,
+) -> Result<()> {
+    let u = sol.u();
+    let grads = scheme.cell_gradients(u);
+    let component = |i: usize| grads.iter().map(|g| g[i]).collect::<Vec<f64>>();
+    let mut cell_data: Vec<(&str, Vec<f64>)> = vec![
+        ("u_K", scheme.cell_values(u)),
+        ("grad_x", component(0)),
+        ("grad_y", component(1)),
+        ("grad_z", component(2)),
+    ];
+    let mut point_data: Vec<(&str, Vec<f64>)> = vec![("u_vertex", scheme.vertex_values(u))];
+    if let Some(c) = &sol.constraints {
+        let dofs = || c.dofs.iter().map(|d| d.dof);
+        let r = &sol.result;
+        let act = EntityFields::new(scheme, dofs(), |j| f64::from(u8::from(r.active[j])));
+        let lam = EntityFields::new(scheme, dofs(), |j| r.multiplier[j]);
+        if let (Some(a), Some(l)) = (act.vertex, lam.vertex) {
+            point_data.push(("active", a));
+            point_data.push(("multiplier", l));
+        }
+        if let (Some(a), Some(l)) = (act.cell, lam.cell) {
+            cell_data.push(("active_cell", a));
+            cell_data.push(("multiplier_cell", l));
+        }
+        let mesh = scheme.mesh();
+        let per_cell = |e: &[f64]| -> Vec<f64> {
+            (0..mesh.n_cells())
+                .map(|k| mesh.cell_faces(k).iter().map(|&f| e[f as usize]).sum())
+                .collect()
+        };
+        if let (Some(a), Some(l)) = (act.edge, lam.edge) {
+            cell_data.push(("active_faces", per_cell(&a)));
+            cell_data.push(("multiplier_faces", per_cell(&l)));
+        }
+    }
+    let pd: Vec<(&str, &[f64])> = point_data.iter().map(|(n, v)| (*n, v.as_slice())).collect();
+    let cd: Vec<(&str, &[f64])> = cell_data.iter().map(|(n, v)| (*n, v.as_slice())).collect();
+    write_vtu3(path, &scheme.mesh().to_polyhedra(), &pd, &cd)?;
+    Ok(())
+}
