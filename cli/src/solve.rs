@@ -73,9 +73,8 @@ pub struct SolveArgs {
     /// Start of the active-set iteration: nested (the default: an active set predicted by
     /// coarse HMM solves of the same problem on agglomerated meshes of the domain, and each
     /// next active set looked ahead by local solves near its changes; same solution, far fewer
-    /// solves on fine meshes) or cold (A₀ = ∅, no look-ahead: the paper's algorithm and NITER).
-    /// On a 3D mesh, where the nested start is not available yet, the default is the cold
-    /// start (the output says so); an explicit --warm-start nested there is an error.
+    /// solves on fine meshes; 2D and 3D) or cold (A₀ = ∅, no look-ahead: the paper's
+    /// algorithm and NITER).
     #[arg(long, value_parser = named::<WarmStart>(["cold", "nested"]))]
     pub(crate) warm_start: Option<WarmStart>,
     /// Linear solver of the condensed systems: auto (direct below 250 000 condensed unknowns,

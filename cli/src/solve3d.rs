@@ -7,10 +7,7 @@
 //! 2D mesh or a 2×2 tensor on a 3D one, at its place in the file).
 //!
 //! ## Warm start
-//! The nested warm start agglomerates planar meshes; until it exists in 3D, the default start
-//! of a 3D solve is cold: a solve asked with the default start that the solver refuses with
-//! its "no nested start on a 3D mesh" error is run again cold, and the output says so. An
-//! explicit `--warm-start nested` is not overridden.
+//! As in 2D, the default is the nested warm start (on agglomerated polyhedral meshes).
 //!
 //! ## The VTU file in 3D
 //! One unstructured grid of the polyhedral cells ([`write_vtu3`]): cell data `u_K`, `grad_x`,
@@ -33,8 +30,7 @@ use gradvi::post::fields::EntityFields;
 use gradvi::problem::Problem;
 use gradvi::problem::file::{MeshSpec, ProblemFile};
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with3};
-use gradvi::solver::start::nested_start_unavailable;
-use gradvi::solver::{Solution, WarmStart, solve_problem};
+use gradvi::solver::{Solution, solve_problem};
 
 /// The 3D scheme trait object.
 type Scheme3<'a> = dyn GradientDiscretisation<PolyMesh3, 3> + 'a;
@@ -98,26 +94,13 @@ pub fn run3(
     write_json(a, &case, &sol, errors.as_ref())
 }
 
-/// The solve with the command line's options; with the default start, a refused nested start
-/// (no nested start on 3D meshes yet) is replaced by the cold start (see the module docs).
+/// The solve with the command line's options.
 fn solve3<'a>(
     a: &SolveArgs,
     scheme: &'a Scheme3<'a>,
     problem: &Problem<3>,
 ) -> Result<Solution<'a, PolyMesh3, 3>> {
-    let opts = solve_options(a);
-    match solve_problem(scheme, problem, &opts) {
-        Err(e)
-            if a.warm_start.is_none()
-                && e.to_string() == nested_start_unavailable(3).to_string() =>
-        {
-            println!("warm start      cold: the nested start is not available on 3D meshes yet");
-            let mut cold = solve_options(a);
-            cold.warm_start = WarmStart::Cold;
-            Ok(solve_problem(scheme, problem, &cold)?)
-        }
-        r => Ok(r?),
-    }
+    Ok(solve_problem(scheme, problem, &solve_options(a))?)
 }
 
 /// Writes u, its cell gradients, the active set and the multiplier to a 3D VTU file (the
