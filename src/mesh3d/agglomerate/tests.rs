@@ -129,10 +129,10 @@ fn check_closed_cells(m: &PolyMesh3) {
         }
         let tol = 1e-13 * surface;
         assert!(sum.iter().all(|x| x.abs() <= tol), "cell {k}: {sum:?}");
-        for r in 0..3 {
-            for q in 0..3 {
+        for (r, row) in c.iter().enumerate() {
+            for (q, entry) in row.iter().enumerate() {
                 let want = if r == q { m.measure(k) } else { 0.0 };
-                let d = (c[r][q] - want).abs();
+                let d = (entry - want).abs();
                 assert!(
                     d <= 1e-12 * m.measure(k),
                     "cell {k}: C_K[{r}][{q}] off by {d:e}"
