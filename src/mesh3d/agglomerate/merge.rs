@@ -74,14 +74,22 @@ impl Interfaces {
 pub(super) struct Scratch {
     /// (neighbour, fine face, reversed) of the faces toward aggregates of higher index.
     items: Vec<(u32, u32, bool)>,
+    /// The faces (fine face, reversed) toward one neighbour.
+    faces: Vec<(u32, bool)>,
     /// The plane group of each face of one neighbour, then sorted (group, index).
     group: Vec<(u32, u32)>,
+    /// The faces of one plane group.
+    members: Vec<(u32, bool)>,
     /// Directed edges (from, to, face index) of one plane group.
     edges: Vec<(u32, u32, u32)>,
-    /// Union-find parents of the faces of one plane group.
+    /// Union-find parents of the faces of one plane group, then the piece of each.
     parent: Vec<u32>,
+    /// Per piece (indexed by its root): number of faces, area, whether merged.
+    pieces: Vec<(u32, f64, bool)>,
+    /// Boundary edges (piece, from, to) of one plane group.
+    bnd: Vec<(u32, u32, u32)>,
     /// Boundary edges (from, to) of one piece.
-    bnd: Vec<(u32, u32)>,
+    piece_edges: Vec<(u32, u32)>,
     /// The merged loop of one piece.
     lp: Vec<u32>,
 }
@@ -107,12 +115,15 @@ pub(super) fn interfaces(
     let mut out = Interfaces::default();
     let items = std::mem::take(&mut s.items);
     for run in items.chunk_by(|x, y| x.0 == y.0) {
-        let faces: Vec<(u32, bool)> = run.iter().map(|&(_, f, r)| (f, r)).collect();
-        plane_groups(fine, &faces, s);
+        s.faces.clear();
+        s.faces.extend(run.iter().map(|&(_, f, r)| (f, r)));
+        plane_groups(fine, s);
         let groups = std::mem::take(&mut s.group);
         for g in groups.chunk_by(|x, y| x.0 == y.0) {
-            let members: Vec<(u32, bool)> = g.iter().map(|&(_, i)| faces[i as usize]).collect();
-            merge_group(fine, run[0].0, &members, s, &mut out);
+            s.members.clear();
+            s.members
+                .extend(g.iter().map(|&(_, i)| s.faces[i as usize]));
+            merge_group(fine, run[0].0, s, &mut out);
         }
         s.group = groups;
     }
@@ -126,9 +137,10 @@ fn normal(fine: &PolyMesh3, f: u32, reversed: bool) -> [f64; 3] {
     if reversed { n.map(|x| -x) } else { n }
 }
 
-/// Sets `s.group` to (plane group, index) of each of `faces`, sorted.
-fn plane_groups(fine: &PolyMesh3, faces: &[(u32, bool)], s: &mut Scratch) {
+/// Sets `s.group` to (plane group, index) of each of `s.faces`, sorted.
+fn plane_groups(fine: &PolyMesh3, s: &mut Scratch) {
     s.group.clear();
+    let faces = &s.faces;
     // the first face of each group (its index in `faces`)
     let mut planes: Vec<u32> = Vec::new();
     for (i, &(f, reversed)) in faces.iter().enumerate() {
@@ -159,22 +171,17 @@ fn find(parent: &mut [u32], mut i: u32) -> u32 {
     i
 }
 
-/// Appends to `out` the faces toward `b` of the coplanar fine faces `members`: one merged
-/// face per connected piece that passes the conditions of the module docs, the fine faces of
-/// the other pieces as they are.
-fn merge_group(
-    fine: &PolyMesh3,
-    b: u32,
-    members: &[(u32, bool)],
-    s: &mut Scratch,
-    out: &mut Interfaces,
-) {
-    if let [(f, reversed)] = members {
-        out.push(b, fine.face_vertices(*f as usize), *reversed);
-        return;
-    }
+/// The edge (u, v) without its direction.
+fn undirected(e: &(u32, u32, u32)) -> (u32, u32) {
+    (e.0.min(e.1), e.0.max(e.1))
+}
+
+/// Sets `s.parent` to the piece (the least index of its faces) of each face of the plane
+/// group `s.members` (faces joined through shared edges), and `s.edges` to their outward
+/// edges sorted by undirected edge.
+fn pieces(fine: &PolyMesh3, s: &mut Scratch) {
     s.edges.clear();
-    for (i, &(f, reversed)) in members.iter().enumerate() {
+    for (i, &(f, reversed)) in s.members.iter().enumerate() {
         let l = fine.face_vertices(f as usize);
         for j in 0..l.len() {
             let (u, v) = (l[j], l[(j + 1) % l.len()]);
@@ -182,52 +189,64 @@ fn merge_group(
             s.edges.push((u, v, i as u32));
         }
     }
-    s.edges
-        .sort_unstable_by_key(|&(u, v, i)| (u.min(v), u.max(v), i));
+    s.edges.sort_unstable_by_key(|e| (undirected(e), e.2));
     s.parent.clear();
-    s.parent.extend(0..members.len() as u32);
+    s.parent.extend(0..s.members.len() as u32);
     for w in s.edges.windows(2) {
-        let same =
-            w[0].0.min(w[0].1) == w[1].0.min(w[1].1) && w[0].0.max(w[0].1) == w[1].0.max(w[1].1);
-        if same {
+        if undirected(&w[0]) == undirected(&w[1]) {
             let (x, y) = (find(&mut s.parent, w[0].2), find(&mut s.parent, w[1].2));
             s.parent[x.max(y) as usize] = x.min(y);
         }
     }
-    let root: Vec<u32> = (0..members.len() as u32)
-        .map(|i| find(&mut s.parent, i))
-        .collect();
+    for i in 0..s.members.len() as u32 {
+        let r = find(&mut s.parent, i);
+        s.parent[i as usize] = r;
+    }
+}
+
+/// Appends to `out` the faces toward `b` of the coplanar fine faces `s.members`: one merged
+/// face per connected piece that passes the conditions of the module docs, then the fine
+/// faces of the other pieces as they are.
+fn merge_group(fine: &PolyMesh3, b: u32, s: &mut Scratch, out: &mut Interfaces) {
+    if let [(f, reversed)] = s.members[..] {
+        out.push(b, fine.face_vertices(f as usize), reversed);
+        return;
+    }
+    pieces(fine, s);
     // the boundary edges of the group (used once), each with its piece
-    let mut bnd: Vec<(u32, u32, u32)> = Vec::new();
+    s.bnd.clear();
     let e = &s.edges;
     for j in 0..e.len() {
-        let key = |t: &(u32, u32, u32)| (t.0.min(t.1), t.0.max(t.1));
-        let once = (j == 0 || key(&e[j - 1]) != key(&e[j]))
-            && (j + 1 == e.len() || key(&e[j + 1]) != key(&e[j]));
+        let once = (j == 0 || undirected(&e[j - 1]) != undirected(&e[j]))
+            && (j + 1 == e.len() || undirected(&e[j + 1]) != undirected(&e[j]));
         if once {
-            bnd.push((root[e[j].2 as usize], e[j].0, e[j].1));
+            s.bnd.push((s.parent[e[j].2 as usize], e[j].0, e[j].1));
         }
     }
-    bnd.sort_unstable();
-    let mut area_of = vec![0.0; members.len()];
-    for (i, &(f, _)) in members.iter().enumerate() {
-        area_of[root[i] as usize] += fine.face_measure(f as usize);
+    s.bnd.sort_unstable();
+    s.pieces.clear();
+    s.pieces.resize(s.members.len(), (0, 0.0, false));
+    for (i, &(f, _)) in s.members.iter().enumerate() {
+        let p = &mut s.pieces[s.parent[i] as usize];
+        p.0 += 1;
+        p.1 += fine.face_measure(f as usize);
     }
-    let n = normal(fine, members[0].0, members[0].1);
-    for (r, piece) in bnd.chunk_by(|x, y| x.0 == y.0).map(|p| (p[0].0, p)) {
-        s.bnd.clear();
-        s.bnd.extend(piece.iter().map(|&(_, u, v)| (u, v)));
-        let merged = root.iter().filter(|&&x| x == r).count() > 1
-            && boundary_loop(&s.bnd, &mut s.lp)
-            && fan_covers(fine, &s.lp, n, area_of[r as usize]);
+    let n = normal(fine, s.members[0].0, s.members[0].1);
+    for piece in s.bnd.chunk_by(|x, y| x.0 == y.0) {
+        let r = piece[0].0 as usize;
+        s.piece_edges.clear();
+        s.piece_edges.extend(piece.iter().map(|&(_, u, v)| (u, v)));
+        let merged = s.pieces[r].0 > 1
+            && boundary_loop(&s.piece_edges, &mut s.lp)
+            && fan_covers(fine, &s.lp, n, s.pieces[r].1);
         if merged {
             out.push(b, &s.lp, false);
-        } else {
-            for (i, &(f, reversed)) in members.iter().enumerate() {
-                if root[i] == r {
-                    out.push(b, fine.face_vertices(f as usize), reversed);
-                }
-            }
+        }
+        s.pieces[r].2 = merged;
+    }
+    for (i, &(f, reversed)) in s.members.iter().enumerate() {
+        if !s.pieces[s.parent[i] as usize].2 {
+            out.push(b, fine.face_vertices(f as usize), reversed);
         }
     }
 }
