@@ -409,3 +409,45 @@ fn diskpp_obstacle_bigger_levels() {
         &DISKPP_KUHN,
     );
 }
+
+/// The measurement of `replication/measurements/solver3d.md` ("Merged coarse faces"): the
+/// cells and faces of the first coarse level, and the nested and cold solves, on cubes 32³
+/// (both problems) and Kuhn tetrahedra n = 20 (DiSk++'s test). Run with
+/// `cargo test --test obstacle3d measure_coarse_faces -- --ignored --nocapture`.
+#[test]
+#[ignore = "measurement: replication/measurements/solver3d.md"]
+fn measure_coarse_faces() {
+    use gradvi::solver::WarmStart;
+    use gradvi::solver::coarse_mesh::CoarseMesh;
+    let cases = [
+        (&DISKPP, cubes as Generator, 32),
+        (&RADIAL, cubes as Generator, 32),
+        (&DISKPP, kuhn as Generator, 20),
+    ];
+    for (ex, generate, n) in cases {
+        let m = mesh(ex, generate, n);
+        let s = Hmm::<PolyMesh3, 3>::with_alpha(&m, 1.0).unwrap();
+        let first = gradvi::scheme::GradientDiscretisation::n_unknowns(&s)
+            / <PolyMesh3 as CoarseMesh<3>>::UNKNOWNS_PER_COARSE_CELL;
+        let measure: f64 = (0..m.n_cells()).map(|k| m.measure(k)).sum();
+        let size = <PolyMesh3 as CoarseMesh<3>>::cell_size(measure, first);
+        let t = std::time::Instant::now();
+        let level = m.coarsen(size, MemoryBudget::DEFAULT).unwrap();
+        println!(
+            "n = {n}: {} fine cells, {} fine faces; first coarse level {} cells, {} faces \
+             (agglomerated in {:.2?})",
+            m.n_cells(),
+            m.n_faces(),
+            level.mesh.n_cells(),
+            level.mesh.n_faces(),
+            t.elapsed()
+        );
+        let cold_opts = SolveOptions {
+            warm_start: WarmStart::Cold,
+            ..nested()
+        };
+        let warm = run(ex, generate, n, &nested());
+        let cold = run(ex, generate, n, &cold_opts);
+        assert!(warm.niter <= cold.niter);
+    }
+}

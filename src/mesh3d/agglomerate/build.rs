@@ -2,6 +2,7 @@
 //! the maps from the fine mesh to it.
 
 use super::check::boundary_sides;
+use super::merge::{self, Interfaces, Scratch};
 use super::{Agglomeration3, MIN_TASK, NO_FACE, Polyhedra, members};
 use crate::error::MeshError;
 use crate::mesh::MemoryBudget;
@@ -9,10 +10,11 @@ use crate::mesh3d::PolyMesh3;
 use rayon::prelude::*;
 
 /// Builds the coarse mesh whose cells are the aggregates `label` (dense, 0..) of `fine`: each
-/// coarse cell lists the fine faces on its boundary, outward, its member cells in increasing
-/// order and their faces in local order; cell tags from the members, boundary tags from the
-/// fine boundary faces. The coarse mesh has at most as many face sides and loop entries as
-/// the fine one, so its 32-bit offsets cannot overflow.
+/// coarse cell lists, outward, the fine boundary faces of its member cells (members in
+/// increasing order, their faces in local order), then its merged faces toward aggregates of
+/// higher index ([`merge::interfaces`]), then those of lower index; cell tags from the
+/// members, boundary tags from the fine boundary faces. The coarse mesh has at most as many
+/// face sides and loop entries as the fine one, so its 32-bit offsets cannot overflow.
 pub(super) fn build(
     fine: &PolyMesh3,
     label: Vec<usize>,
@@ -40,24 +42,49 @@ pub(super) fn build(
         ..Polyhedra::default()
     };
     drop((ptr, cells));
+    let merged: Vec<Interfaces> = (0..na)
+        .into_par_iter()
+        .with_min_len(MIN_TASK / 16)
+        .map_init(Scratch::default, |s, a| {
+            merge::interfaces(fine, &label, a, &sides[a], s)
+        })
+        .collect();
+    // the merged faces each aggregate b receives from the aggregates c < b: (c, face of c)
+    let (in_ptr, incoming) = crate::mesh::buckets::counting_sort(
+        na,
+        merged
+            .iter()
+            .flat_map(|m| m.faces.iter().map(|&(b, _)| Some(b as usize))),
+        |i| i,
+    );
+    let face_owner: Vec<(u32, u32)> = (merged.iter().enumerate())
+        .flat_map(|(c, m)| (0..m.faces.len()).map(move |j| (c as u32, j as u32)))
+        .collect();
     // the side index of each fine boundary face, until the coarse face ids are known
     let mut boundary_face_of = vec![NO_FACE; fine.n_faces()];
-    for cell in &sides {
-        for &(f, reversed) in cell {
-            let l = fine.face_vertices(f as usize);
-            if reversed {
-                p.face_vertices.extend(l.iter().rev());
-            } else {
-                p.face_vertices.extend_from_slice(l);
-            }
-            if fine.is_boundary_face(f as usize) {
-                boundary_face_of[f as usize] = (p.face_ptr.len() - 1) as u32;
-            }
+    for (a, cell) in sides.iter().enumerate() {
+        for &(f, _) in cell
+            .iter()
+            .filter(|(f, _)| fine.is_boundary_face(*f as usize))
+        {
+            p.face_vertices
+                .extend_from_slice(fine.face_vertices(f as usize));
+            boundary_face_of[f as usize] = (p.face_ptr.len() - 1) as u32;
+            p.face_ptr.push(p.face_vertices.len() as u32);
+        }
+        for j in 0..merged[a].faces.len() {
+            p.face_vertices.extend_from_slice(merged[a].face_loop(j));
+            p.face_ptr.push(p.face_vertices.len() as u32);
+        }
+        for &i in &incoming[in_ptr[a]..in_ptr[a + 1]] {
+            let (c, j) = face_owner[i];
+            let l = merged[c as usize].face_loop(j as usize);
+            p.face_vertices.extend(l.iter().rev());
             p.face_ptr.push(p.face_vertices.len() as u32);
         }
         p.cell_ptr.push((p.face_ptr.len() - 1) as u32);
     }
-    drop(sides);
+    drop((sides, merged, face_owner, incoming));
     p.tagged_ptr.push(0);
     for &f in fine.boundary_faces() {
         let tag = fine.face_tag(f as usize);

@@ -4,9 +4,11 @@
 //! HMM accepts any polyhedra that are star-shaped with respect to their centroid, with any
 //! number of faces, so a union of fine cells is an admissible coarse cell as it is: unlike the
 //! 2D construction, faces are not straightened. A coarse cell is the union of its fine cells;
-//! its faces are the fine faces on its boundary, kept with their loops (so a coarse cell may
-//! have many small faces, coplanar or not). Every fine face between two aggregates is a face
-//! of the coarse mesh, shared by the same two coarse cells.
+//! the fine faces between two aggregates are merged into one polygon per plane and connected
+//! piece where the union is bounded by one simple loop (so a block of cubes or of Kuhn
+//! tetrahedra has one face per neighbouring block; see `merge.rs` for the maths and the
+//! conditions), the others are kept with their loops; the fine faces on the boundary of the
+//! domain are kept as they are.
 //!
 //! ## Construction, for a target cell size H
 //! 1. **Aggregates.** Each fine cell K gets the key (⌊(x − x₀)/H⌋, ⌊(y − y₀)/H⌋,
@@ -49,15 +51,19 @@
 //!    each becomes a coarse cell of its own (a fine cell is a cell of a validated mesh, so it
 //!    passes the mesh's checks; aggregates of one cell are not checked). So the construction
 //!    ends after at most [`MAX_SPLITS`] + 1 rounds of checks.
-//! 3. The coarse mesh is then built and validated like any input mesh
-//!    ([`PolyMesh3::from_polyhedra`], after [`Polyhedra::drop_unused_vertices`]: the fine
-//!    vertices inside aggregates are dropped). Every fine boundary face is a coarse boundary face
+//! 3. The faces between aggregates are merged (`merge.rs`), and the coarse mesh is then built
+//!    and validated like any input mesh ([`PolyMesh3::from_polyhedra`], after
+//!    [`Polyhedra::drop_unused_vertices`]: the fine vertices inside aggregates and inside
+//!    merged faces are dropped). Every fine boundary face is a coarse boundary face
 //!    with its tag ([`Agglomeration3::boundary_face_of`]), so boundary data and Signorini
 //!    unknowns carry over one to one; every coarse cell has the tag of its fine cells. A failure
 //!    there is returned as an error: the caller then does without coarse meshes.
 //!
 //! Cost: each round is linear in the fine mesh apart from sorting the boundary edges of each
-//! aggregate checked; then the build of the coarse mesh (O(n log n)).
+//! aggregate checked; then the merging (sorting the faces and edges of each interface, and
+//! grouping its faces by plane: quadratic in the number of planes of one interface, one or a
+//! few on meshes of boxes, at most [`MAX_CELL_FACES`]) and the build of the coarse mesh
+//! (O(n log n)).
 //!
 //! ## Parallelism
 //! The passes over all fine cells (keys), over all fine faces (which cells to join, the
@@ -69,6 +75,7 @@
 
 mod build;
 mod check;
+mod merge;
 #[cfg(test)]
 mod tests;
 
@@ -158,8 +165,9 @@ pub fn agglomerate3(
 /// mesh is built (whose own estimate [`PolyMesh3::from_polyhedra`] checks): per fine cell 32
 /// (key), 8 (label), 8 (parent), 8 (volume), 4 (bucket entry) and 1 (dissolved flag); per
 /// fine face 1 (join flag), 4 (boundary map), 24 (an interface entry, an upper bound) and the
-/// coarse [`Polyhedra`]'s share, at most twice the face with its loop (8 + 8 per loop entry);
-/// 24 per vertex (the coarse vertices before the unused ones are dropped).
+/// coarse [`Polyhedra`]'s share, at most twice the face with its loop (8 + 8 per loop entry),
+/// and the merged interfaces (8 + 4 per loop entry, at most once per fine face); 24 per vertex
+/// (the coarse vertices before the unused ones are dropped).
 pub fn agglomerate3_bytes(fine: &PolyMesh3) -> u64 {
     let cells = fine.n_cells() as u64;
     let faces = fine.n_faces() as u64;
@@ -167,8 +175,8 @@ pub fn agglomerate3_bytes(fine: &PolyMesh3) -> u64 {
     let vertices = fine.n_vertices() as u64;
     cells
         .saturating_mul(32 + 8 + 8 + 8 + 4 + 1)
-        .saturating_add(faces.saturating_mul(1 + 4 + 24 + 8))
-        .saturating_add(loops.saturating_mul(8))
+        .saturating_add(faces.saturating_mul(1 + 4 + 24 + 8 + 8))
+        .saturating_add(loops.saturating_mul(8 + 4))
         .saturating_add(vertices.saturating_mul(24))
 }
 

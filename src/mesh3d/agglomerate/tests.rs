@@ -69,6 +69,83 @@ fn check(fine: &PolyMesh3, agg: &Agglomeration3) {
         );
     }
     assert_eq!(fine.boundary_faces().len(), coarse.boundary_faces().len());
+    check_vector_areas(fine, agg);
+}
+
+/// Σ_σ |σ| n_{K,σ} over the faces of each coarse cell equals the same sum over the fine faces
+/// on its boundary (merged faces are planar, so their |σ| n_σ is the sum of their pieces';
+/// with warped fine faces neither sum is zero).
+fn check_vector_areas(fine: &PolyMesh3, agg: &Agglomeration3) {
+    let coarse = &agg.mesh;
+    let mut want = vec![[0.0; 3]; coarse.n_cells()];
+    let mut surface = vec![0.0; coarse.n_cells()];
+    for f in 0..fine.n_faces() {
+        let [k, l] = fine.face_cells(f);
+        let (a, n) = (fine.face_measure(f), fine.face_normal(f));
+        let ck = agg.cell_of[k] as usize;
+        let cl = (l != crate::mesh::NO_CELL).then(|| agg.cell_of[l] as usize);
+        if cl == Some(ck) {
+            continue;
+        }
+        (0..3).for_each(|r| want[ck][r] += a * n[r]);
+        surface[ck] += a;
+        if let Some(cl) = cl {
+            (0..3).for_each(|r| want[cl][r] -= a * n[r]);
+            surface[cl] += a;
+        }
+    }
+    for k in 0..coarse.n_cells() {
+        let mut got = [0.0; 3];
+        for (i, &f) in coarse.cell_faces(k).iter().enumerate() {
+            let (n, _) = coarse.cell_normal_dist(k, i);
+            (0..3).for_each(|r| got[r] += coarse.face_measure(f as usize) * n[r]);
+        }
+        let d = crate::mesh3d::geometry::dist(got, want[k]);
+        assert!(
+            d <= 1e-13 * surface[k],
+            "coarse cell {k}: {got:?} vs {:?}",
+            want[k]
+        );
+    }
+}
+
+/// Every coarse cell is closed and its faces are planar or merged exactly: the vector areas
+/// add up to zero, Σ_σ |σ| n_{K,σ} = 0, and C_K = Σ_σ |σ| n_{K,σ} (x_σ − x_K)ᵀ = |K| I (the
+/// divergence theorem on a cell bounded by planar faces, which HMM's consistency needs).
+fn check_closed_cells(m: &PolyMesh3) {
+    for k in 0..m.n_cells() {
+        let (mut sum, mut c) = ([0.0; 3], [[0.0; 3]; 3]);
+        let mut surface = 0.0;
+        for (i, &f) in m.cell_faces(k).iter().enumerate() {
+            let (n, _) = m.cell_normal_dist(k, i);
+            let (a, x) = (m.face_measure(f as usize), m.face_centroid(f as usize));
+            surface += a;
+            for r in 0..3 {
+                sum[r] += a * n[r];
+                for q in 0..3 {
+                    c[r][q] += a * n[r] * (x[q] - m.centroid(k)[q]);
+                }
+            }
+        }
+        let tol = 1e-13 * surface;
+        assert!(sum.iter().all(|x| x.abs() <= tol), "cell {k}: {sum:?}");
+        for (r, row) in c.iter().enumerate() {
+            for (q, entry) in row.iter().enumerate() {
+                let want = if r == q { m.measure(k) } else { 0.0 };
+                let d = (entry - want).abs();
+                assert!(
+                    d <= 1e-12 * m.measure(k),
+                    "cell {k}: C_K[{r}][{q}] off by {d:e}"
+                );
+            }
+        }
+    }
+}
+
+fn boundary_area(m: &PolyMesh3) -> f64 {
+    (m.boundary_faces().iter())
+        .map(|&f| m.face_measure(f as usize))
+        .sum()
 }
 
 /// The number of fine cells in each coarse cell.
@@ -84,19 +161,28 @@ fn cubes_agglomerate_to_blocks_of_cubes() {
     for (per, want) in [(2, 64), (4, 8)] {
         let agg = agglomerate3(&fine, per as f64 / 8.0, MemoryBudget::DEFAULT).unwrap();
         check(&fine, &agg);
+        check_closed_cells(&agg.mesh);
         assert_eq!(agg.mesh.n_cells(), want);
         assert_eq!(agg.dissolved_cells, 0);
         assert!(sizes(&agg).iter().all(|&n| n == per * per * per));
         let side = per as f64 / 8.0;
+        let blocks = 8 / per;
         for c in 0..want {
             assert!((agg.mesh.measure(c) - side * side * side).abs() < 1e-15);
-            // a block of per³ cubes keeps the per² fine faces on each of its 6 sides
-            assert_eq!(agg.mesh.cell_faces(c).len(), 6 * per * per);
+            // a block of per³ cubes has one face per neighbouring block and keeps the per²
+            // fine faces of each side on the boundary
+            let x = agg.mesh.centroid(c).map(|x| (x / side) as usize);
+            let outer: usize = x
+                .iter()
+                .map(|&i| usize::from(i == 0) + usize::from(i == blocks - 1))
+                .sum();
+            let faces = (6 - outer) + outer * per * per;
+            assert_eq!(agg.mesh.cell_faces(c).len(), faces, "block {x:?}");
         }
-        let area: f64 = (agg.mesh.boundary_faces().iter())
-            .map(|&f| agg.mesh.face_measure(f as usize))
-            .sum();
-        assert!((area - 6.0).abs() < 1e-13);
+        // the faces between blocks, then the fine boundary faces
+        let interior = 3 * blocks * blocks * (blocks - 1);
+        assert_eq!(agg.mesh.n_faces(), interior + 6 * 64);
+        assert!((boundary_area(&agg.mesh) - 6.0).abs() < 1e-13);
     }
 }
 
@@ -106,15 +192,38 @@ fn tetrahedra_and_perturbed_cubes_give_valid_coarser_meshes() {
     // the six tetrahedra of a cube are placed by the cube: blocks of 2³ cubes
     let agg = agglomerate3(&kuhn, 2.0 / 6.0, MemoryBudget::DEFAULT).unwrap();
     check(&kuhn, &agg);
+    check_closed_cells(&agg.mesh);
     assert_eq!(agg.mesh.n_cells(), 27);
     assert!(sizes(&agg).iter().all(|&n| n == 48));
-    for (fine, sizes) in [
-        (kuhn, [0.23, 0.5]),
-        (side_tags(&mesh(perturbed_cubes(8, 0.1, 7))), [0.25, 0.4]),
+    // the 8 triangles between two blocks merge into one square: 54 faces inside, and the 432
+    // triangles of the boundary
+    assert_eq!(agg.mesh.n_faces(), 54 + 432);
+    assert!((boundary_area(&agg.mesh) - 6.0).abs() < 1e-13);
+    for (fine, sizes, planar) in [
+        (kuhn, [0.23, 0.5], true),
+        (
+            side_tags(&mesh(perturbed_cubes(8, 0.1, 7))),
+            [0.25, 0.4],
+            false,
+        ),
     ] {
         for size in sizes {
             let agg = agglomerate3(&fine, size, MemoryBudget::DEFAULT).unwrap();
             check(&fine, &agg);
+            // the fine faces between two aggregates or on the boundary: on Kuhn tetrahedra
+            // those between two aggregates merge; between perturbed cubes no two are
+            // coplanar, so none merge
+            let kept = (0..fine.n_faces())
+                .filter(|&f| match fine.face_cells(f) {
+                    [_, crate::mesh::NO_CELL] => true,
+                    [k, l] => agg.cell_of[k] != agg.cell_of[l],
+                })
+                .count();
+            if planar {
+                assert!(agg.mesh.n_faces() < kept, "size {size}");
+            } else {
+                assert_eq!(agg.mesh.n_faces(), kept, "size {size}");
+            }
             assert!(
                 agg.mesh.n_cells() * 4 < fine.n_cells(),
                 "size {size}: {} of {} cells",
@@ -183,6 +292,7 @@ fn aggregates_not_star_shaped_are_regrouped() {
     let fine = u_shape();
     let agg = agglomerate3(&fine, 1.0, MemoryBudget::DEFAULT).unwrap();
     check(&fine, &agg);
+    check_closed_cells(&agg.mesh);
     assert_eq!(agg.dissolved_cells, 40);
     let mut s = sizes(&agg);
     s.sort_unstable();
