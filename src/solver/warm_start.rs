@@ -23,7 +23,8 @@
 //! cell unknown in the aggregate of its cell; a vertex or face unknown in those of the fine
 //! cells around it). It is predicted active if all of them are active *and* it is farther than
 //! [`EROSION`] · |K|^{1/D} from every face of such a K whose neighbour is free (in 3D, a face
-//! of K is a fine face and the distance is to its fan triangles). This erodes the
+//! of K is a planar polygon, a fine face or the merge of coplanar fine faces, and the distance
+//! is to its fan triangles). This erodes the
 //! coarse contact zone a little, so that the fine iteration mostly *adds* unknowns, which it
 //! does in one step, rather than freeing them, which it does one layer of cells per step. A
 //! Signorini unknown sits on boundary faces (edges in 2D), which the coarse meshes keep: it is
@@ -127,10 +128,11 @@ pub const FIRST_LEVEL_UNKNOWNS_PER_CELL: usize = 24;
 /// On 3D meshes, the first coarse level has about (fine unknowns) /
 /// FIRST_LEVEL_UNKNOWNS_PER_CELL_3D cells: N/96, a 24th of the cells for HMM on hexahedra
 /// (about 4 unknowns per cell), H ≈ 2.9h. Coarser than in 2D because a 3D agglomerate keeps
-/// the fine faces on its boundary ([`crate::mesh3d::agglomerate`]): a coarse HMM system has
-/// about 3/m of the fine face unknowns for aggregates of m³ cells, with dense blocks of
-/// (6m²)² entries per cell, so the coarse solves cost nearly as much as fine ones unless m is
-/// large enough (`replication/measurements/solver3d.md`).
+/// the fine faces of its non-planar interfaces and of the domain's boundary
+/// ([`crate::mesh3d::agglomerate`]; only coplanar interior interfaces are merged), so its HMM
+/// system is larger than a 2D one's for the same aggregate size
+/// (`replication/measurements/solver3d.md`; the value was chosen before the interfaces were
+/// merged and has not been re-tuned since).
 pub const FIRST_LEVEL_UNKNOWNS_PER_CELL_3D: usize = 96;
 
 /// A coarser level is made while it would have at least this many cells.
