@@ -60,8 +60,12 @@ ALL_CASES = ([f"test1_{k}" for k in range(1, 5)]
              + [f"test2tri_{k}" for k in range(1, 5)]
              + [f"test3_{k}_C{c}" for k in range(1, 5) for c in C_VALUES])
 COARSE_CASES = ["test1_1", "test2tri_1"] + [f"test3_1_C{c}" for c in C_VALUES]
+# 3D cases (tetrahedra): the 3D radial obstacle of problems/ex9-3d.toml on meshes/ex9_3d_k.msh
+ALL_CASES_3D = ["ex9_3d_1", "ex9_3d_2"]
+COARSE_CASES_3D = ["ex9_3d_1"]
+SUMMARY_3D = "reference_summary_3d.csv"
 
-CASE_RE = re.compile(r"^(test1|test2tri|test3)_([1-9][0-9]*)(?:_C([0-9]+))?$")
+CASE_RE = re.compile(r"^(test1|test2tri|test3|ex9_3d)_([1-9][0-9]*)(?:_C([0-9]+))?$")
 
 
 def log(msg):
@@ -71,7 +75,8 @@ def log(msg):
 def parse_case(case):
     m = CASE_RE.match(case)
     if not m:
-        raise SystemExit(f"solve.py: bad case name '{case}' (expected test1_K, test2tri_K or test3_K_C<abs C>)")
+        raise SystemExit(f"solve.py: bad case name '{case}' (expected test1_K, test2tri_K, test3_K_C<abs C> "
+                         "or ex9_3d_K)")
     test, k, c = m.group(1), int(m.group(2)), m.group(3)
     if test == "test3" and c is None:
         raise SystemExit(f"solve.py: case '{case}': test3 needs _C<abs C>, e.g. test3_{k}_C10")
@@ -129,9 +134,23 @@ def psi_test3(x):
     return -np.minimum(np.minimum(x[0], 1.0 - x[0]), np.minimum(x[1], 1.0 - x[1]))
 
 
+# The 3D radial obstacle (problems/ex9-3d.toml): f = 0, u >= psi, Dirichlet data u = 1/(2r)
+def r_3d(x):
+    return np.sqrt(x[0] ** 2 + x[1] ** 2 + x[2] ** 2)
+
+
+def psi_ex9_3d(x):
+    r = r_3d(x)
+    return np.where(r <= 1.0, np.sqrt(np.maximum(1.0 - r ** 2, 0.0)), -1.0)
+
+
+def g_ex9_3d(x):
+    return 1.0 / (2.0 * r_3d(x))
+
+
 # ---------------------------------------------------------------------------
 
-def read_mesh(path):
+def read_mesh(path, gdim=2):
     import gmsh
     from mpi4py import MPI
     from dolfinx.io import gmshio
@@ -141,7 +160,7 @@ def read_mesh(path):
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("reference")
         gmsh.merge(path)
-        mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, MPI.COMM_WORLD, 0, gdim=2)
+        mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, MPI.COMM_WORLD, 0, gdim=gdim)
     finally:
         gmsh.finalize()
     return mesh, cell_tags, facet_tags
@@ -154,8 +173,9 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     from petsc4py import PETSc
 
     test, k, C = parse_case(case)
+    gdim = 3 if test == "ex9_3d" else 2
     t0 = time.perf_counter()
-    mesh, _cell_tags, facet_tags = read_mesh(mesh_path)
+    mesh, _cell_tags, facet_tags = read_mesh(mesh_path, gdim)
     tdim = mesh.topology.dim
     V = fem.FunctionSpace(mesh, ("CG", 1))
     n_cells = mesh.topology.index_map(tdim).size_local
@@ -171,8 +191,11 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     dir_dofs = dofs_on(1)
     if len(dir_dofs) == 0:
         raise SystemExit(f"solve.py: {mesh_path}: no facets with physical tag 1 (Gamma1)")
-    zero = fem.Function(V)
-    bc = fem.dirichletbc(zero, dir_dofs)
+    # Dirichlet values at the vertices: 0 (2D tests), the exact solution (3D radial obstacle)
+    g_dir = fem.Function(V)
+    if test == "ex9_3d":
+        g_dir.interpolate(g_ex9_3d)
+    bc = fem.dirichletbc(g_dir, dir_dofs)
 
     u = ufl.TrialFunction(V)
     v = ufl.TestFunction(V)
@@ -194,6 +217,8 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
             chi = fem.Function(Q)
             chi.interpolate(lambda x: (x[1] < 0.5).astype(np.float64))
             f_h = chi * f_lo + (1.0 - chi) * f_up
+    elif test == "ex9_3d":
+        a = ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx  # f = 0: f_h stays 0
     else:
         f_h.x.array[:] = C
         a = ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx
@@ -220,11 +245,15 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     elif test == "test2tri":
         g3 = dofs_on(3)
         ub_a[g3] = 0.0
+    elif test == "ex9_3d":
+        xdofs = V.tabulate_dof_coordinates()[:n_dofs]
+        lb_a[:] = psi_ex9_3d(xdofs.T)
     else:
         xdofs = V.tabulate_dof_coordinates()[:n_dofs]
         lb_a[:] = psi_test3(xdofs.T)
-    lb_a[is_dir] = 0.0
-    ub_a[is_dir] = 0.0
+    g_a = g_dir.x.array[:n_dofs]
+    lb_a[is_dir] = g_a[is_dir]
+    ub_a[is_dir] = g_a[is_dir]
     constrained = (~is_dir) & ((lb_a > NINF) | (ub_a < INF))
     n_constrained = int(constrained.sum())
 
@@ -291,7 +320,7 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     at_ub = (~is_dir) & (xa >= ub_a)
     wrong_sign = max(float((-Fa[at_lb]).max()) if at_lb.any() else 0.0,
                      float(Fa[at_ub].max()) if at_ub.any() else 0.0, 0.0)
-    dir_err = float(np.abs(xa[is_dir]).max())
+    dir_err = float(np.abs(xa[is_dir] - g_a[is_dir]).max())
 
     # Nodal output, rows in gmsh node-tag order
     os.makedirs(outdir, exist_ok=True)
@@ -305,9 +334,10 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     xdofs = V.tabulate_dof_coordinates()
     nodal_path = os.path.join(outdir, f"nodal_{case}.csv")
     with open(nodal_path, "w") as fh:
-        fh.write("x,y,u\n")
+        fh.write("x,y,z,u\n" if gdim == 3 else "x,y,u\n")
         for d in dofs_in_order:
-            fh.write(f"{xdofs[d, 0]:.17g},{xdofs[d, 1]:.17g},{xa[d]:.17g}\n")
+            coords = ",".join(f"{xdofs[d, i]:.17g}" for i in range(gdim))
+            fh.write(f"{coords},{xa[d]:.17g}\n")
 
     extra = ""
     if test == "test2tri":
@@ -316,7 +346,7 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
 
     row = {
         "case": case,
-        "test": {"test1": "test1", "test2tri": "test2", "test3": "test3"}[test],
+        "test": {"test1": "test1", "test2tri": "test2", "test3": "test3", "ex9_3d": "ex9-3d"}[test],
         "mesh": os.path.basename(mesh_path),
         "C": "" if C is None else f"{C:g}",
         "n_cells": n_cells,
@@ -339,8 +369,8 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     return row, reason > 0
 
 
-def update_summary(outdir, rows):
-    path = os.path.join(outdir, "reference_summary.csv")
+def update_summary(outdir, rows, name="reference_summary.csv"):
+    path = os.path.join(outdir, name)
     existing = []
     if os.path.exists(path):
         with open(path, newline="") as fh:
@@ -391,7 +421,7 @@ def main():
     else:
         if args.mesh:
             raise SystemExit("solve.py: --mesh only goes with --case")
-        cases = ALL_CASES if args.all else COARSE_CASES
+        cases = ALL_CASES + ALL_CASES_3D if args.all else COARSE_CASES + COARSE_CASES_3D
         jobs = [(c, default_mesh(c)) for c in cases]
     for _, m in jobs:
         if not os.path.exists(m):
@@ -406,8 +436,11 @@ def main():
         if not ok:
             failed.append((case, row["snes_reason"]))
             log(f"ERROR: SNES did not converge for {case} (reason {row['snes_reason']})")
-    path = update_summary(args.outdir, rows)
-    log(f"summary written to {path}")
+    rows_2d = [r for r in rows if r["test"] != "ex9-3d"]
+    rows_3d = [r for r in rows if r["test"] == "ex9-3d"]
+    for part, name in ((rows_2d, "reference_summary.csv"), (rows_3d, SUMMARY_3D)):
+        if part:
+            log(f"summary written to {update_summary(args.outdir, part, name)}")
     log(f"total time {time.perf_counter() - t_start:.2f}s for {len(jobs)} case(s)")
     if failed:
         log("FAILED (SNES not converged): " + ", ".join(f"{c} (reason {r})" for c, r in failed))
