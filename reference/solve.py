@@ -61,11 +61,13 @@ ALL_CASES = ([f"test1_{k}" for k in range(1, 5)]
              + [f"test3_{k}_C{c}" for k in range(1, 5) for c in C_VALUES])
 COARSE_CASES = ["test1_1", "test2tri_1"] + [f"test3_1_C{c}" for c in C_VALUES]
 # 3D cases (tetrahedra): the 3D radial obstacle of problems/ex9-3d.toml on meshes/ex9_3d_k.msh
-ALL_CASES_3D = ["ex9_3d_1", "ex9_3d_2"]
-COARSE_CASES_3D = ["ex9_3d_1"]
+# and the 3D Signorini problem of problems/signorini-3d.toml on meshes/signorini3d_k.msh
+ALL_CASES_3D = ["ex9_3d_1", "ex9_3d_2", "signorini3d_1", "signorini3d_2"]
+COARSE_CASES_3D = ["ex9_3d_1", "signorini3d_1"]
+TESTS_3D = {"ex9_3d": "ex9-3d", "signorini3d": "signorini-3d"}
 SUMMARY_3D = "reference_summary_3d.csv"
 
-CASE_RE = re.compile(r"^(test1|test2tri|test3|ex9_3d)_([1-9][0-9]*)(?:_C([0-9]+))?$")
+CASE_RE = re.compile(r"^(test1|test2tri|test3|ex9_3d|signorini3d)_([1-9][0-9]*)(?:_C([0-9]+))?$")
 
 
 def log(msg):
@@ -76,7 +78,7 @@ def parse_case(case):
     m = CASE_RE.match(case)
     if not m:
         raise SystemExit(f"solve.py: bad case name '{case}' (expected test1_K, test2tri_K, test3_K_C<abs C> "
-                         "or ex9_3d_K)")
+                         "ex9_3d_K or signorini3d_K)")
     test, k, c = m.group(1), int(m.group(2)), m.group(3)
     if test == "test3" and c is None:
         raise SystemExit(f"solve.py: case '{case}': test3 needs _C<abs C>, e.g. test3_{k}_C10")
@@ -148,6 +150,41 @@ def g_ex9_3d(x):
     return 1.0 / (2.0 * r_3d(x))
 
 
+# The 3D Signorini problem (problems/signorini-3d.toml): two materials by cell tag (1: y < 1/2,
+# 2: y > 1/2), u = 0 on the faces tagged 12 and 15, flux on 11 and 14, u <= 0 on 10 (x = 0)
+SIGNORINI_A = {1: [[100.0, 0.0, 0.0], [0.0, 100.0, 30.0], [0.0, 30.0, 20.0]],
+               2: [[1.0, 0.0, 0.0], [0.0, 2.0, 0.5], [0.0, 0.5, 1.0]]}
+
+
+def _sig_parts(x):
+    y = x[1]
+    return dict(P=-y * (y - 0.5) ** 2, dP=-(3 * y ** 2 - 2 * y + 0.25), d2P=2 - 6 * y,
+                G=(1 - y) * (y - 0.5) ** 2, dG=-3 * y ** 2 + 4 * y - 1.25, d2G=4 - 6 * y)
+
+
+def f_sig_1(x):  # cells tagged 1
+    p, h = _sig_parts(x), np.cos(np.pi * x[0])
+    w, dw = np.cos(0.5 * np.pi * x[2]), -0.5 * np.pi * np.sin(0.5 * np.pi * x[2])
+    return 105 * np.pi ** 2 * p["P"] * h * w - 100 * p["d2P"] * h * w - 60 * p["dP"] * h * dw
+
+
+def f_sig_2(x):  # cells tagged 2
+    p, g = _sig_parts(x), np.sin(0.5 * np.pi * x[0]) ** 2
+    w, dw = np.cos(0.5 * np.pi * x[2]), -0.5 * np.pi * np.sin(0.5 * np.pi * x[2])
+    return -(0.5 * np.pi ** 2 * np.cos(np.pi * x[0]) * p["G"] * w + 2 * g * p["d2G"] * w
+             - 0.25 * np.pi ** 2 * g * p["G"] * w + g * p["dG"] * dw)
+
+
+def flux_sig(ufl, x):
+    """The Neumann flux of signorini-3d.toml as a ufl expression of the coordinates x."""
+    y = x[1]
+    dP = -(3 * y ** 2 - 2 * y + 0.25)
+    dG = -3 * y ** 2 + 4 * y - 1.25
+    h, g = ufl.cos(ufl.pi * x[0]), ufl.sin(0.5 * ufl.pi * x[0]) ** 2
+    inner = ufl.conditional(ufl.lt(y, 0.5), -30 * dP * h, -0.5 * g * dG)
+    return ufl.conditional(ufl.lt(x[2], 1e-9), inner, 0.0)
+
+
 # ---------------------------------------------------------------------------
 
 def read_mesh(path, gdim=2):
@@ -173,9 +210,9 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     from petsc4py import PETSc
 
     test, k, C = parse_case(case)
-    gdim = 3 if test == "ex9_3d" else 2
+    gdim = 3 if test in TESTS_3D else 2
     t0 = time.perf_counter()
-    mesh, _cell_tags, facet_tags = read_mesh(mesh_path, gdim)
+    mesh, cell_tags, facet_tags = read_mesh(mesh_path, gdim)
     tdim = mesh.topology.dim
     V = fem.FunctionSpace(mesh, ("CG", 1))
     n_cells = mesh.topology.index_map(tdim).size_local
@@ -188,9 +225,10 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     def dofs_on(tag):
         return fem.locate_dofs_topological(V, tdim - 1, facet_tags.find(tag))
 
-    dir_dofs = dofs_on(1)
+    dir_tags = [12, 15] if test == "signorini3d" else [1]
+    dir_dofs = np.unique(np.concatenate([dofs_on(t) for t in dir_tags]))
     if len(dir_dofs) == 0:
-        raise SystemExit(f"solve.py: {mesh_path}: no facets with physical tag 1 (Gamma1)")
+        raise SystemExit(f"solve.py: {mesh_path}: no facets with physical tag(s) {dir_tags} (Dirichlet)")
     # Dirichlet values at the vertices: 0 (2D tests), the exact solution (3D radial obstacle)
     g_dir = fem.Function(V)
     if test == "ex9_3d":
@@ -219,11 +257,26 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
             f_h = chi * f_lo + (1.0 - chi) * f_up
     elif test == "ex9_3d":
         a = ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx  # f = 0: f_h stays 0
+    elif test == "signorini3d":
+        # A constant on each tag; f_h on a cell = P1 interpolant of its tag's formula
+        dxt = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)
+        a = sum(ufl.inner(ufl.as_matrix(A_t) * ufl.grad(u), ufl.grad(v)) * dxt(t)
+                for t, A_t in SIGNORINI_A.items())
+        f_1, f_2 = fem.Function(V), fem.Function(V)
+        f_1.interpolate(f_sig_1)
+        f_2.interpolate(f_sig_2)
+        q2 = {"quadrature_degree": 2}
+        # flux: the centroid rule on each boundary triangle (degree 1: one point, the
+        # centroid), as gradvi's |sigma| g(x_sigma)/3 at each vertex of the face
+        dst = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags, metadata={"quadrature_degree": 1})
+        L = (f_1 * v * dxt(1, metadata=q2) + f_2 * v * dxt(2, metadata=q2)
+             + flux_sig(ufl, ufl.SpatialCoordinate(mesh)) * v * dst((11, 14)))
     else:
         f_h.x.array[:] = C
         a = ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx
-    # quadrature degree 2 (ufl's default for P1*P1): exact for P1*P1 (and DG0*P1*P1)
-    L = f_h * v * ufl.dx(metadata={"quadrature_degree": 2})
+    if test != "signorini3d":
+        # quadrature degree 2 (ufl's default for P1*P1): exact for P1*P1 (and DG0*P1*P1)
+        L = f_h * v * ufl.dx(metadata={"quadrature_degree": 2})
 
     a_form, L_form = fem.form(a), fem.form(L)
     A = fpetsc.assemble_matrix(a_form, bcs=[bc])
@@ -248,6 +301,8 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     elif test == "ex9_3d":
         xdofs = V.tabulate_dof_coordinates()[:n_dofs]
         lb_a[:] = psi_ex9_3d(xdofs.T)
+    elif test == "signorini3d":
+        ub_a[dofs_on(10)] = 0.0
     else:
         xdofs = V.tabulate_dof_coordinates()[:n_dofs]
         lb_a[:] = psi_test3(xdofs.T)
@@ -346,7 +401,7 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
 
     row = {
         "case": case,
-        "test": {"test1": "test1", "test2tri": "test2", "test3": "test3", "ex9_3d": "ex9-3d"}[test],
+        "test": {"test1": "test1", "test2tri": "test2", "test3": "test3", **TESTS_3D}[test],
         "mesh": os.path.basename(mesh_path),
         "C": "" if C is None else f"{C:g}",
         "n_cells": n_cells,
@@ -436,8 +491,8 @@ def main():
         if not ok:
             failed.append((case, row["snes_reason"]))
             log(f"ERROR: SNES did not converge for {case} (reason {row['snes_reason']})")
-    rows_2d = [r for r in rows if r["test"] != "ex9-3d"]
-    rows_3d = [r for r in rows if r["test"] == "ex9-3d"]
+    rows_2d = [r for r in rows if r["test"] not in TESTS_3D.values()]
+    rows_3d = [r for r in rows if r["test"] in TESTS_3D.values()]
     for part, name in ((rows_2d, "reference_summary.csv"), (rows_3d, SUMMARY_3D)):
         if part:
             log(f"summary written to {update_summary(args.outdir, part, name)}")

@@ -2,15 +2,18 @@
 //!
 //! `reference/solve.py` solves the 3D radial obstacle (`problems/ex9-3d.toml`: Ω = (−2,2)³,
 //! −Δu = 0, u ≥ ψ with ψ = √(1 − r²) for r ≤ 1 and −1 beyond, u = 1/(2r) on ∂Ω) on
-//! `meshes/ex9_3d_k.msh` and writes `reference_summary_3d.csv` and `nodal_<case>.csv`
+//! `meshes/ex9_3d_k.msh`, and the 3D Signorini problem (`problems/signorini-3d.toml`) on
+//! `meshes/signorini3d_k.msh`, and writes `reference_summary_3d.csv` and `nodal_<case>.csv`
 //! (`x,y,z,u`). [`solve_cases3`] solves each case with gradvi P1 from the problem file on the
 //! same mesh and compares the nodal values (vertices matched by coordinates) and the active
 //! sets; one row per case in `results/crosscheck3d.csv` ([`Crosscheck3Row`]).
 //!
-//! Both codes solve the same discrete problem: P1 on the same tetrahedra, the load of f = 0 is
-//! zero, Dirichlet values u(x_v) = 1/(2|x_v|) at the boundary vertices (dolfinx: interpolated
-//! boundary data, identity rows), nodal barrier ψ(x_v) on every other vertex. So the solutions
-//! and active sets agree to round-off ([`super::SAME_PROBLEM_TOL`], [`super::ACTIVE_TOL`]).
+//! Both codes solve the same discrete problem: P1 on the same tetrahedra, A constant per cell
+//! (per tag for Signorini), the load = exact integral of the P1 interpolant of f (the cell's
+//! piece), the flux by the centroid rule on boundary triangles (|σ| g(x_σ)/3 per vertex),
+//! Dirichlet values at the vertices (dolfinx: interpolated boundary data, identity rows), nodal
+//! barriers on the other constrained vertices. So the solutions and active sets agree to
+//! round-off ([`super::SAME_PROBLEM_TOL`], [`super::ACTIVE_TOL`]).
 
 use super::{ACTIVE_TOL, MATCH_TOL, ReferenceCase, ReferenceRow};
 use anyhow::{Context, Result, bail};
@@ -69,9 +72,10 @@ pub struct Crosscheck3Row {
     pub n_active_p1: usize,
     /// Active constrained vertices, dolfinx-P1 (tolerance [`ACTIVE_TOL`]).
     pub n_active_dolfinx: usize,
-    /// Contact volume, gradvi-P1: Σ of the lumped vertex measures over active vertices.
+    /// Contact measure (volume for an obstacle, area for Signorini), gradvi-P1: Σ of the lumped
+    /// vertex measures over active vertices.
     pub contact_p1: f64,
-    /// Contact volume, dolfinx-P1, with the same measures.
+    /// Contact measure, dolfinx-P1, with the same measures.
     pub contact_dolfinx: f64,
     /// Relative L² error of u against the exact solution, gradvi-P1.
     pub err_u_p1: Option<f64>,
@@ -233,4 +237,38 @@ fn p1_row3(
         time_dolfinx_setup_s: r.time_setup_s,
         time_dolfinx_solve_s: r.time_solve_s,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(p: [f64; 3]) -> NodalRow3 {
+        NodalRow3 {
+            x: p[0],
+            y: p[1],
+            z: p[2],
+            u: 0.0,
+        }
+    }
+
+    #[test]
+    fn vertices_match_by_coordinates_exactly_or_within_the_tolerance() {
+        let vertices = [[0.0, 0.0, 0.0], [1.0, -2.0, 0.5], [-2.0, 2.0, 2.0]];
+        // permuted, one coordinate off by round-off, one -0.0
+        let nodal = [
+            row([-2.0000000000000004, 2.0, 2.0]),
+            row([-0.0, 0.0, 0.0]),
+            row([1.0, -2.0, 0.5]),
+        ];
+        assert_eq!(match_vertices3(&vertices, &nodal).unwrap(), vec![1, 2, 0]);
+    }
+
+    #[test]
+    fn a_vertex_without_a_match_is_named() {
+        let vertices = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]];
+        let nodal = [row([0.0, 0.0, 0.0]), row([1.0, 1.0, 1.0 + 1e-9])];
+        let e = match_vertices3(&vertices, &nodal).unwrap_err().to_string();
+        assert!(e.starts_with("gradvi vertex 1 at (1, 1, 1)"), "{e}");
+    }
 }
