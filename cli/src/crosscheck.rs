@@ -31,6 +31,7 @@ use gradvi::post::relative_errors;
 use gradvi::problem::{Problem, paper_test1, paper_test2, paper_test3};
 use gradvi::scheme::SchemeKind;
 use gradvi::solver::constraints::Constraints;
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
@@ -40,7 +41,6 @@ mod report;
 mod report3d;
 pub mod three_d;
 pub use report::write_report;
-use serde::de::DeserializeOwned;
 use three_d::{Crosscheck3Row, NodalRow3, SUMMARY_3D, solve_cases3};
 
 /// Same discrete problem: max |u_gradvi − u_dolfinx| / max |u_dolfinx| must not exceed this.
@@ -300,18 +300,27 @@ fn read_cases<N: DeserializeOwned>(
 /// For each gradvi vertex, the row of the dolfinx nodal file at the same coordinates (exactly,
 /// or to [`MATCH_TOL`]). An error names the first vertex without a match.
 pub fn match_vertices(mesh: &PolyMesh, nodal: &[NodalRow]) -> Result<Vec<usize>> {
-    let key = |x: f64, y: f64| ((x + 0.0).to_bits(), (y + 0.0).to_bits());
-    let exact: HashMap<(u64, u64), usize> = nodal
-        .iter()
-        .enumerate()
-        .map(|(i, r)| (key(r.x, r.y), i))
-        .collect();
-    let mut by_x: Vec<(f64, usize)> = nodal.iter().enumerate().map(|(i, r)| (r.x, i)).collect();
+    let points: Vec<Point> = (0..mesh.n_vertices()).map(|v| mesh.vertex(v)).collect();
+    let rows: Vec<Point> = nodal.iter().map(|r| [r.x, r.y]).collect();
+    match_points(&points, &rows)
+}
+
+/// For each of the gradvi vertices `points`, the index of the point of `nodal` at the same
+/// coordinates: exactly (±0 alike), or else to [`MATCH_TOL`] in every coordinate (a search in
+/// the rows sorted by their first coordinate). An error names the first vertex without a match.
+pub(crate) fn match_points<const D: usize>(
+    points: &[[f64; D]],
+    nodal: &[[f64; D]],
+) -> Result<Vec<usize>> {
+    let key = |p: &[f64; D]| p.map(|c| (c + 0.0).to_bits());
+    let exact: HashMap<[u64; D], usize> =
+        nodal.iter().enumerate().map(|(i, r)| (key(r), i)).collect();
+    let mut by_x: Vec<(f64, usize)> = nodal.iter().enumerate().map(|(i, r)| (r[0], i)).collect();
     by_x.sort_by(|a, b| a.0.total_cmp(&b.0));
-    (0..mesh.n_vertices())
-        .map(|v| {
-            let p = mesh.vertex(v);
-            if let Some(&i) = exact.get(&key(p[0], p[1])) {
+    let close = |i: usize, p: &[f64; D]| (0..D).all(|c| (nodal[i][c] - p[c]).abs() <= MATCH_TOL);
+    (points.iter().enumerate())
+        .map(|(v, p)| {
+            if let Some(&i) = exact.get(&key(p)) {
                 return Ok(i);
             }
             let start = by_x.partition_point(|e| e.0 < p[0] - MATCH_TOL);
@@ -319,11 +328,12 @@ pub fn match_vertices(mesh: &PolyMesh, nodal: &[NodalRow]) -> Result<Vec<usize>>
                 .iter()
                 .take_while(|e| e.0 <= p[0] + MATCH_TOL)
                 .map(|e| e.1)
-                .find(|&i| (nodal[i].y - p[1]).abs() <= MATCH_TOL)
+                .find(|&i| close(i, p))
                 .with_context(|| {
+                    let at: Vec<String> = p.iter().map(f64::to_string).collect();
                     format!(
-                        "gradvi vertex {v} at ({}, {}) has no dolfinx vertex within {MATCH_TOL:e}",
-                        p[0], p[1]
+                        "gradvi vertex {v} at ({}) has no dolfinx vertex within {MATCH_TOL:e}",
+                        at.join(", ")
                     )
                 })
         })

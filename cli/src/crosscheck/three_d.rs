@@ -15,7 +15,7 @@
 //! barriers on the other constrained vertices. So the solutions and active sets agree to
 //! round-off ([`super::SAME_PROBLEM_TOL`], [`super::ACTIVE_TOL`]).
 
-use super::{ACTIVE_TOL, MATCH_TOL, ReferenceCase, ReferenceRow};
+use super::{ACTIVE_TOL, ReferenceCase, ReferenceRow, match_points};
 use anyhow::{Context, Result, bail};
 use gradvi::mesh::MemoryBudget;
 use gradvi::mesh3d::io::read_msh3;
@@ -24,7 +24,6 @@ use gradvi::post::relative_errors;
 use gradvi::scheme::{SchemeKind, SchemeOptions, build_with3};
 use gradvi::solver::{SolveOptions, solve_problem};
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
 use std::path::Path;
 
 /// The summary file of the 3D reference cases (same columns as `reference_summary.csv`).
@@ -96,38 +95,11 @@ pub struct Crosscheck3Row {
 }
 
 /// For each gradvi vertex, the row of the dolfinx nodal file at the same coordinates (exactly,
-/// or to [`MATCH_TOL`] in each coordinate). An error names the first vertex without a match.
+/// or to [`super::MATCH_TOL`] in each coordinate). An error names the first vertex without a
+/// match.
 pub fn match_vertices3(vertices: &[Point3], nodal: &[NodalRow3]) -> Result<Vec<usize>> {
-    let key = |p: [f64; 3]| p.map(|c| (c + 0.0).to_bits());
-    let at = |r: &NodalRow3| [r.x, r.y, r.z];
-    let exact: HashMap<[u64; 3], usize> = nodal
-        .iter()
-        .enumerate()
-        .map(|(i, r)| (key(at(r)), i))
-        .collect();
-    let mut by_x: Vec<(f64, usize)> = nodal.iter().enumerate().map(|(i, r)| (r.x, i)).collect();
-    by_x.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let close = |i: usize, p: &Point3| (0..3).all(|c| (at(&nodal[i])[c] - p[c]).abs() <= MATCH_TOL);
-    (vertices.iter().enumerate())
-        .map(|(v, p)| {
-            if let Some(&i) = exact.get(&key(*p)) {
-                return Ok(i);
-            }
-            let start = by_x.partition_point(|e| e.0 < p[0] - MATCH_TOL);
-            by_x[start..]
-                .iter()
-                .take_while(|e| e.0 <= p[0] + MATCH_TOL)
-                .map(|e| e.1)
-                .find(|&i| close(i, p))
-                .with_context(|| {
-                    format!(
-                        "gradvi vertex {v} at ({}, {}, {}) has no dolfinx vertex within \
-                         {MATCH_TOL:e}",
-                        p[0], p[1], p[2]
-                    )
-                })
-        })
-        .collect()
+    let rows: Vec<Point3> = nodal.iter().map(|r| [r.x, r.y, r.z]).collect();
+    match_points(vertices, &rows)
 }
 
 /// Solves every 3D reference case with gradvi P1 (problem file `problems/<test>.toml` on the
