@@ -86,11 +86,13 @@ reference-deps:
 	bash reference/install.sh
 
 ## crosscheck: dolfinx P1 reference solves on the same meshes, diffed -> replication/CROSSCHECK.md
+## (Tests 1-3 on the 2D meshes; in 3D, problems/ex9-3d.toml on meshes/ex9_3d_1,2.msh and
+## problems/signorini-3d.toml on meshes/signorini3d_1,2.msh, gmsh tetrahedra)
 crosscheck: build reference-deps
 	$(PYTHON) reference/solve.py --all --outdir $(REFDIR)
 	$(BIN) crosscheck --reference $(REFDIR)
 
-## crosscheck-coarse: the same on the coarsest meshes (run by CI)
+## crosscheck-coarse: the same on the coarsest meshes (run by CI; in 3D ex9_3d_1 and signorini3d_1)
 crosscheck-coarse: build reference-deps
 	$(PYTHON) reference/solve.py --coarse --outdir /tmp/gradvi-reference-coarse
 	$(BIN) crosscheck --coarse --reference /tmp/gradvi-reference-coarse --out /tmp/gradvi-crosscheck-coarse

@@ -60,8 +60,14 @@ ALL_CASES = ([f"test1_{k}" for k in range(1, 5)]
              + [f"test2tri_{k}" for k in range(1, 5)]
              + [f"test3_{k}_C{c}" for k in range(1, 5) for c in C_VALUES])
 COARSE_CASES = ["test1_1", "test2tri_1"] + [f"test3_1_C{c}" for c in C_VALUES]
+# 3D cases (tetrahedra): the 3D radial obstacle of problems/ex9-3d.toml on meshes/ex9_3d_k.msh
+# and the 3D Signorini problem of problems/signorini-3d.toml on meshes/signorini3d_k.msh
+ALL_CASES_3D = ["ex9_3d_1", "ex9_3d_2", "signorini3d_1", "signorini3d_2"]
+COARSE_CASES_3D = ["ex9_3d_1", "signorini3d_1"]
+TESTS_3D = {"ex9_3d": "ex9-3d", "signorini3d": "signorini-3d"}
+SUMMARY_3D = "reference_summary_3d.csv"
 
-CASE_RE = re.compile(r"^(test1|test2tri|test3)_([1-9][0-9]*)(?:_C([0-9]+))?$")
+CASE_RE = re.compile(r"^(test1|test2tri|test3|ex9_3d|signorini3d)_([1-9][0-9]*)(?:_C([0-9]+))?$")
 
 
 def log(msg):
@@ -71,7 +77,8 @@ def log(msg):
 def parse_case(case):
     m = CASE_RE.match(case)
     if not m:
-        raise SystemExit(f"solve.py: bad case name '{case}' (expected test1_K, test2tri_K or test3_K_C<abs C>)")
+        raise SystemExit(f"solve.py: bad case name '{case}' (expected test1_K, test2tri_K, test3_K_C<abs C> "
+                         "ex9_3d_K or signorini3d_K)")
     test, k, c = m.group(1), int(m.group(2)), m.group(3)
     if test == "test3" and c is None:
         raise SystemExit(f"solve.py: case '{case}': test3 needs _C<abs C>, e.g. test3_{k}_C10")
@@ -129,9 +136,58 @@ def psi_test3(x):
     return -np.minimum(np.minimum(x[0], 1.0 - x[0]), np.minimum(x[1], 1.0 - x[1]))
 
 
+# The 3D radial obstacle (problems/ex9-3d.toml): f = 0, u >= psi, Dirichlet data u = 1/(2r)
+def r_3d(x):
+    return np.sqrt(x[0] ** 2 + x[1] ** 2 + x[2] ** 2)
+
+
+def psi_ex9_3d(x):
+    r = r_3d(x)
+    return np.where(r <= 1.0, np.sqrt(np.maximum(1.0 - r ** 2, 0.0)), -1.0)
+
+
+def g_ex9_3d(x):
+    return 1.0 / (2.0 * r_3d(x))
+
+
+# The 3D Signorini problem (problems/signorini-3d.toml): two materials by cell tag (1: y < 1/2,
+# 2: y > 1/2), u = 0 on the faces tagged 12 and 15, flux on 11 and 14, u <= 0 on 10 (x = 0)
+SIGNORINI_A = {1: [[100.0, 0.0, 0.0], [0.0, 100.0, 30.0], [0.0, 30.0, 20.0]],
+               2: [[1.0, 0.0, 0.0], [0.0, 2.0, 0.5], [0.0, 0.5, 1.0]]}
+
+
+def _sig_parts(x):
+    y = x[1]
+    return dict(P=-y * (y - 0.5) ** 2, dP=-(3 * y ** 2 - 2 * y + 0.25), d2P=2 - 6 * y,
+                G=(1 - y) * (y - 0.5) ** 2, dG=-3 * y ** 2 + 4 * y - 1.25, d2G=4 - 6 * y)
+
+
+def f_sig_1(x):  # cells tagged 1
+    p, h = _sig_parts(x), np.cos(np.pi * x[0])
+    w, dw = np.cos(0.5 * np.pi * x[2]), -0.5 * np.pi * np.sin(0.5 * np.pi * x[2])
+    return 105 * np.pi ** 2 * p["P"] * h * w - 100 * p["d2P"] * h * w - 60 * p["dP"] * h * dw
+
+
+def f_sig_2(x):  # cells tagged 2
+    p, g = _sig_parts(x), np.sin(0.5 * np.pi * x[0]) ** 2
+    w, dw = np.cos(0.5 * np.pi * x[2]), -0.5 * np.pi * np.sin(0.5 * np.pi * x[2])
+    return -(0.5 * np.pi ** 2 * np.cos(np.pi * x[0]) * p["G"] * w + 2 * g * p["d2G"] * w
+             - 0.25 * np.pi ** 2 * g * p["G"] * w + g * p["dG"] * dw)
+
+
+def flux_sig(ufl, x):
+    """The Neumann flux of signorini-3d.toml as a ufl expression of the coordinates x."""
+    y = x[1]
+    dP = -(3 * y ** 2 - 2 * y + 0.25)
+    dG = -3 * y ** 2 + 4 * y - 1.25
+    h, g = ufl.cos(ufl.pi * x[0]), ufl.sin(0.5 * ufl.pi * x[0]) ** 2
+    inner = ufl.conditional(ufl.lt(y, 0.5), -30 * dP * h, -0.5 * g * dG)
+    return ufl.conditional(ufl.lt(x[2], 1e-9), inner, 0.0)
+
+
 # ---------------------------------------------------------------------------
 
-def read_mesh(path):
+def read_mesh(path, gdim=2):
     import gmsh
     from mpi4py import MPI
     from dolfinx.io import gmshio
@@ -141,7 +197,7 @@ def read_mesh(path):
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("reference")
         gmsh.merge(path)
-        mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, MPI.COMM_WORLD, 0, gdim=2)
+        mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, MPI.COMM_WORLD, 0, gdim=gdim)
     finally:
         gmsh.finalize()
     return mesh, cell_tags, facet_tags
@@ -154,8 +210,9 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     from petsc4py import PETSc
 
     test, k, C = parse_case(case)
+    gdim = 3 if test in TESTS_3D else 2
     t0 = time.perf_counter()
-    mesh, _cell_tags, facet_tags = read_mesh(mesh_path)
+    mesh, cell_tags, facet_tags = read_mesh(mesh_path, gdim)
     tdim = mesh.topology.dim
     V = fem.FunctionSpace(mesh, ("CG", 1))
     n_cells = mesh.topology.index_map(tdim).size_local
@@ -168,11 +225,15 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     def dofs_on(tag):
         return fem.locate_dofs_topological(V, tdim - 1, facet_tags.find(tag))
 
-    dir_dofs = dofs_on(1)
+    dir_tags = [12, 15] if test == "signorini3d" else [1]
+    dir_dofs = np.unique(np.concatenate([dofs_on(t) for t in dir_tags]))
     if len(dir_dofs) == 0:
-        raise SystemExit(f"solve.py: {mesh_path}: no facets with physical tag 1 (Gamma1)")
-    zero = fem.Function(V)
-    bc = fem.dirichletbc(zero, dir_dofs)
+        raise SystemExit(f"solve.py: {mesh_path}: no facets with physical tag(s) {dir_tags} (Dirichlet)")
+    # Dirichlet values at the vertices: 0 (2D tests), the exact solution (3D radial obstacle)
+    g_dir = fem.Function(V)
+    if test == "ex9_3d":
+        g_dir.interpolate(g_ex9_3d)
+    bc = fem.dirichletbc(g_dir, dir_dofs)
 
     u = ufl.TrialFunction(V)
     v = ufl.TestFunction(V)
@@ -194,11 +255,28 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
             chi = fem.Function(Q)
             chi.interpolate(lambda x: (x[1] < 0.5).astype(np.float64))
             f_h = chi * f_lo + (1.0 - chi) * f_up
+    elif test == "ex9_3d":
+        a = ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx  # f = 0: f_h stays 0
+    elif test == "signorini3d":
+        # A constant on each tag; f_h on a cell = P1 interpolant of its tag's formula
+        dxt = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)
+        a = sum(ufl.inner(ufl.as_matrix(A_t) * ufl.grad(u), ufl.grad(v)) * dxt(t)
+                for t, A_t in SIGNORINI_A.items())
+        f_1, f_2 = fem.Function(V), fem.Function(V)
+        f_1.interpolate(f_sig_1)
+        f_2.interpolate(f_sig_2)
+        q2 = {"quadrature_degree": 2}
+        # flux: the centroid rule on each boundary triangle (degree 1: one point, the
+        # centroid), as gradvi's |sigma| g(x_sigma)/3 at each vertex of the face
+        dst = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags, metadata={"quadrature_degree": 1})
+        L = (f_1 * v * dxt(1, metadata=q2) + f_2 * v * dxt(2, metadata=q2)
+             + flux_sig(ufl, ufl.SpatialCoordinate(mesh)) * v * dst((11, 14)))
     else:
         f_h.x.array[:] = C
         a = ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx
-    # quadrature degree 2 (ufl's default for P1*P1): exact for P1*P1 (and DG0*P1*P1)
-    L = f_h * v * ufl.dx(metadata={"quadrature_degree": 2})
+    if test != "signorini3d":
+        # quadrature degree 2 (ufl's default for P1*P1): exact for P1*P1 (and DG0*P1*P1)
+        L = f_h * v * ufl.dx(metadata={"quadrature_degree": 2})
 
     a_form, L_form = fem.form(a), fem.form(L)
     A = fpetsc.assemble_matrix(a_form, bcs=[bc])
@@ -220,11 +298,17 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     elif test == "test2tri":
         g3 = dofs_on(3)
         ub_a[g3] = 0.0
+    elif test == "ex9_3d":
+        xdofs = V.tabulate_dof_coordinates()[:n_dofs]
+        lb_a[:] = psi_ex9_3d(xdofs.T)
+    elif test == "signorini3d":
+        ub_a[dofs_on(10)] = 0.0
     else:
         xdofs = V.tabulate_dof_coordinates()[:n_dofs]
         lb_a[:] = psi_test3(xdofs.T)
-    lb_a[is_dir] = 0.0
-    ub_a[is_dir] = 0.0
+    g_a = g_dir.x.array[:n_dofs]
+    lb_a[is_dir] = g_a[is_dir]
+    ub_a[is_dir] = g_a[is_dir]
     constrained = (~is_dir) & ((lb_a > NINF) | (ub_a < INF))
     n_constrained = int(constrained.sum())
 
@@ -291,7 +375,7 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     at_ub = (~is_dir) & (xa >= ub_a)
     wrong_sign = max(float((-Fa[at_lb]).max()) if at_lb.any() else 0.0,
                      float(Fa[at_ub].max()) if at_ub.any() else 0.0, 0.0)
-    dir_err = float(np.abs(xa[is_dir]).max())
+    dir_err = float(np.abs(xa[is_dir] - g_a[is_dir]).max())
 
     # Nodal output, rows in gmsh node-tag order
     os.makedirs(outdir, exist_ok=True)
@@ -305,9 +389,10 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     xdofs = V.tabulate_dof_coordinates()
     nodal_path = os.path.join(outdir, f"nodal_{case}.csv")
     with open(nodal_path, "w") as fh:
-        fh.write("x,y,u\n")
+        fh.write("x,y,z,u\n" if gdim == 3 else "x,y,u\n")
         for d in dofs_in_order:
-            fh.write(f"{xdofs[d, 0]:.17g},{xdofs[d, 1]:.17g},{xa[d]:.17g}\n")
+            coords = ",".join(f"{xdofs[d, i]:.17g}" for i in range(gdim))
+            fh.write(f"{coords},{xa[d]:.17g}\n")
 
     extra = ""
     if test == "test2tri":
@@ -316,7 +401,7 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
 
     row = {
         "case": case,
-        "test": {"test1": "test1", "test2tri": "test2", "test3": "test3"}[test],
+        "test": {"test1": "test1", "test2tri": "test2", "test3": "test3", **TESTS_3D}[test],
         "mesh": os.path.basename(mesh_path),
         "C": "" if C is None else f"{C:g}",
         "n_cells": n_cells,
@@ -339,8 +424,8 @@ def solve_case(case, mesh_path, outdir, lu_solver="petsc", test2_f="average"):
     return row, reason > 0
 
 
-def update_summary(outdir, rows):
-    path = os.path.join(outdir, "reference_summary.csv")
+def update_summary(outdir, rows, name="reference_summary.csv"):
+    path = os.path.join(outdir, name)
     existing = []
     if os.path.exists(path):
         with open(path, newline="") as fh:
@@ -391,7 +476,7 @@ def main():
     else:
         if args.mesh:
             raise SystemExit("solve.py: --mesh only goes with --case")
-        cases = ALL_CASES if args.all else COARSE_CASES
+        cases = ALL_CASES + ALL_CASES_3D if args.all else COARSE_CASES + COARSE_CASES_3D
         jobs = [(c, default_mesh(c)) for c in cases]
     for _, m in jobs:
         if not os.path.exists(m):
@@ -406,8 +491,11 @@ def main():
         if not ok:
             failed.append((case, row["snes_reason"]))
             log(f"ERROR: SNES did not converge for {case} (reason {row['snes_reason']})")
-    path = update_summary(args.outdir, rows)
-    log(f"summary written to {path}")
+    rows_2d = [r for r in rows if r["test"] not in TESTS_3D.values()]
+    rows_3d = [r for r in rows if r["test"] in TESTS_3D.values()]
+    for part, name in ((rows_2d, "reference_summary.csv"), (rows_3d, SUMMARY_3D)):
+        if part:
+            log(f"summary written to {update_summary(args.outdir, part, name)}")
     log(f"total time {time.perf_counter() - t_start:.2f}s for {len(jobs)} case(s)")
     if failed:
         log("FAILED (SNES not converged): " + ", ".join(f"{c} (reason {r})" for c, r in failed))

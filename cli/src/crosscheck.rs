@@ -12,6 +12,9 @@
 //! 3. writes `CROSSCHECK.md` from that CSV only ([`write_report`]), with computed verdicts, and
 //!    fails (after writing the report) when a comparison with a tolerance fails.
 //!
+//! In 3D ([`three_d`]), the 3D radial obstacle on gmsh tetrahedra: gradvi P1 against dolfinx P1,
+//! nodal values and active sets, in `results/crosscheck3d.csv` and a section of the report.
+//!
 //! gradvi-P1 and dolfinx-P1 solve the same discrete problem (same mesh, DG0 A at centroids,
 //! load = exact integral of the one-sided affine interpolant of f, nodal barriers, Dirichlet
 //! vertices excluded), so their solutions must agree to round-off: [`SAME_PROBLEM_TOL`].
@@ -28,13 +31,17 @@ use gradvi::post::relative_errors;
 use gradvi::problem::{Problem, paper_test1, paper_test2, paper_test3};
 use gradvi::scheme::SchemeKind;
 use gradvi::solver::constraints::Constraints;
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 mod report;
+mod report3d;
+pub mod three_d;
 pub use report::write_report;
+use three_d::{Crosscheck3Row, NodalRow3, SUMMARY_3D, solve_cases3};
 
 /// Same discrete problem: max |u_gradvi − u_dolfinx| / max |u_dolfinx| must not exceed this.
 pub const SAME_PROBLEM_TOL: f64 = 1e-8;
@@ -67,6 +74,9 @@ pub struct CrosscheckArgs {
     /// Directory of the gmsh meshes.
     #[arg(long, default_value = "meshes")]
     pub meshes: PathBuf,
+    /// Directory of the problem files (the 3D cases solve `<test>.toml` from there).
+    #[arg(long, default_value = "problems")]
+    pub problems: PathBuf,
     /// Coarsest mesh of each test only.
     #[arg(long)]
     pub coarse: bool,
@@ -214,12 +224,12 @@ pub struct CrosscheckRow {
     pub time_dolfinx_solve_s: f64,
 }
 
-/// A reference case with its nodal values.
-pub struct ReferenceCase {
+/// A reference case with its nodal values (rows [`NodalRow`] in 2D, [`NodalRow3`] in 3D).
+pub struct ReferenceCase<N = NodalRow> {
     /// The summary row.
     pub summary: ReferenceRow,
     /// The nodal values, in gmsh node order.
-    pub nodal: Vec<NodalRow>,
+    pub nodal: Vec<N>,
 }
 
 fn need(path: &Path) -> Result<()> {
@@ -245,7 +255,16 @@ fn mesh_index(mesh: &str) -> Option<usize> {
 /// Reads `reference_summary.csv` and the nodal files of its cases, ordered by test, mesh size
 /// (coarse first) and |C|. With `coarse`, keeps the coarsest mesh of each test.
 pub fn read_reference(dir: &Path, coarse: bool) -> Result<Vec<ReferenceCase>> {
-    let summary_path = dir.join("reference_summary.csv");
+    read_cases(dir, "reference_summary.csv", coarse)
+}
+
+/// As [`read_reference`], for the summary file `summary` and nodal rows of type `N`.
+fn read_cases<N: DeserializeOwned>(
+    dir: &Path,
+    summary: &str,
+    coarse: bool,
+) -> Result<Vec<ReferenceCase<N>>> {
+    let summary_path = dir.join(summary);
     need(&summary_path)?;
     let mut rows: Vec<ReferenceRow> =
         read_csv(&summary_path).with_context(|| format!("reading {}", summary_path.display()))?;
@@ -272,8 +291,7 @@ pub fn read_reference(dir: &Path, coarse: bool) -> Result<Vec<ReferenceCase>> {
         .map(|summary| {
             let p = dir.join(format!("nodal_{}.csv", summary.case));
             need(&p)?;
-            let nodal: Vec<NodalRow> =
-                read_csv(&p).with_context(|| format!("reading {}", p.display()))?;
+            let nodal: Vec<N> = read_csv(&p).with_context(|| format!("reading {}", p.display()))?;
             Ok(ReferenceCase { summary, nodal })
         })
         .collect()
@@ -282,18 +300,27 @@ pub fn read_reference(dir: &Path, coarse: bool) -> Result<Vec<ReferenceCase>> {
 /// For each gradvi vertex, the row of the dolfinx nodal file at the same coordinates (exactly,
 /// or to [`MATCH_TOL`]). An error names the first vertex without a match.
 pub fn match_vertices(mesh: &PolyMesh, nodal: &[NodalRow]) -> Result<Vec<usize>> {
-    let key = |x: f64, y: f64| ((x + 0.0).to_bits(), (y + 0.0).to_bits());
-    let exact: HashMap<(u64, u64), usize> = nodal
-        .iter()
-        .enumerate()
-        .map(|(i, r)| (key(r.x, r.y), i))
-        .collect();
-    let mut by_x: Vec<(f64, usize)> = nodal.iter().enumerate().map(|(i, r)| (r.x, i)).collect();
+    let points: Vec<Point> = (0..mesh.n_vertices()).map(|v| mesh.vertex(v)).collect();
+    let rows: Vec<Point> = nodal.iter().map(|r| [r.x, r.y]).collect();
+    match_points(&points, &rows)
+}
+
+/// For each of the gradvi vertices `points`, the index of the point of `nodal` at the same
+/// coordinates: exactly (±0 alike), or else to [`MATCH_TOL`] in every coordinate (a search in
+/// the rows sorted by their first coordinate). An error names the first vertex without a match.
+pub(crate) fn match_points<const D: usize>(
+    points: &[[f64; D]],
+    nodal: &[[f64; D]],
+) -> Result<Vec<usize>> {
+    let key = |p: &[f64; D]| p.map(|c| (c + 0.0).to_bits());
+    let exact: HashMap<[u64; D], usize> =
+        nodal.iter().enumerate().map(|(i, r)| (key(r), i)).collect();
+    let mut by_x: Vec<(f64, usize)> = nodal.iter().enumerate().map(|(i, r)| (r[0], i)).collect();
     by_x.sort_by(|a, b| a.0.total_cmp(&b.0));
-    (0..mesh.n_vertices())
-        .map(|v| {
-            let p = mesh.vertex(v);
-            if let Some(&i) = exact.get(&key(p[0], p[1])) {
+    let close = |i: usize, p: &[f64; D]| (0..D).all(|c| (nodal[i][c] - p[c]).abs() <= MATCH_TOL);
+    (points.iter().enumerate())
+        .map(|(v, p)| {
+            if let Some(&i) = exact.get(&key(p)) {
                 return Ok(i);
             }
             let start = by_x.partition_point(|e| e.0 < p[0] - MATCH_TOL);
@@ -301,11 +328,12 @@ pub fn match_vertices(mesh: &PolyMesh, nodal: &[NodalRow]) -> Result<Vec<usize>>
                 .iter()
                 .take_while(|e| e.0 <= p[0] + MATCH_TOL)
                 .map(|e| e.1)
-                .find(|&i| (nodal[i].y - p[1]).abs() <= MATCH_TOL)
+                .find(|&i| close(i, p))
                 .with_context(|| {
+                    let at: Vec<String> = p.iter().map(f64::to_string).collect();
                     format!(
-                        "gradvi vertex {v} at ({}, {}) has no dolfinx vertex within {MATCH_TOL:e}",
-                        p[0], p[1]
+                        "gradvi vertex {v} at ({}) has no dolfinx vertex within {MATCH_TOL:e}",
+                        at.join(", ")
                     )
                 })
         })
@@ -646,9 +674,16 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     let mut progress = |s: &str| eprintln!("  {s}");
     let rows = solve_cases(args, &cases, &mut progress)?;
     let t_solve = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let cases3: Vec<ReferenceCase<NodalRow3>> =
+        read_cases(&args.reference, SUMMARY_3D, args.coarse)?;
+    let rows3: Vec<Crosscheck3Row> =
+        solve_cases3(&args.meshes, &args.problems, &cases3, &mut progress)?;
+    let t_solve3 = t.elapsed().as_secs_f64();
     let res = args.out.join("results");
     crate::replication::create_dir(&res)?;
     write_csv(&res.join("crosscheck.csv"), &rows)?;
+    write_csv(&res.join("crosscheck3d.csv"), &rows3)?;
     let timings = vec![
         TimingRow {
             stage: "reading the reference".into(),
@@ -657,6 +692,10 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
         TimingRow {
             stage: "gradvi solves and comparisons".into(),
             seconds: t_solve,
+        },
+        TimingRow {
+            stage: "3D: reading, gradvi solves and comparisons".into(),
+            seconds: t_solve3,
         },
         TimingRow {
             stage: "total".into(),

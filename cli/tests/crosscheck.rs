@@ -2,7 +2,9 @@
 //! `/usr/bin/python3` with dolfinx 0.5.2, installed by `reference/install.sh`): runs
 //! `reference/solve.py --coarse`, then `gradvi crosscheck --coarse` into a temporary directory,
 //! and asserts that gradvi-P1 and dolfinx-P1 give the same discrete solution (relative nodal
-//! difference ≤ 1e-8, identical active sets) on every case.
+//! difference ≤ 1e-8, identical active sets) on every case, 2D (`results/crosscheck.csv`) and
+//! 3D (`results/crosscheck3d.csv`: the 3D radial obstacle and the 3D Signorini problem on
+//! tetrahedra).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -50,13 +52,18 @@ fn gradvi_p1_equals_dolfinx_p1_on_coarse_meshes() {
         .output()
         .expect("running gradvi crosscheck");
     eprintln!("{}", String::from_utf8_lossy(&run.stderr));
-    let mut rdr = csv::ReaderBuilder::new()
-        .comment(Some(b'#'))
-        .from_path(out.join("results/crosscheck.csv"))
-        .unwrap();
-    let rows: Vec<Row> = rdr.deserialize().map(|r| r.unwrap()).collect();
+    let read = |file: &str| -> Vec<Row> {
+        let mut rdr = csv::ReaderBuilder::new()
+            .comment(Some(b'#'))
+            .from_path(out.join("results").join(file))
+            .unwrap();
+        rdr.deserialize().map(|r| r.unwrap()).collect()
+    };
+    let rows = read("crosscheck.csv");
     assert_eq!(rows.len(), 6, "test1_1, test2tri_1 and test3_1 with four C");
-    for r in &rows {
+    let rows3 = read("crosscheck3d.csv");
+    assert_eq!(rows3.len(), 2, "ex9_3d_1 and signorini3d_1");
+    for r in rows.iter().chain(&rows3) {
         assert!(
             r.p1_max_rel_diff <= SAME_PROBLEM_TOL,
             "{}: gradvi-P1 vs dolfinx-P1 relative nodal difference {:e}",
@@ -77,5 +84,6 @@ fn gradvi_p1_equals_dolfinx_p1_on_coarse_meshes() {
     }
     let report = std::fs::read_to_string(out.join("CROSSCHECK.md")).unwrap();
     assert!(report.contains("## 1. Same discrete problem"));
+    assert!(report.contains("## 5. 3D: same discrete problem"));
     std::fs::remove_dir_all(&tmp).ok();
 }

@@ -1,7 +1,9 @@
-//! `CROSSCHECK.md`, written from `results/crosscheck.csv` and `results/crosscheck_timings.csv`
-//! only: one function per section, each adding the comparisons that fail its tolerance to the
+//! `CROSSCHECK.md`, written from `results/crosscheck.csv`, `results/crosscheck3d.csv` (the 3D
+//! section, [`super::report3d`]) and `results/crosscheck_timings.csv` only: one function per section, each adding the comparisons that fail its tolerance to the
 //! list that [`write_report`] returns.
 
+use super::report3d::same_problem_3d;
+use super::three_d::Crosscheck3Row;
 use super::{
     ACTIVE_TOL, CrosscheckRow, ERROR_AGREEMENT_TOL, HAUSDORFF_TOL_H, MATCH_TOL, MIN_ORDER_U,
     SAME_PROBLEM_TOL, SWITCH_TOL_H,
@@ -22,6 +24,7 @@ type Section = fn(&mut Doc, &Rows, &mut Vec<String>);
 pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
     let res = out.join("results");
     let rows: Vec<CrosscheckRow> = read_csv(&res.join("crosscheck.csv"))?;
+    let rows3: Vec<Crosscheck3Row> = read_csv(&res.join("crosscheck3d.csv"))?;
     let timings: Vec<TimingRow> = read_csv(&res.join("crosscheck_timings.csv"))?;
     let all: Vec<&CrosscheckRow> = rows.iter().collect();
     let mut md = Doc::default();
@@ -37,7 +40,7 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
         } else {
             ""
         },
-        rows.len()
+        rows.len() + rows3.len()
     ));
     let summary_at = md.end();
     definitions(&mut md);
@@ -83,9 +86,10 @@ pub fn write_report(out: &Path, coarse: bool) -> Result<Vec<String>> {
     }
     niter_table(&mut md, &all);
     niter_trends(&mut md, &all);
+    same_problem_3d(&mut md, &rows3, &mut failed);
     timing(&mut md, &all, &timings);
     md.insert(summary_at, &summary(&failed).to_string());
-    md.para("Files: `results/crosscheck.csv` (one row per case, every number above), `results/crosscheck_timings.csv`; the dolfinx outputs are in the reference directory (`reference_summary.csv`, `nodal_<case>.csv`); see `reference/README.md`.");
+    md.para("Files: `results/crosscheck.csv` (one row per 2D case, every number above), `results/crosscheck3d.csv` (one row per 3D case), `results/crosscheck_timings.csv`; the dolfinx outputs are in the reference directory (`reference_summary.csv`, `reference_summary_3d.csv`, `nodal_<case>.csv`); see `reference/README.md`.");
     md.write(&out.join("CROSSCHECK.md"))?;
     Ok(failed)
 }
@@ -95,7 +99,7 @@ fn summary(failed: &[String]) -> Doc {
     let mut md = Doc::default();
     md.heading(2, "Summary");
     if failed.is_empty() {
-        md.para("Every comparison with a tolerance passes (sections 1–3); section 4 (NITER) states trends only.");
+        md.para("Every comparison with a tolerance passes (sections 1–3 and 5); section 4 (NITER) states trends only.");
     } else {
         md.para(format!("**{} comparison(s) failed:**", failed.len()));
         let items: Vec<String> = failed.iter().map(|f| format!("- {f}")).collect();
@@ -748,11 +752,13 @@ mod tests {
             Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).join("replication/results");
         let mut rows: Vec<CrosscheckRow> = read_csv(&repo.join("crosscheck.csv")).unwrap();
         let timings: Vec<TimingRow> = read_csv(&repo.join("crosscheck_timings.csv")).unwrap();
+        let rows3: Vec<Crosscheck3Row> = read_csv(&repo.join("crosscheck3d.csv")).unwrap();
         edit(&mut rows);
         let out = std::env::temp_dir().join(format!("gradvi-xc-{name}-{}", std::process::id()));
         std::fs::create_dir_all(out.join("results")).unwrap();
         write_csv(&out.join("results/crosscheck.csv"), &rows).unwrap();
         write_csv(&out.join("results/crosscheck_timings.csv"), &timings).unwrap();
+        write_csv(&out.join("results/crosscheck3d.csv"), &rows3).unwrap();
         let failed = write_report(&out, false).unwrap();
         let md = std::fs::read_to_string(out.join("CROSSCHECK.md")).unwrap();
         std::fs::remove_dir_all(&out).ok();
@@ -771,6 +777,7 @@ mod tests {
             "### Test 2: switch",
             "### Test 3: contact",
             "## 4. NITER",
+            "## 5. 3D: same discrete problem",
             "## Timings",
         ] {
             assert!(md.contains(section), "no {section}");
