@@ -33,7 +33,7 @@ test-external: build reference-deps
 	$(CARGO) test --workspace -- --ignored
 
 ## test-solve3d: the 3D solves of problems/*-3d.toml through the command line, with the
-## Signorini example on gmsh tetrahedra (meshes/signorini3d.geo; installs gmsh if missing)
+## Signorini example on gmsh tetrahedra (meshes/3d/signorini3d.geo; installs gmsh if missing)
 test-solve3d: reference-deps
 	$(CARGO) test -p gradvi-cli --test solve3d -- --include-ignored
 
@@ -86,8 +86,8 @@ reference-deps:
 	bash reference/install.sh
 
 ## crosscheck: dolfinx P1 reference solves on the same meshes, diffed -> replication/CROSSCHECK.md
-## (Tests 1-3 on the 2D meshes; in 3D, problems/ex9-3d.toml on meshes/ex9_3d_1,2.msh and
-## problems/signorini-3d.toml on meshes/signorini3d_1,2.msh, gmsh tetrahedra)
+## (Tests 1-3 on the 2D meshes; in 3D, problems/ex9-3d.toml on meshes/3d/ex9_3d_1,2.msh and
+## problems/signorini-3d.toml on meshes/3d/signorini3d_1,2.msh, gmsh tetrahedra)
 crosscheck: build reference-deps
 	$(PYTHON) reference/solve.py --all --outdir $(REFDIR)
 	$(BIN) crosscheck --reference $(REFDIR)

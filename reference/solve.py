@@ -60,8 +60,8 @@ ALL_CASES = ([f"test1_{k}" for k in range(1, 5)]
              + [f"test2tri_{k}" for k in range(1, 5)]
              + [f"test3_{k}_C{c}" for k in range(1, 5) for c in C_VALUES])
 COARSE_CASES = ["test1_1", "test2tri_1"] + [f"test3_1_C{c}" for c in C_VALUES]
-# 3D cases (tetrahedra): the 3D radial obstacle of problems/ex9-3d.toml on meshes/ex9_3d_k.msh
-# and the 3D Signorini problem of problems/signorini-3d.toml on meshes/signorini3d_k.msh
+# 3D cases (tetrahedra): the 3D radial obstacle of problems/ex9-3d.toml on meshes/3d/ex9_3d_k.msh
+# and the 3D Signorini problem of problems/signorini-3d.toml on meshes/3d/signorini3d_k.msh
 ALL_CASES_3D = ["ex9_3d_1", "ex9_3d_2", "signorini3d_1", "signorini3d_2"]
 COARSE_CASES_3D = ["ex9_3d_1", "signorini3d_1"]
 TESTS_3D = {"ex9_3d": "ex9-3d", "signorini3d": "signorini-3d"}
@@ -445,7 +445,8 @@ def update_summary(outdir, rows, name="reference_summary.csv"):
 
 def default_mesh(case):
     test, k, _ = parse_case(case)
-    return os.path.join(MESHDIR, f"{test}_{k}.msh")
+    sub = "3d" if test in TESTS_3D else ""
+    return os.path.join(MESHDIR, sub, f"{test}_{k}.msh")
 
 
 def main():

@@ -640,7 +640,7 @@ fn example_ex9_with_p1_on_generated_triangles() {
 // ------------------------------------------------------------------------------------------
 // 3D
 
-/// The unit cube in cubes of level `level`, tagged as meshes/signorini3d.geo tags it: cells
+/// The unit cube in cubes of level `level`, tagged as meshes/3d/signorini3d.geo tags it: cells
 /// 1 (y < 1/2) and 2; boundary faces 10 (x = 0), 11 (x = 1), 12 (y = 0 or 1), 14 (z = 0),
 /// 15 (z = 1).
 fn signorini3d_cubes(level: usize) -> gradvi::mesh3d::PolyMesh3 {

@@ -3,7 +3,7 @@
 //! convergence slopes fitted (two-sided); the outputs (JSON, VTU); the dimension mismatches.
 //!
 //! The Signorini example needs gmsh (its tetrahedral meshes are made from
-//! meshes/signorini3d.geo): it is `#[ignore]`d and run by `make test-solve3d` (or
+//! meshes/3d/signorini3d.geo): it is `#[ignore]`d and run by `make test-solve3d` (or
 //! `make test-external`); it fails, not skips, when gmsh is missing.
 
 use serde_json::Value;
@@ -176,7 +176,7 @@ fn poisson_3d_converges_on_cubes_and_tetrahedra() {
     );
 }
 
-/// Meshes meshes/signorini3d.geo with gmsh at size `h` into `out`; panics if gmsh is missing.
+/// Meshes meshes/3d/signorini3d.geo with gmsh at size `h` into `out`; panics if gmsh is missing.
 fn gmsh(h: f64, out: &Path) {
     let status = Command::new("gmsh")
         .args([
@@ -191,12 +191,12 @@ fn gmsh(h: f64, out: &Path) {
             "h",
         ])
         .arg(h.to_string())
-        .arg(Path::new(ROOT).join("meshes/signorini3d.geo"))
+        .arg(Path::new(ROOT).join("meshes/3d/signorini3d.geo"))
         .arg("-o")
         .arg(out)
         .status()
         .expect("gmsh is needed for this test (the Debian package gmsh; make reference-deps)");
-    assert!(status.success(), "gmsh failed on meshes/signorini3d.geo");
+    assert!(status.success(), "gmsh failed on meshes/3d/signorini3d.geo");
 }
 
 #[test]

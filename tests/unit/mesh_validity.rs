@@ -161,6 +161,38 @@ fn good_meshes_still_validate() {
     assert!((total_area(&m) - 8.25).abs() < 1e-14);
 }
 
+/// The 3D gmsh meshes of `meshes/3d/` (the 3D cross-check's tetrahedra) read and validate
+/// with the 3D reader, and fill their domains: (−2,2)³ for `ex9_3d_*`, (0,1)³ for
+/// `signorini3d_*`.
+#[test]
+fn repository_3d_meshes_validate() {
+    use gradvi::mesh3d::PolyMesh3;
+    use gradvi::mesh3d::io::read_msh3;
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes/3d");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("meshes/3d")
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "msh"))
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 4, "{files:?}");
+    for p in &files {
+        let b = MemoryBudget::DEFAULT;
+        let m = read_msh3(p, b)
+            .and_then(|c| PolyMesh3::from_polyhedra(c, b).map_err(Into::into))
+            .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        let name = p.file_name().unwrap().to_string_lossy();
+        let volume = if name.starts_with("ex9_3d") {
+            64.0
+        } else {
+            1.0
+        };
+        let total: f64 = (0..m.n_cells()).map(|k| m.measure(k)).sum();
+        assert!((total - volume).abs() < 1e-10 * volume, "{name}: {total}");
+    }
+}
+
 #[test]
 fn generated_meshes_validate() {
     for (nx, ny) in [(1, 1), (2, 7), (16, 16), (64, 3)] {

@@ -2,8 +2,8 @@
 //!
 //! `reference/solve.py` solves the 3D radial obstacle (`problems/ex9-3d.toml`: Ω = (−2,2)³,
 //! −Δu = 0, u ≥ ψ with ψ = √(1 − r²) for r ≤ 1 and −1 beyond, u = 1/(2r) on ∂Ω) on
-//! `meshes/ex9_3d_k.msh`, and the 3D Signorini problem (`problems/signorini-3d.toml`) on
-//! `meshes/signorini3d_k.msh`, and writes `reference_summary_3d.csv` and `nodal_<case>.csv`
+//! `meshes/3d/ex9_3d_k.msh`, and the 3D Signorini problem (`problems/signorini-3d.toml`) on
+//! `meshes/3d/signorini3d_k.msh`, and writes `reference_summary_3d.csv` and `nodal_<case>.csv`
 //! (`x,y,z,u`). [`solve_cases3`] solves each case with gradvi P1 from the problem file on the
 //! same mesh and compares the nodal values (vertices matched by coordinates) and the active
 //! sets; one row per case in `results/crosscheck3d.csv` ([`Crosscheck3Row`]).
@@ -103,7 +103,7 @@ pub fn match_vertices3(vertices: &[Point3], nodal: &[NodalRow3]) -> Result<Vec<u
 }
 
 /// Solves every 3D reference case with gradvi P1 (problem file `problems/<test>.toml` on the
-/// case's mesh) and compares; `progress` receives one line per case.
+/// case's mesh, found in the `3d/` folder of `meshes`) and compares; `progress` receives one line per case.
 pub fn solve_cases3(
     meshes: &Path,
     problems: &Path,
@@ -114,7 +114,7 @@ pub fn solve_cases3(
     let mut rows = Vec::new();
     for case in cases {
         let r = &case.summary;
-        let path = meshes.join(&r.mesh);
+        let path = meshes.join("3d").join(&r.mesh);
         let mesh = read_msh3(&path, budget)
             .and_then(|p| PolyMesh3::from_polyhedra(p, budget).map_err(Into::into))
             .with_context(|| format!("reading {}", path.display()))?;
