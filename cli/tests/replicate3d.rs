@@ -48,7 +48,14 @@ fn quick_3d_replication_writes_csv_figures_and_report() {
         }
     }
     for r in &rows {
-        let numbers = [r.h, r.err_u, r.err_grad, r.contact_volume, r.certificate, r.time_s];
+        let numbers = [
+            r.h,
+            r.err_u,
+            r.err_grad,
+            r.contact_volume,
+            r.certificate,
+            r.time_s,
+        ];
         assert!(numbers.iter().all(|x| x.is_finite()), "{r:?}");
         assert!(r.err_u > 0.0 && r.err_u < 1.0 && r.err_grad < 1.0, "{r:?}");
         assert!(r.certificate <= 1e-8, "{r:?}");
@@ -61,7 +68,10 @@ fn quick_3d_replication_writes_csv_figures_and_report() {
     }
 
     let report = std::fs::read_to_string(out.join("REPORT-3D.md")).unwrap();
-    assert!(!report.contains("NaN") && !report.contains(" inf"), "{report}");
+    assert!(
+        !report.contains("NaN") && !report.contains(" inf"),
+        "{report}"
+    );
     assert!(report.contains("beyond the paper"));
     assert!(report.contains("HMM on warped") && report.contains("CR on kuhn"));
     assert!(report.contains("Measured orders against the theory"));

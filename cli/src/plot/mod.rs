@@ -20,8 +20,8 @@ pub mod surface;
 
 pub use lines::{LineOptions, LineSeries, Marker, data_range, plot_lines, plot_panels};
 pub use mesh::{MeshPlotOptions, plot_mesh};
-pub use slice::{SliceCell, SliceOptions, plot_slice};
 pub use plotters::chart::SeriesLabelPosition as LegendPosition;
+pub use slice::{SliceCell, SliceOptions, plot_slice};
 pub use surface::{SurfaceOptions, plot_surface};
 
 use std::path::Path;

@@ -89,7 +89,11 @@ fn draw(root: &Canvas, s: f64, cells: &[SliceCell], opts: &SliceOptions) -> Draw
         .draw()?;
     let colour = |v: f64| rgb(viridis((v - vmin) / (vmax - vmin)));
     let poly = |c: &SliceCell| c.polygon.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>();
-    chart.draw_series(cells.iter().map(|c| Polygon::new(poly(c), colour(c.value).filled())))?;
+    chart.draw_series(
+        cells
+            .iter()
+            .map(|c| Polygon::new(poly(c), colour(c.value).filled())),
+    )?;
     let edge = RGBColor(60, 60, 60).stroke_width(1);
     let mark = RGBColor(230, 20, 20).stroke_width((2.0 * s) as u32);
     let closed = |c: &SliceCell| {
@@ -135,13 +139,21 @@ fn colour_bar(area: &Canvas, s: f64, (lo, hi): (f64, f64), label: &str) -> Draw 
             rgb(viridis(t)).filled(),
         ))?;
     }
-    area.draw(&Text::new(label.to_string(), (x0, top - (25.0 * s) as i32), font(14.0, s)))?;
+    area.draw(&Text::new(
+        label.to_string(),
+        (x0, top - (25.0 * s) as i32),
+        font(14.0, s),
+    ))?;
     for i in 0..=4 {
         let t = i as f64 / 4.0;
         let y = bottom - ((bottom - top) as f64 * t) as i32;
         let v = lo + t * (hi - lo);
         let text = tick_label((v * 1e4).round() / 1e4);
-        area.draw(&Text::new(text, (x1 + (5.0 * s) as i32, y - (7.0 * s) as i32), font(12.0, s)))?;
+        area.draw(&Text::new(
+            text,
+            (x1 + (5.0 * s) as i32, y - (7.0 * s) as i32),
+            font(12.0, s),
+        ))?;
     }
     Ok(())
 }

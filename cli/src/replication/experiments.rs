@@ -11,9 +11,7 @@ use gradvi::post::contact::{contact_measure, switch_point};
 use gradvi::post::relative_errors;
 use gradvi::problem::{Problem, file, paper_test2_tie};
 use gradvi::scheme::{SchemeKind, build};
-use gradvi::solver::{
-    Solution, SolveOptions, solve_problem, solve_with_symbolic,
-};
+use gradvi::solver::{Solution, SolveOptions, solve_problem, solve_with_symbolic};
 use serde::Serialize;
 use std::fmt::{self, Display};
 use std::sync::Arc;

@@ -104,9 +104,9 @@ pub const CASES: [Case3d; 3] = [
     },
 ];
 
-/// The levels solved: 1–2 in quick mode, 1–3 otherwise.
+/// The levels solved: 1–2 in quick mode, 1–4 otherwise.
 pub fn levels(cfg: &Config) -> std::ops::RangeInclusive<usize> {
-    if cfg.quick { 1..=2 } else { 1..=3 }
+    if cfg.quick { 1..=2 } else { 1..=4 }
 }
 
 /// The problem of `case` and the box of its `[mesh]` (the unit cube if it names none).

@@ -119,8 +119,18 @@ fn convergence_table(md: &mut Doc, rows: &[&Row3d]) {
         "level | h | cells | unknowns | e(u) | order | e(∇u) | order | NITER | active | contact volume | time (s)",
         "rrrrrrrrrrrr",
     );
-    let ou = orders(&rows.iter().map(|r| (r.h, Some(r.err_u))).collect::<Vec<_>>());
-    let og = orders(&rows.iter().map(|r| (r.h, Some(r.err_grad))).collect::<Vec<_>>());
+    let ou = orders(
+        &rows
+            .iter()
+            .map(|r| (r.h, Some(r.err_u)))
+            .collect::<Vec<_>>(),
+    );
+    let og = orders(
+        &rows
+            .iter()
+            .map(|r| (r.h, Some(r.err_grad)))
+            .collect::<Vec<_>>(),
+    );
     for (i, r) in rows.iter().enumerate() {
         t.row(cells![
             r.level,
@@ -191,6 +201,6 @@ fn orders_section(md: &mut Doc, slopes: &[Slopes]) {
     md.table(&t);
     let mut notes: Vec<String> = reasons.iter().map(|r| format!("- Theory: {r}.")).collect();
     notes.push("- *Higher* than the theory: superconvergence at the centroids, usual on the smooth problem and on meshes with symmetric cells (the centroid is a superconvergence point of the cell values; the cell gradients of HMM on Cartesian and Kuhn meshes often converge faster than O(h)); the theory gives only the lower bound.".into());
-    notes.push("- *Lower* than the theory: the obstacle problems' solutions are only piecewise smooth (the second derivatives jump on the free boundary r = r₀, so u ∉ H³ and the cells cut by the free boundary contribute an O(h) error on a layer of measure O(h)), and on the coarse levels the contact set is resolved by a few cells only (pre-asymptotic range); a slope from three levels of a 3D family spans one decade of h at most.".into());
+    notes.push("- *Lower* than the theory: the obstacle problems' solutions are only piecewise smooth (the second derivatives jump on the free boundary r = r₀, so u ∉ H³ and the cells cut by the free boundary contribute an O(h) error on a layer of measure O(h)), and on the coarse levels the contact set is resolved by a few cells only (pre-asymptotic range).".into());
     md.para(notes.join("\n"));
 }
