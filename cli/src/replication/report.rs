@@ -556,7 +556,14 @@ mod tests {
         let repo = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
         let out = std::env::temp_dir().join(format!("gradvi-report-{}", std::process::id()));
         std::fs::create_dir_all(out.join("results")).unwrap();
-        for f in ["meshes", "test1", "test2", "test3", "timings"] {
+        for f in [
+            "meshes",
+            "test1",
+            "test2",
+            "test3",
+            "timings",
+            "convergence3d",
+        ] {
             let name = format!("results/{f}.csv");
             std::fs::copy(repo.join("replication").join(&name), out.join(&name)).unwrap();
         }
@@ -577,7 +584,18 @@ mod tests {
         };
         write(&cfg, repo).unwrap();
         let md = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
+        let md3 = std::fs::read_to_string(out.join("REPORT-3D.md")).unwrap();
         std::fs::remove_dir_all(&out).ok();
+        for part in [
+            "beyond the paper",
+            "## Problem `poisson-3d`",
+            "## Problem `ex9-3d`",
+            "## Problem `disk-obstacle-3d`",
+            "## Measured orders against the theory",
+        ] {
+            assert!(md3.contains(part), "REPORT-3D.md: no {part}");
+        }
+        assert!(md.contains("[REPORT-3D.md](REPORT-3D.md)"));
         for part in [
             "## Meshes",
             "## Test 1",
