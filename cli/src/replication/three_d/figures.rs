@@ -3,7 +3,9 @@
 //! problem with its active cells.
 
 use super::{CSV, Case3d, Row3d, options};
-use crate::plot::{LineOptions, LineSeries, SliceCell, SliceOptions, plot_lines, plot_slice};
+use crate::plot::{
+    LineOptions, LineSeries, SliceCell, SliceOptions, palette, plot_lines, plot_slice,
+};
 use crate::replication::Config;
 use crate::replication::records::read_csv;
 use gradvi::mesh3d::PolyMesh3;
@@ -27,16 +29,18 @@ pub fn plots_from_csv(cfg: &Config, cases: &[Case3d]) -> gradvi::Result<()> {
     for case in cases {
         let mine: Vec<&Row3d> = rows.iter().filter(|r| r.problem == case.name).collect();
         let mut series = Vec::new();
-        for &(kind, family) in case.runs {
+        for (i, &(kind, family)) in case.runs.iter().enumerate() {
             let of: Vec<&&Row3d> = (mine.iter())
                 .filter(|r| r.scheme == kind.name() && r.family == family.name())
                 .collect();
             let label = format!("{} {}", kind.name().to_uppercase(), family.name());
             let pts = |e: fn(&Row3d) -> f64| of.iter().map(|r| [r.h, e(r)]).collect();
-            series.push(LineSeries::new(format!("{label}: u"), pts(|r| r.err_u)));
+            // one colour per scheme and family: u solid, ∇u dashed
+            let mut u = LineSeries::new(format!("{label}: u"), pts(|r| r.err_u));
+            u.color = Some(palette(i));
             let mut g = LineSeries::new(format!("{label}: ∇u"), pts(|r| r.err_grad));
-            g.dashed = true;
-            series.push(g);
+            (g.color, g.dashed) = (Some(palette(i)), true);
+            series.extend([u, g]);
         }
         let mut opts = LineOptions::log_log(
             format!("{}: relative L² errors (beyond the paper)", case.name),
