@@ -65,12 +65,13 @@ fmt:
 doc:
 	$(CARGO) doc --workspace --no-deps
 
-## replicate: every table and figure of the paper -> replication/REPORT.md
+## replicate: every table and figure of the paper -> replication/REPORT.md, and beyond it the
+## 3D convergence tables and figures -> replication/REPORT-3D.md
 ## (add FVCA5_MESHES=../shared/meshes/fvca5 to run Test 2 on the original files too)
 replicate: build
 	$(BIN) replicate $(if $(FVCA5_MESHES),--fvca5 $(FVCA5_MESHES),)
 
-## replicate-quick: the same on the coarsest meshes only, into /tmp
+## replicate-quick: the same on the coarsest meshes only (3D: levels 1-2), into /tmp
 replicate-quick: build
 	$(BIN) replicate --quick --out /tmp/gradvi-replicate-quick
 

@@ -15,11 +15,13 @@
 
 mod lines;
 mod mesh;
+mod slice;
 pub mod surface;
 
 pub use lines::{LineOptions, LineSeries, Marker, data_range, plot_lines, plot_panels};
 pub use mesh::{MeshPlotOptions, plot_mesh};
 pub use plotters::chart::SeriesLabelPosition as LegendPosition;
+pub use slice::{SliceCell, SliceOptions, plot_slice};
 pub use surface::{SurfaceOptions, plot_surface};
 
 use std::path::Path;

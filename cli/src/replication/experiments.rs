@@ -6,7 +6,7 @@ use super::{Config, create_dir};
 use gradvi::assembly::SymbolicSystem;
 use gradvi::mesh::generate::{hexagonal::hexagonal, kershaw::kershaw};
 use gradvi::mesh::io::read_mesh;
-use gradvi::mesh::{MemoryBudget, PolyMesh};
+use gradvi::mesh::{MemoryBudget, PolyMesh, SolveMesh};
 use gradvi::post::contact::{contact_measure, switch_point};
 use gradvi::post::relative_errors;
 use gradvi::problem::{Problem, file, paper_test2_tie};
@@ -137,7 +137,8 @@ pub fn paper_options() -> SolveOptions {
     o
 }
 
-fn worst(sol: &Solution) -> f64 {
+/// The worst scaled quantity of the certificate of `sol`.
+pub fn worst<M: SolveMesh<D> + ?Sized, const D: usize>(sol: &Solution<M, D>) -> f64 {
     let c = sol.result.certificate;
     c.max_violation
         .max(-c.min_multiplier)
@@ -257,6 +258,9 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result<Vec<T
     table(cfg, &mut logs, "test3", test3)?;
     write_csv(&cfg.results().join("meshes.csv"), &logs.meshes)?;
     write_csv(&cfg.results().join("iterations.csv"), &logs.iterations)?;
+    let t = Instant::now();
+    super::three_d::run(cfg, logs.progress)?;
+    logs.stage("3d", t);
     Ok(logs.timings)
 }
 

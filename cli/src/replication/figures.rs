@@ -213,6 +213,7 @@ fn figures_test2(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result
 /// solid for u and dashed for ∇u) and the Test 3 NITER against the number of cells (a colour per
 /// C, solid for ours and dashed for the paper's).
 pub fn plots_from_csv(cfg: &Config) -> gradvi::Result<()> {
+    super::three_d::figures::plots_from_csv(cfg, &super::three_d::CASES)?;
     let rows: Vec<Test2Row> = read_csv(&cfg.results().join("test2.csv"))?;
     let mut series = Vec::new();
     let methods = [

@@ -9,11 +9,15 @@
 //!
 //! Paths: meshes are read from `meshes/` (the committed gmsh files) or built by the generators
 //! (hexagonal, Kershaw); the original FVCA5 files are used too when a directory is given.
+//!
+//! Beyond the paper, [`three_d`] solves 3D problems with exact solutions in the same steps:
+//! `results/convergence3d.csv`, its figures and `REPORT-3D.md`.
 
 pub mod experiments;
 pub mod figures;
 pub mod records;
 pub mod report;
+pub mod three_d;
 
 use std::path::PathBuf;
 

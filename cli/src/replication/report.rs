@@ -58,11 +58,12 @@ pub fn write(cfg: &Config, root: &Path) -> gradvi::Result<()> {
     md.para(
         "## Files\n\n- `results/test1.csv`, `results/test2.csv`, `results/test3.csv`: one row per solve; `results/iterations.csv`: the log of every monotony iteration (active-set size, entered, left, violation, residual); `results/meshes.csv`; `results/timings.csv`.\n- `figures/*.png`; `vtu/*.vtu` (not committed): the plotted solutions for ParaView.\n- `paper/*.csv`: the values printed in the paper (Tables 1–3 and the Kershaw line), as data.",
     );
-    md.write(&cfg.out.join("REPORT.md"))
+    md.write(&cfg.out.join("REPORT.md"))?;
+    super::three_d::report::write(cfg, root)
 }
 
 /// The output of a command, if it succeeds.
-fn cmd(program: &str, args: &[&str]) -> Option<String> {
+pub(crate) fn cmd(program: &str, args: &[&str]) -> Option<String> {
     let out = std::process::Command::new(program)
         .args(args)
         .output()
@@ -73,7 +74,7 @@ fn cmd(program: &str, args: &[&str]) -> Option<String> {
 }
 
 /// Versions of the main crates, read from Cargo.lock.
-fn crate_versions(root: &Path) -> String {
+pub(crate) fn crate_versions(root: &Path) -> String {
     let lock = std::fs::read_to_string(root.join("Cargo.lock")).unwrap_or_default();
     let mut v = Vec::new();
     let mut name = String::new();
@@ -111,7 +112,7 @@ fn header(md: &mut Doc, cfg: &Config, root: &Path, d: &Data) {
         crate_versions(root),
         list(parts)
     ));
-    md.para("The dolfinx cross-check is in [CROSSCHECK.md](CROSSCHECK.md) (`make crosscheck`).");
+    md.para("The dolfinx cross-check is in [CROSSCHECK.md](CROSSCHECK.md) (`make crosscheck`). Beyond the paper, the 3D solves (convergence tables and figures) are in [REPORT-3D.md](REPORT-3D.md).");
     md.heading(2, "Conventions");
     let certificates = (d.t1.iter().map(|r| r.certificate))
         .chain(d.t2.iter().map(|r| r.certificate))
@@ -555,7 +556,14 @@ mod tests {
         let repo = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
         let out = std::env::temp_dir().join(format!("gradvi-report-{}", std::process::id()));
         std::fs::create_dir_all(out.join("results")).unwrap();
-        for f in ["meshes", "test1", "test2", "test3", "timings"] {
+        for f in [
+            "meshes",
+            "test1",
+            "test2",
+            "test3",
+            "timings",
+            "convergence3d",
+        ] {
             let name = format!("results/{f}.csv");
             std::fs::copy(repo.join("replication").join(&name), out.join(&name)).unwrap();
         }
@@ -576,7 +584,18 @@ mod tests {
         };
         write(&cfg, repo).unwrap();
         let md = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
+        let md3 = std::fs::read_to_string(out.join("REPORT-3D.md")).unwrap();
         std::fs::remove_dir_all(&out).ok();
+        for part in [
+            "beyond the paper",
+            "## Problem `poisson-3d`",
+            "## Problem `ex9-3d`",
+            "## Problem `disk-obstacle-3d`",
+            "## Measured orders against the theory",
+        ] {
+            assert!(md3.contains(part), "REPORT-3D.md: no {part}");
+        }
+        assert!(md.contains("[REPORT-3D.md](REPORT-3D.md)"));
         for part in [
             "## Meshes",
             "## Test 1",
