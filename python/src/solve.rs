@@ -525,6 +525,9 @@ fn finish<'py, const D: usize>(
         }
         Err(p) => return Err(crate::errors::panic_error(p)),
     };
+    // a signal that arrived during the last linear solve (after the last check of the cancel
+    // hook) still interrupts the call: Ctrl-C during `gradvi.solve` always raises
+    py.check_signals()?;
     crate::guard_attached(|| to_dict(py, out, misses))
 }
 
