@@ -44,6 +44,7 @@ use crate::error::MeshError;
 
 mod build;
 mod complex;
+mod crossing;
 mod faces;
 mod geometry;
 mod mesh;
@@ -53,6 +54,7 @@ mod renumber;
 mod shape;
 mod simplex;
 mod solve_mesh;
+mod split_faces;
 mod surface;
 mod tags;
 #[cfg(test)]
@@ -63,10 +65,13 @@ mod tests_build;
 mod tests_errors;
 #[cfg(test)]
 mod tests_external;
+#[cfg(test)]
+mod tests_split;
 pub mod validate;
 
 pub use build::mesh3_bytes;
 pub use mesh::PolyMesh3;
+pub use split_faces::{PLANAR_TOL, WarpedFaces};
 pub use validate::{MAX_CELL_FACES, MAX_FACE_VERTICES, WARP_TOL};
 
 /// A point or vector of ℝ³.
