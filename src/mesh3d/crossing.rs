@@ -184,3 +184,37 @@ mod tests {
         assert!(segment_crosses_triangle(through.1, through.0, T, true));
     }
 }
+
+#[cfg(test)]
+mod timing {
+    use crate::mesh::MemoryBudget;
+    use crate::mesh3d::PolyMesh3;
+    use crate::mesh3d::generate::Family3;
+    use std::time::Instant;
+
+    /// The cost of checks 12a and 12b against the whole build on the Kuhn tetrahedra of level
+    /// 5 (1.57 M cells); the numbers go to replication/measurements/mesh3d_io.md.
+    #[test]
+    #[ignore = "timing: cargo test --release -p gradvi --lib measure_crossing -- --ignored --nocapture"]
+    fn measure_crossing_check_on_a_million_tetrahedra() {
+        let p = Family3::Kuhn
+            .polyhedra(5, crate::mesh3d::Cuboid::UNIT, MemoryBudget::DEFAULT)
+            .unwrap();
+        let t = Instant::now();
+        let m = PolyMesh3::from_polyhedra(p, MemoryBudget::DEFAULT).unwrap();
+        let build = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        m.check_overlap().unwrap();
+        let vertices = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        m.check_crossings().unwrap();
+        let edges = t.elapsed().as_secs_f64();
+        eprintln!(
+            "{} cells, {} boundary faces: build {build:.3} s (checks included), check 12a \
+             {vertices:.3} s, check 12b {edges:.3} s",
+            m.n_cells(),
+            m.boundary_faces().len()
+        );
+        assert_eq!(m.n_cells(), 6 * 64 * 64 * 64);
+    }
+}

@@ -10,7 +10,9 @@
 //! as lists of faces, faces as vertex loops counter-clockwise seen from outside their first
 //! cell, face–cell incidence, boundary faces, tags) and the cached geometry of the notation
 //! table, computed as `geometry.rs` states (exact for planar faces; for warped faces the fan
-//! of triangles around the face's vertex average, HArDCore3D's convention).
+//! of triangles around the face's vertex average, HArDCore3D's convention, or, with
+//! [`WarpedFaces::Split`] and [`PolyMesh3::from_polyhedra_with`], each of those triangles a
+//! face of its own).
 //!
 //! | accessor | maths |
 //! |---|---|
@@ -33,7 +35,10 @@
 //! [`CellComplex<3>`](crate::mesh::CellComplex) view a scheme reads; `renumber.rs` drops
 //! unused vertices ([`Polyhedra::drop_unused_vertices`], for readers); `surface.rs` and
 //! `overlap.rs` check the boundary surface and overlaps; `simplex.rs` gives the vertices of a
-//! tetrahedral cell ([`PolyMesh3::tetrahedron`]) to the schemes on simplices.
+//! tetrahedral cell ([`PolyMesh3::tetrahedron`]) to the schemes on simplices; `crossing.rs`
+//! checks that no boundary edge crosses a boundary face; `split_faces.rs` splits warped faces
+//! into their fan triangles when asked ([`WarpedFaces`], a build option whose default,
+//! [`WarpedFaces::Fan`], keeps them whole).
 
 pub mod agglomerate;
 pub mod io;

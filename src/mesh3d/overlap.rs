@@ -1,4 +1,4 @@
-//! Check 12 of [`validate`](super::validate): no cell covers a boundary vertex.
+//! Check 12a of [`validate`](super::validate): no cell covers a boundary vertex.
 //!
 //! Once every cell is a closed, outward-oriented surface and interior faces are shared by two
 //! cells on opposite sides, Σ_K |K| equals the volume enclosed by the boundary surface,
@@ -12,8 +12,9 @@
 //! vertex are filled); a cell, star-shaped with respect to x_K
 //! (check 10), is the union of the tetrahedra (x_K, T) over the fan triangles T of its faces,
 //! and a point is strictly inside it if it lies in one of these tetrahedra and not on its
-//! outer triangle (barycentric coordinates, to 10⁻⁹). Expected O(n) for meshes of cells of comparable sizes. (Overlaps in which no
-//! vertex enters a cell, such as two bars crossing edge through edge, are not detected.)
+//! outer triangle (barycentric coordinates, to 10⁻⁹). Expected O(n) for meshes of cells of comparable sizes. Overlaps in which no
+//! vertex enters a cell (two bars crossing, an edge through a face) are check 12b's
+//! (`crossing.rs`), which shares the grid defined here.
 
 use super::Point3;
 use super::PolyMesh3;
