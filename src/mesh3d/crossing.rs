@@ -142,7 +142,12 @@ impl PolyMesh3 {
 /// Whether the segment (a, b) crosses the triangle (p, q, r) (see the module docs): its ends
 /// strictly on either side of the plane, the crossing point's barycentric coordinates at least
 /// −[`EPS`], and above [`EPS`] on p (on every corner if `all_corners`).
-fn segment_crosses_triangle(a: Point3, b: Point3, [p, q, r]: [Point3; 3], all_corners: bool) -> bool {
+fn segment_crosses_triangle(
+    a: Point3,
+    b: Point3,
+    [p, q, r]: [Point3; 3],
+    all_corners: bool,
+) -> bool {
     let n = cross(sub(q, p), sub(r, p));
     let nn = dot(n, n);
     let (da, db) = (dot(sub(a, p), n), dot(sub(b, p), n));
@@ -170,17 +175,42 @@ mod tests {
         let through = ([0.2, 0.2, -1.0], [0.2, 0.2, 1.0]);
         assert!(segment_crosses_triangle(through.0, through.1, T, true));
         // ending on the plane, lying in it, or passing beside the triangle: no crossing
-        assert!(!segment_crosses_triangle([0.2, 0.2, 0.0], [0.2, 0.2, 1.0], T, true));
-        assert!(!segment_crosses_triangle([0.1, 0.1, 0.0], [0.3, 0.2, 0.0], T, true));
-        assert!(!segment_crosses_triangle([0.8, 0.8, -1.0], [0.8, 0.8, 1.0], T, true));
+        assert!(!segment_crosses_triangle(
+            [0.2, 0.2, 0.0],
+            [0.2, 0.2, 1.0],
+            T,
+            true
+        ));
+        assert!(!segment_crosses_triangle(
+            [0.1, 0.1, 0.0],
+            [0.3, 0.2, 0.0],
+            T,
+            true
+        ));
+        assert!(!segment_crosses_triangle(
+            [0.8, 0.8, -1.0],
+            [0.8, 0.8, 1.0],
+            T,
+            true
+        ));
         // through the rim: an edge of a triangular face, or the outer edge of a fan triangle
         let rim = ([0.5, 0.0, -1.0], [0.5, 0.0, 1.0]);
         assert!(!segment_crosses_triangle(rim.0, rim.1, T, true));
-        assert!(!segment_crosses_triangle([0.5, 0.5, -1.0], [0.5, 0.5, 1.0], T, false));
+        assert!(!segment_crosses_triangle(
+            [0.5, 0.5, -1.0],
+            [0.5, 0.5, 1.0],
+            T,
+            false
+        ));
         // through a spoke of a fan (p is the fan centre): inside the face
         assert!(segment_crosses_triangle(rim.0, rim.1, T, false));
         // oblique, and either direction
-        assert!(segment_crosses_triangle([0.4, 0.1, 1.0], [0.0, 0.3, -1.0], T, true));
+        assert!(segment_crosses_triangle(
+            [0.4, 0.1, 1.0],
+            [0.0, 0.3, -1.0],
+            T,
+            true
+        ));
         assert!(segment_crosses_triangle(through.1, through.0, T, true));
     }
 }

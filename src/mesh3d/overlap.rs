@@ -51,7 +51,8 @@ impl Grid {
     pub(super) fn buckets(&self, r: [[usize; 2]; 3]) -> impl Iterator<Item = usize> + '_ {
         let n = self.n;
         (r[2][0]..=r[2][1]).flat_map(move |z| {
-            (r[1][0]..=r[1][1]).flat_map(move |y| (r[0][0]..=r[0][1]).map(move |x| x + n * (y + n * z)))
+            (r[1][0]..=r[1][1])
+                .flat_map(move |y| (r[0][0]..=r[0][1]).map(move |x| x + n * (y + n * z)))
         })
     }
 

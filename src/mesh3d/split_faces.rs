@@ -203,7 +203,12 @@ impl PolyMesh3 {
         for k in 0..self.n_cells() {
             for &f in self.cell_faces(k) {
                 self.outward_loop(f as usize, k, &mut l);
-                push_split(&mut p.face_vertices, &mut p.face_ptr, &l, centre[f as usize]);
+                push_split(
+                    &mut p.face_vertices,
+                    &mut p.face_ptr,
+                    &l,
+                    centre[f as usize],
+                );
             }
             p.cell_ptr.push((p.face_ptr.len() - 1) as u32);
         }

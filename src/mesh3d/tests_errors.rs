@@ -356,7 +356,11 @@ fn an_edge_through_a_face_overlaps_without_a_vertex_inside() {
         ),
         "{e:?}"
     );
-    assert!(e.to_string().contains("the edge (8, 10) of cell 1 crosses face"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("the edge (8, 10) of cell 1 crosses face"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -39,7 +39,10 @@ fn check_split(fan: &PolyMesh3, split: &PolyMesh3) {
     assert_eq!(split.n_cells(), fan.n_cells());
     assert!((total_volume(split) - total_volume(fan)).abs() < 1e-12);
     for k in 0..fan.n_cells() {
-        assert!((split.measure(k) - fan.measure(k)).abs() < 1e-14, "cell {k}");
+        assert!(
+            (split.measure(k) - fan.measure(k)).abs() < 1e-14,
+            "cell {k}"
+        );
         let (a, b) = (split.centroid(k), fan.centroid(k));
         assert!((0..3).all(|r| (a[r] - b[r]).abs() < 1e-14), "cell {k}");
         assert_eq!(split.cell_tag(k), fan.cell_tag(k));
@@ -60,6 +63,13 @@ fn the_warped_family_split_is_exactly_consistent_at_levels_1_to_3() {
         assert!(consistency_defect(&fan) > 1e-5);
         let split = build(p, WarpedFaces::Split);
         check_split(&fan, &split);
+        eprintln!(
+            "level {level}: faces {} -> {}, consistency defect {:.3e} -> {:.3e}",
+            fan.n_faces(),
+            split.n_faces(),
+            consistency_defect(&fan),
+            consistency_defect(&split)
+        );
         // every interior face of the warped family is warped, every boundary face planar
         let n = 1usize << (level + 1);
         assert_eq!(fan.faces_to_split().len(), 3 * n * n * (n - 1));
@@ -138,7 +148,10 @@ fn conventions_are_parsed_by_name() {
         assert_eq!(w.name().parse::<WarpedFaces>().unwrap(), w);
         assert_eq!(w.to_string(), w.name());
     }
-    assert_eq!(" Split ".parse::<WarpedFaces>().unwrap(), WarpedFaces::Split);
+    assert_eq!(
+        " Split ".parse::<WarpedFaces>().unwrap(),
+        WarpedFaces::Split
+    );
     let e = "planar".parse::<WarpedFaces>().unwrap_err().to_string();
     assert!(e.contains("\"fan\" or \"split\""), "{e}");
 }
