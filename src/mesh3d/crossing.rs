@@ -12,17 +12,18 @@
 //! cross meet along a segment whose ends lie where an edge of one crosses the other; when no
 //! end is a boundary vertex inside a cell (check 12a, `overlap.rs`), some boundary edge
 //! crosses a boundary face in its interior: two tetrahedra interlocked as a star of David,
-//! two bars crossing edge through face. The degenerate case left is an edge that meets
-//! another exactly (a crossing on the rim of a face), which a perturbation of the vertices
-//! turns into one of the cases above.
+//! two bars crossing edge through face. The degenerate cases left, an edge meeting another
+//! exactly (a crossing on the rim of a face) or a vertex lying exactly on a face, become one
+//! of the cases above under a perturbation of the vertices.
 //!
 //! ## The test
 //! The boundary edges (each shared by two boundary faces, check 11) are tested against the
 //! boundary faces whose bounding box meets theirs, found in a uniform grid of about one
 //! bucket per cell over the bounding box of the mesh (the (bucket, face) pairs of the face
-//! boxes, sorted, searched by bucket). A face is skipped when it has a vertex of the edge or
-//! belongs to a cell of the edge (an edge crossing the interior of such a face would lie in
-//! its plane). Edge (a, b) crosses the face when it crosses one of its fan triangles T (the
+//! boxes, sorted, searched by bucket). A face is skipped when it has a vertex of the edge (a
+//! segment from a point of a planar face crosses its interior only lying in its plane) or
+//! belongs to the cell of one of the edge's two boundary faces (the edges of an embedded cell
+//! do not cross its faces). Edge (a, b) crosses the face when it crosses one of its fan triangles T (the
 //! face itself if it is a triangle): with n = N_T the normal of T and L = |b − a|,
 //!
 //! * a and b lie strictly on either side of the plane of T, each more than 10⁻⁹ L off it

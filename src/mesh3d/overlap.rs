@@ -12,9 +12,9 @@
 //! vertex are filled); a cell, star-shaped with respect to x_K
 //! (check 10), is the union of the tetrahedra (x_K, T) over the fan triangles T of its faces,
 //! and a point is strictly inside it if it lies in one of these tetrahedra and not on its
-//! outer triangle (barycentric coordinates, to 10⁻⁹). Expected O(n) for meshes of cells of comparable sizes. Overlaps in which no
-//! vertex enters a cell (two bars crossing, an edge through a face) are check 12b's
-//! (`crossing.rs`), which shares the grid defined here.
+//! outer triangle (barycentric coordinates, to 10⁻⁹). Expected O(n) for meshes of cells of
+//! comparable sizes. Overlaps in which no vertex enters a cell (two bars crossing, an edge
+//! through a face) are check 12b's (`crossing.rs`), which shares the grid defined here.
 
 use super::Point3;
 use super::PolyMesh3;
