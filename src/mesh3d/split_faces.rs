@@ -102,7 +102,8 @@ impl FromStr for WarpedFaces {
 
 impl PolyMesh3 {
     /// [`PolyMesh3::from_polyhedra`], then warped faces as `warped` says
-    /// ([`WarpedFaces::apply`]).
+    /// ([`WarpedFaces::apply`]). The mesh is validated with its faces whole first, so a face
+    /// warped beyond [`WARP_TOL`](super::WARP_TOL) is refused under either convention.
     pub fn from_polyhedra_with(
         p: Polyhedra,
         budget: MemoryBudget,
