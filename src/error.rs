@@ -471,6 +471,23 @@ pub enum MeshError {
         /// The cell holding it.
         cell: usize,
     },
+    /// The polyhedra cover some region more than once: an edge of the boundary surface
+    /// crosses, in its interior, a boundary face of a cell that does not have the edge.
+    #[error(
+        "cells overlap: the edge ({a}, {b}) of cell {edge_cell} crosses face {face} of cell {face_cell}"
+    )]
+    EdgeThroughFace {
+        /// The smaller vertex of the edge.
+        a: usize,
+        /// The larger vertex of the edge.
+        b: usize,
+        /// A cell having the edge.
+        edge_cell: usize,
+        /// The face crossed.
+        face: usize,
+        /// The cell of that face.
+        face_cell: usize,
+    },
     /// Cell tags that are neither absent nor one per cell.
     #[error("{tags} cell tags for {cells} cells")]
     CellTagCount {

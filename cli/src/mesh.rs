@@ -6,19 +6,22 @@
 //! file is 3D when it has 3D elements (tetrahedra, hexahedra, prisms or pyramids), else 2D
 //! ([`read_any`]). Generated meshes are 3D for the family names of
 //! [`Family3`] (cubes, kuhn or tetrahedra, prisms, refined, warped) and 2D for those of
-//! [`Family`] (cartesian, hexagonal, kershaw, triangles). 3D meshes are written as `.vtu` only
+//! [`Family`] (cartesian, hexagonal, kershaw, triangles). The faces of a 3D mesh that are not
+//! planar are kept whole or split into triangles as `--warped-faces` says ([`WarpedFaces`]).
+//! 3D meshes are written as `.vtu` only
 //! (`.typ2` is a 2D format); every output is written atomically and never over an input
 //! ([`crate::output`]).
 
 use crate::output;
 use anyhow::{Result, bail};
 use clap::Subcommand;
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use gradvi::mesh::generate::Family;
 use gradvi::mesh::io::{read_mesh, write_typ2, write_vtu};
 use gradvi::mesh::{MemoryBudget, PolyMesh, Rect};
 use gradvi::mesh3d::generate::Family3;
 use gradvi::mesh3d::io::{read_mesh3, read_msh3, write_vtu3};
-use gradvi::mesh3d::{Cuboid, PolyMesh3};
+use gradvi::mesh3d::{Cuboid, PolyMesh3, WarpedFaces};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -31,6 +34,10 @@ pub enum MeshCommand {
     Info {
         /// The mesh file.
         file: PathBuf,
+        /// 3D: how faces that are not planar are represented (see --warped-faces of
+        /// `gradvi mesh generate`).
+        #[arg(long, default_value = "fan", value_parser = warped_faces())]
+        warped_faces: WarpedFaces,
     },
     /// Generate a mesh of the unit square (2D families) or the unit cube (3D families), or of
     /// --domain, and write it (.typ2 or .vtu in 2D, .vtu in 3D, by extension).
@@ -51,6 +58,13 @@ pub enum MeshCommand {
         /// Output file (.typ2 or .vtu in 2D, .vtu in 3D).
         #[arg(short, long)]
         output: PathBuf,
+        /// 3D: how faces that are not planar (the warped family's) are represented: fan (one
+        /// face measured on the triangles fanned from its vertex average, HArDCore3D's
+        /// convention; HMM is then exact on affine functions only up to the warp) or split
+        /// (each such face split into those triangles around a new vertex; HMM exact, one
+        /// unknown per triangle). No effect in 2D.
+        #[arg(long, default_value = "fan", value_parser = warped_faces())]
+        warped_faces: WarpedFaces,
     },
     /// Read a mesh, validate it and write it in another format: 2D to .typ2 or .vtu, 3D (gmsh,
     /// RF, VTU) to .vtu.
@@ -59,13 +73,22 @@ pub enum MeshCommand {
         input: PathBuf,
         /// The output file.
         output: PathBuf,
+        /// 3D: fan or split (see --warped-faces of `gradvi mesh generate`).
+        #[arg(long, default_value = "fan", value_parser = warped_faces())]
+        warped_faces: WarpedFaces,
     },
+}
+
+/// The parser of `--warped-faces`: `fan` or `split` ([`WarpedFaces`]).
+pub fn warped_faces() -> impl TypedValueParser<Value = WarpedFaces> {
+    PossibleValuesParser::new(WarpedFaces::ALL.map(WarpedFaces::name))
+        .try_map(|s| s.parse::<WarpedFaces>())
 }
 
 /// Runs a `gradvi mesh` subcommand.
 pub fn run(c: &MeshCommand) -> Result<()> {
     match c {
-        MeshCommand::Info { file } => match read_any(file)? {
+        MeshCommand::Info { file, warped_faces } => match read_any(file, *warped_faces)? {
             AnyMesh::Two(m) => info_2d(file, &m),
             AnyMesh::Three(m) => info_3d(file, &m),
         },
@@ -74,10 +97,11 @@ pub fn run(c: &MeshCommand) -> Result<()> {
             level,
             domain,
             output,
+            warped_faces,
         } => {
             // the output format is checked before any work
             check_format(family.parse::<Family3>().is_ok(), output)?;
-            let m = generate(family, *level, domain.as_deref())?;
+            let m = generate(family, *level, domain.as_deref(), *warped_faces)?;
             write(&m, output)?;
             eprintln!(
                 "wrote {} ({} cells, h = {:.6})",
@@ -87,9 +111,13 @@ pub fn run(c: &MeshCommand) -> Result<()> {
             );
             Ok(())
         }
-        MeshCommand::Convert { input, output } => {
+        MeshCommand::Convert {
+            input,
+            output,
+            warped_faces,
+        } => {
             output::check_distinct(&[("mesh", input)], &[("converted mesh", output)])?;
-            let m = read_any(input)?;
+            let m = read_any(input, *warped_faces)?;
             write(&m, output)?;
             eprintln!("wrote {} ({} cells)", output.display(), m.n_cells());
             Ok(())
@@ -121,20 +149,24 @@ impl AnyMesh {
     }
 }
 
-/// Reads and validates the mesh in `path`, 2D or 3D by its format (see the module docs).
+/// Reads and validates the mesh in `path`, 2D or 3D by its format (see the module docs), a 3D
+/// mesh's warped faces as `warped` says.
 ///
 /// A `.msh` file is first read by the 3D reader: a file with 3D elements is 3D. When the 3D
 /// reader finds no 3D element (its error at line 0), the file is read by the 2D reader, whose
 /// error, if any, is the one reported; any other error of the 3D reader (a syntax error, which
 /// the 2D reader shares, or an element type neither reads) is reported as it is, unless the 2D
 /// reader reads the file.
-pub fn read_any(path: &Path) -> Result<AnyMesh> {
+pub fn read_any(path: &Path, warped: WarpedFaces) -> Result<AnyMesh> {
     let budget = MemoryBudget::available();
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let three = |p| Ok(AnyMesh::Three(PolyMesh3::from_polyhedra(p, budget)?));
+    let three = |p| {
+        let m = PolyMesh3::from_polyhedra_with(p, budget, warped)?;
+        Ok(AnyMesh::Three(m))
+    };
     match ext.as_deref() {
         Some("typ1" | "typ2") => Ok(AnyMesh::Two(read_mesh(path, budget)?)),
         Some("msh") => match read_msh3(path, budget) {
@@ -156,8 +188,13 @@ fn no_3d_cells(e: &gradvi::Error) -> bool {
 }
 
 /// The mesh of `family` at `level`, on `domain` (4 bounds in 2D, 6 in 3D) or the unit square
-/// or cube.
-fn generate(family: &str, level: usize, domain: Option<&[f64]>) -> Result<AnyMesh> {
+/// or cube; a 3D mesh's warped faces as `warped` says.
+fn generate(
+    family: &str,
+    level: usize,
+    domain: Option<&[f64]>,
+    warped: WarpedFaces,
+) -> Result<AnyMesh> {
     let budget = MemoryBudget::available();
     if let Ok(f) = family.parse::<Family3>() {
         let cuboid = match domain {
@@ -168,7 +205,8 @@ fn generate(family: &str, level: usize, domain: Option<&[f64]>) -> Result<AnyMes
                 d.len()
             ),
         };
-        return Ok(AnyMesh::Three(f.generate_on(level, cuboid, budget)?));
+        let m = f.generate_on(level, cuboid, budget)?;
+        return Ok(AnyMesh::Three(warped.apply(m, budget)?));
     }
     let f = match family.parse::<Family>() {
         Ok(f) => f,

@@ -52,6 +52,10 @@ pub struct SolveArgs {
     /// problem file's generated mesh (same family and domain).
     #[arg(long)]
     level: Option<usize>,
+    /// 3D: faces that are not planar kept whole (fan) or split into triangles (split), as for
+    /// `gradvi mesh generate --warped-faces`. No effect in 2D.
+    #[arg(long, default_value = "fan", value_parser = crate::mesh::warped_faces())]
+    warped_faces: gradvi::mesh3d::WarpedFaces,
     /// The scheme (default: the problem file's `scheme`, else hmm).
     #[arg(long, value_parser = named::<SchemeKind>(SchemeKind::ALL.iter().map(|k| k.name())))]
     pub(crate) scheme: Option<SchemeKind>,
@@ -355,7 +359,7 @@ pub fn run(a: &SolveArgs) -> Result<()> {
     )?;
     // the resolved mesh, as the JSON output records it
     let mesh_desc = spec.to_string();
-    match crate::solve3d::case_mesh(&spec, &pf)? {
+    match crate::solve3d::case_mesh(&spec, &pf, a.warped_faces)? {
         AnyMesh::Two(mesh) => run2(a, &pf, &mesh, &mesh_desc, t0.elapsed().as_secs_f64()),
         AnyMesh::Three(mesh) => {
             let seconds = t0.elapsed().as_secs_f64();

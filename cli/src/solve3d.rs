@@ -24,8 +24,8 @@ use super::output::atomic;
 use super::solve::{Case, SolveArgs, report, solve_options, write_json};
 use anyhow::{Context, Result};
 use gradvi::mesh::MemoryBudget;
-use gradvi::mesh3d::PolyMesh3;
 use gradvi::mesh3d::io::write_vtu3;
+use gradvi::mesh3d::{PolyMesh3, WarpedFaces};
 use gradvi::post::fields::EntityFields;
 use gradvi::problem::Problem;
 use gradvi::problem::file::{MeshSpec, ProblemFile};
@@ -38,16 +38,18 @@ type Scheme3<'a> = dyn GradientDiscretisation<PolyMesh3, 3> + 'a;
 /// The mesh `spec` describes, 2D or 3D. A mesh file is read as 2D, exactly as before 3D
 /// solves existed ([`gradvi::case::build_mesh`]), when the problem file is not a 3D problem or
 /// the format is 2D only (`.typ1`, `.typ2`); else by [`read_any`], which tells the dimension
-/// from the file.
-pub fn case_mesh(spec: &MeshSpec, pf: &ProblemFile) -> Result<AnyMesh> {
+/// from the file. A 3D mesh's warped faces are as `warped` says.
+pub fn case_mesh(spec: &MeshSpec, pf: &ProblemFile, warped: WarpedFaces) -> Result<AnyMesh> {
     let budget = MemoryBudget::available();
     let two_d_format = |p: &std::path::Path| {
         let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
         ext.eq_ignore_ascii_case("typ1") || ext.eq_ignore_ascii_case("typ2")
     };
     Ok(match spec {
-        MeshSpec::Generated3 { .. } => AnyMesh::Three(gradvi::case::build_mesh3(spec, budget)?),
-        MeshSpec::File(p) if pf.compiles_for(3) && !two_d_format(p) => read_any(p)?,
+        MeshSpec::Generated3 { .. } => {
+            AnyMesh::Three(warped.apply(gradvi::case::build_mesh3(spec, budget)?, budget)?)
+        }
+        MeshSpec::File(p) if pf.compiles_for(3) && !two_d_format(p) => read_any(p, warped)?,
         _ => AnyMesh::Two(gradvi::case::build_mesh(spec, budget)?),
     })
 }

@@ -96,6 +96,41 @@ fn every_3d_family_is_generated_as_vtu_and_read_back() {
 }
 
 #[test]
+fn warped_faces_are_split_on_request() {
+    // level 1 of the warped family: 240 faces, the 144 interior ones warped; split, each
+    // becomes 4 triangles around a new vertex (15 to 24 faces per cell), the volume unchanged
+    let path = tmp("warped-fan.vtu");
+    let p = path.to_str().unwrap();
+    let (code, _, err) = gradvi(&["mesh", "generate", "warped", "--level", "1", "-o", p]);
+    assert_eq!(code, Some(0), "{err}");
+    let (_, fan, _) = gradvi(&["mesh", "info", p]);
+    assert_eq!(field(&fan, "faces"), "240 (96 on the boundary)");
+    let split_path = tmp("warped-split.vtu");
+    let q = split_path.to_str().unwrap();
+    for args in [
+        vec!["mesh", "info", p, "--warped-faces", "split"],
+        vec!["mesh", "convert", p, q, "--warped-faces", "split"],
+        vec!["mesh", "info", q],
+    ] {
+        let (code, out, err) = gradvi(&args);
+        assert_eq!(code, Some(0), "{args:?}: {err}");
+        if args[1] == "info" {
+            assert_eq!(field(&out, "faces"), "672 (96 on the boundary)", "{args:?}");
+            assert_eq!(field(&out, "vertices"), (125 + 144).to_string());
+            assert_eq!(field(&out, "cells by faces"), "15:8 18:24 21:24 24:8");
+            assert_eq!(field(&out, "total volume"), field(&fan, "total volume"));
+            let warp: f64 = field(&out, "max face warp").parse().unwrap();
+            assert!(warp < 1e-12, "{args:?}: warp {warp}");
+        }
+    }
+    let (code, _, err) = gradvi(&["mesh", "info", p, "--warped-faces", "planar"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("[possible values: fan, split]"), "{err}");
+    std::fs::remove_file(path).ok();
+    std::fs::remove_file(split_path).ok();
+}
+
+#[test]
 fn generate_on_a_domain_and_convert_to_vtu() {
     let path = tmp("box.vtu");
     let p = path.to_str().unwrap();

@@ -10,7 +10,7 @@ use crate::mesh::{point_key, points_array, unique_rows, vec_array};
 use gradvi::mesh::{MemoryBudget, NO_CELL, SolveMesh};
 use gradvi::mesh3d::generate::Family3;
 use gradvi::mesh3d::io::{read_mesh3, write_vtu3};
-use gradvi::mesh3d::{Cuboid, Point3, PolyMesh3, Polyhedra};
+use gradvi::mesh3d::{Cuboid, Point3, PolyMesh3, Polyhedra, WarpedFaces};
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with3};
 use nalgebra::DVector;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
@@ -60,6 +60,12 @@ fn borrow(v: &[(String, Vec<f64>)]) -> Vec<(&str, &[f64])> {
     v.iter().map(|(n, a)| (n.as_str(), a.as_slice())).collect()
 }
 
+/// The convention for warped faces named `name` ("fan" or "split"), else the library's
+/// `InvalidDataError`.
+fn warped_convention(py: Python<'_>, name: &str) -> PyResult<WarpedFaces> {
+    WarpedFaces::from_str(name).map_err(|e| crate::to_pyerr(py, &e))
+}
+
 /// `domain` (x0, x1, y0, y1, z0, z1) as a [`Cuboid`].
 fn cuboid(d: [f64; 6]) -> Cuboid {
     Cuboid::new([d[0], d[1]], [d[2], d[3]], [d[4], d[5]])
@@ -67,12 +73,15 @@ fn cuboid(d: [f64; 6]) -> Cuboid {
 
 #[pymethods]
 impl PyMesh3 {
-    /// Reads a 3D mesh file (.msh gmsh 4.1/2.2 ASCII, .vtu, RF .node/.ele or their stem).
+    /// Reads a 3D mesh file (.msh gmsh 4.1/2.2 ASCII, .vtu, RF .node/.ele or their stem);
+    /// `warped_faces`: "fan" (the default) or "split" (`gradvi::mesh3d::WarpedFaces`).
     #[staticmethod]
-    fn read(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    #[pyo3(signature = (path, warped_faces="fan"))]
+    fn read(py: Python<'_>, path: PathBuf, warped_faces: &str) -> PyResult<Self> {
+        let warped = warped_convention(py, warped_faces)?;
         guard(py, move || {
             let p = read_mesh3(&path, MemoryBudget::available())?;
-            let m = PolyMesh3::from_polyhedra(p, MemoryBudget::available())
+            let m = PolyMesh3::from_polyhedra_with(p, MemoryBudget::available(), warped)
                 .map_err(|source| gradvi::Error::InvalidMeshFile { path, source })?;
             Ok(PyMesh3::new(m))
         })
@@ -81,9 +90,10 @@ impl PyMesh3 {
     /// Builds a mesh from points (n, 3), the CSR description of `gradvi::mesh3d::Polyhedra`
     /// (cell offsets into the face sides, face-side offsets into `face_vertices`), optional
     /// cell tags (one per cell) and optional tagged boundary faces (offsets, vertex loops,
-    /// tags).
+    /// tags); `warped_faces` as for `read`.
     #[staticmethod]
-    #[pyo3(signature = (points, cell_ptr, face_ptr, face_vertices, cell_tags=None, tagged=None))]
+    #[pyo3(signature = (points, cell_ptr, face_ptr, face_vertices, cell_tags=None, tagged=None, warped_faces="fan"))]
+    #[allow(clippy::too_many_arguments)]
     fn from_arrays(
         py: Python<'_>,
         points: PyReadonlyArray2<'_, f64>,
@@ -96,7 +106,9 @@ impl PyMesh3 {
             PyReadonlyArray1<'_, i64>,
             PyReadonlyArray1<'_, i32>,
         )>,
+        warped_faces: &str,
     ) -> PyResult<Self> {
+        let warped = warped_convention(py, warped_faces)?;
         let pts = points.as_array();
         if pts.ncols() != 3 {
             return Err(invalid(format!(
@@ -118,31 +130,32 @@ impl PyMesh3 {
             p.tagged_tags = tags.as_array().to_vec();
         }
         guard(py, move || {
-            Ok(PyMesh3::new(PolyMesh3::from_polyhedra(
+            Ok(PyMesh3::new(PolyMesh3::from_polyhedra_with(
                 p,
                 MemoryBudget::available(),
+                warped,
             )?))
         })
     }
 
     /// The built-in 3D family `family` at `level`, optionally mapped onto a box
-    /// (x0, x1, y0, y1, z0, z1).
+    /// (x0, x1, y0, y1, z0, z1); `warped_faces` as for `read`.
     #[staticmethod]
-    #[pyo3(signature = (family, level, domain=None))]
+    #[pyo3(signature = (family, level, domain=None, warped_faces="fan"))]
     fn generate(
         py: Python<'_>,
         family: &str,
         level: usize,
         domain: Option<[f64; 6]>,
+        warped_faces: &str,
     ) -> PyResult<Self> {
         let fam = Family3::from_str(family).map_err(|e| crate::to_pyerr(py, &e))?;
+        let warped = warped_convention(py, warped_faces)?;
         let domain = domain.map_or(Cuboid::UNIT, cuboid);
         guard(py, move || {
-            Ok(PyMesh3::new(fam.generate_on(
-                level,
-                domain,
-                MemoryBudget::available(),
-            )?))
+            let budget = MemoryBudget::available();
+            let m = fam.generate_on(level, domain, budget)?;
+            Ok(PyMesh3::new(warped.apply(m, budget)?))
         })
     }
 

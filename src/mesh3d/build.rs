@@ -78,6 +78,7 @@ impl PolyMesh3 {
         m.check_shapes()?;
         m.check_boundary_surface()?;
         m.check_overlap()?;
+        m.check_crossings()?;
         m.cell_tags = if p.cell_tags.is_empty() {
             try_filled(m.n_cells(), 0, "the cell tags")?
         } else {

@@ -10,7 +10,9 @@
 //! as lists of faces, faces as vertex loops counter-clockwise seen from outside their first
 //! cell, face–cell incidence, boundary faces, tags) and the cached geometry of the notation
 //! table, computed as `geometry.rs` states (exact for planar faces; for warped faces the fan
-//! of triangles around the face's vertex average, HArDCore3D's convention).
+//! of triangles around the face's vertex average, HArDCore3D's convention, or, with
+//! [`WarpedFaces::Split`] and [`PolyMesh3::from_polyhedra_with`], each of those triangles a
+//! face of its own).
 //!
 //! | accessor | maths |
 //! |---|---|
@@ -33,7 +35,10 @@
 //! [`CellComplex<3>`](crate::mesh::CellComplex) view a scheme reads; `renumber.rs` drops
 //! unused vertices ([`Polyhedra::drop_unused_vertices`], for readers); `surface.rs` and
 //! `overlap.rs` check the boundary surface and overlaps; `simplex.rs` gives the vertices of a
-//! tetrahedral cell ([`PolyMesh3::tetrahedron`]) to the schemes on simplices.
+//! tetrahedral cell ([`PolyMesh3::tetrahedron`]) to the schemes on simplices; `crossing.rs`
+//! checks that no boundary edge crosses a boundary face; `split_faces.rs` splits warped faces
+//! into their fan triangles when asked ([`WarpedFaces`], a build option whose default,
+//! [`WarpedFaces::Fan`], keeps them whole).
 
 pub mod agglomerate;
 pub mod io;
@@ -44,6 +49,7 @@ use crate::error::MeshError;
 
 mod build;
 mod complex;
+mod crossing;
 mod faces;
 mod geometry;
 mod mesh;
@@ -53,6 +59,7 @@ mod renumber;
 mod shape;
 mod simplex;
 mod solve_mesh;
+mod split_faces;
 mod surface;
 mod tags;
 #[cfg(test)]
@@ -63,10 +70,13 @@ mod tests_build;
 mod tests_errors;
 #[cfg(test)]
 mod tests_external;
+#[cfg(test)]
+mod tests_split;
 pub mod validate;
 
 pub use build::mesh3_bytes;
 pub use mesh::PolyMesh3;
+pub use split_faces::{PLANAR_TOL, WarpedFaces};
 pub use validate::{MAX_CELL_FACES, MAX_FACE_VERTICES, WARP_TOL};
 
 /// A point or vector of ℝ³.

@@ -1,4 +1,4 @@
-//! Check 12 of [`validate`](super::validate): no cell covers a boundary vertex.
+//! Check 12a of [`validate`](super::validate): no cell covers a boundary vertex.
 //!
 //! Once every cell is a closed, outward-oriented surface and interior faces are shared by two
 //! cells on opposite sides, Σ_K |K| equals the volume enclosed by the boundary surface,
@@ -12,8 +12,9 @@
 //! vertex are filled); a cell, star-shaped with respect to x_K
 //! (check 10), is the union of the tetrahedra (x_K, T) over the fan triangles T of its faces,
 //! and a point is strictly inside it if it lies in one of these tetrahedra and not on its
-//! outer triangle (barycentric coordinates, to 10⁻⁹). Expected O(n) for meshes of cells of comparable sizes. (Overlaps in which no
-//! vertex enters a cell, such as two bars crossing edge through edge, are not detected.)
+//! outer triangle (barycentric coordinates, to 10⁻⁹). Expected O(n) for meshes of cells of
+//! comparable sizes. Overlaps in which no vertex enters a cell (two bars crossing, an edge
+//! through a face) are check 12b's (`crossing.rs`), which shares the grid defined here.
 
 use super::Point3;
 use super::PolyMesh3;
@@ -23,13 +24,38 @@ use crate::mesh::buckets::counting_sort;
 use rayon::prelude::*;
 
 /// A uniform grid of n × n × n buckets over a bounding box.
-struct Grid {
+pub(super) struct Grid {
     lo: [f64; 3],
     width: [f64; 3],
     n: usize,
 }
 
 impl Grid {
+    /// About one bucket per cell over the bounding box of `m` (at most 1024 per side).
+    pub(super) fn over(m: &PolyMesh3) -> Grid {
+        let bb = m.bounding_box().ranges();
+        let n = ((m.n_cells() as f64).cbrt().ceil() as usize).clamp(1, 1024);
+        Grid {
+            lo: bb.map(|r| r[0]),
+            width: std::array::from_fn(|a| (bb[a][1] - bb[a][0]) / n as f64),
+            n,
+        }
+    }
+
+    /// The slabs of every vertex of `m` ([`Grid::slabs`]).
+    pub(super) fn vertex_slabs(&self, m: &PolyMesh3) -> Vec<[u16; 3]> {
+        m.vertices.par_iter().map(|&p| self.slabs(p)).collect()
+    }
+
+    /// The buckets of the slab ranges `r` (as [`slab_range`] gives them), x fastest.
+    pub(super) fn buckets(&self, r: [[usize; 2]; 3]) -> impl Iterator<Item = usize> + '_ {
+        let n = self.n;
+        (r[2][0]..=r[2][1]).flat_map(move |z| {
+            (r[1][0]..=r[1][1])
+                .flat_map(move |y| (r[0][0]..=r[0][1]).map(move |x| x + n * (y + n * z)))
+        })
+    }
+
     /// The index of the slab holding coordinate `x` along axis `a` (clamped to the grid).
     fn slab(&self, x: f64, a: usize) -> usize {
         (((x - self.lo[a]) / self.width[a]).floor().max(0.0) as usize).min(self.n - 1)
@@ -55,13 +81,8 @@ impl PolyMesh3 {
     /// increasing order, and the error names the smallest boundary vertex inside a cell, and
     /// the smallest such cell.
     pub(crate) fn check_overlap(&self) -> Result<(), MeshError> {
-        let bb = self.bounding_box().ranges();
-        let n = ((self.n_cells() as f64).cbrt().ceil() as usize).clamp(1, 1024);
-        let grid = Grid {
-            lo: bb.map(|r| r[0]),
-            width: std::array::from_fn(|a| (bb[a][1] - bb[a][0]) / n as f64),
-            n,
-        };
+        let grid = Grid::over(self);
+        let n = grid.n;
         let mut boundary_vertices: Vec<u32> = self
             .boundary_faces
             .iter()
@@ -69,7 +90,7 @@ impl PolyMesh3 {
             .collect();
         boundary_vertices.par_sort_unstable();
         boundary_vertices.dedup();
-        let slabs: Vec<[u16; 3]> = self.vertices.par_iter().map(|&p| grid.slabs(p)).collect();
+        let slabs = grid.vertex_slabs(self);
         // the searched buckets, numbered in increasing order
         let mut slot = vec![u32::MAX; n * n * n];
         for &v in &boundary_vertices {
@@ -84,15 +105,14 @@ impl PolyMesh3 {
         let pairs: Vec<(u32, u32)> = (0..self.n_cells())
             .into_par_iter()
             .flat_map_iter(|k| {
-                let r = self.bucket_range(&slabs, k);
+                let ids = self
+                    .cell_faces(k)
+                    .iter()
+                    .flat_map(|&f| self.face_vertices(f as usize));
                 let slot = &slot;
-                (r[2][0]..=r[2][1]).flat_map(move |z| {
-                    (r[1][0]..=r[1][1]).flat_map(move |y| {
-                        (r[0][0]..=r[0][1]).filter_map(move |x| {
-                            let b = slot[x + n * (y + n * z)];
-                            (b != u32::MAX).then_some((b, k as u32))
-                        })
-                    })
+                grid.buckets(slab_range(&slabs, ids)).filter_map(move |b| {
+                    let b = slot[b];
+                    (b != u32::MAX).then_some((b, k as u32))
                 })
             })
             .collect();
@@ -118,22 +138,6 @@ impl PolyMesh3 {
         }
     }
 
-    /// The ranges of slabs, along each axis, met by the bounding box of cell `k`'s vertices
-    /// (`slabs`: those of every vertex).
-    fn bucket_range(&self, slabs: &[[u16; 3]], k: usize) -> [[usize; 2]; 3] {
-        let mut r = [[usize::MAX, 0]; 3];
-        for &f in self.cell_faces(k) {
-            for &v in self.face_vertices(f as usize) {
-                let s = slabs[v as usize];
-                for a in 0..3 {
-                    let i = s[a] as usize;
-                    r[a] = [r[a][0].min(i), r[a][1].max(i)];
-                }
-            }
-        }
-        r
-    }
-
     /// Whether vertex `v` lies strictly inside cell `k` (see the module docs).
     fn strictly_inside(&self, k: usize, v: u32) -> bool {
         let xk = self.cell_centroid[k];
@@ -154,6 +158,23 @@ impl PolyMesh3 {
         }
         inside
     }
+}
+
+/// The ranges of slabs, along each axis, met by the bounding box of the points `ids`
+/// (`slabs`: those of every vertex, [`Grid::vertex_slabs`]).
+pub(super) fn slab_range<'a>(
+    slabs: &[[u16; 3]],
+    ids: impl IntoIterator<Item = &'a u32>,
+) -> [[usize; 2]; 3] {
+    let mut r = [[usize::MAX, 0]; 3];
+    for &v in ids {
+        let s = slabs[v as usize];
+        for a in 0..3 {
+            let i = s[a] as usize;
+            r[a] = [r[a][0].min(i), r[a][1].max(i)];
+        }
+    }
+    r
 }
 
 /// Whether `p` lies in the tetrahedron (xk, a, b, c) (positively oriented), strictly on the

@@ -65,7 +65,7 @@ fn check_identities(m: &PolyMesh3, volume: f64, area: f64) {
 }
 
 /// HMM's local form reproduces affine functions: W δ(u) = |σ| A∇u·n_{K,σ} on every face.
-fn check_local_form(m: &PolyMesh3) {
+pub(crate) fn check_local_form(m: &PolyMesh3) {
     let a = [[3.0, 0.5, 0.2], [0.5, 2.0, 0.3], [0.2, 0.3, 1.0]];
     let grad = [2.0, -1.0, 0.5];
     let u = |p: [f64; 3]| 1.0 + (0..3).map(|r| grad[r] * p[r]).sum::<f64>();

@@ -308,6 +308,74 @@ fn a_cell_inside_another_overlaps_it() {
 }
 
 #[test]
+fn an_edge_through_a_face_overlaps_without_a_vertex_inside() {
+    // a flat tent (cell 0) pierced by a needle (cell 1) whose long edges cross its base and
+    // sides: no vertex of either lies in the other, so check 12a passes and 12b names the
+    // first crossing edge
+    let v = vec![
+        [-3.0, -3.0, 0.0],
+        [3.0, -3.0, 0.0],
+        [0.0, 3.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.9, -0.1, -1.0],
+        [1.1, -0.1, -1.0],
+        [1.0, 0.1, -1.0],
+        [1.0, 0.0, 5.0],
+    ];
+    let e = build(mesh(v, &[tet_faces([0, 1, 2, 3]), tet_faces([4, 5, 6, 7])])).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            MeshError::EdgeThroughFace {
+                a: 4,
+                b: 7,
+                edge_cell: 1,
+                face_cell: 0,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    // two bars crossing: the edges of the bar along y pass through the quadrilateral sides
+    // of the bar along x
+    let p = boxes(&[
+        [[0.0, 4.0], [0.0, 1.0], [0.0, 1.0]],
+        [[1.5, 2.5], [-1.0, 2.0], [0.25, 0.75]],
+    ]);
+    let e = build(p).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            MeshError::EdgeThroughFace {
+                a: 8,
+                b: 10,
+                edge_cell: 1,
+                face_cell: 0,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(
+        e.to_string()
+            .contains("the edge (8, 10) of cell 1 crosses face"),
+        "{e}"
+    );
+}
+
+#[test]
+fn bars_side_by_side_or_touching_do_not_cross() {
+    // the same bars apart, and meeting face to face with a shared face: valid
+    let apart = boxes(&[
+        [[0.0, 4.0], [0.0, 1.0], [0.0, 1.0]],
+        [[1.5, 2.5], [1.5, 4.0], [0.25, 0.75]],
+    ]);
+    assert!(build(apart).is_ok());
+    let stacked = boxes(&[[[0.0, 1.0]; 3], [[0.0, 1.0], [0.0, 1.0], [1.0, 2.0]]]);
+    assert!(build(merge_equal_vertices(stacked)).is_ok());
+}
+
+#[test]
 fn tagged_faces_must_be_boundary_faces() {
     let mut p = cubes(2, 29);
     // the square x = ½ between y, z ∈ [0, ½]: nodes 1, 4, 13, 10 of the 3³ grid

@@ -14,7 +14,8 @@
 //! | 9 | non-negligible volumes: \|K\| > 10⁻¹⁴ h_K³ | [`MeshError::DegenerateVolume`] | O(n) |
 //! | 10 | star-shaped cells: d_{K,σ} > 10⁻¹² h_K, and every fan triangle T of σ seen positively from x_K: the tetrahedron (x_K, T) has volume > 10⁻¹⁴ h_K³ | [`MeshError::NotStarShaped3`] | O(n) |
 //! | 11 | a closed, edge-manifold boundary surface: every boundary edge used by exactly two boundary faces (then in opposite directions), and the boundary faces around each boundary vertex forming one fan (hanging nodes, cells touching along an edge or at a vertex, non-conforming interfaces all fail one of these; see `surface.rs`) | [`MeshError::NonConformingEdge`], [`MeshError::NonConformingVertex`] | O(n log n) |
-//! | 12 | no overlap: no boundary vertex strictly inside a cell (the volume balance Σ_K \|K\| = (1/3) Σ_{boundary σ} ∫_σ x·n holds by construction once the checks above pass, overlap or not; see `overlap.rs`) | [`MeshError::OverlappingPolyhedra`] | O(n) expected, a grid of buckets |
+//! | 12a | no overlap: no boundary vertex strictly inside a cell (the volume balance Σ_K \|K\| = (1/3) Σ_{boundary σ} ∫_σ x·n holds by construction once the checks above pass, overlap or not; see `overlap.rs`) | [`MeshError::OverlappingPolyhedra`] | O(n) expected, a grid of buckets |
+//! | 12b | no overlap: no boundary edge crossing a boundary face of another cell in its interior (cells overlap only if the boundary surface intersects itself; see `crossing.rs`) | [`MeshError::EdgeThroughFace`] | O(n log n) in the boundary's size, a grid of buckets |
 //! | 13 | tagged faces are boundary faces | [`MeshError::BadTaggedFace`] | O(n log n) |
 //!
 //! ## Warped faces
@@ -29,7 +30,9 @@
 //! of their diameter off their plane, so a consistency defect of up to about 10 %, and
 //! rejects faces folded beyond that, whose fan normal no longer represents them.
 //! HArDCore3D's `Random-Hexahedra` files pass with a wide margin: their faces are planar to
-//! round-off.
+//! round-off. [`WarpedFaces::Split`](super::WarpedFaces) removes the defect by splitting every
+//! face warped beyond [`PLANAR_TOL`](super::PLANAR_TOL) into its fan triangles (see
+//! `split_faces.rs`); the default, [`WarpedFaces::Fan`](super::WarpedFaces), keeps them whole.
 
 use super::Polyhedra;
 use crate::error::MeshError;
