@@ -493,3 +493,25 @@ pub fn read_rows(cfg: &super::Config) -> gradvi::Result<Vec<Peer3Row>> {
         Ok(Vec::new())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_index_numbers_x_fastest_then_y_then_z() {
+        let n = 4;
+        assert_eq!(grid_index([-2.0, -2.0, -2.0], n), 0);
+        assert_eq!(grid_index([-1.0, -2.0, -2.0], n), 1);
+        assert_eq!(grid_index([-2.0, -1.0, -2.0], n), 5);
+        assert_eq!(grid_index([-2.0, -2.0, -1.0], n), 25);
+        assert_eq!(grid_index([2.0, 2.0, 2.0], n), 124);
+    }
+
+    #[test]
+    fn max_diff_is_nan_on_a_missing_value_or_length() {
+        assert_eq!(max_diff(&[1.0, 2.0], &[1.5, 1.0]), 1.0);
+        assert!(max_diff(&[1.0, f64::NAN], &[1.0, 1.0]).is_nan());
+        assert!(max_diff(&[1.0], &[1.0, 1.0]).is_nan());
+    }
+}

@@ -245,3 +245,69 @@ fn targets(md: &mut Doc, rows: &[Peer3Row]) {
     ]);
     md.table(&t);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row of `code`/`config` at n = 64 on `cores` cores, `total_s` seconds, `peak` MiB.
+    fn row(code: &str, config: &str, cores: usize, total_s: f64, peak: f64) -> Peer3Row {
+        Peer3Row {
+            code: code.into(),
+            config: config.into(),
+            n: 64,
+            cells: 6 * 64 * 64 * 64,
+            unknowns: 65 * 65 * 65,
+            cores,
+            niter: 7,
+            coarse_niter: 3,
+            krylov: 100,
+            setup_s: 1.0,
+            solve_s: total_s - 1.0,
+            total_s,
+            peak_mib: peak,
+            err_max: 1e-3,
+            err_mean: 1e-4,
+            linear_seconds: total_s / 2.0,
+            linear_krylov: 20,
+            r: 2.0,
+            diff_u: f64::NAN,
+        }
+    }
+
+    #[test]
+    fn the_best_dolfinx_row_is_the_faster_one_at_equal_cores() {
+        let rows = vec![
+            row("dolfinx", "gamg", 1, 30.0, 800.0),
+            row("dolfinx", "hypre", 1, 20.0, 900.0),
+            row("dolfinx", "gamg", 2, 10.0, 1000.0),
+            row("gradvi", "p1 iterative", 1, 5.0, 300.0),
+        ];
+        assert_eq!(best_dolfinx(&rows, 64, 1).unwrap().config, "hypre");
+        assert_eq!(best_dolfinx(&rows, 64, 2).unwrap().config, "gamg");
+        assert!(best_dolfinx(&rows, 32, 1).is_none());
+        let mut md = Doc::default();
+        write(&mut md, &rows);
+        let text = md.to_string();
+        // gradvi / hypre: time 5 / 20, memory 300 / 900
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("| 64 | 274625 | 1 |"))
+            .unwrap();
+        assert!(
+            line.contains("| 0.25 |") && line.contains("| 0.33 |"),
+            "{line}"
+        );
+        assert!(
+            text.contains("| 64 | dolfinx | gamg | 2 | 3.00 |"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn without_rows_the_section_says_not_run() {
+        let mut md = Doc::default();
+        write(&mut md, &[]);
+        assert!(md.to_string().contains("has not been run"));
+    }
+}
