@@ -93,6 +93,10 @@ pub struct Peer3Row {
     /// Wall clock of the whole process or MPI job, measured by the driver.
     #[serde(deserialize_with = "super::peers::nullable")]
     pub total_s: f64,
+    /// gradvi's solve by phase, seconds: warm start (coarse solves), assembly, multigrid setups,
+    /// conjugate gradients, look-ahead (`warm|assemble|setup|cg|look-ahead`; empty for dolfinx).
+    #[serde(default)]
+    pub phases: String,
     /// Peak resident memory, MiB (summed over the MPI ranks).
     pub peak_mib: f64,
     /// Largest |u − ū| at the vertices.
@@ -190,6 +194,10 @@ fn run_gradvi(
         setup_s: before_solve + t.setup,
         solve_s: t.total - t.setup,
         total_s: f64::NAN,
+        phases: format!(
+            "{:.2}|{:.2}|{:.2}|{:.2}|{:.2}",
+            t.warm_start, t.assemble, t.factor, t.solve, t.look_ahead
+        ),
         peak_mib: peak_memory_mib(),
         err_max: errors.iter().fold(0.0, |a: f64, &b| a.max(b)),
         err_mean: errors.iter().sum::<f64>() / errors.len().max(1) as f64,
@@ -316,6 +324,7 @@ fn run_one(cfg: &super::Config, exe: &Path, run: &Run) -> gradvi::Result<Peer3Ro
         setup_s: d.setup_s,
         solve_s: d.solve_s,
         total_s: secs,
+        phases: String::new(),
         peak_mib: d.peak_mib,
         err_max: d.err_max,
         err_mean: d.err_mean,

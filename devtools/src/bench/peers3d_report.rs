@@ -107,10 +107,10 @@ pub fn write(md: &mut Doc, rows: &[Peer3Row]) {
 
 /// Every row of the CSV, with its setup and solve times.
 fn all_rows(md: &mut Doc, rows: &[Peer3Row]) {
-    md.section(3, "Every 3D run", "Setup: gradvi's mesh generation and assembly setup; dolfinx's mesh, forms, assembly and bounds. Solve: gradvi's warm start and active-set iteration; dolfinx's SNES. Total: the whole process (dolfinx: its imports too). Errors against the exact solution at the vertices.");
+    md.section(3, "Every 3D run", "Setup: gradvi's mesh generation and assembly setup; dolfinx's mesh, forms, assembly and bounds. Solve: gradvi's warm start and active-set iteration; dolfinx's SNES. Total: the whole process (dolfinx: its imports too). Errors against the exact solution at the vertices. gradvi's solve by phase (seconds): warm start (coarse solves) | assembly | multigrid setups | conjugate gradients | look-ahead.");
     let mut t = Table::new(
-        "n | code | config | cores | setup [s] | solve [s] | total [s] | peak [MiB] | NITER (+coarse) | Krylov | linear [s] | linear Krylov | R | max error | diff to dolfinx",
-        "rllrrrrrlrrrrrr",
+        "n | code | config | cores | setup [s] | solve [s] | total [s] | peak [MiB] | NITER (+coarse) | Krylov | linear [s] | linear Krylov | R | max error | diff to dolfinx | gradvi phases",
+        "rllrrrrrlrrrrrrl",
     );
     let mut sorted: Vec<&Peer3Row> = rows.iter().collect();
     sorted.sort_by(|a, b| {
@@ -132,7 +132,12 @@ fn all_rows(md: &mut Doc, rows: &[Peer3Row]) {
             r.linear_krylov,
             fixed(r.r, 2),
             format!("{:.4e}", r.err_max),
-            diff_cell(r.diff_u)
+            diff_cell(r.diff_u),
+            if r.phases.is_empty() {
+                NONE.to_string()
+            } else {
+                r.phases.replace('|', " / ")
+            }
         ]);
     }
     md.table(&t);
@@ -265,6 +270,7 @@ mod tests {
             setup_s: 1.0,
             solve_s: total_s - 1.0,
             total_s,
+            phases: String::new(),
             peak_mib: peak,
             err_max: 1e-3,
             err_mean: 1e-4,
