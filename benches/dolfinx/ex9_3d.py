@@ -144,14 +144,14 @@ def solve_obstacle(A, b, lb_a, ub_a, args, comm):
     if args.pc == "gamg":
         # the reduced systems of vinewtonrsls change size with the active set, and GAMG (PETSc
         # 3.18) fails on a size change ("Cannot change local size of Amat after use"), even
-        # after KSPReset: every Newton step gets a new GAMG (the monitor runs between steps),
-        # built from scratch on its reduced operator, as hypre rebuilds its own at each step
+        # after KSPReset: between Newton steps (in the monitor) the preconditioner's type is set
+        # to none and back, which destroys GAMG's hierarchy, and the next step builds a new one
+        # from scratch on its reduced operator, as hypre rebuilds its own at each step
         def fresh_pc(s, _its, _norm):
-            ksp = s.getKSP()
-            pc = PETSc.PC().create(comm)
-            pc.setOptionsPrefix(ksp.getOptionsPrefix())
+            pc = s.getKSP().getPC()
+            pc.setType("none")  # destroys GAMG's hierarchy
+            pc.setType("gamg")
             pc.setFromOptions()
-            ksp.setPC(pc)
 
         snes.setMonitor(fresh_pc)
     snes.solve(None, x)

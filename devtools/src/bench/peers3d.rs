@@ -380,43 +380,76 @@ pub fn fits(n: usize) -> bool {
     ok
 }
 
+/// The obstacle run `run` then its linear variant, R, and the difference of u to `reference`
+/// (dolfinx GAMG on one process, when written already).
+fn run_case(
+    cfg: &super::Config,
+    exe: &Path,
+    mut run: Run,
+    reference: &Path,
+) -> gradvi::Result<Peer3Row> {
+    let mut row = run_one(cfg, exe, &run)?;
+    if let Some(f) = run
+        .u_file
+        .take()
+        .filter(|f| f != reference && reference.exists())
+    {
+        row.diff_u = max_diff(&read_u(&f)?, &read_u(reference)?);
+    }
+    run.barrier = false;
+    let linear = run_one(cfg, exe, &run)?;
+    row.linear_seconds = linear.total_s;
+    row.linear_krylov = linear.krylov;
+    row.r = row.total_s / linear.total_s;
+    eprintln!(
+        "[bench]   {} {} n = {}, {} cores: {} unknowns, NITER {} (+{}), {} Krylov, {:.2} s (setup {:.2}, solve {:.2}), {:.0} MiB, error {:.3e}, |u - u_dolfinx| {:.1e}, linear {:.2} s, R {:.2}",
+        row.code,
+        row.config,
+        row.n,
+        row.cores,
+        row.unknowns,
+        row.niter,
+        row.coarse_niter,
+        row.krylov,
+        row.total_s,
+        row.setup_s,
+        row.solve_s,
+        row.peak_mib,
+        row.err_max,
+        row.diff_u,
+        row.linear_seconds,
+        row.r
+    );
+    Ok(row)
+}
+
 /// The cases of size `n` at every core count: dolfinx GAMG and hypre (when `dolfinx`), then
-/// gradvi, each followed by its linear variant; u compared with dolfinx GAMG on one process.
+/// gradvi, each followed by its linear variant, each row given to `push` as it comes; u is
+/// compared with dolfinx GAMG on one process. A failed dolfinx run is said on stderr and
+/// leaves its row out (the report shows it missing); a failed gradvi run is an error.
 fn run_size(
     cfg: &super::Config,
     exe: &Path,
-    n: usize,
-    dolfinx: bool,
-) -> gradvi::Result<Vec<Peer3Row>> {
+    (n, dolfinx): (usize, bool),
+    push: &mut dyn FnMut(Peer3Row) -> gradvi::Result<()>,
+) -> gradvi::Result<()> {
     let dir = cfg.path(U_DIR);
     std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
     let reference = dir.join(format!("u_dolfinx_gamg_{n}.f64"));
     let _ = std::fs::remove_file(&reference);
-    let mut out = Vec::new();
+    let all: [(&str, &str); 3] = [
+        ("dolfinx", "gamg"),
+        ("dolfinx", "hypre"),
+        ("gradvi", "p1 iterative"),
+    ];
     for cores in super::peers::core_counts() {
-        let configs: &[(&str, &str)] = if dolfinx {
-            &[
-                ("dolfinx", "gamg"),
-                ("dolfinx", "hypre"),
-                ("gradvi", "p1 iterative"),
-            ]
-        } else {
-            &[("gradvi", "p1 iterative")]
-        };
-        for &(code, config) in configs {
-            let writes = code == "gradvi" || cores == 1;
-            let u_file = writes.then(|| {
-                dir.join(format!(
-                    "u_{code}_{}_{n}_{cores}.f64",
-                    config.replace(' ', "_")
-                ))
-            });
-            let u_file = if code == "dolfinx" && config == "gamg" {
-                u_file.map(|_| reference.clone())
-            } else {
-                u_file
+        for &(code, config) in all.iter().filter(|c| dolfinx || c.0 == "gradvi") {
+            let u_file = match (code, config) {
+                ("dolfinx", "gamg") => (cores == 1).then(|| reference.clone()),
+                ("dolfinx", _) => (cores == 1).then(|| dir.join(format!("u_{config}_{n}.f64"))),
+                _ => Some(dir.join(format!("u_gradvi_{n}_{cores}.f64"))),
             };
-            let mut run = Run {
+            let run = Run {
                 code,
                 config,
                 n,
@@ -424,43 +457,21 @@ fn run_size(
                 barrier: true,
                 u_file,
             };
-            let mut row = run_one(cfg, exe, &run)?;
-            if let Some(f) = run
-                .u_file
-                .take()
-                .filter(|f| *f != reference && reference.exists())
-            {
-                row.diff_u = max_diff(&read_u(&f)?, &read_u(&reference)?);
+            match run_case(cfg, exe, run, &reference) {
+                Ok(row) => push(row)?,
+                Err(e) if code == "dolfinx" => {
+                    eprintln!(
+                        "[bench] warning: no row for dolfinx {config}, n = {n}, {cores} cores: {e}"
+                    )
+                }
+                Err(e) => return Err(e),
             }
-            run.barrier = false;
-            let linear = run_one(cfg, exe, &run)?;
-            row.linear_seconds = linear.total_s;
-            row.linear_krylov = linear.krylov;
-            row.r = row.total_s / linear.total_s;
-            eprintln!(
-                "[bench]   {} {} n = {n}, {cores} cores: {} unknowns, NITER {} (+{}), {} Krylov, {:.2} s (setup {:.2}, solve {:.2}), {:.0} MiB, error {:.3e}, |u - u_dolfinx| {:.1e}, linear {:.2} s, R {:.2}",
-                row.code,
-                row.config,
-                row.unknowns,
-                row.niter,
-                row.coarse_niter,
-                row.krylov,
-                row.total_s,
-                row.setup_s,
-                row.solve_s,
-                row.peak_mib,
-                row.err_max,
-                row.diff_u,
-                row.linear_seconds,
-                row.r
-            );
-            out.push(row);
         }
     }
-    Ok(out)
+    Ok(())
 }
 
-/// Runs the benchmark and writes [`CSV`] (after each size).
+/// Runs the benchmark and writes [`CSV`] (after each row).
 pub fn run(cfg: &super::Config, exe: &Path) -> gradvi::Result<()> {
     let max_n = std::env::var("GRADVI_BENCH_3D_MAX_N")
         .ok()
@@ -486,9 +497,12 @@ pub fn run(cfg: &super::Config, exe: &Path) -> gradvi::Result<()> {
     }
     let csv = cfg.path(CSV);
     let mut rows: Vec<Peer3Row> = Vec::new();
+    let mut push = |row: Peer3Row| -> gradvi::Result<()> {
+        rows.push(row);
+        write_csv(&csv, &rows)
+    };
     for n in SIZES.into_iter().filter(|&n| n <= max_n && fits(n)) {
-        rows.extend(run_size(cfg, exe, n, dolfinx)?);
-        write_csv(&csv, &rows)?;
+        run_size(cfg, exe, (n, dolfinx), &mut push)?;
     }
     Ok(())
 }
