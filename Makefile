@@ -11,7 +11,7 @@ FVCA5_MESHES ?=
 PYTHON := /usr/bin/python3
 REFDIR := replication/results/reference
 
-.PHONY: all build test test-external test-solve3d fuzz determinism lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-amg bench-baseline clean
+.PHONY: all build test test-external test-solve3d fuzz determinism lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-peers3d bench-amg bench-baseline clean
 
 all: build
 
@@ -142,6 +142,17 @@ bench-amg:
 ##        -> replication/results/bench_peers.csv, BENCHMARKS.md
 bench-peers: build reference-deps
 	$(DEV) bench --peers
+
+## bench-peers3d: the 3D radial obstacle (problems/ex9-3d.toml) against dolfinx 0.5 (Debian's
+##        python3-dolfinx, installed by reference-deps if missing, run with /usr/bin/python3:
+##        benches/dolfinx/ex9_3d.py) on the same Kuhn tetrahedra of (-2,2)^3, n^3 cubes: gradvi
+##        P1 (iterative) on 1 and N rayon threads, dolfinx SNES vinewtonrsls with CG + GAMG and
+##        CG + hypre on 1 process and under mpiexec -n N (memory summed over the ranks); every
+##        case also without the bounds (the cost ratio R); n up to GRADVI_BENCH_3D_MAX_N (default
+##        64: 275k unknowns, a few minutes; 200 adds n = 100 and 200, about 1M and 8M unknowns)
+##        -> replication/results/bench_peers3d.csv, BENCHMARKS.md
+bench-peers3d: build reference-deps
+	$(DEV) bench --peers3d
 
 clean:
 	$(CARGO) clean

@@ -55,6 +55,8 @@ use std::time::Instant;
 pub mod baseline;
 pub mod mesh3d;
 pub mod peers;
+mod peers3d;
+mod peers3d_report;
 mod peers_cores;
 mod peers_report;
 mod report;
@@ -780,6 +782,9 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
     if let Some(i) = args.iter().position(|a| a == "--peer-child") {
         return peers::child_main(&args[i + 1..], root);
     }
+    if let Some(i) = args.iter().position(|a| a == "--peer3d-child") {
+        return peers3d::child_main(&args[i + 1..], root);
+    }
     if let Some(i) = args.iter().position(|a| a == "--mesh3d-child") {
         return mesh3d::child_main(&args[i + 1..]);
     }
@@ -811,6 +816,10 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
             cfg.variants = vec![Variant::Nested];
         }
         return baseline::run(&cfg, &exe, Path::new(base), &rev);
+    }
+    if args.iter().any(|a| a == "--peers3d") {
+        peers3d::run(&cfg, &exe)?;
+        return write_report(&cfg);
     }
     if args.iter().any(|a| a == "--peers") {
         peers::run(&cfg, &exe)?;

@@ -207,7 +207,7 @@ fn data_seconds(mesh: &PolyMesh, problem: &Problem) -> f64 {
 }
 
 /// An f64 that JSON writes as null when it is NaN.
-fn nullable<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+pub(super) fn nullable<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
