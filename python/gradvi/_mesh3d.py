@@ -310,6 +310,23 @@ class Mesh3:
         cd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (cell_data or {}).items()]
         self._m.write_vtu(os.fspath(path), pd, cd)
 
+    def write_boundary_vtu(
+        self,
+        path: PathLike,
+        point_data: Optional[Mapping[str, ArrayLike]] = None,
+        face_data: Optional[Mapping[str, ArrayLike]] = None,
+    ) -> None:
+        """Writes the boundary surface to an ASCII VTK ``.vtu`` file for ParaView: each boundary
+        face (in the order of :attr:`boundary_faces`) is a ``VTK_POLYGON`` with its loop
+        counter-clockwise seen from outside; the points are the vertices of the boundary faces
+        in increasing order. The cell data ``face`` (the index of each face) and
+        ``boundary_tag`` are always written; ``point_data`` holds one value per mesh vertex and
+        ``face_data`` one value per mesh face (interior faces included): the values on the
+        boundary are written."""
+        pd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (point_data or {}).items()]
+        fd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (face_data or {}).items()]
+        self._m.write_boundary_vtu(os.fspath(path), pd, fd)
+
     def to_meshio(
         self,
         point_data: Optional[Mapping[str, ArrayLike]] = None,

@@ -11,6 +11,7 @@ use gradvi::mesh::{MemoryBudget, NO_CELL, SolveMesh};
 use gradvi::mesh3d::generate::Family3;
 use gradvi::mesh3d::io::{read_mesh3, write_vtu3};
 use gradvi::mesh3d::{Cuboid, Point3, PolyMesh3, Polyhedra};
+use gradvi::post::vtu_boundary::write_boundary_vtu;
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with3};
 use nalgebra::DVector;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
@@ -29,7 +30,7 @@ pub struct PyMesh3 {
 }
 
 impl PyMesh3 {
-    fn new(mesh: PolyMesh3) -> Self {
+    pub(crate) fn new(mesh: PolyMesh3) -> Self {
         PyMesh3 {
             mesh: Arc::new(mesh),
         }
@@ -60,6 +61,13 @@ fn borrow(v: &[(String, Vec<f64>)]) -> Vec<(&str, &[f64])> {
     v.iter().map(|(n, a)| (n.as_str(), a.as_slice())).collect()
 }
 
+/// Named numpy arrays as owned vectors (to hand them to a detached writer).
+fn owned(v: Vec<(String, PyReadonlyArray1<'_, f64>)>) -> Vec<(String, Vec<f64>)> {
+    v.into_iter()
+        .map(|(n, a)| (n, a.as_array().to_vec()))
+        .collect()
+}
+
 /// `domain` (x0, x1, y0, y1, z0, z1) as a [`Cuboid`].
 fn cuboid(d: [f64; 6]) -> Cuboid {
     Cuboid::new([d[0], d[1]], [d[2], d[3]], [d[4], d[5]])
@@ -71,10 +79,9 @@ impl PyMesh3 {
     #[staticmethod]
     fn read(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         guard(py, move || {
-            let p = read_mesh3(&path, MemoryBudget::available())?;
-            let m = PolyMesh3::from_polyhedra(p, MemoryBudget::available())
-                .map_err(|source| gradvi::Error::InvalidMeshFile { path, source })?;
-            Ok(PyMesh3::new(m))
+            let budget = MemoryBudget::available();
+            let p = read_mesh3(&path, budget)?;
+            Ok(PyMesh3::new(crate::case::from_polyhedra(&path, p, budget)?))
         })
     }
 
@@ -290,15 +297,27 @@ impl PyMesh3 {
         point_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
         cell_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
     ) -> PyResult<()> {
-        let owned = |v: Vec<(String, PyReadonlyArray1<'_, f64>)>| -> Vec<(String, Vec<f64>)> {
-            v.into_iter()
-                .map(|(n, a)| (n, a.as_array().to_vec()))
-                .collect()
-        };
         let (pd, cd) = (owned(point_data), owned(cell_data));
         let mesh = Arc::clone(&self.mesh);
         guard(py, move || {
             write_vtu3(&path, &mesh.to_polyhedra(), &borrow(&pd), &borrow(&cd))
+        })
+    }
+
+    /// Writes the boundary faces as polygons with named point data (per mesh vertex) and face
+    /// data (per mesh face) to an ASCII .vtu file
+    /// (`gradvi::post::vtu_boundary::write_boundary_vtu`).
+    fn write_boundary_vtu(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        point_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
+        face_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
+    ) -> PyResult<()> {
+        let (pd, fd) = (owned(point_data), owned(face_data));
+        let mesh = Arc::clone(&self.mesh);
+        guard(py, move || {
+            write_boundary_vtu(&path, &mesh, &borrow(&pd), &borrow(&fd))
         })
     }
 
