@@ -156,8 +156,12 @@ fn check_options(a: &SolveArgs) -> Result<()> {
 }
 
 /// Outputs distinct from the inputs (the mesh, the problem file and the mesh the problem file
-/// names) and from each other.
-fn check_paths(a: &SolveArgs, pf: &file::ProblemFile) -> Result<()> {
+/// names) and from each other, and from `extra_outputs` (the boundary VTU of a 3D solve).
+pub(crate) fn check_paths(
+    a: &SolveArgs,
+    pf: &file::ProblemFile,
+    extra_outputs: &[(&str, &Path)],
+) -> Result<()> {
     let pf_mesh = match &pf.mesh {
         Some(file::MeshSpec::File(m)) => Some(m.as_path()),
         _ => None,
@@ -173,6 +177,7 @@ fn check_paths(a: &SolveArgs, pf: &file::ProblemFile) -> Result<()> {
     let outputs: Vec<(&str, &Path)> = [("VTU", a.vtu.as_deref()), ("JSON", a.json.as_deref())]
         .into_iter()
         .filter_map(|(w, p)| p.map(|p| (w, p)))
+        .chain(extra_outputs.iter().copied())
         .collect();
     check_distinct(&inputs, &outputs)
 }
@@ -349,7 +354,7 @@ pub fn run(a: &SolveArgs) -> Result<()> {
         (None, Some(name)) => file::builtin(name, &a.params)?,
         (None, None) => bail!("give a problem file or --problem NAME"),
     };
-    check_paths(a, &pf)?;
+    check_paths(a, &pf, &[])?;
     let spec = resolve_mesh(
         a.mesh.as_deref(),
         a.generate.as_deref(),

@@ -18,6 +18,15 @@
 //! summed over the faces of each cell, `active_faces` (the number of active faces of the cell)
 //! and `multiplier_faces` (the sum of their multipliers), so that the contact zone shows on the
 //! cells along the contact boundary.
+//!
+//! ## The boundary VTU file
+//! Beside it, `NAME_boundary.vtu` for `--vtu NAME.vtu` ([`boundary_path`]; refused, as every
+//! output, if it would overwrite an input or another output): the boundary faces as polygons
+//! ([`write_boundary_vtu`]) with cell data `face` (the face's index in the mesh),
+//! `boundary_tag`, `u_face` (the face unknown u_σ, HMM and CR), and with a barrier on face
+//! unknowns (HMM Signorini, CR) `active` (1 on the faces of the contact zone) and `multiplier`
+//! (λ_σ); point data `u_vertex`, and with a barrier on vertex unknowns (P1) `active` and
+//! `multiplier` per vertex.
 
 use super::mesh::{AnyMesh, read_any};
 use super::output::atomic;
@@ -27,10 +36,12 @@ use gradvi::mesh::MemoryBudget;
 use gradvi::mesh3d::io::write_vtu3;
 use gradvi::mesh3d::{PolyMesh3, WarpedFaces};
 use gradvi::post::fields::EntityFields;
+use gradvi::post::vtu_boundary::write_boundary_vtu;
 use gradvi::problem::Problem;
 use gradvi::problem::file::{MeshSpec, ProblemFile};
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with3};
 use gradvi::solver::{Solution, solve_problem};
+use std::path::{Path, PathBuf};
 
 /// The 3D scheme trait object.
 type Scheme3<'a> = dyn GradientDiscretisation<PolyMesh3, 3> + 'a;
@@ -41,7 +52,7 @@ type Scheme3<'a> = dyn GradientDiscretisation<PolyMesh3, 3> + 'a;
 /// from the file. A 3D mesh's warped faces are as `warped` says.
 pub fn case_mesh(spec: &MeshSpec, pf: &ProblemFile, warped: WarpedFaces) -> Result<AnyMesh> {
     let budget = MemoryBudget::available();
-    let two_d_format = |p: &std::path::Path| {
+    let two_d_format = |p: &Path| {
         let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
         ext.eq_ignore_ascii_case("typ1") || ext.eq_ignore_ascii_case("typ2")
     };
@@ -62,6 +73,10 @@ pub fn run3(
     mesh_desc: &str,
     mesh_seconds: f64,
 ) -> Result<()> {
+    let boundary_vtu = a.vtu.as_deref().map(boundary_path);
+    if let Some(b) = &boundary_vtu {
+        super::solve::check_paths(a, pf, &[("boundary VTU", b)])?;
+    }
     pf.check_against_mesh3(mesh)?;
     let problem = pf.problem_in::<3>()?;
     let kind = a.scheme.or(pf.scheme).unwrap_or(SchemeKind::Hmm);
@@ -89,9 +104,11 @@ pub fn run3(
         mesh_seconds,
     };
     report(a, &case, &sol, errors.as_ref())?;
-    if let Some(path) = &a.vtu {
+    if let (Some(path), Some(b)) = (&a.vtu, &boundary_vtu) {
         atomic(path, |tmp| write_solution_vtu3(tmp, scheme.as_ref(), &sol))?;
         println!("wrote           {}", path.display());
+        atomic(b, |tmp| write_boundary_vtu3(tmp, scheme.as_ref(), &sol))?;
+        println!("wrote           {}", b.display());
     }
     write_json(a, &case, &sol, errors.as_ref())
 }
@@ -107,11 +124,7 @@ fn solve3<'a>(
 
 /// Writes u, its cell gradients, the active set and the multiplier to a 3D VTU file (the
 /// fields are listed in the module docs).
-fn write_solution_vtu3(
-    path: &std::path::Path,
-    scheme: &Scheme3,
-    sol: &Solution<PolyMesh3, 3>,
-) -> Result<()> {
+fn write_solution_vtu3(path: &Path, scheme: &Scheme3, sol: &Solution<PolyMesh3, 3>) -> Result<()> {
     let u = sol.u();
     let grads = scheme.cell_gradients(u);
     let component = |i: usize| grads.iter().map(|g| g[i]).collect::<Vec<f64>>();
@@ -122,11 +135,7 @@ fn write_solution_vtu3(
         ("grad_z", component(2)),
     ];
     let mut point_data: Vec<(&str, Vec<f64>)> = vec![("u_vertex", scheme.vertex_values(u))];
-    if let Some(c) = &sol.constraints {
-        let dofs = || c.dofs.iter().map(|d| d.dof);
-        let r = &sol.result;
-        let act = EntityFields::new(scheme, dofs(), |j| f64::from(u8::from(r.active[j])));
-        let lam = EntityFields::new(scheme, dofs(), |j| r.multiplier[j]);
+    if let Some((act, lam)) = barrier_fields(scheme, sol) {
         if let (Some(a), Some(l)) = (act.vertex, lam.vertex) {
             point_data.push(("active", a));
             point_data.push(("multiplier", l));
@@ -150,4 +159,59 @@ fn write_solution_vtu3(
     let cd: Vec<(&str, &[f64])> = cell_data.iter().map(|(n, v)| (*n, v.as_slice())).collect();
     write_vtu3(path, &scheme.mesh().to_polyhedra(), &pd, &cd)?;
     Ok(())
+}
+
+/// The boundary VTU file beside the VTU file `vtu`: `NAME_boundary.EXT` for `NAME.EXT`.
+pub fn boundary_path(vtu: &Path) -> PathBuf {
+    let stem = vtu
+        .file_stem()
+        .map(|s| s.to_os_string())
+        .unwrap_or_default();
+    let mut name = stem;
+    name.push("_boundary");
+    if let Some(ext) = vtu.extension() {
+        name.push(".");
+        name.push(ext);
+    }
+    vtu.with_file_name(name)
+}
+
+/// Writes the boundary faces with u_σ, the active set and the multiplier on the faces (and
+/// the vertices) to a VTU file (the fields are listed in the module docs).
+fn write_boundary_vtu3(path: &Path, scheme: &Scheme3, sol: &Solution<PolyMesh3, 3>) -> Result<()> {
+    let u = sol.u();
+    let mut face_data: Vec<(&str, Vec<f64>)> = Vec::new();
+    let mut point_data: Vec<(&str, Vec<f64>)> = vec![("u_vertex", scheme.vertex_values(u))];
+    if let Some(e) = EntityFields::new(scheme, 0..u.len(), |j| u[j]).edge {
+        face_data.push(("u_face", e));
+    }
+    if let Some((act, lam)) = barrier_fields(scheme, sol) {
+        if let (Some(a), Some(l)) = (act.edge, lam.edge) {
+            face_data.push(("active", a));
+            face_data.push(("multiplier", l));
+        }
+        if let (Some(a), Some(l)) = (act.vertex, lam.vertex) {
+            point_data.push(("active", a));
+            point_data.push(("multiplier", l));
+        }
+    }
+    let pd: Vec<(&str, &[f64])> = point_data.iter().map(|(n, v)| (*n, v.as_slice())).collect();
+    let fd: Vec<(&str, &[f64])> = face_data.iter().map(|(n, v)| (*n, v.as_slice())).collect();
+    write_boundary_vtu(path, scheme.mesh(), &pd, &fd)?;
+    Ok(())
+}
+
+/// The active set (1 or 0) and the multiplier of a solve with a barrier, on the entities of
+/// the constrained unknowns; `None` without a barrier.
+fn barrier_fields(
+    scheme: &Scheme3,
+    sol: &Solution<PolyMesh3, 3>,
+) -> Option<(EntityFields, EntityFields)> {
+    let c = sol.constraints.as_ref()?;
+    let dofs = || c.dofs.iter().map(|d| d.dof);
+    let r = &sol.result;
+    Some((
+        EntityFields::new(scheme, dofs(), |j| f64::from(u8::from(r.active[j]))),
+        EntityFields::new(scheme, dofs(), |j| r.multiplier[j]),
+    ))
 }

@@ -1,6 +1,7 @@
 //! `gradvi solve` on 3D meshes: the 3D examples of problems/ solved through the binary, their
 //! errors against the exact solutions checked against the measured values and their
-//! convergence slopes fitted (two-sided); the outputs (JSON, VTU); the dimension mismatches.
+//! convergence slopes fitted (two-sided); the outputs (JSON, VTU of the cells and of the
+//! boundary faces); the dimension mismatches.
 //!
 //! The Signorini example needs gmsh (its tetrahedral meshes are made from
 //! meshes/3d/signorini3d.geo): it is `#[ignore]`d and run by `make test-solve3d` (or
@@ -293,9 +294,136 @@ fn vtu_and_json_outputs_of_3d_solves() {
         assert!(text.contains(&format!("Name=\"{name}\"")), "{name}");
     }
     assert!(!text.contains("active_cell"));
-    for p in [&vtu, &json, &toml] {
+    for p in [&vtu, &json, &toml, &boundary_vtu(&vtu)] {
         std::fs::remove_file(p).ok();
     }
+}
+
+/// [`SIGNORINI_CUBE`] pushed up (f = 10) against a barrier that rises with x: contact on part
+/// of the bottom face.
+const SIGNORINI_CONTACT: &str = r#"
+[source]
+f = 10
+[dirichlet]
+where = "z > 1 - 1e-9"
+[signorini]
+where = "z < 1e-9"
+side = "upper"
+barrier = "10*(x - 0.5)"
+[neumann]
+"#;
+
+#[test]
+fn the_boundary_vtu_shows_the_contact_zone_on_the_faces() {
+    let (toml, vtu, json) = (tmp("contact.toml"), tmp("contact.vtu"), tmp("contact.json"));
+    std::fs::write(&toml, SIGNORINI_CONTACT).unwrap();
+    let (code, out, err) = gradvi(&[
+        "solve",
+        toml.to_str().unwrap(),
+        "--generate",
+        "cubes",
+        "--level",
+        "1",
+        "--vtu",
+        vtu.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    let b = boundary_vtu(&vtu);
+    assert!(
+        out.contains(&format!("wrote           {}", b.display())),
+        "{out}"
+    );
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let text = std::fs::read_to_string(&b).unwrap();
+    assert!(
+        text.contains("NumberOfCells=\"96\""),
+        "6 sides of 4 × 4 squares"
+    );
+    assert!(
+        text.contains("NumberOfPoints=\"98\""),
+        "5³ vertices but 3³ inside"
+    );
+    for name in [
+        "face",
+        "boundary_tag",
+        "u_face",
+        "active",
+        "multiplier",
+        "u_vertex",
+    ] {
+        assert!(text.contains(&format!("Name=\"{name}\"")), "{name}");
+    }
+    assert_eq!(data_array(&text, "types"), vec![7.0; 96]);
+    // half of the 16 faces of the bottom are in contact, and the multiplier lives there
+    let active = data_array(&text, "active");
+    let n_active = active.iter().filter(|&&a| a == 1.0).count();
+    assert_eq!(n_active, 8);
+    assert_eq!(v["n_active"], n_active);
+    let lam = data_array(&text, "multiplier");
+    // λ = 0 off the contact zone (up to round-off), λ > 0 on it
+    assert!(active.iter().zip(&lam).all(|(&a, &l)| if a == 1.0 {
+        l > 0.1
+    } else {
+        l.abs() < 1e-12
+    }));
+    // u_σ = a_σ on the contact faces: below the barrier 10 (x_σ − 1/2) ≤ 0 where x_σ < 1/2
+    let (u, faces) = (data_array(&text, "u_face"), data_array(&text, "face"));
+    assert_eq!(faces.len(), 96);
+    assert!(active.iter().zip(&u).all(|(&a, &u)| a == 0.0 || u < 0.0));
+    for p in [&vtu, &json, &toml, &b] {
+        std::fs::remove_file(p).ok();
+    }
+}
+
+/// The boundary VTU file `gradvi solve --vtu NAME.vtu` writes in 3D: `NAME_boundary.vtu`.
+fn boundary_vtu(vtu: &Path) -> PathBuf {
+    let stem = vtu.file_stem().unwrap().to_str().unwrap();
+    vtu.with_file_name(format!("{stem}_boundary.vtu"))
+}
+
+/// The values of the `DataArray` named `name` of a VTU file's text.
+fn data_array(text: &str, name: &str) -> Vec<f64> {
+    let body = &text[text.find(&format!("Name=\"{name}\"")).unwrap()..];
+    let body = &body[body.find('>').unwrap() + 1..body.find("</DataArray>").unwrap()];
+    body.split_whitespace()
+        .map(|t| t.parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn the_boundary_vtu_never_overwrites_an_input() {
+    // a 3D mesh named as the boundary file of --vtu would be
+    let mesh = tmp("cube_boundary.vtu");
+    let (code, _, err) = gradvi(&[
+        "mesh",
+        "generate",
+        "cubes",
+        "--level",
+        "1",
+        "-o",
+        mesh.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    let before = std::fs::read(&mesh).unwrap();
+    let vtu = tmp("cube.vtu");
+    let (code, _, err) = gradvi(&[
+        "solve",
+        "problems/poisson-3d.toml",
+        "--mesh",
+        mesh.to_str().unwrap(),
+        "--vtu",
+        vtu.to_str().unwrap(),
+    ]);
+    assert_ne!(code, Some(0));
+    assert!(
+        err.contains("the boundary VTU output") && err.contains("is the mesh input"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&mesh).unwrap(), before);
+    assert!(!vtu.exists());
+    std::fs::remove_file(&mesh).ok();
 }
 
 #[test]

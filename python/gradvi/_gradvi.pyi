@@ -96,7 +96,7 @@ class _Mesh:
 
 class _Mesh3:
     @staticmethod
-    def read(path: str) -> _Mesh3: ...
+    def read(path: str, warped_faces: str = ...) -> _Mesh3: ...
     @staticmethod
     def from_arrays(
         points: npt.NDArray[np.float64],
@@ -107,7 +107,7 @@ class _Mesh3:
         tagged: Optional[Tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int32]]] = None,
     ) -> _Mesh3: ...
     @staticmethod
-    def generate(family: str, level: int, domain: Optional[Sequence[float]] = None) -> _Mesh3: ...
+    def generate(family: str, level: int, domain: Optional[Sequence[float]] = None, warped_faces: str = ...) -> _Mesh3: ...
     def with_face_tags(self, tags: npt.NDArray[np.int32]) -> _Mesh3: ...
     def with_cell_tags(self, tags: npt.NDArray[np.int32]) -> _Mesh3: ...
     # n_vertices, n_cells, n_faces, h, bounding_box (x0, x1, y0, y1, z0, z1)
@@ -124,6 +124,12 @@ class _Mesh3:
         path: str,
         point_data: List[Tuple[str, npt.NDArray[np.float64]]],
         cell_data: List[Tuple[str, npt.NDArray[np.float64]]],
+    ) -> None: ...
+    def write_boundary_vtu(
+        self,
+        path: str,
+        point_data: List[Tuple[str, npt.NDArray[np.float64]]],
+        face_data: List[Tuple[str, npt.NDArray[np.float64]]],
     ) -> None: ...
 
 class _Problem:
@@ -144,7 +150,7 @@ class _Problem:
     mesh_spec: Optional[str]
     constraint: Optional[Tuple[str, str]]
     has_exact: bool
-    def build_mesh(self) -> Optional[_Mesh]: ...
+    def build_mesh(self) -> Optional[Union[_Mesh, _Mesh3]]: ...
 
 # every option is given (their defaults are those of gradvi.solve)
 def solve(

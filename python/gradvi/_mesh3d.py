@@ -204,17 +204,23 @@ class Mesh3:
     # ---------------------------------------------------------------- constructors
 
     @classmethod
-    def read(cls, path: PathLike) -> "Mesh3":
+    def read(cls, path: PathLike, warped_faces: str = "fan") -> "Mesh3":
         """Reads a 3D mesh file, the reader chosen by extension: ``.msh`` (gmsh ASCII 4.1 or
         2.2: tetrahedra, hexahedra, prisms, pyramids; physical volumes become cell tags,
         physical surfaces boundary-face tags), ``.vtu`` (what :meth:`write_vtu` writes),
         ``.node``/``.ele`` or the stem of such a pair (HArDCore's RF format, general polyhedra).
         Raises :class:`gradvi.MeshIoError` (with ``path`` and ``line``) or
-        :class:`gradvi.InvalidMeshError` (with ``path``)."""
-        return cls._wrap(_gradvi._Mesh3.read(os.fspath(path)))
+        :class:`gradvi.InvalidMeshError` (with ``path``).
+        ``warped_faces``: ``"fan"`` (the default: a non-planar face is one face, its geometry by
+        the fan of triangles from its centre, as HArDCore and FVCA6) or ``"split"`` (each
+        non-planar face becomes its fan triangles, the centre a new vertex, so that HMM passes
+        the patch test exactly)."""
+        return cls._wrap(_gradvi._Mesh3.read(os.fspath(path), str(warped_faces)))
 
     @classmethod
-    def generate(cls, family: str, level: int, domain: Optional[Union[Box, Sequence[float]]] = None) -> "Mesh3":
+    def generate(
+        cls, family: str, level: int, domain: Optional[Union[Box, Sequence[float]]] = None, warped_faces: str = "fan"
+    ) -> "Mesh3":
         """A mesh of a built-in family of the unit cube, with n = 2^(level+1) cubes per side:
         ``"cubes"`` (n³ cubes), ``"kuhn"`` or ``"tetrahedra"`` (each cube cut into 6 Kuhn
         tetrahedra), ``"prisms"`` (each cube cut into 2 triangular prisms), ``"refined"`` (a
@@ -222,11 +228,12 @@ class Mesh3:
         faces), ``"warped"`` (randomly perturbed hexahedra with warped faces, fixed seed).
         ``domain``, a :class:`Box` or ``(x0, x1, y0, y1, z0, z1)``, maps it affinely onto that
         box. Raises :class:`gradvi.InvalidDataError` for an unknown family, a level out of
-        range or a bad box, :class:`gradvi.OutOfMemoryError` if the mesh would not fit."""
+        range or a bad box, :class:`gradvi.OutOfMemoryError` if the mesh would not fit.
+        ``warped_faces`` as for :meth:`read`."""
         if int(level) < 1:
             raise InvalidDataError(f"mesh levels start at 1, got {level}")
         d = None if domain is None else list(_box(domain))
-        return cls._wrap(_gradvi._Mesh3.generate(str(family), int(level), d))
+        return cls._wrap(_gradvi._Mesh3.generate(str(family), int(level), d, str(warped_faces)))
 
     @classmethod
     def from_meshio(cls, mesh: "meshio.Mesh", tag_key: Optional[str] = None) -> "Mesh3":
@@ -309,6 +316,23 @@ class Mesh3:
         pd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (point_data or {}).items()]
         cd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (cell_data or {}).items()]
         self._m.write_vtu(os.fspath(path), pd, cd)
+
+    def write_boundary_vtu(
+        self,
+        path: PathLike,
+        point_data: Optional[Mapping[str, ArrayLike]] = None,
+        face_data: Optional[Mapping[str, ArrayLike]] = None,
+    ) -> None:
+        """Writes the boundary surface to an ASCII VTK ``.vtu`` file for ParaView: each boundary
+        face (in the order of :attr:`boundary_faces`) is a ``VTK_POLYGON`` with its loop
+        counter-clockwise seen from outside; the points are the vertices of the boundary faces
+        in increasing order. The cell data ``face`` (the index of each face) and
+        ``boundary_tag`` are always written; ``point_data`` holds one value per mesh vertex and
+        ``face_data`` one value per mesh face (interior faces included): the values on the
+        boundary are written."""
+        pd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (point_data or {}).items()]
+        fd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (face_data or {}).items()]
+        self._m.write_boundary_vtu(os.fspath(path), pd, fd)
 
     def to_meshio(
         self,

@@ -338,8 +338,11 @@ class Problem:
     predicates ``sel(x, y, z)`` on the face centroids, masks per face, or a callable
     ``boundary(x, y, z, tag)``); a Signorini barrier acts on the boundary faces of Γ3. The
     points are the scheme's own (HMM: A, f and ū at x_K, u_D, g_N and a Signorini barrier at
-    the boundary face centroids x_σ, an obstacle at x_K). Per-entity arrays, built-in problems
-    and problem files are planar only. A callable with the wrong number of arguments, a 2×2
+    the boundary face centroids x_σ, an obstacle at x_K). Per-entity arrays are planar only.
+    Problem files (``problems/ex9-3d.toml``, ...) and built-in problems are solved on a 3D mesh
+    when they compile as 3D problems, with the very code of ``gradvi solve``; one that does not
+    (a ``z`` on a planar mesh, a 2×2 tensor on a 3D one) raises
+    :class:`gradvi.ProblemFileError` with its place in the file. A callable with the wrong number of arguments, a 2×2
     tensor or a 2-component gradient on a 3D mesh (or the converse) raises
     :class:`gradvi.InvalidDataError` naming the datum.
 
@@ -442,7 +445,9 @@ class Problem:
         """A TOML problem file (see ``problems/README.md`` in the repository), with parameter
         overrides, e.g. ``Problem.from_file("problems/test3.toml", C=-20)``. Raises
         :class:`gradvi.ProblemFileError` with the file, line, column and key at fault. The file
-        is checked against the mesh at :func:`gradvi.solve`."""
+        is checked against the mesh at :func:`gradvi.solve`, planar or 3D (``Mesh3``), e.g.
+        ``gradvi.solve(gradvi.Mesh3.generate("cubes", 2), Problem.from_file("problems/poisson-3d.toml"))``;
+        :meth:`mesh` builds the mesh of its ``[mesh]`` section."""
         return cls._wrap(_gradvi._Problem.from_file(os.fspath(path), [(str(k), float(v)) for k, v in params.items()]))
 
     # ---------------------------------------------------------------- description
@@ -487,12 +492,17 @@ class Problem:
         """Whether the exact solution is known (errors are then computed)."""
         return self._spec.get("exact") is not None if self._handle is None else bool(self._handle.has_exact)
 
-    def mesh(self) -> Optional[Mesh]:
-        """The mesh of a problem file's ``[mesh]`` section (read or generated), or None."""
+    def mesh(self) -> Optional[Union[Mesh, Mesh3]]:
+        """The mesh of a problem file's ``[mesh]`` section (read or generated), or None: a
+        :class:`Mesh3` for a generated 3D family, or for a mesh file with 3D cells (a gmsh
+        ``.msh`` with 3D elements, ``.vtu``, HArDCore RF) when the file is a 3D problem; else
+        a planar :class:`Mesh`. The choice is ``gradvi solve``'s."""
         if self._handle is None:
             return None
         h = self._handle.build_mesh()
-        return None if h is None else Mesh._wrap(h)
+        if h is None:
+            return None
+        return Mesh3._wrap(h) if isinstance(h, _gradvi._Mesh3) else Mesh._wrap(h)
 
     def __repr__(self) -> str:
         c = self.constraint

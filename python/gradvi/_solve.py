@@ -371,11 +371,44 @@ class Solution:
             cd["u_exact"] = self.u_exact_cell
         return pd, cd
 
-    def write_vtu(self, path: Union[str, "os.PathLike[str]"]) -> None:
+    def boundary_fields(self) -> tuple:
+        """``(point_data, face_data)`` of a 3D solution on its boundary surface: the arrays
+        ``gradvi solve --vtu`` writes to its boundary file, per mesh vertex (``u_vertex``; with
+        a barrier on vertex unknowns (P1) ``active`` and ``multiplier``) and per mesh face
+        (``u_face``, the face unknowns u_σ of HMM and CR; with a barrier on face unknowns (HMM
+        Signorini, CR) ``active``, 1.0 on the contact zone, and ``multiplier``, λ_σ).
+        ``InvalidDataError`` on a planar mesh (the planar file draws the cells only)."""
+        if self.dim != 3:
+            raise InvalidDataError("the boundary surface is written for 3D solutions only")
+        pd: Dict[str, np.ndarray] = {"u_vertex": self.u_vertex}
+        fd: Dict[str, np.ndarray] = {}
+        if self.u_face is not None:
+            fd["u_face"] = self.u_face
+        c = self._r["constraint"]
+        if c is not None:
+            a, lam = c["active_fields"], c["multiplier_fields"]
+            for kind, out in (("edge", fd), ("vertex", pd)):
+                if kind in a:
+                    out["active"] = a[kind]
+                    out["multiplier"] = lam[kind]
+        return pd, fd
+
+    def write_boundary_vtu(self, path: Union[str, "os.PathLike[str]"]) -> None:
+        """Writes the boundary surface of a 3D solution (the boundary faces as polygons with
+        :meth:`boundary_fields`, their index ``face`` and their ``boundary_tag``) to an ASCII
+        ``.vtu`` file (:meth:`Mesh3.write_boundary_vtu`)."""
+        pd, fd = self.boundary_fields()
+        self.mesh.write_boundary_vtu(path, pd, fd)  # type: ignore[union-attr]
+
+    def write_vtu(self, path: Union[str, "os.PathLike[str]"], *, boundary: bool = True) -> None:
         """Writes the solution (see :meth:`fields`) to an ASCII ``.vtu`` file for ParaView,
-        with gradvi's own writer."""
+        with gradvi's own writer. A 3D solution also writes, as ``gradvi solve --vtu`` does,
+        its boundary surface (:meth:`write_boundary_vtu`) beside it: ``NAME_boundary.vtu`` for
+        ``NAME.vtu`` (``boundary=False``: not)."""
         pd, cd = self.fields()
         self.mesh.write_vtu(path, pd, cd)
+        if boundary and self.dim == 3:
+            self.write_boundary_vtu(boundary_path(path))
 
     def to_meshio(self) -> "meshio.Mesh":
         """The mesh with the arrays of :meth:`fields` as point and cell data (needs meshio)."""
@@ -420,6 +453,13 @@ class Solution:
             f"<gradvi.Solution {self._r['problem']!r} {self.scheme}: {self.n_unknowns} unknowns, "
             f"NITER {self.niter}, {self.n_active} active, certificate {self.certificate.worst():.1e}>"
         )
+
+
+def boundary_path(path: Union[str, "os.PathLike[str]"]) -> str:
+    """The boundary VTU file beside the VTU file ``path``: ``NAME_boundary.EXT`` for
+    ``NAME.EXT`` (the name ``gradvi solve --vtu`` gives it)."""
+    root, ext = os.path.splitext(os.fspath(path))
+    return f"{root}_boundary{ext}"
 
 
 def _as_mesh(mesh: Any) -> Union[Mesh, Mesh3]:
@@ -474,9 +514,11 @@ def solve(
 
     Args:
         mesh: a :class:`Mesh`, a 3D :class:`Mesh3`, a mesh file path (planar), a
-            ``meshio.Mesh`` (planar), or None for a problem file with a ``[mesh]`` section.
-        problem: a :class:`Problem`, a built-in name (``"test3"``) or a ``.toml`` path (both
-            planar); on a :class:`Mesh3`, a :class:`Problem` built from callables of
+            ``meshio.Mesh`` (planar), or None for a problem file with a ``[mesh]`` section
+            (:meth:`Problem.mesh`: planar or 3D, as ``gradvi solve`` builds it).
+        problem: a :class:`Problem`, a built-in name (``"test3"``) or a ``.toml`` path; on a
+            :class:`Mesh3`, a problem file that compiles as a 3D problem
+            (``problems/ex9-3d.toml``) or a :class:`Problem` built from callables of
             (x, y, z).
         scheme: ``"hmm"`` (any polygonal or polyhedral mesh), ``"p1"`` or ``"cr"`` (triangles
             or tetrahedra; other cells are refused with an :class:`InvalidDataError`);

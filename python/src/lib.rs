@@ -9,6 +9,8 @@
 //!   generate, geometry arrays, VTU output);
 //! - [`problem`]: `_Problem` (built-in problems, problem files, and problems tabulated by the
 //!   Python layer on the points a scheme evaluates data at);
+//! - [`case`]: the mesh of a problem file's `[mesh]` section, 2D or 3D, as the command line
+//!   builds it;
 //! - [`solve`]: `solve`, which returns every result as numpy arrays and plain values;
 //! - the registries `SCHEMES`, `FAMILIES`, `FAMILIES3` and `BUILTIN_PROBLEMS` (names, from the
 //!   library).
@@ -18,6 +20,7 @@
 //! `InternalError` instead of aborting the interpreter or raising pyo3's `PanicException`
 //! (which is not an `Exception`).
 
+mod case;
 mod errors;
 mod mesh;
 mod mesh3d;

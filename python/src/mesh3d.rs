@@ -11,6 +11,7 @@ use gradvi::mesh::{MemoryBudget, NO_CELL, SolveMesh};
 use gradvi::mesh3d::generate::Family3;
 use gradvi::mesh3d::io::{read_mesh3, write_vtu3};
 use gradvi::mesh3d::{Cuboid, Point3, PolyMesh3, Polyhedra, WarpedFaces};
+use gradvi::post::vtu_boundary::write_boundary_vtu;
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with3};
 use nalgebra::DVector;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
@@ -29,7 +30,7 @@ pub struct PyMesh3 {
 }
 
 impl PyMesh3 {
-    fn new(mesh: PolyMesh3) -> Self {
+    pub(crate) fn new(mesh: PolyMesh3) -> Self {
         PyMesh3 {
             mesh: Arc::new(mesh),
         }
@@ -64,6 +65,13 @@ fn borrow(v: &[(String, Vec<f64>)]) -> Vec<(&str, &[f64])> {
 /// `InvalidDataError`.
 fn warped_convention(py: Python<'_>, name: &str) -> PyResult<WarpedFaces> {
     WarpedFaces::from_str(name).map_err(|e| crate::to_pyerr(py, &e))
+}
+
+/// Named numpy arrays as owned vectors (to hand them to a detached writer).
+fn owned(v: Vec<(String, PyReadonlyArray1<'_, f64>)>) -> Vec<(String, Vec<f64>)> {
+    v.into_iter()
+        .map(|(n, a)| (n, a.as_array().to_vec()))
+        .collect()
 }
 
 /// `domain` (x0, x1, y0, y1, z0, z1) as a [`Cuboid`].
@@ -303,15 +311,27 @@ impl PyMesh3 {
         point_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
         cell_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
     ) -> PyResult<()> {
-        let owned = |v: Vec<(String, PyReadonlyArray1<'_, f64>)>| -> Vec<(String, Vec<f64>)> {
-            v.into_iter()
-                .map(|(n, a)| (n, a.as_array().to_vec()))
-                .collect()
-        };
         let (pd, cd) = (owned(point_data), owned(cell_data));
         let mesh = Arc::clone(&self.mesh);
         guard(py, move || {
             write_vtu3(&path, &mesh.to_polyhedra(), &borrow(&pd), &borrow(&cd))
+        })
+    }
+
+    /// Writes the boundary faces as polygons with named point data (per mesh vertex) and face
+    /// data (per mesh face) to an ASCII .vtu file
+    /// (`gradvi::post::vtu_boundary::write_boundary_vtu`).
+    fn write_boundary_vtu(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        point_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
+        face_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
+    ) -> PyResult<()> {
+        let (pd, fd) = (owned(point_data), owned(face_data));
+        let mesh = Arc::clone(&self.mesh);
+        guard(py, move || {
+            write_boundary_vtu(&path, &mesh, &borrow(&pd), &borrow(&fd))
         })
     }
 

@@ -9,6 +9,7 @@
 //! the point-wise fallback the Python layer gave for a callable datum, or gets NaN for array
 //! data (the warm start is then skipped, with the reason in the solution's report).
 
+use crate::case::{CaseMesh, case_mesh};
 use crate::errors::invalid;
 use crate::guard;
 use crate::mesh::{PyMesh, point_key};
@@ -348,12 +349,18 @@ impl PyProblem {
         }
     }
 
-    /// As [`PyProblem::instantiate`], on a 3D mesh: only problems built in Python (callables
-    /// of (x, y, z)) are defined there; built-in problems and problem files are planar.
+    /// As [`PyProblem::instantiate`], on a 3D mesh. A built-in problem or a problem file is
+    /// checked against the mesh as `gradvi solve` checks it
+    /// ([`ProblemFile::check_against_mesh3`]): a file that is not a 3D problem (a 2×2 tensor,
+    /// a 2-component gradient) is a problem-file error with its place in the file.
     pub fn instantiate3(
         &self,
         mesh: &Arc<PolyMesh3>,
     ) -> gradvi::Result<(Problem<3>, Option<Arc<Misses>>)> {
+        let from_file = |pf: &ProblemFile| -> gradvi::Result<(Problem<3>, Option<Arc<Misses>>)> {
+            pf.check_against_mesh3(mesh)?;
+            Ok((pf.problem_in::<3>()?, None))
+        };
         match &self.spec {
             Spec::Tabulated3(t) if Arc::ptr_eq(&t.mesh, mesh) => {
                 Ok((t.problem(), Some(Arc::clone(&t.misses))))
@@ -365,27 +372,42 @@ impl PyProblem {
                 "this problem was tabulated on a planar mesh, and the mesh to solve on is 3D"
                     .into(),
             )),
-            Spec::Builtin { name, .. } => Err(gradvi::Error::InvalidData(format!(
-                "the built-in problem {name:?} is planar and cannot be solved on a 3D mesh; \
-                 build a 3D problem with gradvi.Problem(...) and callables of (x, y, z)"
-            ))),
-            Spec::File(pf) => Err(gradvi::Error::InvalidData(format!(
-                "the problem file {} is planar (x, y) and cannot be solved on a 3D mesh yet; \
-                 build a 3D problem with gradvi.Problem(...) and callables of (x, y, z)",
-                pf.path.display()
-            ))),
+            Spec::Builtin { name, params } => from_file(&builtin(name, params)?),
+            Spec::File(pf) => from_file(pf),
         }
     }
 
-    /// The problem without a mesh (for its description): built-ins and files only.
-    fn describe(&self) -> Option<Problem> {
+    /// The problem file of a built-in problem or a file (`None` for a tabulated problem).
+    fn file(&self) -> Option<std::borrow::Cow<'_, ProblemFile>> {
         match &self.spec {
-            Spec::Builtin { name, params } => builtin(name, params).ok().map(|pf| pf.problem()),
-            Spec::File(pf) => Some(pf.problem()),
+            Spec::Builtin { name, params } => {
+                builtin(name, params).ok().map(std::borrow::Cow::Owned)
+            }
+            Spec::File(pf) => Some(std::borrow::Cow::Borrowed(pf)),
             Spec::Tabulated(_) | Spec::Tabulated3(_) => None,
         }
     }
+
+    /// What a built-in problem or a file describes without a mesh: its barrier (kind, side)
+    /// and whether its exact solution is known, from the 2D problem, or the 3D one for a file
+    /// that is a 3D problem only.
+    fn describe(&self) -> Option<Described> {
+        fn of<const D: usize>(pb: &Problem<D>) -> Described {
+            (
+                pb.constraint.as_ref().map(|c| (c.kind, c.side)),
+                pb.exact.is_some(),
+            )
+        }
+        let pf = self.file()?;
+        match pf.problem_in::<2>() {
+            Ok(pb) => Some(of(&pb)),
+            Err(_) => pf.problem_in::<3>().ok().map(|pb| of(&pb)),
+        }
+    }
 }
+
+/// A problem's barrier (kind, side), if any, and whether its exact solution is known.
+type Described = (Option<(ConstraintKind, Side)>, bool);
 
 // ------------------------------------------------------------------------------------------
 // Reading the tabulated data handed over by the Python layer.
@@ -633,7 +655,7 @@ impl PyProblem {
     #[getter]
     fn name(&self) -> String {
         match &self.spec {
-            Spec::Builtin { .. } => self.describe().map(|p| p.name).unwrap_or_default(),
+            Spec::Builtin { .. } => self.file().map(|pf| pf.name.clone()).unwrap_or_default(),
             Spec::File(pf) => pf.name.clone(),
             Spec::Tabulated(t) => t.name.clone(),
             Spec::Tabulated3(t) => t.name.clone(),
@@ -686,20 +708,25 @@ impl PyProblem {
             _ => None,
         }
     }
-    /// Builds the mesh of the file's `[mesh]` section (None without one).
-    fn build_mesh(&self, py: Python<'_>) -> PyResult<Option<PyMesh>> {
+    /// Builds the mesh of the file's `[mesh]` section, a `_Mesh` or a `_Mesh3` as `gradvi
+    /// solve` would build it ([`crate::case`]); None without one.
+    fn build_mesh(&self, py: Python<'_>) -> PyResult<Option<Py<PyAny>>> {
         let Spec::File(pf) = &self.spec else {
             return Ok(None);
         };
         let Some(spec) = pf.mesh.clone() else {
             return Ok(None);
         };
-        let m = guard(py, move || {
-            gradvi::case::build_mesh(&spec, gradvi::mesh::MemoryBudget::available())
-        })?;
-        Ok(Some(PyMesh {
-            mesh: Arc::new(m),
-            physical_names: Vec::new(),
+        let pf = pf.as_ref();
+        Ok(Some(match guard(py, move || case_mesh(&spec, pf))? {
+            CaseMesh::Two(m) => PyMesh {
+                mesh: Arc::new(m),
+                physical_names: Vec::new(),
+            }
+            .into_pyobject(py)?
+            .into_any()
+            .unbind(),
+            CaseMesh::Three(m) => PyMesh3::new(m).into_pyobject(py)?.into_any().unbind(),
         }))
     }
     /// (kind, side) of the barrier: ("obstacle" | "signorini", "upper" | "lower"), or None.
@@ -722,7 +749,7 @@ impl PyProblem {
         match &self.spec {
             Spec::Tabulated(t) => t.constraint.as_ref().map(|(k, s, _)| name(*k, *s)),
             Spec::Tabulated3(t) => t.constraint.as_ref().map(|(k, s, _)| name(*k, *s)),
-            _ => self.describe()?.constraint.map(|c| name(c.kind, c.side)),
+            _ => self.describe()?.0.map(|(k, s)| name(k, s)),
         }
     }
     /// Whether the exact solution is known.
@@ -731,7 +758,7 @@ impl PyProblem {
         match &self.spec {
             Spec::Tabulated(t) => t.exact.is_some(),
             Spec::Tabulated3(t) => t.exact.is_some(),
-            _ => self.describe().is_some_and(|p| p.exact.is_some()),
+            _ => self.describe().is_some_and(|d| d.1),
         }
     }
 }

@@ -1,4 +1,6 @@
-"""Shared fixtures: the repository root, meshes and problems used by several tests."""
+"""Shared fixtures: the repository root, the command-line binary, meshes and problems used by
+several tests."""
+import os
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +14,13 @@ ROOT = Path(__file__).resolve().parents[2]
 @pytest.fixture(scope="session")
 def root() -> Path:
     return ROOT
+
+
+def cli_binary():
+    """The `gradvi` binary: $GRADVI_BIN, else target/release/gradvi (built by `make build`,
+    `make replicate-quick`), else None."""
+    p = os.environ.get("GRADVI_BIN") or str(ROOT / "target" / "release" / "gradvi")
+    return p if Path(p).is_file() and os.access(p, os.X_OK) else None
 
 
 @pytest.fixture(scope="session")

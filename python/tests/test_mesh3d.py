@@ -233,3 +233,17 @@ def test_meshio_reads_the_vtu_files_gradvi_writes(tmp_path):
         np.testing.assert_array_equal(r.point_data["x"], m.points[:, 0])
         if uniform:
             np.testing.assert_array_equal(np.concatenate(r.cell_data["v"]), m.volumes)
+
+
+def test_warped_faces_fan_or_split():
+    fan = gradvi.Mesh3.generate("warped", 1)
+    split = gradvi.Mesh3.generate("warped", 1, warped_faces="split")
+    assert split.n_cells == fan.n_cells
+    # every warped quadrilateral becomes 4 triangles around a new centre vertex
+    added = split.n_vertices - fan.n_vertices
+    assert added > 0 and split.n_faces - fan.n_faces == 3 * added
+    assert np.allclose(split.volumes, fan.volumes, rtol=0, atol=1e-14)
+    # planar faces are never split
+    assert gradvi.Mesh3.generate("cubes", 1, warped_faces="split") == gradvi.Mesh3.generate("cubes", 1)
+    with pytest.raises(gradvi.InvalidDataError):
+        gradvi.Mesh3.generate("warped", 1, warped_faces="bent")

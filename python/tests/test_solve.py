@@ -2,25 +2,16 @@
 warm starts, options and outputs."""
 import csv
 import json
-import os
 import shutil
 import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import ROOT, make_test3
+from conftest import ROOT, cli_binary, make_test3
 
 import gradvi
 
 import meshio
-
-
-def cli_binary():
-    """The `gradvi` binary: $GRADVI_BIN, else target/release/gradvi (built by `make build`,
-    `make replicate-quick`), else None."""
-    p = os.environ.get("GRADVI_BIN") or str(ROOT / "target" / "release" / "gradvi")
-    return p if Path(p).is_file() and os.access(p, os.X_OK) else None
 
 
 def test_test3_equals_cli(tmp_path, test3_mesh):

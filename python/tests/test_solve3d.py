@@ -7,6 +7,8 @@ import pytest
 
 import gradvi
 
+import meshio
+
 #: An anisotropic constant tensor (symmetric positive definite).
 A3 = np.array([[2.0, 0.3, 0.1], [0.3, 1.0, 0.2], [0.1, 0.2, 1.5]])
 
@@ -247,6 +249,25 @@ def test_3d_solution_output(signorini, tmp_path):
     m = sol.to_meshio()
     np.testing.assert_array_equal(np.concatenate(m.cell_data["u_K"]), sol.u_cell)
     assert "NITER" in sol.summary()
+    # the boundary surface beside it: one polygon per boundary face, the contact zone on Γ3
+    b = meshio.read(tmp_path / "signorini3d_boundary.vtu")
+    bf = mesh.boundary_faces
+    assert [c.type for c in b.cells] == ["polygon"] and len(b.cells[0].data) == len(bf)
+    np.testing.assert_array_equal(b.cell_data["face"][0], bf)
+    np.testing.assert_array_equal(b.cell_data["boundary_tag"][0], mesh.face_tags[bf])
+    active = b.cell_data["active"][0]
+    np.testing.assert_array_equal(active > 0.5, sol.active_faces[bf])
+    assert 0 < active.sum() == sol.n_active < (mesh.face_tags == 5).sum()
+    np.testing.assert_array_equal(b.cell_data["u_face"][0], sol.u_face[bf])
+    # each polygon is its face's loop
+    for i in (0, len(bf) // 2, len(bf) - 1):
+        loop = mesh.points[mesh.face_vertices(bf[i])]
+        np.testing.assert_array_equal(b.points[b.cells[0].data[i]], loop)
+    assert b.point_data["u_vertex"].shape == (len(b.points),)
+    sol.write_vtu(tmp_path / "alone.vtu", boundary=False)
+    assert not (tmp_path / "alone_boundary.vtu").exists()
+    with pytest.raises(gradvi.InvalidDataError, match="3D"):
+        gradvi.solve(gradvi.Mesh.generate("cartesian", 1), gradvi.Problem(source=1.0)).boundary_fields()
 
 
 # ------------------------------------------------------------------------------ errors
@@ -285,7 +306,9 @@ def test_a_3d_callable_on_a_planar_mesh_is_a_typed_error():
 
 
 def test_planar_problems_and_simplex_schemes_on_cubes_are_refused(cube):
-    with pytest.raises(gradvi.InvalidDataError, match="planar"):
-        gradvi.solve(cube, gradvi.Problem.builtin("test3"), scheme="hmm")
+    # a 2×2 tensor and a 2-component gradient: not a 3D problem (tests/test_problem_files3d.py
+    # checks the message is the command line's)
+    with pytest.raises(gradvi.ProblemFileError, match="on a 3D mesh"):
+        gradvi.solve(cube, gradvi.Problem.builtin("fvca5-1.1"), scheme="hmm")
     with pytest.raises(gradvi.InvalidDataError, match="not a tetrahedron"):
         gradvi.solve(cube, gradvi.Problem(source=1.0), scheme="p1")

@@ -1,8 +1,10 @@
 //! Post-processing: discrete errors against an exact solution, convergence orders, fitted
-//! slopes, and contact-zone metrics.
+//! slopes, contact-zone metrics, and the output of a solution on entities the mesh writers do
+//! not draw (fields per entity, the boundary surface of a 3D mesh).
 
 pub mod contact;
 pub mod fields;
+pub mod vtu_boundary;
 
 use crate::mesh::complex::{CellComplex, Vector};
 use crate::scheme::GradientDiscretisation;

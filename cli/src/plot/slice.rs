@@ -1,5 +1,6 @@
 //! A planar section of a 3D cell field: the polygons where the plane z = c cuts the cells,
-//! filled by value ([`viridis`](super::viridis)), with marked cells outlined.
+//! filled by value ([`viridis`](super::viridis)), with marked cells outlined and, optionally, a
+//! curve drawn over them.
 
 use std::path::Path;
 
@@ -31,6 +32,9 @@ pub struct SliceOptions {
     pub value_label: String,
     /// The legend of the marked cells.
     pub marked_label: String,
+    /// A curve drawn over the cells (e.g. the exact free boundary): its legend and its
+    /// pieces, each a polyline.
+    pub curve: Option<(String, Vec<Vec<[f64; 2]>>)>,
 }
 
 /// Draws the cut cells `cells` into the PNG file `path` with an equal aspect ratio, a colour
@@ -40,6 +44,9 @@ pub struct SliceOptions {
 pub fn plot_slice(path: &Path, cells: &[SliceCell], opts: &SliceOptions) -> Result<()> {
     if cells.is_empty() {
         return Err(Error::InvalidData("a slice without cells".into()));
+    }
+    for p in opts.curve.iter().flat_map(|c| c.1.iter().flatten()) {
+        check_finite("slice curve", p)?;
     }
     for c in cells {
         check_finite("slice value", &[c.value])?;
@@ -108,6 +115,19 @@ fn draw(root: &Canvas, s: f64, cells: &[SliceCell], opts: &SliceOptions) -> Draw
         )?
         .label(opts.marked_label.as_str())
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], mark));
+    if let Some((label, pieces)) = &opts.curve {
+        // black on a white halo: visible on every colour of the map and on the red outlines
+        let (halo, line) = (
+            WHITE.stroke_width((4.5 * s) as u32),
+            BLACK.stroke_width((2.0 * s) as u32),
+        );
+        let path = |p: &Vec<[f64; 2]>| p.iter().map(|q| (q[0], q[1])).collect::<Vec<_>>();
+        chart.draw_series(pieces.iter().map(|p| PathElement::new(path(p), halo)))?;
+        chart
+            .draw_series(pieces.iter().map(|p| PathElement::new(path(p), line)))?
+            .label(label.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], line));
+    }
     chart
         .configure_series_labels()
         .position(super::LegendPosition::UpperRight)

@@ -67,6 +67,9 @@ pub struct Case3d {
     pub text: &'static str,
     /// The schemes and families.
     pub runs: &'static [(SchemeKind, Family3)],
+    /// The radius r₀ of the exact contact set, a ball centred at the origin (obstacle
+    /// problems).
+    pub contact_radius: Option<f64>,
 }
 
 const HMM_ALL: &[(SchemeKind, Family3)] = &[
@@ -91,16 +94,21 @@ pub const CASES: [Case3d; 3] = [
         name: "poisson-3d",
         text: include_str!("../../../../problems/poisson-3d.toml"),
         runs: HMM_ALL,
+        contact_radius: None,
     },
     Case3d {
         name: "ex9-3d",
         text: include_str!("../../../../problems/ex9-3d.toml"),
         runs: OBSTACLE_RUNS,
+        // r₀ = 1/√2 (problems/ex9-3d.toml)
+        contact_radius: Some(std::f64::consts::FRAC_1_SQRT_2),
     },
     Case3d {
         name: "disk-obstacle-3d",
         text: include_str!("../../../../problems/disk-obstacle-3d.toml"),
         runs: OBSTACLE_RUNS,
+        // r₀ = 0.7, r measured from the origin (problems/disk-obstacle-3d.toml)
+        contact_radius: Some(0.7),
     },
 ];
 
@@ -190,7 +198,7 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> gradvi::Result<()> {
         if problem.constraint.is_some() {
             let level = *levels(cfg).end();
             let m = mesh(Family3::Cubes, level, domain)?;
-            figures::slice(cfg, case.name, &m, &problem)?;
+            figures::slice(cfg, case, &m, &problem)?;
         }
     }
     write_csv(&cfg.results().join(CSV), &rows)
