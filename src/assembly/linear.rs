@@ -15,9 +15,10 @@
 ///   [`super::DiscreteSystem::refine`]). The certificate of the final solution is computed
 ///   the same way as for the direct solver, from the full system.
 /// - **Auto** (the default): iterative from [`AUTO_ITERATIVE_MIN`] condensed unknowns on
-///   ([`AUTO_ITERATIVE_MIN_3D`] on 3D meshes), direct below; if the conjugate gradients fail (smoothed aggregation converges slowly on
-///   strongly distorted meshes with rotated anisotropy), the direct solver takes over for that
-///   solve and the following ones of the same [`super::SolveState`].
+///   ([`AUTO_ITERATIVE_MIN_3D`] on 3D meshes), direct below; if the conjugate gradients fail
+///   (smoothed aggregation converges slowly on strongly distorted meshes with rotated
+///   anisotropy), the direct solver takes over for that solve and the following ones of the
+///   same [`super::SolveState`].
 ///
 /// The measurements behind these choices are in `replication/BENCHMARKS.md` ("Measurements
 /// behind the defaults").

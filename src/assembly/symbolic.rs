@@ -518,9 +518,9 @@ mod tests {
     }
 
     /// [`LinearSolver::Auto`] picks the solver by size and dimension: a 3D face system from
-    /// [`AUTO_ITERATIVE_MIN_3D`](super::super::linear::AUTO_ITERATIVE_MIN_3D) unknowns on is
-    /// solved iteratively (no symbolic factorisation), one below directly, and a planar one of
-    /// the same size still directly (below [`AUTO_ITERATIVE_MIN`](super::super::linear::AUTO_ITERATIVE_MIN)).
+    /// `AUTO_ITERATIVE_MIN_3D` unknowns on is solved iteratively (no symbolic factorisation),
+    /// one below directly, and a planar one of the same size still directly (it is below
+    /// `AUTO_ITERATIVE_MIN`).
     #[test]
     fn auto_switches_to_the_iterative_solver_earlier_in_3d() {
         use crate::assembly::{AUTO_ITERATIVE_MIN, AUTO_ITERATIVE_MIN_3D};
