@@ -14,17 +14,19 @@
 ///   [`SCREENING_RTOL`] and refines the last one ([`super::DiscreteSystem::screen`],
 ///   [`super::DiscreteSystem::refine`]). The certificate of the final solution is computed
 ///   the same way as for the direct solver, from the full system.
-/// - **Auto** (the default): iterative from [`AUTO_ITERATIVE_MIN`] condensed unknowns on,
-///   direct below; if the conjugate gradients fail (smoothed aggregation converges slowly on
-///   strongly distorted meshes with rotated anisotropy), the direct solver takes over for that
-///   solve and the following ones of the same [`super::SolveState`].
+/// - **Auto** (the default): iterative from [`AUTO_ITERATIVE_MIN`] condensed unknowns on
+///   ([`AUTO_ITERATIVE_MIN_3D`] on 3D meshes), direct below; if the conjugate gradients fail
+///   (smoothed aggregation converges slowly on strongly distorted meshes with rotated
+///   anisotropy), the direct solver takes over for that solve and the following ones of the
+///   same [`super::SolveState`].
 ///
 /// The measurements behind these choices are in `replication/BENCHMARKS.md` ("Measurements
 /// behind the defaults").
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LinearSolver {
-    /// Direct below [`AUTO_ITERATIVE_MIN`] condensed unknowns, iterative from there on.
+    /// Direct below [`AUTO_ITERATIVE_MIN`] condensed unknowns ([`AUTO_ITERATIVE_MIN_3D`] on
+    /// 3D meshes), iterative from there on.
     #[default]
     Auto,
     /// Sparse Cholesky.
@@ -61,6 +63,24 @@ impl std::fmt::Display for LinearSolver {
 /// the iterative solver overtakes the direct one on the benchmarks (`make bench-peers`, the
 /// peer benchmark in `replication/BENCHMARKS.md`).
 pub const AUTO_ITERATIVE_MIN: usize = 250_000;
+
+/// [`LinearSolver::Auto`] solves 3D systems iteratively from this many condensed unknowns on.
+/// The fill of a sparse Cholesky factor grows faster on 3D meshes than on planar ones (like
+/// N^{4/3} under nested dissection, its work like N²), while multigrid-preconditioned
+/// conjugate gradients stay O(N); the two are level around 10⁴ condensed unknowns on the
+/// generated 3D families, and the iterative solver is several times faster from a few 10⁴ on
+/// (`replication/measurements/solver3d.md`).
+pub const AUTO_ITERATIVE_MIN_3D: usize = 20_000;
+
+/// The size from which [`LinearSolver::Auto`] solves iteratively on a mesh of dimension `d`:
+/// [`AUTO_ITERATIVE_MIN_3D`] in 3D, [`AUTO_ITERATIVE_MIN`] otherwise.
+pub const fn auto_iterative_min(d: usize) -> usize {
+    if d == 3 {
+        AUTO_ITERATIVE_MIN_3D
+    } else {
+        AUTO_ITERATIVE_MIN
+    }
+}
 
 /// Relative residual ‖c − S u‖₂ ≤ ITERATIVE_RTOL ‖c‖₂ at which the conjugate gradients stop.
 pub const ITERATIVE_RTOL: f64 = 1e-12;

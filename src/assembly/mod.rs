@@ -58,8 +58,8 @@ use crate::problem::Problem;
 use crate::scheme::{GradientDiscretisation, PointDof};
 use condense::{CellSystem, SymMatrix};
 pub use linear::{
-    AUTO_ITERATIVE_MIN, ITERATIVE_MAX_ITER, ITERATIVE_RTOL, LinearSolver, REUSE_MAX_CHANGED,
-    REUSE_MAX_SLOWDOWN, SCREENING_REDUCTION, SCREENING_RTOL,
+    AUTO_ITERATIVE_MIN, AUTO_ITERATIVE_MIN_3D, ITERATIVE_MAX_ITER, ITERATIVE_RTOL, LinearSolver,
+    REUSE_MAX_CHANGED, REUSE_MAX_SLOWDOWN, SCREENING_REDUCTION, SCREENING_RTOL,
 };
 pub use state::{SolveState, Solving};
 use std::sync::Arc;

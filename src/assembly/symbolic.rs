@@ -16,7 +16,7 @@
 
 use super::SystemOptions;
 use super::gather::{cell_chunks, chunks, split_by_ranges};
-use super::linear::{AUTO_ITERATIVE_MIN, LinearSolver};
+use super::linear::{LinearSolver, auto_iterative_min};
 use super::offsets::Offsets;
 use crate::linalg::SpdPattern;
 use crate::mesh::MemoryBudget;
@@ -237,7 +237,7 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
         let direct = match options.linear {
             LinearSolver::Direct => true,
             LinearSolver::Iterative => false,
-            LinearSolver::Auto => n_skel < AUTO_ITERATIVE_MIN,
+            LinearSolver::Auto => n_skel < auto_iterative_min(D),
         };
         // the symbolic factorisation (sequential) runs beside the scatter maps, on a copy of
         // the pattern; without it the pattern is moved in first and read by the maps (no
@@ -515,5 +515,40 @@ mod tests {
         let below = MemoryBudget::new(bytes - 1);
         let e = check_numeric_memory(&sym.pattern, &sym.maps, n, below).unwrap_err();
         assert!(is_budget_error(&e), "{e}");
+    }
+
+    /// [`LinearSolver::Auto`] picks the solver by size and dimension: a 3D face system from
+    /// `AUTO_ITERATIVE_MIN_3D` unknowns on is solved iteratively (no symbolic factorisation),
+    /// one below directly, and a planar one of the same size still directly (it is below
+    /// `AUTO_ITERATIVE_MIN`).
+    #[test]
+    fn auto_switches_to_the_iterative_solver_earlier_in_3d() {
+        use crate::assembly::{AUTO_ITERATIVE_MIN, AUTO_ITERATIVE_MIN_3D};
+        use crate::mesh3d::generate::kuhn;
+        use crate::mesh3d::{Cuboid, PolyMesh3};
+        let budget = MemoryBudget::DEFAULT;
+        let tets =
+            |n| PolyMesh3::from_polyhedra(kuhn(n, Cuboid::UNIT, budget).unwrap(), budget).unwrap();
+        let (small, large) = (tets(8), tets(16));
+        for (m, direct) in [(&small, true), (&large, false)] {
+            let hmm = Hmm::<PolyMesh3, 3>::with_alpha(m, 1.0).unwrap();
+            assert_eq!(hmm.n_skeleton() < AUTO_ITERATIVE_MIN_3D, direct);
+            let sym = SymbolicSystem::new(&hmm, Default::default()).unwrap();
+            assert_eq!(
+                sym.pattern.has_factorisation(),
+                direct,
+                "{}",
+                hmm.n_skeleton()
+            );
+        }
+        let mesh = cartesian(100, 100).unwrap();
+        let hmm = Hmm::new(&mesh);
+        let n = hmm.n_skeleton();
+        assert!(
+            (AUTO_ITERATIVE_MIN_3D..AUTO_ITERATIVE_MIN).contains(&n),
+            "{n}"
+        );
+        let sym = SymbolicSystem::new(&hmm, Default::default()).unwrap();
+        assert!(sym.pattern.has_factorisation());
     }
 }

@@ -163,6 +163,28 @@ pub fn solve_with_symbolic<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
     solve_system(system, problem, opts, t0)
 }
 
+/// Graph layers of the look-ahead's patches on 3D meshes (see [`look_ahead_options`]).
+pub const LOOK_AHEAD_LAYERS_3D: usize = 3;
+
+/// The look-ahead of the fast path ([`crate::vi::look_ahead`]) on a mesh of dimension `d`: the
+/// default options in 2D; in 3D patches of [`LOOK_AHEAD_LAYERS_3D`] layers. A layer of a 3D
+/// mesh graph holds many more unknowns than a planar one (a shell rather than a band around
+/// the changed unknowns), so the default 6 layers give 3D patches whose local factorisations
+/// cost a sizeable part of a global solve, or exceed the largest patch and propose nothing;
+/// 3 layers proposed as well or better on the 3D benchmarks
+/// (`replication/measurements/solver3d.md`).
+pub fn look_ahead_options(d: usize) -> crate::vi::look_ahead::LookAheadOptions {
+    let default = crate::vi::look_ahead::LookAheadOptions::default();
+    if d == 3 {
+        crate::vi::look_ahead::LookAheadOptions {
+            layers: LOOK_AHEAD_LAYERS_3D,
+            ..default
+        }
+    } else {
+        default
+    }
+}
+
 /// What [`warm_start`] returns: the predicted initial active set and the report.
 type Start = (Option<Vec<bool>>, Option<WarmStartReport>);
 
@@ -217,7 +239,7 @@ fn solve_constrained<M: SolverMesh<D> + ?Sized, const D: usize>(
     };
     // the fast path looks ahead; the paper's cold start keeps the paper's algorithm
     if opts.warm_start == WarmStart::Nested && o.look_ahead.is_none() {
-        o.look_ahead = Some(Default::default());
+        o.look_ahead = Some(look_ahead_options(D));
     }
     match active_set::run(&mut system.with_state(state), cons, &o)? {
         Outcome::Solved(s) => Ok(s),

@@ -228,7 +228,7 @@ fn coarse_solve<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
     let opts = super::SolveOptions {
         active_set: ActiveSetOptions {
             initial_active: initial(&hmm, &c),
-            look_ahead: Some(Default::default()),
+            look_ahead: Some(super::look_ahead_options(D)),
             cancel: cancel.cloned(),
             ..Default::default()
         },
