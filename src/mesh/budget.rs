@@ -126,6 +126,17 @@ pub struct AllocFailure {
     pub bytes: u64,
 }
 
+impl AllocFailure {
+    /// Ends the process as an infallible allocation (`vec!`) does: `memory allocation of …
+    /// failed` and an abort. Only for the callers that have no error to return it in.
+    pub(crate) fn abort(self) -> ! {
+        let bytes = usize::try_from(self.bytes).unwrap_or(usize::MAX);
+        let layout = std::alloc::Layout::from_size_align(bytes.min(isize::MAX as usize), 1)
+            .unwrap_or(std::alloc::Layout::new::<u8>());
+        std::alloc::handle_alloc_error(layout)
+    }
+}
+
 impl From<AllocFailure> for MeshError {
     fn from(f: AllocFailure) -> Self {
         MeshError::TooLarge {

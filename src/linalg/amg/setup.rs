@@ -10,6 +10,7 @@ use super::smooth::LevelSmoother;
 use super::strength::strength;
 use super::{Amg, AmgOptions, CoarseHierarchy, DENSE_MAX, Transfer};
 use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ};
+use crate::mesh::budget::try_filled;
 use rayon::prelude::*;
 
 impl<'a> Amg<'a> {
@@ -26,11 +27,11 @@ impl<'a> Amg<'a> {
         let mut transfers = Vec::new();
         let mut smoothers = Vec::new();
         // the near-null space of the current level (the constants on the fine one)
-        let mut near_null = vec![1.0; a.n_rows()];
+        let mut near_null = try_filled(a.n_rows(), 1.0, "the near-null vector")?;
         loop {
             let level = coarse_ops.len();
             let al = coarse_ops.last().unwrap_or(a);
-            let diag = al.diagonal();
+            let diag = al.try_diagonal()?;
             if level > 0
                 && let Some(i) = diag.iter().position(|&d| !(d > 0.0 && d.is_finite()))
             {
@@ -40,13 +41,13 @@ impl<'a> Amg<'a> {
                     diag[i]
                 )));
             }
-            smoothers.push(LevelSmoother::new(al, &diag, opts));
+            smoothers.push(LevelSmoother::new(al, &diag, opts)?);
             let n = al.n_rows();
             if n <= opts.max_coarse || level + 1 >= opts.max_levels {
                 break;
             }
-            let strong = strength(al, &diag, opts.strength_threshold);
-            let (agg, n_agg) = aggregate(al, &strong, &diag);
+            let strong = strength(al, &diag, opts.strength_threshold)?;
+            let (agg, n_agg) = aggregate(al, &strong, &diag)?;
             drop(strong);
             // stop when coarsening stalls (every row decoupled, or barely any reduction)
             if n_agg == 0 || n_agg as f64 > 0.85 * n as f64 {
@@ -60,9 +61,9 @@ impl<'a> Amg<'a> {
                 &near_null,
                 opts.smoothing_threshold,
                 opts.spectral_steps,
-            );
+            )?;
             near_null = b_next;
-            let ac = galerkin(al, &p, p.transpose());
+            let ac = galerkin(al, &p, p.transpose()?)?;
             transfers.push(Transfer { p });
             coarse_ops.push(ac);
         }
