@@ -198,6 +198,13 @@ pub fn try_filled<T: Clone>(n: usize, value: T, what: &str) -> Result<Vec<T>, Al
     Ok(v)
 }
 
+/// A copy of `s` (the fallible `to_vec`), or [`AllocFailure`] as [`try_vec`].
+pub fn try_copy<T: Clone>(s: &[T], what: &str) -> Result<Vec<T>, AllocFailure> {
+    let mut v = try_vec(s.len(), what)?;
+    v.extend_from_slice(s);
+    Ok(v)
+}
+
 /// The memory the kernel reports as available (`MemAvailable` of `/proc/meminfo`), in bytes;
 /// `None` where that file does not exist or cannot be read.
 pub fn available_memory() -> Option<u64> {
