@@ -755,6 +755,32 @@ mod tests {
         assert_eq!(c, b);
     }
 
+    /// The transpose of a 1 × (2³² − 1) matrix needs 32 GiB of row offsets: in a child
+    /// process whose data is limited to what it has plus 64 MiB, a typed
+    /// out-of-memory error naming them, not an abort; a small transpose still succeeds there.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_transpose_the_data_limit_refuses_is_a_typed_error() {
+        use crate::mesh::budget::child;
+        const NAME: &str =
+            "linalg::csr::tests::a_transpose_the_data_limit_refuses_is_a_typed_error";
+        if !child::is_child(NAME) {
+            return child::run(NAME);
+        }
+        let wide = CsrMatrix::new(1, u32::MAX as usize, vec![0, 0], vec![], vec![]).unwrap();
+        let (cp, ri, v) = lower();
+        let small = CsrMatrix::from_lower_csc(3, &cp, &ri, &v).unwrap();
+        child::limit_data(64 << 20);
+        let e = wide.transpose().unwrap_err();
+        assert!(e.is_out_of_memory(), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("the row offsets of the transpose would need about 32.0 GiB"),
+            "{e}"
+        );
+        assert_eq!(small.transpose().unwrap(), small);
+    }
+
     #[test]
     fn rejects_malformed_structures() {
         let (cp, ri, v) = lower();

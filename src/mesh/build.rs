@@ -140,8 +140,8 @@ impl PolyMesh {
         }
         // compact storage of the cells (ids and offsets below u32::MAX, checked above), before
         // the overlap check, the peak of the construction; the usize arrays are freed
-        let cell_ptr = to_u32(cell_ptr, "the offsets of the cells")?;
-        let cell_verts = to_u32(cell_verts, "the vertices of the cells")?;
+        let cell_ptr = to_u32(cell_ptr, "the 32-bit offsets of the cells")?;
+        let cell_verts = to_u32(cell_verts, "the 32-bit vertices of the cells")?;
 
         let on_boundary = |e: &usize| built.edge_cells[*e][1] == NO_CELL;
         let n_boundary = (0..ne).filter(on_boundary).count();
@@ -313,6 +313,49 @@ mod tests {
             .to_string(),
             format!("the mesh has {max} cell sides: at most 2^32 - 2 are supported")
         );
+    }
+
+    /// Builds a 400 × 400 grid again and again in a child process whose data is limited to
+    /// what it has plus 0, 1, 2, 4, … MiB: every build ends with the mesh or
+    /// with a typed out-of-memory error (whichever of its arrays failed), never an abort; the
+    /// smaller limits fail, the largest succeeds.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_build_the_data_limit_refuses_is_a_typed_error() {
+        use crate::mesh::budget::child;
+        const NAME: &str = "mesh::build::tests::a_build_the_data_limit_refuses_is_a_typed_error";
+        if !child::is_child(NAME) {
+            return child::run(NAME);
+        }
+        let n = 400;
+        let grid = || {
+            let vertices: Vec<Point> = (0..(n + 1) * (n + 1))
+                .map(|v| [(v % (n + 1)) as f64, (v / (n + 1)) as f64])
+                .collect();
+            let cell_ptr: Vec<usize> = (0..=n * n).map(|k| 4 * k).collect();
+            let cell_verts: Vec<usize> = (0..n * n)
+                .flat_map(|k| {
+                    let v = k / n * (n + 1) + k % n;
+                    [v, v + 1, v + n + 2, v + n + 1]
+                })
+                .collect();
+            (vertices, cell_ptr, cell_verts)
+        };
+        let mut refused = 0;
+        for extra_mib in [0, 1, 2, 4, 8, 16, 32, 64, 1024] {
+            let (vertices, cell_ptr, cell_verts) = grid();
+            child::limit_data(extra_mib << 20);
+            match PolyMesh::from_flat_cells(vertices, cell_ptr, cell_verts, Overlap::Sweep) {
+                Ok(m) => assert_eq!(m.n_edges(), 2 * n * (n + 1)),
+                Err(MeshError::TooLarge { what, bytes, .. }) => {
+                    assert!(bytes > 0, "{what}");
+                    refused += 1;
+                }
+                Err(e) => panic!("{extra_mib} MiB: {e}"),
+            }
+            child::limit_data(4 << 30);
+        }
+        assert!((1..9).contains(&refused), "{refused} builds refused");
     }
 
     #[test]

@@ -3,7 +3,7 @@
 use super::NONE;
 use super::rows::build_rows;
 use crate::linalg::csr::CsrMatrix;
-use crate::mesh::budget::{AllocFailure, try_filled};
+use crate::mesh::budget::{AllocFailure, try_filled, try_grow};
 
 /// A dense accumulator of a sparse row: the values by column and the list of touched columns.
 struct Accumulator {
@@ -32,8 +32,19 @@ impl Accumulator {
             self.vals[p as usize] += v;
         }
     }
+    /// Room for the row in `cols` and `vals`, or [`AllocFailure`].
+    fn reserve_in(&self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) -> Result<(), AllocFailure> {
+        let what = "the entries of a Galerkin product";
+        try_grow(cols, self.cols.len(), what)?;
+        try_grow(vals, self.cols.len(), what)
+    }
     /// Appends the row in the order of first touch and clears the accumulator.
-    fn drain_unsorted_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) {
+    fn drain_unsorted_into(
+        &mut self,
+        cols: &mut Vec<u32>,
+        vals: &mut Vec<f64>,
+    ) -> Result<(), AllocFailure> {
+        self.reserve_in(cols, vals)?;
         for &c in &self.cols {
             self.pos[c as usize] = NONE;
         }
@@ -41,9 +52,11 @@ impl Accumulator {
         vals.extend_from_slice(&self.vals);
         self.cols.clear();
         self.vals.clear();
+        Ok(())
     }
     /// Appends the row, sorted by column, and clears the accumulator.
-    fn drain_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) {
+    fn drain_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) -> Result<(), AllocFailure> {
+        self.reserve_in(cols, vals)?;
         self.cols.sort_unstable();
         for &c in &self.cols {
             let p = self.pos[c as usize] as usize;
@@ -53,6 +66,7 @@ impl Accumulator {
         }
         self.cols.clear();
         self.vals.clear();
+        Ok(())
     }
 }
 
@@ -89,9 +103,9 @@ fn product(l: &CsrMatrix, m: &CsrMatrix, sorted: bool) -> Result<CsrMatrix, Allo
                 }
             }
             if sorted {
-                acc.drain_into(cols, vals);
+                acc.drain_into(cols, vals)
             } else {
-                acc.drain_unsorted_into(cols, vals);
+                acc.drain_unsorted_into(cols, vals)
             }
         },
     )

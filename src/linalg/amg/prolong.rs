@@ -5,7 +5,7 @@ use super::NONE;
 use super::rows::build_rows;
 use super::spectral::lanczos_lambda_max;
 use crate::linalg::csr::{CsrMatrix, ROW_CHUNK};
-use crate::mesh::budget::{AllocFailure, try_filled};
+use crate::mesh::budget::{AllocFailure, try_filled, try_grow};
 use rayon::prelude::*;
 
 /// P = (I − ω D_F⁻¹ A_F) T (see the module documentation): row i is
@@ -42,6 +42,10 @@ pub(super) fn smoothed_prolongator(
         n_agg,
         || Ok(()),
         |_, i, cols, vals| {
+            // at most one entry per aggregate met: the unknown's own and its row's
+            let width = a.row(i).0.len() + 1;
+            try_grow(cols, width, "the columns of the prolongator")?;
+            try_grow(vals, width, "the entries of the prolongator")?;
             let start = cols.len();
             let scale = omega / dfil[i];
             let mut add = |g: u32, v: f64| {
@@ -63,6 +67,7 @@ pub(super) fn smoothed_prolongator(
                 }
             }
             sort_tail(cols, vals, start);
+            Ok(())
         },
     )?;
     Ok((p, b_coarse))

@@ -6,7 +6,8 @@ use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
 use rayon::prelude::*;
 
 /// Builds a matrix row by row in parallel: `row(scratch, i, cols, vals)` appends the entries
-/// of row i (sorted by column) to `cols` and `vals`; `init` makes the per-thread scratch.
+/// of row i (sorted by column) to `cols` and `vals`, reserving their room first
+/// ([`try_grow`](crate::mesh::budget::try_grow)); `init` makes the per-thread scratch.
 /// [`AllocFailure`] if the scratch or the arrays of the matrix cannot be allocated (the
 /// entries of one chunk of [`ROW_CHUNK`] rows grow as the rows are appended).
 pub(super) fn build_rows<S, I, F>(
@@ -18,7 +19,7 @@ pub(super) fn build_rows<S, I, F>(
 where
     S: Send,
     I: Fn() -> Result<S, AllocFailure> + Sync + Send,
-    F: Fn(&mut S, usize, &mut Vec<u32>, &mut Vec<f64>) + Sync + Send,
+    F: Fn(&mut S, usize, &mut Vec<u32>, &mut Vec<f64>) -> Result<(), AllocFailure> + Sync + Send,
 {
     let n_chunks = n_rows.div_ceil(ROW_CHUNK);
     let parts: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..n_chunks)
@@ -31,7 +32,7 @@ where
             let mut vals = Vec::new();
             for i in i0..i1 {
                 let before = cols.len();
-                row(s, i, &mut cols, &mut vals);
+                row(s, i, &mut cols, &mut vals)?;
                 lens.push(cols.len() - before);
             }
             Ok((lens, cols, vals))
@@ -110,6 +111,7 @@ mod tests {
                         cols.push(j);
                         vals.push(v);
                     }
+                    Ok(())
                 },
             )
             .unwrap();

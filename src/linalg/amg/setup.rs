@@ -144,6 +144,48 @@ mod tests {
     use super::*;
     use crate::linalg::pcg::{PcgOptions, pcg};
 
+    /// The hierarchy of a 300 × 300 grid and a solve with it, again and again in a child
+    /// process whose data is limited to what it has plus 0, 1, 2, 4, … MiB:
+    /// each ends with the solution or with a typed out-of-memory error (from whichever array
+    /// of the setup or of the cycle's workspace failed), never an abort; the smaller limits
+    /// fail, the largest succeeds.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_setup_the_data_limit_refuses_is_a_typed_error() {
+        use crate::mesh::budget::child;
+        const NAME: &str =
+            "linalg::amg::setup::tests::a_setup_the_data_limit_refuses_is_a_typed_error";
+        if !child::is_child(NAME) {
+            return child::run(NAME);
+        }
+        let a = grid(300, 1.0, 1.0, &|_, _| 1.0);
+        let b = vec![1.0; a.n_rows()];
+        // unlimited solves first, on every thread: the dense factorisation of the coarsest
+        // level (faer) maps a product buffer per thread on first use, infallibly, and keeps it
+        let solve = || {
+            let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
+            let mut x = vec![0.0; a.n_rows()];
+            pcg(&a, &amg, &mut AmgWork::new(), &b, &mut x, &PcgOptions::default()).unwrap();
+        };
+        solve();
+        rayon::broadcast(|_| solve());
+        let mut refused = 0;
+        for extra_mib in [0, 1, 2, 4, 8, 16, 32, 1024] {
+            let mut x = vec![0.0; a.n_rows()];
+            let opts = PcgOptions::default();
+            child::limit_data(extra_mib << 20);
+            let solved = Amg::new(&a, &AmgOptions::default())
+                .and_then(|amg| pcg(&a, &amg, &mut AmgWork::new(), &b, &mut x, &opts));
+            child::limit_data(4 << 30);
+            match solved {
+                Ok(r) => assert!(r.residual_norm <= 1e-6 * (a.n_rows() as f64).sqrt()),
+                Err(e) if e.is_out_of_memory() => refused += 1,
+                Err(e) => panic!("{extra_mib} MiB: {e}"),
+            }
+        }
+        assert!((1..8).contains(&refused), "{refused} solves refused");
+    }
+
     #[test]
     fn bad_input_is_an_error() {
         let a = grid(10, 1.0, 1.0, &|_, _| 1.0);
