@@ -58,6 +58,10 @@ use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
 
+/// The rows of the cell system, whether each skeleton unknown is eliminated, and the row of
+/// each kept one ([`NO_ROW`] else).
+type EliminatedFaces = (Vec<u32>, Vec<bool>, Vec<u32>);
+
 /// Relative size below which an off-diagonal entry of a local skeleton block counts as zero
 /// (see the module docs).
 pub const TWO_POINT_TOL: f64 = 1e-12;
@@ -222,7 +226,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// cell system (the cells' interior unknowns, then the kept skeleton unknowns), the
     /// eliminated flags and the row of each kept skeleton unknown; `None` when too few can be
     /// eliminated for the cell system to pay.
-    fn eliminated_faces(&self) -> crate::Result<Option<(Vec<u32>, Vec<bool>, Vec<u32>)>> {
+    fn eliminated_faces(&self) -> crate::Result<Option<EliminatedFaces>> {
         let (dm, inc) = (&self.sym.dof_map, &self.sym.maps.inc);
         let nc = dm.n_cells();
         let dirichlet = &self.values.dirichlet;

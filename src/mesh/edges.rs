@@ -86,6 +86,9 @@ impl EdgeIndex for usize {
     }
 }
 
+/// The buckets of [`bucket_sides`]: offsets by smaller vertex, the sides, the number of edges.
+type Buckets<I> = (Vec<I>, Vec<HalfEdge<I>>, usize);
+
 /// A cell side in the buckets of [`build_edges`]: (larger vertex, 2·slot + \[the side runs from
 /// the larger to the smaller vertex\], cell). The direction rides along so that step 3 reads no
 /// vertex ids; sorting by the second item sorts by slot.
@@ -98,7 +101,7 @@ fn bucket_sides<I: EdgeIndex>(
     nv: usize,
     cell_ptr: &[usize],
     cell_verts: &[usize],
-) -> Result<(Vec<I>, Vec<HalfEdge<I>>, usize), AllocFailure> {
+) -> Result<Buckets<I>, AllocFailure> {
     let n_half = cell_verts.len();
     let nc = cell_ptr.len().saturating_sub(1);
     // the side in `slot` of cell k (slots s..e) joins cell_verts[slot] to cell_verts[next(slot)]

@@ -165,7 +165,15 @@ mod tests {
         let solve = || {
             let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
             let mut x = vec![0.0; a.n_rows()];
-            pcg(&a, &amg, &mut AmgWork::new(), &b, &mut x, &PcgOptions::default()).unwrap();
+            pcg(
+                &a,
+                &amg,
+                &mut AmgWork::new(),
+                &b,
+                &mut x,
+                &PcgOptions::default(),
+            )
+            .unwrap();
         };
         solve();
         rayon::broadcast(|_| solve());
