@@ -481,8 +481,8 @@ impl CsrMatrix {
     }
 
     /// The diagonal a_ii (0 where row i stores no diagonal entry), for a square matrix;
-    /// aborts, as `vec!` does, if it cannot be allocated ([`CsrMatrix::try_diagonal`] returns
-    /// the failure instead).
+    /// aborts, as `vec!` does, if it cannot be allocated (the library's solve paths use a
+    /// fallible variant that returns the failure instead).
     pub fn diagonal(&self) -> Vec<f64> {
         self.try_diagonal().unwrap_or_else(|f| f.abort())
     }
