@@ -10,6 +10,7 @@ use super::linear::{
 use super::{DiscreteSystem, SolveState};
 use crate::linalg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, CsrMatrix};
 use crate::mesh::SolveMesh;
+use crate::mesh::budget::{try_copy, try_filled};
 use crate::vi::SolveTimings;
 use std::time::Instant;
 
@@ -204,7 +205,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     ) -> crate::Result<(Instant, PcgOutcome)> {
         let hier = hierarchy(a, next, false)?;
         let t2 = Instant::now();
-        let mut x = self.take_initial_guess(state);
+        let mut x = self.take_initial_guess(state)?;
         let out = self.run_pcg(state, hier, rhs, &mut x, rtol, fixed)?;
         rhs.copy_from_slice(&x);
         self.keep_solution(state, x);
@@ -246,9 +247,17 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             (true, Some(r), Some(f)) => r > f / REUSE_MAX_SLOWDOWN,
             _ => false,
         };
+        let screened = if out.inexact {
+            Some((
+                try_copy(c, "the screened right-hand side")?,
+                fingerprint(fixed),
+            ))
+        } else {
+            None
+        };
         state.kept = Some(KeptHierarchy {
             amg,
-            screened: out.inexact.then(|| (c.to_vec(), fingerprint(fixed))),
+            screened,
             fresh_rate: fresh_rate.or(out.rate),
             stale,
             fixed_mask,
@@ -258,12 +267,12 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     }
 
     /// The initial guess of an iterative solve: the last solution, or zero.
-    pub(super) fn take_initial_guess(&self, state: &mut SolveState) -> Vec<f64> {
+    pub(super) fn take_initial_guess(&self, state: &mut SolveState) -> crate::Result<Vec<f64>> {
         let x = std::mem::take(&mut state.last_solution);
         if x.len() == self.n_skel {
-            x
+            Ok(x)
         } else {
-            vec![0.0; self.n_skel]
+            Ok(try_filled(self.n_skel, 0.0, "the initial guess")?)
         }
     }
 

@@ -4,6 +4,7 @@
 use super::DiscreteSystem;
 use super::gather::local_index;
 use crate::mesh::SolveMesh;
+use crate::mesh::budget::try_filled;
 use rayon::prelude::*;
 
 impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
@@ -17,8 +18,8 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// cell is stored.
     pub fn residual(&self, u: &[f64]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
         let inc = &self.sym.maps.inc;
-        let mut r = vec![0.0; self.n];
-        let mut scale = vec![0.0; self.n];
+        let mut r = try_filled(self.n, 0.0, "the residual of the system")?;
+        let mut scale = try_filled(self.n, 0.0, "the residual scales of the system")?;
         r.par_iter_mut()
             .zip(scale.par_iter_mut())
             .enumerate()

@@ -10,6 +10,7 @@ use super::symbolic::check_numeric_memory;
 use super::{DiscreteSystem, SolveState};
 use crate::linalg::{CholeskyWork, SpdPattern};
 use crate::mesh::SolveMesh;
+use crate::mesh::budget::{try_copy, try_filled};
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -137,14 +138,14 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             None
         };
         let mut x = match &cs {
-            Some(cs) => self.take_cell_guess(state, cs),
-            None => self.take_initial_guess(state),
+            Some(cs) => self.take_cell_guess(state, cs)?,
+            None => self.take_initial_guess(state)?,
         };
         let out = self.run_pcg(state, hier, rhs, &mut x, ITERATIVE_RTOL, fixed)?;
         let u = match cs {
             Some(cs) => {
                 let u = self.complete_cells(&cs, &self.fixed_values(fixed), &x)?;
-                self.keep_cells(state, x, &u);
+                self.keep_cells(state, x, &u)?;
                 u
             }
             None => {
@@ -190,7 +191,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let (t2, out) = match reuse {
             None => self.solve_direct(state, &values, &mut rhs)?,
             Some(reuse) if self.sym.options.linear == LinearSolver::Auto => {
-                let c = rhs.clone();
+                let c = try_copy(&rhs, "the right-hand side")?;
                 let it = self
                     .csr(&values)
                     .and_then(|a| self.solve_csr(state, a, &mut rhs, rtol, fixed, reuse));
@@ -227,7 +228,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// cell by cell; a non-finite value is an error.
     fn complete(&self, fixed: &[Option<f64>], skel: &[f64]) -> crate::Result<Vec<f64>> {
         let fx = |d: usize| -> Option<f64> { self.values.dirichlet[d].or(fixed[d]) };
-        let mut u = vec![0.0; self.n];
+        let mut u = try_filled(self.n, 0.0, "the solution")?;
         u[..self.n_skel].copy_from_slice(skel);
         self.recover_interiors(&fx, &mut u)?;
         check_finite(u)

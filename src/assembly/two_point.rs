@@ -52,11 +52,15 @@ use super::solve::check_finite;
 use super::{DiscreteSystem, SolveState};
 use crate::linalg::CsrMatrix;
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{try_filled, try_vec};
+use crate::mesh::budget::{try_copy, try_filled, try_vec};
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
+
+/// The rows of the cell system, whether each skeleton unknown is eliminated, and the row of
+/// each kept one ([`NO_ROW`] else).
+type EliminatedFaces = (Vec<u32>, Vec<bool>, Vec<u32>);
 
 /// Relative size below which an off-diagonal entry of a local skeleton block counts as zero
 /// (see the module docs).
@@ -148,41 +152,52 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let t1 = Instant::now();
         let hier = hierarchy(a, reuse, true)?;
         let t2 = Instant::now();
-        let mut x = self.take_cell_guess(state, cs);
+        let mut x = self.take_cell_guess(state, cs)?;
         let out = self.run_pcg(state, hier, &rhs, &mut x, rtol, fixed)?;
         let u = self.complete_cells(cs, &fx, &x)?;
-        self.keep_cells(state, x, &u);
+        self.keep_cells(state, x, &u)?;
         Ok((u, out.timings([t0, t1, t2, Instant::now()])))
     }
 
     /// The initial guess of a cell solve: the last cell solution; else the cells recovered
     /// from the last skeleton solution (or the warm start's guess), u_K = (b_K − Σ_σ m_σK
     /// u_σ) / (M_K)_KK, and the kept skeleton unknowns from it; else zero.
-    pub(super) fn take_cell_guess(&self, state: &mut SolveState, cs: &CellSystemAll) -> Vec<f64> {
+    pub(super) fn take_cell_guess(
+        &self,
+        state: &mut SolveState,
+        cs: &CellSystemAll,
+    ) -> crate::Result<Vec<f64>> {
         let cells = std::mem::take(&mut state.last_cells);
         if cells.len() == cs.n() {
-            return cells;
+            return Ok(cells);
         }
         // the skeleton guess holds every unknown the cells' rows read (their skeleton ones)
-        let skel = self.take_initial_guess(state);
-        (0..cs.n())
-            .into_par_iter()
+        let skel = self.take_initial_guess(state)?;
+        let mut x = try_filled(cs.n(), 0.0, "the initial guess of the cell system")?;
+        x.par_iter_mut()
+            .enumerate()
             .with_min_len(4096)
-            .map(|i| {
-                if i < cs.n_cells {
+            .for_each(|(i, xi)| {
+                *xi = if i < cs.n_cells {
                     super::condense::interior_value(&self.local(i), &|_| None, &skel)
                 } else {
                     skel[cs.dof(i)]
                 }
-            })
-            .collect()
+            });
+        Ok(x)
     }
 
     /// Keeps the cell values `x` and the skeleton values of `u` in `state` as the initial
     /// guesses of the next solves (of either system).
-    pub(super) fn keep_cells(&self, state: &mut SolveState, x: Vec<f64>, u: &[f64]) {
-        state.last_solution = u[..self.n_skel].to_vec();
+    pub(super) fn keep_cells(
+        &self,
+        state: &mut SolveState,
+        x: Vec<f64>,
+        u: &[f64],
+    ) -> crate::Result<()> {
+        state.last_solution = try_copy(&u[..self.n_skel], "the initial guess of the next solve")?;
         state.last_cells = x;
+        Ok(())
     }
 
     /// The cell system, if enough of the skeleton unknowns can be eliminated (module docs).
@@ -190,7 +205,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         if !self.sym.single_interior || self.n_skel == 0 {
             return Ok(None);
         }
-        let Some((dofs, eliminated, kept_row)) = self.eliminated_faces() else {
+        let Some((dofs, eliminated, kept_row)) = self.eliminated_faces()? else {
             return Ok(None);
         };
         let d = self.eliminated_diagonals(&eliminated)?;
@@ -211,7 +226,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// cell system (the cells' interior unknowns, then the kept skeleton unknowns), the
     /// eliminated flags and the row of each kept skeleton unknown; `None` when too few can be
     /// eliminated for the cell system to pay.
-    fn eliminated_faces(&self) -> Option<(Vec<u32>, Vec<bool>, Vec<u32>)> {
+    fn eliminated_faces(&self) -> crate::Result<Option<EliminatedFaces>> {
         let (dm, inc) = (&self.sym.dof_map, &self.sym.maps.inc);
         let nc = dm.n_cells();
         let dirichlet = &self.values.dirichlet;
@@ -236,8 +251,8 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                 out
             })
             .collect();
-        let mut kept_row = vec![NO_ROW; self.n_skel];
-        let mut eliminated = vec![false; self.n_skel];
+        let mut kept_row = try_filled(self.n_skel, NO_ROW, "the rows of the cell system")?;
+        let mut eliminated = try_filled(self.n_skel, false, "the eliminated skeleton unknowns")?;
         for s in 0..self.n_skel {
             eliminated[s] = dirichlet[s].is_none() && inc.list(s).len() <= 2;
         }
@@ -255,7 +270,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             .iter()
             .filter(|d| d.is_none())
             .count();
-        (4 * dofs.len() <= 3 * free_skel).then_some((dofs, eliminated, kept_row))
+        Ok((4 * dofs.len() <= 3 * free_skel).then_some((dofs, eliminated, kept_row)))
     }
 
     /// d_σ = Σ_{K ∋ σ} (M_K)_σσ of the eliminated skeleton unknowns (0 on the others).
@@ -477,7 +492,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         fixed: &FixedValues,
         x: &[f64],
     ) -> crate::Result<Vec<f64>> {
-        let mut u = vec![0.0; self.n];
+        let mut u = try_filled(self.n, 0.0, "the solution")?;
         for (i, &xi) in x.iter().enumerate() {
             let dof = cs.dof(i);
             u[dof] = fixed.get(dof).unwrap_or(xi);

@@ -24,7 +24,7 @@
 //! r0..r1 comes from the columns j < r1 whose last row reaches r0, scanned in increasing j
 //! (so again sorted), once to count and once to fill the chunk's own part of the arrays.
 
-use crate::mesh::budget::{try_filled, try_vec};
+use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
 use rayon::prelude::*;
 
 /// Rows per task of the parallel products: large enough that spreading the work costs nothing
@@ -41,10 +41,15 @@ const CSC_CHUNK: usize = 16384;
 
 /// For each chunk of [`CSC_CHUNK`] rows of the parallel [`CsrMatrix::from_lower_csc`], the
 /// first column whose last row reaches the chunk (from the running maximum of the last
-/// rows); `None` when the chunks would scan more than 4 n columns in all (a wide band).
-fn first_columns(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<Vec<usize>> {
+/// rows); `None` when the chunks would scan more than 4 n columns in all (a wide band);
+/// [`AllocFailure`] if the running maximum cannot be allocated.
+fn first_columns(
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> Result<Option<Vec<usize>>, AllocFailure> {
     // reach[j] = max_{j' ≤ j} (last row of column j'), running maximum
-    let mut reach = vec![0usize; n];
+    let mut reach = try_filled(n, 0usize, "the column reach of the matrix")?;
     let mut m = 0;
     for (j, r) in reach.iter_mut().enumerate() {
         let (s, e) = (col_ptr[j], col_ptr[j + 1]);
@@ -61,7 +66,7 @@ fn first_columns(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<Vec<u
     let scanned: usize = (0..n_chunks)
         .map(|c| ((c + 1) * CSC_CHUNK).min(n) - first[c])
         .sum();
-    (scanned <= 4 * n).then_some(first)
+    Ok((scanned <= 4 * n).then_some(first))
 }
 
 /// A sparse matrix in compressed sparse row form, with sorted column indices.
@@ -301,7 +306,7 @@ impl CsrMatrix {
         row_idx: &[usize],
         values: &[f64],
     ) -> crate::Result<Option<Self>> {
-        let Some(first) = first_columns(n, col_ptr, row_idx) else {
+        let Some(first) = first_columns(n, col_ptr, row_idx)? else {
             return Ok(None);
         };
         let n_chunks = first.len();
@@ -475,10 +480,17 @@ impl CsrMatrix {
             + self.values.len() * std::mem::size_of::<f64>()
     }
 
-    /// The diagonal a_ii (0 where row i stores no diagonal entry), for a square matrix.
+    /// The diagonal a_ii (0 where row i stores no diagonal entry), for a square matrix;
+    /// aborts, as `vec!` does, if it cannot be allocated (the library's solve paths use a
+    /// fallible variant that returns the failure instead).
     pub fn diagonal(&self) -> Vec<f64> {
+        self.try_diagonal().unwrap_or_else(|f| f.abort())
+    }
+
+    /// [`CsrMatrix::diagonal`], or [`AllocFailure`] if it cannot be allocated.
+    pub(crate) fn try_diagonal(&self) -> Result<Vec<f64>, AllocFailure> {
         let n = self.n_rows.min(self.n_cols);
-        let mut d = vec![0.0; n];
+        let mut d = try_filled(n, 0.0, "the diagonal of the matrix")?;
         let fill = |i0: usize, chunk: &mut [f64]| {
             for (k, di) in chunk.iter_mut().enumerate() {
                 let i = i0 + k;
@@ -495,7 +507,7 @@ impl CsrMatrix {
                 .enumerate()
                 .for_each(|(c, chunk)| fill(c * ROW_CHUNK, chunk));
         }
-        d
+        Ok(d)
     }
 
     /// y = A x, checked: `x` has `n_cols` entries and `y` has `n_rows`.
@@ -615,19 +627,21 @@ impl CsrMatrix {
     }
 
     /// The transpose Aᵀ (a counting sort of the entries by column; rows of the result come
-    /// out sorted because the rows of A are visited in order).
-    pub fn transpose(&self) -> CsrMatrix {
+    /// out sorted because the rows of A are visited in order), or
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if its arrays cannot be allocated.
+    pub fn transpose(&self) -> crate::Result<CsrMatrix> {
         let (m, n) = (self.n_rows, self.n_cols);
-        let mut row_ptr = vec![0usize; n + 1];
+        let mut row_ptr = try_filled(n + 1, 0usize, "the row offsets of the transpose")?;
         for &j in &self.col_idx {
             row_ptr[j as usize + 1] += 1;
         }
         for j in 0..n {
             row_ptr[j + 1] += row_ptr[j];
         }
-        let mut next = row_ptr[..n].to_vec();
-        let mut col_idx = vec![0u32; self.nnz()];
-        let mut values = vec![0.0; self.nnz()];
+        let mut next = try_vec(n, "the fill cursors of the transpose")?;
+        next.extend_from_slice(&row_ptr[..n]);
+        let mut col_idx = try_filled(self.nnz(), 0u32, "the column indices of the transpose")?;
+        let mut values = try_filled(self.nnz(), 0.0, "the entries of the transpose")?;
         for i in 0..m {
             let (cols, vals) = self.row(i);
             for (&j, &v) in cols.iter().zip(vals) {
@@ -637,13 +651,13 @@ impl CsrMatrix {
                 next[j as usize] = p + 1;
             }
         }
-        CsrMatrix {
+        Ok(CsrMatrix {
             n_rows: n,
             n_cols: m,
             row_ptr,
             col_idx,
             values,
-        }
+        })
     }
 }
 
@@ -671,7 +685,7 @@ mod tests {
         let mut y = vec![0.0; 3];
         a.spmv(&[1.0, 2.0, 3.0], &mut y).unwrap();
         assert_eq!(y, vec![6.0, 17.0, 22.0]);
-        assert_eq!(a.transpose(), a);
+        assert_eq!(a.transpose().unwrap(), a);
         assert!(a.spmv(&[1.0], &mut y).is_err());
     }
 
@@ -708,7 +722,7 @@ mod tests {
         let x: Vec<f64> = (0..m).map(|i| (i as f64 * 1.3).cos()).collect();
         let (mut y, mut z) = (vec![f64::NAN; n], vec![0.0; n]);
         a.mul_transpose_to(&x, &mut y);
-        a.transpose().mul_to(&x, &mut z);
+        a.transpose().unwrap().mul_to(&x, &mut z);
         assert_eq!(
             y.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
             z.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
@@ -739,6 +753,32 @@ mod tests {
         let mut c = b.clone();
         c.drop_zeros();
         assert_eq!(c, b);
+    }
+
+    /// The transpose of a 1 × (2³² − 1) matrix needs 32 GiB of row offsets: in a child
+    /// process whose data is limited to what it has plus 64 MiB, a typed
+    /// out-of-memory error naming them, not an abort; a small transpose still succeeds there.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_transpose_the_data_limit_refuses_is_a_typed_error() {
+        use crate::mesh::budget::child;
+        const NAME: &str =
+            "linalg::csr::tests::a_transpose_the_data_limit_refuses_is_a_typed_error";
+        if !child::is_child(NAME) {
+            return child::run(NAME);
+        }
+        let wide = CsrMatrix::new(1, u32::MAX as usize, vec![0, 0], vec![], vec![]).unwrap();
+        let (cp, ri, v) = lower();
+        let small = CsrMatrix::from_lower_csc(3, &cp, &ri, &v).unwrap();
+        child::limit_data(64 << 20);
+        let e = wide.transpose().unwrap_err();
+        assert!(e.is_out_of_memory(), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("the row offsets of the transpose would need about 32.0 GiB"),
+            "{e}"
+        );
+        assert_eq!(small.transpose().unwrap(), small);
     }
 
     #[test]
@@ -807,7 +847,7 @@ mod tests {
             let (cp, ri, v) = banded(n, &offsets);
             let a = CsrMatrix::from_lower_csc(n, &cp, &ri, &v).unwrap();
             assert_eq!(a, expand_naively(n, &cp, &ri, &v), "{offsets:?}");
-            assert_eq!(a.transpose(), a);
+            assert_eq!(a.transpose().unwrap(), a);
         }
         // an error in a late column is found by the parallel check
         let (cp, mut ri, v) = banded(n, &[1, 2]);

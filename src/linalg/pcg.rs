@@ -19,6 +19,7 @@
 //! of the dot products are added in chunk order, so results do not depend on the scheduling.
 
 use super::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
+use crate::mesh::budget::{try_copy, try_filled, try_vec};
 use rayon::prelude::*;
 
 /// An approximate inverse z = M⁻¹ r of a symmetric positive definite M. M does not change
@@ -63,16 +64,16 @@ impl Jacobi {
     /// The inverse diagonal of `a`; a diagonal entry that is not positive and finite is an
     /// error naming its row.
     pub fn new(a: &CsrMatrix) -> crate::Result<Self> {
-        let d = a.diagonal();
+        let d = a.try_diagonal()?;
         if let Some(i) = d.iter().position(|&v| !(v > 0.0 && v.is_finite())) {
             return Err(crate::Error::Linear(format!(
                 "Jacobi preconditioner: diagonal entry {} at row {i} is not positive",
                 d[i]
             )));
         }
-        Ok(Jacobi {
-            inv_diag: d.iter().map(|v| 1.0 / v).collect(),
-        })
+        let mut inv_diag = try_vec(d.len(), "the Jacobi preconditioner")?;
+        inv_diag.extend(d.iter().map(|v| 1.0 / v));
+        Ok(Jacobi { inv_diag })
     }
 }
 
@@ -192,7 +193,7 @@ pub fn pcg<M: Preconditioner + ?Sized>(
     let n = a.n_rows();
     let b_norm = dot(b, b).sqrt();
     let tol = (opts.rtol * b_norm).max(opts.atol);
-    let mut r = vec![0.0; n];
+    let mut r = try_filled(n, 0.0, "the residual of the conjugate gradients")?;
     a.residual_to(b, x, &mut r);
     let r0 = dot(&r, &r).sqrt();
     if !r0.is_finite() {
@@ -230,7 +231,11 @@ fn iterate<M: Preconditioner + ?Sized>(
     mut report: PcgReport,
 ) -> crate::Result<PcgReport> {
     let n = a.n_rows();
-    let mut z = vec![0.0; n];
+    let mut z = try_filled(
+        n,
+        0.0,
+        "the preconditioned residual of the conjugate gradients",
+    )?;
     m.apply(&r, &mut z, work)?;
     let mut rz = dot(&r, &z);
     let mut r_norm = report.initial_residual_norm;
@@ -240,7 +245,7 @@ fn iterate<M: Preconditioner + ?Sized>(
     if !(rz > 0.0 && rz.is_finite()) {
         return Err(failure(n, not_pd(rz), 0, r_norm));
     }
-    let mut p = z.clone();
+    let mut p = try_copy(&z, "the search direction of the conjugate gradients")?;
     // q = A p lives in z's storage: q is dead once r is updated, before z = M⁻¹ r is written
     // (one vector fewer)
     for k in 1..=max_iter {

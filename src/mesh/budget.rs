@@ -126,6 +126,17 @@ pub struct AllocFailure {
     pub bytes: u64,
 }
 
+impl AllocFailure {
+    /// Ends the process as an infallible allocation (`vec!`) does: `memory allocation of …
+    /// failed` and an abort. Only for the callers that have no error to return it in.
+    pub(crate) fn abort(self) -> ! {
+        let bytes = usize::try_from(self.bytes).unwrap_or(usize::MAX);
+        let layout = std::alloc::Layout::from_size_align(bytes.min(isize::MAX as usize), 1)
+            .unwrap_or(std::alloc::Layout::new::<u8>());
+        std::alloc::handle_alloc_error(layout)
+    }
+}
+
 impl From<AllocFailure> for MeshError {
     fn from(f: AllocFailure) -> Self {
         MeshError::TooLarge {
@@ -167,6 +178,18 @@ pub fn try_reserve<T>(v: &mut Vec<T>, additional: usize, what: &str) -> Result<(
     })
 }
 
+/// Room for `additional` more elements in `v`, growing it geometrically as `push` does
+/// (`Vec::try_reserve`), or [`AllocFailure`] naming `what`: for buffers appended to piece
+/// after piece (a check per piece, not per element, and amortised linear growth).
+pub fn try_grow<T>(v: &mut Vec<T>, additional: usize, what: &str) -> Result<(), AllocFailure> {
+    v.try_reserve(additional).map_err(|_| AllocFailure {
+        what: what.to_string(),
+        bytes: (v.len() as u64)
+            .saturating_add(additional as u64)
+            .saturating_mul(std::mem::size_of::<T>() as u64),
+    })
+}
+
 /// `v` resized to `n` elements, new ones `value` (the fallible `Vec::resize`), or
 /// [`AllocFailure`] as [`try_reserve`]: for buffers kept from one call to the next.
 pub fn try_resize<T: Clone>(
@@ -184,6 +207,13 @@ pub fn try_resize<T: Clone>(
 pub fn try_filled<T: Clone>(n: usize, value: T, what: &str) -> Result<Vec<T>, AllocFailure> {
     let mut v = try_vec(n, what)?;
     v.resize(n, value);
+    Ok(v)
+}
+
+/// A copy of `s` (the fallible `to_vec`), or [`AllocFailure`] as [`try_vec`].
+pub fn try_copy<T: Clone>(s: &[T], what: &str) -> Result<Vec<T>, AllocFailure> {
+    let mut v = try_vec(s.len(), what)?;
+    v.extend_from_slice(s);
     Ok(v)
 }
 
@@ -304,6 +334,57 @@ pub fn mesh_bytes(cells: u64, sides: u64, vertices: u64, edges: u64) -> u64 {
         .saturating_add(sides.saturating_mul(per_side))
         .saturating_add(vertices.saturating_mul(per_vertex))
         .saturating_add(edges.saturating_mul(per_edge))
+}
+
+/// Test support for the fallible allocations: a test runs again in a child process, which
+/// limits its own memory ([`limit_data`](child::limit_data)) after
+/// building its input, so that the allocations of the code under test, and only those, meet
+/// the limit.
+#[cfg(all(test, target_os = "linux"))]
+pub(crate) mod child {
+    /// Whether this process is the child [`run`] started for the test `name`.
+    pub(crate) fn is_child(name: &str) -> bool {
+        std::env::var("GRADVI_ALLOC_TEST").is_ok_and(|v| v == name)
+    }
+
+    /// Runs the test `name` (its full path) of this test binary in a child process and
+    /// checks that it passed there: an abort on a failed allocation fails it.
+    pub(crate) fn run(name: &str) {
+        let out = std::process::Command::new(std::env::current_exe().unwrap())
+            .args(["--exact", name, "--test-threads", "1"])
+            .env("GRADVI_ALLOC_TEST", name)
+            .env("RUST_BACKTRACE", "0")
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&out.stdout);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success(),
+            "the child failed ({}): {said}{err}",
+            out.status
+        );
+        assert!(said.contains("1 passed"), "the child ran no test: {said}");
+    }
+
+    /// Limits the data of this process (`RLIMIT_DATA`, as `ulimit -d` does: on Linux every
+    /// private writable mapping, including the parts of the allocator's arenas put to use) to
+    /// what it has now plus `extra` bytes, the worker threads started first (their stacks
+    /// and arenas mapped before the limit). Unlike the address space, which counts the
+    /// arenas' reserve whole, this meets every allocation of the code under test. The soft
+    /// limit may be raised again, up to the hard one, by a later call.
+    pub(crate) fn limit_data(extra: u64) {
+        rayon::broadcast(|_| drop(std::hint::black_box(Box::new(0u64))));
+        let status = std::fs::read_to_string("/proc/self/status").unwrap();
+        let used = super::status_kib(&status, "VmData:").unwrap();
+        let mut lim = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        // SAFETY: getrlimit and setrlimit read or write one `rlimit` through a valid pointer.
+        assert_eq!(unsafe { libc::getrlimit(libc::RLIMIT_DATA, &mut lim) }, 0);
+        lim.rlim_cur = (used + extra).min(lim.rlim_max);
+        assert_eq!(unsafe { libc::setrlimit(libc::RLIMIT_DATA, &lim) }, 0);
+    }
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! [`validate`](super::validate), the edge numbering ([`edges`](super::edges)) and the overlap
 //! sweep, to the compact 32-bit arrays the mesh keeps.
 
+use super::budget::{AllocFailure, try_filled, try_vec};
 use super::edges::{Edges, build_edges};
 use super::tags::NonBoundaryTag;
 use super::{NO_CELL, Point, PolyMesh, sweep, validate};
@@ -33,10 +34,12 @@ fn check_counts(vertices: usize, cells: usize, sides: usize) -> Result<(), MeshE
 }
 
 /// `v` as 32-bit values (all below `u32::MAX`, which the caller has checked), in a new array of
-/// exactly that length; `v` is freed.
-fn to_u32(v: Vec<usize>) -> Vec<u32> {
+/// exactly that length named `what`; `v` is freed.
+fn to_u32(v: Vec<usize>, what: &str) -> Result<Vec<u32>, AllocFailure> {
     debug_assert!(v.iter().all(|&x| x < u32::MAX as usize));
-    v.iter().map(|&x| x as u32).collect()
+    let mut out = try_vec(v.len(), what)?;
+    out.extend(v.iter().map(|&x| x as u32));
+    Ok(out)
 }
 
 impl PolyMesh {
@@ -54,9 +57,10 @@ impl PolyMesh {
         cells: Vec<Vec<usize>>,
         tagged_edges: &[(usize, usize, i32)],
     ) -> Result<Self, MeshError> {
-        let mut cell_ptr = Vec::with_capacity(cells.len() + 1);
+        let mut cell_ptr = try_vec(cells.len() + 1, "the offsets of the cells")?;
         cell_ptr.push(0);
-        let mut cell_verts = Vec::with_capacity(cells.iter().map(Vec::len).sum());
+        let sides = cells.iter().map(Vec::len).sum();
+        let mut cell_verts = try_vec(sides, "the vertices of the cells")?;
         for c in &cells {
             cell_verts.extend_from_slice(c);
             cell_ptr.push(cell_verts.len());
@@ -113,6 +117,7 @@ impl PolyMesh {
         );
         let cells = cells?;
         duplicates?;
+        let order = order.transpose()?;
 
         // --- edges, numbered in (min, max) vertex order (check 7), and check 8 meanwhile
         let (built, simple) = rayon::join(
@@ -135,12 +140,13 @@ impl PolyMesh {
         }
         // compact storage of the cells (ids and offsets below u32::MAX, checked above), before
         // the overlap check, the peak of the construction; the usize arrays are freed
-        let cell_ptr = to_u32(cell_ptr);
-        let cell_verts = to_u32(cell_verts);
+        let cell_ptr = to_u32(cell_ptr, "the 32-bit offsets of the cells")?;
+        let cell_verts = to_u32(cell_verts, "the 32-bit vertices of the cells")?;
 
-        let boundary_edges: Vec<usize> = (0..ne)
-            .filter(|&e| built.edge_cells[e][1] == NO_CELL)
-            .collect();
+        let on_boundary = |e: &usize| built.edge_cells[*e][1] == NO_CELL;
+        let n_boundary = (0..ne).filter(on_boundary).count();
+        let mut boundary_edges = try_vec(n_boundary, "the boundary edges")?;
+        boundary_edges.extend((0..ne).filter(on_boundary));
         check_boundary_and_overlap(
             &vertices,
             &cell_ptr,
@@ -157,7 +163,7 @@ impl PolyMesh {
             built,
             cells,
             boundary_edges,
-        ))
+        )?)
     }
 }
 
@@ -199,7 +205,7 @@ fn check_boundary_and_overlap(
 }
 
 /// The validated mesh, its edge arrays made 32-bit (ids below `u32::MAX`, checked before), no
-/// tags, h = max_K h_K.
+/// tags, h = max_K h_K; or [`AllocFailure`] if those arrays cannot be allocated.
 fn compact(
     vertices: Vec<Point>,
     cell_ptr: Vec<u32>,
@@ -207,35 +213,40 @@ fn compact(
     built: Edges,
     cells: validate::CellGeometry,
     boundary_edges: Vec<usize>,
-) -> PolyMesh {
+) -> Result<PolyMesh, AllocFailure> {
     let Edges {
         edges,
         edge_cells,
         cell_edges,
     } = built;
     let ne = edges.len();
-    let edges: Vec<[u32; 2]> = edges.iter().map(|e| e.map(|v| v as u32)).collect();
-    let edge_cells: Vec<[u32; 2]> = edge_cells
-        .iter()
-        .map(|c| c.map(|k| if k == NO_CELL { u32::MAX } else { k as u32 }))
-        .collect();
-    let edge_tags = vec![0i32; ne];
-    let cell_tags = vec![0i32; cells.area.len()];
+    let mut edges32: Vec<[u32; 2]> = try_vec(ne, "the end points of the edges")?;
+    edges32.extend(edges.iter().map(|e| e.map(|v| v as u32)));
+    drop(edges);
+    let mut cells32: Vec<[u32; 2]> = try_vec(ne, "the cells of the edges")?;
+    cells32.extend(
+        edge_cells
+            .iter()
+            .map(|c| c.map(|k| if k == NO_CELL { u32::MAX } else { k as u32 })),
+    );
+    drop(edge_cells);
+    let edge_tags = try_filled(ne, 0i32, "the edge tags")?;
+    let cell_tags = try_filled(cells.area.len(), 0i32, "the cell tags")?;
     let h = cells.diameter.iter().cloned().fold(0.0, f64::max);
-    PolyMesh {
+    Ok(PolyMesh {
         vertices,
         cell_ptr,
         cell_verts,
         cell_edges,
-        edges,
-        edge_cells,
+        edges: edges32,
+        edge_cells: cells32,
         edge_tags,
         cell_tags,
         cell_area: cells.area,
         cell_centroid: cells.centroid,
         boundary_edges,
         h,
-    }
+    })
 }
 
 #[cfg(test)]
@@ -302,6 +313,49 @@ mod tests {
             .to_string(),
             format!("the mesh has {max} cell sides: at most 2^32 - 2 are supported")
         );
+    }
+
+    /// Builds a 400 × 400 grid again and again in a child process whose data is limited to
+    /// what it has plus 0, 1, 2, 4, … MiB: every build ends with the mesh or
+    /// with a typed out-of-memory error (whichever of its arrays failed), never an abort; the
+    /// smaller limits fail, the largest succeeds.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_build_the_data_limit_refuses_is_a_typed_error() {
+        use crate::mesh::budget::child;
+        const NAME: &str = "mesh::build::tests::a_build_the_data_limit_refuses_is_a_typed_error";
+        if !child::is_child(NAME) {
+            return child::run(NAME);
+        }
+        let n = 400;
+        let grid = || {
+            let vertices: Vec<Point> = (0..(n + 1) * (n + 1))
+                .map(|v| [(v % (n + 1)) as f64, (v / (n + 1)) as f64])
+                .collect();
+            let cell_ptr: Vec<usize> = (0..=n * n).map(|k| 4 * k).collect();
+            let cell_verts: Vec<usize> = (0..n * n)
+                .flat_map(|k| {
+                    let v = k / n * (n + 1) + k % n;
+                    [v, v + 1, v + n + 2, v + n + 1]
+                })
+                .collect();
+            (vertices, cell_ptr, cell_verts)
+        };
+        let mut refused = 0;
+        for extra_mib in [0, 1, 2, 4, 8, 16, 32, 64, 1024] {
+            let (vertices, cell_ptr, cell_verts) = grid();
+            child::limit_data(extra_mib << 20);
+            match PolyMesh::from_flat_cells(vertices, cell_ptr, cell_verts, Overlap::Sweep) {
+                Ok(m) => assert_eq!(m.n_edges(), 2 * n * (n + 1)),
+                Err(MeshError::TooLarge { what, bytes, .. }) => {
+                    assert!(bytes > 0, "{what}");
+                    refused += 1;
+                }
+                Err(e) => panic!("{extra_mib} MiB: {e}"),
+            }
+            child::limit_data(4 << 30);
+        }
+        assert!((1..9).contains(&refused), "{refused} builds refused");
     }
 
     #[test]

@@ -4,6 +4,7 @@
 use super::NO_CELL;
 #[cfg(doc)]
 use super::PolyMesh;
+use super::budget::{AllocFailure, try_filled, try_vec};
 use crate::error::MeshError;
 
 /// The edges of a mesh whose cells are stored flat (`cell_ptr`, `cell_verts`, as in
@@ -85,25 +86,29 @@ impl EdgeIndex for usize {
     }
 }
 
+/// The buckets of [`bucket_sides`]: offsets by smaller vertex, the sides, the number of edges.
+type Buckets<I> = (Vec<I>, Vec<HalfEdge<I>>, usize);
+
 /// A cell side in the buckets of [`build_edges`]: (larger vertex, 2·slot + \[the side runs from
 /// the larger to the smaller vertex\], cell). The direction rides along so that step 3 reads no
 /// vertex ids; sorting by the second item sorts by slot.
 type HalfEdge<I> = (I, I, I);
 
 /// Steps 1 and 2 of [`build_edges`]: the cell sides in buckets by smaller vertex (bucket v is
-/// `half[start[v]..start[v + 1]]`), each bucket sorted, and the number of edges.
+/// `half[start[v]..start[v + 1]]`), each bucket sorted, and the number of edges; or
+/// [`AllocFailure`] if the buckets cannot be allocated.
 fn bucket_sides<I: EdgeIndex>(
     nv: usize,
     cell_ptr: &[usize],
     cell_verts: &[usize],
-) -> (Vec<I>, Vec<HalfEdge<I>>, usize) {
+) -> Result<Buckets<I>, AllocFailure> {
     let n_half = cell_verts.len();
     let nc = cell_ptr.len().saturating_sub(1);
     // the side in `slot` of cell k (slots s..e) joins cell_verts[slot] to cell_verts[next(slot)]
     let next = |slot: usize, s: usize, e: usize| if slot + 1 < e { slot + 1 } else { s };
 
     // 1. counting sort by smaller vertex: bucket v is half[start[v]..start[v + 1]]
-    let mut start = vec![I::default(); nv + 1];
+    let mut start = try_filled(nv + 1, I::default(), "the edge buckets of the vertices")?;
     for k in 0..nc {
         let (s, e) = (cell_ptr[k], cell_ptr[k + 1]);
         for slot in s..e {
@@ -115,8 +120,10 @@ fn bucket_sides<I: EdgeIndex>(
     for v in 0..nv {
         start[v + 1] = I::from_usize(start[v + 1].to_usize() + start[v].to_usize());
     }
-    let mut cursor = start.clone();
-    let mut half = vec![(I::default(), I::default(), I::default()); n_half];
+    let mut cursor = try_vec(start.len(), "the edge bucket cursors")?;
+    cursor.extend_from_slice(&start);
+    let zero = (I::default(), I::default(), I::default());
+    let mut half = try_filled(n_half, zero, "the cell sides sorted by vertex")?;
     for k in 0..nc {
         let (s, e) = (cell_ptr[k], cell_ptr[k + 1]);
         for slot in s..e {
@@ -142,7 +149,7 @@ fn bucket_sides<I: EdgeIndex>(
             .filter(|&(i, h)| i == 0 || bucket[i - 1].0 != h.0)
             .count();
     }
-    (start, half, ne)
+    Ok((start, half, ne))
 }
 
 /// [`build_edges`] with scratch indices of type `I`.
@@ -153,12 +160,12 @@ fn build_edges_with<I: EdgeIndex>(
 ) -> Result<Edges, MeshError> {
     let n_half = cell_verts.len();
     debug_assert!(n_half < u32::MAX as usize, "checked by from_flat_cells");
-    let (start, half, ne) = bucket_sides::<I>(nv, cell_ptr, cell_verts);
+    let (start, half, ne) = bucket_sides::<I>(nv, cell_ptr, cell_verts)?;
     // 3. runs of equal (smaller, larger) vertex pairs are the edges
-    let mut edges = Vec::with_capacity(ne);
-    let mut edge_cells = Vec::with_capacity(ne);
+    let mut edges = try_vec(ne, "the end points of the edges")?;
+    let mut edge_cells = try_vec(ne, "the cells of the edges")?;
     // edge ids are below the number of sides (each edge has a side), so below u32::MAX
-    let mut cell_edges = vec![0u32; n_half];
+    let mut cell_edges = try_filled(n_half, 0u32, "the edges of the cell sides")?;
     for lo in 0..nv {
         let bucket = &half[start[lo].to_usize()..start[lo + 1].to_usize()];
         let mut i = 0;

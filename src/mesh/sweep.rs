@@ -30,6 +30,7 @@
 //! segments at the vertex excluded). The mesh checks use it to tell whether a boundary loop lies
 //! inside a cell ([`super::validate`]).
 
+use super::budget::{AllocFailure, try_filled, try_vec};
 use super::predicates::{orient, segments_meet, segments_overlap_from};
 use super::{EdgeIndex as Index, Point};
 use std::cmp::Ordering;
@@ -102,13 +103,13 @@ fn priority(i: usize) -> u32 {
 }
 
 impl ActiveList {
-    fn new(n_segments: usize) -> Self {
-        ActiveList {
+    fn new(n_segments: usize) -> Result<Self, AllocFailure> {
+        Ok(ActiveList {
             nodes: Vec::new(),
             free: Vec::new(),
             root: NIL,
-            node_of: vec![NIL; n_segments],
-        }
+            node_of: try_filled(n_segments, NIL, "the active list of the sweep")?,
+        })
     }
 
     fn id(&self, n: u32) -> Option<usize> {
@@ -331,8 +332,11 @@ struct Events<I> {
 }
 
 /// A CSR of `0..keys.len()` by key (`n` keys), in increasing order within each key.
-fn csr<I: Index>(keys: impl Iterator<Item = usize> + Clone, n: usize) -> (Vec<usize>, Vec<I>) {
-    super::buckets::counting_sort(n, keys.map(Some), I::from_usize)
+fn csr<I: Index>(
+    keys: impl Iterator<Item = usize> + Clone,
+    n: usize,
+) -> Result<(Vec<usize>, Vec<I>), AllocFailure> {
+    super::buckets::try_counting_sort(n, keys.map(Some), I::from_usize)
 }
 
 /// The vertices in sweep order: the part of [`Events`] that depends on the points alone, so
@@ -346,25 +350,25 @@ pub(crate) struct SweepOrder {
 
 impl SweepOrder {
     /// Sorts `pts` in sweep order (in parallel for many points: the keys are distinct, so the
-    /// order is the same).
-    pub(crate) fn new(pts: &[Point]) -> SweepOrder {
+    /// order is the same), or [`AllocFailure`] if its arrays cannot be allocated.
+    pub(crate) fn new(pts: &[Point]) -> Result<SweepOrder, AllocFailure> {
         let n = pts.len();
-        let keyed = super::buckets::sorted_point_keys(pts, sort_key);
-        let mut rank = vec![0usize; n];
-        let mut sorted_pts = Vec::with_capacity(n);
+        let keyed = super::buckets::sorted_point_keys(pts, sort_key)?;
+        let mut rank = try_filled(n, 0usize, "the sweep order of the vertices")?;
+        let mut sorted_pts = try_vec(n, "the vertices in sweep order")?;
         for (r, &(_, _, v)) in keyed.iter().enumerate() {
             rank[v] = r;
             sorted_pts.push(pts[v]);
         }
-        SweepOrder {
+        Ok(SweepOrder {
             pts: sorted_pts,
             rank,
-        }
+        })
     }
 }
 
 impl<I: Index> Events<I> {
-    fn new(order: SweepOrder, segs: &[[usize; 2]]) -> Events<I> {
+    fn new(order: SweepOrder, segs: &[[usize; 2]]) -> Result<Events<I>, AllocFailure> {
         let SweepOrder {
             pts: sorted_pts,
             rank,
@@ -374,29 +378,27 @@ impl<I: Index> Events<I> {
             let (ra, rb) = (rank[a], rank[b]);
             (ra.min(rb), ra.max(rb))
         });
-        let (start_ptr, by_left) = csr(ranked.clone().map(|(l, _)| l), n);
-        let segs: Vec<(I, I, I)> = by_left
-            .into_iter()
-            .map(|i: I| {
-                let i = i.to_usize();
-                let [a, b] = segs[i];
-                let (ra, rb) = (rank[a], rank[b]);
-                (
-                    I::from_usize(ra.min(rb)),
-                    I::from_usize(ra.max(rb)),
-                    I::from_usize(i),
-                )
-            })
-            .collect();
-        let (end_ptr, ends) = csr(segs.iter().map(|s| s.1.to_usize()), n);
-        Events {
+        let (start_ptr, by_left) = csr(ranked.clone().map(|(l, _)| l), n)?;
+        let mut sorted_segs: Vec<(I, I, I)> = try_vec(by_left.len(), "the segments of the sweep")?;
+        sorted_segs.extend(by_left.into_iter().map(|i: I| {
+            let i = i.to_usize();
+            let [a, b] = segs[i];
+            let (ra, rb) = (rank[a], rank[b]);
+            (
+                I::from_usize(ra.min(rb)),
+                I::from_usize(ra.max(rb)),
+                I::from_usize(i),
+            )
+        }));
+        let (end_ptr, ends) = csr(sorted_segs.iter().map(|s| s.1.to_usize()), n)?;
+        Ok(Events {
             pts: sorted_pts,
             rank,
-            segs,
+            segs: sorted_segs,
             start_ptr,
             end_ptr,
             ends,
-        }
+        })
     }
 
     /// The active segment for `segs[j]`.
@@ -435,8 +437,13 @@ fn collide(s: &Active, t: &Active) -> bool {
 /// (which must be end points of segments). The points must be finite and pairwise distinct; a
 /// segment must join two distinct points. O((n + q) log n) for n points and segments and q
 /// queries (expected, over the priorities of the treap, whatever the input).
-pub(crate) fn first_collision(pts: &[Point], segs: &[[usize; 2]], queries: &[usize]) -> Sweep {
-    first_collision_in(SweepOrder::new(pts), segs, queries)
+/// [`AllocFailure`] if the arrays of the sweep (proportional to n and q) cannot be allocated.
+pub(crate) fn first_collision(
+    pts: &[Point],
+    segs: &[[usize; 2]],
+    queries: &[usize],
+) -> Result<Sweep, AllocFailure> {
+    first_collision_in(SweepOrder::new(pts)?, segs, queries)
 }
 
 /// [`first_collision`] on the points sorted beforehand by [`SweepOrder::new`].
@@ -444,26 +451,28 @@ pub(crate) fn first_collision_in(
     order: SweepOrder,
     segs: &[[usize; 2]],
     queries: &[usize],
-) -> Sweep {
+) -> Result<Sweep, AllocFailure> {
     // the event arrays hold ranks and segment indices: `u32` when they fit (half the memory)
     if u32::try_from(segs.len().max(order.pts.len())).is_ok() {
-        sweep_events(Events::<u32>::new(order, segs), queries)
+        sweep_events(Events::<u32>::new(order, segs)?, queries)
     } else {
-        sweep_events(Events::<usize>::new(order, segs), queries)
+        sweep_events(Events::<usize>::new(order, segs)?, queries)
     }
 }
 
-/// The sweep of [`first_collision`] over its events.
-fn sweep_events<I: Index>(ev: Events<I>, queries: &[usize]) -> Sweep {
+/// The sweep of [`first_collision`] over its events. Its arrays are allocated once, up front
+/// (the active list's nodes grow with the number of segments cut by the sweep line at once).
+fn sweep_events<I: Index>(ev: Events<I>, queries: &[usize]) -> Result<Sweep, AllocFailure> {
     let collision = |i: usize, j: usize| {
         let (a, b) = (ev.segs[i].2.to_usize(), ev.segs[j].2.to_usize());
         Sweep::Collision(a.min(b), a.max(b))
     };
     // the queries by rank, last first, with their positions in `queries`
-    let mut pending: Vec<(usize, usize)> = queries.iter().map(|&q| ev.rank[q]).zip(0..).collect();
+    let mut pending: Vec<(usize, usize)> = try_vec(queries.len(), "the queries of the sweep")?;
+    pending.extend(queries.iter().map(|&q| ev.rank[q]).zip(0..));
     pending.sort_unstable_by(|a, b| b.cmp(a));
-    let mut below = vec![None; queries.len()];
-    let mut list = ActiveList::new(ev.segs.len());
+    let mut below = try_filled(queries.len(), None, "the answers of the sweep")?;
+    let mut list = ActiveList::new(ev.segs.len())?;
     let mut starting: Vec<Active> = Vec::new();
     for r in 0..ev.pts.len() {
         let ending = &ev.ends[ev.end_ptr[r]..ev.end_ptr[r + 1]];
@@ -486,7 +495,7 @@ fn sweep_events<I: Index>(ev: Events<I>, queries: &[usize]) -> Sweep {
         let starts = ev.start_ptr[r]..ev.start_ptr[r + 1];
         if starts.is_empty() {
             if below_r != NIL && above_r != NIL && collide(list.seg(below_r), list.seg(above_r)) {
-                return collision(list.seg(below_r).id, list.seg(above_r).id);
+                return Ok(collision(list.seg(below_r).id, list.seg(above_r).id));
             }
             continue;
         }
@@ -501,16 +510,16 @@ fn sweep_events<I: Index>(ev: Events<I>, queries: &[usize]) -> Sweep {
         let mut last = below_r;
         for s in &starting {
             if last != NIL && collide(list.seg(last), s) {
-                return collision(list.seg(last).id, s.id);
+                return Ok(collision(list.seg(last).id, s.id));
             }
             last = list.insert_after(last, *s);
         }
         let above = list.nodes[last as usize].next;
         if above != NIL && collide(list.seg(last), list.seg(above)) {
-            return collision(list.seg(last).id, list.seg(above).id);
+            return Ok(collision(list.seg(last).id, list.seg(above).id));
         }
     }
-    Sweep::Clear(below)
+    Ok(Sweep::Clear(below))
 }
 
 /// [`collide`] for segments `i` and `j` of `segs`.
@@ -583,7 +592,7 @@ mod tests {
             }
         }
         let queries = [id(1, 1), id(0, 0), id(2, 3)];
-        let Sweep::Clear(below) = first_collision(&pts, &segs, &queries) else {
+        let Sweep::Clear(below) = first_collision(&pts, &segs, &queries).unwrap() else {
             panic!("collision in a grid");
         };
         // right below (1, 1) in the turned plane (x + εy) the segments at (1, 1) do not count:
@@ -620,7 +629,7 @@ mod tests {
             (&[[2, 3], [0, 4]], true),
         ];
         for (segs, collides) in cases {
-            let found = first_collision(&pts, segs, &[]);
+            let found = first_collision(&pts, segs, &[]).unwrap();
             if collides {
                 assert_eq!(found, Sweep::Collision(0, 1), "{segs:?}");
             } else {
@@ -652,7 +661,7 @@ mod tests {
                 })
                 .collect();
             let brute = first_collision_brute(&uniq, &segs);
-            match first_collision(&uniq, &segs, &[]) {
+            match first_collision(&uniq, &segs, &[]).unwrap() {
                 Sweep::Collision(i, j) => {
                     assert!(brute.is_some(), "case {case}: {segs:?}");
                     assert!(collide_ids(&uniq, &segs, i, j), "case {case}");
@@ -716,7 +725,7 @@ mod tests {
             let queries: Vec<usize> = (0..pts.len())
                 .filter(|&v| segs.iter().any(|s| s.contains(&v)))
                 .collect();
-            let Sweep::Clear(below) = first_collision(&pts, &segs, &queries) else {
+            let Sweep::Clear(below) = first_collision(&pts, &segs, &queries).unwrap() else {
                 panic!("case {case}: collision reported in a clear set");
             };
             for (&q, b) in queries.iter().zip(&below) {
@@ -729,7 +738,7 @@ mod tests {
                 }
                 segs.push([a, b]);
                 let brute = first_collision_brute(&pts, &segs);
-                match first_collision(&pts, &segs, &[]) {
+                match first_collision(&pts, &segs, &[]).unwrap() {
                     Sweep::Collision(i, j) => {
                         assert!(
                             brute.is_some() && collide_ids(&pts, &segs, i, j),
@@ -786,7 +795,7 @@ mod tests {
             ends: [0, 1],
             id: i,
         };
-        let mut list = ActiveList::new(n);
+        let mut list = ActiveList::new(n).unwrap();
         let mut active: Vec<usize> = Vec::new();
         for step in 0..5000 {
             let i = (r() * n as f64) as usize % n;

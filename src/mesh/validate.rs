@@ -49,6 +49,7 @@
 //! file larger than a quarter of the memory budget ([`io`](super::io)); the generators refuse a
 //! mesh whose estimated memory exceeds the budget ([`budget`](super::budget)).
 
+use super::budget::{AllocFailure, try_filled, try_vec};
 use super::predicates::{lex, orient, segments_meet, segments_overlap_from};
 use super::sweep::{self, Sweep};
 use super::{NO_CELL, Point, dist, polygon_area_centroid, side_normal_dist, sub};
@@ -91,12 +92,12 @@ pub(crate) fn cell_geometry(
         return Err(MeshError::NonFiniteVertex { vertex: v });
     }
     let mut g = CellGeometry {
-        area: Vec::with_capacity(nc),
-        centroid: Vec::with_capacity(nc),
-        diameter: Vec::with_capacity(nc),
+        area: try_vec(nc, "the areas of the cells")?,
+        centroid: try_vec(nc, "the centroids of the cells")?,
+        diameter: try_vec(nc, "the diameters of the cells")?,
         not_star_shaped: None,
     };
-    let mut used = vec![false; nv];
+    let mut used = try_filled(nv, false, "the used flags of the vertices")?;
     let mut pts: Vec<Point> = Vec::new();
     for k in 0..nc {
         let (s, e) = (cell_ptr[k], cell_ptr[k + 1]);
@@ -262,30 +263,32 @@ fn convex_hull(pts: &[Point]) -> Vec<Point> {
 /// Two sides of the polygon `pts` (local indices i < j; side i joins corners i and i+1) that
 /// meet other than consecutive sides at their common corner, if any. All pairs for a small
 /// polygon, else the sweep of [`super::sweep`] on its sides. The corners must be distinct points.
-pub(crate) fn self_crossing(pts: &[Point]) -> Option<(usize, usize)> {
+/// [`AllocFailure`] if the sweep's arrays (proportional to the polygon) cannot be allocated.
+pub(crate) fn self_crossing(pts: &[Point]) -> Result<Option<(usize, usize)>, AllocFailure> {
     let m = pts.len();
     if m > SMALL_CELL {
-        let sides: Vec<[usize; 2]> = (0..m).map(|i| [i, (i + 1) % m]).collect();
-        return match sweep::first_collision(pts, &sides, &[]) {
+        let mut sides: Vec<[usize; 2]> = try_vec(m, "the sides of a cell")?;
+        sides.extend((0..m).map(|i| [i, (i + 1) % m]));
+        return Ok(match sweep::first_collision(pts, &sides, &[])? {
             Sweep::Collision(i, j) => Some((i, j)),
             Sweep::Clear(_) => None,
-        };
+        });
     }
     for i in 0..m {
         let (a, b) = (pts[i], pts[(i + 1) % m]);
         // the next side folds back onto this one
         if segments_overlap_from(b, a, pts[(i + 2) % m]) {
-            return Some(if i + 1 < m { (i, i + 1) } else { (0, i) });
+            return Ok(Some(if i + 1 < m { (i, i + 1) } else { (0, i) }));
         }
         // sides not adjacent to side i (with j > i; side m−1 is adjacent to side 0)
         let last = if i == 0 { m - 1 } else { m };
         for j in i + 2..last {
             if segments_meet(a, b, pts[j], pts[(j + 1) % m]) {
-                return Some((i, j));
+                return Ok(Some((i, j)));
             }
         }
     }
-    None
+    Ok(None)
 }
 
 /// Check 8: every cell is a simple polygon.
@@ -299,7 +302,7 @@ pub(crate) fn check_simple_cells(
         let c = &cell_verts[cell_ptr[k]..cell_ptr[k + 1]];
         pts.clear();
         pts.extend(c.iter().map(|&v| vertices[v]));
-        if let Some((i, j)) = self_crossing(&pts) {
+        if let Some((i, j)) = self_crossing(&pts)? {
             let side = |i: usize| [c[i], c[(i + 1) % c.len()]];
             return Err(MeshError::SelfIntersectingCell {
                 cell: k,
@@ -332,7 +335,7 @@ pub(crate) fn check_duplicate_vertices(vertices: &[Point]) -> Result<(), MeshErr
     };
     let tol = 2.0 * half_tol;
     let square = |x: f64| ((0.5 * x - 0.5 * lo) / half_tol).floor() as i64;
-    let keys = super::buckets::sorted_point_keys(vertices, square);
+    let keys = super::buckets::sorted_point_keys(vertices, square)?;
     let duplicate = |a: usize, b: usize| {
         let (a, b) = (a.min(b), a.max(b));
         MeshError::DuplicateVertex {
@@ -409,7 +412,7 @@ pub(crate) fn boundary_loops(
 ) -> Result<Boundary, MeshError> {
     // whether each edge is traversed from its smaller to its larger vertex by (the last of) its
     // cells; for a boundary edge, by its only cell
-    let mut forward = vec![false; edges.len()];
+    let mut forward = try_filled(edges.len(), false, "the orientations of the edges")?;
     for k in 0..cell_ptr.len().saturating_sub(1) {
         let (s, t) = (cell_ptr[k] as usize, cell_ptr[k + 1] as usize);
         for slot in s..t {
@@ -417,7 +420,11 @@ pub(crate) fn boundary_loops(
             forward[cell_edges[slot] as usize] = cell_verts[slot] < cell_verts[next];
         }
     }
-    let mut next = vec![NONE; vertices.len()];
+    let mut next = try_filled(
+        vertices.len(),
+        NONE,
+        "the boundary successors of the vertices",
+    )?;
     for &e in boundary_edges {
         let [lo, hi] = edges[e];
         let (a, b) = if forward[e] { (lo, hi) } else { (hi, lo) };
@@ -443,7 +450,11 @@ pub(crate) fn boundary_loops(
 /// Follows `next` from every boundary vertex, in increasing vertex order, into closed loops.
 fn trace_loops(vertices: &[Point], next: &[usize]) -> Result<Vec<BoundaryLoop>, MeshError> {
     let mut loops = Vec::new();
-    let mut seen = vec![false; vertices.len()];
+    let mut seen = try_filled(
+        vertices.len(),
+        false,
+        "the seen flags of the boundary vertices",
+    )?;
     let mut pts = Vec::new();
     for start in 0..next.len() {
         if next[start] == NONE || seen[start] {
@@ -525,8 +536,9 @@ pub(crate) fn check_no_overlap(
     boundary: &Boundary,
     order: sweep::SweepOrder,
 ) -> Result<(), MeshError> {
-    let queries: Vec<usize> = boundary.loops.iter().map(|l| l.lowest).collect();
-    let below = match sweep::first_collision_in(order, t.edges, &queries) {
+    let mut queries: Vec<usize> = try_vec(boundary.loops.len(), "the boundary loops")?;
+    queries.extend(boundary.loops.iter().map(|l| l.lowest));
+    let below = match sweep::first_collision_in(order, t.edges, &queries)? {
         Sweep::Collision(e, f) => {
             return Err(MeshError::CrossingEdges {
                 edges: [t.edges[e], t.edges[f]],
@@ -631,7 +643,7 @@ mod tests {
                         segments_meet(pts[a], pts[b], pts[c], pts[d])
                     }
                 });
-            let found = self_crossing(&pts);
+            let found = self_crossing(&pts).unwrap();
             assert_eq!(found.is_some(), brute.is_some(), "case {case}");
             assert_eq!(found.is_none(), case % 3 != 0, "case {case}");
         }
@@ -687,11 +699,11 @@ mod tests {
             .collect();
         let t0 = std::time::Instant::now();
         assert!((diameter(&pts) - 2.0).abs() < 1e-9);
-        assert_eq!(self_crossing(&pts), None);
+        assert_eq!(self_crossing(&pts), Ok(None));
         let ids: Vec<usize> = (0..m).collect();
         assert_eq!(repeated_vertex(&ids), None);
         let twice: Vec<Point> = (0..m).map(|k| pts[2 * k % m]).collect();
-        assert!(self_crossing(&twice).is_some());
+        assert!(self_crossing(&twice).unwrap().is_some());
         let mut again = ids.clone();
         again[m - 1] = 5;
         assert_eq!(repeated_vertex(&again), Some(5));

@@ -4,6 +4,7 @@
 
 use crate::assembly::DiscreteSystem;
 use crate::mesh::SolveMesh;
+use crate::mesh::budget::{try_filled, try_vec};
 use crate::problem::{ConstraintKind, Problem, check_finite};
 use crate::scheme::PointDof;
 use crate::vi::ConstrainedDof;
@@ -76,26 +77,25 @@ pub fn build<M: SolveMesh<D> + ?Sized, const D: usize>(
     }
     // the barrier at the unknowns off the Dirichlet boundary, evaluated in parallel; the first
     // non-finite value in their order is reported
-    let dofs: Vec<PointDof<D>> = candidates
-        .into_iter()
-        .filter(|pd| dir[pd.dof].is_none())
-        .collect();
-    let barrier: Vec<f64> = dofs
-        .par_iter()
+    let n_free = candidates.iter().filter(|pd| dir[pd.dof].is_none()).count();
+    let mut dofs: Vec<PointDof<D>> = try_vec(n_free, "the constrained unknowns")?;
+    dofs.extend(candidates.into_iter().filter(|pd| dir[pd.dof].is_none()));
+    let mut barrier = try_filled(dofs.len(), 0.0, "the barrier at the constrained unknowns")?;
+    barrier
+        .par_iter_mut()
+        .zip(&dofs)
         .with_min_len(4096)
-        .map(|pd| (c.barrier)(pd.point))
-        .collect();
+        .for_each(|(g, pd)| *g = (c.barrier)(pd.point));
     for (pd, &g) in dofs.iter().zip(&barrier) {
         finite(g, pd.point)?;
     }
-    let dofs = dofs
-        .into_iter()
-        .map(|pd| ConstrainedDof {
-            dof: pd.dof,
-            point: pd.point,
-            measure: pd.measure,
-        })
-        .collect();
+    let mut constrained = try_vec(dofs.len(), "the constrained unknowns")?;
+    constrained.extend(dofs.into_iter().map(|pd| ConstrainedDof {
+        dof: pd.dof,
+        point: pd.point,
+        measure: pd.measure,
+    }));
+    let dofs = constrained;
     Ok(Some(Constraints {
         dofs,
         barrier,

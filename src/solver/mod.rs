@@ -26,6 +26,7 @@ pub mod warm_start;
 pub mod well_posed;
 
 use crate::assembly::{DiscreteSystem, SolveState, SymbolicSystem, SystemOptions};
+use crate::mesh::budget::{try_copy, try_filled};
 use crate::mesh::{PolyMesh, SolveMesh};
 use crate::problem::Problem;
 use crate::scheme::GradientDiscretisation;
@@ -281,15 +282,16 @@ fn solve_system<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
             if !floating.is_empty() {
                 // parts without Dirichlet unknowns: start with their barrier active, or the
                 // first solve would be singular (see well_posed)
-                let a = initial.get_or_insert_with(|| {
-                    opts.active_set
-                        .initial_active
-                        .clone()
-                        .unwrap_or_else(|| vec![false; c.dofs.len()])
-                });
+                let what = "the initial active set";
+                let mut a = match (initial.take(), &opts.active_set.initial_active) {
+                    (Some(a), _) => a,
+                    (None, Some(given)) => try_copy(given, what)?,
+                    (None, None) => try_filled(c.dofs.len(), false, what)?,
+                };
                 for &j in &floating {
                     a[j] = true;
                 }
+                initial = Some(a);
             }
             solve_constrained(&system, &mut state, c, opts, initial)?
         }

@@ -55,6 +55,7 @@
 use super::coarse_mesh::{CoarseMesh, Level};
 use super::start::SolverMesh;
 use crate::assembly::{DiscreteSystem, SystemOptions};
+use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
 use crate::mesh::complex::Vector;
 use crate::mesh::{MemoryBudget, NO_CELL};
 use crate::problem::{ConstraintKind, Problem};
@@ -178,6 +179,8 @@ pub fn predict<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
             state
                 .as_ref()
                 .map(|s| map_down(s, &levels[l + 1], hmm, c, kind, None))
+                .transpose()
+                .map_err(oom)
         };
         let (sol_values, s, n) = coarse_solve(&levels[l].mesh, problem, budget, cancel, initial)?;
         solves += n;
@@ -188,8 +191,9 @@ pub fn predict<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
     let needs_vertices =
         (0..scheme.n_unknowns()).any(|d| matches!(scheme.dof_entity(d), Entity::Vertex(_)));
     let incidence = needs_vertices.then(|| VertexIncidence::new(fine));
-    let active = map_down(&state, &levels[0], scheme, cons, kind, incidence.as_ref());
-    let guess = prolong(&finest_values, &levels[0], scheme, incidence.is_some());
+    let active =
+        map_down(&state, &levels[0], scheme, cons, kind, incidence.as_ref()).map_err(oom)?;
+    let guess = prolong(&finest_values, &levels[0], scheme, incidence.is_some()).map_err(oom)?;
     let report = WarmStartReport {
         levels: levels.iter().map(|a| a.mesh.n_cells()).collect(),
         coarse_solves: solves,
@@ -204,6 +208,11 @@ pub fn predict<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
     })
 }
 
+/// A failed allocation of the warm start as the reason it was skipped.
+fn oom(f: AllocFailure) -> String {
+    crate::Error::from(f).to_string()
+}
+
 /// The solve of `problem` with HMM on the coarse mesh `mesh`, started from the active set
 /// `initial` gives for its scheme and constraints: Π_D u at the cells, the active states and
 /// the number of linear solves.
@@ -212,7 +221,7 @@ fn coarse_solve<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
     problem: &Problem<D>,
     budget: MemoryBudget,
     cancel: Option<&Cancel>,
-    initial: impl Fn(&Hmm<'_, M, D>, &Constraints<D>) -> Option<Vec<bool>>,
+    initial: impl Fn(&Hmm<'_, M, D>, &Constraints<D>) -> Result<Option<Vec<bool>>, String>,
 ) -> Result<(Vec<f64>, CoarseState, usize), String> {
     let fail = |e: crate::Error| format!("coarse solve ({} cells): {e}", mesh.n_cells());
     let hmm = Hmm::<M, D>::with_alpha(mesh, 1.0).map_err(fail)?;
@@ -227,7 +236,7 @@ fn coarse_solve<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
         .ok_or_else(|| "the problem has no barrier".to_string())?;
     let opts = super::SolveOptions {
         active_set: ActiveSetOptions {
-            initial_active: initial(&hmm, &c),
+            initial_active: initial(&hmm, &c)?,
             look_ahead: Some(super::look_ahead_options(D)),
             cancel: cancel.cloned(),
             ..Default::default()
@@ -237,8 +246,8 @@ fn coarse_solve<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
     };
     let sol = super::solve_system(system, problem, &opts, Instant::now()).map_err(fail)?;
     let mut s = CoarseState {
-        cell: vec![false; mesh.n_cells()],
-        face: vec![false; mesh.n_faces()],
+        cell: try_filled(mesh.n_cells(), false, "the coarse active cells").map_err(oom)?,
+        face: try_filled(mesh.n_faces(), false, "the coarse active faces").map_err(oom)?,
     };
     for (d, &a) in c.dofs.iter().zip(&sol.result.active) {
         match hmm.dof_entity(d.dof) {
@@ -272,7 +281,7 @@ fn prolong<M: CoarseMesh<D>, const D: usize>(
     agg: &Level<M>,
     scheme: &dyn GradientDiscretisation<M, D>,
     at_vertices: bool,
-) -> Vec<f64> {
+) -> Result<Vec<f64>, AllocFailure> {
     let fine = scheme.mesh();
     let of = |k: usize| values.get(agg.cell_of[k]).copied().unwrap_or(0.0);
     // the mean around each vertex, by one pass over the cells: each sum adds the values of
@@ -280,8 +289,12 @@ fn prolong<M: CoarseMesh<D>, const D: usize>(
     // list of the vertex's cells would
     let vertex_mean: Vec<f64> = if at_vertices {
         let zero: f64 = std::iter::empty::<f64>().sum();
-        let mut sum = vec![zero; fine.n_vertices()];
-        let mut count = vec![0u32; fine.n_vertices()];
+        let mut sum = try_filled(fine.n_vertices(), zero, "the vertex sums of the warm start")?;
+        let mut count = try_filled(
+            fine.n_vertices(),
+            0u32,
+            "the vertex counts of the warm start",
+        )?;
         let mut scratch = Vec::new();
         for k in 0..fine.n_cells() {
             let x = of(k);
@@ -290,23 +303,25 @@ fn prolong<M: CoarseMesh<D>, const D: usize>(
                 count[v as usize] += 1;
             }
         }
-        sum.iter()
+        sum.iter_mut()
             .zip(&count)
-            .map(|(&s, &n)| if n == 0 { 0.0 } else { s / n as f64 })
-            .collect()
+            .for_each(|(s, &n)| *s = if n == 0 { 0.0 } else { *s / n as f64 });
+        sum
     } else {
         Vec::new()
     };
-    (0..scheme.n_skeleton())
-        .map(|d| match scheme.dof_entity(d) {
+    let mut guess = try_vec(scheme.n_skeleton(), "the first guess of the warm start")?;
+    guess.extend(
+        (0..scheme.n_skeleton()).map(|d| match scheme.dof_entity(d) {
             Entity::Cell(k) => of(k),
             Entity::Edge(e) => match fine.face_cells(e) {
                 [a, NO_CELL] => of(a),
                 [a, b] => 0.5 * (of(a) + of(b)),
             },
             Entity::Vertex(v) => vertex_mean.get(v).copied().unwrap_or(0.0),
-        })
-        .collect()
+        }),
+    );
+    Ok(guess)
 }
 
 /// Whether a fine problem on a planar mesh with this many unknowns is too small to have a
@@ -368,58 +383,56 @@ fn map_down<M: CoarseMesh<D>, const D: usize>(
     cons: &Constraints<D>,
     kind: ConstraintKind,
     incidence: Option<&VertexIncidence>,
-) -> Vec<bool> {
+) -> Result<Vec<bool>, AllocFailure> {
     let fine = scheme.mesh();
     let coarse = &agg.mesh;
     let at_vertices = match (kind, incidence) {
-        (ConstraintKind::Obstacle, Some(_)) => vertex_obstacle(s, agg, scheme, cons),
+        (ConstraintKind::Obstacle, Some(_)) => vertex_obstacle(s, agg, scheme, cons)?,
         _ => Vec::new(),
     };
     let mut cells = Vec::new();
     let mut faces = Vec::new();
-    cons.dofs
-        .iter()
-        .enumerate()
-        .map(|(j, d)| {
-            cells.clear();
-            faces.clear();
-            match scheme.dof_entity(d.dof) {
-                Entity::Cell(k) => cells.push(k),
-                Entity::Edge(e) => {
-                    let [a, b] = fine.face_cells(e);
-                    cells.push(a);
-                    if b != NO_CELL {
-                        cells.push(b);
-                    }
-                    faces.push(e);
+    let mut active = try_vec(cons.dofs.len(), "the predicted active set")?;
+    active.extend(cons.dofs.iter().enumerate().map(|(j, d)| {
+        cells.clear();
+        faces.clear();
+        match scheme.dof_entity(d.dof) {
+            Entity::Cell(k) => cells.push(k),
+            Entity::Edge(e) => {
+                let [a, b] = fine.face_cells(e);
+                cells.push(a);
+                if b != NO_CELL {
+                    cells.push(b);
                 }
-                Entity::Vertex(v) => {
-                    if let Some(inc) = incidence {
-                        faces.extend_from_slice(inc.boundary_faces(v));
-                        if kind == ConstraintKind::Obstacle {
-                            return at_vertices[j];
-                        }
+                faces.push(e);
+            }
+            Entity::Vertex(v) => {
+                if let Some(inc) = incidence {
+                    faces.extend_from_slice(inc.boundary_faces(v));
+                    if kind == ConstraintKind::Obstacle {
+                        return at_vertices[j];
                     }
                 }
             }
-            match kind {
-                ConstraintKind::Obstacle => {
-                    !cells.is_empty()
-                        && cells
-                            .iter()
-                            .all(|&k| active_inside(s, coarse, agg.cell_of[k], d.point))
-                }
-                ConstraintKind::Signorini => {
-                    faces.retain(|&e| fine.face_cells(e)[1] == NO_CELL);
-                    !faces.is_empty()
-                        && faces.iter().all(|&e| {
-                            let ce = agg.boundary_face_of[e];
-                            s.face.get(ce).copied().unwrap_or(false)
-                        })
-                }
+        }
+        match kind {
+            ConstraintKind::Obstacle => {
+                !cells.is_empty()
+                    && cells
+                        .iter()
+                        .all(|&k| active_inside(s, coarse, agg.cell_of[k], d.point))
             }
-        })
-        .collect()
+            ConstraintKind::Signorini => {
+                faces.retain(|&e| fine.face_cells(e)[1] == NO_CELL);
+                !faces.is_empty()
+                    && faces.iter().all(|&e| {
+                        let ce = agg.boundary_face_of[e];
+                        s.face.get(ce).copied().unwrap_or(false)
+                    })
+            }
+        }
+    }));
+    Ok(active)
 }
 
 /// For the obstacle, whether each constrained unknown at a vertex is predicted active: all the
@@ -431,24 +444,25 @@ fn vertex_obstacle<M: CoarseMesh<D>, const D: usize>(
     agg: &Level<M>,
     scheme: &dyn GradientDiscretisation<M, D>,
     cons: &Constraints<D>,
-) -> Vec<bool> {
+) -> Result<Vec<bool>, AllocFailure> {
     let fine = scheme.mesh();
     let nv = fine.n_vertices();
     // the constrained unknowns at each vertex (CSR)
-    let vertex: Vec<Option<usize>> = cons
-        .dofs
-        .iter()
-        .map(|d| match scheme.dof_entity(d.dof) {
-            Entity::Vertex(v) => Some(v),
-            _ => None,
-        })
-        .collect();
-    let (ptr, at) = crate::mesh::buckets::counting_sort(nv, vertex.iter().copied(), |j| j);
+    let mut vertex: Vec<Option<usize>> = try_vec(cons.dofs.len(), "the vertices of the unknowns")?;
+    vertex.extend(cons.dofs.iter().map(|d| match scheme.dof_entity(d.dof) {
+        Entity::Vertex(v) => Some(v),
+        _ => None,
+    }));
+    let (ptr, at) = crate::mesh::buckets::try_counting_sort(nv, vertex.iter().copied(), |j| j)?;
     // per unknown: no cell seen yet, all cells seen so far pass, or one fails
     const UNSEEN: u8 = 0;
     const PASS: u8 = 1;
     const FAIL: u8 = 2;
-    let mut state = vec![UNSEEN; cons.dofs.len()];
+    let mut state = try_filled(
+        cons.dofs.len(),
+        UNSEEN,
+        "the vertex passes of the warm start",
+    )?;
     let mut scratch = Vec::new();
     for k in 0..fine.n_cells() {
         let c = agg.cell_of[k];
@@ -465,7 +479,9 @@ fn vertex_obstacle<M: CoarseMesh<D>, const D: usize>(
             }
         }
     }
-    state.into_iter().map(|x| x == PASS).collect()
+    let mut active = try_vec(state.len(), "the predicted active vertices")?;
+    active.extend(state.into_iter().map(|x| x == PASS));
+    Ok(active)
 }
 
 /// Whether coarse cell `k` is active and `p` is at least [`EROSION`] · |K|^{1/D} away from
@@ -549,7 +565,7 @@ mod tests {
         let incidence = VertexIncidence::new(&fine);
         let (ptr, ids) = fine.vertex_cells();
         let cells = |v: usize| &ids[ptr[v]..ptr[v + 1]];
-        let guess = prolong(&values, &agg, &scheme, true);
+        let guess = prolong(&values, &agg, &scheme, true).unwrap();
         assert_eq!(guess.len(), scheme.n_skeleton());
         let mut dofs = Vec::new();
         for (d, g) in guess.iter().enumerate() {
@@ -576,7 +592,8 @@ mod tests {
             &cons,
             ConstraintKind::Obstacle,
             Some(&incidence),
-        );
+        )
+        .unwrap();
         let mut n = 0;
         for (j, d) in cons.dofs.iter().enumerate() {
             let Entity::Vertex(v) = scheme.dof_entity(d.dof) else {

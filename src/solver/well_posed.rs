@@ -23,6 +23,7 @@
 
 use crate::assembly::DiscreteSystem;
 use crate::mesh::SolveMesh;
+use crate::mesh::budget::{try_filled, try_vec};
 use crate::solver::constraints::Constraints;
 use std::fmt;
 
@@ -88,7 +89,9 @@ pub fn analyse<M: SolveMesh<D> + ?Sized, const D: usize>(
 ) -> crate::Result<Analysis> {
     let n = system.n_unknowns();
     let dm = &system.symbolic().dof_map;
-    let mut parent: Vec<usize> = (0..n).collect();
+    let what = "the connected parts of the mesh";
+    let mut parent: Vec<usize> = try_vec(n, what)?;
+    parent.extend(0..n);
     for k in 0..dm.n_cells() {
         let (d, _) = dm.cell(k);
         if let Some((&first, rest)) = d.split_first() {
@@ -101,16 +104,18 @@ pub fn analyse<M: SolveMesh<D> + ?Sized, const D: usize>(
             }
         }
     }
-    let root: Vec<usize> = (0..n).map(|i| find(&mut parent, i)).collect();
+    let mut root: Vec<usize> = try_vec(n, what)?;
+    root.extend((0..n).map(|i| find(&mut parent, i)));
+    drop(parent);
     let dir = system.dirichlet();
-    let mut anchored = vec![false; n];
-    let (mut sum_b, mut sum_abs) = (vec![0.0f64; n], vec![0.0f64; n]);
+    let mut anchored = try_filled(n, false, what)?;
+    let (mut sum_b, mut sum_abs) = (try_filled(n, 0.0f64, what)?, try_filled(n, 0.0f64, what)?);
     for i in 0..n {
         anchored[root[i]] |= dir[i].is_some();
         sum_b[root[i]] += system.load()[i];
         sum_abs[root[i]] += system.load()[i].abs();
     }
-    let mut barred = vec![false; n];
+    let mut barred = try_filled(n, false, what)?;
     if let Some(c) = cons {
         for d in &c.dofs {
             barred[root[d.dof]] = true;

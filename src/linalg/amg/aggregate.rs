@@ -3,11 +3,16 @@
 
 use super::NONE;
 use crate::linalg::csr::CsrMatrix;
+use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
 
 /// Greedy aggregation on the graph of the strong entries `strong` of A (see the module
 /// documentation): the aggregate of each unknown ([`NONE`] for an isolated one) and the
-/// number of aggregates.
-pub(super) fn aggregate(a: &CsrMatrix, strong: &[bool], diag: &[f64]) -> (Vec<u32>, usize) {
+/// number of aggregates; [`AllocFailure`] if its arrays cannot be allocated.
+pub(super) fn aggregate(
+    a: &CsrMatrix,
+    strong: &[bool],
+    diag: &[f64],
+) -> Result<(Vec<u32>, usize), AllocFailure> {
     let n = a.n_rows();
     let rp = a.row_ptr();
     // the strong entries (column, value) of row i
@@ -21,7 +26,7 @@ pub(super) fn aggregate(a: &CsrMatrix, strong: &[bool], diag: &[f64]) -> (Vec<u3
             .map(|((&j, &v), _)| (j as usize, v))
     };
     let has_strong = |i: usize| strong[rp[i]..rp[i + 1]].contains(&true);
-    let mut agg = vec![NONE; n];
+    let mut agg = try_filled(n, NONE, "the aggregates of the unknowns")?;
     let mut n_agg: u32 = 0;
     // phase 1: roots whose strong neighbourhood is entirely free
     for i in 0..n {
@@ -38,7 +43,8 @@ pub(super) fn aggregate(a: &CsrMatrix, strong: &[bool], diag: &[f64]) -> (Vec<u3
     }
     // phase 2: join the phase-1 aggregate of the strongest neighbour (aggregates numbered
     // below n1 and assigned before this phase; a join made in this phase is not followed)
-    let in_phase1: Vec<bool> = agg.iter().map(|&g| g != NONE).collect();
+    let mut in_phase1: Vec<bool> = try_vec(n, "the first aggregation phase")?;
+    in_phase1.extend(agg.iter().map(|&g| g != NONE));
     for i in 0..n {
         if agg[i] != NONE {
             continue;
@@ -96,7 +102,7 @@ pub(super) fn aggregate(a: &CsrMatrix, strong: &[bool], diag: &[f64]) -> (Vec<u3
             n_agg += 1;
         }
     }
-    (agg, n_agg as usize)
+    Ok((agg, n_agg as usize))
 }
 
 #[cfg(test)]
@@ -111,8 +117,8 @@ mod tests {
         // a row of unit rows (fixed unknowns) across the grid
         let a = fix(&grid(m, 1.0, 1.0, &|_, _| 1.0), &|k| k / m == 10);
         let d = a.diagonal();
-        let strong = strength(&a, &d, 0.08);
-        let (agg, n_agg) = aggregate(&a, &strong, &d);
+        let strong = strength(&a, &d, 0.08).unwrap();
+        let (agg, n_agg) = aggregate(&a, &strong, &d).unwrap();
         // the decoupled rows belong to no aggregate, every other unknown to one
         for (k, &g) in agg.iter().enumerate() {
             assert_eq!(g == NONE, k / m == 10, "unknown {k}");

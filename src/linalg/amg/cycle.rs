@@ -3,6 +3,7 @@
 use super::Amg;
 use super::coarse::{CoarseSolve, dense_solve};
 use crate::linalg::pcg::{Preconditioner, check_len};
+use crate::mesh::budget::{AllocFailure, try_resize};
 
 /// Vectors of one level.
 #[derive(Debug, Clone, Default)]
@@ -18,16 +19,17 @@ pub(super) struct LevelWork {
 
 impl LevelWork {
     /// Gives each vector the length `level` of `amg` needs (keeping its memory when it has
-    /// it already).
-    fn fit(&mut self, amg: &Amg, level: usize) {
+    /// it already), or [`AllocFailure`] if it cannot be had.
+    fn fit(&mut self, amg: &Amg, level: usize) -> Result<(), AllocFailure> {
         let n = amg.op(level).n_rows();
         let bx = if level > 0 { n } else { 0 };
         let dd = amg.h.smoothers[level].vectors();
-        self.b.resize(bx, 0.0);
-        self.x.resize(bx, 0.0);
-        self.r.resize(n, 0.0);
-        self.d0.resize(if dd >= 1 { n } else { 0 }, 0.0);
-        self.d1.resize(if dd >= 2 { n } else { 0 }, 0.0);
+        let what = "the vectors of the multigrid cycle";
+        try_resize(&mut self.b, bx, 0.0, what)?;
+        try_resize(&mut self.x, bx, 0.0, what)?;
+        try_resize(&mut self.r, n, 0.0, what)?;
+        try_resize(&mut self.d0, if dd >= 1 { n } else { 0 }, 0.0, what)?;
+        try_resize(&mut self.d1, if dd >= 2 { n } else { 0 }, 0.0, what)
     }
 
     /// Stored values.
@@ -58,27 +60,30 @@ impl AmgWork {
         self.levels.iter().map(LevelWork::len).sum::<usize>() * std::mem::size_of::<f64>()
     }
 
-    /// Gives the vectors the lengths `amg` needs.
-    fn fit(&mut self, amg: &Amg) {
+    /// Gives the vectors the lengths `amg` needs, or [`AllocFailure`] if they cannot be had.
+    fn fit(&mut self, amg: &Amg) -> Result<(), AllocFailure> {
         self.levels.resize_with(amg.n_levels(), LevelWork::default);
         for (level, w) in self.levels.iter_mut().enumerate() {
-            w.fit(amg, level);
+            w.fit(amg, level)?;
         }
+        Ok(())
     }
 }
 
 impl Amg<'_> {
-    /// A workspace sized for this hierarchy (the same as [`AmgWork::new`] after one cycle).
+    /// A workspace sized for this hierarchy (the same as [`AmgWork::new`] after one cycle);
+    /// aborts, as `vec!` does, if it cannot be allocated (a solve passes [`AmgWork::new`]
+    /// instead, which [`Amg::apply`] sizes or fails with a typed error).
     pub fn work(&self) -> AmgWork {
         let mut work = AmgWork::new();
-        work.fit(self);
+        work.fit(self).unwrap_or_else(|f| f.abort());
         work
     }
 
     /// z = M⁻¹ r: one V(1,1)-cycle from z = 0, with the vectors of `work`.
     pub fn apply(&self, r: &[f64], z: &mut [f64], work: &mut AmgWork) -> crate::Result<()> {
         check_len("multigrid preconditioner", self.n(), r.len(), z.len())?;
-        work.fit(self);
+        work.fit(self)?;
         self.cycle(0, r, z, &mut work.levels);
         Ok(())
     }

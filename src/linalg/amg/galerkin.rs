@@ -3,6 +3,7 @@
 use super::NONE;
 use super::rows::build_rows;
 use crate::linalg::csr::CsrMatrix;
+use crate::mesh::budget::{AllocFailure, try_filled, try_grow};
 
 /// A dense accumulator of a sparse row: the values by column and the list of touched columns.
 struct Accumulator {
@@ -13,12 +14,12 @@ struct Accumulator {
 }
 
 impl Accumulator {
-    fn new(n: usize) -> Self {
-        Accumulator {
-            pos: vec![NONE; n],
+    fn new(n: usize) -> Result<Self, AllocFailure> {
+        Ok(Accumulator {
+            pos: try_filled(n, NONE, "the row accumulator of the Galerkin product")?,
             cols: Vec::new(),
             vals: Vec::new(),
-        }
+        })
     }
     #[inline(always)]
     fn add(&mut self, j: u32, v: f64) {
@@ -31,8 +32,19 @@ impl Accumulator {
             self.vals[p as usize] += v;
         }
     }
+    /// Room for the row in `cols` and `vals`, or [`AllocFailure`].
+    fn reserve_in(&self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) -> Result<(), AllocFailure> {
+        let what = "the entries of a Galerkin product";
+        try_grow(cols, self.cols.len(), what)?;
+        try_grow(vals, self.cols.len(), what)
+    }
     /// Appends the row in the order of first touch and clears the accumulator.
-    fn drain_unsorted_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) {
+    fn drain_unsorted_into(
+        &mut self,
+        cols: &mut Vec<u32>,
+        vals: &mut Vec<f64>,
+    ) -> Result<(), AllocFailure> {
+        self.reserve_in(cols, vals)?;
         for &c in &self.cols {
             self.pos[c as usize] = NONE;
         }
@@ -40,9 +52,11 @@ impl Accumulator {
         vals.extend_from_slice(&self.vals);
         self.cols.clear();
         self.vals.clear();
+        Ok(())
     }
     /// Appends the row, sorted by column, and clears the accumulator.
-    fn drain_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) {
+    fn drain_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) -> Result<(), AllocFailure> {
+        self.reserve_in(cols, vals)?;
         self.cols.sort_unstable();
         for &c in &self.cols {
             let p = self.pos[c as usize] as usize;
@@ -52,21 +66,27 @@ impl Accumulator {
         }
         self.cols.clear();
         self.vals.clear();
+        Ok(())
     }
 }
 
 /// A_c = Pᵀ A P in two row-parallel products (see the module documentation): R A with
 /// R = Pᵀ, row J = Σ_{i : r_Ji ≠ 0} r_Ji A_i (its columns left in the order they are met: only
-/// read below), R freed, then row J of A_c = Σ_k (R A)_Jk P_k.
-pub(super) fn galerkin(a: &CsrMatrix, p: &CsrMatrix, r: CsrMatrix) -> CsrMatrix {
-    let ra = product(&r, a, false);
+/// read below), R freed, then row J of A_c = Σ_k (R A)_Jk P_k. [`AllocFailure`] if the
+/// products cannot be allocated.
+pub(super) fn galerkin(
+    a: &CsrMatrix,
+    p: &CsrMatrix,
+    r: CsrMatrix,
+) -> Result<CsrMatrix, AllocFailure> {
+    let ra = product(&r, a, false)?;
     drop(r);
     product(&ra, p, true)
 }
 
 /// The sparse product L M, row J = Σ_k l_Jk M_k, zero entries of M skipped; each row's
 /// columns sorted if `sorted`, else in the order they are met.
-fn product(l: &CsrMatrix, m: &CsrMatrix, sorted: bool) -> CsrMatrix {
+fn product(l: &CsrMatrix, m: &CsrMatrix, sorted: bool) -> Result<CsrMatrix, AllocFailure> {
     let n = m.n_cols();
     build_rows(
         l.n_rows(),
@@ -83,9 +103,9 @@ fn product(l: &CsrMatrix, m: &CsrMatrix, sorted: bool) -> CsrMatrix {
                 }
             }
             if sorted {
-                acc.drain_into(cols, vals);
+                acc.drain_into(cols, vals)
             } else {
-                acc.drain_unsorted_into(cols, vals);
+                acc.drain_unsorted_into(cols, vals)
             }
         },
     )
@@ -115,7 +135,7 @@ mod tests {
                 rp.push(cols.len());
             }
             let p = CsrMatrix::new(n, nc, rp, cols, vals).unwrap();
-            let ac = galerkin(&a, &p, p.transpose());
+            let ac = galerkin(&a, &p, p.transpose().unwrap()).unwrap();
             assert_eq!((ac.n_rows(), ac.n_cols()), (nc, nc));
             // column J of A_c against Pᵀ (A (P e_J)), for a few J
             for jc in [0, 1, nc / 2, nc - 1] {

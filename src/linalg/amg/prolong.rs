@@ -5,12 +5,14 @@ use super::NONE;
 use super::rows::build_rows;
 use super::spectral::lanczos_lambda_max;
 use crate::linalg::csr::{CsrMatrix, ROW_CHUNK};
+use crate::mesh::budget::{AllocFailure, try_filled, try_grow};
 use rayon::prelude::*;
 
 /// P = (I − ω D_F⁻¹ A_F) T (see the module documentation): row i is
 /// (1 − ω) T_i − (ω / d^F_i) Σ_{j kept} a_ij T_j, where row i of A_F keeps the a_ij (j ≠ i) with
 /// |a_ij| ≥ θ_P a_ii and lumps the others into d^F_i = a_ii + Σ_{j dropped} a_ij; for the
 /// near-null vector `b` of this level. Also returns the near-null vector of the next level.
+/// [`AllocFailure`] if P or the vectors of its construction cannot be allocated.
 pub(super) fn smoothed_prolongator(
     a: &CsrMatrix,
     diag: &[f64],
@@ -19,9 +21,9 @@ pub(super) fn smoothed_prolongator(
     b: &[f64],
     theta_p: f64,
     spectral_steps: usize,
-) -> (CsrMatrix, Vec<f64>) {
+) -> Result<(CsrMatrix, Vec<f64>), AllocFailure> {
     let n = a.n_rows();
-    let b_coarse = coarse_near_null(agg, n_agg, b);
+    let b_coarse = coarse_near_null(agg, n_agg, b)?;
     // T_iJ = b_i / ‖b|𝒜_J‖
     let t = |i: usize| -> f64 {
         match agg[i] {
@@ -33,13 +35,17 @@ pub(super) fn smoothed_prolongator(
         }
     };
     let filter = Filter { diag, theta_p };
-    let dfil = filtered_diagonal(a, filter);
-    let omega = damping(a, filter, &dfil, spectral_steps);
+    let dfil = filtered_diagonal(a, filter)?;
+    let omega = damping(a, filter, &dfil, spectral_steps)?;
     let p = build_rows(
         n,
         n_agg,
-        || (),
+        || Ok(()),
         |_, i, cols, vals| {
+            // at most one entry per aggregate met: the unknown's own and its row's
+            let width = a.row(i).0.len() + 1;
+            try_grow(cols, width, "the columns of the prolongator")?;
+            try_grow(vals, width, "the entries of the prolongator")?;
             let start = cols.len();
             let scale = omega / dfil[i];
             let mut add = |g: u32, v: f64| {
@@ -61,23 +67,24 @@ pub(super) fn smoothed_prolongator(
                 }
             }
             sort_tail(cols, vals, start);
+            Ok(())
         },
-    );
-    (p, b_coarse)
+    )?;
+    Ok((p, b_coarse))
 }
 
 /// The near-null vector of the next level, b^c_J = ‖b|𝒜_J‖, so that T b^c = b on the
 /// aggregated unknowns with T_iJ = b_i / ‖b|𝒜_J‖ (the QR factorisation of b restricted to
 /// each aggregate).
-fn coarse_near_null(agg: &[u32], n_agg: usize, b: &[f64]) -> Vec<f64> {
-    let mut b_coarse = vec![0.0; n_agg];
+fn coarse_near_null(agg: &[u32], n_agg: usize, b: &[f64]) -> Result<Vec<f64>, AllocFailure> {
+    let mut b_coarse = try_filled(n_agg, 0.0, "the coarse near-null vector")?;
     for (&g, &bi) in agg.iter().zip(b) {
         if g != NONE {
             b_coarse[g as usize] += bi * bi;
         }
     }
     b_coarse.iter_mut().for_each(|v| *v = v.sqrt());
-    b_coarse
+    Ok(b_coarse)
 }
 
 /// Which off-diagonal entries the smoothing matrix A_F keeps: |a_ij| ≥ θ_P a_ii.
@@ -96,9 +103,9 @@ impl Filter<'_> {
 
 /// The diagonal of A_F, d^F_i = a_ii + Σ_{j dropped} a_ij (a_ii where lumping positive entries
 /// would leave it non-positive).
-fn filtered_diagonal(a: &CsrMatrix, filter: Filter) -> Vec<f64> {
+fn filtered_diagonal(a: &CsrMatrix, filter: Filter) -> Result<Vec<f64>, AllocFailure> {
     let diag = filter.diag;
-    let mut dfil = vec![0.0; a.n_rows()];
+    let mut dfil = try_filled(a.n_rows(), 0.0, "the filtered diagonal")?;
     a.for_row_chunks(&mut dfil, |i0, chunk| {
         for (k, d) in chunk.iter_mut().enumerate() {
             let i = i0 + k;
@@ -113,13 +120,18 @@ fn filtered_diagonal(a: &CsrMatrix, filter: Filter) -> Vec<f64> {
             *d = if f > 1e-12 * diag[i] { f } else { diag[i] };
         }
     });
-    dfil
+    Ok(dfil)
 }
 
 /// ω = 4 / (3 ρ) of the prolongator smoothing, with ρ the Gershgorin bound of
 /// ρ(D_F⁻¹ A_F), max_i 1 + Σ_{j kept} |a_ij| / d^F_i, or, on a level with positive
 /// off-diagonal entries, 1.1 times the Lanczos estimate of λ_max(D⁻¹A) when smaller.
-fn damping(a: &CsrMatrix, filter: Filter, dfil: &[f64], spectral_steps: usize) -> f64 {
+fn damping(
+    a: &CsrMatrix,
+    filter: Filter,
+    dfil: &[f64],
+    spectral_steps: usize,
+) -> Result<f64, AllocFailure> {
     let n = a.n_rows();
     let rho = (0..n)
         .into_par_iter()
@@ -144,11 +156,11 @@ fn damping(a: &CsrMatrix, filter: Filter, dfil: &[f64], spectral_steps: usize) -
             .any(|(&j, &v)| j as usize != i && v > 0.0)
     });
     let rho = if spectral_steps > 0 && positive {
-        (1.1 * lanczos_lambda_max(a, filter.diag, spectral_steps)).min(rho)
+        (1.1 * lanczos_lambda_max(a, filter.diag, spectral_steps)?).min(rho)
     } else {
         rho
     };
-    4.0 / (3.0 * rho)
+    Ok(4.0 / (3.0 * rho))
 }
 
 /// Sorts the entries `start..` of `cols` (and `vals` along) by column: an insertion sort, as
@@ -184,7 +196,7 @@ mod tests {
             .map(|k| ((k / m / 3) * 3 + (k % m) / 3) as u32)
             .collect();
         let b = vec![1.0; n];
-        let (p, bc) = smoothed_prolongator(&a, &a.diagonal(), &agg, 9, &b, 0.0, 0);
+        let (p, bc) = smoothed_prolongator(&a, &a.diagonal(), &agg, 9, &b, 0.0, 0).unwrap();
         assert_eq!((p.n_rows(), p.n_cols()), (n, 9));
         assert!(bc.iter().all(|&v| (v - 3.0).abs() < 1e-15), "{bc:?}");
         let mut pb = vec![0.0; n];
@@ -204,7 +216,7 @@ mod tests {
         // tentative entry, only its neighbours' smoothed ones: −(ω / 4) Σ_j a_ij / √8
         let mut agg1 = agg.clone();
         agg1[40] = NONE;
-        let (p1, bc1) = smoothed_prolongator(&a, &a.diagonal(), &agg1, 9, &b, 0.0, 0);
+        let (p1, bc1) = smoothed_prolongator(&a, &a.diagonal(), &agg1, 9, &b, 0.0, 0).unwrap();
         assert!((bc1[4] - 8f64.sqrt()).abs() < 1e-15);
         let (cols, vals) = p1.row(40);
         assert_eq!(cols, [4]);

@@ -44,7 +44,7 @@ impl CoarseHierarchy {
         }
         validate(&a)?;
         let mut h = self;
-        h.smoothers[0] = LevelSmoother::new(&a, &a.diagonal(), opts);
+        h.smoothers[0] = LevelSmoother::new(&a, &a.try_diagonal()?, opts)?;
         Ok(Amg {
             fine: std::borrow::Cow::Owned(a),
             h,

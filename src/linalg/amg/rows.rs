@@ -2,32 +2,42 @@
 //! the threads (the rows are computed in fixed chunks and concatenated in order).
 
 use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
+use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
 use rayon::prelude::*;
 
 /// Builds a matrix row by row in parallel: `row(scratch, i, cols, vals)` appends the entries
-/// of row i (sorted by column) to `cols` and `vals`; `init` makes the per-thread scratch.
-pub(super) fn build_rows<S, I, F>(n_rows: usize, n_cols: usize, init: I, row: F) -> CsrMatrix
+/// of row i (sorted by column) to `cols` and `vals`, reserving their room first
+/// ([`try_grow`](crate::mesh::budget::try_grow)); `init` makes the per-thread scratch.
+/// [`AllocFailure`] if the scratch or the arrays of the matrix cannot be allocated (the
+/// entries of one chunk of [`ROW_CHUNK`] rows grow as the rows are appended).
+pub(super) fn build_rows<S, I, F>(
+    n_rows: usize,
+    n_cols: usize,
+    init: I,
+    row: F,
+) -> Result<CsrMatrix, AllocFailure>
 where
     S: Send,
-    I: Fn() -> S + Sync + Send,
-    F: Fn(&mut S, usize, &mut Vec<u32>, &mut Vec<f64>) + Sync + Send,
+    I: Fn() -> Result<S, AllocFailure> + Sync + Send,
+    F: Fn(&mut S, usize, &mut Vec<u32>, &mut Vec<f64>) -> Result<(), AllocFailure> + Sync + Send,
 {
     let n_chunks = n_rows.div_ceil(ROW_CHUNK);
     let parts: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..n_chunks)
         .into_par_iter()
         .map_init(&init, |s, c| {
+            let s = s.as_mut().map_err(|f| f.clone())?;
             let (i0, i1) = (c * ROW_CHUNK, ((c + 1) * ROW_CHUNK).min(n_rows));
-            let mut lens = Vec::with_capacity(i1 - i0);
+            let mut lens = try_vec(i1 - i0, "the row lengths of a multigrid matrix")?;
             let mut cols = Vec::new();
             let mut vals = Vec::new();
             for i in i0..i1 {
                 let before = cols.len();
-                row(s, i, &mut cols, &mut vals);
+                row(s, i, &mut cols, &mut vals)?;
                 lens.push(cols.len() - before);
             }
-            (lens, cols, vals)
+            Ok((lens, cols, vals))
         })
-        .collect();
+        .collect::<Result<_, AllocFailure>>()?;
     // concatenate the chunks in parallel: the offsets of each chunk's rows and entries first
     let mut starts = Vec::with_capacity(parts.len() + 1);
     starts.push(0usize);
@@ -35,9 +45,9 @@ where
         starts.push(starts[starts.len() - 1] + p.1.len());
     }
     let nnz = starts[parts.len()];
-    let mut row_ptr = vec![0usize; n_rows + 1];
-    let mut col_idx = vec![0u32; nnz];
-    let mut values = vec![0.0f64; nnz];
+    let mut row_ptr = try_filled(n_rows + 1, 0usize, "the row offsets of a multigrid matrix")?;
+    let mut col_idx = try_filled(nnz, 0u32, "the column indices of a multigrid matrix")?;
+    let mut values = try_filled(nnz, 0.0f64, "the entries of a multigrid matrix")?;
     row_ptr[n_rows] = nnz;
     // (the chunk's lengths, columns and values; its parts of row_ptr, col_idx, values; the
     // offset of its first entry)
@@ -71,7 +81,9 @@ where
     } else {
         pieces.into_par_iter().for_each(fill);
     }
-    CsrMatrix::from_parts(n_rows, n_cols, row_ptr, col_idx, values)
+    Ok(CsrMatrix::from_parts(
+        n_rows, n_cols, row_ptr, col_idx, values,
+    ))
 }
 
 #[cfg(test)]
@@ -92,15 +104,17 @@ mod tests {
             let m = build_rows(
                 n,
                 n,
-                || 0usize,
+                || Ok(0usize),
                 |calls, i, cols, vals| {
                     *calls += 1;
                     for (j, v) in row(i) {
                         cols.push(j);
                         vals.push(v);
                     }
+                    Ok(())
                 },
-            );
+            )
+            .unwrap();
             assert_eq!((m.n_rows(), m.n_cols()), (n, n));
             for i in 0..n {
                 let (c, v) = m.row(i);

@@ -10,6 +10,7 @@ use super::smooth::LevelSmoother;
 use super::strength::strength;
 use super::{Amg, AmgOptions, CoarseHierarchy, DENSE_MAX, Transfer};
 use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ};
+use crate::mesh::budget::try_filled;
 use rayon::prelude::*;
 
 impl<'a> Amg<'a> {
@@ -26,11 +27,11 @@ impl<'a> Amg<'a> {
         let mut transfers = Vec::new();
         let mut smoothers = Vec::new();
         // the near-null space of the current level (the constants on the fine one)
-        let mut near_null = vec![1.0; a.n_rows()];
+        let mut near_null = try_filled(a.n_rows(), 1.0, "the near-null vector")?;
         loop {
             let level = coarse_ops.len();
             let al = coarse_ops.last().unwrap_or(a);
-            let diag = al.diagonal();
+            let diag = al.try_diagonal()?;
             if level > 0
                 && let Some(i) = diag.iter().position(|&d| !(d > 0.0 && d.is_finite()))
             {
@@ -40,13 +41,13 @@ impl<'a> Amg<'a> {
                     diag[i]
                 )));
             }
-            smoothers.push(LevelSmoother::new(al, &diag, opts));
+            smoothers.push(LevelSmoother::new(al, &diag, opts)?);
             let n = al.n_rows();
             if n <= opts.max_coarse || level + 1 >= opts.max_levels {
                 break;
             }
-            let strong = strength(al, &diag, opts.strength_threshold);
-            let (agg, n_agg) = aggregate(al, &strong, &diag);
+            let strong = strength(al, &diag, opts.strength_threshold)?;
+            let (agg, n_agg) = aggregate(al, &strong, &diag)?;
             drop(strong);
             // stop when coarsening stalls (every row decoupled, or barely any reduction)
             if n_agg == 0 || n_agg as f64 > 0.85 * n as f64 {
@@ -60,9 +61,9 @@ impl<'a> Amg<'a> {
                 &near_null,
                 opts.smoothing_threshold,
                 opts.spectral_steps,
-            );
+            )?;
             near_null = b_next;
-            let ac = galerkin(al, &p, p.transpose());
+            let ac = galerkin(al, &p, p.transpose()?)?;
             transfers.push(Transfer { p });
             coarse_ops.push(ac);
         }
@@ -142,6 +143,56 @@ mod tests {
     use super::super::{AmgWork, Smoother};
     use super::*;
     use crate::linalg::pcg::{PcgOptions, pcg};
+
+    /// The hierarchy of a 300 × 300 grid and a solve with it, again and again in a child
+    /// process whose data is limited to what it has plus 0, 1, 2, 4, … MiB:
+    /// each ends with the solution or with a typed out-of-memory error (from whichever array
+    /// of the setup or of the cycle's workspace failed), never an abort; the smaller limits
+    /// fail, the largest succeeds.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_setup_the_data_limit_refuses_is_a_typed_error() {
+        use crate::mesh::budget::child;
+        const NAME: &str =
+            "linalg::amg::setup::tests::a_setup_the_data_limit_refuses_is_a_typed_error";
+        if !child::is_child(NAME) {
+            return child::run(NAME);
+        }
+        let a = grid(300, 1.0, 1.0, &|_, _| 1.0);
+        let b = vec![1.0; a.n_rows()];
+        // unlimited solves first, on every thread: the dense factorisation of the coarsest
+        // level (faer) maps a product buffer per thread on first use, infallibly, and keeps it
+        let solve = || {
+            let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
+            let mut x = vec![0.0; a.n_rows()];
+            pcg(
+                &a,
+                &amg,
+                &mut AmgWork::new(),
+                &b,
+                &mut x,
+                &PcgOptions::default(),
+            )
+            .unwrap();
+        };
+        solve();
+        rayon::broadcast(|_| solve());
+        let mut refused = 0;
+        for extra_mib in [0, 1, 2, 4, 8, 16, 32, 1024] {
+            let mut x = vec![0.0; a.n_rows()];
+            let opts = PcgOptions::default();
+            child::limit_data(extra_mib << 20);
+            let solved = Amg::new(&a, &AmgOptions::default())
+                .and_then(|amg| pcg(&a, &amg, &mut AmgWork::new(), &b, &mut x, &opts));
+            child::limit_data(4 << 30);
+            match solved {
+                Ok(r) => assert!(r.residual_norm <= 1e-6 * (a.n_rows() as f64).sqrt()),
+                Err(e) if e.is_out_of_memory() => refused += 1,
+                Err(e) => panic!("{extra_mib} MiB: {e}"),
+            }
+        }
+        assert!((1..8).contains(&refused), "{refused} solves refused");
+    }
 
     #[test]
     fn bad_input_is_an_error() {

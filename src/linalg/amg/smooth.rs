@@ -5,6 +5,7 @@ use super::cycle::LevelWork;
 use super::options::{AmgOptions, Smoother};
 use super::spectral::{gershgorin, lanczos_lambda_max};
 use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
+use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
 use rayon::prelude::*;
 
 /// The data of the smoother on one level.
@@ -29,26 +30,33 @@ pub(super) enum LevelSmoother {
 }
 
 impl LevelSmoother {
-    /// The smoother `opts` names for the matrix `a` with diagonal `diag`.
-    pub(super) fn new(a: &CsrMatrix, diag: &[f64], opts: &AmgOptions) -> Self {
+    /// The smoother `opts` names for the matrix `a` with diagonal `diag`, or [`AllocFailure`]
+    /// if its vectors cannot be allocated.
+    pub(super) fn new(
+        a: &CsrMatrix,
+        diag: &[f64],
+        opts: &AmgOptions,
+    ) -> Result<Self, AllocFailure> {
         let n = a.n_rows();
-        match opts.smoother {
+        Ok(match opts.smoother {
             Smoother::Chebyshev { degree, ratio } => {
                 let g = gershgorin(a, diag);
                 let hi = if opts.spectral_steps > 0 {
-                    (1.1 * lanczos_lambda_max(a, diag, opts.spectral_steps)).min(g)
+                    (1.1 * lanczos_lambda_max(a, diag, opts.spectral_steps)?).min(g)
                 } else {
                     g
                 };
+                let mut inv_diag = try_vec(n, "the smoother's inverse diagonal")?;
+                inv_diag.extend(diag.iter().map(|d| 1.0 / d));
                 LevelSmoother::Chebyshev {
-                    inv_diag: diag.iter().map(|d| 1.0 / d).collect(),
+                    inv_diag,
                     lo: hi / ratio,
                     hi,
                     degree,
                 }
             }
             Smoother::L1Jacobi => {
-                let mut inv_l1 = vec![0.0; n];
+                let mut inv_l1 = try_filled(n, 0.0, "the smoother's inverse row sums")?;
                 a.for_row_chunks(&mut inv_l1, |i0, chunk| {
                     for (k, v) in chunk.iter_mut().enumerate() {
                         *v = 1.0 / a.row(i0 + k).1.iter().map(|x| x.abs()).sum::<f64>();
@@ -58,7 +66,7 @@ impl LevelSmoother {
             }
             Smoother::L1GaussSeidel => {
                 let block = gs_block(n);
-                let mut inv_diag = vec![0.0; n];
+                let mut inv_diag = try_filled(n, 0.0, "the smoother's inverse diagonal")?;
                 a.for_row_chunks(&mut inv_diag, |i0, chunk| {
                     for (k, v) in chunk.iter_mut().enumerate() {
                         let i = i0 + k;
@@ -75,7 +83,7 @@ impl LevelSmoother {
                 });
                 LevelSmoother::L1GaussSeidel { inv_diag, block }
             }
-        }
+        })
     }
 
     /// A placeholder holding no data, for the fine level of a [`super::CoarseHierarchy`]

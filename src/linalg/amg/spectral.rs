@@ -3,6 +3,7 @@
 
 use crate::linalg::csr::{CsrMatrix, ROW_CHUNK};
 use crate::linalg::pcg::dot;
+use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
 use rayon::prelude::*;
 
 /// Gershgorin bound of ρ(D⁻¹A): max_i Σ_j |a_ij| / a_ii.
@@ -16,24 +17,30 @@ pub(super) fn gershgorin(a: &CsrMatrix, diag: &[f64]) -> f64 {
 
 /// The largest Ritz value of `steps` Lanczos steps on D^{-1/2} A D^{-1/2} (similar to D⁻¹A),
 /// from a fixed pseudo-random start: a lower bound of λ_max(D⁻¹A), usually close.
-pub(super) fn lanczos_lambda_max(a: &CsrMatrix, diag: &[f64], steps: usize) -> f64 {
+/// [`AllocFailure`] if its vectors cannot be allocated.
+pub(super) fn lanczos_lambda_max(
+    a: &CsrMatrix,
+    diag: &[f64],
+    steps: usize,
+) -> Result<f64, AllocFailure> {
     let n = a.n_rows();
     if n == 0 {
-        return 0.0;
+        return Ok(0.0);
     }
-    let s: Vec<f64> = diag.iter().map(|d| 1.0 / d.sqrt()).collect();
+    let what = "the Lanczos vectors";
+    let mut s: Vec<f64> = try_vec(n, what)?;
+    s.extend(diag.iter().map(|d| 1.0 / d.sqrt()));
     // a deterministic start with components along every eigenvector (almost surely)
-    let mut v: Vec<f64> = (0..n as u64)
-        .map(|i| {
-            let h = (i.wrapping_add(1)).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11;
-            (h as f64 / (1u64 << 53) as f64) - 0.5
-        })
-        .collect();
+    let mut v: Vec<f64> = try_vec(n, what)?;
+    v.extend((0..n as u64).map(|i| {
+        let h = (i.wrapping_add(1)).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11;
+        (h as f64 / (1u64 << 53) as f64) - 0.5
+    }));
     let nv = dot(&v, &v).sqrt();
     v.iter_mut().for_each(|x| *x /= nv);
-    let mut v_prev = vec![0.0; n];
-    let mut u = vec![0.0; n];
-    let mut w = vec![0.0; n];
+    let mut v_prev = try_filled(n, 0.0, what)?;
+    let mut u = try_filled(n, 0.0, what)?;
+    let mut w = try_filled(n, 0.0, what)?;
     let (mut alphas, mut betas) = (Vec::new(), Vec::new());
     let mut beta = 0.0;
     for _ in 0..steps.min(n) {
@@ -69,10 +76,10 @@ pub(super) fn lanczos_lambda_max(a: &CsrMatrix, diag: &[f64], steps: usize) -> f
             0.0
         }
     });
-    t.symmetric_eigenvalues()
+    Ok(t.symmetric_eigenvalues()
         .iter()
         .copied()
-        .fold(0.0, f64::max)
+        .fold(0.0, f64::max))
 }
 
 #[cfg(test)]
@@ -101,14 +108,14 @@ mod tests {
         let exact = 1.0 + (std::f64::consts::PI / (n + 1) as f64).cos();
         assert_eq!(gershgorin(&a, &d), 2.0);
         // n steps: the whole Krylov space, the exact value
-        let full = lanczos_lambda_max(&a, &d, n);
+        let full = lanczos_lambda_max(&a, &d, n).unwrap();
         assert!((full - exact).abs() < 1e-10, "{full} vs {exact}");
         // fewer steps: a Ritz value, below λ_max and close to it
-        let few = lanczos_lambda_max(&a, &d, 8);
+        let few = lanczos_lambda_max(&a, &d, 8).unwrap();
         assert!(
             few <= exact + 1e-12 && few > 0.95 * exact,
             "{few} vs {exact}"
         );
-        assert_eq!(lanczos_lambda_max(&laplacian_1d(0), &[], 5), 0.0);
+        assert_eq!(lanczos_lambda_max(&laplacian_1d(0), &[], 5), Ok(0.0));
     }
 }

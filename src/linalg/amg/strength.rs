@@ -2,15 +2,17 @@
 //! [`super`]).
 
 use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
+use crate::mesh::budget::{AllocFailure, try_filled};
 use rayon::prelude::*;
 
 /// The strong off-diagonal entries of A, a_ij ≠ 0 with a_ij² ≥ θ² a_ii a_jj, whatever their
 /// sign, as a flag per stored entry of A (in the order of its values).
 /// (`replication/BENCHMARKS.md`, "Measurements behind the defaults", compares this rule with
-/// counting only the negative couplings as strong.)
-pub(super) fn strength(a: &CsrMatrix, diag: &[f64], theta: f64) -> Vec<bool> {
+/// counting only the negative couplings as strong.) [`AllocFailure`] if the flags cannot be
+/// allocated.
+pub(super) fn strength(a: &CsrMatrix, diag: &[f64], theta: f64) -> Result<Vec<bool>, AllocFailure> {
     let t2 = theta * theta;
-    let mut strong = vec![false; a.nnz()];
+    let mut strong = try_filled(a.nnz(), false, "the strong couplings of the matrix")?;
     let rp = a.row_ptr();
     let fill = |i0: usize, flags: &mut [bool]| {
         let base = rp[i0];
@@ -27,7 +29,7 @@ pub(super) fn strength(a: &CsrMatrix, diag: &[f64], theta: f64) -> Vec<bool> {
         }
     };
     for_entry_chunks(a, &mut strong, fill);
-    strong
+    Ok(strong)
 }
 
 /// Runs `f(i0, part)` on the parts of a per-entry array `x` of `a` that hold rows
@@ -66,7 +68,7 @@ mod tests {
         for m in [12, 150] {
             let a = grid(m, 0.01, 1.0, &|_, _| 1.0);
             let d = a.diagonal();
-            let flags = strength(&a, &d, 0.08);
+            let flags = strength(&a, &d, 0.08).unwrap();
             let mut n_strong = 0;
             for i in 0..a.n_rows() {
                 let r = a.row_ptr()[i]..a.row_ptr()[i + 1];
@@ -78,7 +80,7 @@ mod tests {
             }
             assert_eq!(n_strong, 2 * m * (m - 1));
             // θ = 0: every off-diagonal nonzero
-            let all = strength(&a, &d, 0.0);
+            let all = strength(&a, &d, 0.0).unwrap();
             assert_eq!(all.iter().filter(|&&s| s).count(), a.nnz() - a.n_rows());
         }
     }
