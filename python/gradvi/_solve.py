@@ -536,7 +536,7 @@ def solve(
         ordering: fill-reducing ordering of the Cholesky factorisation, ``"amd"`` or
             ``"nested-dissection"``.
         factor_threads: ``"sequential"`` or ``"global"`` (faer's parallel factorisation).
-        linear: linear solver, ``"auto"`` (direct below 250 000 condensed unknowns, iterative
+        linear: linear solver, ``"auto"`` (direct below 250 000 condensed unknowns in 2D, 20 000 in 3D, iterative
             above), ``"direct"`` (sparse Cholesky) or ``"iterative"`` (algebraic-multigrid
             preconditioned conjugate gradients, memory linear in the size).
 
