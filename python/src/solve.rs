@@ -349,43 +349,49 @@ fn to_dict<'py, const D: usize>(
     d.set_item("iterates", its)?;
     match o.constrained {
         None => d.set_item("constraint", py.None())?,
-        Some(c) => {
-            let e = PyDict::new(py);
-            e.set_item("kind", c.kind)?;
-            e.set_item(
-                "side",
-                match c.side {
-                    Side::Upper => "upper",
-                    Side::Lower => "lower",
-                },
-            )?;
-            e.set_item("dofs", vec_array(py, c.dofs))?;
-            e.set_item("points", points_array(py, c.points.into_iter())?)?;
-            e.set_item("measures", vec_array(py, c.measures))?;
-            e.set_item("barrier", vec_array(py, c.barrier))?;
-            e.set_item("multiplier", vec_array(py, c.multiplier))?;
-            e.set_item("active", vec_array(py, c.active))?;
-            e.set_item("multiplier_field", vec_array(py, c.multiplier_field))?;
-            e.set_item("active_field", vec_array(py, c.active_field))?;
-            e.set_item("active_fields", entity_fields(py, c.active_fields)?)?;
-            e.set_item("multiplier_fields", entity_fields(py, c.multiplier_fields)?)?;
-            e.set_item(
-                "active_edge_sums",
-                c.active_edge_sums.map(|v| vec_array(py, v)),
-            )?;
-            e.set_item(
-                "multiplier_edge_sums",
-                c.multiplier_edge_sums.map(|v| vec_array(py, v)),
-            )?;
-            e.set_item("contact_measure", c.contact_measure)?;
-            e.set_item(
-                "free_boundary",
-                points_array(py, c.free_boundary.into_iter())?,
-            )?;
-            d.set_item("constraint", e)?;
-        }
+        Some(c) => d.set_item("constraint", constraint_dict(py, c)?)?,
     }
     Ok(d)
+}
+
+/// The constrained unknowns of a solution as the dict `Solution.constraint` reads.
+fn constraint_dict<'py, const D: usize>(
+    py: Python<'py>,
+    c: Constrained<D>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let e = PyDict::new(py);
+    e.set_item("kind", c.kind)?;
+    e.set_item(
+        "side",
+        match c.side {
+            Side::Upper => "upper",
+            Side::Lower => "lower",
+        },
+    )?;
+    e.set_item("dofs", vec_array(py, c.dofs))?;
+    e.set_item("points", points_array(py, c.points.into_iter())?)?;
+    e.set_item("measures", vec_array(py, c.measures))?;
+    e.set_item("barrier", vec_array(py, c.barrier))?;
+    e.set_item("multiplier", vec_array(py, c.multiplier))?;
+    e.set_item("active", vec_array(py, c.active))?;
+    e.set_item("multiplier_field", vec_array(py, c.multiplier_field))?;
+    e.set_item("active_field", vec_array(py, c.active_field))?;
+    e.set_item("active_fields", entity_fields(py, c.active_fields)?)?;
+    e.set_item("multiplier_fields", entity_fields(py, c.multiplier_fields)?)?;
+    e.set_item(
+        "active_edge_sums",
+        c.active_edge_sums.map(|v| vec_array(py, v)),
+    )?;
+    e.set_item(
+        "multiplier_edge_sums",
+        c.multiplier_edge_sums.map(|v| vec_array(py, v)),
+    )?;
+    e.set_item("contact_measure", c.contact_measure)?;
+    e.set_item(
+        "free_boundary",
+        points_array(py, c.free_boundary.into_iter())?,
+    )?;
+    Ok(e)
 }
 
 /// A serialisable value as the Python object `json.loads` makes of it.
