@@ -118,7 +118,7 @@ fn contact_circle(r0: f64, c: f64, x: [f64; 2], y: [f64; 2]) -> Vec<Vec<[f64; 2]
 
 /// Solves `problem` with HMM on `m` and draws the cells cut by the plane z = c through the
 /// middle of the layer of cells just above the centre of the box, coloured by u_K, the active
-/// cells outlined, and the exact free boundary in that plane ([`contact_circle`]).
+/// cells outlined, and the exact free boundary in that plane (`contact_circle`).
 pub fn slice(
     cfg: &Config,
     case: &Case3d,
