@@ -25,6 +25,25 @@ pub(super) fn chunks(n: usize, size: usize) -> Vec<(usize, usize)> {
         .collect()
 }
 
+/// `f(i)` for every i in `0..n`, computed in parallel (at least 4096 per task) into a vector
+/// allocated fallibly ([`try_filled`], `what` naming it); an error of `f` is returned instead
+/// (one of them if several). Each value is computed on its own: the same whatever the threads.
+pub(super) fn par_try_fill<T: Clone + Default + Send>(
+    n: usize,
+    what: &str,
+    f: impl Fn(usize) -> crate::Result<T> + Sync,
+) -> crate::Result<Vec<T>> {
+    let mut v = try_filled(n, T::default(), what)?;
+    v.par_iter_mut()
+        .enumerate()
+        .with_min_len(4096)
+        .try_for_each(|(i, out)| {
+            *out = f(i)?;
+            Ok::<(), crate::Error>(())
+        })?;
+    Ok(v)
+}
+
 /// Splits a buffer laid out by the offsets `ptr` (entity e owns `ptr(e)..ptr(e + 1)`, relative to
 /// `ptr(ranges[0].0)`) into the consecutive slices of the entity `ranges`, so that each
 /// parallel task writes its own slice.

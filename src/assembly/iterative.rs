@@ -10,7 +10,7 @@ use super::linear::{
 use super::{DiscreteSystem, SolveState};
 use crate::linalg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, CsrMatrix};
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{try_copy, try_filled};
+use crate::mesh::budget::{AllocFailure, try_copy, try_filled};
 use crate::vi::SolveTimings;
 use std::time::Instant;
 
@@ -37,14 +37,17 @@ pub(super) struct KeptHierarchy {
 }
 
 /// One bit per unknown: set where the unknown is fixed (Dirichlet, or by `fixed`).
-pub(super) fn fixed_mask(dirichlet: &[Option<f64>], fixed: &[Option<f64>]) -> Vec<u64> {
-    let mut mask = vec![0u64; dirichlet.len().div_ceil(64)];
+pub(super) fn fixed_mask(
+    dirichlet: &[Option<f64>],
+    fixed: &[Option<f64>],
+) -> Result<Vec<u64>, AllocFailure> {
+    let mut mask = try_filled(dirichlet.len().div_ceil(64), 0u64, "the fixed-unknown mask")?;
     for (i, (d, f)) in dirichlet.iter().zip(fixed).enumerate() {
         if d.is_some() || f.is_some() {
             mask[i / 64] |= 1 << (i % 64);
         }
     }
-    mask
+    Ok(mask)
 }
 
 /// Where the hierarchy of the next iterative solve comes from.
@@ -160,10 +163,10 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         state: &mut SolveState,
         fixed: &[Option<f64>],
         cells: bool,
-    ) -> NextHierarchy {
-        let mask = fixed_mask(&self.values.dirichlet, fixed);
+    ) -> crate::Result<NextHierarchy> {
+        let mask = fixed_mask(&self.values.dirichlet, fixed)?;
         let max_changed = (REUSE_MAX_CHANGED * self.n as f64) as usize;
-        state
+        let next = state
             .kept
             .take()
             .filter(|k| {
@@ -177,7 +180,8 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                     built_for,
                 })
             })
-            .unwrap_or(NextHierarchy::New { fixed_mask: mask })
+            .unwrap_or(NextHierarchy::New { fixed_mask: mask });
+        Ok(next)
     }
 
     /// The condensed matrix with lower-triangle `values`, both triangles stored by rows.
@@ -237,7 +241,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             Err(_) if reused => {
                 amg = Amg::owning(amg.into_matrix(), &AmgOptions::default())?;
                 (fresh_rate, reused) = (None, false);
-                fixed_mask = self::fixed_mask(&self.values.dirichlet, fixed);
+                fixed_mask = self::fixed_mask(&self.values.dirichlet, fixed)?;
                 self.pcg(&amg, &mut state.amg, c, x, rtol)?
             }
             Err(e) => return Err(e),

@@ -10,7 +10,7 @@ use super::symbolic::check_numeric_memory;
 use super::{DiscreteSystem, SolveState};
 use crate::linalg::{CholeskyWork, SpdPattern};
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{try_copy, try_filled};
+use crate::mesh::budget::{try_copy, try_filled, try_vec};
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -184,7 +184,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             state.kept = None;
             None
         } else {
-            Some(self.next_hierarchy(state, fixed, false))
+            Some(self.next_hierarchy(state, fixed, false)?)
         };
         let (values, mut rhs) = self.assemble_condensed(state, fixed)?;
         let t1 = Instant::now();
@@ -277,23 +277,27 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// its numeric phase checked against the caller's budget
     /// ([`SystemOptions::budget`](super::SystemOptions::budget)) as for a direct system.
     fn fallback_pattern<'s>(&self, state: &'s mut SolveState) -> crate::Result<&'s SpdPattern> {
-        let built = state.direct_fallback.get_or_insert_with(|| {
+        if state.direct_fallback.is_none() {
             let (col_ptr, row_idx) = self.condensed_pattern();
-            let p = SpdPattern::with_ordering(
-                self.n_skel,
-                col_ptr.to_vec(),
-                row_idx.to_vec(),
-                self.sym.options.ordering,
-            )
-            .map_err(|e| e.to_string())?;
-            let budget = self.sym.options.budget;
-            match check_numeric_memory(&p, &self.sym.maps, self.n, budget) {
-                Ok(()) => Ok(p),
-                Err(crate::Error::Linear(m)) => Err(m),
-                Err(e) => Err(e.to_string()),
-            }
-        });
-        built.as_ref().map_err(|e| crate::Error::Linear(e.clone()))
+            let what = "the pattern copy of the direct solver";
+            let (col_ptr, row_idx) = (try_copy(col_ptr, what)?, try_copy(row_idx, what)?);
+            let built =
+                SpdPattern::with_ordering(self.n_skel, col_ptr, row_idx, self.sym.options.ordering)
+                    .map_err(|e| e.to_string())
+                    .and_then(|p| {
+                        let budget = self.sym.options.budget;
+                        match check_numeric_memory(&p, &self.sym.maps, self.n, budget) {
+                            Ok(()) => Ok(p),
+                            Err(crate::Error::Linear(m)) => Err(m),
+                            Err(e) => Err(e.to_string()),
+                        }
+                    });
+            state.direct_fallback = Some(built);
+        }
+        match &state.direct_fallback {
+            Some(built) => built.as_ref().map_err(|e| crate::Error::Linear(e.clone())),
+            None => Err(crate::Error::Internal("no direct fallback".into())),
+        }
     }
 
     /// Fills the interior unknowns of `u` from its skeleton values, cell by cell
@@ -306,13 +310,11 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let nc = self.sym.scheme().mesh().n_cells();
         if self.sym.single_interior {
             // one interior unknown per cell, computed in parallel from the skeleton values
-            let interior: Vec<(usize, f64)> = (0..nc)
-                .into_par_iter()
-                .map(|k| {
-                    let cell = self.local(k);
-                    (cell.dofs[0] as usize, interior_value(&cell, fx, u))
-                })
-                .collect();
+            let mut interior: Vec<(usize, f64)> = try_vec(nc, "the interior values")?;
+            interior.par_extend((0..nc).into_par_iter().map(|k| {
+                let cell = self.local(k);
+                (cell.dofs[0] as usize, interior_value(&cell, fx, u))
+            }));
             for (dof, v) in interior {
                 u[dof] = v;
             }

@@ -20,7 +20,7 @@ use super::linear::{LinearSolver, auto_iterative_min};
 use super::offsets::Offsets;
 use crate::linalg::SpdPattern;
 use crate::mesh::MemoryBudget;
-use crate::mesh::budget::{try_filled, try_vec};
+use crate::mesh::budget::{try_collect, try_copy, try_filled, try_grow, try_vec};
 use crate::mesh::complex::CellComplex;
 use crate::mesh::{PolyMesh, SolveMesh};
 use crate::scheme::GradientDiscretisation;
@@ -58,11 +58,13 @@ impl DofMap {
         let chunks: crate::Result<Vec<Chunk>> = cell_chunks(nc)
             .into_par_iter()
             .map(|(c0, c1)| {
-                let (mut len, mut all, mut ni) = (Vec::new(), Vec::new(), Vec::new());
-                let mut ld = Vec::new();
+                let mut len = try_vec(c1 - c0, "the unknown counts of the cells")?;
+                let mut ni = try_vec(c1 - c0, "the interior counts of the cells")?;
+                let (mut all, mut ld) = (Vec::new(), Vec::new());
                 for k in c0..c1 {
                     scheme.local_dofs(k, &mut ld);
                     len.push(ld.len());
+                    try_grow(&mut all, ld.len(), "the unknowns of the cells")?;
                     // below 2^32: checked above
                     all.extend(ld.iter().map(|&d| d as u32));
                     let n = scheme.n_local_interior(k);
@@ -156,7 +158,10 @@ impl<T> Ragged<T> {
             )));
         }
         Ok(Ragged {
-            ptr: ptr.into_iter().map(|p| p as u32).collect(),
+            ptr: try_collect(
+                ptr.into_iter().map(|p| p as u32),
+                "the offsets of a gather map",
+            )?,
             items,
         })
     }
@@ -248,8 +253,8 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
                     let t = Instant::now();
                     SpdPattern::with_ordering(
                         n_skel,
-                        col_ptr.clone(),
-                        row_idx.clone(),
+                        try_copy(&col_ptr, "the column offsets of the condensed matrix")?,
+                        try_copy(&row_idx, "the pattern of the condensed matrix")?,
                         options.ordering,
                     )
                     .map(|p| (p, t.elapsed().as_secs_f64()))
@@ -356,15 +361,19 @@ fn condensed_pattern(
     n_skel: usize,
     inc: &Ragged<u32>,
 ) -> crate::Result<(Vec<usize>, Vec<usize>)> {
-    let columns: Vec<(Vec<usize>, Vec<usize>)> = chunks(n_skel, 1 << 14)
+    type Columns = (Vec<usize>, Vec<usize>);
+    let columns: crate::Result<Vec<Columns>> = chunks(n_skel, 1 << 14)
         .into_par_iter()
         .map(|(c0, c1)| {
-            let (mut counts, mut rows) = (Vec::with_capacity(c1 - c0), Vec::new());
+            let what = "the pattern of the condensed matrix";
+            let (mut counts, mut rows) = (try_vec(c1 - c0, what)?, Vec::new());
             for c in c0..c1 {
                 let start = rows.len();
+                try_grow(&mut rows, 1, what)?;
                 rows.push(c);
                 for &k in inc.list(c) {
                     let k = k as usize;
+                    try_grow(&mut rows, dm.skeleton(k).len(), what)?;
                     rows.extend(
                         dm.skeleton(k)
                             .iter()
@@ -383,9 +392,10 @@ fn condensed_pattern(
                 rows.truncate(w);
                 counts.push(w - start);
             }
-            (counts, rows)
+            Ok((counts, rows))
         })
         .collect();
+    let columns = columns?;
     let mut col_ptr = try_vec(n_skel + 1, "the column offsets of the condensed matrix")?;
     col_ptr.push(0);
     let nnz = columns.iter().map(|c| c.1.len()).sum();

@@ -46,13 +46,13 @@
 //! rectangles: 1/2; on triangles nothing is eliminated and it would be larger), and only for
 //! solves that fix no eliminated face (otherwise the skeleton system is solved).
 
-use super::gather::{CHUNK, FixedValues, chunks, local_index, split_by_ranges};
+use super::gather::{CHUNK, FixedValues, chunks, local_index, par_try_fill, split_by_ranges};
 use super::iterative::hierarchy;
 use super::solve::check_finite;
 use super::{DiscreteSystem, SolveState};
 use crate::linalg::CsrMatrix;
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{try_copy, try_filled, try_vec};
+use crate::mesh::budget::{try_collect, try_copy, try_filled, try_grow, try_vec};
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -146,7 +146,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         rtol: f64,
         t0: Instant,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
-        let reuse = self.next_hierarchy(state, fixed, true);
+        let reuse = self.next_hierarchy(state, fixed, true)?;
         let fx = self.fixed_values(fixed);
         let (a, rhs) = self.fixed_cell_system(cs, &fx)?;
         let t1 = Instant::now();
@@ -231,26 +231,22 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let nc = dm.n_cells();
         let dirichlet = &self.values.dirichlet;
         // the free skeleton unknowns coupled with another skeleton unknown in some cell
-        let coupled_list: Vec<u32> = (0..nc)
+        let coupled_chunks: crate::Result<Vec<Vec<u32>>> = chunks(nc, CHUNK)
             .into_par_iter()
-            .with_min_len(4096)
-            .flat_map_iter(|k| {
-                let cell = self.local(k);
-                let (m, dofs) = (cell.matrix, cell.dofs);
-                let free = |a: usize| dirichlet[dofs[a] as usize].is_none();
+            .map(|(k0, k1)| {
                 let mut out = Vec::new();
-                for a in (1..dofs.len()).filter(|&a| free(a)) {
-                    let lone = m.at(a, a) > 0.0
-                        && (1..dofs.len()).filter(|&b| b != a).all(|b| {
-                            m.at(a, b).abs() <= TWO_POINT_TOL * (m.at(a, a) * m.at(b, b)).sqrt()
-                        });
-                    if !lone {
-                        out.push(dofs[a]);
-                    }
+                for k in k0..k1 {
+                    self.coupled_faces(k, &mut out)?;
                 }
-                out
+                Ok(out)
             })
             .collect();
+        let coupled_chunks = coupled_chunks?;
+        let n_coupled = coupled_chunks.iter().map(Vec::len).sum();
+        let mut coupled_list = try_vec(n_coupled, "the coupled skeleton unknowns")?;
+        for c in coupled_chunks {
+            coupled_list.extend_from_slice(&c);
+        }
         let mut kept_row = try_filled(self.n_skel, NO_ROW, "the rows of the cell system")?;
         let mut eliminated = try_filled(self.n_skel, false, "the eliminated skeleton unknowns")?;
         for s in 0..self.n_skel {
@@ -259,7 +255,11 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         for &s in &coupled_list {
             eliminated[s as usize] = false;
         }
-        let mut dofs: Vec<u32> = (0..nc).map(|k| dm.cell(k).0[0]).collect();
+        let kept = (0..self.n_skel)
+            .filter(|&s| dirichlet[s].is_none() && !eliminated[s])
+            .count();
+        let mut dofs = try_vec(nc + kept, "the unknowns of the cell system")?;
+        dofs.extend((0..nc).map(|k| dm.cell(k).0[0]));
         for s in 0..self.n_skel {
             if dirichlet[s].is_none() && !eliminated[s] {
                 kept_row[s] = dofs.len() as u32;
@@ -273,25 +273,42 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         Ok((4 * dofs.len() <= 3 * free_skel).then_some((dofs, eliminated, kept_row)))
     }
 
+    /// Appends to `out` the free skeleton unknowns of cell `k` coupled with another skeleton
+    /// unknown of the cell: (M_K)_σσ ≤ 0, or |(M_K)_σσ'| above [`TWO_POINT_TOL`] times
+    /// √((M_K)_σσ (M_K)_σ'σ') for some other σ'.
+    fn coupled_faces(&self, k: usize, out: &mut Vec<u32>) -> crate::Result<()> {
+        let dirichlet = &self.values.dirichlet;
+        let cell = self.local(k);
+        let (m, dofs) = (cell.matrix, cell.dofs);
+        try_grow(out, dofs.len(), "the coupled skeleton unknowns")?;
+        let free = |a: usize| dirichlet[dofs[a] as usize].is_none();
+        for a in (1..dofs.len()).filter(|&a| free(a)) {
+            let lone = m.at(a, a) > 0.0
+                && (1..dofs.len())
+                    .filter(|&b| b != a)
+                    .all(|b| m.at(a, b).abs() <= TWO_POINT_TOL * (m.at(a, a) * m.at(b, b)).sqrt());
+            if !lone {
+                out.push(dofs[a]);
+            }
+        }
+        Ok(())
+    }
+
     /// d_σ = Σ_{K ∋ σ} (M_K)_σσ of the eliminated skeleton unknowns (0 on the others).
     fn eliminated_diagonals(&self, eliminated: &[bool]) -> crate::Result<Vec<f64>> {
         let inc = &self.sym.maps.inc;
-        (0..self.n_skel)
-            .into_par_iter()
-            .with_min_len(4096)
-            .map(|s| {
-                if !eliminated[s] {
-                    return Ok(0.0);
-                }
-                let mut d = 0.0;
-                for &k in inc.list(s) {
-                    let cell = self.local(k as usize);
-                    let a = local_index(cell.dofs, s)?;
-                    d += cell.matrix.at(a, a);
-                }
-                Ok(d)
-            })
-            .collect()
+        par_try_fill(self.n_skel, "the eliminated diagonals", |s| {
+            if !eliminated[s] {
+                return Ok(0.0);
+            }
+            let mut d = 0.0;
+            for &k in inc.list(s) {
+                let cell = self.local(k as usize);
+                let a = local_index(cell.dofs, s)?;
+                d += cell.matrix.at(a, a);
+            }
+            Ok(d)
+        })
     }
 
     /// The matrix A (rows sorted by column, repeated couplings summed in order) and the
@@ -321,6 +338,14 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                         }
                         same
                     });
+                    try_grow(&mut out.0, 1, "the row lengths of the cell system")?;
+                    try_grow(
+                        &mut out.1,
+                        entries.len(),
+                        "the column indices of the cell system",
+                    )?;
+                    try_grow(&mut out.2, entries.len(), "the entries of the cell system")?;
+                    try_grow(&mut out.3, 1, "the right-hand side of the cell system")?;
                     out.0.push(entries.len());
                     out.1.extend(entries.iter().map(|e| e.0));
                     out.2.extend(entries.iter().map(|e| e.1));
@@ -419,24 +444,25 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         fixed: &FixedValues,
     ) -> crate::Result<(CsrMatrix, Vec<f64>)> {
         let nc = cs.n();
-        let value: Vec<Option<f64>> = (0..nc)
-            .into_par_iter()
-            .with_min_len(4096)
-            .map(|i| fixed.get(cs.dof(i)))
-            .collect();
+        let mut value = try_vec(nc, "the fixed values of the cell system")?;
+        value.par_extend(
+            (0..nc)
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|i| fixed.get(cs.dof(i))),
+        );
         let (rp, ci, va) = (cs.a.row_ptr(), cs.a.col_idx(), cs.a.values());
         // the entries each row keeps (a fixed row: its diagonal)
-        let lens: Vec<usize> = (0..nc)
-            .into_par_iter()
-            .with_min_len(4096)
-            .map(|k| match value[k] {
+        let mut lens = try_vec(nc, "the row lengths of the cell system")?;
+        lens.par_extend((0..nc).into_par_iter().with_min_len(4096).map(|k| {
+            match value[k] {
                 Some(_) => 1,
                 None => ci[rp[k]..rp[k + 1]]
                     .iter()
                     .filter(|&&l| value[l as usize].is_none())
                     .count(),
-            })
-            .collect();
+            }
+        }));
         let mut row_ptr = try_vec(nc + 1, "the row offsets of the cell system")?;
         row_ptr.push(0);
         for len in lens {
@@ -450,12 +476,10 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let c_slices = split_by_ranges(&mut cols, &ranges, |k| row_ptr[k]);
         let v_slices = split_by_ranges(&mut vals, &ranges, |k| row_ptr[k]);
         let r_slices = split_by_ranges(&mut rhs, &ranges, |k| k);
-        let tasks: Vec<_> = ranges
-            .into_iter()
-            .zip(c_slices)
-            .zip(v_slices)
-            .zip(r_slices)
-            .collect();
+        let tasks = try_collect(
+            ranges.into_iter().zip(c_slices).zip(v_slices).zip(r_slices),
+            "the tasks of the cell system",
+        )?;
         tasks
             .into_par_iter()
             .for_each(|((((k0, k1), cols), vals), rhs)| {
@@ -498,26 +522,21 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             u[dof] = fixed.get(dof).unwrap_or(xi);
         }
         let inc = &self.sym.maps.inc;
-        let skel: crate::Result<Vec<f64>> = (0..self.n_skel)
-            .into_par_iter()
-            .with_min_len(4096)
-            .map(|s| {
-                if let Some(v) = self.values.dirichlet[s] {
-                    return Ok(v);
-                }
-                if cs.kept_row[s] != NO_ROW {
-                    return Ok(u[s]);
-                }
-                let mut acc = self.values.load[s];
-                for &k in inc.list(s) {
-                    let cell = self.local(k as usize);
-                    let a = local_index(cell.dofs, s)?;
-                    acc -= cell.matrix.at(a, 0) * u[cell.dofs[0] as usize];
-                }
-                Ok(acc / cs.d[s])
-            })
-            .collect();
-        let skel = skel?;
+        let skel = par_try_fill(self.n_skel, "the skeleton values", |s| {
+            if let Some(v) = self.values.dirichlet[s] {
+                return Ok(v);
+            }
+            if cs.kept_row[s] != NO_ROW {
+                return Ok(u[s]);
+            }
+            let mut acc = self.values.load[s];
+            for &k in inc.list(s) {
+                let cell = self.local(k as usize);
+                let a = local_index(cell.dofs, s)?;
+                acc -= cell.matrix.at(a, 0) * u[cell.dofs[0] as usize];
+            }
+            Ok(acc / cs.d[s])
+        })?;
         u[..self.n_skel].copy_from_slice(&skel);
         check_finite(u)
     }

@@ -7,7 +7,7 @@ use super::gather::cell_chunks;
 use super::offsets::Offsets;
 use super::symbolic::DofMap;
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{try_filled, try_vec};
+use crate::mesh::budget::{AllocFailure, try_filled, try_grow, try_vec};
 use crate::problem::{BoundaryKind, Problem, check_finite, check_tensor};
 use crate::scheme::{GradientDiscretisation, PointDof};
 use nalgebra::{DMatrix, DVector};
@@ -41,6 +41,8 @@ struct LocalChunk {
     loads: Vec<f64>,
     bad_tensor: Option<crate::Error>,
     bad_source: Option<String>,
+    /// The chunk's buffers could not grow: it stopped at that cell.
+    no_memory: Option<AllocFailure>,
 }
 
 impl<const D: usize> ProblemValues<D> {
@@ -115,15 +117,15 @@ impl<const D: usize> ProblemValues<D> {
             }
         }
         // Γ3 carries natural (zero-flux) data where inactive: nothing to add to the load.
-        self.signorini = (0..n)
-            .filter_map(|d| {
-                sig_point[d].map(|point| PointDof {
-                    dof: d,
-                    point,
-                    measure: sig_meas[d],
-                })
+        let n_sig = sig_point.iter().filter(|p| p.is_some()).count();
+        self.signorini = try_vec(n_sig, "the Signorini unknowns")?;
+        self.signorini.extend((0..n).filter_map(|d| {
+            sig_point[d].map(|point| PointDof {
+                dof: d,
+                point,
+                measure: sig_meas[d],
             })
-            .collect();
+        }));
         Ok(())
     }
 }
@@ -163,6 +165,13 @@ fn local_data<M: SolveMesh<D> + ?Sized, const D: usize>(
                 // symmetric: the lower triangle only
                 let (n, start) = (m.nrows(), out.mats.len());
                 let len = super::condense::packed_len(n);
+                let room = try_grow(&mut out.mats, len, "the local matrices")
+                    .and_then(|()| try_grow(&mut out.loads, b.len(), "the local loads"))
+                    .and_then(|()| try_grow(&mut out.mat_len, 1, "the local matrices"));
+                if let Err(f) = room {
+                    out.no_memory = Some(f);
+                    break;
+                }
                 out.mats.resize(start + len, 0.0);
                 super::condense::pack_lower(n, m.as_slice(), &mut out.mats[start..]);
                 out.mat_len.push(len);
@@ -172,6 +181,9 @@ fn local_data<M: SolveMesh<D> + ?Sized, const D: usize>(
         })
         .collect();
     let mut chunks = chunks;
+    if let Some(f) = chunks.iter_mut().find_map(|c| c.no_memory.take()) {
+        return Err(f.into());
+    }
     if let Some(e) = chunks.iter_mut().find_map(|c| c.bad_tensor.take()) {
         return Err(e);
     }

@@ -217,6 +217,17 @@ pub fn try_copy<T: Clone>(s: &[T], what: &str) -> Result<Vec<T>, AllocFailure> {
     Ok(v)
 }
 
+/// The items of `iter` in a vector (the fallible `collect` of an iterator whose length is
+/// known), or [`AllocFailure`] as [`try_vec`].
+pub fn try_collect<T>(
+    iter: impl ExactSizeIterator<Item = T>,
+    what: &str,
+) -> Result<Vec<T>, AllocFailure> {
+    let mut v = try_vec(iter.len(), what)?;
+    v.extend(iter);
+    Ok(v)
+}
+
 /// The memory the kernel reports as available (`MemAvailable` of `/proc/meminfo`), in bytes;
 /// `None` where that file does not exist or cannot be read.
 pub fn available_memory() -> Option<u64> {
@@ -459,6 +470,11 @@ mod tests {
         let v = try_filled(5, 1.5f64, "five values").unwrap();
         assert_eq!(v, vec![1.5; 5]);
         assert_eq!(try_vec::<u32>(7, "seven").unwrap().capacity(), 7);
+        assert_eq!(
+            try_collect((0..4).map(|i| i * 2), "four").unwrap(),
+            [0, 2, 4, 6]
+        );
+        assert!(try_collect(0..usize::MAX, "too many").is_err());
         let mut w = vec![1u8, 2];
         try_resize(&mut w, 4, 9, "four").unwrap();
         assert_eq!(w, [1, 2, 9, 9]);

@@ -13,6 +13,7 @@
 
 use super::warm_start::{FIRST_LEVEL_UNKNOWNS_PER_CELL, FIRST_LEVEL_UNKNOWNS_PER_CELL_3D};
 use crate::error::MeshError;
+use crate::mesh::budget::try_collect;
 use crate::mesh::complex::{Vector, VertexAverage};
 use crate::mesh::{MemoryBudget, PolyMesh, SolveMesh};
 use crate::mesh3d::{Point3, PolyMesh3, agglomerate::NO_FACE};
@@ -101,8 +102,11 @@ impl CoarseMesh<3> for PolyMesh3 {
             }
         };
         Ok(Level {
-            cell_of: a.cell_of.iter().map(|&c| c as usize).collect(),
-            boundary_face_of: a.boundary_face_of.iter().map(wide).collect(),
+            cell_of: try_collect(a.cell_of.iter().map(|&c| c as usize), "the coarse cells")?,
+            boundary_face_of: try_collect(
+                a.boundary_face_of.iter().map(wide),
+                "the coarse boundary faces",
+            )?,
             mesh: a.mesh,
         })
     }

@@ -4,7 +4,7 @@
 
 use crate::assembly::DiscreteSystem;
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{try_filled, try_vec};
+use crate::mesh::budget::{try_copy, try_filled, try_vec};
 use crate::problem::{ConstraintKind, Problem, check_finite};
 use crate::scheme::PointDof;
 use crate::vi::ConstrainedDof;
@@ -36,7 +36,7 @@ pub fn build<M: SolveMesh<D> + ?Sized, const D: usize>(
                     "a Signorini barrier is given but no boundary face is of Signorini type".into(),
                 ));
             }
-            system.signorini_dofs().to_vec()
+            try_copy(system.signorini_dofs(), "the Signorini unknowns")?
         }
     };
     // barrier versus Dirichlet data: the convex set must not be empty. Obstacle: every
