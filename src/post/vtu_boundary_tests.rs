@@ -141,10 +141,11 @@ fn every_face_is_one_polygon_and_the_boundary_list_gives_the_boundary_file() {
     );
     assert_eq!(array(&text, "value"), per_face);
     let tags = array(&text, "boundary_tag");
-    for f in 0..mesh.n_faces() {
-        assert_eq!(tags[f], f64::from(mesh.face_tag(f)), "face {f}");
+    assert_eq!(tags.len(), mesh.n_faces());
+    for (f, &t) in tags.iter().enumerate() {
+        assert_eq!(t, f64::from(mesh.face_tag(f)), "face {f}");
         if !mesh.is_boundary_face(f) {
-            assert_eq!(tags[f], 0.0, "interior face {f}");
+            assert_eq!(t, 0.0, "interior face {f}");
         }
     }
     assert_eq!(tags.iter().filter(|&&t| t == 5.0).count(), 16);
