@@ -91,6 +91,10 @@ pub struct SolveArgs {
     /// fields are listed in README.md, "Outputs").
     #[arg(long)]
     pub(crate) vtu: Option<PathBuf>,
+    /// 3D only (refused on a 2D mesh): also write NAME_faces.vtu beside --vtu NAME.vtu, every
+    /// face of the mesh (interior and boundary) with the arrays of NAME_boundary.vtu.
+    #[arg(long, requires = "vtu")]
+    pub(crate) vtu_faces: bool,
     /// Write a JSON summary to this file.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -381,6 +385,9 @@ fn run2(
     mesh_desc: &str,
     mesh_seconds: f64,
 ) -> Result<()> {
+    if a.vtu_faces {
+        bail!("--vtu-faces writes the faces of a 3D mesh; the mesh {mesh_desc} is 2D");
+    }
     pf.check_against_mesh(mesh)?;
     let problem = pf.problem();
     let kind = a.scheme.or(pf.scheme).unwrap_or(SchemeKind::Hmm);

@@ -22,11 +22,16 @@
 //! ## The boundary VTU file
 //! Beside it, `NAME_boundary.vtu` for `--vtu NAME.vtu` ([`boundary_path`]; refused, as every
 //! output, if it would overwrite an input or another output): the boundary faces as polygons
-//! ([`write_boundary_vtu`]) with cell data `face` (the face's index in the mesh),
+//! ([`write_boundary_vtu`](gradvi::post::vtu_boundary::write_boundary_vtu)) with cell data `face` (the face's index in the mesh),
 //! `boundary_tag`, `u_face` (the face unknown u_σ, HMM and CR), and with a barrier on face
 //! unknowns (HMM Signorini, CR) `active` (1 on the faces of the contact zone) and `multiplier`
 //! (λ_σ); point data `u_vertex`, and with a barrier on vertex unknowns (P1) `active` and
 //! `multiplier` per vertex.
+//!
+//! With `--vtu-faces` (3D only; refused on a 2D mesh), also `NAME_faces.vtu`: every face of
+//! the mesh, interior and boundary, as polygons ([`write_faces_vtu`]) with the same arrays
+//! (`boundary_tag` 0 on interior faces; `active` and `multiplier` 0 off the constrained faces,
+//! as in the boundary file), so that the interior face unknowns u_σ show in ParaView.
 
 use super::mesh::{AnyMesh, read_any};
 use super::output::atomic;
@@ -36,7 +41,7 @@ use gradvi::mesh::MemoryBudget;
 use gradvi::mesh3d::io::write_vtu3;
 use gradvi::mesh3d::{PolyMesh3, WarpedFaces};
 use gradvi::post::fields::EntityFields;
-use gradvi::post::vtu_boundary::write_boundary_vtu;
+use gradvi::post::vtu_boundary::write_faces_vtu;
 use gradvi::problem::Problem;
 use gradvi::problem::file::{MeshSpec, ProblemFile};
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with3};
@@ -73,9 +78,16 @@ pub fn run3(
     mesh_desc: &str,
     mesh_seconds: f64,
 ) -> Result<()> {
-    let boundary_vtu = a.vtu.as_deref().map(boundary_path);
+    let boundary_vtu = a.vtu.as_deref().map(|p| sibling_path(p, "_boundary"));
+    let faces_vtu = a
+        .vtu
+        .as_deref()
+        .filter(|_| a.vtu_faces)
+        .map(|p| sibling_path(p, "_faces"));
     if let Some(b) = &boundary_vtu {
-        super::solve::check_paths(a, pf, &[("boundary VTU", b)])?;
+        let mut extra = vec![("boundary VTU", b.as_path())];
+        extra.extend(faces_vtu.as_deref().map(|f| ("faces VTU", f)));
+        super::solve::check_paths(a, pf, &extra)?;
     }
     pf.check_against_mesh3(mesh)?;
     let problem = pf.problem_in::<3>()?;
@@ -107,8 +119,16 @@ pub fn run3(
     if let (Some(path), Some(b)) = (&a.vtu, &boundary_vtu) {
         atomic(path, |tmp| write_solution_vtu3(tmp, scheme.as_ref(), &sol))?;
         println!("wrote           {}", path.display());
-        atomic(b, |tmp| write_boundary_vtu3(tmp, scheme.as_ref(), &sol))?;
+        let boundary = scheme.mesh().boundary_faces();
+        atomic(b, |tmp| {
+            write_faces_vtu3(tmp, scheme.as_ref(), &sol, boundary)
+        })?;
         println!("wrote           {}", b.display());
+    }
+    if let Some(f) = &faces_vtu {
+        let all: Vec<u32> = (0..mesh.n_faces() as u32).collect();
+        atomic(f, |tmp| write_faces_vtu3(tmp, scheme.as_ref(), &sol, &all))?;
+        println!("wrote           {}", f.display());
     }
     write_json(a, &case, &sol, errors.as_ref())
 }
@@ -163,12 +183,17 @@ fn write_solution_vtu3(path: &Path, scheme: &Scheme3, sol: &Solution<PolyMesh3, 
 
 /// The boundary VTU file beside the VTU file `vtu`: `NAME_boundary.EXT` for `NAME.EXT`.
 pub fn boundary_path(vtu: &Path) -> PathBuf {
+    sibling_path(vtu, "_boundary")
+}
+
+/// The file beside the VTU file `vtu`: `NAME{suffix}.EXT` for `NAME.EXT`.
+fn sibling_path(vtu: &Path, suffix: &str) -> PathBuf {
     let stem = vtu
         .file_stem()
         .map(|s| s.to_os_string())
         .unwrap_or_default();
     let mut name = stem;
-    name.push("_boundary");
+    name.push(suffix);
     if let Some(ext) = vtu.extension() {
         name.push(".");
         name.push(ext);
@@ -176,9 +201,15 @@ pub fn boundary_path(vtu: &Path) -> PathBuf {
     vtu.with_file_name(name)
 }
 
-/// Writes the boundary faces with u_σ, the active set and the multiplier on the faces (and
-/// the vertices) to a VTU file (the fields are listed in the module docs).
-fn write_boundary_vtu3(path: &Path, scheme: &Scheme3, sol: &Solution<PolyMesh3, 3>) -> Result<()> {
+/// Writes the faces `faces` (the boundary faces, or all) with u_σ, the active set and the
+/// multiplier on the faces (and the vertices) to a VTU file (the fields are listed in the
+/// module docs).
+fn write_faces_vtu3(
+    path: &Path,
+    scheme: &Scheme3,
+    sol: &Solution<PolyMesh3, 3>,
+    faces: &[u32],
+) -> Result<()> {
     let u = sol.u();
     let mut face_data: Vec<(&str, Vec<f64>)> = Vec::new();
     let mut point_data: Vec<(&str, Vec<f64>)> = vec![("u_vertex", scheme.vertex_values(u))];
@@ -197,7 +228,7 @@ fn write_boundary_vtu3(path: &Path, scheme: &Scheme3, sol: &Solution<PolyMesh3, 
     }
     let pd: Vec<(&str, &[f64])> = point_data.iter().map(|(n, v)| (*n, v.as_slice())).collect();
     let fd: Vec<(&str, &[f64])> = face_data.iter().map(|(n, v)| (*n, v.as_slice())).collect();
-    write_boundary_vtu(path, scheme.mesh(), &pd, &fd)?;
+    write_faces_vtu(path, scheme.mesh(), faces, &pd, &fd)?;
     Ok(())
 }
 

@@ -475,3 +475,69 @@ fn dimension_mismatches_are_errors_at_their_place_in_the_file() {
     assert!(err.contains("--generate cubes is a 3D family"), "{err}");
     std::fs::remove_file(&toml).ok();
 }
+
+#[test]
+fn vtu_faces_writes_every_face_with_the_boundary_files_values() {
+    let (toml, vtu) = (tmp("faces.toml"), tmp("faces.vtu"));
+    std::fs::write(&toml, SIGNORINI_CONTACT).unwrap();
+    let args = [
+        "solve",
+        toml.to_str().unwrap(),
+        "--generate",
+        "cubes",
+        "--level",
+        "1",
+        "--vtu",
+        vtu.to_str().unwrap(),
+        "--vtu-faces",
+    ];
+    let (code, out, err) = gradvi(&args);
+    assert_eq!(code, Some(0), "{err}");
+    let f = tmp("faces_faces.vtu");
+    assert!(
+        out.contains(&format!("wrote           {}", f.display())),
+        "{out}"
+    );
+    let text = std::fs::read_to_string(&f).unwrap();
+    // 3 directions × 5 planes × 4 × 4 squares: every face of the mesh
+    assert!(text.contains("NumberOfCells=\"240\""), "all 240 faces");
+    assert_eq!(data_array(&text, "types"), vec![7.0; 240]);
+    let faces = data_array(&text, "face");
+    assert_eq!(faces, (0..240).map(f64::from).collect::<Vec<_>>());
+    // HMM's u_σ on the boundary faces is the boundary file's
+    let b = std::fs::read_to_string(boundary_vtu(&vtu)).unwrap();
+    let (u_all, u_b) = (data_array(&text, "u_face"), data_array(&b, "u_face"));
+    for (i, &fb) in data_array(&b, "face").iter().enumerate() {
+        assert_eq!(u_all[fb as usize], u_b[i], "face {fb}");
+    }
+    assert_eq!(
+        data_array(&text, "active")
+            .iter()
+            .filter(|&&a| a == 1.0)
+            .count(),
+        8
+    );
+    for p in [&vtu, &toml, &f, &boundary_vtu(&vtu)] {
+        std::fs::remove_file(p).ok();
+    }
+    // 2D: refused with a clear error
+    let v2 = tmp("faces2d.vtu");
+    let (code, _, err) = gradvi(&[
+        "solve",
+        "--problem",
+        "test1",
+        "--generate",
+        "cartesian",
+        "--level",
+        "1",
+        "--vtu",
+        v2.to_str().unwrap(),
+        "--vtu-faces",
+    ]);
+    assert_ne!(code, Some(0));
+    assert!(
+        err.contains("--vtu-faces writes the faces of a 3D mesh"),
+        "{err}"
+    );
+    assert!(!v2.exists());
+}

@@ -1,18 +1,21 @@
-//! The boundary surface of a 3D mesh as a VTK XML unstructured grid (`.vtu`, ASCII), with data
-//! per boundary face: what ParaView shows of a solution on ∂Ω (the face values u_σ, the
-//! Signorini contact zone and its multiplier, the boundary parts), which the volume file of
-//! [`crate::mesh3d::io::write_vtu3`] can only show on the cells.
+//! Faces of a 3D mesh as a VTK XML unstructured grid (`.vtu`, ASCII), with data per face: what
+//! ParaView shows of a solution on ∂Ω (the face values u_σ, the Signorini contact zone and its
+//! multiplier, the boundary parts), or on every face of the mesh (the interior face unknowns
+//! u_σ of HMM and CR), which the volume file of [`crate::mesh3d::io::write_vtu3`] can only show
+//! on the cells.
 //!
-//! Each boundary face σ of the [`PolyMesh3`] is one `VTK_POLYGON` (7) cell, in the order of
-//! [`PolyMesh3::boundary_faces`], with its vertex loop counter-clockwise seen from outside Ω
-//! (the mesh's own loop: its normal is the outward normal n_σ). The points are the vertices of
-//! the boundary faces, in increasing order of their index in the mesh. The file always holds
-//! the cell data `face` (Int64: the index σ of each face in the mesh, to join the file with the
-//! mesh's face arrays) and `boundary_tag` (Int32: the face's tag, the gmsh physical surface, 0
-//! when untagged), then the caller's arrays: point data given per mesh vertex and face data given
-//! per mesh face (one value per face, interior faces included), of which the writer keeps the
-//! values on the boundary. Floats are written as by the other VTU writers (17 significant
-//! digits, exact on reading back).
+//! [`write_faces_vtu`] writes a list of faces; [`write_boundary_vtu`] is that list taken as
+//! [`PolyMesh3::boundary_faces`]. Each listed face σ is one `VTK_POLYGON` (7) cell, in the
+//! order of the list, with the mesh's own vertex loop: counter-clockwise seen from outside
+//! `face_cells(σ)[0]`, so on the boundary counter-clockwise seen from outside Ω (its normal is
+//! the outward normal n_σ). The points are the vertices of the listed faces, in increasing
+//! order of their index in the mesh. The file always holds the cell data `face` (Int64: the
+//! index σ of each face in the mesh, to join the file with the mesh's face arrays) and
+//! `boundary_tag` (Int32: the face's tag, the gmsh physical surface; 0 for interior faces and
+//! untagged boundary faces), then the caller's arrays: point data given per mesh vertex and
+//! face data given per mesh face (one value per face, interior faces included), of which the
+//! writer keeps the values on the listed faces. Floats are written as by the other VTU writers
+//! (17 significant digits, exact on reading back).
 
 use crate::error::{Error, Result};
 use crate::mesh::io::vtu::{check_arrays, write_cell_array, write_data, write_f64};
@@ -24,7 +27,8 @@ use std::path::Path;
 const VTK_POLYGON: u8 = 7;
 
 /// Writes the boundary surface of `mesh` to `path` (see the module docs), with `point_data`
-/// (one value per mesh vertex) and `face_data` (one value per mesh face), all `Float64`.
+/// (one value per mesh vertex) and `face_data` (one value per mesh face), all `Float64`:
+/// [`write_faces_vtu`] of the boundary faces.
 ///
 /// [`Error::InvalidData`] if an array has the wrong length, a name is empty, reserved
 /// (`face`, `boundary_tag`) or given twice; [`Error::Io`] if the file cannot be written.
@@ -34,7 +38,34 @@ pub fn write_boundary_vtu(
     point_data: &[(&str, &[f64])],
     face_data: &[(&str, &[f64])],
 ) -> Result<()> {
+    write_faces_vtu(path, mesh, mesh.boundary_faces(), point_data, face_data)
+}
+
+/// Writes the faces `faces` of `mesh` (indices into the mesh's faces, in the order of the
+/// cells of the file) to `path` (see the module docs), with `point_data` (one value per mesh
+/// vertex) and `face_data` (one value per mesh face), all `Float64`.
+///
+/// [`Error::InvalidData`] if a face index is out of range, an array has the wrong length, a
+/// name is empty, reserved (`face`, `boundary_tag`) or given twice; [`Error::Io`] if the file
+/// cannot be written.
+pub fn write_faces_vtu(
+    path: impl AsRef<Path>,
+    mesh: &PolyMesh3,
+    faces: &[u32],
+    point_data: &[(&str, &[f64])],
+    face_data: &[(&str, &[f64])],
+) -> Result<()> {
     let path = path.as_ref();
+    if let Some((i, f)) = faces
+        .iter()
+        .enumerate()
+        .find(|(_, f)| **f as usize >= mesh.n_faces())
+    {
+        return Err(Error::InvalidData(format!(
+            "face {f} (entry {i} of the faces to write) is out of range: the mesh has {} faces",
+            mesh.n_faces()
+        )));
+    }
     check_arrays("point", point_data, mesh.n_vertices(), "vertices")?;
     check_arrays("face", face_data, mesh.n_faces(), "faces")?;
     if let Some((name, _)) = face_data
@@ -42,7 +73,7 @@ pub fn write_boundary_vtu(
         .find(|(n, _)| matches!(*n, "face" | "boundary_tag"))
     {
         return Err(Error::InvalidData(format!(
-            "the face-data name \"{name}\" is reserved: the boundary VTU file writes it itself"
+            "the face-data name \"{name}\" is reserved: the face VTU file writes it itself"
         )));
     }
     let io = |source| Error::Io {
@@ -51,15 +82,15 @@ pub fn write_boundary_vtu(
     };
     let file = std::fs::File::create(path).map_err(io)?;
     let mut w = std::io::BufWriter::new(file);
-    write_to(&mut w, mesh, point_data, face_data).map_err(io)?;
+    write_to(&mut w, mesh, faces, point_data, face_data).map_err(io)?;
     w.flush().map_err(io)
 }
 
-/// The vertices of the boundary faces in increasing order, and the point index of each mesh
-/// vertex (`u32::MAX` off the boundary).
-fn boundary_points(mesh: &PolyMesh3) -> (Vec<u32>, Vec<u32>) {
+/// The vertices of `faces` in increasing order, and the point index of each mesh vertex
+/// (`u32::MAX` off those faces).
+fn face_points(mesh: &PolyMesh3, faces: &[u32]) -> (Vec<u32>, Vec<u32>) {
     let mut on = vec![false; mesh.n_vertices()];
-    for &f in mesh.boundary_faces() {
+    for &f in faces {
         for &v in mesh.face_vertices(f as usize) {
             on[v as usize] = true;
         }
@@ -77,12 +108,12 @@ fn boundary_points(mesh: &PolyMesh3) -> (Vec<u32>, Vec<u32>) {
 fn write_to(
     w: &mut impl Write,
     mesh: &PolyMesh3,
+    faces: &[u32],
     point_data: &[(&str, &[f64])],
     face_data: &[(&str, &[f64])],
 ) -> std::io::Result<()> {
-    let faces = mesh.boundary_faces();
     let nf = faces.len();
-    let (used, index) = boundary_points(mesh);
+    let (used, index) = face_points(mesh, faces);
     writeln!(w, "<?xml version=\"1.0\"?>")?;
     writeln!(
         w,

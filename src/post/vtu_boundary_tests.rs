@@ -1,7 +1,7 @@
 //! Tests of the boundary-surface VTU writer: the file is parsed back (its counts, cell types,
 //! connectivity and data arrays) and compared with the mesh.
 
-use super::write_boundary_vtu;
+use super::{write_boundary_vtu, write_faces_vtu};
 use crate::mesh::MemoryBudget;
 use crate::mesh3d::PolyMesh3;
 use crate::mesh3d::generate::Family3;
@@ -113,4 +113,52 @@ fn wrong_lengths_and_reserved_names_are_refused() {
     let e = write_boundary_vtu(&path, &mesh, &[("p", &full)], &[]).unwrap_err();
     assert!(e.to_string().contains("vertices"), "{e}");
     assert!(!path.exists());
+}
+
+#[test]
+fn every_face_is_one_polygon_and_the_boundary_list_gives_the_boundary_file() {
+    let mesh = tagged_cubes();
+    let dir = std::env::temp_dir().join(format!("gradvi-vtu-faces-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let per_face: Vec<f64> = (0..mesh.n_faces()).map(|f| 0.5 * f as f64 - 3.0).collect();
+    let per_vertex: Vec<f64> = mesh.vertices().iter().map(|x| x[1] - x[2]).collect();
+    let (pd, fd) = (
+        [("p", per_vertex.as_slice())],
+        [("value", per_face.as_slice())],
+    );
+    let all: Vec<u32> = (0..mesh.n_faces() as u32).collect();
+    let path = dir.join("all.vtu");
+    write_faces_vtu(&path, &mesh, &all, &pd, &fd).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    // 3 directions × 5 planes × 4 × 4 squares
+    assert_eq!(mesh.n_faces(), 240);
+    assert_eq!(attribute(&text, "NumberOfCells"), 240);
+    assert_eq!(attribute(&text, "NumberOfPoints"), 125);
+    assert_eq!(array(&text, "types").len(), 240);
+    assert_eq!(
+        array(&text, "face"),
+        all.iter().map(|&f| f as f64).collect::<Vec<_>>()
+    );
+    assert_eq!(array(&text, "value"), per_face);
+    let tags = array(&text, "boundary_tag");
+    assert_eq!(tags.len(), mesh.n_faces());
+    for (f, &t) in tags.iter().enumerate() {
+        assert_eq!(t, f64::from(mesh.face_tag(f)), "face {f}");
+        if !mesh.is_boundary_face(f) {
+            assert_eq!(t, 0.0, "interior face {f}");
+        }
+    }
+    assert_eq!(tags.iter().filter(|&&t| t == 5.0).count(), 16);
+    let offsets = array(&text, "offsets");
+    assert_eq!(*offsets.last().unwrap(), 4.0 * 240.0);
+    // the boundary file is the faces file of the boundary faces, byte for byte
+    let (b1, b2) = (dir.join("b1.vtu"), dir.join("b2.vtu"));
+    write_boundary_vtu(&b1, &mesh, &pd, &fd).unwrap();
+    write_faces_vtu(&b2, &mesh, mesh.boundary_faces(), &pd, &fd).unwrap();
+    assert_eq!(std::fs::read(&b1).unwrap(), std::fs::read(&b2).unwrap());
+    // a face out of range is refused, naming it
+    let e = write_faces_vtu(dir.join("x.vtu"), &mesh, &[3, 240], &pd, &fd).unwrap_err();
+    assert!(e.to_string().contains("face 240 (entry 1"), "{e}");
+    assert!(!dir.join("x.vtu").exists());
+    std::fs::remove_dir_all(&dir).ok();
 }
