@@ -59,6 +59,7 @@ mod peers3d;
 mod peers3d_report;
 mod peers_cores;
 mod peers_report;
+mod peers_targets;
 mod report;
 pub use report::write_report;
 
