@@ -7,7 +7,8 @@ use super::ordering::{Ordering, nested_dissection};
 use crate::mesh::budget::{AllocFailure, try_resize};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{
-    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+    LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, Side};
@@ -231,6 +232,14 @@ impl SpdPattern {
         let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
         let kept = work.scratch.take();
         let mem = work.scratch.insert(scratch_for(kept, req)?);
+        // the supernodal updates run faer's dense product kernel, whose per-thread workspace
+        // is checked against the process's limits first (the simplicial one runs none)
+        if let SymbolicCholeskyRaw::Supernodal(_) = symbolic.raw() {
+            super::product_workspace::reserve(
+                par,
+                "an iterative linear solver (`--linear iterative`)",
+            )?;
+        }
         symbolic
             .factorize_numeric_llt(
                 l_values,
