@@ -79,7 +79,11 @@ fn a_direct_solve_under_a_sweep_of_address_space_limits_solves_or_is_refused() {
     ];
     let free = solve_limited(None, &args);
     let said = String::from_utf8_lossy(&free.stdout).to_string();
-    assert!(free.status.success(), "{}", String::from_utf8_lossy(&free.stderr));
+    assert!(
+        free.status.success(),
+        "{}",
+        String::from_utf8_lossy(&free.stderr)
+    );
     let expected = niter(&said).expect("no NITER").to_string();
     let mut solved = Vec::new();
     for mib in [128u64, 256, 384, 512, 768, 1024, 1536, 2048, 3072, 8192] {

@@ -7,8 +7,7 @@ use super::ordering::{Ordering, nested_dissection};
 use crate::mesh::budget::{AllocFailure, try_resize};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{
-    LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
-    factorize_symbolic_cholesky,
+    LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, Side};
@@ -98,8 +97,14 @@ fn symbolic_factorisation(
     pattern: &SymbolicSparseColMat<usize>,
     ordering: Ordering,
 ) -> crate::Result<SymbolicCholesky<usize>> {
-    let err = |e: faer::sparse::FaerError| {
-        crate::Error::Linear(format!("symbolic Cholesky failed: {e:?}"))
+    // faer's allocations failing are the typed out-of-memory error; their size is not known,
+    // so it gives the size of the pattern, a lower bound
+    let err = |e: faer::sparse::FaerError| match e {
+        faer::sparse::FaerError::OutOfMemory => crate::Error::from(AllocFailure {
+            what: "the symbolic Cholesky factorisation".into(),
+            bytes: 8 * (pattern.row_idx().len() + pattern.ncols() + 1) as u64,
+        }),
+        e => crate::Error::Linear(format!("symbolic Cholesky failed: {e:?}")),
     };
     match ordering {
         Ordering::Amd => factorize_symbolic_cholesky(

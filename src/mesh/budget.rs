@@ -350,7 +350,11 @@ pub fn dense_product_workspace() -> u64 {
     let pages = |bytes: u64| bytes.div_ceil(4096);
     let first = 2 * pages(l3);
     let elems = l3 / 8;
-    let nr = if cfg!(target_arch = "x86_64") && avx512() { 8 } else { 4 };
+    let nr = if cfg!(target_arch = "x86_64") && avx512() {
+        8
+    } else {
+        4
+    };
     let needed = pages(elems.next_multiple_of(16) * 8) + pages(elems.next_multiple_of(nr) * 8);
     let total = if needed > first {
         first + first + needed
@@ -454,7 +458,11 @@ fn cache_index(index: &std::path::Path) -> Option<Option<CacheIndex>> {
     };
     for entry in std::fs::read_dir(index).ok()? {
         let path = entry.ok()?.path();
-        let Some(name) = path.file_name().and_then(|n| n.to_str()).map(str::to_string) else {
+        let Some(name) = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .map(str::to_string)
+        else {
             continue;
         };
         let text = std::fs::read_to_string(&path).ok()?;
@@ -516,7 +524,11 @@ pub fn check_dense_product_workspace(threads: u64, avoid: &str) -> crate::Result
     match rlimit_headroom() {
         Some(room) if bytes > room => {
             let fewer = (threads > 1).then_some("fewer threads (RAYON_NUM_THREADS=1)");
-            let less: Vec<&str> = [avoid].into_iter().filter(|a| !a.is_empty()).chain(fewer).collect();
+            let less: Vec<&str> = [avoid]
+                .into_iter()
+                .filter(|a| !a.is_empty())
+                .chain(fewer)
+                .collect();
             let less = if less.is_empty() {
                 String::new()
             } else {
@@ -742,5 +754,76 @@ mod tests {
             ),
             "{e}"
         );
+    }
+
+    /// A `/sys/devices/system/cpu` as this virtual machine's: two processors, each with a
+    /// 48 KiB L1 data cache of its own and the one 480 MiB L3 shared by both; the instruction
+    /// cache and the directories that are not processors are skipped.
+    #[test]
+    fn the_l3_size_is_read_as_the_product_kernel_reads_it() {
+        let dir = std::env::temp_dir().join(format!("gradvi-l3-{}", std::process::id()));
+        let caches = [
+            ("index0", "1", "Data", "48K", "0"),
+            ("index1", "1", "Instruction", "64K", "0"),
+            ("index3", "3", "Unified", "491520K", "0-1"),
+        ];
+        for cpu in ["cpu0", "cpu1"] {
+            for (index, level, kind, size, shared) in caches {
+                let d = dir.join(cpu).join("cache").join(index);
+                std::fs::create_dir_all(&d).unwrap();
+                for (name, text) in [
+                    ("level", level),
+                    ("type", kind),
+                    ("size", size),
+                    ("shared_cpu_list", shared),
+                    ("coherency_line_size", "64"),
+                ] {
+                    std::fs::write(d.join(name), format!("{text}\n")).unwrap();
+                }
+            }
+        }
+        std::fs::create_dir_all(dir.join("cpufreq")).unwrap();
+        let read = sysfs_caches(&dir);
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(read, Some((240 << 20, 1)));
+        assert_eq!(cache_size("2M"), Some(2 << 20));
+        assert_eq!(cache_size("1G"), Some(1 << 30));
+        assert_eq!(cache_size("4096"), Some(4096));
+        assert_eq!(cache_size("x"), None);
+        assert_eq!(cpu_list_len("0-3,8,10-11"), Some(7));
+        assert_eq!(cpu_list_len("0-a"), None);
+        assert_eq!(
+            sysfs_caches(std::path::Path::new("/nonexistent/gradvi")),
+            None
+        );
+    }
+
+    /// Under a data limit, the product workspace of more threads than fit is refused with the
+    /// typed error naming it and suggesting fewer threads; none is always accepted.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_product_workspace_beyond_the_limit_is_a_typed_error() {
+        const NAME: &str =
+            "mesh::budget::tests::a_product_workspace_beyond_the_limit_is_a_typed_error";
+        if !child::is_child(NAME) {
+            return child::run(NAME);
+        }
+        let w = dense_product_workspace();
+        child::limit_data(64 << 20);
+        let refused = check_dense_product_workspace(2, "");
+        let none = check_dense_product_workspace(0, "");
+        child::limit_data(4 << 30);
+        assert!(none.is_ok());
+        if w > 32 << 20 {
+            let e = refused.unwrap_err();
+            assert!(e.is_out_of_memory(), "{e}");
+            let m = e.to_string();
+            assert!(
+                m.contains("dense matrix-product workspace") && m.contains("RAYON_NUM_THREADS=1"),
+                "{m}"
+            );
+        } else {
+            assert!(refused.is_ok());
+        }
     }
 }

@@ -134,7 +134,11 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> Solution<'_, M, D> {
     }
     /// A vector over every unknown, `value(j)` on the j-th constrained unknown and 0 elsewhere,
     /// allocated fallibly (its length is the number of unknowns).
-    fn constrained_field(&self, what: &str, value: impl Fn(usize) -> f64) -> crate::Result<Vec<f64>> {
+    fn constrained_field(
+        &self,
+        what: &str,
+        value: impl Fn(usize) -> f64,
+    ) -> crate::Result<Vec<f64>> {
         let mut a = try_filled(self.result.u.len(), 0.0, what)?;
         if let Some(c) = &self.constraints {
             for (j, pd) in c.dofs.iter().enumerate() {
