@@ -46,7 +46,9 @@ pub(crate) fn reserve(par: faer::Par, avoid: &str) -> crate::Result<()> {
     } else {
         0
     };
-    let caller = usize::from(!MAPPED.get() && !(parallel && in_pool));
+    // a caller in the pool was counted by the broadcast
+    let counted = parallel && in_pool;
+    let caller = usize::from(!(MAPPED.get() || counted));
     let threads = (workers + caller) as u64;
     if threads == 0 {
         return Ok(());
