@@ -24,6 +24,11 @@
 //!   what is already allocated, an estimate that fell short) becomes a typed error instead of
 //!   an abort: [`AllocFailure`], which converts into [`MeshError::TooLarge`] and
 //!   [`Error::OutOfMemory`](crate::Error::OutOfMemory).
+//! * [`dense_product_workspace`]: the address space faer's dense product kernel maps on each
+//!   thread that runs a product (twice the last-level cache size as that kernel reads it,
+//!   [`gemm_l3_bytes`]), and [`check_dense_product_workspace`], its check against
+//!   [`rlimit_headroom`] before the computations that run it
+//!   (`linalg::product_workspace`).
 //! * [`MemoryBudget::max_file_bytes`]: the largest mesh file the readers read, a quarter of the
 //!   budget (the mesh built from a text file needs several times the size of the text). A
 //!   larger file, or an endless stream, is refused after reading at most that much.
