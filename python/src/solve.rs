@@ -148,7 +148,11 @@ fn solve_and_collect<M: SolverMesh<D> + ?Sized, const D: usize>(
             Entity::Cell(i) => (2u8, i as i64),
         })
         .unzip();
-    let constrained = sol.constraints.as_ref().map(|c| {
+    let fields = match sol.constraints {
+        Some(_) => Some((sol.multiplier_field()?, sol.active_field()?)),
+        None => None,
+    };
+    let constrained = sol.constraints.as_ref().zip(fields).map(|(c, fields)| {
         let r = &sol.result;
         let dofs = || c.dofs.iter().map(|d| d.dof);
         let active_fields = EntityFields::new(s, dofs(), |j| f64::from(u8::from(r.active[j])));
@@ -165,8 +169,8 @@ fn solve_and_collect<M: SolverMesh<D> + ?Sized, const D: usize>(
             barrier: c.barrier.clone(),
             multiplier: r.multiplier.clone(),
             active: r.active.clone(),
-            multiplier_field: sol.multiplier_field(),
-            active_field: sol.active_field(),
+            multiplier_field: fields.0,
+            active_field: fields.1,
             // Σ_j m_j over the active constrained unknowns
             contact_measure: c
                 .dofs

@@ -52,6 +52,9 @@ pub mod symbolic;
 pub mod two_point;
 pub mod values;
 
+#[cfg(test)]
+mod tests_limits;
+
 use crate::linalg::{FactorThreads, Ordering};
 use crate::mesh::{MemoryBudget, PolyMesh, SolveMesh};
 use crate::problem::Problem;

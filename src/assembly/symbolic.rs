@@ -346,10 +346,11 @@ fn incidence(dm: &DofMap, n: usize) -> crate::Result<Ragged<u32>> {
                 out[dm.dof_ptr.at(k) - base..dm.dof_ptr.at(k + 1) - base].fill(k as u32);
             }
         });
-    let (ptr, items) =
-        crate::mesh::buckets::counting_sort(n, dm.dofs.iter().map(|&d| Some(d as usize)), |i| {
-            cell_of[i]
-        });
+    let (ptr, items) = crate::mesh::buckets::try_counting_sort(
+        n,
+        dm.dofs.iter().map(|&d| Some(d as usize)),
+        |i| cell_of[i],
+    )?;
     Ragged::new(ptr, items)
 }
 
@@ -420,7 +421,7 @@ fn counting_sort(
     n_buckets: usize,
     keys: impl Iterator<Item = Option<usize>> + Clone,
 ) -> crate::Result<Ragged<u32>> {
-    let (ptr, items) = crate::mesh::buckets::counting_sort(n_buckets, keys, |i| i as u32);
+    let (ptr, items) = crate::mesh::buckets::try_counting_sort(n_buckets, keys, |i| i as u32)?;
     Ragged::new(ptr, items)
 }
 

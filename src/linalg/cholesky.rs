@@ -7,7 +7,7 @@ use super::ordering::{Ordering, nested_dissection};
 use crate::mesh::budget::{AllocFailure, try_resize};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{
-    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+    LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, Side};
@@ -97,8 +97,14 @@ fn symbolic_factorisation(
     pattern: &SymbolicSparseColMat<usize>,
     ordering: Ordering,
 ) -> crate::Result<SymbolicCholesky<usize>> {
-    let err = |e: faer::sparse::FaerError| {
-        crate::Error::Linear(format!("symbolic Cholesky failed: {e:?}"))
+    // faer's allocations failing are the typed out-of-memory error; their size is not known,
+    // so it gives the size of the pattern, a lower bound
+    let err = |e: faer::sparse::FaerError| match e {
+        faer::sparse::FaerError::OutOfMemory => crate::Error::from(AllocFailure {
+            what: "the symbolic Cholesky factorisation".into(),
+            bytes: 8 * (pattern.row_idx().len() + pattern.ncols() + 1) as u64,
+        }),
+        e => crate::Error::Linear(format!("symbolic Cholesky failed: {e:?}")),
     };
     match ordering {
         Ordering::Amd => factorize_symbolic_cholesky(
@@ -231,6 +237,14 @@ impl SpdPattern {
         let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
         let kept = work.scratch.take();
         let mem = work.scratch.insert(scratch_for(kept, req)?);
+        // the supernodal updates run faer's dense product kernel, whose per-thread workspace
+        // is checked against the process's limits first (the simplicial one runs none)
+        if let SymbolicCholeskyRaw::Supernodal(_) = symbolic.raw() {
+            super::product_workspace::reserve(
+                par,
+                "an iterative linear solver (`--linear iterative`)",
+            )?;
+        }
         symbolic
             .factorize_numeric_llt(
                 l_values,

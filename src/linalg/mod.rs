@@ -36,6 +36,7 @@ pub mod cholesky;
 pub mod csr;
 pub mod ordering;
 pub mod pcg;
+pub(crate) mod product_workspace;
 
 pub use amg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, LevelSummary, Smoother};
 pub use cholesky::{CholeskyWork, FactorThreads, SpdFactor, SpdPattern};

@@ -24,6 +24,11 @@
 //!   what is already allocated, an estimate that fell short) becomes a typed error instead of
 //!   an abort: [`AllocFailure`], which converts into [`MeshError::TooLarge`] and
 //!   [`Error::OutOfMemory`](crate::Error::OutOfMemory).
+//! * [`dense_product_workspace`]: the address space faer's dense product kernel maps on each
+//!   thread that runs a product (twice the last-level cache size as that kernel reads it,
+//!   [`gemm_l3_bytes`]), and [`check_dense_product_workspace`], its check against
+//!   [`rlimit_headroom`] before the computations that run it
+//!   (`linalg::product_workspace`).
 //! * [`MemoryBudget::max_file_bytes`]: the largest mesh file the readers read, a quarter of the
 //!   budget (the mesh built from a text file needs several times the size of the text). A
 //!   larger file, or an endless stream, is refused after reading at most that much.
@@ -321,6 +326,235 @@ fn rlimit(_which: Limit) -> Option<u64> {
     None
 }
 
+/// The address space faer's dense matrix-product kernel maps, once and for good, on each
+/// thread that runs it, in bytes; 0 where that kernel is not used or its size is not known.
+///
+/// On x86_64 with AVX-512F, or AVX2 and FMA, faer hands every dense product that is not tiny
+/// (and every product with a triangular or row-indexed destination, whatever its size: the
+/// Schur-complement updates of the supernodal sparse Cholesky factorisation and of the
+/// blocked dense one) to `private-gemm-x86`. On the first such product a thread runs, that
+/// kernel allocates its packing buffers in a thread-local vector, infallibly, and keeps them
+/// until the thread ends: two buffers of L3 bytes each, rounded up to 4 KiB pages, where L3
+/// is the kernel's own estimate of the last-level cache ([`gemm_l3_bytes`]). For `f64`
+/// products it then needs ⌈8·⌈L3/8⌉₁₆ / 4096⌉ + ⌈8·⌈L3/8⌉ₙᵣ / 4096⌉ pages (⌈x⌉ₖ: x rounded
+/// up to a multiple of k; nᵣ = 4 or 8, the width of its micro-kernel); when that exceeds the
+/// 2·⌈L3/4096⌉ pages first allocated (an L3 that is not a multiple of 64 bytes), the vector is
+/// grown by that many more pages, which the estimate adds, with the copy of the old ones.
+///
+/// The pages are touched only as far as the products use them, so the resident memory grows
+/// little; but the address space (`RLIMIT_AS`, `ulimit -v`) and the data limit
+/// (`RLIMIT_DATA`) count them whole, and an address-space limit smaller than this, times the
+/// threads that run products, ends the process with `memory allocation of … failed`.
+pub fn dense_product_workspace() -> u64 {
+    if !dense_product_kernel_in_use() {
+        return 0;
+    }
+    let Some(l3) = gemm_l3_bytes() else {
+        return 0;
+    };
+    let pages = |bytes: u64| bytes.div_ceil(4096);
+    let first = 2 * pages(l3);
+    let elems = l3 / 8;
+    let nr = if cfg!(target_arch = "x86_64") && avx512() {
+        8
+    } else {
+        4
+    };
+    let needed = pages(elems.next_multiple_of(16) * 8) + pages(elems.next_multiple_of(nr) * 8);
+    let total = if needed > first {
+        first + first + needed
+    } else {
+        first
+    };
+    total * 4096
+}
+
+/// Whether faer's products run `private-gemm-x86`: x86_64 with AVX-512F, or AVX2 and FMA.
+fn dense_product_kernel_in_use() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        avx512()
+            || (std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma"))
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Whether the processor has AVX-512F (the kernel then uses its wider micro-kernels).
+fn avx512() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// The last-level cache size, in bytes, as `private-gemm-x86` estimates it on Linux: for each
+/// `cpuN/cache/indexM` of `/sys/devices/system/cpu` of type `Data` or `Unified`, its `size`
+/// divided by the number of processors in its `shared_cpu_list` (the last one read of each
+/// level is kept, unless its `coherency_line_size` is smaller than the kept one's); the level-3 value times the processors sharing a level-1 cache, times the
+/// number of physical cores (`num_cpus::get_physical`). This is not the size of a cache: on
+/// a virtual machine reporting one 480 MiB L3 shared by 2 processors on 2 cores it gives
+/// 480 MiB, on a machine whose 32 MiB L3 is shared by 16 cores, 32 MiB. `None` where the
+/// files cannot be read (not Linux): the kernel then falls back to `lscpu` or `cpuid`, whose
+/// sizes this function does not reproduce, and [`dense_product_workspace`] is 0.
+pub fn gemm_l3_bytes() -> Option<u64> {
+    #[cfg(all(target_os = "linux", target_arch = "x86_64"))]
+    {
+        let (l3, l1_shared) = sysfs_caches(std::path::Path::new("/sys/devices/system/cpu"))?;
+        Some(l3 * l1_shared * num_cpus::get_physical() as u64)
+    }
+    #[cfg(not(all(target_os = "linux", target_arch = "x86_64")))]
+    {
+        None
+    }
+}
+
+/// The level-3 size per sharing processor and the number of processors sharing the level-1
+/// cache, read from the cache directories under `cpu_dir` as [`gemm_l3_bytes`] says; `None`
+/// if a file cannot be read (the kernel then ignores these files).
+fn sysfs_caches(cpu_dir: &std::path::Path) -> Option<(u64, u64)> {
+    let (mut l3, mut l3_line, mut l1_shared) = (0u64, 64u64, 1u64);
+    for cpu in std::fs::read_dir(cpu_dir).ok()? {
+        let cache = cpu.ok()?.path().join("cache");
+        let is_cpu = cache
+            .parent()
+            .and_then(|p| p.file_name())
+            .and_then(|n| n.to_str())
+            .is_some_and(|n| n.starts_with("cpu"));
+        if !is_cpu || !cache.is_dir() {
+            continue;
+        }
+        for index in std::fs::read_dir(cache).ok()? {
+            let index = index.ok()?.path();
+            let named = index.file_name().and_then(|n| n.to_str());
+            if !index.is_dir() || !named.is_some_and(|n| n.starts_with("index")) {
+                continue;
+            }
+            let Some(c) = cache_index(&index)? else {
+                continue;
+            };
+            if c.level == 1 {
+                l1_shared = c.shared;
+            }
+            if c.level == 3 && c.shared > 0 && c.line >= l3_line {
+                (l3, l3_line) = (c.bytes / c.shared, c.line);
+            }
+        }
+    }
+    Some((l3, l1_shared))
+}
+
+/// One `indexM` directory, every file of it read as the kernel reads them: `Some(None)` if it
+/// is not a data or unified cache or a value does not parse (the kernel skips it), else its
+/// level, size, number of sharing processors and line size; `None` if a file cannot be read.
+fn cache_index(index: &std::path::Path) -> Option<Option<CacheIndex>> {
+    let mut c = CacheIndex {
+        level: 0,
+        bytes: 0,
+        shared: 0,
+        line: 64,
+    };
+    for entry in std::fs::read_dir(index).ok()? {
+        let path = entry.ok()?.path();
+        let Some(name) = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .map(str::to_string)
+        else {
+            continue;
+        };
+        let text = std::fs::read_to_string(&path).ok()?;
+        let t = text.trim();
+        let parsed = match name.as_str() {
+            "type" => matches!(t, "Data" | "Unified").then_some(()),
+            "shared_cpu_list" => cpu_list_len(t).map(|n| c.shared = n),
+            "level" => t.parse().ok().map(|l| c.level = l),
+            "coherency_line_size" => t.parse().ok().map(|l| c.line = l),
+            "size" => cache_size(t).map(|b| c.bytes = b),
+            _ => Some(()),
+        };
+        if parsed.is_none() {
+            return Some(None);
+        }
+    }
+    Some(Some(c))
+}
+
+/// What [`cache_index`] reads of a cache.
+struct CacheIndex {
+    level: u64,
+    bytes: u64,
+    shared: u64,
+    line: u64,
+}
+
+/// The number of processors in a list such as `0-3,8,10-11`; `None` if a range does not parse.
+fn cpu_list_len(list: &str) -> Option<u64> {
+    let mut n = 0;
+    for item in list.split(',') {
+        n += match item.split_once('-') {
+            Some((a, b)) => b.parse::<u64>().ok()? + 1 - a.parse::<u64>().ok()?,
+            None => 1,
+        };
+    }
+    Some(n)
+}
+
+/// A cache size such as `491520K`, `2M` or `1G` (binary units), in bytes.
+fn cache_size(t: &str) -> Option<u64> {
+    let (num, unit) = match t.as_bytes().last()? {
+        b'G' => (&t[..t.len() - 1], 1 << 30),
+        b'M' => (&t[..t.len() - 1], 1 << 20),
+        b'K' => (&t[..t.len() - 1], 1 << 10),
+        _ => (t, 1),
+    };
+    num.parse::<u64>().ok().map(|n| n * unit)
+}
+
+/// `Ok` if `threads` more threads may each map faer's dense product workspace
+/// ([`dense_product_workspace`]) within what the process's limits leave
+/// ([`rlimit_headroom`]), else [`Error::OutOfMemory`](crate::Error::OutOfMemory) saying what
+/// that workspace is; `avoid` names what else would avoid it (an iterative solver, for one;
+/// empty if nothing), and fewer threads are suggested when `threads` > 1.
+pub fn check_dense_product_workspace(threads: u64, avoid: &str) -> crate::Result<()> {
+    let per_thread = dense_product_workspace();
+    let bytes = per_thread.saturating_mul(threads);
+    match rlimit_headroom() {
+        Some(room) if bytes > room => {
+            let fewer = (threads > 1).then_some("fewer threads (RAYON_NUM_THREADS=1)");
+            let less: Vec<&str> = [avoid]
+                .into_iter()
+                .filter(|a| !a.is_empty())
+                .chain(fewer)
+                .collect();
+            let less = if less.is_empty() {
+                String::new()
+            } else {
+                format!("; {} would need less", less.join(", or "))
+            };
+            Err(crate::Error::OutOfMemory {
+                what: format!(
+                    "the dense matrix-product workspace of faer ({} of address space on each \
+                     of {threads} thread(s): twice the {} last-level cache the system \
+                     reports{less})",
+                    human_bytes(per_thread),
+                    human_bytes(gemm_l3_bytes().unwrap_or(0)),
+                ),
+                bytes,
+                budget: room,
+            })
+        }
+        _ => Ok(()),
+    }
+}
+
 /// Estimated peak memory, in bytes, of building a mesh with `cells` cells whose vertex lists
 /// hold `sides` entries in all, `vertices` vertices and `edges` edges.
 ///
@@ -525,5 +759,76 @@ mod tests {
             ),
             "{e}"
         );
+    }
+
+    /// A `/sys/devices/system/cpu` as this virtual machine's: two processors, each with a
+    /// 48 KiB L1 data cache of its own and the one 480 MiB L3 shared by both; the instruction
+    /// cache and the directories that are not processors are skipped.
+    #[test]
+    fn the_l3_size_is_read_as_the_product_kernel_reads_it() {
+        let dir = std::env::temp_dir().join(format!("gradvi-l3-{}", std::process::id()));
+        let caches = [
+            ("index0", "1", "Data", "48K", "0"),
+            ("index1", "1", "Instruction", "64K", "0"),
+            ("index3", "3", "Unified", "491520K", "0-1"),
+        ];
+        for cpu in ["cpu0", "cpu1"] {
+            for (index, level, kind, size, shared) in caches {
+                let d = dir.join(cpu).join("cache").join(index);
+                std::fs::create_dir_all(&d).unwrap();
+                for (name, text) in [
+                    ("level", level),
+                    ("type", kind),
+                    ("size", size),
+                    ("shared_cpu_list", shared),
+                    ("coherency_line_size", "64"),
+                ] {
+                    std::fs::write(d.join(name), format!("{text}\n")).unwrap();
+                }
+            }
+        }
+        std::fs::create_dir_all(dir.join("cpufreq")).unwrap();
+        let read = sysfs_caches(&dir);
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(read, Some((240 << 20, 1)));
+        assert_eq!(cache_size("2M"), Some(2 << 20));
+        assert_eq!(cache_size("1G"), Some(1 << 30));
+        assert_eq!(cache_size("4096"), Some(4096));
+        assert_eq!(cache_size("x"), None);
+        assert_eq!(cpu_list_len("0-3,8,10-11"), Some(7));
+        assert_eq!(cpu_list_len("0-a"), None);
+        assert_eq!(
+            sysfs_caches(std::path::Path::new("/nonexistent/gradvi")),
+            None
+        );
+    }
+
+    /// Under a data limit, the product workspace of more threads than fit is refused with the
+    /// typed error naming it and suggesting fewer threads; none is always accepted.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_product_workspace_beyond_the_limit_is_a_typed_error() {
+        const NAME: &str =
+            "mesh::budget::tests::a_product_workspace_beyond_the_limit_is_a_typed_error";
+        if !child::is_child(NAME) {
+            return child::run(NAME);
+        }
+        let w = dense_product_workspace();
+        child::limit_data(64 << 20);
+        let refused = check_dense_product_workspace(2, "");
+        let none = check_dense_product_workspace(0, "");
+        child::limit_data(4 << 30);
+        assert!(none.is_ok());
+        if w > 32 << 20 {
+            let e = refused.unwrap_err();
+            assert!(e.is_out_of_memory(), "{e}");
+            let m = e.to_string();
+            assert!(
+                m.contains("dense matrix-product workspace") && m.contains("RAYON_NUM_THREADS=1"),
+                "{m}"
+            );
+        } else {
+            assert!(refused.is_ok());
+        }
     }
 }

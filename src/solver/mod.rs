@@ -120,22 +120,32 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> Solution<'_, M, D> {
     pub fn niter(&self) -> usize {
         self.result.niter
     }
-    /// The multiplier on every unknown (zero off the constrained unknowns).
-    pub fn multiplier_field(&self) -> Vec<f64> {
-        self.constrained_field(|j| self.result.multiplier[j])
+    /// The multiplier on every unknown (zero off the constrained unknowns), or
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if its vector cannot be allocated.
+    pub fn multiplier_field(&self) -> crate::Result<Vec<f64>> {
+        self.constrained_field("the multiplier field", |j| self.result.multiplier[j])
     }
-    /// 1 on active unknowns, 0 elsewhere.
-    pub fn active_field(&self) -> Vec<f64> {
-        self.constrained_field(|j| if self.result.active[j] { 1.0 } else { 0.0 })
+    /// 1 on active unknowns, 0 elsewhere, or
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if its vector cannot be allocated.
+    pub fn active_field(&self) -> crate::Result<Vec<f64>> {
+        self.constrained_field("the active-set field", |j| {
+            if self.result.active[j] { 1.0 } else { 0.0 }
+        })
     }
-    fn constrained_field(&self, value: impl Fn(usize) -> f64) -> Vec<f64> {
-        let mut a = vec![0.0; self.result.u.len()];
+    /// A vector over every unknown, `value(j)` on the j-th constrained unknown and 0 elsewhere,
+    /// allocated fallibly (its length is the number of unknowns).
+    fn constrained_field(
+        &self,
+        what: &str,
+        value: impl Fn(usize) -> f64,
+    ) -> crate::Result<Vec<f64>> {
+        let mut a = try_filled(self.result.u.len(), 0.0, what)?;
         if let Some(c) = &self.constraints {
             for (j, pd) in c.dofs.iter().enumerate() {
                 a[pd.dof] = value(j);
             }
         }
-        a
+        Ok(a)
     }
 }
 

@@ -22,11 +22,21 @@ impl CoarseSolve {
     }
 }
 
+/// The order up to which faer's dense Cholesky factorisation is unblocked (its default
+/// `recursion_threshold`): no matrix product, and so no product workspace
+/// ([`product_workspace`](crate::linalg::product_workspace)).
+const FAER_LLT_RECURSION: usize = 64;
+
 /// The dense Cholesky factor of the coarsest operator (faer), packed.
 pub(super) fn dense_cholesky(a: &CsrMatrix, level: usize) -> crate::Result<CoarseSolve> {
     let n = a.n_rows();
     if n == 0 {
         return Ok(CoarseSolve::Dense { n, l: Vec::new() });
+    }
+    // above faer's recursion threshold, the blocked factorisation's updates run its dense
+    // product kernel, whose per-thread workspace is checked against the process's limits
+    if n > FAER_LLT_RECURSION {
+        crate::linalg::product_workspace::reserve(faer::get_global_parallelism(), "")?;
     }
     let mut m = faer::Mat::<f64>::zeros(n, n);
     for i in 0..n {
