@@ -21,11 +21,11 @@ use rayon::prelude::*;
 /// they are computed in parallel). Per side: 4 (its cell), 4 (place in its bucket), 1 (pair
 /// flag), 4 (partner side), 4 (its face), 1 (orientation), 4 (face id in the cell's list).
 /// Per face, counting as many faces as sides (an upper bound): 8 (sides), 4 (offset), 8
-/// (cells), 4 (tag), 8 (area), 4 (boundary list); face centroids and normals are not stored. Per loop
-/// entry: 4 (stored loop), 4 (the pieces in which the loops are gathered in parallel, and the
-/// per-thread scratch of face matching), and 16 for the directed boundary edges and 24 for the
-/// corners of the boundary surface checks (counting every loop entry as a boundary one, an
-/// upper bound).
+/// (cells), 4 (tag), 8 (area), 4 (boundary list); face centroids and normals are not stored.
+/// Per loop entry: 4 (stored loop), 4 (the pieces in which the loops are gathered in parallel,
+/// and the per-thread scratch of face matching), and 16 for the directed boundary edges and 24
+/// for the corners of the boundary surface checks (counting every loop entry as a boundary
+/// one, an upper bound).
 pub fn mesh3_bytes(cells: u64, sides: u64, side_vertices: u64, vertices: u64) -> u64 {
     let per_vertex = 24 + 4 + 1;
     let per_cell = 4 + 8 + 24 + 8 + 4 + 16;

@@ -5,9 +5,9 @@ use super::{Cuboid, Point3, Polyhedra};
 use crate::mesh::NO_CELL;
 
 /// A conforming mesh of polyhedra with its cell geometry and face areas cached (face
-/// centroids and normals computed on demand: [`PolyMesh3::face_frame`]), flat and immutable: every array is
-/// indexed by 32-bit ids, cells and faces are CSR lists (offsets and data), nothing is
-/// allocated per cell. Built by [`PolyMesh3::from_polyhedra`]; see the module docs of
+/// centroids and normals computed on demand: [`PolyMesh3::face_frame`]), flat and immutable:
+/// every array is indexed by 32-bit ids, cells and faces are CSR lists (offsets and data),
+/// nothing is allocated per cell. Built by [`PolyMesh3::from_polyhedra`]; see the module docs of
 /// [`crate::mesh3d`] for the maths and the checks.
 #[derive(Debug, Clone)]
 pub struct PolyMesh3 {
@@ -122,8 +122,8 @@ impl PolyMesh3 {
 
     /// (x_σ, n_σ) of face `f`: its centroid and its unit normal N_σ/|N_σ|, from the fan
     /// triangles of its loop (module docs of [`crate::mesh3d`]). They are not stored (48 bytes
-    /// per face, more than the rest of a face's data): the same loop and vertices give the
-    /// same bits at every call, so a computed value is the value a stored one would have been.
+    /// per face, more than the rest of a face's data); a pure function of the loop and the
+    /// vertices, they have the same bits at every call.
     pub fn face_frame(&self, f: usize) -> (Point3, Point3) {
         let g = face_geometry(&self.vertices, self.face_vertices(f));
         let l = norm(g.vector_area);
