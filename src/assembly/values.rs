@@ -3,11 +3,11 @@
 //! the local matrices and loads the scheme emits for them. Refilled per problem; the symbolic
 //! part ([`super::symbolic`]) is shared.
 
-use super::gather::cell_chunks;
+use super::gather::{cell_chunks, split_by_ranges};
 use super::offsets::Offsets;
 use super::symbolic::DofMap;
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{AllocFailure, try_filled, try_grow, try_vec};
+use crate::mesh::budget::{try_filled, try_vec};
 use crate::problem::{BoundaryKind, Problem, check_finite, check_tensor};
 use crate::scheme::{GradientDiscretisation, PointDof};
 use nalgebra::{DMatrix, DVector};
@@ -33,16 +33,13 @@ pub struct ProblemValues<const D: usize = 2> {
     pub signorini: Vec<PointDof<D>>,
 }
 
-/// What one parallel task of [`local_data`] computes for its cells.
+/// What one parallel task of [`local_data`] found wrong in its cells (the first of each kind).
 #[derive(Default)]
-struct LocalChunk {
-    mat_len: Vec<usize>,
-    mats: Vec<f64>,
-    loads: Vec<f64>,
+struct ChunkDefects {
     bad_tensor: Option<crate::Error>,
     bad_source: Option<String>,
-    /// The chunk's buffers could not grow: it stopped at that cell.
-    no_memory: Option<AllocFailure>,
+    /// The scheme emitted a local system of another size than the cell's unknowns.
+    bad_size: Option<String>,
 }
 
 impl<const D: usize> ProblemValues<D> {
@@ -52,7 +49,7 @@ impl<const D: usize> ProblemValues<D> {
         dm: &DofMap,
         problem: &Problem<D>,
     ) -> crate::Result<Self> {
-        let (mat_ptr, mats, loads) = local_data(scheme, problem)?;
+        let (mat_ptr, mats, loads) = local_data(scheme, dm, problem)?;
         let n = scheme.n_unknowns();
         let mut load = try_filled(n, 0.0, "the load vector")?;
         for (i, &d) in dm.dofs.iter().enumerate() {
@@ -131,20 +128,34 @@ impl<const D: usize> ProblemValues<D> {
 }
 
 /// The local matrices (for A_K = A(x_K)) and loads of every cell, in parallel over chunks of
-/// cells, concatenated in cell order; the first bad tensor or non-finite load in cell order is
-/// the error, as in a sequential loop.
+/// cells, written in place into arrays laid out by the dof map `dm` (cell k's matrix has
+/// packed_len(p_k) entries, p_k its number of unknowns; its load p_k entries) and allocated
+/// once, before the cells are visited, so that no per-chunk copy is ever held beside them. The
+/// first bad tensor in cell order is the error, then the first non-finite load, as in a
+/// sequential loop.
 fn local_data<M: SolveMesh<D> + ?Sized, const D: usize>(
     scheme: &dyn GradientDiscretisation<M, D>,
+    dm: &DofMap,
     problem: &Problem<D>,
 ) -> crate::Result<(Offsets, Vec<f64>, Vec<f64>)> {
     let mesh = scheme.mesh();
     let nc = mesh.n_cells();
-    let chunks: Vec<LocalChunk> = cell_chunks(nc)
+    let mat_ptr = Offsets::from_lengths(
+        (0..nc).map(|k| super::condense::packed_len(dm.dof_ptr.range(k).len())),
+    )?;
+    let mut mats = try_filled(mat_ptr.total(), 0.0, "the local matrices")?;
+    let mut loads = try_filled(dm.dofs.len(), 0.0, "the local loads")?;
+    let ranges = cell_chunks(nc);
+    let m_slices = split_by_ranges(&mut mats, &ranges, |k| mat_ptr.at(k));
+    let l_slices = split_by_ranges(&mut loads, &ranges, |k| dm.dof_ptr.at(k));
+    let tasks: Vec<_> = ranges.into_iter().zip(m_slices).zip(l_slices).collect();
+    let defects: Vec<ChunkDefects> = tasks
         .into_par_iter()
-        .map(|(c0, c1)| {
-            let mut out = LocalChunk::default();
+        .map(|(((c0, c1), ms), ls)| {
+            let mut out = ChunkDefects::default();
             let mut m = DMatrix::zeros(0, 0);
             let mut b = DVector::zeros(0);
+            let (m0, l0) = (mat_ptr.at(c0), dm.dof_ptr.at(c0));
             for k in c0..c1 {
                 let xk = mesh.cell_centre(k);
                 let tag = mesh.cell_tag(k);
@@ -157,46 +168,39 @@ fn local_data<M: SolveMesh<D> + ?Sized, const D: usize>(
                 scheme.local_matrix(k, &a, &mut m);
                 let f = |p: [f64; D]| -> f64 { problem.source_in(p, xk, tag) };
                 scheme.local_load(k, &f, &mut b);
+                let p = dm.dof_ptr.range(k).len();
+                if m.nrows() != p || m.ncols() != p || b.len() != p {
+                    out.bad_size = Some(format!(
+                        "cell {k}: a local matrix of {}×{} and a load of {} for {p} unknowns",
+                        m.nrows(),
+                        m.ncols(),
+                        b.len()
+                    ));
+                    break;
+                }
                 if out.bad_source.is_none() && b.iter().any(|x| !x.is_finite()) {
                     out.bad_source = Some(format!(
                         "the source term f is not finite in cell {k} (x_K = {xk:?})"
                     ));
                 }
                 // symmetric: the lower triangle only
-                let (n, start) = (m.nrows(), out.mats.len());
-                let len = super::condense::packed_len(n);
-                let room = try_grow(&mut out.mats, len, "the local matrices")
-                    .and_then(|()| try_grow(&mut out.loads, b.len(), "the local loads"))
-                    .and_then(|()| try_grow(&mut out.mat_len, 1, "the local matrices"));
-                if let Err(f) = room {
-                    out.no_memory = Some(f);
-                    break;
-                }
-                out.mats.resize(start + len, 0.0);
-                super::condense::pack_lower(n, m.as_slice(), &mut out.mats[start..]);
-                out.mat_len.push(len);
-                out.loads.extend(b.iter());
+                let mr = mat_ptr.range(k);
+                super::condense::pack_lower(p, m.as_slice(), &mut ms[mr.start - m0..mr.end - m0]);
+                let lr = dm.dof_ptr.range(k);
+                ls[lr.start - l0..lr.end - l0].copy_from_slice(b.as_slice());
             }
             out
         })
         .collect();
-    let mut chunks = chunks;
-    if let Some(f) = chunks.iter_mut().find_map(|c| c.no_memory.take()) {
-        return Err(f.into());
+    let mut defects = defects;
+    if let Some(msg) = defects.iter_mut().find_map(|c| c.bad_size.take()) {
+        return Err(crate::Error::Internal(msg));
     }
-    if let Some(e) = chunks.iter_mut().find_map(|c| c.bad_tensor.take()) {
+    if let Some(e) = defects.iter_mut().find_map(|c| c.bad_tensor.take()) {
         return Err(e);
     }
-    if let Some(msg) = chunks.iter().find_map(|c| c.bad_source.clone()) {
+    if let Some(msg) = defects.iter().find_map(|c| c.bad_source.clone()) {
         return Err(crate::Error::InvalidData(msg));
-    }
-    let mat_ptr = Offsets::from_lengths(chunks.iter().flat_map(|c| c.mat_len.iter().copied()))?;
-    let mut mats = try_vec(mat_ptr.total(), "the local matrices")?;
-    let loads_len = chunks.iter().map(|c| c.loads.len()).sum();
-    let mut loads = try_vec(loads_len, "the local loads")?;
-    for c in chunks {
-        mats.extend_from_slice(&c.mats);
-        loads.extend_from_slice(&c.loads);
     }
     Ok((mat_ptr, mats, loads))
 }

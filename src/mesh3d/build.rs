@@ -21,15 +21,15 @@ use rayon::prelude::*;
 /// they are computed in parallel). Per side: 4 (its cell), 4 (place in its bucket), 1 (pair
 /// flag), 4 (partner side), 4 (its face), 1 (orientation), 4 (face id in the cell's list).
 /// Per face, counting as many faces as sides (an upper bound): 8 (sides), 4 (offset), 8
-/// (cells), 4 (tag), 8 (area), 24 (centroid), 24 (normal), 4 (boundary list). Per loop
-/// entry: 4 (stored loop), 4 (the pieces in which the loops are gathered in parallel, and the
-/// per-thread scratch of face matching), and 16 for the directed boundary edges and 24 for the
-/// corners of the boundary surface checks (counting every loop entry as a boundary one, an
-/// upper bound).
+/// (cells), 4 (tag), 8 (area), 4 (boundary list); face centroids and normals are not stored.
+/// Per loop entry: 4 (stored loop), 4 (the pieces in which the loops are gathered in parallel,
+/// and the per-thread scratch of face matching), and 16 for the directed boundary edges and 24
+/// for the corners of the boundary surface checks (counting every loop entry as a boundary
+/// one, an upper bound).
 pub fn mesh3_bytes(cells: u64, sides: u64, side_vertices: u64, vertices: u64) -> u64 {
     let per_vertex = 24 + 4 + 1;
     let per_cell = 4 + 8 + 24 + 8 + 4 + 16;
-    let per_side = (4 + 4 + 1 + 4 + 4 + 1 + 4) + (8 + 4 + 8 + 4 + 8 + 24 + 24 + 4);
+    let per_side = (4 + 4 + 1 + 4 + 4 + 1 + 4) + (8 + 4 + 8 + 4 + 8 + 4);
     let per_loop_entry = 4 + 4 + 16 + 24;
     cells
         .saturating_mul(per_cell)
@@ -150,8 +150,6 @@ fn assemble(
         cell_centroid: Vec::new(),
         cell_diameter: Vec::new(),
         face_area: Vec::new(),
-        face_centroid: Vec::new(),
-        face_normal: Vec::new(),
         boundary_faces,
         h: 0.0,
     })
@@ -189,44 +187,35 @@ fn pair_defect(
 }
 
 impl PolyMesh3 {
-    /// |σ|, x_σ and n_σ of every face, in parallel, written in place; [`MeshError::BadFace`]
-    /// for the first face whose vector area is negligible (|N_σ| ≤ 10⁻¹⁴ diam(σ)²: no normal).
+    /// |σ| of every face, in parallel, written in place (x_σ and n_σ are computed when asked
+    /// for: [`PolyMesh3::face_frame`]); [`MeshError::BadFace`] for the first face whose vector
+    /// area is negligible (|N_σ| ≤ 10⁻¹⁴ diam(σ)²: no normal).
     fn compute_face_geometry(&mut self) -> Result<(), MeshError> {
         let n = self.n_faces();
         let mut area = try_filled(n, 0.0, "the face areas")?;
-        let mut centroid = try_filled(n, [0.0; 3], "the face centroids")?;
-        // the vector areas N_σ, normalised once every face has passed the check
-        let mut normal = try_filled(n, [0.0; 3], "the face normals")?;
-        (
-            area.par_iter_mut(),
-            centroid.par_iter_mut(),
-            normal.par_iter_mut(),
-        )
-            .into_par_iter()
-            .enumerate()
-            .for_each(|(f, (a, c, nv))| {
-                let g = face_geometry(&self.vertices, self.face_vertices(f));
-                (*a, *c, *nv) = (g.area, g.centroid, g.vector_area);
-            });
-        let bad = (0..n).into_par_iter().find_first(|&f| {
+        let has_normal = |f: usize, vector_area: [f64; 3]| {
             let d = diameter(&self.vertices, self.face_vertices(f));
-            !(norm(normal[f]) > 1e-14 * d * d)
-        });
+            norm(vector_area) > 1e-14 * d * d
+        };
+        let bad = area
+            .par_iter_mut()
+            .enumerate()
+            .filter_map(|(f, a)| {
+                let g = face_geometry(&self.vertices, self.face_vertices(f));
+                *a = g.area;
+                (!has_normal(f, g.vector_area)).then_some(f)
+            })
+            .min();
         if let Some(f) = bad {
             let k = self.face_cells[f][0] as usize;
+            let g = face_geometry(&self.vertices, self.face_vertices(f));
             return Err(MeshError::BadFace {
                 cell: k,
                 local_face: self.local_face(k, f),
-                msg: format!("zero area ({:e})", norm(normal[f])),
+                msg: format!("zero area ({:e})", norm(g.vector_area)),
             });
         }
-        normal.par_iter_mut().for_each(|v| {
-            let l = norm(*v);
-            *v = v.map(|x| x / l);
-        });
         self.face_area = area;
-        self.face_centroid = centroid;
-        self.face_normal = normal;
         Ok(())
     }
 

@@ -1,12 +1,13 @@
 //! [`PolyMesh3`], the validated 3D polyhedral mesh, and its accessors.
 
-use super::geometry::{dot, sub};
+use super::geometry::{dot, face_geometry, norm, sub};
 use super::{Cuboid, Point3, Polyhedra};
 use crate::mesh::NO_CELL;
 
-/// A conforming mesh of polyhedra with cached geometry, flat and immutable: every array is
-/// indexed by 32-bit ids, cells and faces are CSR lists (offsets and data), nothing is
-/// allocated per cell. Built by [`PolyMesh3::from_polyhedra`]; see the module docs of
+/// A conforming mesh of polyhedra with its cell geometry and face areas cached (face
+/// centroids and normals computed on demand: [`PolyMesh3::face_frame`]), flat and immutable:
+/// every array is indexed by 32-bit ids, cells and faces are CSR lists (offsets and data),
+/// nothing is allocated per cell. Built by [`PolyMesh3::from_polyhedra`]; see the module docs of
 /// [`crate::mesh3d`] for the maths and the checks.
 #[derive(Debug, Clone)]
 pub struct PolyMesh3 {
@@ -29,9 +30,6 @@ pub struct PolyMesh3 {
     pub(crate) cell_centroid: Vec<Point3>,
     pub(crate) cell_diameter: Vec<f64>,
     pub(crate) face_area: Vec<f64>,
-    pub(crate) face_centroid: Vec<Point3>,
-    /// Unit normal of every face, outward from its first cell.
-    pub(crate) face_normal: Vec<Point3>,
     /// The boundary faces, in increasing order.
     pub(crate) boundary_faces: Vec<u32>,
     pub(crate) h: f64,
@@ -111,27 +109,38 @@ impl PolyMesh3 {
         self.face_area[f]
     }
 
-    /// x_σ, the centroid of face `f`.
+    /// x_σ, the centroid of face `f` (computed from its loop: see [`PolyMesh3::face_frame`]).
     pub fn face_centroid(&self, f: usize) -> Point3 {
-        self.face_centroid[f]
+        self.face_frame(f).0
     }
 
-    /// The unit normal of face `f`, outward from `face_cells(f)[0]`.
+    /// The unit normal of face `f`, outward from `face_cells(f)[0]` (computed from its loop:
+    /// see [`PolyMesh3::face_frame`]).
     pub fn face_normal(&self, f: usize) -> Point3 {
-        self.face_normal[f]
+        self.face_frame(f).1
+    }
+
+    /// (x_σ, n_σ) of face `f`: its centroid and its unit normal N_σ/|N_σ|, from the fan
+    /// triangles of its loop (module docs of [`crate::mesh3d`]). They are not stored (48 bytes
+    /// per face, more than the rest of a face's data); a pure function of the loop and the
+    /// vertices, they have the same bits at every call.
+    pub fn face_frame(&self, f: usize) -> (Point3, Point3) {
+        let g = face_geometry(&self.vertices, self.face_vertices(f));
+        let l = norm(g.vector_area);
+        (g.centroid, g.vector_area.map(|x| x / l))
     }
 
     /// (n_{K,σ}, d_{K,σ}) on local face `i` of cell `k`: the outward unit normal and
     /// d_{K,σ} = (x_σ − x_K)·n_{K,σ}.
     pub fn cell_normal_dist(&self, k: usize, i: usize) -> (Point3, f64) {
         let f = self.cell_faces(k)[i] as usize;
-        let n = self.face_normal[f];
+        let (centroid, n) = self.face_frame(f);
         let n = if self.face_cells[f][0] as usize == k {
             n
         } else {
             n.map(|x| -x)
         };
-        (n, dot(sub(self.face_centroid[f], self.cell_centroid[k]), n))
+        (n, dot(sub(centroid, self.cell_centroid[k]), n))
     }
 
     /// The tag of cell `k` (gmsh physical volume; 0 when untagged).

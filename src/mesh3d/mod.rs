@@ -8,11 +8,12 @@
 //!
 //! [`PolyMesh3::from_polyhedra`] builds a [`PolyMesh3`]: flat CSR arrays with 32-bit ids (cells
 //! as lists of faces, faces as vertex loops counter-clockwise seen from outside their first
-//! cell, face–cell incidence, boundary faces, tags) and the cached geometry of the notation
-//! table, computed as `geometry.rs` states (exact for planar faces; for warped faces the fan
-//! of triangles around the face's vertex average, HArDCore3D's convention, or, with
-//! [`WarpedFaces::Split`] and [`PolyMesh3::from_polyhedra_with`], each of those triangles a
-//! face of its own).
+//! cell, face–cell incidence, boundary faces, tags) and the geometry of the notation table
+//! (stored, except x_σ and n_σ, which are computed from the face's loop when asked for:
+//! [`PolyMesh3::face_frame`]), computed as `geometry.rs` states (exact for planar faces; for
+//! warped faces the fan of triangles around the face's vertex average, HArDCore3D's
+//! convention, or, with [`WarpedFaces::Split`] and [`PolyMesh3::from_polyhedra_with`], each of
+//! those triangles a face of its own).
 //!
 //! | accessor | maths |
 //! |---|---|

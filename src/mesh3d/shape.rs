@@ -11,12 +11,8 @@ impl PolyMesh3 {
     /// The warp of face `f`: max over its vertices v of |(v − x_σ)·n_σ| / diam(σ), 0 for a
     /// planar face (see [`validate`](super::validate), "Warped faces").
     pub fn face_warp(&self, f: usize) -> f64 {
-        face_warp(
-            &self.vertices,
-            self.face_vertices(f),
-            self.face_centroid[f],
-            self.face_normal[f],
-        )
+        let (centroid, normal) = self.face_frame(f);
+        face_warp(&self.vertices, self.face_vertices(f), centroid, normal)
     }
 
     /// [`MeshError::WarpedFace`] for the first face warped beyond [`WARP_TOL`], then

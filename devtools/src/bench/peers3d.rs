@@ -139,6 +139,29 @@ fn write_u(path: &Path, mesh: &PolyMesh3, n: usize, u: &[f64]) -> gradvi::Result
     std::fs::write(path, bytes).map_err(|e| io_err(path, e))
 }
 
+/// With `GRADVI_BENCH_MEM` set, prints to stderr the resident set (`VmRSS`) and its peak so
+/// far (`VmHWM`) of this process after `phase`, in MiB (`make` never sets it: a measurement aid,
+/// `replication/measurements/memory3d.md`).
+fn memory_phase(phase: &str) {
+    if std::env::var_os("GRADVI_BENCH_MEM").is_none() {
+        return;
+    }
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let kib = |key: &str| {
+        status
+            .lines()
+            .find(|l| l.starts_with(key))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .and_then(|v| v.parse::<f64>().ok())
+            .map_or(f64::NAN, |kb| kb / 1024.0)
+    };
+    eprintln!(
+        "[memory] {phase}: VmRSS {:.0} MiB, VmHWM {:.0} MiB",
+        kib("VmRSS:"),
+        kib("VmHWM:")
+    );
+}
+
 /// Solves the case of `n` in this process (the body of a `--peer3d-child`); without the
 /// `barrier`, its linear variant. `total_s` is left to the driver.
 fn run_gradvi(
@@ -156,6 +179,7 @@ fn run_gradvi(
         z: side,
     };
     let mesh = PolyMesh3::from_polyhedra(kuhn(n, domain, budget)?, budget)?;
+    memory_phase("mesh");
     let mut problem = problem(root)?;
     if !barrier {
         problem.constraint = None;
@@ -165,7 +189,9 @@ fn run_gradvi(
     options.system.linear = "iterative".parse()?;
     options.system.budget = budget;
     let before_solve = t0.elapsed().as_secs_f64();
+    memory_phase("scheme");
     let sol = solve_problem(scheme.as_ref(), &problem, &options)?;
+    memory_phase("solve");
     let t = sol.timings;
     let u = scheme.vertex_values(sol.u());
     let exact = problem
