@@ -63,7 +63,7 @@ fn borrow(v: &[(String, Vec<f64>)]) -> Vec<(&str, &[f64])> {
 
 /// The convention for warped faces named `name` ("fan" or "split"), else the library's
 /// `InvalidDataError`.
-fn warped_convention(py: Python<'_>, name: &str) -> PyResult<WarpedFaces> {
+pub(crate) fn warped_convention(py: Python<'_>, name: &str) -> PyResult<WarpedFaces> {
     WarpedFaces::from_str(name).map_err(|e| crate::to_pyerr(py, &e))
 }
 
