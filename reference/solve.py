@@ -136,18 +136,31 @@ def psi_test3(x):
     return -np.minimum(np.minimum(x[0], 1.0 - x[0]), np.minimum(x[1], 1.0 - x[1]))
 
 
-# The 3D radial obstacle (problems/ex9-3d.toml): f = 0, u >= psi, Dirichlet data u = 1/(2r)
+# The 3D radial obstacle (problems/ex9-3d.toml): f = 0, u >= psi, Dirichlet data u = 1/(2r).
+# Also imported by the dolfinx peer benchmark (benches/dolfinx/ex9_3d.py).
 def r_3d(x):
     return np.sqrt(x[0] ** 2 + x[1] ** 2 + x[2] ** 2)
 
 
 def psi_ex9_3d(x):
+    """psi = sqrt(1 - r^2) for r <= 1, -1 beyond."""
     r = r_3d(x)
     return np.where(r <= 1.0, np.sqrt(np.maximum(1.0 - r ** 2, 0.0)), -1.0)
 
 
 def g_ex9_3d(x):
-    return 1.0 / (2.0 * r_3d(x))
+    """1/(2r), and 0 at the origin (an interior vertex: never a Dirichlet value)."""
+    r = r_3d(x)
+    return np.where(r > 0.0, 0.5 / np.maximum(r, 1e-300), 0.0)
+
+
+R0_EX9_3D = 1.0 / np.sqrt(2.0)  # the radius of the contact ball
+
+
+def u_exact_ex9_3d(x):
+    """The exact solution: psi on the contact ball r <= R0, 1/(2r) outside it."""
+    r = r_3d(x)
+    return np.where(r <= R0_EX9_3D, psi_ex9_3d(x), 0.5 / np.maximum(r, 1e-300))
 
 
 # The 3D Signorini problem (problems/signorini-3d.toml): two materials by cell tag (1: y < 1/2,

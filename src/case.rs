@@ -3,7 +3,11 @@
 //! A problem file ([`crate::problem::file`]) describes its mesh as data, a
 //! [`MeshSpec`]: a mesh file or a generated family at a level. Reading or generating that mesh
 //! is the job of this module, above the problem layer, so that `problem` depends on no mesh
-//! reader or generator.
+//! reader or generator. [`read_any`] and [`case_mesh`] tell a mesh's dimension from its file
+//! and from the problem file ([`AnyMesh`], in `any_mesh.rs`).
+
+mod any_mesh;
+pub use any_mesh::{AnyMesh, case_mesh, read_any};
 
 use crate::error::{Error, Result};
 use crate::mesh::{MemoryBudget, PolyMesh};

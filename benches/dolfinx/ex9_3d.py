@@ -32,6 +32,7 @@ import json
 import resource
 import sys
 import time
+from pathlib import Path
 
 T_START = time.perf_counter()
 
@@ -39,28 +40,11 @@ import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
 
-
-def radius(x):
-    return np.sqrt(x[0] ** 2 + x[1] ** 2 + x[2] ** 2)
-
-
-def psi(x):
-    r = radius(x)
-    return np.where(r <= 1.0, np.sqrt(np.maximum(1.0 - r ** 2, 0.0)), -1.0)
-
-
-def dirichlet_value(x):
-    """1/(2r), and 0 at the origin (an interior vertex: never a Dirichlet value)."""
-    r = radius(x)
-    return np.where(r > 0.0, 0.5 / np.maximum(r, 1e-300), 0.0)
-
-
-R0 = 1.0 / np.sqrt(2.0)  # radius of the contact ball
-
-
-def exact(x):
-    r = radius(x)
-    return np.where(r <= R0, psi(x), 0.5 / np.maximum(r, 1e-300))
+# psi, the Dirichlet data 1/(2r) and the exact solution: the reference solver's formulas
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+from reference.solve import g_ex9_3d as dirichlet_value  # noqa: E402
+from reference.solve import psi_ex9_3d as psi  # noqa: E402
+from reference.solve import u_exact_ex9_3d as exact  # noqa: E402
 
 
 def options(prefix, args):

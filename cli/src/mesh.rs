@@ -4,7 +4,7 @@
 //! The dimension of a file comes from its format: `.typ1` and `.typ2` are 2D; `.vtu`, `.node`,
 //! `.ele` and the stem of a `.node`/`.ele` pair (HArDCore's RF format) are 3D; a gmsh `.msh`
 //! file is 3D when it has 3D elements (tetrahedra, hexahedra, prisms or pyramids), else 2D
-//! ([`read_any`]). Generated meshes are 3D for the family names of
+//! ([`gradvi::case::read_any`]). Generated meshes are 3D for the family names of
 //! [`Family3`] (cubes, kuhn or tetrahedra, prisms, refined, warped) and 2D for those of
 //! [`Family`] (cartesian, hexagonal, kershaw, triangles). The faces of a 3D mesh that are not
 //! planar are kept whole or split into triangles as `--warped-faces` says ([`WarpedFaces`]).
@@ -16,11 +16,12 @@ use crate::output;
 use anyhow::{Result, bail};
 use clap::Subcommand;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
+use gradvi::case::{AnyMesh, read_any};
 use gradvi::mesh::generate::Family;
-use gradvi::mesh::io::{read_mesh, write_typ2, write_vtu};
+use gradvi::mesh::io::{write_typ2, write_vtu};
 use gradvi::mesh::{MemoryBudget, PolyMesh, Rect};
 use gradvi::mesh3d::generate::Family3;
-use gradvi::mesh3d::io::{read_mesh3, read_msh3, write_vtu3};
+use gradvi::mesh3d::io::write_vtu3;
 use gradvi::mesh3d::{Cuboid, PolyMesh3, WarpedFaces};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -88,7 +89,7 @@ pub fn warped_faces() -> impl TypedValueParser<Value = WarpedFaces> {
 /// Runs a `gradvi mesh` subcommand.
 pub fn run(c: &MeshCommand) -> Result<()> {
     match c {
-        MeshCommand::Info { file, warped_faces } => match read_any(file, *warped_faces)? {
+        MeshCommand::Info { file, warped_faces } => match read(file, *warped_faces)? {
             AnyMesh::Two(m) => info_2d(file, &m),
             AnyMesh::Three(m) => info_3d(file, &m),
         },
@@ -117,7 +118,7 @@ pub fn run(c: &MeshCommand) -> Result<()> {
             warped_faces,
         } => {
             output::check_distinct(&[("mesh", input)], &[("converted mesh", output)])?;
-            let m = read_any(input, *warped_faces)?;
+            let m = read(input, *warped_faces)?;
             write(&m, output)?;
             eprintln!("wrote {} ({} cells)", output.display(), m.n_cells());
             Ok(())
@@ -125,66 +126,9 @@ pub fn run(c: &MeshCommand) -> Result<()> {
     }
 }
 
-/// A validated mesh of either dimension.
-pub enum AnyMesh {
-    /// A 2D polygonal mesh.
-    Two(PolyMesh),
-    /// A 3D polyhedral mesh.
-    Three(PolyMesh3),
-}
-
-impl AnyMesh {
-    fn n_cells(&self) -> usize {
-        match self {
-            AnyMesh::Two(m) => m.n_cells(),
-            AnyMesh::Three(m) => m.n_cells(),
-        }
-    }
-
-    fn h(&self) -> f64 {
-        match self {
-            AnyMesh::Two(m) => m.h(),
-            AnyMesh::Three(m) => m.h(),
-        }
-    }
-}
-
-/// Reads and validates the mesh in `path`, 2D or 3D by its format (see the module docs), a 3D
-/// mesh's warped faces as `warped` says.
-///
-/// A `.msh` file is first read by the 3D reader: a file with 3D elements is 3D. When the 3D
-/// reader finds no 3D element (its error at line 0), the file is read by the 2D reader, whose
-/// error, if any, is the one reported; any other error of the 3D reader (a syntax error, which
-/// the 2D reader shares, or an element type neither reads) is reported as it is, unless the 2D
-/// reader reads the file.
-pub fn read_any(path: &Path, warped: WarpedFaces) -> Result<AnyMesh> {
-    let budget = MemoryBudget::available();
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    let three = |p| {
-        let m = PolyMesh3::from_polyhedra_with(p, budget, warped)?;
-        Ok(AnyMesh::Three(m))
-    };
-    match ext.as_deref() {
-        Some("typ1" | "typ2") => Ok(AnyMesh::Two(read_mesh(path, budget)?)),
-        Some("msh") => match read_msh3(path, budget) {
-            Ok(p) => three(p),
-            Err(e3) => match read_mesh(path, budget) {
-                Ok(m) => Ok(AnyMesh::Two(m)),
-                Err(e2) if no_3d_cells(&e3) => Err(e2.into()),
-                Err(_) => Err(e3.into()),
-            },
-        },
-        _ => three(read_mesh3(path, budget)?),
-    }
-}
-
-/// Whether `e`, an error of the 3D gmsh reader, says that the file has no 3D element (the
-/// only error it reports at line 0).
-fn no_3d_cells(e: &gradvi::Error) -> bool {
-    matches!(e, gradvi::Error::MeshIo { line: 0, .. })
+/// The mesh in `path`, 2D or 3D by its format ([`read_any`]), within the memory available.
+fn read(path: &Path, warped: WarpedFaces) -> Result<AnyMesh> {
+    Ok(read_any(path, warped, MemoryBudget::available())?)
 }
 
 /// The mesh of `family` at `level`, on `domain` (4 bounds in 2D, 6 in 3D) or the unit square

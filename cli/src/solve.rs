@@ -1,12 +1,12 @@
 //! `gradvi solve`: one problem on one mesh with one scheme; prints NITER, the iteration log,
 //! the certificate, errors and timings; optionally writes VTU and JSON.
 
-use super::mesh::AnyMesh;
 use super::output::{atomic, check_distinct};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use gradvi::assembly::LinearSolver;
+use gradvi::case::AnyMesh;
 use gradvi::mesh::generate::Family;
 use gradvi::mesh::io::write_vtu;
 use gradvi::mesh::solve_mesh::SolveMesh;

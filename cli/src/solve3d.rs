@@ -1,7 +1,7 @@
 //! `gradvi solve` on a 3D mesh, and the choice of the mesh's dimension.
 //!
 //! The dimension of a solve is the mesh's: a generated 3D family (cubes, kuhn, prisms, refined,
-//! warped), or a mesh file read as `gradvi mesh info` reads it ([`crate::mesh::read_any`]:
+//! warped), or a mesh file read as `gradvi mesh info` reads it ([`gradvi::case::read_any`]:
 //! a `.msh` with 3D elements, `.vtu`, HArDCore RF). The problem file must compile for that
 //! dimension ([`gradvi::problem::file::ProblemFile::check_against_mesh3`] reports a `z` on a
 //! 2D mesh or a 2×2 tensor on a 3D one, at its place in the file).
@@ -33,10 +33,10 @@
 //! (`boundary_tag` 0 on interior faces; `active` and `multiplier` 0 off the constrained faces,
 //! as in the boundary file), so that the interior face unknowns u_σ show in ParaView.
 
-use super::mesh::{AnyMesh, read_any};
 use super::output::atomic;
 use super::solve::{Case, SolveArgs, report, solve_options, write_json};
 use anyhow::{Context, Result};
+use gradvi::case::AnyMesh;
 use gradvi::mesh::MemoryBudget;
 use gradvi::mesh3d::io::write_vtu3;
 use gradvi::mesh3d::{PolyMesh3, WarpedFaces};
@@ -51,23 +51,17 @@ use std::path::{Path, PathBuf};
 /// The 3D scheme trait object.
 type Scheme3<'a> = dyn GradientDiscretisation<PolyMesh3, 3> + 'a;
 
-/// The mesh `spec` describes, 2D or 3D. A mesh file is read as 2D, exactly as before 3D
-/// solves existed ([`gradvi::case::build_mesh`]), when the problem file is not a 3D problem or
-/// the format is 2D only (`.typ1`, `.typ2`); else by [`read_any`], which tells the dimension
-/// from the file. A 3D mesh's warped faces are as `warped` says.
+/// The mesh `spec` describes, 2D or 3D, within the memory available
+/// ([`gradvi::case::case_mesh`]: a mesh file is read as 2D, exactly as before 3D solves
+/// existed, when the problem file is not a 3D problem or the format is 2D only; else its
+/// dimension comes from the file). A 3D mesh's warped faces are as `warped` says.
 pub fn case_mesh(spec: &MeshSpec, pf: &ProblemFile, warped: WarpedFaces) -> Result<AnyMesh> {
-    let budget = MemoryBudget::available();
-    let two_d_format = |p: &Path| {
-        let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
-        ext.eq_ignore_ascii_case("typ1") || ext.eq_ignore_ascii_case("typ2")
-    };
-    Ok(match spec {
-        MeshSpec::Generated3 { .. } => {
-            AnyMesh::Three(warped.apply(gradvi::case::build_mesh3(spec, budget)?, budget)?)
-        }
-        MeshSpec::File(p) if pf.compiles_for(3) && !two_d_format(p) => read_any(p, warped)?,
-        _ => AnyMesh::Two(gradvi::case::build_mesh(spec, budget)?),
-    })
+    Ok(gradvi::case::case_mesh(
+        spec,
+        pf,
+        warped,
+        MemoryBudget::available(),
+    )?)
 }
 
 /// The solve on a 3D mesh (read or generated in `mesh_seconds`).

@@ -29,6 +29,18 @@ fn gradvi(args: &[&str]) -> (Option<i32>, String, String) {
     )
 }
 
+/// Runs `gradvi solve PROBLEM --generate FAMILY --level LEVEL EXTRA...` in the repository.
+fn solve_on(
+    problem: &str,
+    family: &str,
+    level: &str,
+    extra: &[&str],
+) -> (Option<i32>, String, String) {
+    let mut args = vec!["solve", problem, "--generate", family, "--level", level];
+    args.extend_from_slice(extra);
+    gradvi(&args)
+}
+
 fn tmp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("gradvi-solve3d-{}-{name}", std::process::id()))
 }
@@ -278,16 +290,12 @@ fn vtu_and_json_outputs_of_3d_solves() {
     // Signorini (face unknowns): the active faces and their multipliers summed per cell
     let toml = tmp("signorini.toml");
     std::fs::write(&toml, SIGNORINI_CUBE).unwrap();
-    let (code, _, err) = gradvi(&[
-        "solve",
+    let (code, _, err) = solve_on(
         toml.to_str().unwrap(),
-        "--generate",
         "cubes",
-        "--level",
         "1",
-        "--vtu",
-        vtu.to_str().unwrap(),
-    ]);
+        &["--vtu", vtu.to_str().unwrap()],
+    );
     assert_eq!(code, Some(0), "{err}");
     let text = std::fs::read_to_string(&vtu).unwrap();
     for name in ["active_faces", "multiplier_faces"] {
@@ -317,18 +325,17 @@ barrier = "10*(x - 0.5)"
 fn the_boundary_vtu_shows_the_contact_zone_on_the_faces() {
     let (toml, vtu, json) = (tmp("contact.toml"), tmp("contact.vtu"), tmp("contact.json"));
     std::fs::write(&toml, SIGNORINI_CONTACT).unwrap();
-    let (code, out, err) = gradvi(&[
-        "solve",
+    let (code, out, err) = solve_on(
         toml.to_str().unwrap(),
-        "--generate",
         "cubes",
-        "--level",
         "1",
-        "--vtu",
-        vtu.to_str().unwrap(),
-        "--json",
-        json.to_str().unwrap(),
-    ]);
+        &[
+            "--vtu",
+            vtu.to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+        ],
+    );
     assert_eq!(code, Some(0), "{err}");
     let b = boundary_vtu(&vtu);
     assert!(
@@ -431,14 +438,7 @@ fn dimension_mismatches_are_errors_at_their_place_in_the_file() {
     let toml = tmp("mismatch.toml");
     // a 2×2 tensor on a 3D mesh
     std::fs::write(&toml, "[diffusion]\nA = [[1, 0], [0, 1]]\n").unwrap();
-    let (code, _, err) = gradvi(&[
-        "solve",
-        toml.to_str().unwrap(),
-        "--generate",
-        "cubes",
-        "--level",
-        "1",
-    ]);
+    let (code, _, err) = solve_on(toml.to_str().unwrap(), "cubes", "1", &[]);
     assert_ne!(code, Some(0));
     assert!(
         err.contains(":2:5: diffusion.A: a 2x2 tensor on a 3D mesh"),
@@ -446,28 +446,14 @@ fn dimension_mismatches_are_errors_at_their_place_in_the_file() {
     );
     // a z on a 2D mesh
     std::fs::write(&toml, "[source]\nf = \"x*z\"\n").unwrap();
-    let (code, _, err) = gradvi(&[
-        "solve",
-        toml.to_str().unwrap(),
-        "--generate",
-        "cartesian",
-        "--level",
-        "1",
-    ]);
+    let (code, _, err) = solve_on(toml.to_str().unwrap(), "cartesian", "1", &[]);
     assert_ne!(code, Some(0));
     assert!(
         err.contains(":2:8: source.f: \"x*z\" at character 3: unknown variable 'z'"),
         "{err}"
     );
     // the same file solves on a 3D mesh
-    let (code, _, err) = gradvi(&[
-        "solve",
-        toml.to_str().unwrap(),
-        "--generate",
-        "kuhn",
-        "--level",
-        "1",
-    ]);
+    let (code, _, err) = solve_on(toml.to_str().unwrap(), "kuhn", "1", &[]);
     assert_eq!(code, Some(0), "{err}");
     // a 3D family with the 2D domain of a problem file's mesh
     let (code, _, err) = gradvi(&["solve", "problems/ex9.toml", "--generate", "cubes"]);
@@ -480,18 +466,12 @@ fn dimension_mismatches_are_errors_at_their_place_in_the_file() {
 fn vtu_faces_writes_every_face_with_the_boundary_files_values() {
     let (toml, vtu) = (tmp("faces.toml"), tmp("faces.vtu"));
     std::fs::write(&toml, SIGNORINI_CONTACT).unwrap();
-    let args = [
-        "solve",
+    let (code, out, err) = solve_on(
         toml.to_str().unwrap(),
-        "--generate",
         "cubes",
-        "--level",
         "1",
-        "--vtu",
-        vtu.to_str().unwrap(),
-        "--vtu-faces",
-    ];
-    let (code, out, err) = gradvi(&args);
+        &["--vtu", vtu.to_str().unwrap(), "--vtu-faces"],
+    );
     assert_eq!(code, Some(0), "{err}");
     let f = tmp("faces_faces.vtu");
     assert!(

@@ -125,11 +125,12 @@ class _Mesh3:
         point_data: List[Tuple[str, npt.NDArray[np.float64]]],
         cell_data: List[Tuple[str, npt.NDArray[np.float64]]],
     ) -> None: ...
-    def write_boundary_vtu(
+    def write_faces_vtu(
         self,
         path: str,
         point_data: List[Tuple[str, npt.NDArray[np.float64]]],
         face_data: List[Tuple[str, npt.NDArray[np.float64]]],
+        boundary_only: bool,
     ) -> None: ...
 
 class _Problem:
@@ -150,7 +151,7 @@ class _Problem:
     mesh_spec: Optional[str]
     constraint: Optional[Tuple[str, str]]
     has_exact: bool
-    def build_mesh(self) -> Optional[Union[_Mesh, _Mesh3]]: ...
+    def build_mesh(self, warped_faces: str = ...) -> Optional[Union[_Mesh, _Mesh3]]: ...
 
 # every option is given (their defaults are those of gradvi.solve)
 def solve(

@@ -49,6 +49,11 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return a
 
 
+def _named(data: Optional[Mapping[str, ArrayLike]]) -> List[Tuple[str, np.ndarray]]:
+    """Named data arrays as the writers take them: (name, contiguous flat float64 array)."""
+    return [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (data or {}).items()]
+
+
 def _points2d(points: ArrayLike) -> np.ndarray:
     p = np.asarray(points, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] not in (2, 3):
@@ -374,9 +379,7 @@ class Mesh:
     ) -> None:
         """Writes an ASCII VTK ``.vtu`` file (polygons; float64 data arrays, one value per vertex
         or per cell) with gradvi's own writer (no meshio needed)."""
-        pd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (point_data or {}).items()]
-        cd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (cell_data or {}).items()]
-        self._m.write_vtu(os.fspath(path), pd, cd)
+        self._m.write_vtu(os.fspath(path), _named(point_data), _named(cell_data))
 
     def write_typ2(self, path: PathLike) -> None:
         """Writes an FVCA5 / HArDCore ``.typ2`` file (readable by :meth:`read`)."""

@@ -11,7 +11,7 @@ import numpy as np
 
 from . import _gradvi
 from ._gradvi import InvalidDataError
-from ._mesh import _readonly
+from ._mesh import _named, _readonly
 
 if TYPE_CHECKING:  # pragma: no cover
     import meshio
@@ -313,9 +313,7 @@ class Mesh3:
         ``VTK_POLYHEDRON``; cell tags as the cell data ``cell_tag``, tagged boundary faces as
         field data; float64 data arrays, one value per vertex or per cell. :meth:`read` reads
         it back."""
-        pd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (point_data or {}).items()]
-        cd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (cell_data or {}).items()]
-        self._m.write_vtu(os.fspath(path), pd, cd)
+        self._m.write_vtu(os.fspath(path), _named(point_data), _named(cell_data))
 
     def write_boundary_vtu(
         self,
@@ -330,9 +328,21 @@ class Mesh3:
         ``boundary_tag`` are always written; ``point_data`` holds one value per mesh vertex and
         ``face_data`` one value per mesh face (interior faces included): the values on the
         boundary are written."""
-        pd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (point_data or {}).items()]
-        fd = [(str(k), np.ascontiguousarray(v, dtype=np.float64).reshape(-1)) for k, v in (face_data or {}).items()]
-        self._m.write_boundary_vtu(os.fspath(path), pd, fd)
+        self._m.write_faces_vtu(os.fspath(path), _named(point_data), _named(face_data), True)
+
+    def write_faces_vtu(
+        self,
+        path: PathLike,
+        point_data: Optional[Mapping[str, ArrayLike]] = None,
+        face_data: Optional[Mapping[str, ArrayLike]] = None,
+    ) -> None:
+        """Writes every face of the mesh, interior and boundary, to an ASCII VTK ``.vtu`` file
+        for ParaView: face ``f`` is the ``VTK_POLYGON`` number ``f``, its loop the mesh's
+        (counter-clockwise seen from outside the first cell of the face); the points are the
+        mesh's vertices in increasing order. The cell data ``face`` (the index of each face) and
+        ``boundary_tag`` (0 on interior faces) are always written; ``point_data`` holds one
+        value per mesh vertex and ``face_data`` one value per mesh face."""
+        self._m.write_faces_vtu(os.fspath(path), _named(point_data), _named(face_data), False)
 
     def to_meshio(
         self,

@@ -492,14 +492,16 @@ class Problem:
         """Whether the exact solution is known (errors are then computed)."""
         return self._spec.get("exact") is not None if self._handle is None else bool(self._handle.has_exact)
 
-    def mesh(self) -> Optional[Union[Mesh, Mesh3]]:
+    def mesh(self, warped_faces: str = "fan") -> Optional[Union[Mesh, Mesh3]]:
         """The mesh of a problem file's ``[mesh]`` section (read or generated), or None: a
         :class:`Mesh3` for a generated 3D family, or for a mesh file with 3D cells (a gmsh
         ``.msh`` with 3D elements, ``.vtu``, HArDCore RF) when the file is a 3D problem; else
-        a planar :class:`Mesh`. The choice is ``gradvi solve``'s."""
+        a planar :class:`Mesh`. The choice is ``gradvi solve``'s. ``warped_faces``: the faces
+        of a 3D mesh that are not planar kept whole (``"fan"``, the default) or split
+        (``"split"``), as ``gradvi solve --warped-faces`` and :meth:`Mesh3.read` say."""
         if self._handle is None:
             return None
-        h = self._handle.build_mesh()
+        h = self._handle.build_mesh(str(warped_faces))
         if h is None:
             return None
         return Mesh3._wrap(h) if isinstance(h, _gradvi._Mesh3) else Mesh._wrap(h)

@@ -400,15 +400,33 @@ class Solution:
         pd, fd = self.boundary_fields()
         self.mesh.write_boundary_vtu(path, pd, fd)  # type: ignore[union-attr]
 
-    def write_vtu(self, path: Union[str, "os.PathLike[str]"], *, boundary: bool = True) -> None:
+    def write_faces_vtu(self, path: Union[str, "os.PathLike[str]"]) -> None:
+        """Writes every face of the mesh of a 3D solution, interior and boundary, to an ASCII
+        ``.vtu`` file (:meth:`Mesh3.write_faces_vtu`) with the arrays of
+        :meth:`boundary_fields` on every face (``active`` and ``multiplier`` are 0 off the
+        constrained faces, ``boundary_tag`` 0 on interior faces): what ``gradvi solve --vtu
+        --vtu-faces`` writes to ``NAME_faces.vtu``. ``InvalidDataError`` on a planar mesh."""
+        pd, fd = self.boundary_fields()
+        self.mesh.write_faces_vtu(path, pd, fd)  # type: ignore[union-attr]
+
+    def write_vtu(self, path: Union[str, "os.PathLike[str]"], *, boundary: bool = True, faces: bool = False) -> None:
         """Writes the solution (see :meth:`fields`) to an ASCII ``.vtu`` file for ParaView,
         with gradvi's own writer. A 3D solution also writes, as ``gradvi solve --vtu`` does,
         its boundary surface (:meth:`write_boundary_vtu`) beside it: ``NAME_boundary.vtu`` for
-        ``NAME.vtu`` (``boundary=False``: not)."""
+        ``NAME.vtu`` (``boundary=False``: not). With ``faces=True``, as ``gradvi solve --vtu
+        --vtu-faces``, also every face of the mesh (:meth:`write_faces_vtu`) to
+        ``NAME_faces.vtu`` (:func:`faces_path`). ``faces=True`` on a planar solution raises
+        :class:`gradvi.InvalidDataError` before any file is written."""
+        if faces and self.dim != 3:
+            raise InvalidDataError(
+                f"faces=True writes the faces of a 3D mesh; the mesh ({self.mesh.n_cells} cells) is 2D"
+            )
         pd, cd = self.fields()
         self.mesh.write_vtu(path, pd, cd)
         if boundary and self.dim == 3:
             self.write_boundary_vtu(boundary_path(path))
+        if faces:
+            self.write_faces_vtu(faces_path(path))
 
     def to_meshio(self) -> "meshio.Mesh":
         """The mesh with the arrays of :meth:`fields` as point and cell data (needs meshio)."""
@@ -460,6 +478,13 @@ def boundary_path(path: Union[str, "os.PathLike[str]"]) -> str:
     ``NAME.EXT`` (the name ``gradvi solve --vtu`` gives it)."""
     root, ext = os.path.splitext(os.fspath(path))
     return f"{root}_boundary{ext}"
+
+
+def faces_path(path: Union[str, "os.PathLike[str]"]) -> str:
+    """The all-faces VTU file beside the VTU file ``path``: ``NAME_faces.EXT`` for
+    ``NAME.EXT`` (the name ``gradvi solve --vtu --vtu-faces`` gives it)."""
+    root, ext = os.path.splitext(os.fspath(path))
+    return f"{root}_faces{ext}"
 
 
 def _as_mesh(mesh: Any) -> Union[Mesh, Mesh3]:

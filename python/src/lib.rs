@@ -20,7 +20,6 @@
 //! `InternalError` instead of aborting the interpreter or raising pyo3's `PanicException`
 //! (which is not an `Exception`).
 
-mod case;
 mod errors;
 mod mesh;
 mod mesh3d;

@@ -11,7 +11,7 @@ use gradvi::mesh::{MemoryBudget, NO_CELL, SolveMesh};
 use gradvi::mesh3d::generate::Family3;
 use gradvi::mesh3d::io::{read_mesh3, write_vtu3};
 use gradvi::mesh3d::{Cuboid, Point3, PolyMesh3, Polyhedra, WarpedFaces};
-use gradvi::post::vtu_boundary::write_boundary_vtu;
+use gradvi::post::vtu_boundary::{write_boundary_vtu, write_faces_vtu};
 use gradvi::scheme::{GradientDiscretisation, SchemeKind, SchemeOptions, build_with3};
 use nalgebra::DVector;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
@@ -63,7 +63,7 @@ fn borrow(v: &[(String, Vec<f64>)]) -> Vec<(&str, &[f64])> {
 
 /// The convention for warped faces named `name` ("fan" or "split"), else the library's
 /// `InvalidDataError`.
-fn warped_convention(py: Python<'_>, name: &str) -> PyResult<WarpedFaces> {
+pub(crate) fn warped_convention(py: Python<'_>, name: &str) -> PyResult<WarpedFaces> {
     WarpedFaces::from_str(name).map_err(|e| crate::to_pyerr(py, &e))
 }
 
@@ -318,20 +318,26 @@ impl PyMesh3 {
         })
     }
 
-    /// Writes the boundary faces as polygons with named point data (per mesh vertex) and face
-    /// data (per mesh face) to an ASCII .vtu file
-    /// (`gradvi::post::vtu_boundary::write_boundary_vtu`).
-    fn write_boundary_vtu(
+    /// Writes the boundary faces (`boundary_only`), or every face of the mesh, as polygons
+    /// with named point data (per mesh vertex) and face data (per mesh face) to an ASCII .vtu
+    /// file (`gradvi::post::vtu_boundary::write_faces_vtu`).
+    fn write_faces_vtu(
         &self,
         py: Python<'_>,
         path: PathBuf,
         point_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
         face_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
+        boundary_only: bool,
     ) -> PyResult<()> {
         let (pd, fd) = (owned(point_data), owned(face_data));
         let mesh = Arc::clone(&self.mesh);
         guard(py, move || {
-            write_boundary_vtu(&path, &mesh, &borrow(&pd), &borrow(&fd))
+            let (pd, fd) = (borrow(&pd), borrow(&fd));
+            if boundary_only {
+                return write_boundary_vtu(&path, &mesh, &pd, &fd);
+            }
+            let all: Vec<u32> = (0..mesh.n_faces() as u32).collect();
+            write_faces_vtu(&path, &mesh, &all, &pd, &fd)
         })
     }
 

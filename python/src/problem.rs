@@ -9,11 +9,11 @@
 //! the point-wise fallback the Python layer gave for a callable datum, or gets NaN for array
 //! data (the warm start is then skipped, with the reason in the solution's report).
 
-use crate::case::{CaseMesh, case_mesh};
 use crate::errors::invalid;
 use crate::guard;
 use crate::mesh::{PyMesh, point_key};
-use crate::mesh3d::PyMesh3;
+use crate::mesh3d::{PyMesh3, warped_convention};
+use gradvi::case::{AnyMesh, case_mesh};
 use gradvi::mesh::{CellComplex, PolyMesh, SolveMesh};
 use gradvi::mesh3d::PolyMesh3;
 use gradvi::problem::file::{ProblemFile, builtin, load};
@@ -709,24 +709,29 @@ impl PyProblem {
         }
     }
     /// Builds the mesh of the file's `[mesh]` section, a `_Mesh` or a `_Mesh3` as `gradvi
-    /// solve` would build it ([`crate::case`]); None without one.
-    fn build_mesh(&self, py: Python<'_>) -> PyResult<Option<Py<PyAny>>> {
+    /// solve` would build it ([`gradvi::case::case_mesh`]), a 3D mesh's warped faces as
+    /// `warped_faces` ("fan" or "split") says; None without one.
+    #[pyo3(signature = (warped_faces="fan"))]
+    fn build_mesh(&self, py: Python<'_>, warped_faces: &str) -> PyResult<Option<Py<PyAny>>> {
         let Spec::File(pf) = &self.spec else {
             return Ok(None);
         };
         let Some(spec) = pf.mesh.clone() else {
             return Ok(None);
         };
+        let warped = warped_convention(py, warped_faces)?;
         let pf = pf.as_ref();
-        Ok(Some(match guard(py, move || case_mesh(&spec, pf))? {
-            CaseMesh::Two(m) => PyMesh {
+        let budget = gradvi::mesh::MemoryBudget::available();
+        let mesh = guard(py, move || case_mesh(&spec, pf, warped, budget))?;
+        Ok(Some(match mesh {
+            AnyMesh::Two(m) => PyMesh {
                 mesh: Arc::new(m),
                 physical_names: Vec::new(),
             }
             .into_pyobject(py)?
             .into_any()
             .unbind(),
-            CaseMesh::Three(m) => PyMesh3::new(m).into_pyobject(py)?.into_any().unbind(),
+            AnyMesh::Three(m) => PyMesh3::new(m).into_pyobject(py)?.into_any().unbind(),
         }))
     }
     /// (kind, side) of the barrier: ("obstacle" | "signorini", "upper" | "lower"), or None.

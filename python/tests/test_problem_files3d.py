@@ -192,3 +192,52 @@ def test_the_boundary_vtu_of_a_signorini_file(tmp_path):
         assert_close(np.concatenate(b.cell_data["multiplier"]), lam[bf], "multiplier")
         u_face = np.concatenate(b.cell_data["u_face"])
         assert_close(u_face, sol.u_face[bf], "u_face")
+
+
+# ------------------------------------------------------------------------- all-faces VTU
+
+
+def test_the_faces_vtu_is_the_command_lines(tmp_path):
+    """`write_vtu(..., faces=True)` writes NAME_faces.vtu as `gradvi solve --vtu --vtu-faces`
+    does: every face of the mesh, interior ones included, with the same arrays and values."""
+    toml = tmp_path / "contact.toml"
+    toml.write_text(SIGNORINI_CONTACT)
+    run_cli(tmp_path, str(toml), "--generate", "cubes", "--level", "1", "--vtu-faces")
+    mesh = gradvi.Mesh3.generate("cubes", 1)
+    sol = gradvi.solve(mesh, gradvi.Problem.from_file(toml), scheme="hmm")
+    sol.write_vtu(tmp_path / "s.vtu", faces=True)
+    assert (tmp_path / "s_boundary.vtu").exists()
+    ours, theirs = meshio.read(tmp_path / "s_faces.vtu"), meshio.read(tmp_path / "cli_faces.vtu")
+    assert [c.type for c in ours.cells] == ["polygon"] and len(ours.cells[0].data) == mesh.n_faces == 240
+    np.testing.assert_array_equal(ours.cell_data["face"][0], np.arange(mesh.n_faces))
+    np.testing.assert_array_equal(ours.points, theirs.points)
+    np.testing.assert_array_equal(ours.cells[0].data, theirs.cells[0].data)
+    for f in (0, 100, 239):
+        np.testing.assert_array_equal(ours.points[ours.cells[0].data[f]], mesh.points[mesh.face_vertices(f)])
+    assert set(ours.cell_data) == set(theirs.cell_data) == {"face", "boundary_tag", "u_face", "active", "multiplier"}
+    assert set(ours.point_data) == set(theirs.point_data) == {"u_vertex"}
+    for name in ours.cell_data:
+        assert_close(ours.cell_data[name][0], theirs.cell_data[name][0], name)
+    assert_close(ours.point_data["u_vertex"], theirs.point_data["u_vertex"], "u_vertex")
+    # u_σ on every face; the contact zone on the bottom only
+    np.testing.assert_array_equal(ours.cell_data["u_face"][0], sol.u_face)
+    active = ours.cell_data["active"][0]
+    np.testing.assert_array_equal(active > 0.5, sol.active_faces)
+    assert int(active.sum()) == sol.n_active == 8
+    # not written unless asked for
+    sol.write_vtu(tmp_path / "plain.vtu")
+    assert (tmp_path / "plain_boundary.vtu").exists() and not (tmp_path / "plain_faces.vtu").exists()
+
+
+def test_the_faces_vtu_is_refused_on_a_planar_mesh_as_on_the_command_line(tmp_path):
+    sol = gradvi.solve(gradvi.Mesh.generate("cartesian", 1), gradvi.Problem.builtin("test1"))
+    with pytest.raises(gradvi.InvalidDataError) as e:
+        sol.write_vtu(tmp_path / "flat.vtu", faces=True)
+    assert list(tmp_path.iterdir()) == [], "nothing is written"
+    vtu = tmp_path / "c.vtu"
+    want = cli_error("--problem", "test1", "--generate", "cartesian", "--level", "1", "--vtu", str(vtu), "--vtu-faces")
+    assert not vtu.exists()
+    # the same message, the option named as each interface names it
+    ours, theirs = str(e.value).removeprefix("faces=True "), want.removeprefix("--vtu-faces ")
+    assert ours.split("; the mesh ")[0] == theirs.split("; the mesh ")[0] == "writes the faces of a 3D mesh"
+    assert ours.endswith(" is 2D") and theirs.endswith(" is 2D")

@@ -18,13 +18,13 @@
 //! (17 significant digits, exact on reading back).
 
 use crate::error::{Error, Result};
-use crate::mesh::io::vtu::{check_arrays, write_cell_array, write_data, write_f64};
+use crate::mesh::io::vtu::{
+    check_arrays, write_cell_array, write_data, write_f64, write_file, write_header,
+    write_polygons_and_end,
+};
 use crate::mesh3d::PolyMesh3;
 use std::io::Write;
 use std::path::Path;
-
-/// The VTK cell type of a polygon.
-const VTK_POLYGON: u8 = 7;
 
 /// Writes the boundary surface of `mesh` to `path` (see the module docs), with `point_data`
 /// (one value per mesh vertex) and `face_data` (one value per mesh face), all `Float64`:
@@ -76,14 +76,7 @@ pub fn write_faces_vtu(
             "the face-data name \"{name}\" is reserved: the face VTU file writes it itself"
         )));
     }
-    let io = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let file = std::fs::File::create(path).map_err(io)?;
-    let mut w = std::io::BufWriter::new(file);
-    write_to(&mut w, mesh, faces, point_data, face_data).map_err(io)?;
-    w.flush().map_err(io)
+    write_file(path, |w| write_to(w, mesh, faces, point_data, face_data))
 }
 
 /// The vertices of `faces` in increasing order, and the point index of each mesh vertex
@@ -114,17 +107,7 @@ fn write_to(
 ) -> std::io::Result<()> {
     let nf = faces.len();
     let (used, index) = face_points(mesh, faces);
-    writeln!(w, "<?xml version=\"1.0\"?>")?;
-    writeln!(
-        w,
-        "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">"
-    )?;
-    writeln!(w, "  <UnstructuredGrid>")?;
-    writeln!(
-        w,
-        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{nf}\">",
-        used.len()
-    )?;
+    write_header(w, used.len(), nf)?;
     if !point_data.is_empty() {
         writeln!(w, "      <PointData>")?;
         for (name, values) in point_data {
@@ -160,26 +143,12 @@ fn write_to(
     }
     writeln!(w, "        </DataArray>")?;
     writeln!(w, "      </Points>")?;
-    writeln!(w, "      <Cells>")?;
-    write_cell_array(w, "Int64", "connectivity", nf, |w, i| {
-        write!(w, "         ")?;
-        for &v in mesh.face_vertices(faces[i] as usize) {
-            write!(w, " {}", index[v as usize])?;
-        }
-        writeln!(w)
-    })?;
-    let mut offset = 0usize;
-    write_cell_array(w, "Int64", "offsets", nf, |w, i| {
-        offset += mesh.face_vertices(faces[i] as usize).len();
-        writeln!(w, "          {offset}")
-    })?;
-    write_cell_array(w, "UInt8", "types", nf, |w, _| {
-        writeln!(w, "          {VTK_POLYGON}")
-    })?;
-    writeln!(w, "      </Cells>")?;
-    writeln!(w, "    </Piece>")?;
-    writeln!(w, "  </UnstructuredGrid>")?;
-    writeln!(w, "</VTKFile>")
+    write_polygons_and_end(
+        w,
+        nf,
+        |i| mesh.face_vertices(faces[i] as usize),
+        |v| index[v as usize],
+    )
 }
 
 #[cfg(test)]

@@ -7,7 +7,8 @@
 
 use crate::error::{Error, Result};
 use crate::mesh::PolyMesh;
-use std::io::Write;
+use std::fs::File;
+use std::io::{BufWriter, Write};
 use std::path::Path;
 
 /// VTK cell type of a polygon.
@@ -27,14 +28,71 @@ pub fn write_vtu(
     let path = path.as_ref();
     check_arrays("point", point_data, mesh.n_vertices(), "vertices")?;
     check_arrays("cell", cell_data, mesh.n_cells(), "cells")?;
+    write_file(path, |w| write_to(w, mesh, point_data, cell_data))
+}
+
+/// Creates `path` and writes it, buffered, through `write`; an I/O error is [`Error::Io`]
+/// with the path.
+pub(crate) fn write_file(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+) -> Result<()> {
     let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
     };
-    let file = std::fs::File::create(path).map_err(io)?;
-    let mut w = std::io::BufWriter::new(file);
-    write_to(&mut w, mesh, point_data, cell_data).map_err(io)?;
+    let mut w = BufWriter::new(File::create(path).map_err(io)?);
+    write(&mut w).map_err(io)?;
     w.flush().map_err(io)
+}
+
+/// The start of an unstructured grid of one piece of `n_points` points and `n_cells` cells, up
+/// to the opening `<Piece>` tag.
+pub(crate) fn write_header(
+    w: &mut impl Write,
+    n_points: usize,
+    n_cells: usize,
+) -> std::io::Result<()> {
+    writeln!(w, "<?xml version=\"1.0\"?>")?;
+    writeln!(
+        w,
+        "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">"
+    )?;
+    writeln!(w, "  <UnstructuredGrid>")?;
+    writeln!(
+        w,
+        "    <Piece NumberOfPoints=\"{n_points}\" NumberOfCells=\"{n_cells}\">"
+    )
+}
+
+/// The `<Cells>` block of `n_cells` polygons, cell k the loop of points `point(v)` for the
+/// vertices v of `vertex_loop(k)`, then the end of the piece and of the file.
+pub(crate) fn write_polygons_and_end<'a, W: Write>(
+    w: &mut W,
+    n_cells: usize,
+    vertex_loop: impl Fn(usize) -> &'a [u32],
+    point: impl Fn(u32) -> u32,
+) -> std::io::Result<()> {
+    writeln!(w, "      <Cells>")?;
+    write_cell_array(w, "Int64", "connectivity", n_cells, |w, k| {
+        write!(w, "         ")?;
+        for &v in vertex_loop(k) {
+            write!(w, " {}", point(v))?;
+        }
+        writeln!(w)
+    })?;
+    let mut offset = 0usize;
+    write_cell_array(w, "Int64", "offsets", n_cells, |w, k| {
+        offset += vertex_loop(k).len();
+        writeln!(w, "          {offset}")
+    })?;
+    write_cell_array(w, "UInt8", "types", n_cells, |w, _| {
+        writeln!(w, "          {VTK_POLYGON}")
+    })?;
+    writeln!(w, "      </Cells>")?;
+    writeln!(w, "    </Piece>")?;
+    writeln!(w, "  </UnstructuredGrid>")?;
+    writeln!(w, "</VTKFile>")
 }
 
 pub(crate) fn check_arrays(
@@ -132,18 +190,7 @@ fn write_to(
     point_data: &[(&str, &[f64])],
     cell_data: &[(&str, &[f64])],
 ) -> std::io::Result<()> {
-    writeln!(w, "<?xml version=\"1.0\"?>")?;
-    writeln!(
-        w,
-        "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">"
-    )?;
-    writeln!(w, "  <UnstructuredGrid>")?;
-    writeln!(
-        w,
-        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
-        mesh.n_vertices(),
-        mesh.n_cells()
-    )?;
+    write_header(w, mesh.n_vertices(), mesh.n_cells())?;
     if !point_data.is_empty() {
         writeln!(w, "      <PointData>")?;
         for (name, values) in point_data {
@@ -172,27 +219,7 @@ fn write_to(
     }
     writeln!(w, "        </DataArray>")?;
     writeln!(w, "      </Points>")?;
-    writeln!(w, "      <Cells>")?;
-    let n = mesh.n_cells();
-    write_cell_array(w, "Int64", "connectivity", n, |w, k| {
-        write!(w, "         ")?;
-        for &v in mesh.cell_vertices(k) {
-            write!(w, " {v}")?;
-        }
-        writeln!(w)
-    })?;
-    let mut offset = 0usize;
-    write_cell_array(w, "Int64", "offsets", n, |w, k| {
-        offset += mesh.cell_vertices(k).len();
-        writeln!(w, "          {offset}")
-    })?;
-    write_cell_array(w, "UInt8", "types", n, |w, _| {
-        writeln!(w, "          {VTK_POLYGON}")
-    })?;
-    writeln!(w, "      </Cells>")?;
-    writeln!(w, "    </Piece>")?;
-    writeln!(w, "  </UnstructuredGrid>")?;
-    writeln!(w, "</VTKFile>")
+    write_polygons_and_end(w, mesh.n_cells(), |k| mesh.cell_vertices(k), |v| v)
 }
 
 #[cfg(test)]
