@@ -5,7 +5,7 @@
 //! in the caller's [`SolveState`].
 
 use super::linear::{
-    ITERATIVE_MAX_ITER, ITERATIVE_RTOL, REUSE_MAX_CHANGED, REUSE_MAX_SLOWDOWN, SCREENING_REDUCTION,
+    ITERATIVE_MAX_ITER, ITERATIVE_RTOL, REUSE_MAX_SLOWDOWN, SCREENING_REDUCTION, reuse_max_changed,
 };
 use super::{DiscreteSystem, SolveState};
 use crate::linalg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, CsrMatrix};
@@ -165,7 +165,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         cells: bool,
     ) -> crate::Result<NextHierarchy> {
         let mask = fixed_mask(&self.values.dirichlet, fixed)?;
-        let max_changed = (REUSE_MAX_CHANGED * self.n as f64) as usize;
+        let max_changed = (reuse_max_changed(D) * self.n as f64) as usize;
         let next = state
             .kept
             .take()

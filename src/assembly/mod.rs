@@ -62,7 +62,8 @@ use crate::scheme::{GradientDiscretisation, PointDof};
 use condense::{CellSystem, SymMatrix};
 pub use linear::{
     AUTO_ITERATIVE_MIN, AUTO_ITERATIVE_MIN_3D, ITERATIVE_MAX_ITER, ITERATIVE_RTOL, LinearSolver,
-    REUSE_MAX_CHANGED, REUSE_MAX_SLOWDOWN, SCREENING_REDUCTION, SCREENING_RTOL,
+    REUSE_MAX_CHANGED, REUSE_MAX_CHANGED_3D, REUSE_MAX_SLOWDOWN, SCREENING_REDUCTION,
+    SCREENING_RTOL,
 };
 pub use state::{SolveState, Solving};
 use std::sync::Arc;
