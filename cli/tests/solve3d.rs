@@ -308,19 +308,9 @@ fn vtu_and_json_outputs_of_3d_solves() {
     }
 }
 
-/// [`SIGNORINI_CUBE`] pushed up (f = 10) against a barrier that rises with x: contact on part
-/// of the bottom face.
-const SIGNORINI_CONTACT: &str = r#"
-[source]
-f = 10
-[dirichlet]
-where = "z > 1 - 1e-9"
-[signorini]
-where = "z < 1e-9"
-side = "upper"
-barrier = "10*(x - 0.5)"
-[neumann]
-"#;
+/// The Signorini cube pushed up (f = 10) against a barrier that rises with x: contact on part
+/// of the bottom face (`tests/data/signorini-contact-3d.toml`, shared with the Python tests).
+const SIGNORINI_CONTACT: &str = include_str!("../../tests/data/signorini-contact-3d.toml");
 
 #[test]
 fn the_boundary_vtu_shows_the_contact_zone_on_the_faces() {

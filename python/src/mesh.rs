@@ -2,6 +2,7 @@
 
 use crate::errors::invalid;
 use crate::guard;
+use crate::mesh3d::{borrow, owned};
 use gradvi::mesh::generate::{Family, cartesian_rect_within};
 use gradvi::mesh::io::{read_mesh, read_msh, write_typ2, write_vtu};
 use gradvi::mesh::{MemoryBudget, NO_CELL, Point, PolyMesh, Rect};
@@ -424,21 +425,10 @@ impl PyMesh {
         point_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
         cell_data: Vec<(String, PyReadonlyArray1<'_, f64>)>,
     ) -> PyResult<()> {
-        let pd: Vec<(String, Vec<f64>)> = point_data
-            .into_iter()
-            .map(|(n, a)| (n, a.as_array().to_vec()))
-            .collect();
-        let cd: Vec<(String, Vec<f64>)> = cell_data
-            .into_iter()
-            .map(|(n, a)| (n, a.as_array().to_vec()))
-            .collect();
+        let (pd, cd) = (owned(point_data), owned(cell_data));
         let mesh = Arc::clone(&self.mesh);
         guard(py, move || {
-            let p: Vec<(&str, &[f64])> =
-                pd.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
-            let c: Vec<(&str, &[f64])> =
-                cd.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
-            write_vtu(&path, &mesh, &p, &c)
+            write_vtu(&path, &mesh, &borrow(&pd), &borrow(&cd))
         })
     }
 

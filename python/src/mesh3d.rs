@@ -57,7 +57,7 @@ fn to_u32(what: &str, a: PyReadonlyArray1<'_, i64>) -> PyResult<Vec<u32>> {
 }
 
 /// Named arrays as the slices the writers take.
-fn borrow(v: &[(String, Vec<f64>)]) -> Vec<(&str, &[f64])> {
+pub(crate) fn borrow(v: &[(String, Vec<f64>)]) -> Vec<(&str, &[f64])> {
     v.iter().map(|(n, a)| (n.as_str(), a.as_slice())).collect()
 }
 
@@ -68,7 +68,7 @@ pub(crate) fn warped_convention(py: Python<'_>, name: &str) -> PyResult<WarpedFa
 }
 
 /// Named numpy arrays as owned vectors (to hand them to a detached writer).
-fn owned(v: Vec<(String, PyReadonlyArray1<'_, f64>)>) -> Vec<(String, Vec<f64>)> {
+pub(crate) fn owned(v: Vec<(String, PyReadonlyArray1<'_, f64>)>) -> Vec<(String, Vec<f64>)> {
     v.into_iter()
         .map(|(n, a)| (n, a.as_array().to_vec()))
         .collect()

@@ -155,18 +155,9 @@ def test_builtin_problems_on_a_3d_mesh_are_the_command_lines(tmp_path):
 
 # ------------------------------------------------------------------------------ boundary VTU
 
-#: A Signorini problem on the unit cube: contact on the part x < 1/2 of the bottom face.
-SIGNORINI_CONTACT = """
-[source]
-f = 10
-[dirichlet]
-where = "z > 1 - 1e-9"
-[signorini]
-where = "z < 1e-9"
-side = "upper"
-barrier = "10*(x - 0.5)"
-[neumann]
-"""
+#: A Signorini problem on the unit cube: contact on the part x < 1/2 of the bottom face (shared
+#: with cli/tests/solve3d.rs).
+SIGNORINI_CONTACT = (ROOT / "tests" / "data" / "signorini-contact-3d.toml").read_text()
 
 
 def test_the_boundary_vtu_of_a_signorini_file(tmp_path):
