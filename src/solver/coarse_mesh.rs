@@ -43,8 +43,16 @@ pub trait CoarseMesh<const D: usize>: SolveMesh<D> + VertexAverage + Sized {
     fn cell_size(measure: f64, cells: usize) -> f64;
     /// The length of a cell of measure `measure`: measure^{1/D}.
     fn cell_length(measure: f64) -> f64;
-    /// Agglomerates the mesh into cells of size about `size`, within `budget`.
-    fn coarsen(&self, size: f64, budget: MemoryBudget) -> Result<Level<Self>, MeshError>;
+    /// Agglomerates the mesh into cells of size about `size`, within `budget`; where the mesh
+    /// type can, the boundary faces of one coarse cell with the same key in `boundary_key`
+    /// (indexed by face; [`KEEP`](crate::mesh3d::agglomerate::KEEP) keeps a face as it is) are merged by plane
+    /// ([`crate::mesh3d::agglomerate::agglomerate3_merging`]).
+    fn coarsen(
+        &self,
+        size: f64,
+        boundary_key: Option<&[u32]>,
+        budget: MemoryBudget,
+    ) -> Result<Level<Self>, MeshError>;
     /// The distance from `p` to face `f` (see the module docs).
     fn face_distance(&self, f: usize, p: Vector<D>) -> f64;
     /// The vertices of cell `k`, each once (in `scratch` if the mesh does not store them).
@@ -62,7 +70,14 @@ impl CoarseMesh<2> for PolyMesh {
         measure.sqrt()
     }
     /// The planar agglomeration (it takes no budget: its memory is that of the coarse mesh).
-    fn coarsen(&self, size: f64, _budget: MemoryBudget) -> Result<Level<Self>, MeshError> {
+    /// Its coarse boundary edges are the fine ones (`boundary_key` is not read): a 2D coarse
+    /// cell along the boundary has about H/h of them, a 3D one (H/h)² boundary faces.
+    fn coarsen(
+        &self,
+        size: f64,
+        _boundary_key: Option<&[u32]>,
+        _budget: MemoryBudget,
+    ) -> Result<Level<Self>, MeshError> {
         let a = crate::mesh::agglomerate::agglomerate(self, size)?;
         Ok(Level {
             mesh: a.mesh,
@@ -92,8 +107,13 @@ impl CoarseMesh<3> for PolyMesh3 {
     fn cell_length(measure: f64) -> f64 {
         measure.cbrt()
     }
-    fn coarsen(&self, size: f64, budget: MemoryBudget) -> Result<Level<Self>, MeshError> {
-        let a = crate::mesh3d::agglomerate::agglomerate3(self, size, budget)?;
+    fn coarsen(
+        &self,
+        size: f64,
+        boundary_key: Option<&[u32]>,
+        budget: MemoryBudget,
+    ) -> Result<Level<Self>, MeshError> {
+        let a = crate::mesh3d::agglomerate::agglomerate3_merging(self, size, boundary_key, budget)?;
         let wide = |i: &u32| {
             if *i == NO_FACE {
                 NO_COARSE_FACE

@@ -198,7 +198,8 @@ fn the_nested_warm_start_is_skipped_on_a_coarse_3d_mesh() {
 }
 
 /// The nested start on the obstacle problem and on the Signorini problem (its unknowns on
-/// boundary faces, which the coarse meshes keep one to one) makes a coarse level and reaches
+/// boundary faces, which the coarse meshes keep one to one, while they merge the Dirichlet
+/// and the Neumann faces by plane) makes a coarse level and reaches
 /// the cold start's solution, in no more fine solves.
 #[test]
 fn the_nested_warm_start_reaches_the_cold_solution_in_3d() {

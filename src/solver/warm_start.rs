@@ -58,7 +58,8 @@ use crate::assembly::{DiscreteSystem, SystemOptions};
 use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
 use crate::mesh::complex::Vector;
 use crate::mesh::{MemoryBudget, NO_CELL};
-use crate::problem::{ConstraintKind, Problem};
+use crate::mesh3d::agglomerate::KEEP;
+use crate::problem::{BoundaryKind, ConstraintKind, Problem};
 use crate::scheme::{Entity, GradientDiscretisation, Hmm};
 use crate::solver::constraints::Constraints;
 use crate::vi::{ActiveSetOptions, Cancel};
@@ -169,7 +170,7 @@ pub fn predict<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
         .ok_or_else(|| "the problem has no barrier".to_string())?
         .kind;
     let fine = scheme.mesh();
-    let levels = hierarchy(fine, scheme.n_unknowns(), budget)?;
+    let levels = hierarchy(fine, problem, scheme.n_unknowns(), budget)?;
     // from the coarsest level to the finest coarse one, each warm-started by the one above
     let mut state: Option<CoarseState> = None;
     let mut finest_values: Vec<f64> = Vec::new();
@@ -336,6 +337,7 @@ pub fn too_coarse(unknowns: usize) -> bool {
 /// first at least 64).
 fn hierarchy<M: CoarseMesh<D>, const D: usize>(
     fine: &M,
+    problem: &Problem<D>,
     unknowns: usize,
     budget: MemoryBudget,
 ) -> Result<Vec<Level<M>>, String> {
@@ -356,8 +358,9 @@ fn hierarchy<M: CoarseMesh<D>, const D: usize>(
             below.n_cells() / RATIO
         };
         let size = M::cell_size(measure, target);
+        let keys = boundary_keys(below, problem).map_err(oom)?;
         let agg = below
-            .coarsen(size, budget)
+            .coarsen(size, Some(&keys), budget)
             .map_err(|e| format!("agglomerating {} cells into {target}: {e}", below.n_cells()))?;
         if agg.mesh.n_cells() * 2 > below.n_cells() {
             break; // no real coarsening (a mesh of slivers): stop here
@@ -372,6 +375,33 @@ fn hierarchy<M: CoarseMesh<D>, const D: usize>(
         return Err("the agglomerated mesh is not coarser than the mesh".into());
     }
     Ok(levels)
+}
+
+/// The boundary merge key of each face of `mesh` ([`CoarseMesh::coarsen`]): one key per
+/// (boundary condition, tag) pair of `problem` at the face's centre, so that a merged coarse
+/// face joins only fine faces of one boundary part with one tag; [`KEEP`] for interior faces
+/// and for Signorini faces, which stay as they are so that the predicted contact zone on Γ3 is
+/// resolved at the fine faces. The coarse problem evaluates its boundary data at the merged
+/// faces' centres: it is a coarser discretisation of the same problem, like the cells.
+fn boundary_keys<M: CoarseMesh<D>, const D: usize>(
+    mesh: &M,
+    problem: &Problem<D>,
+) -> Result<Vec<u32>, AllocFailure> {
+    let mut keys = try_filled(
+        mesh.n_faces(),
+        KEEP,
+        "the boundary merge keys of the warm start",
+    )?;
+    let mut parts: std::collections::BTreeMap<(BoundaryKind, i32), u32> = Default::default();
+    for f in mesh.boundary_faces_iter() {
+        let tag = mesh.face_tag(f);
+        let kind = (problem.boundary)(mesh.face_centre(f), tag);
+        if kind != BoundaryKind::Signorini {
+            let next = parts.len() as u32;
+            keys[f] = *parts.entry((kind, tag)).or_insert(next);
+        }
+    }
+    Ok(keys)
 }
 
 /// The prediction on the constrained unknowns `cons` of `scheme` (on the fine mesh of `agg`)
@@ -540,13 +570,45 @@ mod tests {
     use crate::mesh::generate::cartesian_triangles;
     use crate::scheme::P1;
 
+    /// The boundary merge keys: one per boundary part and tag, [`KEEP`] on interior faces and
+    /// on Signorini faces.
+    #[test]
+    fn boundary_keys_join_one_part_and_keep_signorini_faces() {
+        use crate::mesh3d::{PolyMesh3, test_meshes::cubes};
+        let m = PolyMesh3::from_polyhedra(cubes(3, 1), MemoryBudget::DEFAULT).unwrap();
+        let p = Problem::<3>::new("parts", Box::new(|_| 0.0)).with_boundary(|x: [f64; 3], _| {
+            if x[2] > 1.0 - 1e-12 {
+                BoundaryKind::Dirichlet
+            } else if x[2] < 1e-12 {
+                BoundaryKind::Signorini
+            } else {
+                BoundaryKind::Neumann
+            }
+        });
+        let keys = boundary_keys(&m, &p).unwrap();
+        let (mut top, mut sides) = (Vec::new(), Vec::new());
+        for (f, &k) in keys.iter().enumerate() {
+            let z = m.face_centroid(f)[2];
+            if !m.is_boundary_face(f) || z < 1e-12 {
+                assert_eq!(k, KEEP, "face {f}");
+            } else if z > 1.0 - 1e-12 {
+                top.push(k);
+            } else {
+                sides.push(k);
+            }
+        }
+        assert_eq!((top.len(), sides.len()), (9, 36));
+        assert!(top.iter().all(|&k| k == top[0]) && sides.iter().all(|&k| k == sides[0]));
+        assert!(top[0] != sides[0] && top[0] != KEEP && sides[0] != KEEP);
+    }
+
     /// The passes over the cells of [`prolong`] and [`vertex_obstacle`] give exactly what
     /// gathering the cells of each vertex (their definition) gives.
     #[test]
     fn vertex_passes_are_the_gathered_definitions() {
         let fine = cartesian_triangles(64, 48, [-2.0, 2.0], [-1.5, 1.5]).unwrap();
         let scheme = P1::new(&fine).unwrap();
-        let agg = fine.coarsen(0.3, MemoryBudget::DEFAULT).unwrap();
+        let agg = fine.coarsen(0.3, None, MemoryBudget::DEFAULT).unwrap();
         let coarse = &agg.mesh;
         // a coarse contact zone (a disc) and coarse values
         let s = CoarseState {

@@ -19,6 +19,7 @@ pub(super) fn build(
     fine: &PolyMesh3,
     label: Vec<usize>,
     dissolved_cells: usize,
+    boundary_key: Option<&[u32]>,
     budget: MemoryBudget,
 ) -> Result<Agglomeration3, MeshError> {
     let (ptr, cells) = members(&label);
@@ -42,13 +43,16 @@ pub(super) fn build(
         ..Polyhedra::default()
     };
     drop((ptr, cells));
-    let merged: Vec<Interfaces> = (0..na)
+    let (merged, bnd): (Vec<Interfaces>, Vec<merge::BoundaryFaces>) = (0..na)
         .into_par_iter()
         .with_min_len(MIN_TASK / 16)
         .map_init(Scratch::default, |s, a| {
-            merge::interfaces(fine, &label, a, &sides[a], s)
+            (
+                merge::interfaces(fine, &label, a, &sides[a], s),
+                merge::boundary(fine, boundary_key, &sides[a], s),
+            )
         })
-        .collect();
+        .unzip();
     // the merged faces each aggregate b receives from the aggregates c < b: (c, face of c)
     let (in_ptr, incoming) = crate::mesh::buckets::counting_sort(
         na,
@@ -62,15 +66,28 @@ pub(super) fn build(
         .collect();
     // the side index of each fine boundary face, until the coarse face ids are known
     let mut boundary_face_of = vec![NO_FACE; fine.n_faces()];
-    for (a, cell) in sides.iter().enumerate() {
-        for &(f, _) in cell
-            .iter()
-            .filter(|(f, _)| fine.is_boundary_face(*f as usize))
-        {
-            p.face_vertices
-                .extend_from_slice(fine.face_vertices(f as usize));
-            boundary_face_of[f as usize] = (p.face_ptr.len() - 1) as u32;
+    p.tagged_ptr.push(0);
+    for (a, (faces, face_of)) in bnd.iter().enumerate() {
+        let first = (p.face_ptr.len() - 1) as u32;
+        for j in 0..faces.faces.len() {
+            p.face_vertices.extend_from_slice(faces.face_loop(j));
             p.face_ptr.push(p.face_vertices.len() as u32);
+        }
+        for &(f, j) in face_of {
+            boundary_face_of[f as usize] = first + j;
+        }
+        // the tag of each boundary face: that of its fine faces (merged faces share a key)
+        let mut tagged = face_of
+            .iter()
+            .map(|&(f, j)| (j, fine.face_tag(f as usize)))
+            .collect::<Vec<_>>();
+        tagged.sort_unstable();
+        tagged.dedup_by_key(|t| t.0);
+        for (j, tag) in tagged.into_iter().filter(|t| t.1 != 0) {
+            p.tagged_vertices
+                .extend_from_slice(faces.face_loop(j as usize));
+            p.tagged_ptr.push(p.tagged_vertices.len() as u32);
+            p.tagged_tags.push(tag);
         }
         for j in 0..merged[a].faces.len() {
             p.face_vertices.extend_from_slice(merged[a].face_loop(j));
@@ -84,17 +101,7 @@ pub(super) fn build(
         }
         p.cell_ptr.push((p.face_ptr.len() - 1) as u32);
     }
-    drop((sides, merged, face_owner, incoming));
-    p.tagged_ptr.push(0);
-    for &f in fine.boundary_faces() {
-        let tag = fine.face_tag(f as usize);
-        if tag != 0 {
-            p.tagged_vertices
-                .extend_from_slice(fine.face_vertices(f as usize));
-            p.tagged_ptr.push(p.tagged_vertices.len() as u32);
-            p.tagged_tags.push(tag);
-        }
-    }
+    drop((sides, merged, bnd, face_owner, incoming));
     p.drop_unused_vertices();
     let mesh = PolyMesh3::from_polyhedra(p, budget)?;
     for &f in fine.boundary_faces() {

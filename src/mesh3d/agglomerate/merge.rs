@@ -27,10 +27,13 @@
 //! differently), so Σ_σ |σ| n_{K,σ} = 0 still holds. d_{A,σ} = (x_σ − x_A)·n is the distance
 //! from x_A to the common plane, the one the checks of step 2 bounded below for each σ_j and
 //! each of their fan triangles, so the merged cell stays star-shaped with the same margin. A
-//! piece that fails is kept as its fine faces. Faces on the boundary of the domain are kept
-//! as they are: the problem decides the boundary part of a face from its centre x_σ
-//! ([`crate::problem::BoundaryFn`]), so merged boundary faces could change the coarse
-//! problem's partition.
+//! piece that fails is kept as its fine faces.
+//!
+//! Faces on the boundary of the domain are merged in the same way when the caller gives each
+//! a merge key ([`boundary`]): the fine boundary faces of one aggregate with the same key are
+//! grouped by plane and connected piece as above. The caller chooses the key (the warm start
+//! uses the boundary condition and the tag, so that a merged face joins only faces of one
+//! boundary part, and keeps the Signorini faces as they are); [`KEEP`] keeps a face as it is.
 
 use crate::mesh::NO_CELL;
 use crate::mesh3d::MAX_FACE_VERTICES;
@@ -42,6 +45,9 @@ pub const PLANE_TOL: f64 = 1e-12;
 
 /// Least (v_i − c) × (v_{i+1} − c)·n of a fan triangle of a merged face, relative to 2 |P|.
 pub const FAN_TOL: f64 = 1e-9;
+
+/// The boundary merge key of a fine boundary face kept as it is ([`boundary`]).
+pub const KEEP: u32 = u32::MAX;
 
 /// The faces of one aggregate A toward the aggregates of higher index: each with its
 /// neighbour and the end of its loop (outward from A) in `loops`.
@@ -69,6 +75,10 @@ impl Interfaces {
     }
 }
 
+/// The boundary faces of one aggregate ([`boundary`]): the faces, and the index among them of
+/// the face of each fine boundary face (fine face, index).
+pub(super) type BoundaryFaces = (Interfaces, Vec<(u32, u32)>);
+
 /// Buffers reused from one aggregate to the next.
 #[derive(Default)]
 pub(super) struct Scratch {
@@ -84,8 +94,11 @@ pub(super) struct Scratch {
     edges: Vec<(u32, u32, u32)>,
     /// Union-find parents of the faces of one plane group, then the piece of each.
     parent: Vec<u32>,
-    /// Per piece (indexed by its root): number of faces, area, whether merged.
-    pieces: Vec<(u32, f64, bool)>,
+    /// Per piece (indexed by its root): number of faces, area, its face in the output if
+    /// merged ([`KEEP`] if not).
+    pieces: Vec<(u32, f64, u32)>,
+    /// The face in the output of each face of one plane group (set by `merge_group`).
+    out_of: Vec<u32>,
     /// Boundary edges (piece, from, to) of one plane group.
     bnd: Vec<(u32, u32, u32)>,
     /// Boundary edges (from, to) of one piece.
@@ -129,6 +142,53 @@ pub(super) fn interfaces(
     }
     s.items = items;
     out
+}
+
+/// The faces of aggregate `a` on the boundary of the domain (the fine faces of `sides` without
+/// a neighbour), merged by key (`key`, indexed by fine face: [`KEEP`] keeps a face as it is,
+/// and so does `None` every face),
+/// plane and piece (module docs), and for each fine boundary face the index of its face in
+/// the output. The faces kept as they are come in the order of `sides`.
+pub(super) fn boundary(
+    fine: &PolyMesh3,
+    key: Option<&[u32]>,
+    sides: &[(u32, bool)],
+    s: &mut Scratch,
+) -> BoundaryFaces {
+    s.items.clear();
+    s.items.extend(
+        (sides.iter())
+            .filter(|&&(f, _)| fine.is_boundary_face(f as usize))
+            .map(|&(f, reversed)| (key.map_or(KEEP, |k| k[f as usize]), f, reversed)),
+    );
+    // stable: the faces of one key stay in the order of `sides`
+    s.items.sort_by_key(|x| x.0);
+    let mut out = Interfaces::default();
+    let mut face_of = Vec::with_capacity(s.items.len());
+    let items = std::mem::take(&mut s.items);
+    for run in items.chunk_by(|x, y| x.0 == y.0) {
+        if run[0].0 == KEEP {
+            for &(k, f, reversed) in run {
+                face_of.push((f, out.faces.len() as u32));
+                out.push(k, fine.face_vertices(f as usize), reversed);
+            }
+            continue;
+        }
+        s.faces.clear();
+        s.faces.extend(run.iter().map(|&(_, f, r)| (f, r)));
+        plane_groups(fine, s);
+        let groups = std::mem::take(&mut s.group);
+        for g in groups.chunk_by(|x, y| x.0 == y.0) {
+            s.members.clear();
+            s.members
+                .extend(g.iter().map(|&(_, i)| s.faces[i as usize]));
+            merge_group(fine, run[0].0, s, &mut out);
+            face_of.extend((s.members.iter().zip(&s.out_of)).map(|(&(f, _), &j)| (f, j)));
+        }
+        s.group = groups;
+    }
+    s.items = items;
+    (out, face_of)
 }
 
 /// The outward unit normal of fine face `f` (turned if `reversed`).
@@ -206,9 +266,11 @@ fn pieces(fine: &PolyMesh3, s: &mut Scratch) {
 
 /// Appends to `out` the faces toward `b` of the coplanar fine faces `s.members`: one merged
 /// face per connected piece that passes the conditions of the module docs, then the fine
-/// faces of the other pieces as they are.
+/// faces of the other pieces as they are; sets `s.out_of` to the output face of each member.
 fn merge_group(fine: &PolyMesh3, b: u32, s: &mut Scratch, out: &mut Interfaces) {
+    s.out_of.clear();
     if let [(f, reversed)] = s.members[..] {
+        s.out_of.push(out.faces.len() as u32);
         out.push(b, fine.face_vertices(f as usize), reversed);
         return;
     }
@@ -225,7 +287,7 @@ fn merge_group(fine: &PolyMesh3, b: u32, s: &mut Scratch, out: &mut Interfaces) 
     }
     s.bnd.sort_unstable();
     s.pieces.clear();
-    s.pieces.resize(s.members.len(), (0, 0.0, false));
+    s.pieces.resize(s.members.len(), (0, 0.0, KEEP));
     for (i, &(f, _)) in s.members.iter().enumerate() {
         let p = &mut s.pieces[s.parent[i] as usize];
         p.0 += 1;
@@ -240,13 +302,17 @@ fn merge_group(fine: &PolyMesh3, b: u32, s: &mut Scratch, out: &mut Interfaces) 
             && boundary_loop(&s.piece_edges, &mut s.lp)
             && fan_covers(fine, &s.lp, n, s.pieces[r].1);
         if merged {
+            s.pieces[r].2 = out.faces.len() as u32;
             out.push(b, &s.lp, false);
         }
-        s.pieces[r].2 = merged;
     }
     for (i, &(f, reversed)) in s.members.iter().enumerate() {
-        if !s.pieces[s.parent[i] as usize].2 {
+        let merged = s.pieces[s.parent[i] as usize].2;
+        if merged == KEEP {
+            s.out_of.push(out.faces.len() as u32);
             out.push(b, fine.face_vertices(f as usize), reversed);
+        } else {
+            s.out_of.push(merged);
         }
     }
 }

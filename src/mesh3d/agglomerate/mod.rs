@@ -54,9 +54,12 @@
 //! 3. The faces between aggregates are merged (`merge.rs`), and the coarse mesh is then built
 //!    and validated like any input mesh ([`PolyMesh3::from_polyhedra`], after
 //!    [`Polyhedra::drop_unused_vertices`]: the fine vertices inside aggregates and inside
-//!    merged faces are dropped). Every fine boundary face is a coarse boundary face
+//!    merged faces are dropped). Every fine boundary face is a coarse boundary face, or part of
+//!    one,
 //!    with its tag ([`Agglomeration3::boundary_face_of`]), so boundary data and Signorini
-//!    unknowns carry over one to one; every coarse cell has the tag of its fine cells. A failure
+//!    unknowns carry over one to one, unless the caller asks for boundary faces to be merged
+//!    ([`agglomerate3_merging`]: then several fine boundary faces of one part map to one coarse
+//!    face); every coarse cell has the tag of its fine cells. A failure
 //!    there is returned as an error: the caller then does without coarse meshes.
 //!
 //! Cost: each round is linear in the fine mesh apart from sorting the boundary edges of each
@@ -86,6 +89,7 @@ use crate::mesh::{MemoryBudget, NO_CELL};
 use rayon::prelude::*;
 
 pub use crate::mesh::agglomerate::MIN_DIST_RATIO;
+pub use merge::KEEP;
 
 /// Marker for "no coarse face" in [`Agglomeration3::boundary_face_of`] (interior fine faces).
 pub const NO_FACE: u32 = u32::MAX;
@@ -107,8 +111,9 @@ pub struct Agglomeration3 {
     pub mesh: PolyMesh3,
     /// The coarse cell of each fine cell.
     pub cell_of: Vec<u32>,
-    /// The coarse face of each fine boundary face (the same polygon, with the same tag);
-    /// [`NO_FACE`] for interior fine faces. Indexed by fine face.
+    /// The coarse face of each fine boundary face (the same polygon, or the merged face
+    /// containing it, with the same tag); [`NO_FACE`] for interior fine faces. Indexed by fine
+    /// face.
     pub boundary_face_of: Vec<u32>,
     /// Fine cells whose first aggregate failed the checks (regrouped into smaller aggregates
     /// or left alone).
@@ -125,6 +130,28 @@ pub fn agglomerate3(
     size: f64,
     budget: MemoryBudget,
 ) -> Result<Agglomeration3, MeshError> {
+    agglomerate3_merging(fine, size, None, budget)
+}
+
+/// [`agglomerate3`], the fine boundary faces of each aggregate merged by plane and piece among
+/// those with the same key in `boundary_key` (indexed by fine face, read on boundary faces
+/// only; [`KEEP`] keeps a face as it is, and so does `None` every face: then this is
+/// [`agglomerate3`]). A merged boundary face is one coarse face with the tag of its fine
+/// faces, so faces of different tags must have different keys (`merge.rs` has the maths).
+/// [`MeshError::NonConforming`] if `boundary_key` does not have one entry per fine face.
+pub fn agglomerate3_merging(
+    fine: &PolyMesh3,
+    size: f64,
+    boundary_key: Option<&[u32]>,
+    budget: MemoryBudget,
+) -> Result<Agglomeration3, MeshError> {
+    if let Some(k) = boundary_key.filter(|k| k.len() != fine.n_faces()) {
+        return Err(MeshError::NonConforming(format!(
+            "{} boundary merge keys for a mesh of {} faces",
+            k.len(),
+            fine.n_faces()
+        )));
+    }
     if !(size.is_finite() && size > 0.0) {
         return Err(MeshError::NonConforming(format!(
             "agglomeration size must be positive and finite, got {size}"
@@ -158,7 +185,7 @@ pub fn agglomerate3(
     }
     let n_dissolved = regrouped.iter().filter(|&&d| d).count();
     drop((regrouped, settled));
-    build::build(fine, label, n_dissolved, budget)
+    build::build(fine, label, n_dissolved, boundary_key, budget)
 }
 
 /// Estimated peak working memory, in bytes, of [`agglomerate3`] on `fine`, before the coarse

@@ -1,6 +1,6 @@
 //! Tests of [`agglomerate3`](super::agglomerate3).
 
-use super::{Agglomeration3, MAX_SPLITS, NO_FACE, agglomerate3};
+use super::{Agglomeration3, KEEP, MAX_SPLITS, NO_FACE, agglomerate3, agglomerate3_merging};
 use crate::error::MeshError;
 use crate::mesh::MemoryBudget;
 use crate::mesh3d::test_meshes::{cubes, perturbed_cubes, tetrahedra};
@@ -399,4 +399,81 @@ fn measure_agglomeration_of_large_meshes() {
             );
         }
     }
+}
+
+/// With boundary merge keys, the fine boundary faces of one coarse cell with one key and one
+/// plane become one face: on Kuhn tetrahedra, the 8 triangles of a block's side become one
+/// square. Faces keyed [`KEEP`] stay as they are. Every fine boundary face lies in a coarse
+/// boundary face of its tag, whose area and centroid are those of its fine faces.
+#[test]
+fn boundary_faces_with_one_key_merge_by_plane() {
+    let kuhn = side_tags(&mesh(tetrahedra(6, 5)));
+    // one key per side, the side z = 1 (tag 6) kept
+    let keys: Vec<u32> = (0..kuhn.n_faces())
+        .map(|f| match kuhn.face_tag(f) {
+            0 | 6 => KEEP,
+            t => t as u32,
+        })
+        .collect();
+    let agg = agglomerate3_merging(&kuhn, 2.0 / 6.0, Some(&keys), MemoryBudget::DEFAULT).unwrap();
+    let coarse = &agg.mesh;
+    check_closed_cells(coarse);
+    check_vector_areas(&kuhn, &agg);
+    assert_eq!(coarse.n_cells(), 27);
+    // 54 squares between blocks, 5 sides of 9 squares, and the 72 triangles of z = 1
+    assert_eq!(coarse.n_faces(), 54 + 45 + 72);
+    let mut area = vec![0.0; coarse.n_faces()];
+    let mut moment = vec![[0.0; 3]; coarse.n_faces()];
+    for &f in kuhn.boundary_faces() {
+        let (f, cf) = (f as usize, agg.boundary_face_of[f as usize] as usize);
+        assert!(coarse.is_boundary_face(cf), "fine face {f}");
+        assert_eq!(kuhn.face_tag(f), coarse.face_tag(cf), "fine face {f}");
+        assert_eq!(
+            agg.cell_of[kuhn.face_cells(f)[0]] as usize,
+            coarse.face_cells(cf)[0]
+        );
+        area[cf] += kuhn.face_measure(f);
+        (0..3).for_each(|r| moment[cf][r] += kuhn.face_measure(f) * kuhn.face_centroid(f)[r]);
+    }
+    for &cf in coarse.boundary_faces() {
+        let cf = cf as usize;
+        let want = if coarse.face_tag(cf) == 6 {
+            1.0 / 72.0
+        } else {
+            1.0 / 9.0
+        };
+        assert!(
+            (area[cf] - want).abs() < 1e-15,
+            "coarse face {cf}: {}",
+            area[cf]
+        );
+        assert!(
+            (coarse.face_measure(cf) - want).abs() < 1e-15,
+            "coarse face {cf}"
+        );
+        let x = coarse.face_centroid(cf);
+        assert!((0..3).all(|r| (moment[cf][r] / area[cf] - x[r]).abs() < 1e-14));
+    }
+    // the same with every key KEEP is the agglomeration without merging, face for face
+    let none = agglomerate3_merging(
+        &kuhn,
+        2.0 / 6.0,
+        Some(&vec![KEEP; kuhn.n_faces()]),
+        MemoryBudget::DEFAULT,
+    )
+    .unwrap();
+    let plain = agglomerate3(&kuhn, 2.0 / 6.0, MemoryBudget::DEFAULT).unwrap();
+    assert_eq!(none.mesh.n_faces(), plain.mesh.n_faces());
+    assert!(
+        (0..plain.mesh.n_faces())
+            .all(|f| none.mesh.face_vertices(f) == plain.mesh.face_vertices(f))
+    );
+    assert_eq!(none.boundary_face_of, plain.boundary_face_of);
+    // keys for another mesh: a typed error
+    let err =
+        agglomerate3_merging(&kuhn, 0.5, Some(&keys[1..]), MemoryBudget::DEFAULT).unwrap_err();
+    assert!(
+        matches!(err, MeshError::NonConforming(ref m) if m.contains("merge keys")),
+        "{err}"
+    );
 }
