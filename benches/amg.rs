@@ -257,8 +257,10 @@ fn schemes(opts: &AmgOptions) -> gradvi::Result<()> {
             run(&format!("hmm {name} {pname}"), &l, opts, small, REPS);
         }
     }
-    let mesh =
-        gradvi::mesh::io::read_mesh("meshes/test2tri_4.msh", gradvi::mesh::MemoryBudget::DEFAULT)?;
+    let mesh = gradvi::mesh::io::read_mesh(
+        "meshes/test2tri_4.msh",
+        gradvi::budget::MemoryBudget::DEFAULT,
+    )?;
     let p1 = P1::new(&mesh)?;
     for (pname, problem) in [
         ("test2", paper_test2()),

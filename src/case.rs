@@ -9,8 +9,9 @@
 mod any_mesh;
 pub use any_mesh::{AnyMesh, case_mesh, read_any};
 
+use crate::budget::MemoryBudget;
 use crate::error::{Error, Result};
-use crate::mesh::{MemoryBudget, PolyMesh};
+use crate::mesh::PolyMesh;
 use crate::mesh3d::PolyMesh3;
 use crate::problem::file::MeshSpec;
 
@@ -62,7 +63,8 @@ pub fn build_mesh3(spec: &MeshSpec, budget: MemoryBudget) -> Result<PolyMesh3> {
 #[cfg(test)]
 mod tests {
     use super::build_mesh;
-    use crate::mesh::{Family, MemoryBudget, Rect};
+    use crate::budget::MemoryBudget;
+    use crate::mesh::{Family, Rect};
     use crate::problem::file::{MeshSpec, parse};
     use std::path::Path;
 

@@ -78,7 +78,7 @@ pub enum Error {
     #[error("internal error (please report): {0}")]
     Internal(String),
     /// A computation would need more memory than the caller's budget
-    /// ([`MemoryBudget`](crate::mesh::MemoryBudget)): refused by its estimate before the
+    /// ([`MemoryBudget`](crate::budget::MemoryBudget)): refused by its estimate before the
     /// allocation, or an allocation that failed. A mesh too large to build is
     /// [`MeshError::TooLarge`] instead.
     #[error(

@@ -77,29 +77,32 @@
 //! module's tests may use its own layer and those above it):
 //! 1. [`units`]: byte counts for people; uses no other module.
 //! 2. [`error`]: the typed errors ([`Error`], [`MeshError`]).
-//! 3. [`linalg`] (sparse Cholesky with symbolic reuse, orderings; algebraic multigrid
-//!    [`linalg::amg`] and conjugate gradients; it uses only [`error`]) and [`vi`] (the
-//!    algebraic variational-inequality algorithms over the [`vi::QuadraticEnergy`] trait: the
-//!    monotony active-set method and its look-ahead on patches, projected Gauss–Seidel,
-//!    exhaustive enumeration, the certificate, the direction of a barrier [`vi::Side`]; it
-//!    uses [`linalg`] and no mesh, scheme or problem type). Both are pure algebra: they sit
-//!    below the meshes.
-//! 4. [`mesh`]: [`mesh::PolyMesh`] (flat arrays, cached geometry, validation), readers
+//! 3. [`budget`]: the caller's [`budget::MemoryBudget`], the memory estimates checked
+//!    against it, the fallible allocations ([`budget::try_vec`] and the like) and the limits of
+//!    the process and the machine; it uses [`units`] and [`error`].
+//! 4. [`linalg`] (sparse Cholesky with symbolic reuse, orderings; algebraic multigrid
+//!    [`linalg::amg`] and conjugate gradients; it uses only [`error`] and [`budget`]) and
+//!    [`vi`] (the algebraic variational-inequality algorithms over the [`vi::QuadraticEnergy`]
+//!    trait: the monotony active-set method and its look-ahead on patches, projected
+//!    Gauss–Seidel, exhaustive enumeration, the certificate, the direction of a barrier
+//!    [`vi::Side`]; it uses [`linalg`] and no mesh, scheme or problem type). Both are pure
+//!    algebra: they sit below the meshes.
+//! 5. [`mesh`]: [`mesh::PolyMesh`] (flat arrays, cached geometry, validation), readers
 //!    ([`mesh::io`]: gmsh 4.1/2.2, FVCA5 typ1/typ2), writers (VTU, typ2), generators
 //!    ([`mesh::generate`]: Cartesian, hexagonal = FVCA5 `hexa1_k`, Kershaw = `mesh4_1_k`,
-//!    triangulated Cartesian) within the caller's [`mesh::MemoryBudget`], coarse meshes by
+//!    triangulated Cartesian) within the caller's [`budget::MemoryBudget`], coarse meshes by
 //!    agglomeration ([`mesh::agglomerate`]), and the dimension-generic cell–face complex a
 //!    scheme reads ([`mesh::CellComplex`], see "Dimension" in [`mesh`]).
 //!    Beside it, [`mesh3d`]: three-dimensional polyhedral meshes (it uses [`mesh`], never the
 //!    other way).
-//! 5. [`scheme`]: the [`scheme::GradientDiscretisation`] trait (local matrix, local load, trace
+//! 6. [`scheme`]: the [`scheme::GradientDiscretisation`] trait (local matrix, local load, trace
 //!    and barrier unknowns, the mesh [`scheme::Entity`] of each unknown); one file per scheme:
 //!    [`scheme::Hmm`], [`scheme::P1`], [`scheme::Cr`]; registered once in [`scheme::SchemeKind`];
 //!    the points where each scheme evaluates the data ([`scheme::points`]).
-//! 6. [`problem`]: data A, f, Γ1/Γ2/Γ3, barriers; the paper's Tests 1–3; problem files
+//! 7. [`problem`]: data A, f, Γ1/Γ2/Γ3, barriers; the paper's Tests 1–3; problem files
 //!    ([`problem::file`]) and their expressions ([`problem::expr`]).
 //!    Above it, [`case`]: a problem file's case, its mesh read or generated from `[mesh]`.
-//! 7. [`assembly`]: what depends only on the scheme, built once ([`assembly::symbolic`]: dof
+//! 8. [`assembly`]: what depends only on the scheme, built once ([`assembly::symbolic`]: dof
 //!    map, condensed pattern, symbolic factorisation, scatter maps; [`assembly::offsets`]);
 //!    the values of one problem ([`assembly::values`]); the solves of one active set
 //!    (static condensation [`assembly::condense`], the gathered matrix [`assembly::gather`],
@@ -107,10 +110,10 @@
 //!    cell system [`assembly::two_point`], recovery [`assembly::solve`], the residual
 //!    [`assembly::residual`]); and what one solve leaves for the next, owned by the caller
 //!    ([`assembly::state`]). [`assembly::DiscreteSystem`] implements [`vi::QuadraticEnergy`].
-//! 8. [`solver`]: the driver: builds the constraints, decides the warm start
+//! 9. [`solver`]: the driver: builds the constraints, decides the warm start
 //!    ([`solver::warm_start`]), the look-ahead and the fallback, returns a certified
 //!    [`solver::Solution`].
-//! 9. [`post`]: errors, orders, fitted slopes, contact-zone metrics, fields on mesh entities.
+//! 10. [`post`]: errors, orders, fitted slopes, contact-zone metrics, fields on mesh entities.
 //!
 //! The applications live in the other members of the workspace, not in this library: the
 //! `gradvi` command line (`cli/`: solve, mesh tools, replication of the paper, cross-check with
@@ -121,6 +124,7 @@
 // validation rejects NaN data.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 pub mod assembly;
+pub mod budget;
 pub mod case;
 pub mod error;
 pub mod linalg;

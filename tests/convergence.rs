@@ -113,7 +113,7 @@ fn fvca5_triangles_from_the_shared_files() {
         .map(|l| {
             gradvi::mesh::io::read_mesh(
                 dir.join(format!("mesh1_{l}.typ2")),
-                gradvi::mesh::MemoryBudget::DEFAULT,
+                gradvi::budget::MemoryBudget::DEFAULT,
             )
             .unwrap()
         })

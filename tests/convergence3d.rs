@@ -6,7 +6,7 @@
 //! The default tests use small meshes (a few seconds in a debug build); the larger levels are
 //! `#[ignore]`d.
 
-use gradvi::mesh::MemoryBudget;
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh3d::generate::{cubes, kuhn, prisms, refined, warped};
 use gradvi::mesh3d::io::read_rf;
 use gradvi::mesh3d::{Cuboid, Point3, PolyMesh3, Polyhedra, WarpedFaces};

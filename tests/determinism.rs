@@ -16,7 +16,7 @@
 //! alone in `make determinism`).
 
 use gradvi::assembly::{LinearSolver, SystemOptions};
-use gradvi::mesh::MemoryBudget;
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh::generate::{cartesian, cartesian_triangles, kershaw};
 use gradvi::mesh3d::PolyMesh3;
 use gradvi::mesh3d::generate::Family3;

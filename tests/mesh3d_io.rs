@@ -3,7 +3,7 @@
 //! counts, Σ|K|, boundary area, tags), VTU files written and read back, and, with
 //! `../shared/meshes/hardcore3d` present (`make test-external`), every HArDCore3D file.
 
-use gradvi::mesh::MemoryBudget;
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh3d::io::{read_mesh3, read_rf, read_vtu3, write_vtu3};
 use gradvi::mesh3d::{PolyMesh3, Polyhedra};
 use std::path::{Path, PathBuf};

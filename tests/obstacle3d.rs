@@ -26,7 +26,7 @@
 //! `replication/measurements/solver3d.md`.
 
 use gradvi::assembly::{LinearSolver, SystemOptions};
-use gradvi::mesh::MemoryBudget;
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh3d::generate::{cubes, kuhn};
 use gradvi::mesh3d::{Cuboid, PolyMesh3, Polyhedra};
 use gradvi::post::{fitted_slope, relative_errors};

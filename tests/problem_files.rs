@@ -61,7 +61,7 @@ fn builtin_files_reproduce_the_rust_problems() {
         let pf = file::load(problems().join(format!("{name}.toml")), &params).unwrap();
         let embedded = file::builtin(name, &params).unwrap();
         assert_eq!(pf.name, embedded.name);
-        let tri = read_mesh(root().join(tri), gradvi::mesh::MemoryBudget::DEFAULT).unwrap();
+        let tri = read_mesh(root().join(tri), gradvi::budget::MemoryBudget::DEFAULT).unwrap();
         for mesh in [&hex, &ker, &tri] {
             pf.check_against_mesh(mesh).unwrap();
             same_solution(&Hmm::new(mesh), &builtin, &pf.problem());
@@ -248,7 +248,7 @@ fn first_error(name: &str) -> Error {
         Err(e) => return e,
     };
     let mesh = match &pf.mesh {
-        Some(spec) => build_mesh(spec, gradvi::mesh::MemoryBudget::DEFAULT).unwrap(),
+        Some(spec) => build_mesh(spec, gradvi::budget::MemoryBudget::DEFAULT).unwrap(),
         None => cartesian(4, 4).unwrap(),
     };
     if let Err(e) = pf.check_against_mesh(&mesh) {
@@ -343,7 +343,7 @@ fn parameters_are_overridden_by_name_and_unknown_ones_rejected() {
 fn example(name: &str) -> (ProblemFile, PolyMesh) {
     let pf = file::load(problems().join(format!("{name}.toml")), &[]).unwrap();
     let spec = pf.mesh.clone().expect("examples name their mesh");
-    let mesh = build_mesh(&spec, gradvi::mesh::MemoryBudget::DEFAULT).unwrap();
+    let mesh = build_mesh(&spec, gradvi::budget::MemoryBudget::DEFAULT).unwrap();
     pf.check_against_mesh(&mesh).unwrap();
     (pf, mesh)
 }
@@ -531,7 +531,7 @@ fn readme_example_is_a_valid_problem() {
     assert_eq!(pf.scheme, Some(gradvi::scheme::SchemeKind::Hmm));
     let mesh = build_mesh(
         pf.mesh.as_ref().unwrap(),
-        gradvi::mesh::MemoryBudget::DEFAULT,
+        gradvi::budget::MemoryBudget::DEFAULT,
     )
     .unwrap();
     pf.check_against_mesh(&mesh).unwrap();
@@ -576,7 +576,7 @@ fn pieces_by_cell_tag_equal_pieces_by_condition() {
 fn gmsh22_cells_carry_their_physical_tag() {
     let mesh = read_mesh(
         root().join("tests/data/good/square_41_gmsh22.msh"),
-        gradvi::mesh::MemoryBudget::DEFAULT,
+        gradvi::budget::MemoryBudget::DEFAULT,
     )
     .unwrap();
     assert!(mesh.n_cells() > 0);
@@ -606,7 +606,7 @@ fn example_ex9_with_p1_on_generated_triangles() {
         domain,
     };
     assert_eq!(spec.to_string(), "triangles level 4 on [-2, 2]x[-2, 2]");
-    let mesh = build_mesh(&spec, gradvi::mesh::MemoryBudget::DEFAULT).unwrap();
+    let mesh = build_mesh(&spec, gradvi::budget::MemoryBudget::DEFAULT).unwrap();
     let reference = cartesian_triangles(32, 32, [-2.0, 2.0], [-2.0, 2.0]).unwrap();
     assert_eq!(mesh.vertices(), reference.vertices());
     assert_eq!(mesh.n_cells(), 2 * 32 * 32);
@@ -646,7 +646,7 @@ fn example_ex9_with_p1_on_generated_triangles() {
 fn signorini3d_cubes(level: usize) -> gradvi::mesh3d::PolyMesh3 {
     use gradvi::mesh3d::generate::Family3;
     let m = Family3::Cubes
-        .generate(level, gradvi::mesh::MemoryBudget::DEFAULT)
+        .generate(level, gradvi::budget::MemoryBudget::DEFAULT)
         .unwrap();
     let on = |a: f64, b: f64| (a - b).abs() < 1e-12;
     let m = m.with_boundary_tags(|x| match x {

@@ -52,7 +52,7 @@ fn table2_hexagonal_levels_1_and_2() {
 fn table3_and_table1_on_the_coarsest_meshes() {
     let m3 = read_mesh(
         root().join("meshes/test3_1.msh"),
-        gradvi::mesh::MemoryBudget::DEFAULT,
+        gradvi::budget::MemoryBudget::DEFAULT,
     )
     .unwrap();
     for (c, hmm, p1) in [(-5.0, 8, 6), (-10.0, 8, 6), (-15.0, 5, 5), (-20.0, 5, 4)] {
@@ -65,7 +65,7 @@ fn table3_and_table1_on_the_coarsest_meshes() {
     }
     let m1 = read_mesh(
         root().join("meshes/test1_1.msh"),
-        gradvi::mesh::MemoryBudget::DEFAULT,
+        gradvi::budget::MemoryBudget::DEFAULT,
     )
     .unwrap();
     let s1 = Hmm::new(&m1);

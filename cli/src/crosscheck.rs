@@ -24,8 +24,9 @@ use crate::replication::records::{
     PaperTable1, PaperTable2, PaperTable3, TimingRow, read_csv, write_csv,
 };
 use anyhow::{Context, Result, bail};
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh::io::read_mesh;
-use gradvi::mesh::{MemoryBudget, Point, PolyMesh};
+use gradvi::mesh::{Point, PolyMesh};
 use gradvi::post::contact::{contact_measure, free_boundary, hausdorff, switch_point};
 use gradvi::post::relative_errors;
 use gradvi::problem::{Problem, paper_test1, paper_test2, paper_test3};

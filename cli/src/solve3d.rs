@@ -36,8 +36,8 @@
 use super::output::atomic;
 use super::solve::{Case, SolveArgs, report, solve_options, write_json};
 use anyhow::{Context, Result};
+use gradvi::budget::MemoryBudget;
 use gradvi::case::AnyMesh;
-use gradvi::mesh::MemoryBudget;
 use gradvi::mesh3d::io::write_vtu3;
 use gradvi::mesh3d::{PolyMesh3, WarpedFaces};
 use gradvi::post::fields::EntityFields;

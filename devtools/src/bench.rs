@@ -39,7 +39,7 @@
 //! [--baseline-rev REV]` compares every gradvi case with the earlier build EXE in the same run
 //! ([`baseline`]); `--mesh3d` times reading and building tetrahedral meshes ([`mesh3d`]).
 
-use gradvi::mesh::MemoryBudget;
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{Family, cartesian_rect_within};
 use gradvi::mesh::io::read_mesh;

@@ -7,7 +7,8 @@
 use crate::errors::invalid;
 use crate::guard;
 use crate::mesh::{point_key, points_array, unique_rows, vec_array};
-use gradvi::mesh::{MemoryBudget, NO_CELL, SolveMesh};
+use gradvi::budget::MemoryBudget;
+use gradvi::mesh::{NO_CELL, SolveMesh};
 use gradvi::mesh3d::generate::Family3;
 use gradvi::mesh3d::io::{read_mesh3, write_vtu3};
 use gradvi::mesh3d::{Cuboid, Point3, PolyMesh3, Polyhedra, WarpedFaces};

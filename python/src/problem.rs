@@ -721,7 +721,7 @@ impl PyProblem {
         };
         let warped = warped_convention(py, warped_faces)?;
         let pf = pf.as_ref();
-        let budget = gradvi::mesh::MemoryBudget::available();
+        let budget = gradvi::budget::MemoryBudget::available();
         let mesh = guard(py, move || case_mesh(&spec, pf, warped, budget))?;
         Ok(Some(match mesh {
             AnyMesh::Two(m) => PyMesh {

@@ -451,7 +451,7 @@ fn solve<'py>(
             ordering: self::ordering(ordering)?,
             factor_threads: self::factor_threads(factor_threads)?,
             linear: gradvi::assembly::LinearSolver::from_str(&linear.to_ascii_lowercase())?,
-            budget: gradvi::mesh::MemoryBudget::available(),
+            budget: gradvi::budget::MemoryBudget::available(),
         };
         Ok(Options {
             kind: SchemeKind::from_str(scheme)?,

@@ -5,8 +5,8 @@
 
 use super::condense::{self, condense};
 use super::{DiscreteSystem, SolveState};
+use crate::budget::{try_filled, try_resize};
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{try_filled, try_resize};
 use rayon::prelude::*;
 
 /// Cells per parallel task in the cell loops (large enough to amortise the task, small enough

@@ -8,9 +8,9 @@ use super::linear::{
     ITERATIVE_MAX_ITER, ITERATIVE_RTOL, REUSE_MAX_SLOWDOWN, SCREENING_REDUCTION, reuse_max_changed,
 };
 use super::{DiscreteSystem, SolveState};
+use crate::budget::{AllocFailure, try_copy, try_filled};
 use crate::linalg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, CsrMatrix};
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{AllocFailure, try_copy, try_filled};
 use crate::vi::SolveTimings;
 use std::time::Instant;
 

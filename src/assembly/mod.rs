@@ -55,8 +55,9 @@ pub mod values;
 #[cfg(test)]
 mod tests_limits;
 
+use crate::budget::MemoryBudget;
 use crate::linalg::{FactorThreads, Ordering};
-use crate::mesh::{MemoryBudget, PolyMesh, SolveMesh};
+use crate::mesh::{PolyMesh, SolveMesh};
 use crate::problem::Problem;
 use crate::scheme::{GradientDiscretisation, PointDof};
 use condense::{CellSystem, SymMatrix};

@@ -3,8 +3,8 @@
 
 use super::DiscreteSystem;
 use super::gather::local_index;
+use crate::budget::try_filled;
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::try_filled;
 use rayon::prelude::*;
 
 impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {

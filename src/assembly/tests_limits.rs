@@ -4,7 +4,7 @@
 //! the typed out-of-memory error, never an abort.
 
 use crate::assembly::{LinearSolver, SystemOptions};
-use crate::mesh::budget::child;
+use crate::budget::child;
 use crate::solver::{SolveOptions, solve_problem};
 
 /// The margins of the sweep, in MiB: from none (everything refused) to ample.

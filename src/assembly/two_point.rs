@@ -50,9 +50,9 @@ use super::gather::{CHUNK, FixedValues, chunks, local_index, par_try_fill, split
 use super::iterative::hierarchy;
 use super::solve::check_finite;
 use super::{DiscreteSystem, SolveState};
+use crate::budget::{try_collect, try_copy, try_filled, try_grow, try_vec};
 use crate::linalg::CsrMatrix;
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{try_collect, try_copy, try_filled, try_grow, try_vec};
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
 use std::sync::Arc;

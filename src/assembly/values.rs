@@ -6,8 +6,8 @@
 use super::gather::{cell_chunks, split_by_ranges};
 use super::offsets::Offsets;
 use super::symbolic::DofMap;
+use crate::budget::{try_filled, try_vec};
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{try_filled, try_vec};
 use crate::problem::{BoundaryKind, Problem, check_finite, check_tensor};
 use crate::scheme::{GradientDiscretisation, PointDof};
 use nalgebra::{DMatrix, DVector};

@@ -11,9 +11,10 @@
 //! split into triangles as the caller's [`WarpedFaces`] says.
 
 use super::{build_mesh, build_mesh3};
+use crate::budget::MemoryBudget;
 use crate::error::{Error, Result};
+use crate::mesh::PolyMesh;
 use crate::mesh::io::read_mesh;
-use crate::mesh::{MemoryBudget, PolyMesh};
 use crate::mesh3d::io::{read_mesh3, read_msh3};
 use crate::mesh3d::{PolyMesh3, Polyhedra, WarpedFaces};
 use crate::problem::file::{MeshSpec, ProblemFile};

@@ -1,5 +1,5 @@
 use super::{AnyMesh, case_mesh, read_any};
-use crate::mesh::MemoryBudget;
+use crate::budget::MemoryBudget;
 use crate::mesh3d::WarpedFaces;
 use crate::mesh3d::generate::Family3;
 use crate::problem::file::{ProblemFile, parse};

@@ -4,7 +4,7 @@
 //! ([`SpdFactor::solve_in_place`]).
 
 use super::ordering::{Ordering, nested_dissection};
-use crate::mesh::budget::{AllocFailure, try_resize};
+use crate::budget::{AllocFailure, try_resize};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{
     LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,

@@ -24,7 +24,7 @@
 //! r0..r1 comes from the columns j < r1 whose last row reaches r0, scanned in increasing j
 //! (so again sorted), once to count and once to fill the chunk's own part of the arrays.
 
-use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
+use crate::budget::{AllocFailure, try_filled, try_vec};
 use rayon::prelude::*;
 
 /// Rows per task of the parallel products: large enough that spreading the work costs nothing
@@ -761,7 +761,7 @@ mod tests {
     #[cfg(target_os = "linux")]
     #[test]
     fn a_transpose_the_data_limit_refuses_is_a_typed_error() {
-        use crate::mesh::budget::child;
+        use crate::budget::child;
         const NAME: &str =
             "linalg::csr::tests::a_transpose_the_data_limit_refuses_is_a_typed_error";
         if !child::is_child(NAME) {

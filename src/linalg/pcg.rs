@@ -19,7 +19,7 @@
 //! of the dot products are added in chunk order, so results do not depend on the scheduling.
 
 use super::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
-use crate::mesh::budget::{try_copy, try_filled, try_vec};
+use crate::budget::{try_copy, try_filled, try_vec};
 use rayon::prelude::*;
 
 /// An approximate inverse z = M⁻¹ r of a symmetric positive definite M. M does not change

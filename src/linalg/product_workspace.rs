@@ -13,14 +13,14 @@
 //! [`reserve`] is called before such a computation. It counts the threads that may run a
 //! product and have not mapped the workspace yet (the calling thread; with parallel faer
 //! (`Par::Rayon`), every thread of the rayon pool too), checks that many workspaces against
-//! [`rlimit_headroom`](crate::mesh::budget::rlimit_headroom) (an address-space or data limit;
+//! [`rlimit_headroom`](crate::budget::rlimit_headroom) (an address-space or data limit;
 //! without one there is nothing to check), and then has each of those threads run a 1 × 1
 //! product, so that every workspace the computation may use is mapped now, under the check,
 //! and no thread maps one later unchecked. A thread that mapped its workspace through faer
 //! outside [`reserve`] is counted again: the check is then stricter than needed, never
 //! looser. The workspace changes no result: the kernel overwrites what it reads of it.
 
-use crate::mesh::budget::{check_dense_product_workspace, dense_product_workspace};
+use crate::budget::{check_dense_product_workspace, dense_product_workspace};
 use std::cell::Cell;
 
 thread_local! {

@@ -686,7 +686,7 @@ mod tests {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
         for name in ["dam.msh", "lshape.msh", "hole.msh"] {
             let fine =
-                crate::mesh::io::read_mesh(dir.join(name), crate::mesh::MemoryBudget::DEFAULT)
+                crate::mesh::io::read_mesh(dir.join(name), crate::budget::MemoryBudget::DEFAULT)
                     .unwrap();
             let area = total_area(&fine);
             let size = (area / (fine.n_cells() / 16) as f64).sqrt();
@@ -793,7 +793,7 @@ mod tests {
         cases.push(coarse);
         for name in ["dam.msh", "lshape.msh", "hole.msh"] {
             cases.push(
-                crate::mesh::io::read_mesh(dir.join(name), crate::mesh::MemoryBudget::DEFAULT)
+                crate::mesh::io::read_mesh(dir.join(name), crate::budget::MemoryBudget::DEFAULT)
                     .unwrap(),
             );
         }

@@ -1,7 +1,7 @@
 //! Sorting helpers: a counting sort into buckets (compressed sparse rows), shared by the
 //! mesh sweep and the symbolic assembly, and the sorted lattice keys of points.
 
-use super::budget::{AllocFailure, try_filled, try_vec};
+use crate::budget::{AllocFailure, try_filled, try_vec};
 
 /// The buckets of a counting sort: item i goes to bucket `key(i)` (if any), buckets
 /// ascending, items ascending within a bucket, each stored as `item(i)`.

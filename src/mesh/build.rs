@@ -2,10 +2,10 @@
 //! [`validate`](super::validate), the edge numbering ([`edges`](super::edges)) and the overlap
 //! sweep, to the compact 32-bit arrays the mesh keeps.
 
-use super::budget::{AllocFailure, try_filled, try_vec};
 use super::edges::{Edges, build_edges};
 use super::tags::NonBoundaryTag;
 use super::{NO_CELL, Point, PolyMesh, sweep, validate};
+use crate::budget::{AllocFailure, try_filled, try_vec};
 use crate::error::MeshError;
 
 /// Whether [`PolyMesh::from_flat_cells`] sweeps for crossing edges and overlapping cells.
@@ -322,7 +322,7 @@ mod tests {
     #[cfg(target_os = "linux")]
     #[test]
     fn a_build_the_data_limit_refuses_is_a_typed_error() {
-        use crate::mesh::budget::child;
+        use crate::budget::child;
         const NAME: &str = "mesh::build::tests::a_build_the_data_limit_refuses_is_a_typed_error";
         if !child::is_child(NAME) {
             return child::run(NAME);

@@ -4,7 +4,7 @@
 use super::NO_CELL;
 #[cfg(doc)]
 use super::PolyMesh;
-use super::budget::{AllocFailure, try_filled, try_vec};
+use crate::budget::{AllocFailure, try_filled, try_vec};
 use crate::error::MeshError;
 
 /// The edges of a mesh whose cells are stored flat (`cell_ptr`, `cell_verts`, as in

@@ -34,7 +34,8 @@
 //! the edge numbering of `edges.rs` and the overlap sweep of `sweep.rs`); `poly_mesh.rs` holds
 //! the accessors; `tags.rs` the boundary and cell tags; `geometry.rs` the geometry of points
 //! and polygons and [`Rect`]; `renumber.rs` drops unused vertices for the readers;
-//! [`budget`] estimates the memory of a mesh against the caller's [`MemoryBudget`];
+//! the memory of a mesh is estimated ([`mesh_bytes`](crate::budget::mesh_bytes)) against the
+//! caller's [`MemoryBudget`](crate::budget::MemoryBudget) before it is built;
 //! [`generate`] and [`io`] make meshes, [`agglomerate`] coarsens them, [`complex`] is the
 //! dimension-generic view a scheme reads.
 //!
@@ -62,7 +63,6 @@
 
 pub mod agglomerate;
 pub(crate) mod buckets;
-pub mod budget;
 mod build;
 pub mod complex;
 mod edges;
@@ -77,7 +77,6 @@ mod sweep;
 mod tags;
 pub mod validate;
 
-pub use budget::MemoryBudget;
 pub(crate) use build::Overlap;
 pub use complex::CellComplex;
 pub(crate) use edges::EdgeIndex;
@@ -166,7 +165,7 @@ pub(crate) fn unit_square_2x1() -> PolyMesh {
 pub(crate) fn test_meshes() -> Vec<PolyMesh> {
     let mut meshes = vec![unit_square_2x1()];
     for f in generate::Family::ALL {
-        meshes.push(f.generate(2, MemoryBudget::DEFAULT).unwrap());
+        meshes.push(f.generate(2, crate::budget::MemoryBudget::DEFAULT).unwrap());
     }
     meshes
 }

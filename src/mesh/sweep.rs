@@ -30,9 +30,9 @@
 //! segments at the vertex excluded). The mesh checks use it to tell whether a boundary loop lies
 //! inside a cell ([`super::validate`]).
 
-use super::budget::{AllocFailure, try_filled, try_vec};
 use super::predicates::{orient, segments_meet, segments_overlap_from};
 use super::{EdgeIndex as Index, Point};
+use crate::budget::{AllocFailure, try_filled, try_vec};
 use std::cmp::Ordering;
 
 /// An active segment: its end points in sweep order, their ranks in that order and its index

@@ -47,12 +47,12 @@
 //!
 //! **Bounded cost elsewhere.** The readers stop at the first line that is not text and read no
 //! file larger than a quarter of the memory budget ([`io`](super::io)); the generators refuse a
-//! mesh whose estimated memory exceeds the budget ([`budget`](super::budget)).
+//! mesh whose estimated memory exceeds the budget ([`budget`](crate::budget)).
 
-use super::budget::{AllocFailure, try_filled, try_vec};
 use super::predicates::{lex, orient, segments_meet, segments_overlap_from};
 use super::sweep::{self, Sweep};
 use super::{NO_CELL, Point, dist, polygon_area_centroid, side_normal_dist, sub};
+use crate::budget::{AllocFailure, try_filled, try_vec};
 use crate::error::MeshError;
 use std::cmp::Ordering;
 

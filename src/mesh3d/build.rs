@@ -7,9 +7,9 @@ use super::geometry::{cell_volume_centroid, diameter, face_geometry, norm, verte
 use super::orient::orient_cells;
 use super::validate::{check_cells, check_offsets, check_vertices};
 use super::{PolyMesh3, Polyhedra};
+use crate::budget::MemoryBudget;
+use crate::budget::{try_filled, try_vec};
 use crate::error::MeshError;
-use crate::mesh::MemoryBudget;
-use crate::mesh::budget::{try_filled, try_vec};
 use rayon::prelude::*;
 
 /// Estimated peak memory, in bytes, of [`PolyMesh3::from_polyhedra`] on a [`Polyhedra`] with

@@ -218,7 +218,7 @@ mod tests {
 
 #[cfg(test)]
 mod timing {
-    use crate::mesh::MemoryBudget;
+    use crate::budget::MemoryBudget;
     use crate::mesh3d::PolyMesh3;
     use crate::mesh3d::generate::Family3;
     use std::time::Instant;

@@ -16,9 +16,9 @@
 //! allocated per side.
 
 use super::Polyhedra;
+use crate::budget::{try_filled, try_vec};
 use crate::error::MeshError;
 use crate::mesh::buckets::counting_sort;
-use crate::mesh::budget::{try_filled, try_vec};
 use rayon::prelude::*;
 
 /// No partner side: a boundary face.

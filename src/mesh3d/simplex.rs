@@ -45,7 +45,7 @@ impl PolyMesh3 {
 
 #[cfg(test)]
 mod tests {
-    use crate::mesh::MemoryBudget;
+    use crate::budget::MemoryBudget;
     use crate::mesh3d::{PolyMesh3, test_meshes};
 
     #[test]

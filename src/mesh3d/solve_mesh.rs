@@ -32,7 +32,7 @@ mod tests {
     #[test]
     fn the_unit_cube_has_its_boundary_and_diameter() {
         let p = crate::mesh3d::test_meshes::cubes(2, 1);
-        let m = PolyMesh3::from_polyhedra(p, crate::mesh::MemoryBudget::DEFAULT).unwrap();
+        let m = PolyMesh3::from_polyhedra(p, crate::budget::MemoryBudget::DEFAULT).unwrap();
         // 6 sides of 2×2 squares
         assert_eq!(m.n_boundary_faces(), 24);
         let area: f64 = m.boundary_faces_iter().map(|f| m.face_measure(f)).sum();

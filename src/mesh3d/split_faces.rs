@@ -32,9 +32,9 @@
 
 use super::geometry::vertex_average;
 use super::{PolyMesh3, Polyhedra, mesh3_bytes};
+use crate::budget::MemoryBudget;
+use crate::budget::{try_filled, try_vec};
 use crate::error::{Error, MeshError};
-use crate::mesh::MemoryBudget;
-use crate::mesh::budget::{try_filled, try_vec};
 use rayon::prelude::*;
 use std::fmt;
 use std::str::FromStr;

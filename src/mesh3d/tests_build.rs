@@ -3,8 +3,9 @@
 
 use super::test_meshes::{cubes, dented_pair, tetrahedra};
 use super::{Cuboid, PolyMesh3, Polyhedra};
+use crate::budget::MemoryBudget;
+use crate::mesh::NO_CELL;
 use crate::mesh::complex::{CellComplex, VertexAverage};
-use crate::mesh::{MemoryBudget, NO_CELL};
 use crate::scheme::hmm::local_form;
 use nalgebra::DVector;
 

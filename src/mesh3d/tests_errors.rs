@@ -3,8 +3,8 @@
 
 use super::test_meshes::{cubes, dented_pair, hex_faces, tet_faces};
 use super::{MAX_CELL_FACES, MAX_FACE_VERTICES, Point3, PolyMesh3, Polyhedra};
+use crate::budget::MemoryBudget;
 use crate::error::MeshError;
-use crate::mesh::MemoryBudget;
 
 fn build(p: Polyhedra) -> Result<PolyMesh3, MeshError> {
     PolyMesh3::from_polyhedra(p, MemoryBudget::DEFAULT)

@@ -5,7 +5,7 @@
 
 use super::tests_build::consistency_defect;
 use super::{PolyMesh3, Polyhedra};
-use crate::mesh::MemoryBudget;
+use crate::budget::MemoryBudget;
 
 /// The numbers of an RF file, comment lines dropped.
 fn numbers(path: &str) -> Vec<f64> {

@@ -5,8 +5,8 @@ use super::generate::Family3;
 use super::test_meshes::{cubes, perturbed_cubes};
 use super::tests_build::{check_local_form, consistency_defect};
 use super::{PLANAR_TOL, PolyMesh3, Polyhedra, WarpedFaces};
+use crate::budget::MemoryBudget;
 use crate::error::MeshError;
-use crate::mesh::MemoryBudget;
 
 fn build(p: Polyhedra, w: WarpedFaces) -> PolyMesh3 {
     PolyMesh3::from_polyhedra_with(p, MemoryBudget::DEFAULT, w).unwrap()

@@ -2,7 +2,7 @@
 //! connectivity and data arrays) and compared with the mesh.
 
 use super::{write_boundary_vtu, write_faces_vtu};
-use crate::mesh::MemoryBudget;
+use crate::budget::MemoryBudget;
 use crate::mesh3d::PolyMesh3;
 use crate::mesh3d::generate::Family3;
 

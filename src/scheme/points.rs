@@ -327,7 +327,7 @@ mod tests {
         assert_eq!(ob.len(), m.n_vertices() + tr.len());
 
         let hex = crate::mesh::generate::Family::Hexagonal
-            .generate(1, crate::mesh::MemoryBudget::DEFAULT)
+            .generate(1, crate::budget::MemoryBudget::DEFAULT)
             .unwrap();
         let hmm = Hmm::new(&hex);
         let src = source_points(&hmm);

@@ -4,7 +4,7 @@
 //! that tile Ω, traces, and the refusal of other cells.
 
 use super::{Cr, Entity, GradientDiscretisation, P1, PointDof, Tensor};
-use crate::mesh::MemoryBudget;
+use crate::budget::MemoryBudget;
 use crate::mesh3d::{Point3, PolyMesh3, Polyhedra, test_meshes};
 use nalgebra::{DMatrix, DVector};
 

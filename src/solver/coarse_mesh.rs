@@ -12,10 +12,11 @@
 //! surface the mesh integrates on when σ is warped.
 
 use super::warm_start::{FIRST_LEVEL_UNKNOWNS_PER_CELL, FIRST_LEVEL_UNKNOWNS_PER_CELL_3D};
+use crate::budget::MemoryBudget;
+use crate::budget::try_collect;
 use crate::error::MeshError;
-use crate::mesh::budget::try_collect;
 use crate::mesh::complex::{Vector, VertexAverage};
-use crate::mesh::{MemoryBudget, PolyMesh, SolveMesh};
+use crate::mesh::{PolyMesh, SolveMesh};
 use crate::mesh3d::{Point3, PolyMesh3, agglomerate::NO_FACE};
 
 /// Marker for "no coarse face" in [`Level::boundary_face_of`] (interior fine faces).

@@ -3,8 +3,8 @@
 //! a(x_σ), nodal values), and the check that the discrete convex set is not empty.
 
 use crate::assembly::DiscreteSystem;
+use crate::budget::{try_copy, try_filled, try_vec};
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{try_copy, try_filled, try_vec};
 use crate::problem::{ConstraintKind, Problem, check_finite};
 use crate::scheme::PointDof;
 use crate::vi::ConstrainedDof;

@@ -26,7 +26,7 @@ pub mod warm_start;
 pub mod well_posed;
 
 use crate::assembly::{DiscreteSystem, SolveState, SymbolicSystem, SystemOptions};
-use crate::mesh::budget::{try_copy, try_filled};
+use crate::budget::{try_copy, try_filled};
 use crate::mesh::{PolyMesh, SolveMesh};
 use crate::problem::Problem;
 use crate::scheme::GradientDiscretisation;

@@ -10,7 +10,8 @@
 
 use super::constraints::Constraints;
 use super::warm_start::{self, Prediction};
-use crate::mesh::{MemoryBudget, PolyMesh, SolveMesh};
+use crate::budget::MemoryBudget;
+use crate::mesh::{PolyMesh, SolveMesh};
 use crate::mesh3d::PolyMesh3;
 use crate::problem::Problem;
 use crate::scheme::GradientDiscretisation;

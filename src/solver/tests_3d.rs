@@ -6,7 +6,8 @@
 
 use super::{SolveOptions, constraints, solve_problem};
 use crate::assembly::{DiscreteSystem, SolveState};
-use crate::mesh::{CellComplex, MemoryBudget};
+use crate::budget::MemoryBudget;
+use crate::mesh::CellComplex;
 use crate::mesh3d::{PolyMesh3, Polyhedra, test_meshes};
 use crate::problem::{BoundaryKind, ConstraintKind, Problem, Side};
 use crate::scheme::{Entity, GradientDiscretisation, Hmm, Tensor};

@@ -55,9 +55,10 @@
 use super::coarse_mesh::{CoarseMesh, Level};
 use super::start::SolverMesh;
 use crate::assembly::{DiscreteSystem, SystemOptions};
-use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
+use crate::budget::MemoryBudget;
+use crate::budget::{AllocFailure, try_filled, try_vec};
+use crate::mesh::NO_CELL;
 use crate::mesh::complex::Vector;
-use crate::mesh::{MemoryBudget, NO_CELL};
 use crate::mesh3d::agglomerate::KEEP;
 use crate::problem::{BoundaryKind, ConstraintKind, Problem};
 use crate::scheme::{Entity, GradientDiscretisation, Hmm};

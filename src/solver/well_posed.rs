@@ -22,8 +22,8 @@
 //! the initial active set. Cost: one union–find pass over the local unknowns.
 
 use crate::assembly::DiscreteSystem;
+use crate::budget::{try_filled, try_vec};
 use crate::mesh::SolveMesh;
-use crate::mesh::budget::{try_filled, try_vec};
 use crate::solver::constraints::Constraints;
 use std::fmt;
 

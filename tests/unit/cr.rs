@@ -14,7 +14,7 @@ fn gmsh(name: &str) -> PolyMesh {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("meshes")
         .join(name);
-    gradvi::mesh::io::read_mesh(&path, gradvi::mesh::MemoryBudget::DEFAULT).unwrap()
+    gradvi::mesh::io::read_mesh(&path, gradvi::budget::MemoryBudget::DEFAULT).unwrap()
 }
 
 #[test]

@@ -13,8 +13,9 @@
 //! crate's reader.
 
 use crate::common::fvca5_dir;
+use gradvi::budget::MemoryBudget;
+use gradvi::mesh::PolyMesh;
 use gradvi::mesh::generate::{Family, hexagonal, kershaw};
-use gradvi::mesh::{MemoryBudget, PolyMesh};
 use std::collections::HashMap;
 use std::path::Path;
 

@@ -340,10 +340,10 @@ fn a_solve_is_refused_beyond_the_callers_memory_budget() {
     let p = paper_test3(-20.0);
     for ws in [WarmStart::Cold, WarmStart::Nested] {
         let mut o = opts(LinearSolver::Direct, ws);
-        o.system.budget = gradvi::mesh::MemoryBudget::new(u64::MAX);
+        o.system.budget = gradvi::budget::MemoryBudget::new(u64::MAX);
         let sol = solve_problem(&hmm, &p, &o).unwrap();
         sol.result.certificate.check(1e-10).unwrap();
-        o.system.budget = gradvi::mesh::MemoryBudget::new(4096);
+        o.system.budget = gradvi::budget::MemoryBudget::new(4096);
         match solve_problem(&hmm, &p, &o) {
             Err(e @ gradvi::Error::OutOfMemory { budget: 4096, .. }) => {
                 assert!(

@@ -2,8 +2,9 @@
 //! files of `tests/data/good`, the FVCA5 benchmark files (when `../shared/meshes/fvca5` is
 //! present), and round trips through the typ2 and VTU writers.
 
+use gradvi::budget::MemoryBudget;
+use gradvi::mesh::PolyMesh;
 use gradvi::mesh::io::{read_msh, read_typ1, read_typ2, write_typ2, write_vtu};
-use gradvi::mesh::{MemoryBudget, PolyMesh};
 use gradvi::{Error, MeshError, mesh::io::read_mesh};
 use std::collections::BTreeMap;
 use std::panic::{AssertUnwindSafe, catch_unwind};

@@ -3,9 +3,10 @@
 //! `meshes/*.msh`, `tests/data/good`, the generators at several levels) still validates, and the
 //! checks stay fast on inputs that made the old ones quadratic.
 
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh::generate::{cartesian, cartesian_rect, hexagonal, hexagonal_grid, kershaw};
 use gradvi::mesh::io::read_mesh;
-use gradvi::mesh::{MAX_CELL_VERTICES, MemoryBudget, Point, PolyMesh};
+use gradvi::mesh::{MAX_CELL_VERTICES, Point, PolyMesh};
 use gradvi::{Error, MeshError};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};

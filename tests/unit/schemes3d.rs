@@ -4,7 +4,7 @@
 //! run to 1e-15 where there are more (the HMM counterparts are in `src/solver/tests_3d.rs`).
 
 use gradvi::assembly::{DiscreteSystem, SolveState};
-use gradvi::mesh::MemoryBudget;
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh3d::generate::kuhn;
 use gradvi::mesh3d::{Cuboid, PolyMesh3};
 use gradvi::problem::{BoundaryKind, ConstraintKind, Problem, Side};

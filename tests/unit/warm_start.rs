@@ -3,9 +3,10 @@
 //! the mesh is too coarse.
 
 use crate::common::*;
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh::generate::{cartesian, cartesian_triangles, hexagonal};
 use gradvi::mesh::io::read_mesh;
-use gradvi::mesh::{MemoryBudget, PolyMesh, drop_unused_vertices};
+use gradvi::mesh::{PolyMesh, drop_unused_vertices};
 use gradvi::problem::*;
 use gradvi::scheme::*;
 use gradvi::solver::*;
@@ -59,7 +60,7 @@ fn nested_obstacle_gives_the_cold_solution_in_fewer_solves() {
     // P1 on a gmsh triangle mesh of the replication, and HMM on hexagons
     let tri = read_mesh(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/test3_4.msh"),
-        gradvi::mesh::MemoryBudget::DEFAULT,
+        gradvi::budget::MemoryBudget::DEFAULT,
     )
     .unwrap();
     let p1 = P1::new(&tri).unwrap();
@@ -107,7 +108,7 @@ fn nested_signorini_gives_the_cold_solution() {
     assert!(r.skipped.is_none() && r.predicted_active > 0, "{r:?}");
     let tri = read_mesh(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/test1_3.msh"),
-        gradvi::mesh::MemoryBudget::DEFAULT,
+        gradvi::budget::MemoryBudget::DEFAULT,
     )
     .unwrap();
     let p1 = P1::new(&tri).unwrap();
@@ -150,7 +151,7 @@ fn nested_works_on_any_domain() {
         let pf = gradvi::problem::file::load(dir.join(format!("{file}.toml")), &[]).unwrap();
         let mesh = read_mesh(
             dir.join(format!("{msh}.msh")),
-            gradvi::mesh::MemoryBudget::DEFAULT,
+            gradvi::budget::MemoryBudget::DEFAULT,
         )
         .unwrap();
         let hmm = Hmm::new(&mesh);

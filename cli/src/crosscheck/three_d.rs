@@ -17,7 +17,7 @@
 
 use super::{ACTIVE_TOL, ReferenceCase, ReferenceRow, match_points};
 use anyhow::{Context, Result, bail};
-use gradvi::mesh::MemoryBudget;
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh3d::io::read_msh3;
 use gradvi::mesh3d::{Point3, PolyMesh3};
 use gradvi::post::relative_errors;

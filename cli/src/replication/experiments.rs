@@ -4,9 +4,10 @@
 use super::records::*;
 use super::{Config, create_dir};
 use gradvi::assembly::SymbolicSystem;
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh::generate::{hexagonal::hexagonal, kershaw::kershaw};
 use gradvi::mesh::io::read_mesh;
-use gradvi::mesh::{MemoryBudget, PolyMesh, SolveMesh};
+use gradvi::mesh::{PolyMesh, SolveMesh};
 use gradvi::post::contact::{contact_measure, switch_point};
 use gradvi::post::relative_errors;
 use gradvi::problem::{Problem, file, paper_test2_tie};

@@ -12,7 +12,7 @@
 //! by hand go to `replication/measurements/mesh3d_io.md`.
 
 use super::{bad, io_err, peak_memory_mib, stdout_of};
-use gradvi::mesh::MemoryBudget;
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh3d::PolyMesh3;
 use gradvi::mesh3d::io::read_mesh3;
 use serde::{Deserialize, Serialize};

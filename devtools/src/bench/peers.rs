@@ -37,9 +37,9 @@
 //! sections are written from it ([`super::report`]).
 
 use super::{Config, bad, io_err, json_row, peak_memory_mib, stdout_of};
-use gradvi::mesh::MemoryBudget;
+use gradvi::budget::MemoryBudget;
+use gradvi::budget::human_bytes;
 use gradvi::mesh::PolyMesh;
-use gradvi::mesh::budget::human_bytes;
 use gradvi::mesh::generate::{cartesian_rect_within, cartesian_triangles_within};
 use gradvi::mesh::io::read_mesh;
 use gradvi::problem::{Problem, paper_test3};

@@ -39,8 +39,8 @@
 //! ([`super::peers3d_report`]).
 
 use super::{bad, io_err, json_row, peak_memory_mib, stdout_of};
-use gradvi::mesh::MemoryBudget;
-use gradvi::mesh::budget::human_bytes;
+use gradvi::budget::MemoryBudget;
+use gradvi::budget::human_bytes;
 use gradvi::mesh3d::generate::kuhn;
 use gradvi::mesh3d::{Cuboid, PolyMesh3};
 use gradvi::scheme::{SchemeKind, SchemeOptions, build_with3};

@@ -2,8 +2,8 @@
 //! setup, see [`super`]).
 
 use super::NONE;
+use crate::budget::{AllocFailure, try_filled, try_vec};
 use crate::linalg::csr::CsrMatrix;
-use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
 
 /// Greedy aggregation on the graph of the strong entries `strong` of A (see the module
 /// documentation): the aggregate of each unknown ([`NONE`] for an isolated one) and the

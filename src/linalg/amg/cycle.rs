@@ -2,8 +2,8 @@
 
 use super::Amg;
 use super::coarse::{CoarseSolve, dense_solve};
+use crate::budget::{AllocFailure, try_resize};
 use crate::linalg::pcg::{Preconditioner, check_len};
-use crate::mesh::budget::{AllocFailure, try_resize};
 
 /// Vectors of one level.
 #[derive(Debug, Clone, Default)]

@@ -2,8 +2,8 @@
 
 use super::NONE;
 use super::rows::build_rows;
+use crate::budget::{AllocFailure, try_filled, try_grow};
 use crate::linalg::csr::CsrMatrix;
-use crate::mesh::budget::{AllocFailure, try_filled, try_grow};
 
 /// A dense accumulator of a sparse row: the values by column and the list of touched columns.
 struct Accumulator {

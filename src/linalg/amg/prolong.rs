@@ -4,8 +4,8 @@
 use super::NONE;
 use super::rows::build_rows;
 use super::spectral::lanczos_lambda_max;
+use crate::budget::{AllocFailure, try_filled, try_grow};
 use crate::linalg::csr::{CsrMatrix, ROW_CHUNK};
-use crate::mesh::budget::{AllocFailure, try_filled, try_grow};
 use rayon::prelude::*;
 
 /// P = (I − ω D_F⁻¹ A_F) T (see the module documentation): row i is

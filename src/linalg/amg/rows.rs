@@ -1,13 +1,13 @@
 //! Building a sparse matrix row by row, in parallel, with a result that does not depend on
 //! the threads (the rows are computed in fixed chunks and concatenated in order).
 
+use crate::budget::{AllocFailure, try_filled, try_vec};
 use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
-use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
 use rayon::prelude::*;
 
 /// Builds a matrix row by row in parallel: `row(scratch, i, cols, vals)` appends the entries
 /// of row i (sorted by column) to `cols` and `vals`, reserving their room first
-/// ([`try_grow`](crate::mesh::budget::try_grow)); `init` makes the per-thread scratch.
+/// ([`try_grow`](crate::budget::try_grow)); `init` makes the per-thread scratch.
 /// [`AllocFailure`] if the scratch or the arrays of the matrix cannot be allocated (the
 /// entries of one chunk of [`ROW_CHUNK`] rows grow as the rows are appended).
 pub(super) fn build_rows<S, I, F>(

@@ -9,8 +9,8 @@ use super::prolong::smoothed_prolongator;
 use super::smooth::LevelSmoother;
 use super::strength::strength;
 use super::{Amg, AmgOptions, CoarseHierarchy, DENSE_MAX, Transfer};
+use crate::budget::try_filled;
 use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ};
-use crate::mesh::budget::try_filled;
 use rayon::prelude::*;
 
 impl<'a> Amg<'a> {
@@ -152,7 +152,7 @@ mod tests {
     #[cfg(target_os = "linux")]
     #[test]
     fn a_setup_the_data_limit_refuses_is_a_typed_error() {
-        use crate::mesh::budget::child;
+        use crate::budget::child;
         const NAME: &str =
             "linalg::amg::setup::tests::a_setup_the_data_limit_refuses_is_a_typed_error";
         if !child::is_child(NAME) {

@@ -4,8 +4,8 @@
 use super::cycle::LevelWork;
 use super::options::{AmgOptions, Smoother};
 use super::spectral::{gershgorin, lanczos_lambda_max};
+use crate::budget::{AllocFailure, try_filled, try_vec};
 use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
-use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
 use rayon::prelude::*;
 
 /// The data of the smoother on one level.

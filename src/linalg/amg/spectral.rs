@@ -1,9 +1,9 @@
 //! Bounds and estimates of the largest eigenvalue of D⁻¹A: for ω of the prolongator smoothing
 //! and the interval of the Chebyshev smoother (see [`super`]).
 
+use crate::budget::{AllocFailure, try_filled, try_vec};
 use crate::linalg::csr::{CsrMatrix, ROW_CHUNK};
 use crate::linalg::pcg::dot;
-use crate::mesh::budget::{AllocFailure, try_filled, try_vec};
 use rayon::prelude::*;
 
 /// Gershgorin bound of ρ(D⁻¹A): max_i Σ_j |a_ij| / a_ii.

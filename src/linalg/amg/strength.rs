@@ -1,8 +1,8 @@
 //! Strength of connection: which couplings of A_ℓ are strong (step 1 of the setup, see
 //! [`super`]).
 
+use crate::budget::{AllocFailure, try_filled};
 use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
-use crate::mesh::budget::{AllocFailure, try_filled};
 use rayon::prelude::*;
 
 /// The strong off-diagonal entries of A, a_ij ≠ 0 with a_ij² ≥ θ² a_ii a_jj, whatever their

@@ -15,9 +15,9 @@
 //! h = √((x₁−x₀)²/nx² + (y₁−y₀)²/ny²).
 
 use super::{Counts, check_cell_count, check_memory};
+use crate::budget::MemoryBudget;
+use crate::budget::try_vec;
 use crate::error::{Error, Result};
-use crate::mesh::budget::MemoryBudget;
-use crate::mesh::budget::try_vec;
 use crate::mesh::{Overlap, Point, PolyMesh};
 
 /// The nx × ny uniform mesh of \[0,1\]² (see the module docs for the numbering), within the

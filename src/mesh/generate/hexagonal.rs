@@ -55,9 +55,9 @@
 //! Everything is index arithmetic: O(cells) time, no search.
 
 use super::{Counts, check_cell_count, check_memory};
+use crate::budget::MemoryBudget;
+use crate::budget::{try_filled, try_vec};
 use crate::error::{Error, Result};
-use crate::mesh::budget::MemoryBudget;
-use crate::mesh::budget::{try_filled, try_vec};
 use crate::mesh::{Point, PolyMesh};
 use std::f64::consts::PI;
 

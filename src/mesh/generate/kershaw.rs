@@ -50,9 +50,9 @@
 //! subcell (α, β) lists the subnodes (α,β+1), (α,β), (α+1,β), (α+1,β+1) (top-left first,
 //! counter-clockwise).
 
+use crate::budget::MemoryBudget;
+use crate::budget::{try_filled, try_vec};
 use crate::error::Result;
-use crate::mesh::budget::MemoryBudget;
-use crate::mesh::budget::{try_filled, try_vec};
 use crate::mesh::{Point, PolyMesh};
 use std::f64::consts::PI;
 

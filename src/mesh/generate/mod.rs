@@ -49,8 +49,8 @@ pub use cartesian::{
 pub use hexagonal::{hexagonal, hexagonal_grid, hexagonal_grid_within};
 pub use kershaw::{kershaw, kershaw_within};
 
+use crate::budget::{MemoryBudget, mesh_bytes, try_vec};
 use crate::error::{Error, Result};
-use crate::mesh::budget::{MemoryBudget, mesh_bytes, try_vec};
 use crate::mesh::{Overlap, PolyMesh, Rect};
 use std::fmt;
 use std::str::FromStr;

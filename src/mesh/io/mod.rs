@@ -32,9 +32,10 @@ pub use typ1::read_typ1;
 pub use typ2::{read_typ2, write_typ2};
 pub use vtu::write_vtu;
 
+use crate::budget::MemoryBudget;
+use crate::budget::{AllocFailure, try_vec};
 use crate::error::{Error, Result};
-use crate::mesh::budget::{AllocFailure, try_vec};
-use crate::mesh::{MemoryBudget, PolyMesh};
+use crate::mesh::PolyMesh;
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;

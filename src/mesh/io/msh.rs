@@ -18,11 +18,10 @@
 //! Binary files and the formats 4.0 and 3.0 are rejected with a clear message.
 
 use super::{Tokens, capacity, read_text};
+use crate::budget::MemoryBudget;
+use crate::budget::{try_reserve, try_vec};
 use crate::error::Result;
-use crate::mesh::budget::{try_reserve, try_vec};
-use crate::mesh::{
-    MemoryBudget, NonBoundaryTag, Overlap, Point, PolyMesh, drop_unused_vertices_flat,
-};
+use crate::mesh::{NonBoundaryTag, Overlap, Point, PolyMesh, drop_unused_vertices_flat};
 use std::collections::{BTreeSet, HashMap};
 use std::fmt::Display;
 use std::path::Path;

@@ -23,9 +23,10 @@
 //! edge (boundary edge) of the mesh must be listed exactly once.
 
 use super::{Tokens, capacity, read_text};
+use crate::budget::MemoryBudget;
+use crate::budget::{try_filled, try_reserve, try_vec};
 use crate::error::Result;
-use crate::mesh::budget::{try_filled, try_reserve, try_vec};
-use crate::mesh::{MemoryBudget, NO_CELL, Point, PolyMesh};
+use crate::mesh::{NO_CELL, Point, PolyMesh};
 use std::path::Path;
 
 /// Reads a `.typ1` mesh, inserting the hanging nodes of the `all edges` list into the cells

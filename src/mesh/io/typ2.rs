@@ -17,9 +17,10 @@
 //! (180° angles), as in every typ2 file of the FVCA5 benchmark.
 
 use super::{Tokens, capacity, read_text};
+use crate::budget::MemoryBudget;
+use crate::budget::try_vec;
 use crate::error::{Error, Result};
-use crate::mesh::budget::try_vec;
-use crate::mesh::{MAX_CELL_VERTICES, MemoryBudget, Point, PolyMesh};
+use crate::mesh::{MAX_CELL_VERTICES, Point, PolyMesh};
 use std::io::Write;
 use std::path::Path;
 

@@ -4,8 +4,8 @@
 use super::check::boundary_sides;
 use super::merge::{self, Interfaces, Scratch};
 use super::{Agglomeration3, MIN_TASK, NO_FACE, Polyhedra, members};
+use crate::budget::MemoryBudget;
 use crate::error::MeshError;
-use crate::mesh::MemoryBudget;
 use crate::mesh3d::PolyMesh3;
 use rayon::prelude::*;
 

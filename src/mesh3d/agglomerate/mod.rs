@@ -83,9 +83,10 @@ mod merge;
 mod tests;
 
 use super::{Point3, PolyMesh3, Polyhedra, validate::MAX_CELL_FACES};
+use crate::budget::MemoryBudget;
 use crate::error::MeshError;
+use crate::mesh::NO_CELL;
 use crate::mesh::agglomerate::{components, dissolve, floor_i64, merge_into_neighbours, renumber};
-use crate::mesh::{MemoryBudget, NO_CELL};
 use rayon::prelude::*;
 
 pub use crate::mesh::agglomerate::MIN_DIST_RATIO;

@@ -1,8 +1,8 @@
 //! Tests of [`agglomerate3`](super::agglomerate3).
 
 use super::{Agglomeration3, KEEP, MAX_SPLITS, NO_FACE, agglomerate3, agglomerate3_merging};
+use crate::budget::MemoryBudget;
 use crate::error::MeshError;
-use crate::mesh::MemoryBudget;
 use crate::mesh3d::test_meshes::{cubes, perturbed_cubes, tetrahedra};
 use crate::mesh3d::{Point3, PolyMesh3, Polyhedra};
 

@@ -6,8 +6,8 @@
 //! (n+1)³ vertices.
 
 use super::split::{self, CubeSplit};
+use crate::budget::MemoryBudget;
 use crate::error::Result;
-use crate::mesh::MemoryBudget;
 use crate::mesh3d::{Cuboid, Polyhedra};
 
 /// The cube as one cell: its faces x−, x+, y−, y+, z−, z+ in local corners.

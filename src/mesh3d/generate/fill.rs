@@ -9,7 +9,7 @@
 //! Each layer writes absolute offsets (its own plus the sums of the layers before it), so the
 //! layers are independent and the result does not depend on how rayon schedules them.
 
-use crate::mesh::budget::{AllocFailure, try_filled};
+use crate::budget::{AllocFailure, try_filled};
 use rayon::prelude::*;
 
 /// Where a generator describes the cells of one layer.

@@ -11,8 +11,8 @@
 //! Cartesian meshes, stacked). Cube (i, j, k), 0 ≤ i, j, k < n, has id `(k·n + j)·n + i` and
 //! the local corners 0 … 7, corner `dx + 2·dy + 4·dz` being grid point (i+dx, j+dy, k+dz).
 
+use crate::budget::try_filled;
 use crate::error::{Error, Result};
-use crate::mesh::budget::try_filled;
 use crate::mesh3d::{Cuboid, Point3};
 use rayon::prelude::*;
 

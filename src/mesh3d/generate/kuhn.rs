@@ -14,8 +14,8 @@
 //! Counts: 6n³ cells, 24n³ face sides, 72n³ face vertices, (n+1)³ vertices.
 
 use super::split::{self, CubeSplit};
+use crate::budget::MemoryBudget;
 use crate::error::Result;
-use crate::mesh::MemoryBudget;
 use crate::mesh3d::{Cuboid, Polyhedra};
 
 /// The six tetrahedra xyz, xzy, yxz, yzx, zxy, zyx of a cube, faces in local corners.

@@ -47,8 +47,8 @@ pub use prisms::prisms;
 pub use refined::refined;
 pub use warped::warped;
 
+use crate::budget::MemoryBudget;
 use crate::error::{Error, Result};
-use crate::mesh::MemoryBudget;
 use crate::mesh3d::{Cuboid, PolyMesh3, Polyhedra, mesh3_bytes};
 use std::fmt;
 use std::str::FromStr;

@@ -13,8 +13,8 @@
 //! Counts: 2n³ cells, 10n³ face sides, 36n³ face vertices, (n+1)³ vertices.
 
 use super::split::{self, CubeSplit};
+use crate::budget::MemoryBudget;
 use crate::error::Result;
-use crate::mesh::MemoryBudget;
 use crate::mesh3d::{Cuboid, Polyhedra};
 
 /// Prisms A and B of a cube, faces in local corners.

@@ -28,9 +28,9 @@
 
 use super::fill::{Sink, count_layers, fill_layers};
 use super::{Counts3, check_request, grid};
+use crate::budget::MemoryBudget;
+use crate::budget::try_filled;
 use crate::error::{Error, Result};
-use crate::mesh::MemoryBudget;
-use crate::mesh::budget::try_filled;
 use crate::mesh3d::{Cuboid, Point3, Polyhedra};
 use rayon::prelude::*;
 

@@ -10,8 +10,8 @@
 use super::fill::{Sink, fill_layers};
 use super::grid::{self, cube_corners};
 use super::{Counts3, check_request};
+use crate::budget::MemoryBudget;
 use crate::error::Result;
-use crate::mesh::MemoryBudget;
 use crate::mesh3d::{Cuboid, Point3, Polyhedra};
 
 /// The cells of one cube: faces as loops of local corners (see the module docs).

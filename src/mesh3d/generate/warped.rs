@@ -27,8 +27,8 @@
 
 use super::cubes::CUBE;
 use super::split;
+use crate::budget::MemoryBudget;
 use crate::error::Result;
-use crate::mesh::MemoryBudget;
 use crate::mesh3d::{Cuboid, Polyhedra};
 
 /// How far an interior point moves, per coordinate, as a fraction of the grid step.

@@ -28,9 +28,9 @@ pub use rf::read_rf;
 pub use vtu::write_vtu3;
 pub use vtu_read::read_vtu3;
 
+use crate::budget::MemoryBudget;
+use crate::budget::{try_filled, try_vec};
 use crate::error::{Error, MeshError, Result};
-use crate::mesh::MemoryBudget;
-use crate::mesh::budget::{try_filled, try_vec};
 use crate::mesh3d::{Point3, Polyhedra};
 use std::path::Path;
 

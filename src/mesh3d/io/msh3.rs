@@ -14,9 +14,9 @@
 //! * Nodes that no cell uses are dropped; the others keep the order of the `$Nodes` section.
 
 use super::{compact_vertices, too_large};
+use crate::budget::MemoryBudget;
+use crate::budget::{try_reserve, try_vec};
 use crate::error::Result;
-use crate::mesh::MemoryBudget;
-use crate::mesh::budget::{try_reserve, try_vec};
 use crate::mesh::io::msh::{ElementSink, ElementTag, Sections, nodes_of_type, parse_sections};
 use crate::mesh::io::{Tokens, read_text};
 use crate::mesh3d::io::cells::{HEX_FACES, PRISM_FACES, PYRAMID_FACES, TET_FACES, push_shape};

@@ -9,9 +9,9 @@
 //! A face shared by two cells is listed by both, in either orientation. The files carry no
 //! tags: the cells and the boundary faces are untagged.
 
+use crate::budget::MemoryBudget;
+use crate::budget::{try_reserve, try_vec};
 use crate::error::{Error, Result};
-use crate::mesh::MemoryBudget;
-use crate::mesh::budget::{try_reserve, try_vec};
 use crate::mesh::io::{Tokens, capacity, read_text};
 use crate::mesh3d::{Point3, Polyhedra};
 use std::ffi::OsString;

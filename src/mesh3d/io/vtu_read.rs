@@ -9,8 +9,8 @@
 use super::cells::{HEX_FACES, TET_FACES, push_shape};
 use super::too_large;
 use super::vtu::{VTK_HEXAHEDRON, VTK_POLYHEDRON, VTK_TETRA};
+use crate::budget::MemoryBudget;
 use crate::error::Result;
-use crate::mesh::MemoryBudget;
 use crate::mesh::io::{Tokens, read_text};
 use crate::mesh3d::Polyhedra;
 use std::path::Path;

@@ -12,7 +12,7 @@ pub mod report;
 use super::experiments::worst;
 use super::records::write_csv;
 use super::{Config, create_dir};
-use gradvi::mesh::MemoryBudget;
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh3d::generate::Family3;
 use gradvi::mesh3d::{Cuboid, PolyMesh3};
 use gradvi::post::relative_errors;

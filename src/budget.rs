@@ -1,11 +1,14 @@
-//! How much memory building a mesh may take, so that a request too large is refused up front
-//! with an error giving the estimate, instead of aborting on allocation.
+//! How much memory building a mesh or running a computation (assembly, factorisation,
+//! multigrid) may take, so that a request too large is refused up front with an error giving
+//! the estimate, instead of aborting on allocation. It uses only [`units`](crate::units) and
+//! [`error`](crate::error), so every layer above, the linear algebra included, allocates
+//! through it.
 //!
 //! The budget is the caller's: every generator and reader takes a [`MemoryBudget`], and the
 //! library never looks at the machine's free memory unless the caller asks for it with
 //! [`MemoryBudget::available`]. The same call therefore passes or fails whatever the load of
 //! the machine. The convenience generators without a budget argument
-//! ([`cartesian()`](super::generate::cartesian()) and the like) use the fixed
+//! ([`cartesian()`](crate::mesh::generate::cartesian()) and the like) use the fixed
 //! [`MemoryBudget::DEFAULT`] (8 GiB).
 //!
 //! * [`MemoryBudget::available`]: the memory the kernel reports as available (`MemAvailable` in
@@ -14,10 +17,11 @@
 //!   ([`rlimit_headroom`]: `RLIMIT_AS`, as `ulimit -v` and batch systems set it, and
 //!   `RLIMIT_DATA`); [`MemoryBudget::DEFAULT`] where none is known. The command line and the
 //!   Python module start from it.
-//! * [`mesh_bytes`]: the peak memory of building and validating a [`PolyMesh`](super::PolyMesh)
-//!   with given numbers of cells, cell sides, vertices and edges. The generators compare it with
-//!   the budget before allocating anything ([`MemoryBudget::check`]); a caller that needs memory
-//!   for more than the mesh (a solve) passes a smaller budget.
+//! * [`mesh_bytes`]: the peak memory of building and validating a
+//!   [`PolyMesh`](crate::mesh::PolyMesh) with given numbers of cells, cell sides, vertices and
+//!   edges. The generators compare it with the budget before allocating anything
+//!   ([`MemoryBudget::check`]); a caller that needs memory for more than the mesh (a solve)
+//!   passes a smaller budget.
 //! * [`try_vec`] and [`try_filled`]: the large buffers whose size the input decides (the
 //!   arrays of a mesh, a matrix pattern, a factor) are allocated fallibly, so that a request
 //!   the estimates let through but the process cannot map (an address-space limit reached by
@@ -345,6 +349,9 @@ fn rlimit(_which: Limit) -> Option<u64> {
 /// little; but the address space (`RLIMIT_AS`, `ulimit -v`) and the data limit
 /// (`RLIMIT_DATA`) count them whole, and an address-space limit smaller than this, times the
 /// threads that run products, ends the process with `memory allocation of … failed`.
+///
+/// The cache sizes behind it are read from the system once per process ([`gemm_l3_bytes`]);
+/// every call after the first is arithmetic on them.
 pub fn dense_product_workspace() -> u64 {
     if !dense_product_kernel_in_use() {
         return 0;
@@ -404,7 +411,18 @@ fn avx512() -> bool {
 /// 480 MiB, on a machine whose 32 MiB L3 is shared by 16 cores, 32 MiB. `None` where the
 /// files cannot be read (not Linux): the kernel then falls back to `lscpu` or `cpuid`, whose
 /// sizes this function does not reproduce, and [`dense_product_workspace`] is 0.
+///
+/// The files are read once per process, on the first call, and the value kept in a
+/// process-wide [`OnceLock`](std::sync::OnceLock): it is a fact of the hardware, as fixed as
+/// the kernel's own estimate, which it also computes once per process. Later calls (one per
+/// supernodal factorisation, through [`dense_product_workspace`]) read no file.
 pub fn gemm_l3_bytes() -> Option<u64> {
+    static L3: std::sync::OnceLock<Option<u64>> = std::sync::OnceLock::new();
+    *L3.get_or_init(read_gemm_l3_bytes)
+}
+
+/// [`gemm_l3_bytes`] read from the files, without the cache.
+fn read_gemm_l3_bytes() -> Option<u64> {
     #[cfg(all(target_os = "linux", target_arch = "x86_64"))]
     {
         let (l3, l1_shared) = sysfs_caches(std::path::Path::new("/sys/devices/system/cpu"))?;
@@ -559,7 +577,7 @@ pub fn check_dense_product_workspace(threads: u64, avoid: &str) -> crate::Result
 /// hold `sides` entries in all, `vertices` vertices and `edges` edges.
 ///
 /// The peak is reached during the overlap check (the sweep of
-/// [`validate`](super::validate)), when the arrays of [`PolyMesh`](super::PolyMesh) are all
+/// [`validate`](crate::mesh::validate)), when the arrays of [`PolyMesh`](crate::mesh::PolyMesh) are all
 /// built: 16 bytes per vertex (coordinates), 36 per cell (32-bit CSR offset, area, centroid,
 /// and the diameter, present during the check, not kept by the mesh), 8 per cell side (32-bit
 /// vertex and edge ids; n_{K,σ} and d_{K,σ} are computed on demand) and 56 per edge (end
@@ -683,7 +701,7 @@ mod tests {
             .arg(exe)
             .args([
                 "--exact",
-                "mesh::budget::tests::the_available_budget_sees_the_address_space_limit",
+                "budget::tests::the_available_budget_sees_the_address_space_limit",
             ])
             .args(["--test-threads", "1"])
             .env("GRADVI_BUDGET_CHILD", "1")
@@ -808,8 +826,7 @@ mod tests {
     #[cfg(target_os = "linux")]
     #[test]
     fn a_product_workspace_beyond_the_limit_is_a_typed_error() {
-        const NAME: &str =
-            "mesh::budget::tests::a_product_workspace_beyond_the_limit_is_a_typed_error";
+        const NAME: &str = "budget::tests::a_product_workspace_beyond_the_limit_is_a_typed_error";
         if !child::is_child(NAME) {
             return child::run(NAME);
         }
