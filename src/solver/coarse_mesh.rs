@@ -54,6 +54,11 @@ pub trait CoarseMesh<const D: usize>: SolveMesh<D> + VertexAverage + Sized {
         boundary_key: Option<&[u32]>,
         budget: MemoryBudget,
     ) -> Result<Level<Self>, MeshError>;
+    /// A coarse mesh of boxes of side `size` covering the mesh, for when agglomeration cannot
+    /// coarsen it ([`crate::mesh3d::agglomerate::box_cover`]: its domain is a staircase
+    /// around Ω's and no boundary face carries over, so it serves obstacle problems only);
+    /// `None` where the mesh type has none.
+    fn cover(&self, size: f64, budget: MemoryBudget) -> Option<Result<Level<Self>, MeshError>>;
     /// The distance from `p` to face `f` (see the module docs).
     fn face_distance(&self, f: usize, p: Vector<D>) -> f64;
     /// The vertices of cell `k`, each once (in `scratch` if the mesh does not store them).
@@ -86,6 +91,11 @@ impl CoarseMesh<2> for PolyMesh {
             boundary_face_of: a.boundary_edge_of,
         })
     }
+    /// None: the planar agglomeration straightens the faces of its aggregates, so it coarsens
+    /// any planar mesh.
+    fn cover(&self, _size: f64, _budget: MemoryBudget) -> Option<Result<Level<Self>, MeshError>> {
+        None
+    }
     fn face_distance(&self, f: usize, p: Vector<2>) -> f64 {
         let [v, w] = self.edge_vertices(f);
         segment_distance(p, self.vertex(v), self.vertex(w))
@@ -114,22 +124,18 @@ impl CoarseMesh<3> for PolyMesh3 {
         boundary_key: Option<&[u32]>,
         budget: MemoryBudget,
     ) -> Result<Level<Self>, MeshError> {
-        let a = crate::mesh3d::agglomerate::agglomerate3_merging(self, size, boundary_key, budget)?;
-        let wide = |i: &u32| {
-            if *i == NO_FACE {
-                NO_COARSE_FACE
-            } else {
-                *i as usize
-            }
-        };
-        Ok(Level {
-            cell_of: try_collect(a.cell_of.iter().map(|&c| c as usize), "the coarse cells")?,
-            boundary_face_of: try_collect(
-                a.boundary_face_of.iter().map(wide),
-                "the coarse boundary faces",
-            )?,
-            mesh: a.mesh,
-        })
+        // more than half the cells in failed aggregates: this level would not be coarser
+        let a = crate::mesh3d::agglomerate::agglomerate3_merging(
+            self,
+            size,
+            boundary_key,
+            0.5,
+            budget,
+        )?;
+        level3(a)
+    }
+    fn cover(&self, size: f64, budget: MemoryBudget) -> Option<Result<Level<Self>, MeshError>> {
+        Some(crate::mesh3d::agglomerate::box_cover(self, size, budget).and_then(level3))
     }
     fn face_distance(&self, f: usize, p: Vector<3>) -> f64 {
         let ids = self.face_vertices(f);
@@ -167,6 +173,25 @@ impl CoarseMesh<3> for PolyMesh3 {
 }
 
 /// Distance from p to the segment [a, b].
+/// The level of a 3D agglomeration or cover (indices widened).
+fn level3(a: crate::mesh3d::agglomerate::Agglomeration3) -> Result<Level<PolyMesh3>, MeshError> {
+    let wide = |i: &u32| {
+        if *i == NO_FACE {
+            NO_COARSE_FACE
+        } else {
+            *i as usize
+        }
+    };
+    Ok(Level {
+        cell_of: try_collect(a.cell_of.iter().map(|&c| c as usize), "the coarse cells")?,
+        boundary_face_of: try_collect(
+            a.boundary_face_of.iter().map(wide),
+            "the coarse boundary faces",
+        )?,
+        mesh: a.mesh,
+    })
+}
+
 fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (d, q) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
     let len2 = d[0] * d[0] + d[1] * d[1];

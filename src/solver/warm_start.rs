@@ -19,6 +19,16 @@
 //! that one has at least [`MIN_CELLS`] cells, and starts the fine iteration from the predicted
 //! active set.
 //!
+//! **Meshes that do not agglomerate.** On unstructured tetrahedra and Voronoi cells the 3D
+//! aggregates have jagged boundaries and fail their star-shape checks
+//! ([`crate::mesh3d::agglomerate`]; the agglomeration gives up when more than half the cells
+//! are in failing aggregates). For the obstacle the level is then a cover of the mesh by boxes
+//! of the same size H ([`crate::mesh3d::agglomerate::box_cover`]): each fine cell belongs to
+//! the box of its centroid, the coarse domain is the union of those boxes (Ω up to a staircase
+//! of boxes along ∂Ω, where the coarse problem takes its boundary data), and the levels above
+//! it agglomerate the boxes. Signorini needs Γ's faces, which boxes do not have: it starts
+//! cold on such meshes.
+//!
 //! **Prediction.** A fine unknown of the obstacle barrier lies in one or more coarse cells (a
 //! cell unknown in the aggregate of its cell; a vertex or face unknown in those of the fine
 //! cells around it). It is predicted active if all of them are active *and* it is farther than
@@ -171,7 +181,7 @@ pub fn predict<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
         .ok_or_else(|| "the problem has no barrier".to_string())?
         .kind;
     let fine = scheme.mesh();
-    let levels = hierarchy(fine, problem, scheme.n_unknowns(), budget)?;
+    let levels = hierarchy(fine, problem, kind, scheme.n_unknowns(), budget)?;
     // from the coarsest level to the finest coarse one, each warm-started by the one above
     let mut state: Option<CoarseState> = None;
     let mut finest_values: Vec<f64> = Vec::new();
@@ -339,6 +349,7 @@ pub fn too_coarse(unknowns: usize) -> bool {
 fn hierarchy<M: CoarseMesh<D>, const D: usize>(
     fine: &M,
     problem: &Problem<D>,
+    kind: ConstraintKind,
     unknowns: usize,
     budget: MemoryBudget,
 ) -> Result<Vec<Level<M>>, String> {
@@ -360,9 +371,26 @@ fn hierarchy<M: CoarseMesh<D>, const D: usize>(
         };
         let size = M::cell_size(measure, target);
         let keys = boundary_keys(below, problem).map_err(oom)?;
-        let agg = below
-            .coarsen(size, Some(&keys), budget)
-            .map_err(|e| format!("agglomerating {} cells into {target}: {e}", below.n_cells()))?;
+        let agg = below.coarsen(size, Some(&keys), budget);
+        drop(keys);
+        let agg = match agg {
+            Ok(a) if a.mesh.n_cells() * 2 <= below.n_cells() => a,
+            // the aggregates failed their checks (jagged unions of unstructured cells): for
+            // the obstacle, boxes
+            first => {
+                let cover = if kind == ConstraintKind::Obstacle {
+                    below.cover(size, budget)
+                } else {
+                    None
+                };
+                match cover {
+                    Some(Ok(cover)) => cover,
+                    _ => first.map_err(|e| {
+                        format!("agglomerating {} cells into {target}: {e}", below.n_cells())
+                    })?,
+                }
+            }
+        };
         if agg.mesh.n_cells() * 2 > below.n_cells() {
             break; // no real coarsening (a mesh of slivers): stop here
         }

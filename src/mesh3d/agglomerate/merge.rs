@@ -46,7 +46,7 @@ pub const PLANE_TOL: f64 = 1e-12;
 /// Least (v_i − c) × (v_{i+1} − c)·n of a fan triangle of a merged face, relative to 2 |P|.
 pub const FAN_TOL: f64 = 1e-9;
 
-/// The boundary merge key of a fine boundary face kept as it is ([`boundary`]).
+/// The boundary merge key of a fine boundary face kept as it is ([`super::agglomerate3_merging`]).
 pub const KEEP: u32 = u32::MAX;
 
 /// The faces of one aggregate A toward the aggregates of higher index: each with its

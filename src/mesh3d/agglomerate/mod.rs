@@ -76,6 +76,7 @@
 //! sums of volumes and face areas) stays sequential, in fine cell or fine face order. The
 //! coarse meshes therefore do not depend on the number of threads.
 
+mod boxes;
 mod build;
 mod check;
 mod merge;
@@ -90,6 +91,7 @@ use crate::mesh::agglomerate::{components, dissolve, floor_i64, merge_into_neigh
 use rayon::prelude::*;
 
 pub use crate::mesh::agglomerate::MIN_DIST_RATIO;
+pub use boxes::box_cover;
 pub use merge::KEEP;
 
 /// Marker for "no coarse face" in [`Agglomeration3::boundary_face_of`] (interior fine faces).
@@ -131,7 +133,7 @@ pub fn agglomerate3(
     size: f64,
     budget: MemoryBudget,
 ) -> Result<Agglomeration3, MeshError> {
-    agglomerate3_merging(fine, size, None, budget)
+    agglomerate3_merging(fine, size, None, 1.0, budget)
 }
 
 /// [`agglomerate3`], the fine boundary faces of each aggregate merged by plane and piece among
@@ -139,11 +141,17 @@ pub fn agglomerate3(
 /// only; [`KEEP`] keeps a face as it is, and so does `None` every face: then this is
 /// [`agglomerate3`]). A merged boundary face is one coarse face with the tag of its fine
 /// faces, so faces of different tags must have different keys (`merge.rs` has the maths).
-/// [`MeshError::NonConforming`] if `boundary_key` does not have one entry per fine face.
+/// [`MeshError::NonConforming`] if `boundary_key` does not have one entry per fine face, and
+/// if more than the fraction `max_failed` of the fine cells lie in aggregates that fail the
+/// first checks (then the mesh does not agglomerate at this size, as on unstructured
+/// tetrahedra, whose aggregates have jagged boundaries: a caller that would use the coarse
+/// mesh only if it is coarser learns it after one round of checks instead of
+/// [`MAX_SPLITS`] + 1; 1 never stops).
 pub fn agglomerate3_merging(
     fine: &PolyMesh3,
     size: f64,
     boundary_key: Option<&[u32]>,
+    max_failed: f64,
     budget: MemoryBudget,
 ) -> Result<Agglomeration3, MeshError> {
     if let Some(k) = boundary_key.filter(|k| k.len() != fine.n_faces()) {
@@ -175,6 +183,14 @@ pub fn agglomerate3_merging(
         for (k, &a) in label.iter().enumerate() {
             regrouped[k] |= failed[a];
             settled[k] = !failed[a];
+        }
+        let bad = regrouped.iter().filter(|&&r| r).count();
+        if round == 0 && bad as f64 > max_failed * fine.n_cells() as f64 {
+            return Err(MeshError::NonConforming(format!(
+                "{bad} of {} cells lie in aggregates of size {size} that fail the checks: \
+                 the mesh does not agglomerate at this size",
+                fine.n_cells()
+            )));
         }
         if round == MAX_SPLITS {
             dissolve(&mut label, &mut regrouped, &failed);

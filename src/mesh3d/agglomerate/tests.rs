@@ -415,7 +415,8 @@ fn boundary_faces_with_one_key_merge_by_plane() {
             t => t as u32,
         })
         .collect();
-    let agg = agglomerate3_merging(&kuhn, 2.0 / 6.0, Some(&keys), MemoryBudget::DEFAULT).unwrap();
+    let agg =
+        agglomerate3_merging(&kuhn, 2.0 / 6.0, Some(&keys), 1.0, MemoryBudget::DEFAULT).unwrap();
     let coarse = &agg.mesh;
     check_closed_cells(coarse);
     check_vector_areas(&kuhn, &agg);
@@ -459,6 +460,7 @@ fn boundary_faces_with_one_key_merge_by_plane() {
         &kuhn,
         2.0 / 6.0,
         Some(&vec![KEEP; kuhn.n_faces()]),
+        1.0,
         MemoryBudget::DEFAULT,
     )
     .unwrap();
@@ -471,9 +473,46 @@ fn boundary_faces_with_one_key_merge_by_plane() {
     assert_eq!(none.boundary_face_of, plain.boundary_face_of);
     // keys for another mesh: a typed error
     let err =
-        agglomerate3_merging(&kuhn, 0.5, Some(&keys[1..]), MemoryBudget::DEFAULT).unwrap_err();
+        agglomerate3_merging(&kuhn, 0.5, Some(&keys[1..]), 1.0, MemoryBudget::DEFAULT).unwrap_err();
     assert!(
         matches!(err, MeshError::NonConforming(ref m) if m.contains("merge keys")),
         "{err}"
     );
+}
+
+/// The box cover: each fine centroid lies in its coarse cell, a box of side H; the boxes are
+/// those that hold a fine centroid, and their volumes add up to H³ times their number.
+#[test]
+fn box_cover_puts_each_cell_in_the_box_of_its_centroid() {
+    let fine = mesh(perturbed_cubes(8, 0.1, 7));
+    let h = 0.3;
+    let cover = super::box_cover(&fine, h, MemoryBudget::DEFAULT).unwrap();
+    let coarse = &cover.mesh;
+    // x₀ = 0: the boxes [0.3 i, 0.3 (i + 1)] for i = 0..3 along each axis hold centroids
+    assert_eq!(coarse.n_cells(), 64);
+    for k in 0..coarse.n_cells() {
+        assert!((coarse.measure(k) - h * h * h).abs() < 1e-15, "box {k}");
+    }
+    for k in 0..fine.n_cells() {
+        let (c, x) = (coarse.centroid(cover.cell_of[k] as usize), fine.centroid(k));
+        assert!(
+            (0..3).all(|r| (x[r] - c[r]).abs() <= 0.5 * h),
+            "fine cell {k}"
+        );
+    }
+    assert!(cover.boundary_face_of.iter().all(|&f| f == NO_FACE));
+    check_closed_cells(coarse);
+    assert!(super::box_cover(&fine, 0.0, MemoryBudget::DEFAULT).is_err());
+    assert!(super::box_cover(&fine, 1e-9, MemoryBudget::DEFAULT).is_err());
+}
+
+/// With `max_failed` below the fraction of cells in failing aggregates, the agglomeration
+/// stops after its first checks with an error, instead of regrouping.
+#[test]
+fn agglomeration_stops_early_when_most_aggregates_fail() {
+    // the U of `aggregates_not_star_shaped_are_regrouped`: its 40 cells of 64 fail
+    let fine = u_shape();
+    let err = agglomerate3_merging(&fine, 1.0, None, 0.5, MemoryBudget::DEFAULT).unwrap_err();
+    assert!(err.to_string().contains("does not agglomerate"), "{err}");
+    assert!(agglomerate3_merging(&fine, 1.0, None, 0.7, MemoryBudget::DEFAULT).is_ok());
 }
