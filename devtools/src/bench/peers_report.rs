@@ -453,3 +453,60 @@ fn figure(cfg: &Config, rows: &[PeerRow]) -> gradvi::Result<()> {
         &charts,
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gradvi_cli::replication::records::read_csv;
+
+    /// Domain rows (`family,mesh,scheme,linear,cells,krylov,total_s`) through the real reader.
+    fn rows_of(lines: &[&str]) -> Vec<PeerRow> {
+        let dir = std::env::temp_dir().join(format!("gradvi-peers-report-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("bench_peers.csv");
+        let mut text = "family,mesh,code,scheme,linear,grid,cells,unknowns,niter,coarse_niter,krylov,total_s,coarse_s,linear_s,peak_mib,err_max,err_mean,certificate\n".to_string();
+        for l in lines {
+            let f: Vec<&str> = l.split(',').collect();
+            text += &format!(
+                "{},{},gradvi,{},{},0,{},1,3,4,{},{},0.1,0.5,50,,,1e-12\n",
+                f[0], f[1], f[2], f[3], f[4], f[5], f[6]
+            );
+        }
+        std::fs::write(&path, text).unwrap();
+        let rows = read_csv(&path).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        rows
+    }
+
+    #[test]
+    fn the_domain_verdict_covers_the_reseeded_meshes() {
+        // seed 1, direct: time ∝ N; seed 7, auto (direct then iterative): time ∝ N^1.3
+        let rows = rows_of(&[
+            "lshape,,hmm,direct,10000,0,1.0",
+            "lshape,,hmm,direct,100000,0,10.0",
+            "lshape,seed 7,hmm,auto,10000,0,1.0",
+            "lshape,seed 7,hmm,auto,100000,40,19.952623149688797",
+        ]);
+        let mut t = Table::new("target | measured | verdict", "llr");
+        domain_targets(&mut t, &rows);
+        let mut md = Doc::default();
+        md.table(&t);
+        let text = md.to_string();
+        assert!(
+            text.contains("steepest growth N^1.30 (lshape seed 7 auto)")
+                && text.contains("**not met**"),
+            "{text}"
+        );
+        let mut md = Doc::default();
+        domains_section(&mut md, &rows);
+        let text = md.to_string();
+        assert!(
+            text.contains("| lshape | seed 7 | hmm | auto: iterative | 100000 |"),
+            "{text}"
+        );
+        assert!(
+            text.contains("| lshape | seed 1 | hmm | direct | 10000 |"),
+            "{text}"
+        );
+    }
+}
