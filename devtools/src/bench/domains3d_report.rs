@@ -89,6 +89,7 @@ pub fn write(md: &mut Doc, rows: &[Domain3Row]) {
         .cloned()
         .collect();
     voronoi_note(md, &run);
+    warm_start_note(md, &run);
     table(md, &run);
     targets(md, &run);
 }
@@ -105,6 +106,35 @@ fn voronoi_note(md: &mut Doc, rows: &[Domain3Row]) {
             big.mesh, big.cells
         ));
     }
+}
+
+/// How many solved rows ran without the nested warm start (no coarse solve), and why.
+fn warm_start_note(md: &mut Doc, rows: &[Domain3Row]) {
+    let solved: Vec<&Domain3Row> = rows.iter().filter(|r| r.ok()).collect();
+    let skipped: Vec<&&Domain3Row> = solved
+        .iter()
+        .filter(|r| !r.warm_skipped.is_empty())
+        .collect();
+    if skipped.is_empty() {
+        return;
+    }
+    let mut reasons: Vec<(String, usize)> = Vec::new();
+    for r in &skipped {
+        match reasons.iter_mut().find(|(w, _)| *w == r.warm_skipped) {
+            Some((_, n)) => *n += 1,
+            None => reasons.push((r.warm_skipped.clone(), 1)),
+        }
+    }
+    let list: Vec<String> = reasons
+        .iter()
+        .map(|(w, n)| format!("'{w}' ({n})"))
+        .collect();
+    md.para(format!(
+        "The nested warm start was skipped (the iteration started cold) in {} of the {} solved rows: {}.",
+        skipped.len(),
+        solved.len(),
+        list.join("; ")
+    ));
 }
 
 /// Every row, grouped by domain, scheme and cores, with the growth of each group.
@@ -274,6 +304,7 @@ mod tests {
             row("cube", "p1", 1_000_000, 1000.0, 4),
             row("voronoi", "hmm", 4_913, 50.0, 5),
         ];
+        rows[0].warm_skipped = "the mesh is too coarse".into();
         let (g, k) = growth(&series(&rows, "ball", "hmm", 1));
         assert_eq!(k, 2);
         assert!((g.unwrap() - 1.0).abs() < 1e-12);
@@ -288,6 +319,7 @@ mod tests {
             "**not met**"
         );
         assert!(text.contains("N^1.50") && text.contains("voro") && text.contains("4913 cells"));
+        assert!(text.contains("skipped (the iteration started cold) in 1 of the 5 solved rows: 'the mesh is too coarse' (1)"), "{text}");
         // NITER above 10 fails the verdict, and so does a failed case
         rows[1].niter = 11;
         let mut md = Doc::default();
