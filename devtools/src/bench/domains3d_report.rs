@@ -118,11 +118,20 @@ fn warm_start_note(md: &mut Doc, rows: &[Domain3Row]) {
     if skipped.is_empty() {
         return;
     }
+    // reasons that differ only by a number (a cell count) are one reason
     let mut reasons: Vec<(String, usize)> = Vec::new();
     for r in &skipped {
-        match reasons.iter_mut().find(|(w, _)| *w == r.warm_skipped) {
+        let mut why = String::new();
+        for c in r.warm_skipped.chars() {
+            match (c.is_ascii_digit(), why.ends_with('N')) {
+                (true, true) => {}
+                (true, false) => why.push('N'),
+                _ => why.push(c),
+            }
+        }
+        match reasons.iter_mut().find(|(w, _)| *w == why) {
             Some((_, n)) => *n += 1,
-            None => reasons.push((r.warm_skipped.clone(), 1)),
+            None => reasons.push((why, 1)),
         }
     }
     let list: Vec<String> = reasons
@@ -304,7 +313,8 @@ mod tests {
             row("cube", "p1", 1_000_000, 1000.0, 4),
             row("voronoi", "hmm", 4_913, 50.0, 5),
         ];
-        rows[0].warm_skipped = "the mesh is too coarse".into();
+        rows[0].warm_skipped = "the mesh (10000 cells) is too coarse".into();
+        rows[1].warm_skipped = "the mesh (100000 cells) is too coarse".into();
         let (g, k) = growth(&series(&rows, "ball", "hmm", 1));
         assert_eq!(k, 2);
         assert!((g.unwrap() - 1.0).abs() < 1e-12);
@@ -319,7 +329,7 @@ mod tests {
             "**not met**"
         );
         assert!(text.contains("N^1.50") && text.contains("voro") && text.contains("4913 cells"));
-        assert!(text.contains("skipped (the iteration started cold) in 1 of the 5 solved rows: 'the mesh is too coarse' (1)"), "{text}");
+        assert!(text.contains("skipped (the iteration started cold) in 2 of the 5 solved rows: 'the mesh (N cells) is too coarse' (2)"), "{text}");
         // NITER above 10 fails the verdict, and so does a failed case
         rows[1].niter = 11;
         let mut md = Doc::default();
