@@ -11,7 +11,7 @@ FVCA5_MESHES ?=
 PYTHON := /usr/bin/python3
 REFDIR := replication/results/reference
 
-.PHONY: all build test test-external test-solve3d fuzz determinism lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-peers3d bench-amg bench-baseline clean
+.PHONY: all build test test-external test-solve3d fuzz determinism lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-peers3d bench-domains3d bench-amg bench-baseline clean
 
 all: build
 
@@ -138,7 +138,9 @@ bench-amg:
 ##        4097² grid, PETSc and gradvi P1 only, where 21 GiB are available), and
 ##        the L-shape/disk/hole family (meshed by gmsh: reference-deps installs it);
 ##        GRADVI_BENCH_PEER_REPEAT=N runs every case N times, interleaved, keeping the median
-##        (about N times as long); GRADVI_BENCH_PEERS=ex9 or =domains runs one part
+##        (about N times as long); the same domains meshed again with another gmsh seed at
+##        other sizes, default linear solver; GRADVI_BENCH_PEERS=ex9, =domains or =reseeded
+##        (comma-separated) runs those parts
 ##        -> replication/results/bench_peers.csv, BENCHMARKS.md
 bench-peers: build reference-deps
 	$(DEV) bench --peers
@@ -153,6 +155,19 @@ bench-peers: build reference-deps
 ##        -> replication/results/bench_peers3d.csv, BENCHMARKS.md
 bench-peers3d: build reference-deps
 	$(DEV) bench --peers3d
+
+## bench-domains3d: the 3D "any domain" family: problems/ex9-3d.toml (the radial obstacle, its
+##        exact solution as Dirichlet data) on gmsh tetrahedra of benches/domains3d/*.geo (a
+##        ball, the cube (-2,2)^3 with a spherical hole, the cube itself; reference-deps installs
+##        gmsh) of about 1e4 to 1e6 cells, up to GRADVI_BENCH_DOMAINS3D_MAX_CELLS (default 1e6:
+##        gmsh alone takes about a minute for it), HMM and P1; and HArDCore3D's Voronoi family
+##        (../shared/meshes/hardcore3d/Voro-small-0 or GRADVI_BENCH_HARDCORE3D, HMM; "not run"
+##        in the report where missing); default solver options (auto linear solver, nested
+##        warm start), 1 and N rayon threads; GRADVI_BENCH_DOMAINS3D=ball,hole,cube,voronoi
+##        selects domains (the others' rows are kept)
+##        -> replication/results/bench_domains3d.csv, BENCHMARKS.md (growth exponents, target 6)
+bench-domains3d: build reference-deps
+	$(DEV) bench --domains3d
 
 clean:
 	$(CARGO) clean

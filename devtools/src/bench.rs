@@ -37,7 +37,8 @@
 //! Arguments: `--report-only` rewrites the report from the existing CSV; `--child FAMILY
 //! SCHEME VARIANT SIZE [FILE]` runs one case and prints its row as JSON; `--baseline EXE
 //! [--baseline-rev REV]` compares every gradvi case with the earlier build EXE in the same run
-//! ([`baseline`]); `--mesh3d` times reading and building tetrahedral meshes ([`mesh3d`]).
+//! ([`baseline`]); `--mesh3d` times reading and building tetrahedral meshes ([`mesh3d`]);
+//! `--domains3d` runs the 3D any-domain benchmark (`domains3d`).
 
 use gradvi::budget::MemoryBudget;
 use gradvi::mesh::PolyMesh;
@@ -53,6 +54,8 @@ use std::process::{Command, Stdio};
 use std::time::Instant;
 
 pub mod baseline;
+mod domains3d;
+mod domains3d_report;
 pub mod mesh3d;
 pub mod peers;
 mod peers3d;
@@ -786,6 +789,9 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
     if let Some(i) = args.iter().position(|a| a == "--peer3d-child") {
         return peers3d::child_main(&args[i + 1..], root);
     }
+    if let Some(i) = args.iter().position(|a| a == "--domain3d-child") {
+        return domains3d::child_main(&args[i + 1..], root);
+    }
     if let Some(i) = args.iter().position(|a| a == "--mesh3d-child") {
         return mesh3d::child_main(&args[i + 1..]);
     }
@@ -817,6 +823,10 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
             cfg.variants = vec![Variant::Nested];
         }
         return baseline::run(&cfg, &exe, Path::new(base), &rev);
+    }
+    if args.iter().any(|a| a == "--domains3d") {
+        domains3d::run(&cfg, &exe)?;
+        return write_report(&cfg);
     }
     if args.iter().any(|a| a == "--peers3d") {
         peers3d::run(&cfg, &exe)?;

@@ -35,7 +35,8 @@ enum DevCommand {
     /// runs the scaling benchmark; `--peers` the peer benchmark; `--baseline EXE
     /// [--baseline-rev REV]` the regression check against an earlier gradvi build;
     /// `--report-only` rewrites BENCHMARKS.md (and REGRESSION.md) from the CSV files;
-    /// `--mesh3d` times reading and building tetrahedral meshes of the unit cube.
+    /// `--mesh3d` times reading and building tetrahedral meshes of the unit cube;
+    /// `--peers3d` the 3D peer benchmark; `--domains3d` the 3D any-domain benchmark.
     Bench {
         /// Arguments passed to the benchmark driver.
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]

@@ -11,7 +11,11 @@
 //!    them, boundary included; over the cell centres for HMM).
 //! 2. **Any domain.** The paper's Test 3 data (C = −5) on gmsh meshes of an L-shaped domain, a
 //!    disk and a square with a hole (`benches/domains/*.geo`) from 10⁴ to 10⁶ cells, HMM and
-//!    P1 with the default (nested) start: NITER and the growth of the total time.
+//!    P1 with the default (nested) start: NITER and the growth of the total time. Both linear
+//!    solvers run on the meshes of [`DOMAIN_LC`] (gmsh's seed 1); the same domains are meshed
+//!    again with another seed ([`RESEED`]) at sizes between those ([`RESEED_LC`]), where the
+//!    default linear solver (`auto`) runs, so that its direct/iterative switch falls inside the
+//!    range (rows with the `mesh` label [`RESEED_LABEL`]).
 //!
 //! **Equal cores.** Every ex9 case runs on 1 core and on N, the machine's cores
 //! ([`core_counts`]): PETSc on 1 process and under `mpiexec -n N` (`benches/petsc/run_ex9.sh`;
@@ -29,8 +33,8 @@
 //! to the freeing of everything).
 //!
 //! Every case runs in a child process, as in the scaling benchmark, so that peak memory is the
-//! case's own. `GRADVI_BENCH_PEERS` (default `ex9,domains`) selects the parts; the rows of the
-//! other part are kept from the existing CSV. `GRADVI_BENCH_PEER_REPEAT` (1 to 20, default 1)
+//! case's own. `GRADVI_BENCH_PEERS` (default `ex9,domains,reseeded`) selects the parts; the rows
+//! of the other parts are kept from the existing CSV. `GRADVI_BENCH_PEER_REPEAT` (1 to 20, default 1)
 //! runs every case that many times, interleaved with the other cases of its grid or mesh, and
 //! records the run with the median time ([`run_group`]). `GRADVI_BENCH_LOG=1` prints each
 //! solve's timings. Rows go to `replication/results/bench_peers.csv`; the report's first
@@ -86,6 +90,17 @@ pub const DOMAINS: [&str; 3] = ["lshape", "disk", "hole"];
 /// gmsh characteristic lengths of the domain meshes (about 11k, 44k, 177k and 700k cells on
 /// the L-shape; a little more on the others).
 pub const DOMAIN_LC: [f64; 4] = [0.0125, 0.00625, 0.003125, 0.0015625];
+/// The gmsh seed (`Mesh.RandomSeed`) of the re-seeded domain meshes; the `.geo` files use 1.
+pub const RESEED: u32 = 7;
+/// gmsh's random perturbation factor (`Mesh.RandomFactor`) of the re-seeded meshes (its
+/// default is 10⁻⁹).
+pub const RESEED_RANDOM_FACTOR: f64 = 1e-8;
+/// Characteristic lengths of the re-seeded domain meshes: sizes the defaults were not tuned on
+/// (about 16k, 64k, 126k, 255k and 504k cells on the L-shape; a little more on the others),
+/// between those of [`DOMAIN_LC`].
+pub const RESEED_LC: [f64; 5] = [0.0105, 0.0052, 0.0037, 0.0026, 0.00185];
+/// The `mesh` label of the rows on the re-seeded meshes (empty for the others).
+pub const RESEED_LABEL: &str = "seed 7";
 
 /// One row of [`CSV`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -166,6 +181,10 @@ pub struct PeerRow {
     /// The cost ratio R = `total_s / linear_seconds` (NaN without the linear variant).
     #[serde(deserialize_with = "nullable", default = "nan")]
     pub r: f64,
+    /// Which meshes of a domain: empty for the meshes of [`DOMAIN_LC`] (gmsh seed 1, and
+    /// ex9's generated grids), [`RESEED_LABEL`] for those of [`RESEED_LC`].
+    #[serde(default)]
+    pub mesh: String,
 }
 
 fn one() -> usize {
@@ -387,6 +406,7 @@ fn run_gradvi(
         cores: rayon_threads(),
         linear_seconds: f64::NAN,
         r: f64::NAN,
+        mesh: String::new(),
     };
     // PETSc's time is its whole process, finalisation (freeing) included: so is this one
     drop(sol);
@@ -485,6 +505,7 @@ fn run_petsc(cfg: &Config, bin: &Path, grid: usize, nproc: usize) -> gradvi::Res
         cores: r.processes,
         linear_seconds: f64::NAN,
         r: f64::NAN,
+        mesh: String::new(),
     })
 }
 
@@ -529,14 +550,28 @@ fn build_petsc(cfg: &Config) -> Result<PathBuf, String> {
 }
 
 /// The gmsh mesh of `domain` at characteristic length `lc` (written once into
-/// `target/bench-meshes/`).
-fn domain_mesh(cfg: &Config, domain: &str, lc: f64) -> gradvi::Result<PathBuf> {
+/// `target/bench-meshes/`), with the seed of its `.geo` file (1) or with `seed` (and
+/// [`RESEED_RANDOM_FACTOR`]): then gmsh meshes a `.geo` written next to the mesh, which
+/// includes the domain's and sets both options after it.
+fn domain_mesh(cfg: &Config, domain: &str, lc: f64, seed: Option<u32>) -> gradvi::Result<PathBuf> {
     let dir = cfg.path(super::MESH_DIR);
     std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
-    let geo = cfg.path(&format!("benches/domains/{domain}.geo"));
-    let msh = dir.join(format!("{domain}_{lc}.msh"));
+    let mut geo = cfg.path(&format!("benches/domains/{domain}.geo"));
+    let msh = match seed {
+        None => dir.join(format!("{domain}_{lc}.msh")),
+        Some(s) => dir.join(format!("{domain}_seed{s}_{lc}.msh")),
+    };
     if msh.exists() {
         return Ok(msh);
+    }
+    if let Some(s) = seed {
+        let wrapper = dir.join(format!("{domain}_seed{s}.geo"));
+        let text = format!(
+            "Include \"{}\";\nMesh.RandomSeed = {s};\nMesh.RandomFactor = {RESEED_RANDOM_FACTOR:e};\n",
+            geo.display()
+        );
+        std::fs::write(&wrapper, text).map_err(|e| io_err(&wrapper, e))?;
+        geo = wrapper;
     }
     eprintln!("[bench] gmsh: meshing {} (lc {lc})", geo.display());
     super::run_gmsh(
@@ -607,14 +642,18 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
         .and_then(|v| v.trim().parse().ok())
         .unwrap_or(DEFAULT_MAX_GRID);
     let csv = cfg.path(CSV);
-    let parts = std::env::var("GRADVI_BENCH_PEERS").unwrap_or_else(|_| "ex9,domains".into());
-    let (do_ex9, do_domains) = (parts.contains("ex9"), parts.contains("domains"));
+    let parts =
+        std::env::var("GRADVI_BENCH_PEERS").unwrap_or_else(|_| "ex9,domains,reseeded".into());
+    let part = |name: &str| parts.split(',').any(|p| p.trim() == name);
+    let (do_ex9, do_domains, do_reseeded) = (part("ex9"), part("domains"), part("reseeded"));
     // rows of the parts not run this time are kept from the existing CSV
     let mut rows: Vec<PeerRow> = read_rows(cfg)?
         .into_iter()
         .filter(|r| {
             if r.family == "ex9" {
                 !do_ex9
+            } else if r.mesh == RESEED_LABEL {
+                !do_reseeded
             } else {
                 !do_domains
             }
@@ -659,16 +698,18 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
             push(row, &mut rows)?;
         }
     }
-    let domains = if do_domains {
-        domain_cases(cfg)?
-    } else {
-        Vec::new()
-    };
+    let mut domains: Vec<(DomainCase, &str)> = Vec::new();
+    if do_domains {
+        domains.extend(domain_cases(cfg)?.into_iter().map(|c| (c, "")));
+    }
+    if do_reseeded {
+        domains.extend(reseeded_cases(cfg)?.into_iter().map(|c| (c, RESEED_LABEL)));
+    }
     // the cases of one mesh form a group
-    for mesh_cases in domains.chunk_by(|a, b| a.3 == b.3) {
+    for mesh_cases in domains.chunk_by(|a, b| a.0.3 == b.0.3) {
         let group: Vec<Case> = mesh_cases
             .iter()
-            .map(|(domain, scheme, linear, file)| -> Case {
+            .map(|((domain, scheme, linear, file), label)| -> Case {
                 (
                     format!("{domain} ({}) gradvi {scheme} {linear}", file.display()),
                     Box::new(move || {
@@ -677,7 +718,9 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
                             threads: None,
                             barrier: true,
                         };
-                        gradvi_child(exe, what, 0, Some(file.as_path()), run)
+                        let mut row = gradvi_child(exe, what, 0, Some(file.as_path()), run)?;
+                        row.mesh = label.to_string();
+                        Ok(row)
                     }),
                 )
             })
@@ -778,22 +821,42 @@ fn ex9_grids(max_grid: usize) -> Vec<usize> {
         .collect()
 }
 
-/// The gradvi cases of the any-domain part: (domain, scheme, linear solver, mesh file), the
-/// meshes written by gmsh when missing, those above the cell cap of `cfg` left out.
-fn domain_cases(
-    cfg: &Config,
-) -> gradvi::Result<Vec<(&'static str, SchemeKind, &'static str, PathBuf)>> {
+/// A gradvi case of the any-domain part: domain, scheme, linear solver and mesh file.
+type DomainCase = (&'static str, SchemeKind, &'static str, PathBuf);
+
+/// Whether a mesh of characteristic length `lc` of one of the [`DOMAINS`] is within the cell
+/// cap of `cfg` (about 2.3/lc² triangles per unit area, areas 0.75 to 0.97).
+fn within_cap(cfg: &Config, lc: f64) -> bool {
+    0.75 * 2.3 / (lc * lc) <= cfg.max_cells as f64
+}
+
+/// The gradvi cases of the any-domain part, on the meshes of [`DOMAIN_LC`]: the meshes written
+/// by gmsh when missing, those above the cell cap of `cfg` left out.
+fn domain_cases(cfg: &Config) -> gradvi::Result<Vec<DomainCase>> {
     let mut out = Vec::new();
     for domain in DOMAINS {
-        for &lc in &DOMAIN_LC {
-            if 0.75 * 2.3 / (lc * lc) > cfg.max_cells as f64 {
-                continue; // about 2.3/lc² triangles per unit area, areas 0.75 to 0.97
-            }
-            let file = domain_mesh(cfg, domain, lc)?;
+        for &lc in DOMAIN_LC.iter().filter(|&&lc| within_cap(cfg, lc)) {
+            let file = domain_mesh(cfg, domain, lc, None)?;
             for scheme in [SchemeKind::Hmm, SchemeKind::P1] {
                 for linear in linear_variants() {
                     out.push((domain, scheme, linear, file.clone()));
                 }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The cases on the re-seeded meshes ([`RESEED`], [`RESEED_LC`]), HMM and P1 with the default
+/// linear solver (`auto`: direct below `assembly::AUTO_ITERATIVE_MIN` condensed unknowns,
+/// iterative above, so that the sizes cross the switch), within the cell cap of `cfg`.
+fn reseeded_cases(cfg: &Config) -> gradvi::Result<Vec<DomainCase>> {
+    let mut out = Vec::new();
+    for domain in DOMAINS {
+        for &lc in RESEED_LC.iter().filter(|&&lc| within_cap(cfg, lc)) {
+            let file = domain_mesh(cfg, domain, lc, Some(RESEED))?;
+            for scheme in [SchemeKind::Hmm, SchemeKind::P1] {
+                out.push((domain, scheme, "auto", file.clone()));
             }
         }
     }
