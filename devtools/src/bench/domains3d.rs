@@ -30,7 +30,7 @@
 //! existing CSV. The report's section is [`super::domains3d_report`].
 
 use super::{Config, bad, io_err, json_row, peak_memory_mib};
-use gradvi::mesh::MemoryBudget;
+use gradvi::budget::MemoryBudget;
 use gradvi::mesh3d::io::read_mesh3;
 use gradvi::mesh3d::{Cuboid, PolyMesh3};
 use gradvi::scheme::{SchemeKind, SchemeOptions, build_with3};
