@@ -67,28 +67,8 @@ pub(super) fn build(
     // the side index of each fine boundary face, until the coarse face ids are known
     let mut boundary_face_of = vec![NO_FACE; fine.n_faces()];
     p.tagged_ptr.push(0);
-    for (a, (faces, face_of)) in bnd.iter().enumerate() {
-        let first = (p.face_ptr.len() - 1) as u32;
-        for j in 0..faces.faces.len() {
-            p.face_vertices.extend_from_slice(faces.face_loop(j));
-            p.face_ptr.push(p.face_vertices.len() as u32);
-        }
-        for &(f, j) in face_of {
-            boundary_face_of[f as usize] = first + j;
-        }
-        // the tag of each boundary face: that of its fine faces (merged faces share a key)
-        let mut tagged = face_of
-            .iter()
-            .map(|&(f, j)| (j, fine.face_tag(f as usize)))
-            .collect::<Vec<_>>();
-        tagged.sort_unstable();
-        tagged.dedup_by_key(|t| t.0);
-        for (j, tag) in tagged.into_iter().filter(|t| t.1 != 0) {
-            p.tagged_vertices
-                .extend_from_slice(faces.face_loop(j as usize));
-            p.tagged_ptr.push(p.tagged_vertices.len() as u32);
-            p.tagged_tags.push(tag);
-        }
+    for (a, b) in bnd.iter().enumerate() {
+        push_boundary(fine, &mut p, b, &mut boundary_face_of);
         for j in 0..merged[a].faces.len() {
             p.face_vertices.extend_from_slice(merged[a].face_loop(j));
             p.face_ptr.push(p.face_vertices.len() as u32);
@@ -121,4 +101,34 @@ pub(super) fn build(
         boundary_face_of,
         dissolved_cells,
     })
+}
+
+/// Appends the boundary faces `faces` of one aggregate to `p` with their tags (a merged face
+/// has the tag of its fine faces, which share a key), and records the side of each fine
+/// boundary face in `boundary_face_of`.
+fn push_boundary(
+    fine: &PolyMesh3,
+    p: &mut Polyhedra,
+    (faces, face_of): &merge::BoundaryFaces,
+    boundary_face_of: &mut [u32],
+) {
+    let first = (p.face_ptr.len() - 1) as u32;
+    for j in 0..faces.faces.len() {
+        p.face_vertices.extend_from_slice(faces.face_loop(j));
+        p.face_ptr.push(p.face_vertices.len() as u32);
+    }
+    for &(f, j) in face_of {
+        boundary_face_of[f as usize] = first + j;
+    }
+    let mut tagged = (face_of.iter())
+        .map(|&(f, j)| (j, fine.face_tag(f as usize)))
+        .collect::<Vec<_>>();
+    tagged.sort_unstable();
+    tagged.dedup_by_key(|t| t.0);
+    for (j, tag) in tagged.into_iter().filter(|t| t.1 != 0) {
+        p.tagged_vertices
+            .extend_from_slice(faces.face_loop(j as usize));
+        p.tagged_ptr.push(p.tagged_vertices.len() as u32);
+        p.tagged_tags.push(tag);
+    }
 }
