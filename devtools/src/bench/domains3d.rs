@@ -37,6 +37,7 @@ use gradvi::scheme::{SchemeKind, SchemeOptions, build_with3};
 use gradvi::solver::{SolveOptions, solve_problem};
 use gradvi_cli::replication::records::{read_csv, write_csv};
 use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
@@ -45,10 +46,8 @@ use std::time::Instant;
 pub const CSV: &str = "replication/results/bench_domains3d.csv";
 /// The gmsh domains (`benches/domains3d/NAME.geo`) with their volumes.
 pub const DOMAINS: [(&str, f64); 3] = [
-    // (4/3)π 2³
-    ("ball", 33.510_321_638_291_124),
-    // 4³ − (4/3)π 0.4³
-    ("hole", 63.731_918_581_765_2),
+    ("ball", 4.0 / 3.0 * PI * 8.0),                    // (4/3)π 2³
+    ("hole", 64.0 - 4.0 / 3.0 * PI * 0.4 * 0.4 * 0.4), // 4³ − (4/3)π 0.4³
     ("cube", 64.0),
 ];
 /// Target numbers of tetrahedra of the gmsh meshes.
