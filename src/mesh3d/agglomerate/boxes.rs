@@ -15,6 +15,13 @@
 //! coarse cells share a face exactly when their boxes do, and the mesh is conforming. The
 //! coarse cell of K is its box; a box takes the tag of its fine cell of least index.
 //!
+//! Boxes that hold no centroid are added where the union would be pinched: around a grid
+//! vertex, the boxes present, and those absent, must each be connected through the faces they
+//! share (two boxes sharing only an edge or a corner are not: the union's boundary would pass
+//! through that edge or vertex twice, which no mesh of a domain has). The absent boxes around
+//! such a vertex are added, with the tag of a box present there, until no pinch remains or
+//! after a few rounds (the build's validation then refuses the cover).
+//!
 //! The coarse domain is the union of the boxes: it covers every fine centroid and differs from
 //! Ω by at most a box along ∂Ω (a staircase). Boundary data evaluated on it is evaluated up to
 //! √3 H outside Ω, and no fine boundary face is a coarse one
@@ -70,6 +77,7 @@ pub fn box_cover(
     let mut boxes = keys.clone();
     boxes.sort_unstable();
     boxes.dedup();
+    let fills = fill_pinches(&mut boxes);
     let cell_of: Vec<u32> = keys
         .iter()
         .map(|k| boxes.binary_search(k).map_or(u32::MAX, |i| i as u32))
@@ -104,6 +112,11 @@ pub fn box_cover(
             tags[b as usize] = fine.cell_tag(k);
         }
     }
+    // a filled box takes the tag of the box it was added beside, in the order of addition
+    for (u, from) in &fills {
+        let at = |g: &[i64; 3]| boxes.binary_search(g).unwrap_or(0);
+        tags[at(u)] = tags[at(from)];
+    }
     let mut p = Polyhedra {
         vertices: corners
             .iter()
@@ -125,4 +138,117 @@ pub fn box_cover(
         boundary_face_of: vec![NO_FACE; fine.n_faces()],
         dissolved_cells: 0,
     })
+}
+
+/// Rounds of [`fill_pinches`] at most (each adds boxes only next to existing ones).
+const MAX_FILL_ROUNDS: usize = 8;
+
+/// Whether the boxes of `mask` (bit c: the box at offset (c & 1, (c >> 1) & 1, c >> 2) of a
+/// 2 × 2 × 2 block) are connected through the faces they share (true when empty).
+fn connected(mask: u8) -> bool {
+    if mask == 0 {
+        return true;
+    }
+    let mut seen = 1u8 << mask.trailing_zeros();
+    loop {
+        let mut next = seen;
+        for c in 0..8 {
+            if seen & (1 << c) != 0 {
+                for bit in [1, 2, 4] {
+                    next |= (1 << (c ^ bit)) & mask;
+                }
+            }
+        }
+        if next == seen {
+            return seen == mask;
+        }
+        seen = next;
+    }
+}
+
+/// The 8 boxes around the grid vertex `v` (the boxes v − (0 or 1 on each axis)), as offsets
+/// c of [`connected`].
+fn around(v: [i64; 3], c: usize) -> [i64; 3] {
+    [
+        v[0] - 1 + (c & 1) as i64,
+        v[1] - 1 + ((c >> 1) & 1) as i64,
+        v[2] - 1 + (c >> 2) as i64,
+    ]
+}
+
+/// Adds to the sorted boxes `boxes` those that remove the pinches (module docs): around every
+/// grid vertex of a box, the boxes present and those absent must each be connected through
+/// faces, or the union's boundary would pass more than once through the vertex; otherwise the
+/// absent ones are added. Returns each added box with a box present beside it, in the order of
+/// addition.
+fn fill_pinches(boxes: &mut Vec<[i64; 3]>) -> Vec<([i64; 3], [i64; 3])> {
+    let mut fills = Vec::new();
+    for _ in 0..MAX_FILL_ROUNDS {
+        let has = |g: &[i64; 3]| boxes.binary_search(g).is_ok();
+        // the corners b + (0 or 1 on each axis) of every box
+        let mut vertices: Vec<[i64; 3]> = (boxes.iter())
+            .flat_map(|b| (0..8).map(move |c| around([b[0] + 1, b[1] + 1, b[2] + 1], c)))
+            .collect();
+        vertices.sort_unstable();
+        vertices.dedup();
+        let mut add: Vec<([i64; 3], [i64; 3])> = Vec::new();
+        for v in vertices {
+            let mask = (0..8).fold(0u8, |m, c| m | (u8::from(has(&around(v, c))) << c));
+            if connected(mask) && connected(!mask) {
+                continue;
+            }
+            let from = around(v, mask.trailing_zeros() as usize);
+            add.extend(
+                (0..8)
+                    .filter(|c| mask & (1 << c) == 0)
+                    .map(|c| (around(v, c), from)),
+            );
+        }
+        if add.is_empty() {
+            break;
+        }
+        add.sort_unstable();
+        add.dedup_by_key(|a| a.0);
+        boxes.extend(add.iter().map(|a| a.0));
+        boxes.sort_unstable();
+        fills.extend(add);
+    }
+    fills
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{around, connected, fill_pinches};
+
+    /// Whether some grid vertex has its present or its absent boxes disconnected.
+    fn pinched(b: &[[i64; 3]]) -> bool {
+        b.iter().any(|x| {
+            (0..8).any(|c| {
+                let v = around([x[0] + 1, x[1] + 1, x[2] + 1], c);
+                let m = (0..8).fold(0u8, |m, c| m | (u8::from(b.contains(&around(v, c))) << c));
+                !(connected(m) && connected(!m))
+            })
+        })
+    }
+
+    /// Boxes that share only an edge or only a corner are joined by filled boxes; boxes that
+    /// share a face are left as they are.
+    #[test]
+    fn pinches_are_filled() {
+        assert!(connected(0b0000_0011) && !connected(0b1000_0001) && !connected(0b0000_1001));
+        for pair in [[[0, 0, 0], [1, 1, 0]], [[0, 0, 0], [1, 1, 1]]] {
+            let mut b = pair.to_vec();
+            assert!(pinched(&b));
+            let fills = fill_pinches(&mut b);
+            assert!(!fills.is_empty() && !pinched(&b), "{b:?}");
+            assert!(pair.iter().all(|p| b.contains(p)));
+            assert!(
+                fills
+                    .iter()
+                    .all(|(u, from)| b.contains(u) && b.contains(from))
+            );
+        }
+        let mut face = vec![[0, 0, 0], [1, 0, 0]];
+        assert!(!pinched(&face) && fill_pinches(&mut face).is_empty());
+    }
 }
