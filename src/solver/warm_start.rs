@@ -383,11 +383,18 @@ fn hierarchy<M: CoarseMesh<D>, const D: usize>(
                 } else {
                     None
                 };
-                match cover {
-                    Some(Ok(cover)) => cover,
-                    _ => first.map_err(|e| {
-                        format!("agglomerating {} cells into {target}: {e}", below.n_cells())
-                    })?,
+                let n = below.n_cells();
+                match (cover, first) {
+                    (Some(Ok(cover)), _) => cover,
+                    (Some(Err(c)), Err(e)) => {
+                        return Err(format!(
+                            "agglomerating {n} cells into {target}: {e}; covering them with \
+                             boxes: {c}"
+                        ));
+                    }
+                    (_, first) => {
+                        first.map_err(|e| format!("agglomerating {n} cells into {target}: {e}"))?
+                    }
                 }
             }
         };
