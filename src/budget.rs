@@ -350,8 +350,7 @@ fn rlimit(_which: Limit) -> Option<u64> {
 /// (`RLIMIT_DATA`) count them whole, and an address-space limit smaller than this, times the
 /// threads that run products, ends the process with `memory allocation of … failed`.
 ///
-/// The cache sizes behind it are read from the system once per process ([`gemm_l3_bytes`]);
-/// every call after the first is arithmetic on them.
+/// The cache sizes behind it are read from the system on each call ([`gemm_l3_bytes`]).
 pub fn dense_product_workspace() -> u64 {
     if !dense_product_kernel_in_use() {
         return 0;
@@ -412,17 +411,9 @@ fn avx512() -> bool {
 /// files cannot be read (not Linux): the kernel then falls back to `lscpu` or `cpuid`, whose
 /// sizes this function does not reproduce, and [`dense_product_workspace`] is 0.
 ///
-/// The files are read once per process, on the first call, and the value kept in a
-/// process-wide [`OnceLock`](std::sync::OnceLock): it is a fact of the hardware, as fixed as
-/// the kernel's own estimate, which it also computes once per process. Later calls (one per
-/// supernodal factorisation, through [`dense_product_workspace`]) read no file.
+/// The files are read on every call (a few small files per supernodal factorisation, through
+/// [`dense_product_workspace`]): nothing is kept between calls.
 pub fn gemm_l3_bytes() -> Option<u64> {
-    static L3: std::sync::OnceLock<Option<u64>> = std::sync::OnceLock::new();
-    *L3.get_or_init(read_gemm_l3_bytes)
-}
-
-/// [`gemm_l3_bytes`] read from the files, without the cache.
-fn read_gemm_l3_bytes() -> Option<u64> {
     #[cfg(all(target_os = "linux", target_arch = "x86_64"))]
     {
         let (l3, l1_shared) = sysfs_caches(std::path::Path::new("/sys/devices/system/cpu"))?;

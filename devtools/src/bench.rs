@@ -386,11 +386,7 @@ pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
             - t.solve,
         total_s,
         peak_mib: peak_memory_mib(),
-        certificate: c
-            .max_violation
-            .max(-c.min_multiplier)
-            .max(c.complementarity)
-            .max(c.balance_residual),
+        certificate: c.worst(),
         factor_len: system.factor_len(),
         changes: sol
             .result
@@ -576,16 +572,31 @@ pub fn gmsh_mesh(cfg: &Config, n: usize) -> gradvi::Result<PathBuf> {
         geo_path.display(),
         gmsh_lc(n)
     );
-    run_gmsh(&geo_path, &msh_path, &[])?;
+    run_gmsh(&geo_path, &msh_path, 2, &[])?;
     Ok(msh_path)
 }
 
-/// Meshes `geo` with gmsh (2D, one thread, msh 4.1) into `msh`, through a `.part` file renamed
-/// at the end, with `extra` arguments (e.g. `-setnumber lc 0.01`).
-pub fn run_gmsh(geo: &Path, msh: &Path, extra: &[String]) -> gradvi::Result<()> {
+/// The rows of the CSV `rel` below the root of `cfg` (empty if it does not exist yet).
+pub fn read_rows_of<T: serde::de::DeserializeOwned>(
+    cfg: &Config,
+    rel: &str,
+) -> gradvi::Result<Vec<T>> {
+    let csv = cfg.path(rel);
+    if csv.exists() {
+        read_csv(&csv)
+    } else {
+        Ok(Vec::new())
+    }
+}
+
+/// Meshes `geo` with gmsh (in dimension `dim`, 2 or 3; one thread, msh 4.1) into `msh`,
+/// through a `.part` file renamed at the end, with `extra` arguments (e.g. `-setnumber lc
+/// 0.01`).
+pub fn run_gmsh(geo: &Path, msh: &Path, dim: u8, extra: &[String]) -> gradvi::Result<()> {
     let tmp = msh.with_extension("msh.part");
     let status = Command::new("gmsh")
-        .args(["-2", "-nt", "1", "-format", "msh41", "-v", "2"])
+        .arg(format!("-{dim}"))
+        .args(["-nt", "1", "-format", "msh41", "-v", "2"])
         .args(extra)
         .arg(geo)
         .arg("-o")

@@ -109,7 +109,7 @@ fn obstacle() -> Problem<3> {
 
 /// A Signorini problem on the unit cube: −Δu = 2π sin(2πx), u = 0 on z = 1, u ≥ 0,
 /// ∇u·n ≥ 0, u ∇u·n = 0 on z = 0, zero flux on the other faces.
-fn signorini() -> Problem<3> {
+pub(super) fn signorini() -> Problem<3> {
     let pi = std::f64::consts::PI;
     Problem::<3>::new(
         "signorini-3d",

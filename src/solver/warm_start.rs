@@ -612,15 +612,8 @@ mod tests {
     fn boundary_keys_join_one_part_and_keep_signorini_faces() {
         use crate::mesh3d::{PolyMesh3, test_meshes::cubes};
         let m = PolyMesh3::from_polyhedra(cubes(3, 1), MemoryBudget::DEFAULT).unwrap();
-        let p = Problem::<3>::new("parts", Box::new(|_| 0.0)).with_boundary(|x: [f64; 3], _| {
-            if x[2] > 1.0 - 1e-12 {
-                BoundaryKind::Dirichlet
-            } else if x[2] < 1e-12 {
-                BoundaryKind::Signorini
-            } else {
-                BoundaryKind::Neumann
-            }
-        });
+        // Dirichlet on z = 1, Signorini on z = 0, Neumann on the sides
+        let p = crate::solver::tests_3d::signorini();
         let keys = boundary_keys(&m, &p).unwrap();
         let (mut top, mut sides) = (Vec::new(), Vec::new());
         for (f, &k) in keys.iter().enumerate() {

@@ -33,6 +33,15 @@ pub struct Certificate {
 pub const MAGNITUDE_LIMIT: f64 = 1e6;
 
 impl Certificate {
+    /// The largest of the four scaled quantities (violation, −min multiplier,
+    /// complementarity, balance residual): what [`Certificate::check`] compares with `tol`.
+    pub fn worst(&self) -> f64 {
+        self.max_violation
+            .max(-self.min_multiplier)
+            .max(self.complementarity)
+            .max(self.balance_residual)
+    }
+
     /// The first quantity above `tol`, as an error.
     pub fn check(&self, tol: f64) -> Result<(), SolverError> {
         for (name, v) in [

@@ -140,11 +140,7 @@ pub fn paper_options() -> SolveOptions {
 
 /// The worst scaled quantity of the certificate of `sol`.
 pub fn worst<M: SolveMesh<D> + ?Sized, const D: usize>(sol: &Solution<M, D>) -> f64 {
-    let c = sol.result.certificate;
-    c.max_violation
-        .max(-c.min_multiplier)
-        .max(c.complementarity)
-        .max(c.balance_residual)
+    sol.result.certificate.worst()
 }
 
 fn log_rows(case: &str, kind: SchemeKind, mesh: &str, sol: &Solution) -> Vec<IterationRow> {

@@ -35,7 +35,7 @@ use gradvi::mesh3d::io::read_mesh3;
 use gradvi::mesh3d::{Cuboid, PolyMesh3};
 use gradvi::scheme::{SchemeKind, SchemeOptions, build_with3};
 use gradvi::solver::{SolveOptions, solve_problem};
-use gradvi_cli::replication::records::{read_csv, write_csv};
+use gradvi_cli::replication::records::write_csv;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -217,11 +217,7 @@ fn run_gradvi(
         peak_mib: peak_memory_mib(),
         err_max,
         err_mean,
-        certificate: c
-            .max_violation
-            .max(-c.min_multiplier)
-            .max(c.complementarity)
-            .max(c.balance_residual),
+        certificate: c.worst(),
         warm_skipped: sol
             .warm_start
             .as_ref()
@@ -362,37 +358,10 @@ fn gmsh_mesh(
         "[bench] gmsh: meshing {} (lc {lc:.5}, about {n} cells)",
         geo.display()
     );
-    let tmp = msh.with_extension("msh.part");
     let t = Instant::now();
-    let status = Command::new("gmsh")
-        .args([
-            "-3",
-            "-nt",
-            "1",
-            "-format",
-            "msh41",
-            "-v",
-            "2",
-            "-setnumber",
-            "lc",
-        ])
-        .arg(format!("{lc:.6e}"))
-        .arg(&geo)
-        .arg("-o")
-        .arg(&tmp)
-        .stdout(Stdio::null())
-        .status()
-        .map_err(|e| {
-            io_err(
-                Path::new("gmsh"),
-                format!("{e} (install it with 'bash reference/install.sh')"),
-            )
-        })?;
-    if !status.success() {
-        return Err(io_err(&geo, format!("gmsh failed: {status}")));
-    }
+    let lc_arg = ["-setnumber".into(), "lc".into(), format!("{lc:.6e}")];
+    super::run_gmsh(&geo, &msh, 3, &lc_arg)?;
     let s = t.elapsed().as_secs_f64();
-    std::fs::rename(&tmp, &msh).map_err(|e| io_err(&msh, e))?;
     std::fs::write(&seconds, format!("{s}\n")).map_err(|e| io_err(&seconds, e))?;
     Ok((msh, s))
 }
@@ -517,12 +486,7 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
 
 /// The rows of [`CSV`] (empty if it does not exist).
 pub fn read_rows(cfg: &Config) -> gradvi::Result<Vec<Domain3Row>> {
-    let csv = cfg.path(CSV);
-    if csv.exists() {
-        read_csv(&csv)
-    } else {
-        Ok(Vec::new())
-    }
+    super::read_rows_of(cfg, CSV)
 }
 
 #[cfg(test)]

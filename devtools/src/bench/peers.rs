@@ -49,7 +49,7 @@ use gradvi::mesh::io::read_mesh;
 use gradvi::problem::{Problem, paper_test3};
 use gradvi::scheme::{Entity, SchemeKind};
 use gradvi::solver::{SolveOptions, solve_problem};
-use gradvi_cli::replication::records::{read_csv, write_csv};
+use gradvi_cli::replication::records::write_csv;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -397,11 +397,7 @@ fn run_gradvi(
         data_s,
         err_max,
         err_mean,
-        certificate: c
-            .max_violation
-            .max(-c.min_multiplier)
-            .max(c.complementarity)
-            .max(c.balance_residual),
+        certificate: c.worst(),
         runs: 1,
         cores: rayon_threads(),
         linear_seconds: f64::NAN,
@@ -577,6 +573,7 @@ fn domain_mesh(cfg: &Config, domain: &str, lc: f64, seed: Option<u32>) -> gradvi
     super::run_gmsh(
         &geo,
         &msh,
+        2,
         &["-setnumber".into(), "lc".into(), lc.to_string()],
     )?;
     Ok(msh)
@@ -884,10 +881,5 @@ pub fn gradvi_cases(cfg: &Config, max_grid: usize) -> gradvi::Result<Vec<GradviC
 
 /// The rows of [`CSV`] (empty if it does not exist).
 pub fn read_rows(cfg: &Config) -> gradvi::Result<Vec<PeerRow>> {
-    let csv = cfg.path(CSV);
-    if csv.exists() {
-        read_csv(&csv)
-    } else {
-        Ok(Vec::new())
-    }
+    super::read_rows_of(cfg, CSV)
 }

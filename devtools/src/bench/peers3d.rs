@@ -45,7 +45,7 @@ use gradvi::mesh3d::generate::kuhn;
 use gradvi::mesh3d::{Cuboid, PolyMesh3};
 use gradvi::scheme::{SchemeKind, SchemeOptions, build_with3};
 use gradvi::solver::{SolveOptions, solve_problem};
-use gradvi_cli::replication::records::{read_csv, write_csv};
+use gradvi_cli::replication::records::write_csv;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -535,12 +535,7 @@ pub fn run(cfg: &super::Config, exe: &Path) -> gradvi::Result<()> {
 
 /// The rows of [`CSV`] (empty if it does not exist).
 pub fn read_rows(cfg: &super::Config) -> gradvi::Result<Vec<Peer3Row>> {
-    let csv = cfg.path(CSV);
-    if csv.exists() {
-        read_csv(&csv)
-    } else {
-        Ok(Vec::new())
-    }
+    super::read_rows_of(cfg, CSV)
 }
 
 #[cfg(test)]

@@ -128,20 +128,34 @@ pub(super) fn interfaces(
     let mut out = Interfaces::default();
     let items = std::mem::take(&mut s.items);
     for run in items.chunk_by(|x, y| x.0 == y.0) {
-        s.faces.clear();
-        s.faces.extend(run.iter().map(|&(_, f, r)| (f, r)));
-        plane_groups(fine, s);
-        let groups = std::mem::take(&mut s.group);
-        for g in groups.chunk_by(|x, y| x.0 == y.0) {
-            s.members.clear();
-            s.members
-                .extend(g.iter().map(|&(_, i)| s.faces[i as usize]));
-            merge_group(fine, run[0].0, s, &mut out);
-        }
-        s.group = groups;
+        merge_run(fine, run, s, &mut out, |_, _| {});
     }
     s.items = items;
     out
+}
+
+/// Appends to `out` the faces `run` (fine face, reversed) toward one neighbour or of one
+/// boundary key (`run[i].0`), merged by plane and piece ([`merge_group`] on each plane
+/// group), calling `each` with every fine face and the index of its face in `out`.
+fn merge_run(
+    fine: &PolyMesh3,
+    run: &[(u32, u32, bool)],
+    s: &mut Scratch,
+    out: &mut Interfaces,
+    mut each: impl FnMut(u32, u32),
+) {
+    s.faces.clear();
+    s.faces.extend(run.iter().map(|&(_, f, r)| (f, r)));
+    plane_groups(fine, s);
+    let groups = std::mem::take(&mut s.group);
+    for g in groups.chunk_by(|x, y| x.0 == y.0) {
+        s.members.clear();
+        s.members
+            .extend(g.iter().map(|&(_, i)| s.faces[i as usize]));
+        merge_group(fine, run[0].0, s, out);
+        (s.members.iter().zip(&s.out_of)).for_each(|(&(f, _), &j)| each(f, j));
+    }
+    s.group = groups;
 }
 
 /// The faces of aggregate `a` on the boundary of the domain (the fine faces of `sides` without
@@ -174,18 +188,7 @@ pub(super) fn boundary(
             }
             continue;
         }
-        s.faces.clear();
-        s.faces.extend(run.iter().map(|&(_, f, r)| (f, r)));
-        plane_groups(fine, s);
-        let groups = std::mem::take(&mut s.group);
-        for g in groups.chunk_by(|x, y| x.0 == y.0) {
-            s.members.clear();
-            s.members
-                .extend(g.iter().map(|&(_, i)| s.faces[i as usize]));
-            merge_group(fine, run[0].0, s, &mut out);
-            face_of.extend((s.members.iter().zip(&s.out_of)).map(|(&(f, _), &j)| (f, j)));
-        }
-        s.group = groups;
+        merge_run(fine, run, s, &mut out, |f, j| face_of.push((f, j)));
     }
     s.items = items;
     (out, face_of)
