@@ -120,12 +120,9 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     ) -> crate::Result<(Vec<f64>, Vec<f64>)> {
         self.bind(state);
         let fixed = FixedValues::new(&self.values.dirichlet, fixed);
-        // without interior unknowns S_K = M_K, laid out like the local matrices, and the
-        // cells' right-hand sides are computed where they are gathered: no buffer at all
-        if self.sym.no_interior {
-            let values = self.gather_matrix(&fixed, &self.values.mats)?;
-            let rhs = self.gather_rhs(&fixed, |k, i| self.cell_rhs(k, i, &fixed))?;
-            return Ok((values, rhs));
+        // without interior unknowns, S and c are masked from the global matrix
+        if let Some(a) = self.assembled() {
+            return Ok((self.masked_lower(a, &fixed)?, self.masked_rhs(a, &fixed)?));
         }
         // buffers kept between calls (they are entirely rewritten where read)
         let (sbuf, gbuf) = &mut state.scratch;
@@ -173,21 +170,6 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         results.into_iter().collect()
     }
 
-    /// Entry i of the right-hand side b_K − M_K P_K u_F of cell k without interior unknowns
-    /// (what [`Self::condense_cell`] computes when S_K = M_K, in the same order of
-    /// operations: the load, then the fixed columns one after the other).
-    fn cell_rhs(&self, k: usize, i: usize, fixed: &FixedValues) -> f64 {
-        let cell = self.local(k);
-        let (d, m) = (cell.dofs, cell.matrix);
-        let mut g = cell.load[i];
-        for (bcol, &dj) in d.iter().enumerate() {
-            if let Some(vj) = fixed.get(dj as usize) {
-                g -= m.at(i, bcol) * vj;
-            }
-        }
-        g
-    }
-
     /// Condenses cell k: its block S_K, packed ([`condense::packed_index`]), into the first p(p + 1)/2
     /// entries of `s`, and its right-hand side g_K − S_K P_K u_F into `g` after its `ni`
     /// interior entries (the cell's stretch of a buffer laid out like `dofs` starts at `g`).
@@ -222,7 +204,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
 
     /// The values of the condensed matrix, gathered entry by entry (column by column in
     /// parallel): entry q is the sum of its sources `src.list(q)` in
-    /// `blocks` (the condensed blocks, or the local matrices when they coincide), listed in cell
+    /// `blocks` (the condensed blocks), listed in cell
     /// order (the order of a sequential scatter, whatever the number of
     /// threads); zero in the rows and columns of fixed unknowns, whose diagonal is 1.
     /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if the values cannot be allocated.

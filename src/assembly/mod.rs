@@ -6,7 +6,8 @@
 //!   and the scatter maps. Share it (`Arc`) between problems posed on the same scheme, e.g.
 //!   the four values of C of the paper's Test 3.
 //! - [`values::ProblemValues`] (per problem): data evaluation, local matrices and loads,
-//!   boundary conditions.
+//!   boundary conditions; for schemes without interior unknowns (P1, CR), the global matrix
+//!   assembled once instead of the local matrices ([`assembled`]), each solve masking it.
 //! - [`DiscreteSystem`] = both, immutable once built. [`DiscreteSystem::solve`] takes a set of
 //!   *fixed* unknowns (Dirichlet unknowns are always fixed; the active-set solver adds active
 //!   constrained unknowns) and
@@ -38,8 +39,10 @@
 //! rayon; the global arrays are then *gathered* entry by entry (each entry of the condensed
 //! matrix and each residual row knows its contributions, listed in cell order) instead of
 //! scattered, so that the sums do not depend on the number of threads; the symbolic
-//! factorisation runs beside the local matrices. Measurements: `replication/BENCHMARKS.md`.
+//! factorisation runs beside the local matrices (after the pattern, when they are assembled
+//! at once). Measurements: `replication/BENCHMARKS.md`.
 
+mod assembled;
 pub mod condense;
 pub mod gather;
 pub mod iterative;
@@ -52,6 +55,8 @@ pub mod symbolic;
 pub mod two_point;
 pub mod values;
 
+#[cfg(test)]
+mod tests_assembled;
 #[cfg(test)]
 mod tests_limits;
 
@@ -108,8 +113,9 @@ where
     id: u64,
     /// Time to build (data, local matrices, and the symbolic system when built here), seconds.
     pub setup_seconds: f64,
-    /// The symbolic factorisation, seconds (0 when the symbolic system was given). It runs
-    /// beside the local matrices, so `setup_seconds − symbolic_seconds` is what it did not hide.
+    /// The symbolic factorisation, seconds (0 when the symbolic system was given). With
+    /// interior unknowns it runs beside the local matrices, so `setup_seconds −
+    /// symbolic_seconds` is what it did not hide.
     pub symbolic_seconds: f64,
 }
 
@@ -123,6 +129,14 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'a, M, D> {
         let t0 = Instant::now();
         let dof_map = Arc::new(DofMap::new(scheme)?);
         dof_map.check_setup_memory(options.budget)?;
+        // without interior unknowns the values are assembled on the pattern: after it
+        if dof_map.n_int.iter().all(|&ni| ni == 0) {
+            let sym = Arc::new(SymbolicSystem::with_dof_map(scheme, dof_map, options)?);
+            let mut s = Self::with_symbolic(sym, problem)?;
+            s.symbolic_seconds = s.sym.symbolic_seconds;
+            s.setup_seconds = t0.elapsed().as_secs_f64();
+            return Ok(s);
+        }
         let (values, sym) = rayon::join(
             || ProblemValues::evaluate(scheme, &dof_map, problem),
             || SymbolicSystem::with_dof_map(scheme, Arc::clone(&dof_map), options),
@@ -142,7 +156,12 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'a, M, D> {
         problem: &Problem<D>,
     ) -> crate::Result<Self> {
         let t0 = Instant::now();
-        let values = ProblemValues::evaluate(sym.scheme(), &sym.dof_map, problem)?;
+        let values = if sym.no_interior {
+            let pattern = (sym.pattern.col_ptr(), sym.pattern.row_idx());
+            ProblemValues::evaluate_assembled(sym.scheme(), &sym.dof_map, pattern, problem)?
+        } else {
+            ProblemValues::evaluate(sym.scheme(), &sym.dof_map, problem)?
+        };
         let mut s = Self::from_parts(sym, values);
         s.setup_seconds = t0.elapsed().as_secs_f64();
         Ok(s)
@@ -199,9 +218,11 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'a, M, D> {
     }
 
     /// The local system of cell k: its unknowns, its number of interior unknowns, its local
-    /// matrix and load.
+    /// matrix and load (not kept for schemes without interior unknowns, whose global matrix
+    /// is assembled instead: [`Self::assembled`]).
     #[inline]
     fn local(&self, k: usize) -> CellSystem<'_> {
+        debug_assert!(self.values.assembled.is_none());
         let (d, ni) = self.sym.dof_map.cell(k);
         let r = self.sym.dof_map.dof_ptr.range(k);
         let v = &self.values;

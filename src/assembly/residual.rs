@@ -12,11 +12,15 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// scale |b_i| + Σ_j |M_ij u_j| against which it is small. On Dirichlet unknowns r is the
     /// reaction, not a balance; on constrained unknowns it is the multiplier (up to sign).
     ///
-    /// M u = Σ_K P_Kᵀ M_K P_K u, gathered row by row in parallel: row i visits the cells where
-    /// unknown i appears (`inc`, ascending) and takes there the row of M_K u_K, so the sums
-    /// run in the order of a sequential scatter (independent of the threads) and nothing per
-    /// cell is stored.
+    /// Without interior unknowns, M is assembled ([`super::assembled`]) and read row by row.
+    /// Otherwise M u = Σ_K P_Kᵀ M_K P_K u is gathered row by row in parallel: row i visits the
+    /// cells where unknown i appears (`inc`, ascending) and takes there the row of M_K u_K, so
+    /// the sums run in the order of a sequential scatter (independent of the threads) and
+    /// nothing per cell is stored; the scale then sums |(M_K)_ij u_j| cell by cell.
     pub fn residual(&self, u: &[f64]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
+        if let Some(a) = self.assembled() {
+            return self.assembled_residual(a, u);
+        }
         let inc = &self.sym.maps.inc;
         let mut r = try_filled(self.n, 0.0, "the residual of the system")?;
         let mut scale = try_filled(self.n, 0.0, "the residual scales of the system")?;
@@ -50,6 +54,9 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// The entries (i, j, (M_K)_ij) of the rows i ∈ `rows` of the full matrix, cell by cell
     /// (repeated (i, j) sum), through the cells of each unknown.
     pub fn row_entries(&self, rows: &[usize]) -> crate::Result<Vec<(usize, usize, f64)>> {
+        if let Some(a) = self.assembled() {
+            return Self::assembled_rows(a, rows);
+        }
         let inc = &self.sym.maps.inc;
         let mut t = Vec::new();
         for &gi in rows {
@@ -83,6 +90,13 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// triplets (i, j, (M_K)_ij) in global indices (repeated entries sum).
     pub fn full_matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
         let mut t = Vec::new();
+        if let Some(a) = self.assembled() {
+            for i in 0..a.n_rows() {
+                let (cols, vals) = a.row(i);
+                t.extend(cols.iter().zip(vals).map(|(&j, &v)| (i, j as usize, v)));
+            }
+            return t;
+        }
         for k in 0..self.sym.scheme().mesh().n_cells() {
             let cell = self.local(k);
             let (d, m) = (cell.dofs, cell.matrix);

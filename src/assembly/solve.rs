@@ -4,12 +4,12 @@
 
 use super::condense::{interior_value, recover_interior};
 use super::gather::FixedValues;
-use super::iterative::{Hierarchy, KeptHierarchy, PcgOutcome, fingerprint};
+use super::iterative::{Hierarchy, KeptHierarchy, NextHierarchy, PcgOutcome, fingerprint};
 use super::linear::{ITERATIVE_RTOL, LinearSolver, SCREENING_RTOL};
 use super::symbolic::check_numeric_memory;
 use super::{DiscreteSystem, SolveState};
 use crate::budget::{try_copy, try_filled, try_vec};
-use crate::linalg::{CholeskyWork, SpdPattern};
+use crate::linalg::{CholeskyWork, CsrMatrix, SpdPattern};
 use crate::mesh::SolveMesh;
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
@@ -186,6 +186,11 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         } else {
             Some(self.next_hierarchy(state, fixed, false)?)
         };
+        if let Some(a) = self.assembled() {
+            let (x, t1, t2, out) = self.solve_assembled(state, a, fixed, rtol, reuse)?;
+            let u = self.complete(fixed, &x)?;
+            return Ok((u, out.timings([t0, t1, t2, Instant::now()])));
+        }
         let (values, mut rhs) = self.assemble_condensed(state, fixed)?;
         let t1 = Instant::now();
         let (t2, out) = match reuse {
@@ -217,6 +222,48 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         };
         let u = self.complete(fixed, &rhs)?;
         Ok((u, out.timings([t0, t1, t2, Instant::now()])))
+    }
+
+    /// [`Self::solve_to`] for a scheme without interior unknowns: the system masked from the
+    /// assembled matrix `a` ([`super::assembled`]), by rows for the conjugate gradients and on
+    /// the lower pattern for the direct solver (with `Auto`, also when the conjugate gradients
+    /// fail). Returns the solution, when the assembly and the multigrid setup ended, and what
+    /// the solver did.
+    fn solve_assembled(
+        &self,
+        state: &mut SolveState,
+        a: &CsrMatrix,
+        fixed: &[Option<f64>],
+        rtol: f64,
+        reuse: Option<NextHierarchy>,
+    ) -> crate::Result<(Vec<f64>, Instant, Instant, PcgOutcome)> {
+        let fx = self.fixed_values(fixed);
+        let mut rhs = self.masked_rhs(a, &fx)?;
+        let Some(reuse) = reuse else {
+            let values = self.masked_lower(a, &fx)?;
+            let t1 = Instant::now();
+            let (t2, out) = self.solve_direct(state, &values, &mut rhs)?;
+            return Ok((rhs, t1, t2, out));
+        };
+        let s = self.masked_rows(a, &fx)?;
+        let t1 = Instant::now();
+        let auto = self.sym.options.linear == LinearSolver::Auto;
+        let c = if auto {
+            Some(try_copy(&rhs, "the right-hand side")?)
+        } else {
+            None
+        };
+        match (self.solve_csr(state, s, &mut rhs, rtol, fixed, reuse), c) {
+            (Ok((t2, out)), _) => Ok((rhs, t1, t2, out)),
+            // as for the gathered systems: with Auto, the direct solver takes over
+            (Err(_), Some(mut c)) => {
+                self.fallback_pattern(state)?;
+                let values = self.masked_lower(a, &fx)?;
+                let (t2, out) = self.solve_direct(state, &values, &mut c)?;
+                Ok((c, t1, t2, out))
+            }
+            (Err(e), None) => Err(e),
+        }
     }
 
     /// The values of the fixed unknowns: `fixed` and the Dirichlet ones.
@@ -308,6 +355,9 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         u: &mut [f64],
     ) -> crate::Result<()> {
         let nc = self.sym.scheme().mesh().n_cells();
+        if self.sym.no_interior {
+            return Ok(());
+        }
         if self.sym.single_interior {
             // one interior unknown per cell, computed in parallel from the skeleton values
             let mut interior: Vec<(usize, f64)> = try_vec(nc, "the interior values")?;

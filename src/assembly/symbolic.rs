@@ -182,8 +182,11 @@ pub struct ScatterMaps {
     pub block_ptr: Offsets,
     /// Per condensed entry, the indices in that buffer of the local entries landing on it
     /// (each local entry (a, b), a ≥ b, lands on the entry (max, min) of its two unknowns).
+    /// Empty (no lists) when no cell has interior unknowns: the global matrix is then
+    /// assembled once through `inc` ([`super::assembled`]).
     pub src: Ragged<u32>,
-    /// Per unknown, the cells where it appears, ascending.
+    /// Per unknown, the cells where it appears, ascending (empty, no lists, when no cell has
+    /// interior unknowns).
     pub inc: Ragged<u32>,
 }
 
@@ -202,8 +205,8 @@ where
     pub maps: ScatterMaps,
     /// Every cell has exactly one interior unknown (HMM): parallel recovery.
     pub single_interior: bool,
-    /// No cell has interior unknowns (P1, CR): the skeleton blocks are the local matrices,
-    /// laid out alike, and are gathered from them without a copy.
+    /// No cell has interior unknowns (P1, CR): the condensed matrix is the global one,
+    /// assembled once per problem on the pattern ([`super::assembled`]); no gather maps.
     pub no_interior: bool,
     /// The options it was built with (the linear solver asked for, the ordering).
     pub options: SystemOptions,
@@ -238,6 +241,7 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
         }
         // unknown -> the cells where it appears, ascending
         let inc = incidence(&dof_map, n)?;
+        let no_interior = dof_map.n_int.iter().all(|&ni| ni == 0);
         let (col_ptr, row_idx) = condensed_pattern(&dof_map, n_skel, &inc)?;
         let direct = match options.linear {
             LinearSolver::Direct => true,
@@ -259,12 +263,12 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
                     )
                     .map(|p| (p, t.elapsed().as_secs_f64()))
                 },
-                || scatter_maps(&dof_map, inc, &col_ptr, &row_idx),
+                || scatter_maps(&dof_map, inc, &col_ptr, &row_idx, !no_interior),
             )
         } else {
             match SpdPattern::without_factorisation(n_skel, col_ptr, row_idx) {
                 Ok(p) => {
-                    let maps = scatter_maps(&dof_map, inc, p.col_ptr(), p.row_idx());
+                    let maps = scatter_maps(&dof_map, inc, p.col_ptr(), p.row_idx(), !no_interior);
                     (Ok((p, 0.0)), maps)
                 }
                 Err(e) => (Err(e), Err(crate::Error::Linear("no pattern".into()))),
@@ -275,7 +279,6 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
         let maps = maps?;
         check_numeric_memory(&pattern, &maps, n, options.budget)?;
         let single_interior = dof_map.n_int.iter().all(|&ni| ni == 1);
-        let no_interior = dof_map.n_int.iter().all(|&ni| ni == 0);
         Ok(SymbolicSystem {
             scheme,
             dof_map,
@@ -425,12 +428,14 @@ fn counting_sort(
     Ragged::new(ptr, items)
 }
 
-/// The scatter and gather maps (see the module docs).
+/// The scatter and gather maps (see the module docs); without `gather`, only the offsets of
+/// the blocks.
 fn scatter_maps(
     dm: &DofMap,
     inc: Ragged<u32>,
     col_ptr: &[usize],
     row_idx: &[usize],
+    gather: bool,
 ) -> crate::Result<ScatterMaps> {
     let nc = dm.n_cells();
     let find = |r: usize, c: usize| -> u32 {
@@ -443,6 +448,15 @@ fn scatter_maps(
         return Err(crate::Error::Linear(
             "more than 2^32 local skeleton entries".into(),
         ));
+    }
+    if !gather {
+        // the global matrix is assembled on the pattern alone: no gather, no incidences
+        drop(inc);
+        return Ok(ScatterMaps {
+            block_ptr: pos_ptr,
+            src: Ragged::new(vec![0], Vec::new())?,
+            inc: Ragged::new(vec![0], Vec::new())?,
+        });
     }
     // the packed lower triangle of each block (column b, rows a ≥ b, local indices): the
     // entry lands on the condensed entry (max, min) of its two unknowns

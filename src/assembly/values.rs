@@ -3,10 +3,11 @@
 //! the local matrices and loads the scheme emits for them. Refilled per problem; the symbolic
 //! part ([`super::symbolic`]) is shared.
 
-use super::gather::{cell_chunks, split_by_ranges};
+use super::gather::{cell_chunks, chunks, split_by_ranges};
 use super::offsets::Offsets;
 use super::symbolic::DofMap;
-use crate::budget::{try_filled, try_vec};
+use crate::budget::{try_filled, try_resize, try_vec};
+use crate::linalg::CsrMatrix;
 use crate::mesh::SolveMesh;
 use crate::problem::{BoundaryKind, Problem, check_finite, check_tensor};
 use crate::scheme::{GradientDiscretisation, PointDof};
@@ -31,9 +32,16 @@ pub struct ProblemValues<const D: usize = 2> {
     pub dirichlet: Vec<Option<f64>>,
     /// Unknowns carrying the trace on Γ3, with their points and measures (Dirichlet ones too).
     pub signorini: Vec<PointDof<D>>,
+    /// Schemes without interior unknowns: the global matrix, assembled once
+    /// ([`super::assembled`]); `mats` and `loads` are then empty.
+    pub assembled: Option<CsrMatrix>,
 }
 
-/// What one parallel task of [`local_data`] found wrong in its cells (the first of each kind).
+/// Cells per batch of [`ProblemValues::evaluate_assembled`] (64k tetrahedra: 5 MiB of local
+/// matrices).
+const BATCH: usize = 1 << 16;
+
+/// What one parallel task of [`fill_local`] found wrong in its cells (the first of each kind).
 #[derive(Default)]
 struct ChunkDefects {
     bad_tensor: Option<crate::Error>,
@@ -63,6 +71,65 @@ impl<const D: usize> ProblemValues<D> {
             neumann_load: try_filled(scheme.n_skeleton(), 0.0, "the Neumann load")?,
             dirichlet: try_filled(n, None, "the Dirichlet values")?,
             signorini: Vec::new(),
+            assembled: None,
+        };
+        values.boundary_conditions(scheme, problem)?;
+        Ok(values)
+    }
+
+    /// For a scheme without interior unknowns (P1, CR): the data, with the global matrix
+    /// assembled on the lower pattern `pattern` of the condensed matrix instead of the local
+    /// matrices ([`super::assembled`]). The cells go by batches of [`BATCH`]: their local
+    /// matrices and loads are computed in parallel, then added into M and b in cell order
+    /// (so M and b have the bits of the gathered ones), and the batch's buffers reused.
+    pub fn evaluate_assembled<M: SolveMesh<D> + ?Sized>(
+        scheme: &dyn GradientDiscretisation<M, D>,
+        dm: &DofMap,
+        pattern: (&[usize], &[usize]),
+        problem: &Problem<D>,
+    ) -> crate::Result<Self> {
+        let nc = scheme.mesh().n_cells();
+        let mat_ptr = local_offsets(dm)?;
+        let mut lower = try_filled(pattern.1.len(), 0.0, "the assembled matrix")?;
+        let mut load = try_filled(scheme.n_unknowns(), 0.0, "the load vector")?;
+        let (mut mats, mut loads) = (Vec::new(), Vec::new());
+        for (b0, b1) in chunks(nc, BATCH) {
+            let (l0, l1) = (dm.dof_ptr.at(b0), dm.dof_ptr.at(b1));
+            try_resize(
+                &mut mats,
+                mat_ptr.at(b1) - mat_ptr.at(b0),
+                0.0,
+                "the local matrices",
+            )?;
+            try_resize(&mut loads, l1 - l0, 0.0, "the local loads")?;
+            fill_local(
+                scheme,
+                dm,
+                problem,
+                (b0, b1),
+                &mat_ptr,
+                &mut mats,
+                &mut loads,
+            )?;
+            super::assembled::scatter(dm, (b0, b1), pattern, &mats, &mat_ptr, &mut lower)?;
+            for (&d, &l) in dm.dofs[l0..l1].iter().zip(&loads) {
+                load[d as usize] += l;
+            }
+        }
+        drop((mats, loads));
+        let (col_ptr, row_idx) = pattern;
+        let mut a = CsrMatrix::from_lower_csc(col_ptr.len() - 1, col_ptr, row_idx, &lower)?;
+        drop(lower);
+        a.drop_zeros();
+        let mut values = ProblemValues {
+            mat_ptr: Offsets::from_lengths(std::iter::empty())?,
+            mats: Vec::new(),
+            loads: Vec::new(),
+            load,
+            neumann_load: try_filled(scheme.n_skeleton(), 0.0, "the Neumann load")?,
+            dirichlet: try_filled(scheme.n_unknowns(), None, "the Dirichlet values")?,
+            signorini: Vec::new(),
+            assembled: Some(a),
         };
         values.boundary_conditions(scheme, problem)?;
         Ok(values)
@@ -127,27 +194,59 @@ impl<const D: usize> ProblemValues<D> {
     }
 }
 
-/// The local matrices (for A_K = A(x_K)) and loads of every cell, in parallel over chunks of
-/// cells, written in place into arrays laid out by the dof map `dm` (cell k's matrix has
-/// packed_len(p_k) entries, p_k its number of unknowns; its load p_k entries) and allocated
-/// once, before the cells are visited, so that no per-chunk copy is ever held beside them. The
-/// first bad tensor in cell order is the error, then the first non-finite load, as in a
-/// sequential loop.
+/// The offsets of the packed local matrices on the dof map `dm`: cell k's has
+/// packed_len(p_k) entries, p_k its number of unknowns.
+fn local_offsets(dm: &DofMap) -> crate::Result<Offsets> {
+    Offsets::from_lengths(
+        (0..dm.n_cells()).map(|k| super::condense::packed_len(dm.dof_ptr.range(k).len())),
+    )
+}
+
+/// The local matrices (for A_K = A(x_K)) and loads of every cell, written in place into arrays
+/// laid out by the dof map `dm` ([`local_offsets`] for the matrices; the loads like the
+/// unknowns) and allocated once, before the cells are visited, so that no per-chunk copy is
+/// ever held beside them.
 fn local_data<M: SolveMesh<D> + ?Sized, const D: usize>(
     scheme: &dyn GradientDiscretisation<M, D>,
     dm: &DofMap,
     problem: &Problem<D>,
 ) -> crate::Result<(Offsets, Vec<f64>, Vec<f64>)> {
-    let mesh = scheme.mesh();
-    let nc = mesh.n_cells();
-    let mat_ptr = Offsets::from_lengths(
-        (0..nc).map(|k| super::condense::packed_len(dm.dof_ptr.range(k).len())),
-    )?;
+    let nc = scheme.mesh().n_cells();
+    let mat_ptr = local_offsets(dm)?;
     let mut mats = try_filled(mat_ptr.total(), 0.0, "the local matrices")?;
     let mut loads = try_filled(dm.dofs.len(), 0.0, "the local loads")?;
-    let ranges = cell_chunks(nc);
-    let m_slices = split_by_ranges(&mut mats, &ranges, |k| mat_ptr.at(k));
-    let l_slices = split_by_ranges(&mut loads, &ranges, |k| dm.dof_ptr.at(k));
+    fill_local(
+        scheme,
+        dm,
+        problem,
+        (0, nc),
+        &mat_ptr,
+        &mut mats,
+        &mut loads,
+    )?;
+    Ok((mat_ptr, mats, loads))
+}
+
+/// The local matrices and loads of the cells `b0..b1` into `mats` and `loads` (laid out by
+/// `mat_ptr` and the dof map `dm`, from the batch's first cell), in parallel over chunks of
+/// cells. The first bad tensor in cell order is the error, then the first non-finite load, as
+/// in a sequential loop.
+fn fill_local<M: SolveMesh<D> + ?Sized, const D: usize>(
+    scheme: &dyn GradientDiscretisation<M, D>,
+    dm: &DofMap,
+    problem: &Problem<D>,
+    (b0, b1): (usize, usize),
+    mat_ptr: &Offsets,
+    mats: &mut [f64],
+    loads: &mut [f64],
+) -> crate::Result<()> {
+    let mesh = scheme.mesh();
+    let ranges: Vec<_> = cell_chunks(b1 - b0)
+        .into_iter()
+        .map(|(c0, c1)| (b0 + c0, b0 + c1))
+        .collect();
+    let m_slices = split_by_ranges(mats, &ranges, |k| mat_ptr.at(k));
+    let l_slices = split_by_ranges(loads, &ranges, |k| dm.dof_ptr.at(k));
     let tasks: Vec<_> = ranges.into_iter().zip(m_slices).zip(l_slices).collect();
     let defects: Vec<ChunkDefects> = tasks
         .into_par_iter()
@@ -202,5 +301,5 @@ fn local_data<M: SolveMesh<D> + ?Sized, const D: usize>(
     if let Some(msg) = defects.iter().find_map(|c| c.bad_source.clone()) {
         return Err(crate::Error::InvalidData(msg));
     }
-    Ok((mat_ptr, mats, loads))
+    Ok(())
 }

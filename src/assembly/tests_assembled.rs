@@ -1,0 +1,116 @@
+//! Tests of the assembled matrix of schemes without interior unknowns ([`super::assembled`]).
+
+use super::symbolic::DofMap;
+use super::values::ProblemValues;
+use super::{DiscreteSystem, LinearSolver, SolveState, SystemOptions};
+use crate::mesh::generate::cartesian_triangles;
+use crate::problem::paper_test3;
+use crate::scheme::{GradientDiscretisation, P1};
+use std::collections::BTreeMap;
+
+/// M summed entry by entry in cell order from the scheme's local matrices (their packed lower
+/// triangles, as every assembly reads them), sequentially: the reference of the bits.
+fn cell_order_sum(
+    scheme: &dyn GradientDiscretisation,
+    p: &crate::problem::Problem,
+) -> BTreeMap<(usize, usize), f64> {
+    let dm = DofMap::new(scheme).unwrap();
+    let v = ProblemValues::evaluate(scheme, &dm, p).unwrap();
+    let mut m = BTreeMap::new();
+    for k in 0..dm.n_cells() {
+        let (d, _) = dm.cell(k);
+        let lower = &v.mats[v.mat_ptr.range(k)];
+        let mut t = 0;
+        for (b, &j) in d.iter().enumerate() {
+            for &i in &d[b..] {
+                let key = (i.max(j) as usize, i.min(j) as usize);
+                *m.entry(key).or_insert(0.0) += lower[t];
+                t += 1;
+            }
+        }
+    }
+    m
+}
+
+fn bits(t: &[(usize, usize, f64)]) -> Vec<(usize, usize, u64)> {
+    t.iter().map(|&(i, j, v)| (i, j, v.to_bits())).collect()
+}
+
+/// More cells than one batch of the streamed assembly (65 536): the assembled M has, entry by
+/// entry, the bits of the sequential cell-order sum (exact zeros dropped, both triangles),
+/// whatever the number of threads, and b those of the local loads summed in cell order.
+#[test]
+fn the_assembled_matrix_has_the_bits_of_the_cell_order_sum() {
+    let mesh = cartesian_triangles(200, 170, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    assert!(mesh.n_cells() > 1 << 16);
+    let p1 = P1::new(&mesh).unwrap();
+    let p = paper_test3(1.0);
+    let reference = cell_order_sum(&p1, &p);
+    let build = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let sys = DiscreteSystem::new(&p1, &p, SystemOptions::default()).unwrap();
+            (sys.full_matrix_triplets(), sys.load().to_vec())
+        })
+    };
+    let (one, load1) = build(1);
+    let mut expected = Vec::new();
+    for (&(r, c), &v) in &reference {
+        if v != 0.0 || r == c {
+            expected.push((r, c, v));
+            if r != c {
+                expected.push((c, r, v));
+            }
+        }
+    }
+    expected.sort_by_key(|&(i, j, _)| (i, j));
+    assert_eq!(bits(&one), bits(&expected));
+    let (three, load3) = build(3);
+    assert_eq!(bits(&one), bits(&three));
+    assert_eq!(
+        load1.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+        load3.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+    );
+}
+
+/// The masked systems: with some unknowns fixed, the direct solve (lower pattern) and the
+/// iterative one (rows) agree to the solver's tolerance, keep the fixed values, and leave a
+/// residual b − M u that vanishes on the free unknowns.
+#[test]
+fn direct_and_iterative_solves_of_the_masked_system_agree() {
+    let mesh = cartesian_triangles(40, 40, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let p1 = P1::new(&mesh).unwrap();
+    let p = paper_test3(-10.0);
+    let with = |linear| SystemOptions {
+        linear,
+        ..Default::default()
+    };
+    let direct = DiscreteSystem::new(&p1, &p, with(LinearSolver::Direct)).unwrap();
+    let iterative = DiscreteSystem::new(&p1, &p, with(LinearSolver::Iterative)).unwrap();
+    let n = direct.n_unknowns();
+    let fixed: Vec<Option<f64>> = (0..n).map(|i| (i % 7 == 3).then_some(0.25)).collect();
+    let (ud, _) = direct.solve(&mut SolveState::default(), &fixed).unwrap();
+    let (ui, _) = iterative.solve(&mut SolveState::default(), &fixed).unwrap();
+    let scale = ud.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let gap = ud
+        .iter()
+        .zip(&ui)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(gap <= 1e-8 * scale, "{gap:e} against {scale:e}");
+    let (r, s) = direct.residual(&ud).unwrap();
+    let mut free = 0;
+    for i in 0..n {
+        match (fixed[i], direct.dirichlet()[i]) {
+            (_, Some(v)) => assert_eq!(ud[i], v),
+            (Some(v), None) => assert_eq!(ud[i], v),
+            (None, None) => {
+                free += 1;
+                assert!(r[i].abs() <= 1e-12 * s[i].max(1.0), "row {i}: {:e}", r[i]);
+            }
+        }
+    }
+    assert!(free > n / 2, "{free} free unknowns of {n}");
+}
