@@ -79,7 +79,9 @@
 //! 2. [`error`]: the typed errors ([`Error`], [`MeshError`]).
 //! 3. [`budget`]: the caller's [`budget::MemoryBudget`], the memory estimates checked
 //!    against it, the fallible allocations ([`budget::try_vec`] and the like) and the limits of
-//!    the process and the machine; it uses [`units`] and [`error`].
+//!    the process and the machine; it uses [`units`] and [`error`]. Beside it [`offsets`]: the
+//!    offsets of flat lists, stored as one stride when the lists have one length (the mesh's
+//!    cells and faces, the dof map); it uses [`error`].
 //! 4. [`linalg`] (sparse Cholesky with symbolic reuse, orderings; algebraic multigrid
 //!    [`linalg::amg`] and conjugate gradients; it uses only [`error`] and [`budget`]) and
 //!    [`vi`] (the algebraic variational-inequality algorithms over the [`vi::QuadraticEnergy`]
@@ -130,6 +132,7 @@ pub mod error;
 pub mod linalg;
 pub mod mesh;
 pub mod mesh3d;
+pub mod offsets;
 pub mod post;
 pub mod problem;
 pub mod scheme;

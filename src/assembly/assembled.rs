@@ -23,11 +23,11 @@
 
 use super::DiscreteSystem;
 use super::gather::{FixedValues, chunks, split_by_ranges};
-use super::offsets::Offsets;
 use super::symbolic::DofMap;
 use crate::budget::{try_filled, try_vec};
 use crate::linalg::CsrMatrix;
 use crate::mesh::SolveMesh;
+use crate::offsets::Offsets;
 use rayon::prelude::*;
 
 /// Unknowns (rows or columns) per parallel task.

@@ -47,7 +47,7 @@ pub mod condense;
 pub mod gather;
 pub mod iterative;
 pub mod linear;
-pub mod offsets;
+pub use crate::offsets;
 pub mod residual;
 pub mod solve;
 pub mod state;

@@ -17,12 +17,12 @@
 use super::SystemOptions;
 use super::gather::{cell_chunks, chunks, split_by_ranges};
 use super::linear::{LinearSolver, auto_iterative_min};
-use super::offsets::Offsets;
 use crate::budget::MemoryBudget;
 use crate::budget::{try_collect, try_copy, try_filled, try_grow, try_vec};
 use crate::linalg::SpdPattern;
 use crate::mesh::complex::CellComplex;
 use crate::mesh::{PolyMesh, SolveMesh};
+use crate::offsets::Offsets;
 use crate::scheme::GradientDiscretisation;
 use rayon::prelude::*;
 use std::sync::Arc;

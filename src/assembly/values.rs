@@ -4,11 +4,11 @@
 //! part ([`super::symbolic`]) is shared.
 
 use super::gather::{cell_chunks, chunks, split_by_ranges};
-use super::offsets::Offsets;
 use super::symbolic::DofMap;
 use crate::budget::{try_filled, try_resize, try_vec};
 use crate::linalg::CsrMatrix;
 use crate::mesh::SolveMesh;
+use crate::offsets::Offsets;
 use crate::problem::{BoundaryKind, Problem, check_finite, check_tensor};
 use crate::scheme::{GradientDiscretisation, PointDof};
 use nalgebra::{DMatrix, DVector};

@@ -10,6 +10,7 @@ use super::{PolyMesh3, Polyhedra};
 use crate::budget::MemoryBudget;
 use crate::budget::{try_filled, try_vec};
 use crate::error::MeshError;
+use crate::offsets::Offsets;
 use rayon::prelude::*;
 
 /// Estimated peak memory, in bytes, of [`PolyMesh3::from_polyhedra`] on a [`Polyhedra`] with
@@ -17,11 +18,12 @@ use rayon::prelude::*;
 /// the face loops and `vertices` vertices, on top of the [`Polyhedra`] itself.
 ///
 /// Per vertex: 24 bytes of coordinates, 4 of sort order, 1 of use flag. Per cell: 4 (offset),
-/// 8 (volume), 24 (centroid), 8 (diameter), 4 (tag), 16 (its slice of the orientations while
-/// they are computed in parallel). Per side: 4 (its cell), 4 (place in its bucket), 1 (pair
-/// flag), 4 (partner side), 4 (its face), 1 (orientation), 4 (face id in the cell's list).
-/// Per face, counting as many faces as sides (an upper bound): 8 (sides), 4 (offset), 8
-/// (cells), 4 (tag), 8 (area), 4 (boundary list); face centroids and normals are not stored.
+/// 8 (volume), 24 (centroid), 8 (diameter, while the shapes are checked), 4 (tag), 16 (its
+/// slice of the orientations while they are computed in parallel). Per side: 4 (its cell), 4
+/// (place in its bucket), 1 (pair flag), 4 (partner side), 4 (its face), 1 (orientation), 4
+/// (face id in the cell's list). Per face, counting as many faces as sides (an upper bound): 8
+/// (sides), 4 (offset), 8 (cells), 4 (boundary tag), 4 (boundary list); face areas, centroids
+/// and normals are not stored.
 /// Per loop entry: 4 (stored loop), 4 (the pieces in which the loops are gathered in parallel,
 /// and the per-thread scratch of face matching), and 16 for the directed boundary edges and 24
 /// for the corners of the boundary surface checks (counting every loop entry as a boundary
@@ -29,7 +31,7 @@ use rayon::prelude::*;
 pub fn mesh3_bytes(cells: u64, sides: u64, side_vertices: u64, vertices: u64) -> u64 {
     let per_vertex = 24 + 4 + 1;
     let per_cell = 4 + 8 + 24 + 8 + 4 + 16;
-    let per_side = (4 + 4 + 1 + 4 + 4 + 1 + 4) + (8 + 4 + 8 + 4 + 8 + 4);
+    let per_side = (4 + 4 + 1 + 4 + 4 + 1 + 4) + (8 + 4 + 8 + 4 + 4);
     let per_loop_entry = 4 + 4 + 16 + 24;
     cells
         .saturating_mul(per_cell)
@@ -68,19 +70,20 @@ impl PolyMesh3 {
         drop((side_cell, face_sides, inward));
         // the mesh takes over the vertices and cell offsets; the face loops are no longer needed
         m.vertices = std::mem::take(&mut p.vertices);
-        m.cell_ptr = std::mem::take(&mut p.cell_ptr);
+        m.cell_ptr = Offsets::from_offsets(std::mem::take(&mut p.cell_ptr));
         drop((
             std::mem::take(&mut p.face_ptr),
             std::mem::take(&mut p.face_vertices),
         ));
-        m.compute_face_geometry()?;
-        m.compute_cell_geometry()?;
-        m.check_shapes()?;
+        m.check_face_geometry()?;
+        let diameters = m.compute_cell_geometry()?;
+        m.check_shapes(&diameters)?;
+        drop(diameters);
         m.check_boundary_surface()?;
         m.check_overlap()?;
         m.check_crossings()?;
-        m.cell_tags = if p.cell_tags.is_empty() {
-            try_filled(m.n_cells(), 0, "the cell tags")?
+        m.cell_tags = if p.cell_tags.iter().all(|&t| t == 0) {
+            Vec::new()
         } else {
             std::mem::take(&mut p.cell_tags)
         };
@@ -134,23 +137,22 @@ fn assemble(
         };
         [side_cell[s as usize], second]
     }));
-    let boundary_faces = (0..n_faces as u32)
+    let boundary_faces: Vec<u32> = (0..n_faces as u32)
         .filter(|&f| face_cells[f as usize][1] == u32::MAX)
         .collect();
+    let boundary_tags = try_filled(boundary_faces.len(), 0, "the boundary tags")?;
     Ok(PolyMesh3 {
         vertices: Vec::new(),
-        cell_ptr: Vec::new(),
+        cell_ptr: Offsets::from_offsets(vec![0]),
         cell_faces: face_of_side,
-        face_ptr,
+        face_ptr: Offsets::from_offsets(face_ptr),
         face_verts,
         face_cells,
-        face_tags: try_filled(n_faces, 0, "the face tags")?,
         cell_tags: Vec::new(),
         cell_volume: Vec::new(),
         cell_centroid: Vec::new(),
-        cell_diameter: Vec::new(),
-        face_area: Vec::new(),
         boundary_faces,
+        boundary_tags,
         h: 0.0,
     })
 }
@@ -187,25 +189,19 @@ fn pair_defect(
 }
 
 impl PolyMesh3 {
-    /// |σ| of every face, in parallel, written in place (x_σ and n_σ are computed when asked
-    /// for: [`PolyMesh3::face_frame`]); [`MeshError::BadFace`] for the first face whose vector
-    /// area is negligible (|N_σ| ≤ 10⁻¹⁴ diam(σ)²: no normal).
-    fn compute_face_geometry(&mut self) -> Result<(), MeshError> {
+    /// Checks the faces, in parallel (|σ|, x_σ and n_σ are computed when asked for:
+    /// [`PolyMesh3::face_measure`], [`PolyMesh3::face_frame`]): [`MeshError::BadFace`] for the
+    /// first face whose vector area is negligible (|N_σ| ≤ 10⁻¹⁴ diam(σ)²: no normal).
+    fn check_face_geometry(&self) -> Result<(), MeshError> {
         let n = self.n_faces();
-        let mut area = try_filled(n, 0.0, "the face areas")?;
         let has_normal = |f: usize, vector_area: [f64; 3]| {
             let d = diameter(&self.vertices, self.face_vertices(f));
             norm(vector_area) > 1e-14 * d * d
         };
-        let bad = area
-            .par_iter_mut()
-            .enumerate()
-            .filter_map(|(f, a)| {
-                let g = face_geometry(&self.vertices, self.face_vertices(f));
-                *a = g.area;
-                (!has_normal(f, g.vector_area)).then_some(f)
-            })
-            .min();
+        let bad = (0..n).into_par_iter().find_first(|&f| {
+            let g = face_geometry(&self.vertices, self.face_vertices(f));
+            !has_normal(f, g.vector_area)
+        });
         if let Some(f) = bad {
             let k = self.face_cells[f][0] as usize;
             let g = face_geometry(&self.vertices, self.face_vertices(f));
@@ -215,7 +211,6 @@ impl PolyMesh3 {
                 msg: format!("zero area ({:e})", norm(g.vector_area)),
             });
         }
-        self.face_area = area;
         Ok(())
     }
 
@@ -227,9 +222,10 @@ impl PolyMesh3 {
             .unwrap_or(usize::MAX)
     }
 
-    /// |K|, x_K and h_K of every cell, in parallel, written in place, and h;
+    /// |K| and x_K of every cell, in parallel, written in place, and h; returns h_K of every
+    /// cell (for the shape checks; [`PolyMesh3::diameter`] computes it when asked for later).
     /// [`MeshError::DegenerateVolume`] for the first cell with |K| ≤ 10⁻¹⁴ h_K³.
-    fn compute_cell_geometry(&mut self) -> Result<(), MeshError> {
+    fn compute_cell_geometry(&mut self) -> Result<Vec<f64>, MeshError> {
         let n = self.n_cells();
         let mut volume = try_filled(n, 0.0, "the cell volumes")?;
         let mut centroid = try_filled(n, [0.0; 3], "the cell centroids")?;
@@ -268,7 +264,6 @@ impl PolyMesh3 {
         self.h = diam.iter().copied().fold(0.0, f64::max);
         self.cell_volume = volume;
         self.cell_centroid = centroid;
-        self.cell_diameter = diam;
-        Ok(())
+        Ok(diam)
     }
 }

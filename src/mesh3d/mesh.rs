@@ -1,8 +1,9 @@
 //! [`PolyMesh3`], the validated 3D polyhedral mesh, and its accessors.
 
-use super::geometry::{dot, face_geometry, norm, sub};
+use super::geometry::{diameter, dot, face_geometry, norm, sub};
 use super::{Cuboid, Point3, Polyhedra};
 use crate::mesh::NO_CELL;
+use crate::offsets::Offsets;
 
 /// A conforming mesh of polyhedra with its cell geometry and face areas cached (face
 /// centroids and normals computed on demand: [`PolyMesh3::face_frame`]), flat and immutable:
@@ -12,26 +13,27 @@ use crate::mesh::NO_CELL;
 #[derive(Debug, Clone)]
 pub struct PolyMesh3 {
     pub(crate) vertices: Vec<Point3>,
-    /// Offsets of each cell's faces in `cell_faces` (length: cells + 1).
-    pub(crate) cell_ptr: Vec<u32>,
+    /// Offsets of each cell's faces in `cell_faces` (one stride when every cell has as many).
+    pub(crate) cell_ptr: Offsets,
     /// The faces of every cell, in the order the cell listed them.
     pub(crate) cell_faces: Vec<u32>,
-    /// Offsets of each face's vertex loop in `face_verts` (length: faces + 1).
-    pub(crate) face_ptr: Vec<u32>,
+    /// Offsets of each face's vertex loop in `face_verts` (one stride when every face has as
+    /// many vertices).
+    pub(crate) face_ptr: Offsets,
     /// The vertex loop of every face, counter-clockwise seen from outside its first cell.
     pub(crate) face_verts: Vec<u32>,
     /// The cells of every face; `u32::MAX` as second cell on the boundary.
     pub(crate) face_cells: Vec<[u32; 2]>,
-    /// Boundary tag of every face (0 for interior and untagged boundary faces).
-    pub(crate) face_tags: Vec<i32>,
-    /// Tag of every cell (0 when untagged).
+
+    /// Tag of every cell (0 when untagged); empty when every cell has tag 0.
     pub(crate) cell_tags: Vec<i32>,
     pub(crate) cell_volume: Vec<f64>,
     pub(crate) cell_centroid: Vec<Point3>,
-    pub(crate) cell_diameter: Vec<f64>,
-    pub(crate) face_area: Vec<f64>,
     /// The boundary faces, in increasing order.
     pub(crate) boundary_faces: Vec<u32>,
+    /// The tag of each boundary face, in the order of `boundary_faces` (0 when untagged;
+    /// interior faces have tag 0 and store none).
+    pub(crate) boundary_tags: Vec<i32>,
     pub(crate) h: f64,
 }
 
@@ -48,23 +50,23 @@ impl PolyMesh3 {
 
     /// Number of cells.
     pub fn n_cells(&self) -> usize {
-        self.cell_ptr.len() - 1
+        self.cell_ptr.n_lists()
     }
 
     /// Number of faces.
     pub fn n_faces(&self) -> usize {
-        self.face_ptr.len() - 1
+        self.face_ptr.n_lists()
     }
 
     /// The faces of cell `k`, in the order its description listed them (local face i is
     /// `cell_faces(k)[i]`).
     pub fn cell_faces(&self, k: usize) -> &[u32] {
-        &self.cell_faces[self.cell_ptr[k] as usize..self.cell_ptr[k + 1] as usize]
+        &self.cell_faces[self.cell_ptr.range(k)]
     }
 
     /// The vertex loop of face `f`, counter-clockwise seen from outside `face_cells(f)[0]`.
     pub fn face_vertices(&self, f: usize) -> &[u32] {
-        &self.face_verts[self.face_ptr[f] as usize..self.face_ptr[f + 1] as usize]
+        &self.face_verts[self.face_ptr.range(f)]
     }
 
     /// The cells on either side of face `f`: the one its loop and normal are outward from,
@@ -94,9 +96,15 @@ impl PolyMesh3 {
         self.cell_centroid[k]
     }
 
-    /// h_K, the largest distance between two vertices of cell `k`.
+    /// h_K, the largest distance between two vertices of cell `k` (computed when asked for).
     pub fn diameter(&self, k: usize) -> f64 {
-        self.cell_diameter[k]
+        let mut ids: Vec<u32> = Vec::new();
+        for &f in self.cell_faces(k) {
+            ids.extend_from_slice(self.face_vertices(f as usize));
+        }
+        ids.sort_unstable();
+        ids.dedup();
+        diameter(&self.vertices, &ids)
     }
 
     /// h = max_K h_K.
@@ -104,9 +112,10 @@ impl PolyMesh3 {
         self.h
     }
 
-    /// |σ|, the area of face `f`.
+    /// |σ|, the area of face `f` (computed from its loop when asked for, like
+    /// [`PolyMesh3::face_frame`]: the same bits as the build's).
     pub fn face_measure(&self, f: usize) -> f64 {
-        self.face_area[f]
+        face_geometry(&self.vertices, self.face_vertices(f)).area
     }
 
     /// x_σ, the centroid of face `f` (computed from its loop: see [`PolyMesh3::face_frame`]).
@@ -145,13 +154,28 @@ impl PolyMesh3 {
 
     /// The tag of cell `k` (gmsh physical volume; 0 when untagged).
     pub fn cell_tag(&self, k: usize) -> i32 {
-        self.cell_tags[k]
+        if self.cell_tags.is_empty() {
+            0
+        } else {
+            self.cell_tags[k]
+        }
     }
 
     /// The boundary tag of face `f` (gmsh physical surface; 0 for interior faces and untagged
-    /// boundary faces).
+    /// boundary faces), found among the boundary faces by binary search.
     pub fn face_tag(&self, f: usize) -> i32 {
-        self.face_tags[f]
+        match self.boundary_index(f) {
+            Some(i) => self.boundary_tags[i],
+            None => 0,
+        }
+    }
+
+    /// The position of face `f` in the list of boundary faces, if it is one.
+    pub(crate) fn boundary_index(&self, f: usize) -> Option<usize> {
+        if !self.is_boundary_face(f) {
+            return None;
+        }
+        self.boundary_faces.binary_search(&(f as u32)).ok()
     }
 
     /// The smallest [`Cuboid`] holding the mesh.
@@ -172,7 +196,7 @@ impl PolyMesh3 {
         let sides = self.cell_faces.len();
         let mut p = Polyhedra {
             vertices: self.vertices.clone(),
-            cell_ptr: self.cell_ptr.clone(),
+            cell_ptr: self.cell_ptr.to_offsets(),
             face_ptr: Vec::with_capacity(sides + 1),
             face_vertices: Vec::with_capacity(self.face_verts.len() * 2),
             ..Polyhedra::default()
@@ -192,8 +216,7 @@ impl PolyMesh3 {
         if self.cell_tags.iter().any(|&t| t != 0) {
             p.cell_tags = self.cell_tags.clone();
         }
-        for &f in &self.boundary_faces {
-            let tag = self.face_tags[f as usize];
+        for (&f, &tag) in self.boundary_faces.iter().zip(&self.boundary_tags) {
             if tag != 0 {
                 if p.tagged_ptr.is_empty() {
                     p.tagged_ptr.push(0);

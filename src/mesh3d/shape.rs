@@ -18,7 +18,7 @@ impl PolyMesh3 {
     /// [`MeshError::WarpedFace`] for the first face warped beyond [`WARP_TOL`], then
     /// [`MeshError::NotStarShaped3`] for the first cell not strictly star-shaped with respect to
     /// x_K: d_{K,σ} ≤ 10⁻¹² h_K, or a fan triangle T of σ with (x_K, T) of volume ≤ 10⁻¹⁴ h_K³.
-    pub(crate) fn check_shapes(&self) -> Result<(), MeshError> {
+    pub(crate) fn check_shapes(&self, diameters: &[f64]) -> Result<(), MeshError> {
         let warped = (0..self.n_faces())
             .into_par_iter()
             .find_first(|&f| !(self.face_warp(f) <= WARP_TOL));
@@ -33,7 +33,7 @@ impl PolyMesh3 {
         }
         let bad = (0..self.n_cells())
             .into_par_iter()
-            .find_map_first(|k| self.star_defect(k));
+            .find_map_first(|k| self.star_defect(k, diameters[k]));
         match bad {
             Some(e) => Err(e),
             None => Ok(()),
@@ -41,8 +41,8 @@ impl PolyMesh3 {
     }
 
     /// The first defect of star-shapedness of cell `k` (see [`PolyMesh3::check_shapes`]).
-    fn star_defect(&self, k: usize) -> Option<MeshError> {
-        let (xk, h) = (self.cell_centroid[k], self.cell_diameter[k]);
+    fn star_defect(&self, k: usize, h: f64) -> Option<MeshError> {
+        let xk = self.cell_centroid[k];
         for (i, &f) in self.cell_faces(k).iter().enumerate() {
             let (_, d) = self.cell_normal_dist(k, i);
             let defect = |what, value| MeshError::NotStarShaped3 {

@@ -229,8 +229,8 @@ impl PolyMesh3 {
     /// The boundary faces with a non-zero tag as tagged faces of `p`, those with a new
     /// vertex in `centre` as their fan triangles, each with the face's tag.
     fn split_tagged_faces(&self, centre: &[u32], p: &mut Polyhedra) {
-        for &f in &self.boundary_faces {
-            let (f, tag) = (f as usize, self.face_tags[f as usize]);
+        for (&f, &tag) in self.boundary_faces.iter().zip(&self.boundary_tags) {
+            let f = f as usize;
             if tag == 0 {
                 continue;
             }

@@ -33,10 +33,7 @@ impl PolyMesh3 {
             want.extend_from_slice(l);
             want.sort_unstable();
             match order.binary_search_by(|&b| key(b).cmp(&want)) {
-                Ok(i) => {
-                    let f = self.boundary_faces[order[i]] as usize;
-                    self.face_tags[f] = p.tagged_tags[t];
-                }
+                Ok(i) => self.boundary_tags[order[i]] = p.tagged_tags[t],
                 Err(_) => {
                     return Err(MeshError::BadTaggedFace {
                         index: t,
@@ -53,8 +50,8 @@ impl PolyMesh3 {
     /// Returns a copy whose boundary faces are tagged by `tag(x_σ)` (interior faces keep 0).
     pub fn with_boundary_tags(&self, tag: impl Fn(Point3) -> i32) -> PolyMesh3 {
         let mut m = self.clone();
-        for &f in &self.boundary_faces {
-            m.face_tags[f as usize] = tag(self.face_centroid(f as usize));
+        for (b, &f) in self.boundary_faces.iter().enumerate() {
+            m.boundary_tags[b] = tag(self.face_centroid(f as usize));
         }
         m
     }

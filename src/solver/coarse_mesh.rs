@@ -59,6 +59,11 @@ pub trait CoarseMesh<const D: usize>: SolveMesh<D> + VertexAverage + Sized {
     /// around Ω's and no boundary face carries over, so it serves obstacle problems only);
     /// `None` where the mesh type has none.
     fn cover(&self, size: f64, budget: MemoryBudget) -> Option<Result<Level<Self>, MeshError>>;
+    /// The side h of boxes that tile the mesh's domain exactly, if that domain is a box (its
+    /// measure `measure` is its bounding box's) cut by h ≈ `size` (h = L / round(L / `size`), L
+    /// its longest side) into whole boxes along every side; `None` otherwise and where the mesh
+    /// type has no [`Self::cover`].
+    fn box_tiling(&self, measure: f64, size: f64) -> Option<f64>;
     /// The distance from `p` to face `f` (see the module docs).
     fn face_distance(&self, f: usize, p: Vector<D>) -> f64;
     /// The vertices of cell `k`, each once (in `scratch` if the mesh does not store them).
@@ -94,6 +99,9 @@ impl CoarseMesh<2> for PolyMesh {
     /// None: the planar agglomeration straightens the faces of its aggregates, so it coarsens
     /// any planar mesh.
     fn cover(&self, _size: f64, _budget: MemoryBudget) -> Option<Result<Level<Self>, MeshError>> {
+        None
+    }
+    fn box_tiling(&self, _measure: f64, _size: f64) -> Option<f64> {
         None
     }
     fn face_distance(&self, f: usize, p: Vector<2>) -> f64 {
@@ -136,6 +144,20 @@ impl CoarseMesh<3> for PolyMesh3 {
     }
     fn cover(&self, size: f64, budget: MemoryBudget) -> Option<Result<Level<Self>, MeshError>> {
         Some(crate::mesh3d::agglomerate::box_cover(self, size, budget).and_then(level3))
+    }
+    fn box_tiling(&self, measure: f64, size: f64) -> Option<f64> {
+        let sides = self.bounding_box().ranges().map(|r| r[1] - r[0]);
+        let volume = sides.iter().product::<f64>();
+        let longest = sides.iter().copied().fold(0.0, f64::max);
+        if !((measure - volume).abs() <= 1e-9 * volume && size > 0.0) {
+            return None;
+        }
+        let h = longest / (longest / size).round().max(1.0);
+        let whole = |l: f64| {
+            let k = (l / h).round();
+            k >= 1.0 && (l - k * h).abs() <= 1e-9 * l
+        };
+        sides.iter().all(|&l| whole(l)).then_some(h)
     }
     fn face_distance(&self, f: usize, p: Vector<3>) -> f64 {
         let ids = self.face_vertices(f);
@@ -297,6 +319,27 @@ mod tests {
             assert!(d <= best + 1e-12, "{d} > {best}");
             assert!(d >= best - spacing, "{d} < {best} - {spacing}");
         }
+    }
+
+    /// Boxes tile a box domain when the longest side's count fits the others; never a domain
+    /// that is not its bounding box, nor a planar mesh.
+    #[test]
+    fn box_tiling_needs_a_box_that_whole_boxes_cut() {
+        use crate::mesh::CellComplex;
+        use crate::mesh3d::Cuboid;
+        use crate::mesh3d::generate::kuhn;
+        let budget = MemoryBudget::DEFAULT;
+        let cuboid = Cuboid::new([0.0, 2.0], [0.0, 1.0], [0.0, 1.0]);
+        let m = PolyMesh3::from_polyhedra(kuhn(4, cuboid, budget).unwrap(), budget).unwrap();
+        let measure: f64 = (0..m.n_cells()).map(|k| m.cell_measure(k)).sum();
+        // 2 / 0.26 rounds to 8 boxes of 0.25: 4 along the unit sides
+        assert_eq!(m.box_tiling(measure, 0.26), Some(0.25));
+        // 2 / 0.3 rounds to 7 boxes of 2/7: 3.5 along the unit sides
+        assert_eq!(m.box_tiling(measure, 0.3), None);
+        // the same mesh seen as a smaller domain (a cell missing) is not a box
+        assert_eq!(m.box_tiling(0.99 * measure, 0.26), None);
+        let planar = crate::mesh::generate::cartesian(4, 4).unwrap();
+        assert_eq!(planar.box_tiling(1.0, 0.25), None);
     }
 
     /// A point above the middle of the unit square face of a cube, and one beside it.
