@@ -36,6 +36,7 @@ use crate::budget::MemoryBudget;
 use crate::error::MeshError;
 use crate::mesh::agglomerate::floor_i64;
 use crate::mesh3d::{PolyMesh3, Polyhedra};
+use rayon::prelude::*;
 
 /// The outward loops of the six faces of a box, as corner indices c = 4 dz + 2 dy + dx.
 const BOX_FACES: [[usize; 4]; 6] = [
@@ -73,13 +74,11 @@ pub fn box_cover(
         let c = fine.centroid(k);
         std::array::from_fn(|r| floor_i64((c[r] - origin[r]) / size))
     };
-    let keys: Vec<[i64; 3]> = (0..fine.n_cells()).map(key).collect();
-    let mut boxes = keys.clone();
-    boxes.sort_unstable();
-    boxes.dedup();
+    let keys: Vec<[i64; 3]> = (0..fine.n_cells()).into_par_iter().map(key).collect();
+    let mut boxes = distinct_boxes(&keys);
     let fills = fill_pinches(&mut boxes);
     let cell_of: Vec<u32> = keys
-        .iter()
+        .par_iter()
         .map(|k| boxes.binary_search(k).map_or(u32::MAX, |i| i as u32))
         .collect();
     drop(keys);
@@ -138,6 +137,60 @@ pub fn box_cover(
         boundary_face_of: vec![NO_FACE; fine.n_faces()],
         dissolved_cells: 0,
     })
+}
+
+/// The distinct `keys`, sorted (lexicographically: i, then j, then k). When the keys span a
+/// grid of at most 4 boxes per key, they are marked on that grid and read back in order (O(n),
+/// the case of a mesh of its bounding box); otherwise sorted (O(n log n), in parallel).
+fn distinct_boxes(keys: &[[i64; 3]]) -> Vec<[i64; 3]> {
+    let Some(&first) = keys.first() else {
+        return Vec::new();
+    };
+    let (lo, hi) = keys
+        .par_iter()
+        .fold_with((first, first), |(mut lo, mut hi), k| {
+            for r in 0..3 {
+                (lo[r], hi[r]) = (lo[r].min(k[r]), hi[r].max(k[r]));
+            }
+            (lo, hi)
+        })
+        .reduce(
+            || (first, first),
+            |(a, b), (c, d)| {
+                (
+                    std::array::from_fn(|r| a[r].min(c[r])),
+                    std::array::from_fn(|r| b[r].max(d[r])),
+                )
+            },
+        );
+    let dims: [u64; 3] = std::array::from_fn(|r| (hi[r] - lo[r]) as u64 + 1);
+    let cells = dims.iter().try_fold(1u64, |a, &d| a.checked_mul(d));
+    match cells {
+        Some(g) if g <= 4 * keys.len() as u64 => {
+            let at = |k: &[i64; 3]| {
+                let o: [u64; 3] = std::array::from_fn(|r| (k[r] - lo[r]) as u64);
+                ((o[0] * dims[1] + o[1]) * dims[2] + o[2]) as usize
+            };
+            let mut marked = vec![false; g as usize];
+            for k in keys {
+                marked[at(k)] = true;
+            }
+            let mut boxes = Vec::new();
+            for (lin, _) in marked.iter().enumerate().filter(|(_, m)| **m) {
+                let lin = lin as u64;
+                let (i, jk) = (lin / (dims[1] * dims[2]), lin % (dims[1] * dims[2]));
+                let (j, k) = (jk / dims[2], jk % dims[2]);
+                boxes.push([lo[0] + i as i64, lo[1] + j as i64, lo[2] + k as i64]);
+            }
+            boxes
+        }
+        _ => {
+            let mut boxes = keys.to_vec();
+            boxes.par_sort_unstable();
+            boxes.dedup();
+            boxes
+        }
+    }
 }
 
 /// Rounds of [`fill_pinches`] at most (each adds boxes only next to existing ones).
@@ -218,7 +271,24 @@ fn fill_pinches(boxes: &mut Vec<[i64; 3]>) -> Vec<([i64; 3], [i64; 3])> {
 
 #[cfg(test)]
 mod tests {
-    use super::{around, connected, fill_pinches};
+    use super::{around, connected, distinct_boxes, fill_pinches};
+
+    /// The grid marking (keys in a small grid, negative ones too) and the sort (keys spread
+    /// far apart) both give the sorted distinct keys.
+    #[test]
+    fn distinct_boxes_are_the_sorted_distinct_keys() {
+        let mut rng = crate::mesh::test_rng(3);
+        for spread in [3.0, 1e6] {
+            let keys: Vec<[i64; 3]> = (0..500)
+                .map(|_| [0, 1, 2].map(|_| (spread * (2.0 * rng() - 1.0)).floor() as i64))
+                .collect();
+            let mut want = keys.clone();
+            want.sort_unstable();
+            want.dedup();
+            assert_eq!(distinct_boxes(&keys), want, "spread {spread}");
+        }
+        assert!(distinct_boxes(&[]).is_empty());
+    }
 
     /// Whether some grid vertex has its present or its absent boxes disconnected.
     fn pinched(b: &[[i64; 3]]) -> bool {
