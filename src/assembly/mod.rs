@@ -131,8 +131,11 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'a, M, D> {
         dof_map.check_setup_memory(options.budget)?;
         // without interior unknowns the values are assembled on the pattern: after it
         if dof_map.n_int.iter().all(|&ni| ni == 0) {
-            let sym = Arc::new(SymbolicSystem::with_dof_map(scheme, dof_map, options)?);
-            let mut s = Self::with_symbolic(sym, problem)?;
+            let sym = SymbolicSystem::with_dof_map(scheme, Arc::clone(&dof_map), options)?;
+            let pattern = (sym.pattern.col_ptr(), sym.pattern.row_idx());
+            let values = ProblemValues::evaluate_assembled(scheme, &dof_map, pattern, problem)?;
+            drop(dof_map);
+            let mut s = Self::from_parts(Arc::new(sym), values);
             s.symbolic_seconds = s.sym.symbolic_seconds;
             s.setup_seconds = t0.elapsed().as_secs_f64();
             return Ok(s);
@@ -157,8 +160,11 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'a, M, D> {
     ) -> crate::Result<Self> {
         let t0 = Instant::now();
         let values = if sym.no_interior {
+            // the symbolic system keeps no dof map for these schemes (see its docs)
+            let dm = DofMap::new(sym.scheme())?;
+            dm.check_setup_memory(sym.options.budget)?;
             let pattern = (sym.pattern.col_ptr(), sym.pattern.row_idx());
-            ProblemValues::evaluate_assembled(sym.scheme(), &sym.dof_map, pattern, problem)?
+            ProblemValues::evaluate_assembled(sym.scheme(), &dm, pattern, problem)?
         } else {
             ProblemValues::evaluate(sym.scheme(), &sym.dof_map, problem)?
         };

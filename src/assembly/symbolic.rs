@@ -42,6 +42,15 @@ pub struct DofMap {
 }
 
 impl DofMap {
+    /// The dof map of no cells.
+    pub fn empty() -> Self {
+        DofMap {
+            dof_ptr: Offsets::Uniform { n: 0, stride: 0 },
+            dofs: Vec::new(),
+            n_int: Vec::new(),
+        }
+    }
+
     /// Asks the scheme for the unknowns of every cell (in parallel over chunks of cells).
     pub fn new<M: CellComplex<D> + ?Sized, const D: usize>(
         scheme: &dyn GradientDiscretisation<M, D>,
@@ -197,7 +206,9 @@ where
 {
     scheme: &'a dyn GradientDiscretisation<M, D>,
     /// The unknowns of each cell (shared with whoever built it alongside, e.g. the data
-    /// evaluation of [`super::DiscreteSystem::new`]).
+    /// evaluation of [`super::DiscreteSystem::new`]). Empty (no cells) when no cell has
+    /// interior unknowns: the solves then read the assembled matrix only, and the assembly of
+    /// another problem on this system asks the scheme again ([`DofMap::new`]).
     pub dof_map: Arc<DofMap>,
     /// Pattern and symbolic factorisation of the condensed matrix.
     pub pattern: SpdPattern,
@@ -279,6 +290,11 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
         let maps = maps?;
         check_numeric_memory(&pattern, &maps, n, options.budget)?;
         let single_interior = dof_map.n_int.iter().all(|&ni| ni == 1);
+        let dof_map = if no_interior {
+            Arc::new(DofMap::empty())
+        } else {
+            dof_map
+        };
         Ok(SymbolicSystem {
             scheme,
             dof_map,

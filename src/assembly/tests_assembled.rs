@@ -114,3 +114,33 @@ fn direct_and_iterative_solves_of_the_masked_system_agree() {
     }
     assert!(free > n / 2, "{free} free unknowns of {n}");
 }
+
+/// A symbolic system shared by two problems (it keeps no dof map for P1): each system built on
+/// it is the one built alone, bit for bit, and well-posedness is read from the pattern.
+#[test]
+fn a_shared_symbolic_system_assembles_each_problem_as_alone() {
+    use super::SymbolicSystem;
+    use std::sync::Arc;
+    let mesh = cartesian_triangles(20, 20, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let p1 = P1::new(&mesh).unwrap();
+    let sym = Arc::new(SymbolicSystem::new(&p1, SystemOptions::default()).unwrap());
+    assert_eq!(sym.dof_map.n_cells(), 0);
+    for c in [1.0, -10.0] {
+        let p = paper_test3(c);
+        let shared = DiscreteSystem::with_symbolic(Arc::clone(&sym), &p).unwrap();
+        let alone = DiscreteSystem::new(&p1, &p, SystemOptions::default()).unwrap();
+        assert_eq!(
+            bits(&shared.full_matrix_triplets()),
+            bits(&alone.full_matrix_triplets())
+        );
+        let fixed = vec![None; shared.n_unknowns()];
+        let (a, _) = shared.solve(&mut SolveState::default(), &fixed).unwrap();
+        let (b, _) = alone.solve(&mut SolveState::default(), &fixed).unwrap();
+        assert_eq!(
+            a.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            b.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+        let analysis = crate::solver::well_posed::analyse(&shared, None).unwrap();
+        assert!(analysis.floating.is_empty(), "c = {c}");
+    }
+}

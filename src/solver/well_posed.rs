@@ -92,6 +92,18 @@ pub fn analyse<M: SolveMesh<D> + ?Sized, const D: usize>(
     let what = "the connected parts of the mesh";
     let mut parent: Vec<usize> = try_vec(n, what)?;
     parent.extend(0..n);
+    if system.symbolic().no_interior {
+        // no dof map is kept: the unknowns of a cell are coupled in the matrix's pattern
+        let (col_ptr, row_idx) = system.condensed_pattern();
+        for c in 0..col_ptr.len() - 1 {
+            for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
+                let (a, b) = (find(&mut parent, c), find(&mut parent, r));
+                if a != b {
+                    parent[b] = a;
+                }
+            }
+        }
+    }
     for k in 0..dm.n_cells() {
         let (d, _) = dm.cell(k);
         if let Some((&first, rest)) = d.split_first() {
