@@ -5,10 +5,11 @@ use super::{Cuboid, Point3, Polyhedra};
 use crate::mesh::NO_CELL;
 use crate::offsets::Offsets;
 
-/// A conforming mesh of polyhedra with its cell geometry and face areas cached (face
-/// centroids and normals computed on demand: [`PolyMesh3::face_frame`]), flat and immutable:
-/// every array is indexed by 32-bit ids, cells and faces are CSR lists (offsets and data),
-/// nothing is allocated per cell. Built by [`PolyMesh3::from_polyhedra`]; see the module docs of
+/// A conforming mesh of polyhedra with the cells' volumes and centroids cached (face areas,
+/// centroids and normals and cell diameters computed on demand: [`PolyMesh3::face_measure`],
+/// [`PolyMesh3::face_frame`], [`PolyMesh3::diameter`]), flat and immutable: every array is
+/// indexed by 32-bit ids, cells and faces are CSR lists (offsets, one stride when the lists
+/// have one length, and data), nothing is allocated per cell. Built by [`PolyMesh3::from_polyhedra`]; see the module docs of
 /// [`crate::mesh3d`] for the maths and the checks.
 #[derive(Debug, Clone)]
 pub struct PolyMesh3 {
