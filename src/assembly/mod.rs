@@ -42,7 +42,7 @@
 //! factorisation runs beside the local matrices (after the pattern, when they are assembled
 //! at once). Measurements: `replication/BENCHMARKS.md`.
 
-mod assembled;
+pub mod assembled;
 pub mod condense;
 pub mod gather;
 pub mod iterative;

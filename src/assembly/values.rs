@@ -79,7 +79,7 @@ impl<const D: usize> ProblemValues<D> {
 
     /// For a scheme without interior unknowns (P1, CR): the data, with the global matrix
     /// assembled on the lower pattern `pattern` of the condensed matrix instead of the local
-    /// matrices ([`super::assembled`]). The cells go by batches of [`BATCH`]: their local
+    /// matrices ([`super::assembled`]). The cells go by batches of `BATCH` (65 536): their local
     /// matrices and loads are computed in parallel, then added into M and b in cell order
     /// (so M and b have the bits of the gathered ones), and the batch's buffers reused.
     pub fn evaluate_assembled<M: SolveMesh<D> + ?Sized>(
