@@ -3,9 +3,10 @@
 //!
 //! When no cell has interior unknowns, the condensed matrix is the global matrix
 //! M = Σ_K P_Kᵀ M_K P_K itself, and fixing unknowns only masks its rows and columns. The
-//! system therefore assembles M once, when it is built, stores it by rows (both triangles,
-//! exact zeros dropped), and frees the local matrices and loads: a solve with the fixed
-//! unknowns F (values u_F) reads
+//! system therefore assembles M once, when it is built, and stores it by rows (both
+//! triangles, exact zeros dropped): the local matrices and loads are computed batch by batch
+//! of cells and added into M and b at once ([`ProblemValues::evaluate_assembled`]), so that
+//! they are never all held. A solve with the fixed unknowns F (values u_F) reads
 //!
 //!   S_ij = M_ij for i, j ∉ F,   S_ii = 1 for i ∈ F,   S_ij = 0 else,
 //!   c_i  = b_i − Σ_{j ∈ F} M_ij u_j for i ∉ F,   c_i = u_i for i ∈ F,
@@ -22,6 +23,8 @@
 //! all held; M takes 12 bytes per stored entry, about 15 entries per unknown on tetrahedra.
 
 use super::DiscreteSystem;
+#[cfg(doc)]
+use super::ProblemValues;
 use super::gather::{FixedValues, chunks, split_by_ranges};
 use super::symbolic::DofMap;
 use crate::budget::{try_filled, try_vec};

@@ -120,7 +120,8 @@ where
 }
 
 impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'a, M, D> {
-    /// Builds the symbolic system of `scheme` and the values of `problem`, side by side.
+    /// Builds the symbolic system of `scheme` and the values of `problem`, side by side (the
+    /// values after the pattern when no cell has interior unknowns: they are assembled on it).
     pub fn new(
         scheme: &'a dyn GradientDiscretisation<M, D>,
         problem: &Problem<D>,
