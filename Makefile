@@ -11,7 +11,7 @@ FVCA5_MESHES ?=
 PYTHON := /usr/bin/python3
 REFDIR := replication/results/reference
 
-.PHONY: all build test test-external test-solve3d fuzz determinism lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-peers3d bench-domains3d bench-amg bench-baseline clean
+.PHONY: all build test test-external test-solve3d fuzz determinism lint fmt doc replicate replicate-quick report meshes crosscheck crosscheck-coarse reference-deps bench bench-peers bench-peers3d bench-domains3d bench-hmm3d bench-amg bench-baseline clean
 
 all: build
 
@@ -168,6 +168,15 @@ bench-peers3d: build reference-deps
 ##        -> replication/results/bench_domains3d.csv, BENCHMARKS.md (growth exponents, target 6)
 bench-domains3d: build reference-deps
 	$(DEV) bench --domains3d
+
+## bench-hmm3d: HMM on n^3 cubes of (-2,2)^3, problems/ex9-3d.toml (the radial obstacle), gradvi
+##        alone (iterative solver, nested warm start), 1 and N rayon threads, each case and its
+##        linear variant (no bounds: the cost ratio R) in its own process; n in 32, 64, 100,
+##        128, 200 up to GRADVI_BENCH_HMM3D_MAX_N (default 64; 200 is target 5, 8M cells within
+##        24 GiB), a size skipped when its estimated peak does not fit in the memory available
+##        -> replication/results/bench_hmm3d.csv, BENCHMARKS.md (the verdict of target 5)
+bench-hmm3d: build
+	$(DEV) bench --hmm3d
 
 clean:
 	$(CARGO) clean

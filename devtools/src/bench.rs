@@ -38,7 +38,8 @@
 //! SCHEME VARIANT SIZE [FILE]` runs one case and prints its row as JSON; `--baseline EXE
 //! [--baseline-rev REV]` compares every gradvi case with the earlier build EXE in the same run
 //! ([`baseline`]); `--mesh3d` times reading and building tetrahedral meshes ([`mesh3d`]);
-//! `--domains3d` runs the 3D any-domain benchmark (`domains3d`).
+//! `--domains3d` runs the 3D any-domain benchmark (`domains3d`); `--hmm3d` runs HMM on n³
+//! cubes of (−2,2)³ (`hmm3d`).
 
 use gradvi::budget::MemoryBudget;
 use gradvi::mesh::PolyMesh;
@@ -56,6 +57,8 @@ use std::time::Instant;
 pub mod baseline;
 mod domains3d;
 mod domains3d_report;
+mod hmm3d;
+mod hmm3d_report;
 pub mod mesh3d;
 pub mod peers;
 mod peers3d;
@@ -800,6 +803,9 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
     if let Some(i) = args.iter().position(|a| a == "--peer3d-child") {
         return peers3d::child_main(&args[i + 1..], root);
     }
+    if let Some(i) = args.iter().position(|a| a == "--hmm3d-child") {
+        return hmm3d::child_main(&args[i + 1..], root);
+    }
     if let Some(i) = args.iter().position(|a| a == "--domain3d-child") {
         return domains3d::child_main(&args[i + 1..], root);
     }
@@ -841,6 +847,10 @@ pub fn main_with_args(root: &Path, args: &[String]) -> gradvi::Result<()> {
     }
     if args.iter().any(|a| a == "--peers3d") {
         peers3d::run(&cfg, &exe)?;
+        return write_report(&cfg);
+    }
+    if args.iter().any(|a| a == "--hmm3d") {
+        hmm3d::run(&cfg, &exe)?;
         return write_report(&cfg);
     }
     if args.iter().any(|a| a == "--peers") {

@@ -36,7 +36,8 @@ enum DevCommand {
     /// [--baseline-rev REV]` the regression check against an earlier gradvi build;
     /// `--report-only` rewrites BENCHMARKS.md (and REGRESSION.md) from the CSV files;
     /// `--mesh3d` times reading and building tetrahedral meshes of the unit cube;
-    /// `--peers3d` the 3D peer benchmark; `--domains3d` the 3D any-domain benchmark.
+    /// `--peers3d` the 3D peer benchmark; `--domains3d` the 3D any-domain benchmark;
+    /// `--hmm3d` HMM on n³ cubes of (−2,2)³ (target 5: 200³ cubes within 24 GiB).
     Bench {
         /// Arguments passed to the benchmark driver.
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]

@@ -57,6 +57,7 @@ pub fn write_report(cfg: &Config) -> gradvi::Result<()> {
     intro(&mut md);
     super::peers_report::write(cfg, &mut md, &super::peers::read_rows(cfg)?)?;
     super::peers3d_report::write(&mut md, &super::peers3d::read_rows(cfg)?);
+    super::hmm3d_report::write(&mut md, &super::hmm3d::read_rows(cfg)?);
     super::domains3d_report::write(&mut md, &super::domains3d::read_rows(cfg)?);
     md.section(
         2,
