@@ -44,9 +44,10 @@ pub const DEFAULT_MAX_N: usize = 64;
 pub const TARGET_N: usize = 200;
 /// The memory of target 5, MiB (24 GiB).
 pub const TARGET_MIB: f64 = 24.0 * 1024.0;
-/// Peak resident memory of an HMM child per cell, bytes: about 1.8 KiB per cell, measured at
-/// about 2M cells on 2 cores (the peak of the iterative HMM solve of ex9-3d on cubes over its
-/// cells). Used only to skip the sizes that would not fit ([`fits`]).
+/// Peak resident memory of an HMM child per cell, bytes, rounded up from a measurement:
+/// `gradvi solve problems/ex9-3d.toml --scheme hmm --generate cubes --level 6` (128³ =
+/// 2 097 152 cubes, iterative solver, 2 threads) peaked at 3 538 584 KiB, 1.69 KiB per cell.
+/// Used only to skip the sizes that would not fit ([`fits`]).
 pub const BYTES_PER_CELL: f64 = 1.8 * 1024.0;
 /// The flag of a child that runs the linear variant.
 const NO_BARRIER: &str = "--no-barrier";
