@@ -48,6 +48,7 @@ impl PolyMesh3 {
     pub fn from_polyhedra(mut p: Polyhedra, budget: MemoryBudget) -> Result<PolyMesh3, MeshError> {
         check_offsets(&p)?;
         check_cells(&p)?;
+
         let sides = p.face_ptr.len() - 1;
         let bytes = mesh3_bytes(
             p.n_cells() as u64,
@@ -76,9 +77,9 @@ impl PolyMesh3 {
             std::mem::take(&mut p.face_vertices),
         ));
         m.check_face_geometry()?;
-        let diameters = m.compute_cell_geometry()?;
-        m.check_shapes(&diameters)?;
-        drop(diameters);
+        let (diameters, star) = m.compute_cell_geometry()?;
+        m.check_shapes(&diameters, &star)?;
+        drop((diameters, star));
         m.check_boundary_surface()?;
         m.check_overlap()?;
         m.check_crossings()?;
@@ -223,21 +224,26 @@ impl PolyMesh3 {
     }
 
     /// |K| and x_K of every cell, in parallel, written in place, and h; returns h_K of every
-    /// cell (for the shape checks; [`PolyMesh3::diameter`] computes it when asked for later).
+    /// cell (for the shape checks; [`PolyMesh3::diameter`] computes it when asked for later)
+    /// and whether each cell is strictly star-shaped with respect to x_K
+    /// ([`PolyMesh3::star_defect`], evaluated here while the cell's vertices are at hand and
+    /// reported by [`PolyMesh3::check_shapes`], after the volume and warp checks).
     /// [`MeshError::DegenerateVolume`] for the first cell with |K| ≤ 10⁻¹⁴ h_K³.
-    fn compute_cell_geometry(&mut self) -> Result<Vec<f64>, MeshError> {
+    fn compute_cell_geometry(&mut self) -> Result<(Vec<f64>, Vec<bool>), MeshError> {
         let n = self.n_cells();
         let mut volume = try_filled(n, 0.0, "the cell volumes")?;
         let mut centroid = try_filled(n, [0.0; 3], "the cell centroids")?;
         let mut diam = try_filled(n, 0.0, "the cell diameters")?;
+        let mut star = try_filled(n, false, "the star-shapedness flags")?;
         (
             volume.par_iter_mut(),
             centroid.par_iter_mut(),
             diam.par_iter_mut(),
+            star.par_iter_mut(),
         )
             .into_par_iter()
             .enumerate()
-            .for_each_init(Vec::new, |ids: &mut Vec<u32>, (k, (vol, c, d))| {
+            .for_each_init(Vec::new, |ids: &mut Vec<u32>, (k, (vol, c, d, ok))| {
                 ids.clear();
                 for &f in self.cell_faces(k) {
                     ids.extend_from_slice(self.face_vertices(f as usize));
@@ -251,6 +257,7 @@ impl PolyMesh3 {
                 });
                 (*vol, *c) = cell_volume_centroid(&self.vertices, apex, sides);
                 *d = diameter(&self.vertices, ids);
+                *ok = self.star_defect(k, *c, *d).is_none();
             });
         let bad = (0..n)
             .into_par_iter()
@@ -264,6 +271,6 @@ impl PolyMesh3 {
         self.h = diam.iter().copied().fold(0.0, f64::max);
         self.cell_volume = volume;
         self.cell_centroid = centroid;
-        Ok(diam)
+        Ok((diam, star))
     }
 }

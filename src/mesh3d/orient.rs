@@ -115,24 +115,34 @@ pub(crate) fn orient_cell(
     Ok(())
 }
 
+/// Cells per parallel task of [`orient_cells`].
+const BLOCK: usize = 4096;
+
 /// Per side of `p`, whether its loop must be reversed to be outward ([`orient_cell`] on every
-/// cell, in parallel; the error reported is that of the first bad cell).
+/// cell, in parallel by blocks of [`BLOCK`] consecutive cells, whose sides are consecutive;
+/// the error reported is that of the first bad cell).
 pub(crate) fn orient_cells(p: &Polyhedra) -> Result<Vec<bool>, MeshError> {
     let mut inward = vec![false; p.face_ptr.len() - 1];
-    let mut chunks = Vec::with_capacity(p.n_cells());
+    let n = p.n_cells();
+    let mut blocks = Vec::with_capacity(n.div_ceil(BLOCK));
     let mut rest = &mut inward[..];
-    for k in 0..p.n_cells() {
-        let (cell, tail) = rest.split_at_mut(p.cell_sides(k).len());
-        chunks.push(cell);
+    for start in (0..n).step_by(BLOCK) {
+        let end = (start + BLOCK).min(n);
+        let sides = (p.cell_ptr[end] - p.cell_ptr[start]) as usize;
+        let (block, tail) = rest.split_at_mut(sides);
+        blocks.push((start..end, block));
         rest = tail;
     }
-    let err = chunks
+    let err = blocks
         .into_par_iter()
-        .enumerate()
-        .map_init(OrientScratch::default, |scratch, (k, cell)| {
-            orient_cell(p, k, scratch, cell)
+        .map_init(OrientScratch::default, |scratch, (cells, block)| {
+            let first = p.cell_ptr[cells.start] as usize;
+            cells.into_iter().find_map(|k| {
+                let r = p.cell_sides(k);
+                orient_cell(p, k, scratch, &mut block[r.start - first..r.end - first]).err()
+            })
         })
-        .find_map_first(|r| r.err());
+        .find_map_first(|e| e);
     match err {
         Some(e) => Err(e),
         None => Ok(inward),

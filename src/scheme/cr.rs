@@ -134,7 +134,8 @@ impl super::simplex::SimplexScheme<PolyMesh, 2> for Cr<'_> {
     }
     fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>) {
         let third = self.mesh.measure(k) / 3.0;
-        *b = DVector::from_fn(3, |i, _| third * f(self.sub_centroid(k, i)));
+        super::zeroed_vector(b, 3);
+        (0..3).for_each(|i| b[i] = third * f(self.sub_centroid(k, i)));
     }
     fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
         super::face_unknown_trace(self.mesh, e, out);
@@ -169,7 +170,8 @@ impl super::simplex::SimplexScheme<PolyMesh3, 3> for Cr<'_, PolyMesh3, 3> {
     }
     fn local_load(&self, k: usize, f: &dyn Fn(Point3) -> f64, b: &mut DVector<f64>) {
         let quarter = self.mesh.measure(k) / 4.0;
-        *b = DVector::from_fn(4, |i, _| quarter * f(self.sub_centroid(k, i)));
+        super::zeroed_vector(b, 4);
+        (0..4).for_each(|i| b[i] = quarter * f(self.sub_centroid(k, i)));
     }
     fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof<3>>) {
         super::face_unknown_trace(self.mesh, e, out);

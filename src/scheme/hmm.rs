@@ -136,7 +136,7 @@ impl<'a, M: CellComplex<D> + ?Sized, const D: usize> Hmm<'a, M, D> {
 /// of [`local_form`] (on δ = (u_σ − u_K)_σ = C (u_K, u_σ…), C = [−1 | I]).
 fn cell_face_matrix(w: &DMatrix<f64>, m: &mut DMatrix<f64>) {
     let n = w.nrows();
-    *m = DMatrix::zeros(n + 1, n + 1);
+    super::zeroed_matrix(m, n + 1, n + 1);
     let mut total = 0.0;
     for i in 0..n {
         let mut row = 0.0;
@@ -186,7 +186,7 @@ impl<M: CellComplex<D> + VertexAverage + ?Sized, const D: usize> GradientDiscret
     }
     fn local_load(&self, k: usize, f: &dyn Fn(Vector<D>) -> f64, b: &mut DVector<f64>) {
         let n = self.mesh.cell_faces(k).len();
-        *b = DVector::zeros(n + 1);
+        super::zeroed_vector(b, n + 1);
         b[0] = self.mesh.cell_measure(k) * f(self.mesh.cell_centre(k));
     }
     fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof<D>>) {

@@ -259,3 +259,25 @@ pub fn build<'a>(
 ) -> crate::Result<Box<dyn GradientDiscretisation + 'a>> {
     build_with(kind, mesh, &SchemeOptions::default())
 }
+
+/// `m` as a `rows × cols` matrix of zeros, keeping its allocation when it has that shape
+/// already: the local matrices are computed cell after cell into one buffer per task, and an
+/// allocation per cell would serialise the threads on the allocator's lock (one malloc arena,
+/// `gradvi_cli::limit_malloc_arenas`).
+pub(crate) fn zeroed_matrix(m: &mut DMatrix<f64>, rows: usize, cols: usize) {
+    if m.shape() == (rows, cols) {
+        m.fill(0.0);
+    } else {
+        *m = DMatrix::zeros(rows, cols);
+    }
+}
+
+/// `b` as a vector of `n` zeros, keeping its allocation when it has that length already (see
+/// [`zeroed_matrix`]).
+pub(crate) fn zeroed_vector(b: &mut DVector<f64>, n: usize) {
+    if b.len() == n {
+        b.fill(0.0);
+    } else {
+        *b = DVector::zeros(n);
+    }
+}

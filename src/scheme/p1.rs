@@ -57,7 +57,7 @@ impl super::simplex::SimplexScheme<PolyMesh, 2> for P1<'_> {
     /// The gradients of the three barycentric functions λ_i of triangle `k`.
     fn basis_gradients(&self, k: usize) -> Local<Point> {
         let v = self.mesh.cell_vertices(k);
-        let p: Vec<Point> = v.iter().map(|&i| self.mesh.vertex(i as usize)).collect();
+        let p: [Point; 3] = std::array::from_fn(|i| self.mesh.vertex(v[i] as usize));
         let twice_area =
             (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
         let mut g = [[0.0; 2]; 4];
@@ -71,10 +71,13 @@ impl super::simplex::SimplexScheme<PolyMesh, 2> for P1<'_> {
     }
     fn local_load(&self, k: usize, f: &dyn Fn(Point) -> f64, b: &mut DVector<f64>) {
         let v = self.mesh.cell_vertices(k);
-        let fv: Vec<f64> = v.iter().map(|&i| f(self.mesh.vertex(i as usize))).collect();
+        let fv: [f64; 3] = std::array::from_fn(|i| f(self.mesh.vertex(v[i] as usize)));
         let s = fv[0] + fv[1] + fv[2];
         let area = self.mesh.measure(k);
-        *b = DVector::from_fn(3, |i, _| area / 12.0 * (s + fv[i]));
+        super::zeroed_vector(b, 3);
+        b.iter_mut()
+            .zip(fv)
+            .for_each(|(b, fi)| *b = area / 12.0 * (s + fi));
     }
     fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof>) {
         out.clear();
@@ -132,7 +135,10 @@ impl super::simplex::SimplexScheme<PolyMesh3, 3> for P1<'_, PolyMesh3, 3> {
             .map(|v| f(self.mesh.vertices()[v as usize]));
         let s = fv[0] + fv[1] + fv[2] + fv[3];
         let vol = self.mesh.measure(k);
-        *b = DVector::from_fn(4, |i, _| vol / 20.0 * (s + fv[i]));
+        super::zeroed_vector(b, 4);
+        b.iter_mut()
+            .zip(fv)
+            .for_each(|(b, fi)| *b = vol / 20.0 * (s + fi));
     }
     fn face_trace_dofs(&self, e: usize, out: &mut Vec<PointDof<3>>) {
         out.clear();

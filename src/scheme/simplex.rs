@@ -185,7 +185,7 @@ macro_rules! simplex_discretisation {
             fn local_matrix(&self, k: usize, a: &Tensor<$d>, m: &mut DMatrix<f64>) {
                 let g = self.basis_gradients(k);
                 let vol = SimplexScheme::mesh(self).cell_measure(k);
-                *m = DMatrix::zeros($d + 1, $d + 1);
+                super::zeroed_matrix(m, $d + 1, $d + 1);
                 for i in 0..=$d {
                     let ag: Vector<$d> = std::array::from_fn(|r| dot(&a[r], &g[i]));
                     for j in 0..=$d {

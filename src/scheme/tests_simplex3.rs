@@ -196,3 +196,30 @@ fn cells_that_are_not_tetrahedra_are_refused_by_index() {
         }
     }
 }
+
+/// The local matrices and loads are written into reused buffers (one allocation per task, not
+/// per cell): a buffer holding another cell's values, or of another size, gives exactly the
+/// values of a fresh one, for P1, CR and HMM.
+#[test]
+fn local_operators_into_reused_buffers_equal_fresh_ones() {
+    let m = tets();
+    let hmm = super::Hmm::<PolyMesh3, 3>::with_alpha(&m, 1.0).unwrap();
+    let (p1, cr) = (P1::new(&m).unwrap(), Cr::new(&m).unwrap());
+    let schemes: [&dyn GradientDiscretisation<PolyMesh3, 3>; 3] = [&p1, &cr, &hmm];
+    for s in schemes {
+        let f = |x: Point3| 1.0 + x[0] - 2.0 * x[2];
+        let (mut m_used, mut b_used) = (DMatrix::from_element(9, 2, 7.0), DVector::zeros(1));
+        for k in 0..m.n_cells() {
+            let (mut m_new, mut b_new) = (DMatrix::zeros(0, 0), DVector::zeros(0));
+            s.local_matrix(k, &A, &mut m_new);
+            s.local_load(k, &f, &mut b_new);
+            s.local_matrix(k, &A, &mut m_used);
+            s.local_load(k, &f, &mut b_used);
+            assert_eq!(m_used, m_new, "{} cell {k}", s.name());
+            assert_eq!(b_used, b_new, "{} cell {k}", s.name());
+            // dirty the buffers for the next cell
+            m_used.fill(f64::NAN);
+            b_used.fill(-3.0);
+        }
+    }
+}
