@@ -157,6 +157,23 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         Ok((u, out.iterations))
     }
 
+    /// [`Self::solve`] to the relative residual `rtol` (below [`ITERATIVE_RTOL`]), from the last
+    /// solution kept in `state`: the active-set solver's polish of a settled iterate whose
+    /// certificate residuals are above its tolerance (see `QuadraticEnergy::polish`). `None`
+    /// for a direct solve, which is exact already.
+    pub fn polish(
+        &self,
+        state: &mut SolveState,
+        fixed: &[Option<f64>],
+        rtol: f64,
+    ) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+        self.bind(state);
+        if self.is_direct(state) {
+            return Ok(None);
+        }
+        self.solve_to(state, fixed, rtol).map(Some)
+    }
+
     /// Assembles and solves with `fixed`, an iterative solve to the relative residual `rtol`.
     fn solve_to(
         &self,

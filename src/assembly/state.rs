@@ -102,6 +102,13 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> QuadraticEnergy for Solving<'_, '
     fn refine(&mut self, fixed: &[Option<f64>]) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
         self.system.refine(self.state, fixed)
     }
+    fn polish(
+        &mut self,
+        fixed: &[Option<f64>],
+        rtol: f64,
+    ) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+        self.system.polish(self.state, fixed, rtol)
+    }
     fn release(&mut self) {
         self.state.release();
     }

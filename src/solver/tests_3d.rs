@@ -223,3 +223,42 @@ fn the_nested_warm_start_reaches_the_cold_solution_in_3d() {
         }
     }
 }
+
+/// The polish of a settled iterate (`vi::active_set::POLISH_RTOLS`): with the iterative solver
+/// and a certificate tolerance of 1e-13, the iteration settles with residuals (maxima over
+/// the unknowns) of about 1e-13 after CG stopped at its 2-norm target; the polished solve
+/// passes the certificate, where it failed before the polish existed. The solution is that
+/// of the direct solver to the tolerance.
+#[test]
+fn a_settled_iterative_solve_is_polished_to_a_tight_certificate() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let problem = crate::problem::file::load(root.join("problems/ex9-3d.toml"), &[])
+        .unwrap()
+        .problem_in::<3>()
+        .unwrap();
+    let side = [-2.0, 2.0];
+    let domain = crate::mesh3d::Cuboid {
+        x: side,
+        y: side,
+        z: side,
+    };
+    let m = mesh(crate::mesh3d::generate::cubes(16, domain, MemoryBudget::DEFAULT).unwrap());
+    let s = hmm(&m);
+    let tol = 1e-13;
+    let mut opts = SolveOptions::default();
+    opts.active_set.tol = tol;
+    opts.system.linear = "iterative".parse().unwrap();
+    let it = solve_problem(&s, &problem, &opts).unwrap();
+    let c = it.result.certificate;
+    assert!(c.worst() <= tol, "{c:?}");
+    opts.system.linear = "direct".parse().unwrap();
+    let direct = solve_problem(&s, &problem, &opts).unwrap();
+    let diff = (it.u().iter().zip(direct.u()))
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        diff < 1e-10,
+        "largest difference to the direct solve {diff:e}"
+    );
+    assert_eq!(it.result.active, direct.result.active);
+}

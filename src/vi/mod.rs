@@ -101,6 +101,19 @@ pub trait QuadraticEnergy {
         let _ = fixed;
         Ok(None)
     }
+    /// Solves again with `fixed`, from the last solution, to the relative residual `rtol`
+    /// (below the iterative solver's usual target): what the active-set solver asks when its
+    /// iteration has settled but the certificate's residuals, a maximum over the unknowns, are
+    /// above its tolerance while the solve's residual, a 2-norm, met its own. `None` when the
+    /// solves are exact (direct) and there is nothing to polish. Default: `None`.
+    fn polish(
+        &mut self,
+        fixed: &[Option<f64>],
+        rtol: f64,
+    ) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+        let _ = (fixed, rtol);
+        Ok(None)
+    }
     /// The iteration is over: free what is kept from one solve to the next (a multigrid
     /// hierarchy, for instance). Default: nothing.
     fn release(&mut self) {}

@@ -104,6 +104,11 @@ pub struct Hmm3Row {
     /// R = `total_s / linear_seconds`.
     #[serde(deserialize_with = "super::peers::nullable")]
     pub r: f64,
+    /// The solver's error when the solve failed (a typed error: certificate, iterations,
+    /// memory…), empty when it succeeded; a failed row has `certified` false, its peak and
+    /// times up to the failure, and no solve details (NaN or 0).
+    #[serde(default)]
+    pub error: String,
 }
 
 impl Hmm3Row {
@@ -144,7 +149,17 @@ fn run_gradvi(n: usize, barrier: bool, root: &Path) -> gradvi::Result<Hmm3Row> {
     options.system.linear = "iterative".parse()?;
     options.system.budget = budget;
     let before_solve = t0.elapsed().as_secs_f64();
-    let sol = solve_problem(scheme.as_ref(), &problem, &options)?;
+    let sol = match solve_problem(scheme.as_ref(), &problem, &options) {
+        Ok(sol) => sol,
+        Err(e) => {
+            return Ok(failed_row(
+                (n, mesh.n_cells(), mesh.n_faces(), scheme.n_unknowns()),
+                before_solve,
+                t0.elapsed().as_secs_f64() - before_solve,
+                e.to_string(),
+            ));
+        }
+    };
     let exact = problem
         .exact
         .as_ref()
@@ -178,7 +193,43 @@ fn run_gradvi(n: usize, barrier: bool, root: &Path) -> gradvi::Result<Hmm3Row> {
         linear_seconds: f64::NAN,
         linear_krylov: 0,
         r: f64::NAN,
+        error: String::new(),
     })
+}
+
+/// The row of a solve that failed with `error`: (n, cells, faces, unknowns), the setup and
+/// the time until the failure, the peak so far; no certificate, errors or iteration counts.
+fn failed_row(
+    (n, cells, faces, unknowns): (usize, usize, usize, usize),
+    setup_s: f64,
+    solve_s: f64,
+    error: String,
+) -> Hmm3Row {
+    Hmm3Row {
+        n,
+        cells,
+        faces,
+        unknowns,
+        cores: rayon::current_num_threads(),
+        niter: 0,
+        coarse_niter: 0,
+        krylov: 0,
+        setup_s,
+        solve_s,
+        total_s: f64::NAN,
+        phases: String::new(),
+        peak_mib: peak_memory_mib(),
+        violation: f64::NAN,
+        balance_residual: f64::NAN,
+        certificate: f64::NAN,
+        certified: false,
+        l2_u: f64::NAN,
+        l2_grad: f64::NAN,
+        linear_seconds: f64::NAN,
+        linear_krylov: 0,
+        r: f64::NAN,
+        error,
+    }
 }
 
 /// Arguments of a child process: `[--no-barrier] N`.
@@ -260,12 +311,19 @@ fn run_one(exe: &Path, n: usize, cores: usize, barrier: bool) -> gradvi::Result<
         if row.certified { "" } else { " (failed)" },
         row.l2_u
     );
+    if !row.error.is_empty() {
+        eprintln!("[bench]   the solve failed: {}", row.error);
+    }
     Ok(row)
 }
 
 /// The case of `n` on `cores` cores, then its linear variant, and R.
 fn run_case(exe: &Path, n: usize, cores: usize) -> gradvi::Result<Hmm3Row> {
     let mut row = run_one(exe, n, cores, true)?;
+    if !row.error.is_empty() {
+        // no R for a failed solve: its linear variant is not run
+        return Ok(row);
+    }
     let linear = run_one(exe, n, cores, false)?;
     row.linear_seconds = linear.total_s;
     row.linear_krylov = linear.krylov;
@@ -349,6 +407,7 @@ mod tests {
             linear_seconds: 0.2,
             linear_krylov: 2,
             r: 2.0,
+            error: String::new(),
         };
         assert_eq!(row.bytes_per_cell(), 131_072.0);
         assert_eq!(row.us_per_cell(), 50_000.0);

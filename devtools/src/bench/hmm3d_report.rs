@@ -89,7 +89,16 @@ fn verdict_line(rows: &[Hmm3Row]) -> String {
                 "{} cores: peak {:.0} MiB, certificate {}",
                 r.cores,
                 r.peak_mib,
-                if r.certified { "passed" } else { "failed" }
+                if r.certified {
+                    "passed".to_string()
+                } else if r.error.is_empty() {
+                    "failed".to_string()
+                } else {
+                    format!(
+                        "failed: the solve stopped with the typed error '{}'",
+                        r.error
+                    )
+                }
             )
         })
         .collect();
@@ -159,6 +168,7 @@ mod tests {
             linear_seconds: 2.0,
             linear_krylov: 20,
             r: 2.0,
+            error: String::new(),
         }
     }
 
@@ -174,6 +184,20 @@ mod tests {
         failed.certified = false;
         assert_eq!(verdict(&[failed]), Verdict::NotMet);
         assert_eq!(verdict(&[row(200, 2, f64::NAN)]), Verdict::NotMet);
+    }
+
+    #[test]
+    fn a_failed_solve_is_not_met_and_its_error_is_in_the_verdict() {
+        let mut failed = row(200, 2, 14_000.0);
+        failed.certified = false;
+        failed.error = "active-set solver: certificate failed".into();
+        assert_eq!(verdict(std::slice::from_ref(&failed)), Verdict::NotMet);
+        let line = verdict_line(&[failed]);
+        assert!(line.contains("not met"), "{line}");
+        assert!(
+            line.contains("active-set solver: certificate failed"),
+            "{line}"
+        );
     }
 
     #[test]
