@@ -29,10 +29,11 @@
 //! `ball,hole,cube,voronoi`) selects the domains, the rows of the others are kept from the
 //! existing CSV. The report's section is [`super::domains3d_report`].
 
+use super::peers3d::{BOX, problem};
 use super::{Config, bad, io_err, json_row, peak_memory_mib};
 use gradvi::budget::MemoryBudget;
+use gradvi::mesh3d::PolyMesh3;
 use gradvi::mesh3d::io::read_mesh3;
-use gradvi::mesh3d::{Cuboid, PolyMesh3};
 use gradvi::scheme::{SchemeKind, SchemeOptions, build_with3};
 use gradvi::solver::{SolveOptions, solve_problem};
 use gradvi_cli::replication::records::write_csv;
@@ -64,12 +65,6 @@ pub const VORONOI: &str = "Voro-small-0";
 pub const VORONOI_LEVELS: [usize; 8] = [2, 4, 6, 8, 10, 12, 14, 16];
 /// Where the HArDCore3D meshes are by default, relative to the repository root.
 pub const HARDCORE3D_DIR: &str = "../shared/meshes/hardcore3d";
-/// The box the unit-cube Voronoi meshes are mapped onto: the domain of `ex9-3d.toml`.
-const BOX: Cuboid = Cuboid {
-    x: [-2.0, 2.0],
-    y: [-2.0, 2.0],
-    z: [-2.0, 2.0],
-};
 
 /// gmsh's size for about `n` tetrahedra in a domain of volume `volume` (see [`TETS_PER_LC3`]).
 pub fn lc_for(volume: f64, n: usize) -> f64 {
@@ -138,11 +133,6 @@ impl Domain3Row {
     pub fn ok(&self) -> bool {
         self.status == "ok"
     }
-}
-
-/// The ex9-3d problem of `problems/ex9-3d.toml`.
-fn problem(root: &Path) -> gradvi::Result<gradvi::problem::Problem<3>> {
-    gradvi::problem::file::load(root.join("problems/ex9-3d.toml"), &[])?.problem_in::<3>()
 }
 
 /// Max and mean of |v − ū(x)| over the pairs (x, v).

@@ -22,10 +22,11 @@
 //! keeps what it measured; the rows of an earlier run are replaced, as in
 //! [`super::peers3d`]); the report's section is [`super::hmm3d_report`].
 
+use super::peers3d::{BOX, phases, problem};
 use super::{bad, json_row, peak_memory_mib, stdout_of};
 use gradvi::budget::{MemoryBudget, human_bytes};
+use gradvi::mesh3d::PolyMesh3;
 use gradvi::mesh3d::generate::cubes;
-use gradvi::mesh3d::{Cuboid, PolyMesh3};
 use gradvi::scheme::{SchemeKind, SchemeOptions, build_with3};
 use gradvi::solver::{SolveOptions, solve_problem};
 use gradvi_cli::replication::records::write_csv;
@@ -85,16 +86,21 @@ pub struct Hmm3Row {
     #[serde(deserialize_with = "super::peers::nullable")]
     pub peak_mib: f64,
     /// The certificate's largest scaled constraint violation.
+    #[serde(deserialize_with = "super::peers::nullable")]
     pub violation: f64,
     /// The certificate's scaled balance residual (non-Dirichlet, inactive unknowns).
+    #[serde(deserialize_with = "super::peers::nullable")]
     pub balance_residual: f64,
     /// The certificate's largest scaled quantity.
+    #[serde(deserialize_with = "super::peers::nullable")]
     pub certificate: f64,
     /// Whether the certificate passed at the solve's tolerance.
     pub certified: bool,
     /// Relative L² error of u at the centroids.
+    #[serde(deserialize_with = "super::peers::nullable")]
     pub l2_u: f64,
     /// Relative L² error of the gradient at the centroids.
+    #[serde(deserialize_with = "super::peers::nullable")]
     pub l2_grad: f64,
     /// `total_s` of the linear variant (no constraint).
     #[serde(deserialize_with = "super::peers::nullable")]
@@ -123,23 +129,12 @@ impl Hmm3Row {
     }
 }
 
-/// The ex9-3d problem of `problems/ex9-3d.toml`.
-fn problem(root: &Path) -> gradvi::Result<gradvi::problem::Problem<3>> {
-    gradvi::problem::file::load(root.join("problems/ex9-3d.toml"), &[])?.problem_in::<3>()
-}
-
 /// Solves the case of `n` in this process (the body of a `--hmm3d-child`); without the
 /// `barrier`, its linear variant. `total_s` and the linear fields are left to the driver.
 fn run_gradvi(n: usize, barrier: bool, root: &Path) -> gradvi::Result<Hmm3Row> {
     let t0 = Instant::now();
     let budget = MemoryBudget::available();
-    let side = [-2.0, 2.0];
-    let domain = Cuboid {
-        x: side,
-        y: side,
-        z: side,
-    };
-    let mesh = PolyMesh3::from_polyhedra(cubes(n, domain, budget)?, budget)?;
+    let mesh = PolyMesh3::from_polyhedra(cubes(n, BOX, budget)?, budget)?;
     let mut problem = problem(root)?;
     if !barrier {
         problem.constraint = None;
@@ -179,10 +174,7 @@ fn run_gradvi(n: usize, barrier: bool, root: &Path) -> gradvi::Result<Hmm3Row> {
         setup_s: before_solve + t.setup,
         solve_s: t.total - t.setup,
         total_s: f64::NAN,
-        phases: format!(
-            "{:.2}|{:.2}|{:.2}|{:.2}|{:.2}",
-            t.warm_start, t.assemble, t.factor, t.solve, t.look_ahead
-        ),
+        phases: phases(&t),
         peak_mib: peak_memory_mib(),
         violation: c.max_violation,
         balance_residual: c.balance_residual,
@@ -411,5 +403,23 @@ mod tests {
         };
         assert_eq!(row.bytes_per_cell(), 131_072.0);
         assert_eq!(row.us_per_cell(), 50_000.0);
+    }
+
+    #[test]
+    fn a_failed_row_goes_through_the_child_json_and_back() {
+        let row = failed_row(
+            (200, 8_000_000, 24_120_000, 32_120_000),
+            50.0,
+            90.0,
+            "certificate failed".into(),
+        );
+        let text = serde_json::to_string(&row).unwrap();
+        let back: Hmm3Row = json_row(&text, "test").unwrap();
+        assert!(!back.certified && back.error == "certificate failed");
+        assert!(back.certificate.is_nan() && back.l2_u.is_nan() && back.balance_residual.is_nan());
+        assert_eq!(
+            (back.n, back.cells, back.unknowns),
+            (200, 8_000_000, 32_120_000)
+        );
     }
 }

@@ -117,9 +117,25 @@ pub struct Peer3Row {
     pub diff_u: f64,
 }
 
-/// The ex9-3d problem of `problems/ex9-3d.toml`.
-fn problem(root: &Path) -> gradvi::Result<gradvi::problem::Problem<3>> {
+/// The domain of `problems/ex9-3d.toml`, (−2,2)³ (shared by the 3D benchmarks).
+pub(super) const BOX: Cuboid = Cuboid {
+    x: [-2.0, 2.0],
+    y: [-2.0, 2.0],
+    z: [-2.0, 2.0],
+};
+
+/// The ex9-3d problem of `problems/ex9-3d.toml` (shared by the 3D benchmarks).
+pub(super) fn problem(root: &Path) -> gradvi::Result<gradvi::problem::Problem<3>> {
     gradvi::problem::file::load(root.join("problems/ex9-3d.toml"), &[])?.problem_in::<3>()
+}
+
+/// A solve's phases as the 3D benchmarks record them: `warm|assemble|setup|cg|look-ahead`,
+/// seconds.
+pub(super) fn phases(t: &gradvi::solver::Timings) -> String {
+    format!(
+        "{:.2}|{:.2}|{:.2}|{:.2}|{:.2}",
+        t.warm_start, t.assemble, t.factor, t.solve, t.look_ahead
+    )
 }
 
 /// Position of vertex `x` of the n³ grid of (−2,2)³ in the order i + (n+1)(j + (n+1)k).
@@ -172,13 +188,7 @@ fn run_gradvi(
 ) -> gradvi::Result<Peer3Row> {
     let t0 = Instant::now();
     let budget = MemoryBudget::available();
-    let side = [-2.0, 2.0];
-    let domain = Cuboid {
-        x: side,
-        y: side,
-        z: side,
-    };
-    let mesh = PolyMesh3::from_polyhedra(kuhn(n, domain, budget)?, budget)?;
+    let mesh = PolyMesh3::from_polyhedra(kuhn(n, BOX, budget)?, budget)?;
     memory_phase("mesh");
     let mut problem = problem(root)?;
     if !barrier {
@@ -220,10 +230,7 @@ fn run_gradvi(
         setup_s: before_solve + t.setup,
         solve_s: t.total - t.setup,
         total_s: f64::NAN,
-        phases: format!(
-            "{:.2}|{:.2}|{:.2}|{:.2}|{:.2}",
-            t.warm_start, t.assemble, t.factor, t.solve, t.look_ahead
-        ),
+        phases: phases(&t),
         peak_mib: peak_memory_mib(),
         err_max: errors.iter().fold(0.0, |a: f64, &b| a.max(b)),
         err_mean: errors.iter().sum::<f64>() / errors.len().max(1) as f64,
