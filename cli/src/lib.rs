@@ -154,32 +154,58 @@ pub fn one_line(e: &anyhow::Error) -> String {
     line
 }
 
-/// One malloc arena for all threads (glibc), unless `MALLOC_ARENA_MAX` says otherwise. Call it
-/// first thing in `main`, before any other thread exists.
+/// The allocator settings of gradvi's processes (glibc): one malloc arena for all threads,
+/// unless `MALLOC_ARENA_MAX` says otherwise, and blocks of up to [`MMAP_THRESHOLD`] bytes
+/// taken from the heap rather than mapped afresh, unless `MALLOC_MMAP_THRESHOLD_` or
+/// `GLIBC_TUNABLES` says otherwise. Call it first thing in `main`, before any other thread
+/// exists.
 ///
 /// glibc gives each thread that allocates (here rayon's workers) its own arena and returns
 /// the freed memory of those arenas to the system far less readily than that of the main
 /// one, so the vectors freed between two active-set steps stayed resident: one arena lowers
-/// the peak resident memory at an unchanged time. The benchmark's children (`gradvi-dev`)
-/// call it too, so they measure the same setting. The measurements behind this choice, and
-/// the alternatives measured and rejected, are in `replication/BENCHMARKS.md` ("Measurements
-/// behind the defaults").
-pub fn limit_malloc_arenas() {
+/// the peak resident memory at an unchanged time.
+///
+/// glibc maps every block above its mmap threshold (at most 32 MiB by default) afresh and
+/// unmaps it when freed, so each large array of a pass (a mesh build, an assembly, an
+/// active-set step) pays page faults and the kernel's zeroing of its pages, even when the
+/// array freed just before would have served. With the threshold at [`MMAP_THRESHOLD`] such
+/// blocks are reused from the heap; larger ones are still mapped, so the peak does not grow
+/// with the largest arrays of big problems.
+///
+/// The benchmark's children (`gradvi-dev`) call it too, so they measure the same settings.
+/// The measurements behind these choices, and the alternatives measured and rejected, are in
+/// `replication/BENCHMARKS.md` ("Measurements behind the defaults").
+pub fn tune_malloc() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    if std::env::var_os("MALLOC_ARENA_MAX").is_none() {
+    {
         use std::ffi::c_int;
         unsafe extern "C" {
             fn mallopt(param: c_int, value: c_int) -> c_int;
         }
         /// `M_ARENA_MAX` of glibc's `<malloc.h>`.
         const M_ARENA_MAX: c_int = -8;
+        /// `M_MMAP_THRESHOLD` of glibc's `<malloc.h>`.
+        const M_MMAP_THRESHOLD: c_int = -3;
+        let unset = |v: &str| std::env::var_os(v).is_none();
         // SAFETY: mallopt only sets a parameter of the allocator; it is called first thing in
         // main, before any other thread exists. A failure (return 0) leaves the default.
-        unsafe {
-            mallopt(M_ARENA_MAX, 1);
+        if unset("MALLOC_ARENA_MAX") {
+            unsafe {
+                mallopt(M_ARENA_MAX, 1);
+            }
+        }
+        if unset("MALLOC_MMAP_THRESHOLD_") && unset("GLIBC_TUNABLES") {
+            unsafe {
+                mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD);
+            }
         }
     }
 }
+
+/// The mmap threshold [`tune_malloc`] sets: 256 MiB (measured against glibc's default and
+/// against no threshold in `replication/measurements/cli.md`).
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+pub const MMAP_THRESHOLD: std::ffi::c_int = 256 << 20;
 
 fn run(cli: Cli) -> Result<()> {
     match &cli.command {

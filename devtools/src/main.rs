@@ -48,7 +48,7 @@ enum DevCommand {
 }
 
 fn main() -> ExitCode {
-    gradvi_cli::limit_malloc_arenas();
+    gradvi_cli::tune_malloc();
     let args: Vec<OsString> = std::env::args_os().collect();
     // `gradvi-dev gradvi ARGS` is `gradvi ARGS`, its arguments untouched by this parser
     if args.get(1).is_some_and(|a| a == "gradvi") {

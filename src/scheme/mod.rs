@@ -263,7 +263,7 @@ pub fn build<'a>(
 /// `m` as a `rows × cols` matrix of zeros, keeping its allocation when it has that shape
 /// already: the local matrices are computed cell after cell into one buffer per task, and an
 /// allocation per cell would serialise the threads on the allocator's lock (one malloc arena,
-/// `gradvi_cli::limit_malloc_arenas`).
+/// `gradvi_cli::tune_malloc`).
 pub(crate) fn zeroed_matrix(m: &mut DMatrix<f64>, rows: usize, cols: usize) {
     if m.shape() == (rows, cols) {
         m.fill(0.0);
