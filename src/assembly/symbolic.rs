@@ -365,9 +365,10 @@ fn incidence(dm: &DofMap, n: usize) -> crate::Result<Ragged<u32>> {
                 out[dm.dof_ptr.at(k) - base..dm.dof_ptr.at(k + 1) - base].fill(k as u32);
             }
         });
-    let (ptr, items) = crate::mesh::buckets::try_counting_sort(
+    let (ptr, items) = crate::mesh::buckets::try_par_counting_sort(
         n,
-        dm.dofs.iter().map(|&d| Some(d as usize)),
+        dm.dofs.len(),
+        |i| Some(dm.dofs[i] as usize),
         |i| cell_of[i],
     )?;
     Ragged::new(ptr, items)
@@ -434,13 +435,20 @@ fn condensed_pattern(
     Ok((col_ptr, row_idx))
 }
 
-/// The buckets of a counting sort: item i goes to bucket `key(i)` (if any), buckets
-/// ascending, items ascending within a bucket. Items are below 2^32 (checked by the caller).
+/// The buckets of a counting sort of the items `0..n_items`: item i goes to bucket `key(i)`,
+/// buckets ascending, items ascending within a bucket (in parallel, the same result). Items
+/// are below 2^32 (checked by the caller).
 fn counting_sort(
     n_buckets: usize,
-    keys: impl Iterator<Item = Option<usize>> + Clone,
+    n_items: usize,
+    key: impl Fn(usize) -> usize + Sync,
 ) -> crate::Result<Ragged<u32>> {
-    let (ptr, items) = crate::mesh::buckets::try_counting_sort(n_buckets, keys, |i| i as u32)?;
+    let (ptr, items) = crate::mesh::buckets::try_par_counting_sort(
+        n_buckets,
+        n_items,
+        |i| Some(key(i)),
+        |i| i as u32,
+    )?;
     Ragged::new(ptr, items)
 }
 
@@ -491,7 +499,7 @@ fn scatter_maps(
         out
     }));
     // condensed entry -> the local entries landing on it, in cell order
-    let src = counting_sort(row_idx.len(), pos.iter().map(|&q| Some(q as usize)))?;
+    let src = counting_sort(row_idx.len(), pos.len(), |i| pos[i] as usize)?;
     Ok(ScatterMaps {
         block_ptr: pos_ptr,
         src,

@@ -104,12 +104,18 @@ fn assemble(
     inward: &[bool],
 ) -> Result<PolyMesh3, MeshError> {
     let n_faces = face_sides.len();
+    // the loop lengths in parallel, then their running sum
     let mut face_ptr = try_vec(n_faces + 1, "the face offsets")?;
     face_ptr.push(0u32);
+    face_ptr.par_extend(
+        face_sides
+            .par_iter()
+            .map(|&[s, _]| p.side_vertices(s as usize).len() as u32),
+    );
     let mut end = 0u32;
-    for &[s, _] in face_sides {
-        end += p.side_vertices(s as usize).len() as u32;
-        face_ptr.push(end);
+    for x in &mut face_ptr[1..] {
+        end += *x;
+        *x = end;
     }
     // the loops are gathered in per-thread pieces, appended to the buffer reserved here
     let mut face_verts: Vec<u32> = try_vec(end as usize, "the face loops")?;
@@ -139,6 +145,7 @@ fn assemble(
         [side_cell[s as usize], second]
     }));
     let boundary_faces: Vec<u32> = (0..n_faces as u32)
+        .into_par_iter()
         .filter(|&f| face_cells[f as usize][1] == u32::MAX)
         .collect();
     let boundary_tags = try_filled(boundary_faces.len(), 0, "the boundary tags")?;

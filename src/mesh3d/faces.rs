@@ -18,8 +18,9 @@
 use super::Polyhedra;
 use crate::budget::{try_filled, try_vec};
 use crate::error::MeshError;
-use crate::mesh::buckets::counting_sort;
+use crate::mesh::buckets::try_par_counting_sort;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// No partner side: a boundary face.
 pub(crate) const NO_SIDE: u32 = u32::MAX;
@@ -32,17 +33,29 @@ pub(crate) struct FaceMatch {
     pub face_sides: Vec<[u32; 2]>,
 }
 
-/// Per side, the cell it belongs to.
+/// Per side, the cell it belongs to (in parallel over chunks of sides; `p.cell_ptr` is well
+/// formed, check 1).
 pub(crate) fn side_cells(p: &Polyhedra) -> Result<Vec<u32>, MeshError> {
-    let mut out = try_vec(
-        p.face_ptr.len().saturating_sub(1),
-        "the cells of the face sides",
-    )?;
-    for k in 0..p.n_cells() {
-        out.extend(p.cell_sides(k).map(|_| k as u32));
-    }
+    let n_sides = p.face_ptr.len().saturating_sub(1);
+    let mut out = try_filled(n_sides, 0u32, "the cells of the face sides")?;
+    out.par_chunks_mut(SIDE_CHUNK)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            let s0 = c * SIDE_CHUNK;
+            // the cell of side s0: the last k with cell_ptr[k] ≤ s0 (empty cells skipped below)
+            let mut k = p.cell_ptr.partition_point(|&x| x as usize <= s0) - 1;
+            for (i, o) in chunk.iter_mut().enumerate() {
+                while p.cell_ptr[k + 1] as usize <= s0 + i {
+                    k += 1;
+                }
+                *o = k as u32;
+            }
+        });
     Ok(out)
 }
+
+/// Sides per chunk of the parallel passes over the sides.
+const SIDE_CHUNK: usize = 1 << 16;
 
 /// Reused buffers of [`match_bucket`].
 #[derive(Default)]
@@ -62,13 +75,13 @@ fn packed_prefix(key: &[u32]) -> u128 {
     })
 }
 
-/// Sorts the sides of one bucket by key and side, and flags the first side of every interior
-/// face (`pair_start[i]`: sides `bucket[i]` and `bucket[i + 1]` form a face).
+/// Sorts the sides of one bucket by key and side, and makes the two sides of every interior
+/// face each other's `partner` (each side is in one bucket, so each slot is written once).
 fn match_bucket(
     p: &Polyhedra,
     side_cell: &[u32],
-    bucket: &mut [u32],
-    pair_start: &mut [bool],
+    bucket: &[u32],
+    partner: &[AtomicU32],
     scratch: &mut BucketScratch,
 ) -> Result<(), MeshError> {
     let BucketScratch { keys, entries } = scratch;
@@ -108,7 +121,11 @@ fn match_bucket(
                     ),
                 });
             }
-            2 => pair_start[i] = true,
+            2 => {
+                let (a, b) = (entries[i].1, entries[i + 1].1);
+                partner[a as usize].store(b, Ordering::Relaxed);
+                partner[b as usize].store(a, Ordering::Relaxed);
+            }
             _ => {
                 return Err(MeshError::OvercrowdedFace {
                     vertices: key(&entries[i]).iter().map(|&v| v as usize).collect(),
@@ -118,21 +135,7 @@ fn match_bucket(
         }
         i = j;
     }
-    for (b, e) in bucket.iter_mut().zip(entries.iter()) {
-        *b = e.1;
-    }
     Ok(())
-}
-
-/// `data` cut into consecutive mutable pieces at the offsets `ptr`.
-fn split_at_offsets<'a, T>(mut data: &'a mut [T], ptr: &[usize]) -> Vec<&'a mut [T]> {
-    let mut out = Vec::with_capacity(ptr.len().saturating_sub(1));
-    for w in ptr.windows(2) {
-        let (head, tail) = data.split_at_mut(w[1] - w[0]);
-        out.push(head);
-        data = tail;
-    }
-    out
 }
 
 /// Per side, its partner side ([`NO_SIDE`] on the boundary), or the error of the smallest bad
@@ -140,45 +143,71 @@ fn split_at_offsets<'a, T>(mut data: &'a mut [T], ptr: &[usize]) -> Vec<&'a mut 
 fn partners(p: &Polyhedra, side_cell: &[u32]) -> Result<Vec<u32>, MeshError> {
     let n_sides = side_cell.len();
     let smallest = |s: usize| p.side_vertices(s).iter().min().map(|&v| v as usize);
-    let (ptr, mut order) =
-        counting_sort(p.vertices.len(), (0..n_sides).map(smallest), |s| s as u32);
-    let mut pair_start = try_filled(n_sides, false, "the pairs of face sides")?;
-    let err = split_at_offsets(&mut order, &ptr)
-        .into_par_iter()
-        .zip(split_at_offsets(&mut pair_start, &ptr))
-        .map_init(BucketScratch::default, |scratch, (bucket, pairs)| {
-            match_bucket(p, side_cell, bucket, pairs, scratch)
+    let (ptr, order) = try_par_counting_sort(p.vertices.len(), n_sides, smallest, |s| s as u32)?;
+    let mut partner: Vec<AtomicU32> = try_vec(n_sides, "the partners of the face sides")?;
+    partner.extend((0..n_sides).map(|_| AtomicU32::new(NO_SIDE)));
+    let err = ptr
+        .par_windows(2)
+        .map_init(BucketScratch::default, |scratch, w| {
+            match_bucket(p, side_cell, &order[w[0]..w[1]], &partner, scratch)
         })
         .find_map_first(|r| r.err());
     if let Some(e) = err {
         return Err(e);
     }
-    let mut partner = try_filled(n_sides, NO_SIDE, "the partners of the face sides")?;
-    for i in (0..n_sides).filter(|&i| pair_start[i]) {
-        let (a, b) = (order[i], order[i + 1]);
-        partner[a as usize] = b;
-        partner[b as usize] = a;
-    }
-    Ok(partner)
+    Ok(partner.into_iter().map(AtomicU32::into_inner).collect())
 }
 
-/// Matches the sides of `p` into faces (`side_cell`: [`side_cells`]).
+/// Matches the sides of `p` into faces (`side_cell`: [`side_cells`]). Faces are numbered in
+/// the order of their first side, in parallel over chunks of sides: each chunk counts its
+/// first sides (boundary sides, and interior sides before their partner), the counts give
+/// each chunk its first face number, and the second sides take the number of their partner.
 pub(crate) fn match_faces(p: &Polyhedra, side_cell: &[u32]) -> Result<FaceMatch, MeshError> {
     let n_sides = side_cell.len();
     let partner = partners(p, side_cell)?;
-    let mut face_of_side = try_filled(n_sides, 0u32, "the faces of the face sides")?;
-    let mut face_sides = try_vec(n_sides / 2 + 1, "the sides of the faces")?;
-    for s in 0..n_sides {
-        let q = partner[s];
-        if q == NO_SIDE || q as usize > s {
-            face_of_side[s] = face_sides.len() as u32;
-            face_sides.push([s as u32, q]);
-        } else {
-            face_of_side[s] = face_of_side[q as usize];
-        }
+    let first = |s: usize| partner[s] == NO_SIDE || partner[s] as usize > s;
+    let n_chunks = n_sides.div_ceil(SIDE_CHUNK);
+    let range = |c: usize| c * SIDE_CHUNK..((c + 1) * SIDE_CHUNK).min(n_sides);
+    let counts: Vec<usize> = (0..n_chunks)
+        .into_par_iter()
+        .map(|c| range(c).filter(|&s| first(s)).count())
+        .collect();
+    let mut start = Vec::with_capacity(n_chunks + 1);
+    start.push(0);
+    for c in &counts {
+        start.push(start.last().copied().unwrap_or(0) + c);
     }
+    let n_faces = start[n_chunks];
+    let mut face_sides: Vec<[u32; 2]> = try_filled(n_faces, [0, 0], "the sides of the faces")?;
+    let mut face_of_side: Vec<AtomicU32> = try_vec(n_sides, "the faces of the face sides")?;
+    face_of_side.extend((0..n_sides).map(|_| AtomicU32::new(0)));
+    // the first sides, chunk by chunk into consecutive faces
+    let mut pieces = Vec::with_capacity(n_chunks);
+    let mut rest = face_sides.as_mut_slice();
+    for (c, &len) in counts.iter().enumerate() {
+        let (piece, tail) = rest.split_at_mut(len);
+        pieces.push((c, piece));
+        rest = tail;
+    }
+    pieces.into_par_iter().for_each(|(c, piece)| {
+        let firsts = range(c).filter(|&s| first(s));
+        for ((f, s), slot) in (start[c]..).zip(firsts).zip(piece.iter_mut()) {
+            *slot = [s as u32, partner[s]];
+            face_of_side[s].store(f as u32, Ordering::Relaxed);
+        }
+    });
+    // the second sides, once every first side has its face
+    (0..n_sides).into_par_iter().for_each(|s| {
+        if !first(s) {
+            let f = face_of_side[partner[s] as usize].load(Ordering::Relaxed);
+            face_of_side[s].store(f, Ordering::Relaxed);
+        }
+    });
     Ok(FaceMatch {
-        face_of_side,
+        face_of_side: face_of_side
+            .into_iter()
+            .map(AtomicU32::into_inner)
+            .collect(),
         face_sides,
     })
 }

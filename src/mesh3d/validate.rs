@@ -92,34 +92,49 @@ fn check_ptr(name: &str, ptr: &[u32], len: usize) -> Result<(), MeshError> {
     Ok(())
 }
 
-/// Check 2 of the module docs, for every cell, with `buf` as scratch for a face's sorted ids.
+/// Check 2 of the module docs, for every cell.
 pub(crate) fn check_cells(p: &Polyhedra) -> Result<(), MeshError> {
     let n_vertices = p.vertices.len();
-    let mut buf = Vec::new();
-    for k in 0..p.n_cells() {
-        let sides = p.cell_sides(k);
-        if sides.len() > MAX_CELL_FACES {
-            return Err(MeshError::PolyhedronTooLarge {
-                cell: k,
-                n_faces: sides.len(),
-                max: MAX_CELL_FACES,
-            });
-        }
-        if sides.len() < 4 {
-            return Err(MeshError::BadCell {
-                cell: k,
-                msg: format!("{} faces (a polyhedron has at least 4)", sides.len()),
-            });
-        }
-        for (j, s) in sides.enumerate() {
-            check_face(k, j, p.side_vertices(s), n_vertices, &mut buf)?;
-        }
+    // in parallel over the cells; the error is that of the first bad cell, as in a loop
+    let bad = (0..p.n_cells())
+        .into_par_iter()
+        .map_init(Vec::new, |buf, k| check_cell(p, k, n_vertices, buf).err())
+        .find_map_first(|e| e);
+    if let Some(e) = bad {
+        return Err(e);
     }
     if !(p.cell_tags.is_empty() || p.cell_tags.len() == p.n_cells()) {
         return Err(MeshError::CellTagCount {
             tags: p.cell_tags.len(),
             cells: p.n_cells(),
         });
+    }
+    Ok(())
+}
+
+/// Check 2 of the module docs for cell `k` (`buf`: scratch for a face's sorted ids).
+fn check_cell(
+    p: &Polyhedra,
+    k: usize,
+    n_vertices: usize,
+    buf: &mut Vec<u32>,
+) -> Result<(), MeshError> {
+    let sides = p.cell_sides(k);
+    if sides.len() > MAX_CELL_FACES {
+        return Err(MeshError::PolyhedronTooLarge {
+            cell: k,
+            n_faces: sides.len(),
+            max: MAX_CELL_FACES,
+        });
+    }
+    if sides.len() < 4 {
+        return Err(MeshError::BadCell {
+            cell: k,
+            msg: format!("{} faces (a polyhedron has at least 4)", sides.len()),
+        });
+    }
+    for (j, s) in sides.enumerate() {
+        check_face(k, j, p.side_vertices(s), n_vertices, buf)?;
     }
     Ok(())
 }

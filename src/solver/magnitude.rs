@@ -94,7 +94,10 @@ mod tests {
     #[test]
     fn the_smallest_eigenvalue_of_diagonal_and_full_tensors() {
         assert_eq!(smallest_eigenvalue(&[[3.0, 0.0], [0.0, 0.5]]), 0.5);
-        assert_eq!(smallest_eigenvalue(&[[2.0, 0.0, 0.0], [0.0, 4.0, 0.0], [0.0, 0.0, 1.5]]), 1.5);
+        assert_eq!(
+            smallest_eigenvalue(&[[2.0, 0.0, 0.0], [0.0, 4.0, 0.0], [0.0, 0.0, 1.5]]),
+            1.5
+        );
         // [[2, 1], [1, 2]]: eigenvalues 1 and 3
         assert!((smallest_eigenvalue(&[[2.0, 1.0], [1.0, 2.0]]) - 1.0).abs() < 1e-14);
         // a rotation of diag(1, 2, 5) about z by 45°: [[1.5, 0.5, 0], [0.5, 1.5, 0], [0, 0, 5]]
@@ -102,7 +105,9 @@ mod tests {
         assert!((smallest_eigenvalue(&a) - 1.0).abs() < 1e-14);
         // the general path in 3D agrees with the dynamic one
         let b = [[4.0, 1.0, 0.5], [1.0, 3.0, 0.25], [0.5, 0.25, 2.0]];
-        let d = nalgebra::DMatrix::from_fn(3, 3, |i, j| b[i][j]).symmetric_eigenvalues().min();
+        let d = nalgebra::DMatrix::from_fn(3, 3, |i, j| b[i][j])
+            .symmetric_eigenvalues()
+            .min();
         assert!((smallest_eigenvalue(&b) - d).abs() < 1e-13);
     }
 
