@@ -78,6 +78,8 @@ use crate::mesh::complex::Vector;
 use crate::mesh3d::agglomerate::KEEP;
 use crate::problem::{BoundaryKind, ConstraintKind, Problem};
 use crate::scheme::{Entity, GradientDiscretisation, Hmm};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU8, Ordering::Relaxed};
 use crate::solver::constraints::Constraints;
 use crate::vi::{ActiveSetOptions, Cancel};
 use std::time::Instant;
@@ -535,33 +537,34 @@ fn vertex_obstacle<M: CoarseMesh<D>, const D: usize>(
         _ => None,
     }));
     let (ptr, at) = crate::mesh::buckets::try_counting_sort(nv, vertex.iter().copied(), |j| j)?;
-    // per unknown: no cell seen yet, all cells seen so far pass, or one fails
+    // per unknown: no cell seen yet, all cells seen so far pass, or one fails; the cells are
+    // visited in parallel, and the outcome does not depend on their order (a failure is
+    // final, a pass only replaces "unseen")
     const UNSEEN: u8 = 0;
     const PASS: u8 = 1;
     const FAIL: u8 = 2;
-    let mut state = try_filled(
-        cons.dofs.len(),
-        UNSEEN,
-        "the vertex passes of the warm start",
-    )?;
-    let mut scratch = Vec::new();
-    for k in 0..fine.n_cells() {
-        let c = agg.cell_of[k];
-        for &v in fine.cell_vertex_ids(k, &mut scratch) {
-            let v = v as usize;
-            for &j in &at[ptr[v]..ptr[v + 1]] {
-                if state[j] != FAIL {
-                    state[j] = if active_inside(s, &agg.mesh, c, cons.dofs[j].point) {
-                        PASS
+    let mut state: Vec<AtomicU8> = try_vec(cons.dofs.len(), "the vertex passes of the warm start")?;
+    state.extend((0..cons.dofs.len()).map(|_| AtomicU8::new(UNSEEN)));
+    (0..fine.n_cells())
+        .into_par_iter()
+        .for_each_init(Vec::new, |scratch, k| {
+            let c = agg.cell_of[k];
+            for &v in fine.cell_vertex_ids(k, scratch) {
+                let v = v as usize;
+                for &j in &at[ptr[v]..ptr[v + 1]] {
+                    if state[j].load(Relaxed) == FAIL {
+                        continue;
+                    }
+                    if active_inside(s, &agg.mesh, c, cons.dofs[j].point) {
+                        let _ = state[j].compare_exchange(UNSEEN, PASS, Relaxed, Relaxed);
                     } else {
-                        FAIL
-                    };
+                        state[j].store(FAIL, Relaxed);
+                    }
                 }
             }
-        }
-    }
+        });
     let mut active = try_vec(state.len(), "the predicted active vertices")?;
-    active.extend(state.into_iter().map(|x| x == PASS));
+    active.extend(state.into_iter().map(|x| x.into_inner() == PASS));
     Ok(active)
 }
 
