@@ -78,10 +78,10 @@ use crate::mesh::complex::Vector;
 use crate::mesh3d::agglomerate::KEEP;
 use crate::problem::{BoundaryKind, ConstraintKind, Problem};
 use crate::scheme::{Entity, GradientDiscretisation, Hmm};
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicU8, Ordering::Relaxed};
 use crate::solver::constraints::Constraints;
 use crate::vi::{ActiveSetOptions, Cancel};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU8, Ordering::Relaxed};
 use std::time::Instant;
 
 /// How the monotony algorithm starts (`--warm-start nested|cold` on the command line).
