@@ -65,6 +65,33 @@ pub trait CellComplex<const D: usize>: Sync {
     fn cell_face_dist(&self, k: usize, i: usize) -> f64 {
         self.cell_face_normal_dist(k, i).1
     }
+    /// Everything a local matrix needs of local face `i` of cell `k`: |σ|, x_σ and
+    /// (n_{K,σ}, d_{K,σ}), the values of [`CellComplex::face_measure`],
+    /// [`CellComplex::face_centre`] and [`CellComplex::cell_face_normal_dist`]. A mesh that
+    /// computes its face geometry on demand overrides it to compute it once.
+    fn cell_face_geometry(&self, k: usize, i: usize) -> FaceOfCell<D> {
+        let f = self.cell_faces(k)[i] as usize;
+        let (normal, dist) = self.cell_face_normal_dist(k, i);
+        FaceOfCell {
+            measure: self.face_measure(f),
+            centre: self.face_centre(f),
+            normal,
+            dist,
+        }
+    }
+}
+
+/// Local face σ of a cell K, as [`CellComplex::cell_face_geometry`] gives it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FaceOfCell<const D: usize> {
+    /// |σ|.
+    pub measure: f64,
+    /// x_σ.
+    pub centre: Vector<D>,
+    /// n_{K,σ}, the outward unit normal.
+    pub normal: Vector<D>,
+    /// d_{K,σ} = (x_σ − x_K)·n_{K,σ}.
+    pub dist: f64,
 }
 
 /// A mesh with vertices, for output: cell values averaged at the vertices (the vertex values

@@ -3,6 +3,7 @@
 use super::geometry::{diameter, dot, face_geometry, norm, sub};
 use super::{Cuboid, Point3, Polyhedra};
 use crate::mesh::NO_CELL;
+use crate::mesh::complex::FaceOfCell;
 use crate::offsets::Offsets;
 
 /// A conforming mesh of polyhedra with the cells' volumes and centroids cached (face areas,
@@ -151,6 +152,27 @@ impl PolyMesh3 {
             n.map(|x| -x)
         };
         (n, dot(sub(centroid, self.cell_centroid[k]), n))
+    }
+
+    /// |σ|, x_σ, n_{K,σ} and d_{K,σ} of local face `i` of cell `k`, from one evaluation of the
+    /// face's fan geometry: the values of [`PolyMesh3::face_measure`],
+    /// [`PolyMesh3::face_centroid`] and [`PolyMesh3::cell_normal_dist`], bit for bit.
+    pub fn face_of_cell(&self, k: usize, i: usize) -> FaceOfCell<3> {
+        let f = self.cell_faces(k)[i] as usize;
+        let g = face_geometry(&self.vertices, self.face_vertices(f));
+        let l = norm(g.vector_area);
+        let n = g.vector_area.map(|x| x / l);
+        let n = if self.face_cells[f][0] as usize == k {
+            n
+        } else {
+            n.map(|x| -x)
+        };
+        FaceOfCell {
+            measure: g.area,
+            centre: g.centroid,
+            normal: n,
+            dist: dot(sub(g.centroid, self.cell_centroid[k]), n),
+        }
     }
 
     /// The tag of cell `k` (gmsh physical volume; 0 when untagged).

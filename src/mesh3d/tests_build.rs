@@ -246,3 +246,28 @@ fn warped_faces_give_a_consistency_defect_of_the_order_of_their_warp() {
         );
     }
 }
+
+#[test]
+fn the_face_geometry_of_a_cell_is_that_of_the_three_accessors_bit_for_bit() {
+    // warped hexahedra, triangles and a dented (non-convex) pair: faces of 3 and 4 vertices
+    let mut warped = cubes(2, 1);
+    warped.vertices[13][2] += 0.05;
+    for m in [
+        build(warped),
+        build(tetrahedra(2, 3)),
+        build(dented_pair(0.3, 3)),
+    ] {
+        for k in 0..m.n_cells() {
+            for i in 0..m.cell_faces(k).len() {
+                let f = m.cell_faces(k)[i] as usize;
+                let got = CellComplex::cell_face_geometry(&m, k, i);
+                let (normal, dist) = CellComplex::cell_face_normal_dist(&m, k, i);
+                let bits = |x: [f64; 3]| x.map(f64::to_bits);
+                assert_eq!(got.measure.to_bits(), m.face_measure(f).to_bits());
+                assert_eq!(bits(got.centre), bits(CellComplex::face_centre(&m, f)));
+                assert_eq!(bits(got.normal), bits(normal));
+                assert_eq!(got.dist.to_bits(), dist.to_bits());
+            }
+        }
+    }
+}

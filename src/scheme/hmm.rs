@@ -43,11 +43,9 @@ pub fn local_form<const D: usize, M: CellComplex<D> + ?Sized>(
     let mut g = DMatrix::<f64>::zeros(D, n);
     let mut x = DMatrix::<f64>::zeros(n, D);
     let mut bdiag = DVector::<f64>::zeros(n);
-    for (i, &f) in faces.iter().enumerate() {
-        let f = f as usize;
-        let len = mesh.face_measure(f);
-        let (nrm, dist) = mesh.cell_face_normal_dist(k, i);
-        let xs = mesh.face_centre(f);
+    for i in 0..n {
+        let face = mesh.cell_face_geometry(k, i);
+        let (len, nrm, dist, xs) = (face.measure, face.normal, face.dist, face.centre);
         for r in 0..D {
             g[(r, i)] = len * nrm[r] / vol;
             x[(i, r)] = xs[r] - xk[r];
