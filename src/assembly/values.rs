@@ -9,7 +9,7 @@ use crate::budget::{try_filled, try_resize, try_vec};
 use crate::linalg::CsrMatrix;
 use crate::mesh::SolveMesh;
 use crate::offsets::Offsets;
-use crate::problem::{BoundaryKind, Problem, check_finite, check_tensor};
+use crate::problem::{BoundaryKind, Problem, check_finite_at, check_tensor};
 use crate::scheme::{GradientDiscretisation, PointDof};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -147,14 +147,6 @@ impl<const D: usize> ProblemValues<D> {
         let mut sig_meas: Vec<f64> = try_filled(n, 0.0, "the Signorini measures")?;
         let mut sig_point: Vec<Option<[f64; D]>> = try_filled(n, None, "the Signorini points")?;
         let mut tr = Vec::new();
-        // the message is formatted only for a non-finite value, not for every boundary unknown
-        let finite = |v: f64, what: &str, x: [f64; D]| -> crate::Result<f64> {
-            if v.is_finite() {
-                Ok(v)
-            } else {
-                check_finite(v, &format!("{what} at {x:?}"))
-            }
-        };
         for i in 0..mesh.n_boundary_faces() {
             let e = mesh.boundary_face(i);
             let xs = mesh.face_centre(e);
@@ -163,13 +155,16 @@ impl<const D: usize> ProblemValues<D> {
             match kind {
                 BoundaryKind::Dirichlet => {
                     for t in &tr {
-                        let v =
-                            finite((problem.dirichlet)(t.point), "the Dirichlet value", t.point)?;
+                        let v = check_finite_at((problem.dirichlet)(t.point), || {
+                            format!("the Dirichlet value at {:?}", t.point)
+                        })?;
                         self.dirichlet[t.dof] = Some(v);
                     }
                 }
                 BoundaryKind::Neumann => {
-                    let g = finite((problem.neumann)(xs), "the Neumann flux", xs)?;
+                    let g = check_finite_at((problem.neumann)(xs), || {
+                        format!("the Neumann flux at {xs:?}")
+                    })?;
                     for t in &tr {
                         self.load[t.dof] += t.measure * g;
                         self.neumann_load[t.dof] += t.measure * g;

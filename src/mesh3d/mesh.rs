@@ -144,19 +144,14 @@ impl PolyMesh3 {
     /// (n_{K,σ}, d_{K,σ}) on local face `i` of cell `k`: the outward unit normal and
     /// d_{K,σ} = (x_σ − x_K)·n_{K,σ}.
     pub fn cell_normal_dist(&self, k: usize, i: usize) -> (Point3, f64) {
-        let f = self.cell_faces(k)[i] as usize;
-        let (centroid, n) = self.face_frame(f);
-        let n = if self.face_cells[f][0] as usize == k {
-            n
-        } else {
-            n.map(|x| -x)
-        };
-        (n, dot(sub(centroid, self.cell_centroid[k]), n))
+        let g = self.face_of_cell(k, i);
+        (g.normal, g.dist)
     }
 
     /// |σ|, x_σ, n_{K,σ} and d_{K,σ} of local face `i` of cell `k`, from one evaluation of the
     /// face's fan geometry: the values of [`PolyMesh3::face_measure`],
-    /// [`PolyMesh3::face_centroid`] and [`PolyMesh3::cell_normal_dist`], bit for bit.
+    /// [`PolyMesh3::face_centroid`] and [`PolyMesh3::cell_normal_dist`] (which takes its
+    /// values from here), bit for bit.
     pub fn face_of_cell(&self, k: usize, i: usize) -> FaceOfCell<3> {
         let f = self.cell_faces(k)[i] as usize;
         let g = face_geometry(&self.vertices, self.face_vertices(f));

@@ -1,6 +1,7 @@
 //! Tests of [`PolyMesh3::from_polyhedra`] on valid meshes: the identities of the geometry
 //! and HMM's consistency.
 
+use super::geometry::{dot, sub};
 use super::test_meshes::{cubes, dented_pair, tetrahedra};
 use super::{Cuboid, PolyMesh3, Polyhedra};
 use crate::budget::MemoryBudget;
@@ -261,10 +262,27 @@ fn the_face_geometry_of_a_cell_is_that_of_the_three_accessors_bit_for_bit() {
             for i in 0..m.cell_faces(k).len() {
                 let f = m.cell_faces(k)[i] as usize;
                 let got = CellComplex::cell_face_geometry(&m, k, i);
-                let (normal, dist) = CellComplex::cell_face_normal_dist(&m, k, i);
+                // n_{K,σ} and d_{K,σ} from the face's frame, as the accessors computed them
+                let (centre, n) = m.face_frame(f);
+                let normal = if m.face_cells(f)[0] == k {
+                    n
+                } else {
+                    n.map(|x| -x)
+                };
+                let dist = dot(sub(centre, m.centroid(k)), normal);
                 let bits = |x: [f64; 3]| x.map(f64::to_bits);
+                assert_eq!(
+                    (bits(got.normal), got.dist.to_bits()),
+                    (bits(normal), dist.to_bits())
+                );
                 assert_eq!(got.measure.to_bits(), m.face_measure(f).to_bits());
                 assert_eq!(bits(got.centre), bits(CellComplex::face_centre(&m, f)));
+                assert_eq!(bits(got.centre), bits(centre));
+                let (n2, d2) = CellComplex::cell_face_normal_dist(&m, k, i);
+                assert_eq!(
+                    (bits(n2), d2.to_bits()),
+                    (bits(got.normal), got.dist.to_bits())
+                );
                 assert_eq!(bits(got.normal), bits(normal));
                 assert_eq!(got.dist.to_bits(), dist.to_bits());
             }

@@ -251,10 +251,17 @@ fn positive_definite<const D: usize>(a: &Tensor<D>, scale: f64) -> bool {
 
 /// Checks that a data value is finite; `what` names the datum and the place.
 pub fn check_finite(v: f64, what: &str) -> crate::Result<f64> {
+    check_finite_at(v, || what.to_string())
+}
+
+/// [`check_finite`] with the name formatted only for a non-finite value: for the checks
+/// made once per unknown or per cell, where formatting every name would cost more than the
+/// check.
+pub fn check_finite_at(v: f64, what: impl FnOnce() -> String) -> crate::Result<f64> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(crate::Error::InvalidData(format!("{what} is {v}")))
+        Err(crate::Error::InvalidData(format!("{} is {v}", what())))
     }
 }
 

@@ -5,7 +5,7 @@
 use crate::assembly::DiscreteSystem;
 use crate::budget::{try_copy, try_filled, try_vec};
 use crate::mesh::SolveMesh;
-use crate::problem::{ConstraintKind, Problem, check_finite};
+use crate::problem::{ConstraintKind, Problem, check_finite_at};
 use crate::scheme::PointDof;
 use crate::vi::ConstrainedDof;
 use rayon::prelude::*;
@@ -56,17 +56,11 @@ pub fn build<M: SolveMesh<D> + ?Sized, const D: usize>(
             checks.extend(candidates.iter().filter(|t| dir[t.dof].is_some()));
         }
     }
-    // the message is formatted only for a non-finite value
-    let finite = |g: f64, p: [f64; D]| -> crate::Result<f64> {
-        if g.is_finite() {
-            Ok(g)
-        } else {
-            check_finite(g, &format!("the barrier at {p:?}"))
-        }
-    };
     for t in &checks {
         let v = dir[t.dof].unwrap_or(0.0);
-        let g = finite((c.barrier)(t.point), t.point)?;
+        let g = check_finite_at((c.barrier)(t.point), || {
+            format!("the barrier at {:?}", t.point)
+        })?;
         if s * (v - g) > 1e-12 * (1.0 + g.abs()) {
             return Err(crate::Error::Infeasible(format!(
                 "the Dirichlet value {v} at {:?} is {} the barrier {g}: the discrete convex set is empty",
@@ -87,7 +81,7 @@ pub fn build<M: SolveMesh<D> + ?Sized, const D: usize>(
         .with_min_len(4096)
         .for_each(|(g, pd)| *g = (c.barrier)(pd.point));
     for (pd, &g) in dofs.iter().zip(&barrier) {
-        finite(g, pd.point)?;
+        check_finite_at(g, || format!("the barrier at {:?}", pd.point))?;
     }
     let mut constrained = try_vec(dofs.len(), "the constrained unknowns")?;
     constrained.extend(dofs.into_iter().map(|pd| ConstrainedDof {
