@@ -129,6 +129,7 @@ pub mod assembly;
 pub mod budget;
 pub mod case;
 pub mod error;
+pub mod heap;
 pub mod linalg;
 pub mod mesh;
 pub mod mesh3d;

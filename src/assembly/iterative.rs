@@ -96,7 +96,12 @@ pub(super) fn hierarchy(
             cells,
         },
         NextHierarchy::New { fixed_mask } => Hierarchy {
-            amg: Amg::owning(a, &opts)?,
+            amg: {
+                // the setup is the largest transient of a solve: on the live data, not also on
+                // the holes the previous phases left in the heap (see crate::heap)
+                crate::heap::release_free_pages();
+                Amg::owning(a, &opts)?
+            },
             fresh_rate: None,
             reused: false,
             fixed_mask,

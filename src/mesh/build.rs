@@ -153,7 +153,7 @@ impl PolyMesh {
             &cell_verts,
             &built,
             &boundary_edges,
-            &cells.area,
+            cells.total_area,
             order,
         )?;
         Ok(compact(
@@ -176,7 +176,7 @@ fn check_boundary_and_overlap(
     cell_verts: &[u32],
     built: &Edges,
     boundary_edges: &[usize],
-    cell_area: &[f64],
+    cells_area: f64,
     order: Option<sweep::SweepOrder>,
 ) -> Result<(), MeshError> {
     let boundary = validate::boundary_loops(
@@ -195,7 +195,7 @@ fn check_boundary_and_overlap(
                 cell_verts,
                 edges: &built.edges,
                 edge_cells: &built.edge_cells,
-                cell_area,
+                cells_area,
             },
             &boundary,
             order,
@@ -230,9 +230,8 @@ fn compact(
             .map(|c| c.map(|k| if k == NO_CELL { u32::MAX } else { k as u32 })),
     );
     drop(edge_cells);
-    let edge_tags = try_filled(ne, 0i32, "the edge tags")?;
-    let cell_tags = try_filled(cells.area.len(), 0i32, "the cell tags")?;
-    let h = cells.diameter.iter().cloned().fold(0.0, f64::max);
+    let boundary_tags = try_filled(boundary_edges.len(), 0i32, "the boundary tags")?;
+    let h = cells.h;
     Ok(PolyMesh {
         vertices,
         cell_ptr,
@@ -240,10 +239,9 @@ fn compact(
         cell_edges,
         edges: edges32,
         edge_cells: cells32,
-        edge_tags,
-        cell_tags,
-        cell_area: cells.area,
-        cell_centroid: cells.centroid,
+        boundary_tags,
+        cell_tags: Vec::new(),
+        reversed: cells.reversed,
         boundary_edges,
         h,
     })

@@ -67,9 +67,12 @@ pub trait CellComplex<const D: usize>: Sync {
     }
     /// Everything a local matrix needs of local face `i` of cell `k`: |σ|, x_σ and
     /// (n_{K,σ}, d_{K,σ}), the values of [`CellComplex::face_measure`],
-    /// [`CellComplex::face_centre`] and [`CellComplex::cell_face_normal_dist`]. A mesh that
-    /// computes its face geometry on demand overrides it to compute it once.
-    fn cell_face_geometry(&self, k: usize, i: usize) -> FaceOfCell<D> {
+    /// [`CellComplex::face_centre`] and [`CellComplex::cell_face_normal_dist`]; `xk` is x_K,
+    /// the value of [`CellComplex::cell_centre`], which the caller has already. A mesh that
+    /// computes its geometry on demand overrides it to compute each value once (the planar
+    /// mesh computes x_K on demand, so it takes it from `xk` rather than once per face).
+    fn cell_face_geometry(&self, k: usize, i: usize, xk: Vector<D>) -> FaceOfCell<D> {
+        let _ = xk;
         let f = self.cell_faces(k)[i] as usize;
         let (normal, dist) = self.cell_face_normal_dist(k, i);
         FaceOfCell {
@@ -145,5 +148,16 @@ impl CellComplex<2> for PolyMesh {
     }
     fn cell_face_normal_dist(&self, k: usize, i: usize) -> (Vector<2>, f64) {
         self.cell_normal_dist(k, i)
+    }
+    /// The values of the accessors, x_K taken from `xk` (computed on demand otherwise).
+    fn cell_face_geometry(&self, k: usize, i: usize, xk: Vector<2>) -> FaceOfCell<2> {
+        let f = self.cell_edges(k)[i] as usize;
+        let (normal, dist) = self.cell_normal_dist_from(k, i, xk);
+        FaceOfCell {
+            measure: self.edge_measure(f),
+            centre: self.edge_midpoint(f),
+            normal,
+            dist,
+        }
     }
 }

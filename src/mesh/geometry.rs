@@ -32,13 +32,20 @@ pub(crate) fn side_normal_dist(p: Point, q: Point, xk: Point) -> (Point, f64) {
 /// (positive area for counter-clockwise order). Computed relative to the first vertex
 /// for accuracy.
 pub fn polygon_area_centroid(pts: &[Point]) -> (f64, Point) {
-    let o = pts[0];
+    polygon_area_centroid_of(pts.len(), |i| pts[i])
+}
+
+/// [`polygon_area_centroid`] of the polygon whose `m` corners are `pt(0)`, …, `pt(m − 1)`, with
+/// the same operations in the same order (the same bits), without a slice of them.
+#[inline]
+pub(crate) fn polygon_area_centroid_of(m: usize, pt: impl Fn(usize) -> Point) -> (f64, Point) {
+    let o = pt(0);
     let mut a2 = 0.0;
     let mut cx = 0.0;
     let mut cy = 0.0;
-    for i in 1..pts.len().saturating_sub(1) {
-        let p = sub(pts[i], o);
-        let q = sub(pts[i + 1], o);
+    for i in 1..m.saturating_sub(1) {
+        let p = sub(pt(i), o);
+        let q = sub(pt(i + 1), o);
         let cr = p[0] * q[1] - p[1] * q[0];
         a2 += cr;
         cx += cr * (p[0] + q[0]);

@@ -1,7 +1,7 @@
 //! The accessors of a [`PolyMesh`]: counts, vertices, cell and edge incidences, and the geometry
 //! named in the crate's notation table.
 
-use super::geometry::{dist, side_normal_dist};
+use super::geometry::{dist, polygon_area_centroid_of, side_normal_dist};
 use super::{NO_CELL, Point, PolyMesh, Rect, validate};
 
 impl PolyMesh {
@@ -11,7 +11,7 @@ impl PolyMesh {
     }
     /// Number of cells K.
     pub fn n_cells(&self) -> usize {
-        self.cell_area.len()
+        self.cell_ptr.len().saturating_sub(1)
     }
     /// Number of edges σ (faces).
     pub fn n_edges(&self) -> usize {
@@ -55,8 +55,14 @@ impl PolyMesh {
     /// and the centroid (not stored; no allocation).
     #[inline]
     pub fn cell_normal_dist(&self, k: usize, i: usize) -> (Point, f64) {
+        self.cell_normal_dist_from(k, i, self.centroid(k))
+    }
+    /// [`PolyMesh::cell_normal_dist`] with x_K given (`xk`, the value of
+    /// [`PolyMesh::centroid`]): for callers that have it, so that it is not computed per side.
+    #[inline]
+    pub(crate) fn cell_normal_dist_from(&self, k: usize, i: usize, xk: Point) -> (Point, f64) {
         let (p, q) = self.cell_side_points(k, i);
-        side_normal_dist(p, q, self.cell_centroid[k])
+        side_normal_dist(p, q, xk)
     }
     /// The outward unit normal n_{K,σ} of cell `k` on its local edge `i` (joining local
     /// vertices i and i+1); see [`PolyMesh::cell_normal_dist`].
@@ -75,7 +81,7 @@ impl PolyMesh {
     /// time as the iterator advances (no allocation).
     pub fn cell_normals_dists(&self, k: usize) -> impl ExactSizeIterator<Item = (Point, f64)> + '_ {
         let c = self.cell_vertices(k);
-        let xk = self.cell_centroid[k];
+        let xk = self.centroid(k);
         let n = c.len();
         // each corner is read once: the end of side i is the start of side i+1
         let mut p = self.vertices[c[0] as usize];
@@ -108,15 +114,41 @@ impl PolyMesh {
     }
     /// Boundary tag of edge `e` (0 if none).
     pub fn edge_tag(&self, e: usize) -> i32 {
-        self.edge_tags[e]
+        if !self.is_boundary_edge(e) {
+            return 0;
+        }
+        // boundary_edges is sorted: O(log n_boundary)
+        match self.boundary_edges.binary_search(&e) {
+            Ok(i) => self.boundary_tags[i],
+            Err(_) => 0,
+        }
     }
     /// |K|.
+    #[inline]
     pub fn measure(&self, k: usize) -> f64 {
-        self.cell_area[k]
+        self.area_centroid(k).0
     }
     /// x_K, the centre of mass of cell `k`.
+    #[inline]
     pub fn centroid(&self, k: usize) -> Point {
-        self.cell_centroid[k]
+        self.area_centroid(k).1
+    }
+    /// (|K|, x_K), computed from the vertices (not stored): the shoelace formula on the fan
+    /// from the first corner ([`polygon_area_centroid`](super::geometry::polygon_area_centroid)),
+    /// on the corners in the order the cell was given (a clockwise cell, whose list the mesh
+    /// reversed, is read backwards), so that the values are those the validation computed.
+    #[inline]
+    pub fn area_centroid(&self, k: usize) -> (f64, Point) {
+        let c = self.cell_vertices(k);
+        let m = c.len();
+        let v = &self.vertices;
+        let reversed = !self.reversed.is_empty() && self.reversed[k / 64] >> (k % 64) & 1 == 1;
+        let (a, x) = if reversed {
+            polygon_area_centroid_of(m, |i| v[c[m - 1 - i] as usize])
+        } else {
+            polygon_area_centroid_of(m, |i| v[c[i] as usize])
+        };
+        (a.abs(), x)
     }
     /// h_K.
     pub fn diameter(&self, k: usize) -> f64 {
@@ -200,6 +232,67 @@ mod tests {
     use super::super::geometry::sub;
     use super::super::{test_meshes, unit_square_2x1};
     use super::*;
+
+    #[test]
+    fn cell_measures_and_centroids_are_those_of_the_cells_as_given() {
+        // the unit square in two triangles and three quadrilaterals, two of them given
+        // clockwise, with coordinates that do not round evenly: |K| and x_K (computed on
+        // demand) have the bits of the shoelace formula on the corners in the order given,
+        // although the mesh stores the clockwise cells reversed
+        let v = vec![
+            [0.0, 0.0],
+            [0.3, 0.0],
+            [1.0, 0.0],
+            [0.0, 0.7],
+            [0.37, 0.61],
+            [1.0, 1.0],
+            [0.0, 1.0],
+            [0.45, 1.0],
+        ];
+        let cells = vec![
+            vec![0, 3, 4, 1], // clockwise
+            vec![1, 2, 4],
+            vec![2, 4, 7, 5], // clockwise
+            vec![3, 4, 7, 6],
+        ];
+        let m = PolyMesh::from_cells(v.clone(), cells.clone()).unwrap();
+        let mut any_reversed = false;
+        for (k, c) in cells.iter().enumerate() {
+            let pts: Vec<Point> = c.iter().map(|&i| v[i]).collect();
+            let (a, x) = super::super::geometry::polygon_area_centroid(&pts);
+            any_reversed |= a < 0.0;
+            assert_eq!(m.measure(k).to_bits(), a.abs().to_bits(), "cell {k}");
+            assert_eq!(
+                m.centroid(k).map(f64::to_bits),
+                x.map(f64::to_bits),
+                "cell {k}"
+            );
+        }
+        assert!(
+            any_reversed,
+            "no clockwise cell: the test would not exercise the reversal"
+        );
+    }
+
+    #[test]
+    fn the_face_geometry_of_a_cell_is_that_of_the_accessors() {
+        use crate::mesh::complex::CellComplex;
+        for m in test_meshes() {
+            for k in 0..m.n_cells() {
+                for (i, &e) in m.cell_edges(k).iter().enumerate() {
+                    let got = CellComplex::cell_face_geometry(&m, k, i, m.centroid(k));
+                    let (n, d) = m.cell_normal_dist(k, i);
+                    let bits = |p: Point| p.map(f64::to_bits);
+                    assert_eq!(got.measure.to_bits(), m.edge_measure(e as usize).to_bits());
+                    assert_eq!(bits(got.centre), bits(m.edge_midpoint(e as usize)));
+                    assert_eq!(
+                        (bits(got.normal), got.dist.to_bits()),
+                        (bits(n), d.to_bits())
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn geometry_of_two_rectangles() {

@@ -32,7 +32,7 @@ impl PolyMesh {
                 .boundary_edges
                 .binary_search_by(|&e| self.edge_vertices(e).cmp(&key));
             match (found, non_boundary) {
-                (Ok(pos), _) => self.edge_tags[self.boundary_edges[pos]] = tag,
+                (Ok(pos), _) => self.boundary_tags[pos] = tag,
                 (Err(_), NonBoundaryTag::Ignore) => {}
                 (Err(_), NonBoundaryTag::Reject) => {
                     return Err(MeshError::BadEdge {
@@ -56,20 +56,31 @@ impl PolyMesh {
                 self.n_cells()
             )));
         }
-        self.cell_tags = tags;
+        // all zero: stored as no tags (see the field)
+        self.cell_tags = if tags.iter().all(|&t| t == 0) {
+            Vec::new()
+        } else {
+            tags
+        };
         Ok(self)
     }
 
     /// The tag of cell `k` (its gmsh physical surface; 0 when untagged).
     pub fn cell_tag(&self, k: usize) -> i32 {
-        self.cell_tags[k]
+        if self.cell_tags.is_empty() {
+            // bounds-checked as a stored tag would be
+            assert!(k < self.n_cells(), "cell {k} of {}", self.n_cells());
+            0
+        } else {
+            self.cell_tags[k]
+        }
     }
 
     /// Returns a copy whose boundary edges are tagged by `tag(x_σ)` (interior edges keep tag 0).
     pub fn with_boundary_tags(&self, tag: impl Fn(Point) -> i32) -> PolyMesh {
         let mut m = self.clone();
-        for &e in &self.boundary_edges {
-            m.edge_tags[e] = tag(self.edge_midpoint(e));
+        for (t, &e) in m.boundary_tags.iter_mut().zip(&self.boundary_edges) {
+            *t = tag(self.edge_midpoint(e));
         }
         m
     }

@@ -69,9 +69,14 @@ const NONE: usize = usize::MAX;
 /// d_{K,σ} are not kept: the mesh recomputes them on demand ([`side_normal_dist`]), and check 9
 /// only needs them one side at a time.
 pub(crate) struct CellGeometry {
-    pub(crate) area: Vec<f64>,
-    pub(crate) centroid: Vec<Point>,
-    pub(crate) diameter: Vec<f64>,
+    /// Σ_K |K|, summed in the order of the cells (check 12).
+    pub(crate) total_area: f64,
+    /// h = max_K h_K.
+    pub(crate) h: f64,
+    /// The cells given clockwise, whose vertex lists were reversed: a bit per cell, or empty
+    /// when there are none (the mesh recomputes |K| and x_K from the given order, see
+    /// [`PolyMesh::area_centroid`](super::PolyMesh::area_centroid)).
+    pub(crate) reversed: Vec<u64>,
     /// The first cell that is not strictly star-shaped (check 9, reported after checks 5–8).
     pub(crate) not_star_shaped: Option<MeshError>,
 }
@@ -92,9 +97,9 @@ pub(crate) fn cell_geometry(
         return Err(MeshError::NonFiniteVertex { vertex: v });
     }
     let mut g = CellGeometry {
-        area: try_vec(nc, "the areas of the cells")?,
-        centroid: try_vec(nc, "the centroids of the cells")?,
-        diameter: try_vec(nc, "the diameters of the cells")?,
+        total_area: 0.0,
+        h: 0.0,
+        reversed: Vec::new(),
         not_star_shaped: None,
     };
     let mut used = try_filled(nv, false, "the used flags of the vertices")?;
@@ -116,13 +121,16 @@ pub(crate) fn cell_geometry(
         if area < 0.0 {
             cell_verts[s..e].reverse();
             pts.reverse();
+            if g.reversed.is_empty() {
+                g.reversed = try_filled(nc.div_ceil(64), 0u64, "the reversed cells")?;
+            }
+            g.reversed[k / 64] |= 1 << (k % 64);
         }
         if g.not_star_shaped.is_none() {
             g.not_star_shaped = check_star_shaped(k, &pts, centroid, diam).err();
         }
-        g.area.push(area.abs());
-        g.centroid.push(centroid);
-        g.diameter.push(diam);
+        g.total_area += area.abs();
+        g.h = g.h.max(diam);
     }
     if let Some(v) = used.iter().position(|u| !u) {
         return Err(MeshError::UnusedVertex { vertex: v });
@@ -501,7 +509,8 @@ pub(crate) struct Topology<'a> {
     pub(crate) cell_verts: &'a [u32],
     pub(crate) edges: &'a [[usize; 2]],
     pub(crate) edge_cells: &'a [[usize; 2]],
-    pub(crate) cell_area: &'a [f64],
+    /// Σ_K |K|.
+    pub(crate) cells_area: f64,
 }
 
 impl Topology<'_> {
@@ -547,7 +556,7 @@ pub(crate) fn check_no_overlap(
         }
         Sweep::Clear(below) => below,
     };
-    let cells_area: f64 = t.cell_area.iter().sum();
+    let cells_area = t.cells_area;
     let mut enclosed_area = 0.0;
     let mut culprit = None;
     for (l, e) in boundary.loops.iter().zip(below) {

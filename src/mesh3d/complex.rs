@@ -36,8 +36,8 @@ impl CellComplex<3> for PolyMesh3 {
         self.cell_normal_dist(k, i)
     }
     /// The face's fan geometry computed once (the default computes it three times), with the
-    /// same values as the three accessors.
-    fn cell_face_geometry(&self, k: usize, i: usize) -> FaceOfCell<3> {
+    /// same values as the three accessors (x_K is stored: `xk` is not needed).
+    fn cell_face_geometry(&self, k: usize, i: usize, _xk: Vector<3>) -> FaceOfCell<3> {
         self.face_of_cell(k, i)
     }
 }

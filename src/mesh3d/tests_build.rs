@@ -261,7 +261,7 @@ fn the_face_geometry_of_a_cell_is_that_of_the_three_accessors_bit_for_bit() {
         for k in 0..m.n_cells() {
             for i in 0..m.cell_faces(k).len() {
                 let f = m.cell_faces(k)[i] as usize;
-                let got = CellComplex::cell_face_geometry(&m, k, i);
+                let got = CellComplex::cell_face_geometry(&m, k, i, m.centroid(k));
                 // n_{K,σ} and d_{K,σ} from the face's frame, as the accessors computed them
                 let (centre, n) = m.face_frame(f);
                 let normal = if m.face_cells(f)[0] == k {

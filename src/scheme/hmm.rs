@@ -44,7 +44,7 @@ pub fn local_form<const D: usize, M: CellComplex<D> + ?Sized>(
     let mut x = DMatrix::<f64>::zeros(n, D);
     let mut bdiag = DVector::<f64>::zeros(n);
     for i in 0..n {
-        let face = mesh.cell_face_geometry(k, i);
+        let face = mesh.cell_face_geometry(k, i, xk);
         let (len, nrm, dist, xs) = (face.measure, face.normal, face.dist, face.centre);
         for r in 0..D {
             g[(r, i)] = len * nrm[r] / vol;

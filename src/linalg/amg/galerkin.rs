@@ -1,8 +1,8 @@
 //! The Galerkin product A_{ℓ+1} = Pᵀ A_ℓ P (step 5 of the setup, see [`super`]).
 
 use super::NONE;
-use super::rows::build_rows;
-use crate::budget::{AllocFailure, try_filled, try_grow};
+use super::rows::build_counted_rows;
+use crate::budget::{AllocFailure, try_filled};
 use crate::linalg::csr::CsrMatrix;
 
 /// A dense accumulator of a sparse row: the values by column and the list of touched columns.
@@ -32,41 +32,44 @@ impl Accumulator {
             self.vals[p as usize] += v;
         }
     }
-    /// Room for the row in `cols` and `vals`, or [`AllocFailure`].
-    fn reserve_in(&self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) -> Result<(), AllocFailure> {
-        let what = "the entries of a Galerkin product";
-        try_grow(cols, self.cols.len(), what)?;
-        try_grow(vals, self.cols.len(), what)
+    /// Marks column j as touched, without a value (the counting pass).
+    #[inline(always)]
+    fn touch(&mut self, j: u32) {
+        if self.pos[j as usize] == NONE {
+            self.pos[j as usize] = self.cols.len() as u32;
+            self.cols.push(j);
+        }
     }
-    /// Appends the row in the order of first touch and clears the accumulator.
-    fn drain_unsorted_into(
-        &mut self,
-        cols: &mut Vec<u32>,
-        vals: &mut Vec<f64>,
-    ) -> Result<(), AllocFailure> {
-        self.reserve_in(cols, vals)?;
+    /// The number of touched columns, the accumulator cleared.
+    fn take_count(&mut self) -> usize {
         for &c in &self.cols {
             self.pos[c as usize] = NONE;
         }
-        cols.extend_from_slice(&self.cols);
-        vals.extend_from_slice(&self.vals);
+        let n = self.cols.len();
         self.cols.clear();
         self.vals.clear();
-        Ok(())
+        n
     }
-    /// Appends the row, sorted by column, and clears the accumulator.
-    fn drain_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) -> Result<(), AllocFailure> {
-        self.reserve_in(cols, vals)?;
-        self.cols.sort_unstable();
-        for &c in &self.cols {
-            let p = self.pos[c as usize] as usize;
-            cols.push(c);
-            vals.push(self.vals[p]);
-            self.pos[c as usize] = NONE;
+    /// Writes the row into `cols` and `vals` (of its length), sorted by column if `sorted`,
+    /// else in the order of first touch, and clears the accumulator.
+    fn drain_to(&mut self, cols: &mut [u32], vals: &mut [f64], sorted: bool) {
+        debug_assert_eq!(cols.len(), self.cols.len());
+        if sorted {
+            self.cols.sort_unstable();
+            for ((&c, oc), ov) in self.cols.iter().zip(cols.iter_mut()).zip(vals.iter_mut()) {
+                *oc = c;
+                *ov = self.vals[self.pos[c as usize] as usize];
+                self.pos[c as usize] = NONE;
+            }
+        } else {
+            for &c in &self.cols {
+                self.pos[c as usize] = NONE;
+            }
+            cols.copy_from_slice(&self.cols);
+            vals.copy_from_slice(&self.vals);
         }
         self.cols.clear();
         self.vals.clear();
-        Ok(())
     }
 }
 
@@ -85,13 +88,25 @@ pub(super) fn galerkin(
 }
 
 /// The sparse product L M, row J = Σ_k l_Jk M_k, zero entries of M skipped; each row's
-/// columns sorted if `sorted`, else in the order they are met.
+/// columns sorted if `sorted`, else in the order they are met. Two passes (the row lengths,
+/// then the rows in place, [`build_counted_rows`]), so that the product is held once.
 fn product(l: &CsrMatrix, m: &CsrMatrix, sorted: bool) -> Result<CsrMatrix, AllocFailure> {
     let n = m.n_cols();
-    build_rows(
+    build_counted_rows(
         l.n_rows(),
         n,
         || Accumulator::new(n),
+        |acc, row| {
+            for &k in l.row(row).0 {
+                let (mc, mv) = m.row(k as usize);
+                for (&j, &mkj) in mc.iter().zip(mv) {
+                    if mkj != 0.0 {
+                        acc.touch(j);
+                    }
+                }
+            }
+            acc.take_count()
+        },
         |acc, row, cols, vals| {
             let (lc, lv) = l.row(row);
             for (&k, &lk) in lc.iter().zip(lv) {
@@ -102,11 +117,7 @@ fn product(l: &CsrMatrix, m: &CsrMatrix, sorted: bool) -> Result<CsrMatrix, Allo
                     }
                 }
             }
-            if sorted {
-                acc.drain_into(cols, vals)
-            } else {
-                acc.drain_unsorted_into(cols, vals)
-            }
+            acc.drain_to(cols, vals, sorted)
         },
     )
 }

@@ -2,9 +2,9 @@
 //! [`super`]).
 
 use super::NONE;
-use super::rows::build_rows;
+use super::rows::build_counted_rows;
 use super::spectral::lanczos_lambda_max;
-use crate::budget::{AllocFailure, try_filled, try_grow};
+use crate::budget::{AllocFailure, try_filled};
 use crate::linalg::csr::{CsrMatrix, ROW_CHUNK};
 use rayon::prelude::*;
 
@@ -37,37 +37,44 @@ pub(super) fn smoothed_prolongator(
     let filter = Filter { diag, theta_p };
     let dfil = filtered_diagonal(a, filter)?;
     let omega = damping(a, filter, &dfil, spectral_steps)?;
-    let p = build_rows(
+    // row i into the scratch (columns sorted), computed twice: to count it, then to write it
+    // in place (build_counted_rows: the prolongator is held once)
+    let row = |(cols, vals): &mut (Vec<u32>, Vec<f64>), i: usize| {
+        cols.clear();
+        vals.clear();
+        let scale = omega / dfil[i];
+        let mut add = |g: u32, v: f64| {
+            if let Some(p) = cols.iter().position(|&c| c == g) {
+                vals[p] += v;
+            } else {
+                cols.push(g);
+                vals.push(v);
+            }
+        };
+        if agg[i] != NONE {
+            add(agg[i], (1.0 - omega) * t(i));
+        }
+        let (ac, av) = a.row(i);
+        for (&j, &v) in ac.iter().zip(av) {
+            let g = agg[j as usize];
+            if g != NONE && filter.kept(i, j, v) {
+                add(g, -scale * v * t(j as usize));
+            }
+        }
+        sort_tail(cols, vals, 0);
+    };
+    let p = build_counted_rows(
         n,
         n_agg,
-        || Ok(()),
-        |_, i, cols, vals| {
-            // at most one entry per aggregate met: the unknown's own and its row's
-            let width = a.row(i).0.len() + 1;
-            try_grow(cols, width, "the columns of the prolongator")?;
-            try_grow(vals, width, "the entries of the prolongator")?;
-            let start = cols.len();
-            let scale = omega / dfil[i];
-            let mut add = |g: u32, v: f64| {
-                if let Some(p) = cols[start..].iter().position(|&c| c == g) {
-                    vals[start + p] += v;
-                } else {
-                    cols.push(g);
-                    vals.push(v);
-                }
-            };
-            if agg[i] != NONE {
-                add(agg[i], (1.0 - omega) * t(i));
-            }
-            let (ac, av) = a.row(i);
-            for (&j, &v) in ac.iter().zip(av) {
-                let g = agg[j as usize];
-                if g != NONE && filter.kept(i, j, v) {
-                    add(g, -scale * v * t(j as usize));
-                }
-            }
-            sort_tail(cols, vals, start);
-            Ok(())
+        || Ok((Vec::new(), Vec::new())),
+        |s, i| {
+            row(s, i);
+            s.0.len()
+        },
+        |s, i, cols, vals| {
+            row(s, i);
+            cols.copy_from_slice(&s.0);
+            vals.copy_from_slice(&s.1);
         },
     )?;
     Ok((p, b_coarse))
