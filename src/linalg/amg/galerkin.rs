@@ -1,8 +1,8 @@
 //! The Galerkin product A_{ℓ+1} = Pᵀ A_ℓ P (step 5 of the setup, see [`super`]).
 
 use super::NONE;
-use super::rows::build_counted_rows;
-use crate::budget::{AllocFailure, try_filled};
+use super::rows::build_rows;
+use crate::budget::{AllocFailure, try_filled, try_grow};
 use crate::linalg::csr::CsrMatrix;
 
 /// A dense accumulator of a sparse row: the values by column and the list of touched columns.
@@ -32,92 +32,67 @@ impl Accumulator {
             self.vals[p as usize] += v;
         }
     }
-    /// Marks column j as touched, without a value (the counting pass).
-    #[inline(always)]
-    fn touch(&mut self, j: u32) {
-        if self.pos[j as usize] == NONE {
-            self.pos[j as usize] = self.cols.len() as u32;
-            self.cols.push(j);
-        }
-    }
-    /// The number of touched columns, the accumulator cleared.
-    fn take_count(&mut self) -> usize {
+    /// Clears the accumulator.
+    fn clear(&mut self) {
         for &c in &self.cols {
             self.pos[c as usize] = NONE;
         }
-        let n = self.cols.len();
         self.cols.clear();
         self.vals.clear();
-        n
     }
-    /// Writes the row into `cols` and `vals` (of its length), sorted by column if `sorted`,
-    /// else in the order of first touch, and clears the accumulator.
-    fn drain_to(&mut self, cols: &mut [u32], vals: &mut [f64], sorted: bool) {
-        debug_assert_eq!(cols.len(), self.cols.len());
-        if sorted {
-            self.cols.sort_unstable();
-            for ((&c, oc), ov) in self.cols.iter().zip(cols.iter_mut()).zip(vals.iter_mut()) {
-                *oc = c;
-                *ov = self.vals[self.pos[c as usize] as usize];
-                self.pos[c as usize] = NONE;
-            }
-        } else {
-            for &c in &self.cols {
-                self.pos[c as usize] = NONE;
-            }
-            cols.copy_from_slice(&self.cols);
-            vals.copy_from_slice(&self.vals);
+    /// Appends the row, sorted by column, and clears the accumulator.
+    fn drain_into(&mut self, cols: &mut Vec<u32>, vals: &mut Vec<f64>) -> Result<(), AllocFailure> {
+        let what = "the entries of a Galerkin product";
+        try_grow(cols, self.cols.len(), what)?;
+        try_grow(vals, self.cols.len(), what)?;
+        self.cols.sort_unstable();
+        for &c in &self.cols {
+            let p = self.pos[c as usize] as usize;
+            cols.push(c);
+            vals.push(self.vals[p]);
+            self.pos[c as usize] = NONE;
         }
         self.cols.clear();
         self.vals.clear();
+        Ok(())
     }
 }
 
-/// A_c = Pᵀ A P in two row-parallel products (see the module documentation): R A with
-/// R = Pᵀ, row J = Σ_{i : r_Ji ≠ 0} r_Ji A_i (its columns left in the order they are met: only
-/// read below), R freed, then row J of A_c = Σ_k (R A)_Jk P_k. [`AllocFailure`] if the
-/// products cannot be allocated.
+/// A_c = Pᵀ A P row by row (see the module documentation): row J of R A (R = Pᵀ),
+/// Σ_{i : r_Ji ≠ 0} r_Ji A_i, in one accumulator (its columns in the order they are met), then
+/// row J of A_c = Σ_k (R A)_Jk P_k in another, sorted; R A is not stored. The same sums in the
+/// same order as forming R A first. [`AllocFailure`] if A_c or the accumulators cannot be
+/// allocated.
 pub(super) fn galerkin(
     a: &CsrMatrix,
     p: &CsrMatrix,
     r: CsrMatrix,
 ) -> Result<CsrMatrix, AllocFailure> {
-    let ra = product(&r, a, false)?;
-    drop(r);
-    product(&ra, p, true)
-}
-
-/// The sparse product L M, row J = Σ_k l_Jk M_k, zero entries of M skipped; each row's
-/// columns sorted if `sorted`, else in the order they are met. Two passes (the row lengths,
-/// then the rows in place, [`build_counted_rows`]), so that the product is held once.
-fn product(l: &CsrMatrix, m: &CsrMatrix, sorted: bool) -> Result<CsrMatrix, AllocFailure> {
-    let n = m.n_cols();
-    build_counted_rows(
-        l.n_rows(),
-        n,
-        || Accumulator::new(n),
-        |acc, row| {
-            for &k in l.row(row).0 {
-                let (mc, mv) = m.row(k as usize);
-                for (&j, &mkj) in mc.iter().zip(mv) {
-                    if mkj != 0.0 {
-                        acc.touch(j);
+    let (nf, nc) = (a.n_cols(), p.n_cols());
+    build_rows(
+        r.n_rows(),
+        nc,
+        || Ok((Accumulator::new(nf)?, Accumulator::new(nc)?)),
+        |(ra, ac), row, cols, vals| {
+            let (rc, rv) = r.row(row);
+            for (&i, &rji) in rc.iter().zip(rv) {
+                let (mc, mv) = a.row(i as usize);
+                for (&k, &aik) in mc.iter().zip(mv) {
+                    if aik != 0.0 {
+                        ra.add(k, rji * aik);
                     }
                 }
             }
-            acc.take_count()
-        },
-        |acc, row, cols, vals| {
-            let (lc, lv) = l.row(row);
-            for (&k, &lk) in lc.iter().zip(lv) {
-                let (mc, mv) = m.row(k as usize);
-                for (&j, &mkj) in mc.iter().zip(mv) {
-                    if mkj != 0.0 {
-                        acc.add(j, lk * mkj);
+            for (&k, &rak) in ra.cols.iter().zip(&ra.vals) {
+                let (pc, pv) = p.row(k as usize);
+                for (&j, &pkj) in pc.iter().zip(pv) {
+                    if pkj != 0.0 {
+                        ac.add(j, rak * pkj);
                     }
                 }
             }
-            acc.drain_to(cols, vals, sorted)
+            ra.clear();
+            ac.drain_into(cols, vals)
         },
     )
 }

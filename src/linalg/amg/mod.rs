@@ -29,14 +29,14 @@
 //!    by a Lanczos estimate of λ_max(D⁻¹A) × 1.1 when smaller ([`AmgOptions::spectral_steps`]).
 //!    P's columns are then smooth, low-energy basis functions overlapping their
 //!    neighbours.
-//! 5. **Galerkin product** A_{ℓ+1} = Pᵀ A P in two row-parallel products, each row
-//!    accumulated in a dense array with a list of the touched columns (one per thread):
-//!    first R A with R = Pᵀ, row J = Σ_{i : r_Ji ≠ 0} r_Ji A_i (= ((A P)ᵀ)_J, A symmetric),
-//!    then R is freed and row J of A_{ℓ+1} = Σ_k (R A)_Jk P_k. Entries a_ij stored as zeros
-//!    (the diagonal couplings of P1 on right triangles, the zeroed couplings of unit rows)
-//!    are skipped. The transient R A has as many entries as A P would; forming it lets R go
-//!    before the second product, which lowers the peak memory of the setup
-//!    (`replication/BENCHMARKS.md`, "Measurements behind the defaults").
+//! 5. **Galerkin product** A_{ℓ+1} = Pᵀ A P row by row, in parallel, with R = Pᵀ: row J of
+//!    R A, Σ_{i : r_Ji ≠ 0} r_Ji A_i (= ((A P)ᵀ)_J, A symmetric), is accumulated in a dense
+//!    array with a list of the touched columns, then row J of A_{ℓ+1} = Σ_k (R A)_Jk P_k in a
+//!    second one (two per thread); R A is never stored. Entries a_ij stored as zeros (the
+//!    diagonal couplings of P1 on right triangles, the zeroed couplings of unit rows) and
+//!    zero entries of P are skipped. Storing R A between two products, as this did before,
+//!    held a matrix with as many entries as A P, twice while its rows were concatenated: the
+//!    peak of the 2D solves (`replication/BENCHMARKS.md`, "Measurements behind the defaults").
 //!
 //! The strength of connection is a flag per stored entry of A_ℓ (not a copy of the strong
 //! part), filled in parallel; the aggregation reads A_ℓ through it.
