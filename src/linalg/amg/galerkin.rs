@@ -66,7 +66,7 @@ impl Accumulator {
 pub(super) fn galerkin(
     a: &CsrMatrix,
     p: &CsrMatrix,
-    r: CsrMatrix,
+    r: &CsrMatrix,
 ) -> Result<CsrMatrix, AllocFailure> {
     let (nf, nc) = (a.n_cols(), p.n_cols());
     build_rows(
@@ -121,7 +121,7 @@ mod tests {
                 rp.push(cols.len());
             }
             let p = CsrMatrix::new(n, nc, rp, cols, vals).unwrap();
-            let ac = galerkin(&a, &p, p.transpose().unwrap()).unwrap();
+            let ac = galerkin(&a, &p, &p.transpose().unwrap()).unwrap();
             assert_eq!((ac.n_rows(), ac.n_cols()), (nc, nc));
             // column J of A_c against Pᵀ (A (P e_J)), for a few J
             for jc in [0, 1, nc / 2, nc - 1] {

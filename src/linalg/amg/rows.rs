@@ -94,8 +94,9 @@ where
 /// the matrix are allocated at their exact size, and `fill(scratch, i, cols, vals)` writes row
 /// i into its slices (of that length). [`build_rows`] holds about twice the matrix while it
 /// concatenates the chunks, which set the peak memory of a multigrid setup when it built the
-/// prolongator and the product R A; this computes every row twice instead. The result does not depend on the threads. [`AllocFailure`] if the scratch or the
-/// arrays cannot be allocated.
+/// prolongator and the product R A; this computes every row twice instead. The result does
+/// not depend on the threads. [`AllocFailure`] if the scratch or the arrays cannot be
+/// allocated.
 pub(super) fn build_counted_rows<S, I, C, F>(
     n_rows: usize,
     n_cols: usize,
@@ -215,11 +216,8 @@ mod tests {
             let two = build_counted_rows(
                 n,
                 n,
-                || Ok(0usize),
-                |counted, i| {
-                    *counted += 1;
-                    row(i).len()
-                },
+                || Ok(()),
+                |_, i| row(i).len(),
                 |_, i, cols, vals| {
                     let r = row(i);
                     assert_eq!((cols.len(), vals.len()), (r.len(), r.len()), "row {i}");

@@ -63,7 +63,7 @@ impl<'a> Amg<'a> {
                 opts.spectral_steps,
             )?;
             near_null = b_next;
-            let ac = galerkin(al, &p, p.transpose()?)?;
+            let ac = galerkin(al, &p, &p.transpose()?)?;
             transfers.push(Transfer { p });
             coarse_ops.push(ac);
         }
