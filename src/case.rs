@@ -43,7 +43,11 @@ pub fn build_mesh3(spec: &MeshSpec, budget: MemoryBudget) -> Result<PolyMesh3> {
     match spec {
         MeshSpec::File(p) => {
             let poly = crate::mesh3d::io::read_mesh3(p, budget)?;
-            Ok(PolyMesh3::from_polyhedra(poly, budget)?)
+            Ok(PolyMesh3::from_file_polyhedra(
+                poly,
+                budget,
+                crate::mesh3d::WarpedFaces::default(),
+            )?)
         }
         MeshSpec::Generated3 {
             family,

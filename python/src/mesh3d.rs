@@ -90,7 +90,7 @@ impl PyMesh3 {
         let warped = warped_convention(py, warped_faces)?;
         guard(py, move || {
             let p = read_mesh3(&path, MemoryBudget::available())?;
-            let m = PolyMesh3::from_polyhedra_with(p, MemoryBudget::available(), warped)
+            let m = PolyMesh3::from_file_polyhedra(p, MemoryBudget::available(), warped)
                 .map_err(|source| gradvi::Error::InvalidMeshFile { path, source })?;
             Ok(PyMesh3::new(m))
         })

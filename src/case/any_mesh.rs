@@ -64,7 +64,7 @@ fn extension(path: &Path) -> Option<String> {
 /// reader reads the file. A 3D mesh that fails validation is [`Error::InvalidMeshFile`].
 pub fn read_any(path: &Path, warped: WarpedFaces, budget: MemoryBudget) -> Result<AnyMesh> {
     let three = |p: Polyhedra| {
-        PolyMesh3::from_polyhedra_with(p, budget, warped)
+        PolyMesh3::from_file_polyhedra(p, budget, warped)
             .map(AnyMesh::Three)
             .map_err(|source| Error::InvalidMeshFile {
                 path: path.to_path_buf(),

@@ -51,6 +51,7 @@ use crate::error::MeshError;
 mod build;
 mod complex;
 mod crossing;
+mod face_order;
 mod faces;
 mod geometry;
 mod mesh;

@@ -153,7 +153,11 @@ fn read(domain: &str, file: &Path, budget: MemoryBudget) -> gradvi::Result<PolyM
             *x = BOX.map_unit(*x);
         }
     }
-    Ok(PolyMesh3::from_polyhedra(p, budget)?)
+    Ok(PolyMesh3::from_file_polyhedra(
+        p,
+        budget,
+        gradvi::mesh3d::WarpedFaces::default(),
+    )?)
 }
 
 /// Solves one case in this process (the body of a `--domain3d-child`); `total_s` and

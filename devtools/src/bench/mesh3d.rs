@@ -55,7 +55,7 @@ pub fn run_one(file: &Path) -> gradvi::Result<Mesh3Row> {
     let p = read_mesh3(file, budget)?;
     let read_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let m = PolyMesh3::from_polyhedra(p, budget)?;
+    let m = PolyMesh3::from_file_polyhedra(p, budget, gradvi::mesh3d::WarpedFaces::default())?;
     let build_s = t1.elapsed().as_secs_f64();
     Ok(Mesh3Row {
         file: file.display().to_string(),
