@@ -59,7 +59,7 @@ fn corpus() -> Vec<(&'static str, Expect)> {
             "msh22_overlapping_triangles.msh",
             Mesh(
                 |e| matches!(e, MeshError::CrossingEdges { cells: [6, 7], .. }),
-                "edges (3, 8) of cell 6 and (5, 9) of cell 7 intersect",
+                "edges (2, 9) of cell 6 and (6, 8) of cell 7 intersect",
             ),
         ),
         (

@@ -662,8 +662,9 @@ fn build(path: &Path, sections: Sections<Point>, raw: Raw) -> Result<MshMesh> {
         return Err(t.err_at(0, "inconsistent element records"));
     }
     drop((cell_nodes, cell_line));
-    let (vertices, new_id) = drop_unused_vertices_flat(&nodes, &mut cell_verts);
+    let (vertices, mut new_id) = drop_unused_vertices_flat(&nodes, &mut cell_verts);
     drop(nodes);
+    let vertices = crate::mesh::renumber::space_order(vertices, &mut cell_verts, &mut new_id);
 
     // tagged lines, in file order, as new vertex ids; lines on unused nodes are dropped
     let mut tagged = Vec::new();
@@ -798,16 +799,26 @@ mod tests {
         let m = parse_msh(Path::new("s.msh"), extra.as_bytes())
             .unwrap()
             .mesh;
-        let mut tags: Vec<(usize, usize, i32)> = (0..m.n_edges())
+        // the edges by the coordinates of their end points (the reader numbers the vertices
+        // in space order)
+        let mut tags: Vec<([[i64; 2]; 2], i32)> = (0..m.n_edges())
             .map(|e| {
-                let [a, b] = m.edge_vertices(e);
-                (a, b, m.edge_tag(e))
+                let [a, b] = m
+                    .edge_vertices(e)
+                    .map(|v| m.vertices()[v].map(|x| x as i64));
+                ([a.min(b), a.max(b)], m.edge_tag(e))
             })
             .collect();
         tags.sort_unstable();
         assert_eq!(
             tags,
-            vec![(0, 1, 7), (0, 2, 0), (0, 3, 0), (1, 2, 8), (2, 3, 0)]
+            vec![
+                ([[0, 0], [0, 1]], 0),
+                ([[0, 0], [1, 0]], 7),
+                ([[0, 0], [1, 1]], 0),
+                ([[0, 1], [1, 1]], 0),
+                ([[1, 0], [1, 1]], 8),
+            ]
         );
         // an unknown node on a line is still an error, before any mesh check
         let bad = extra.replace("6 1 2 6 1 1 9", "6 1 2 6 1 1 99");
