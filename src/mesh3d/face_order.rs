@@ -75,7 +75,11 @@ impl PolyMesh3 {
         if nf < 2 {
             return Ok(self);
         }
-        let (lo, len) = self.vertex_box();
+        // the vertices' bounding box, each side at least the smallest positive normal number
+        // (so that a flat box divides)
+        let r = self.bounding_box().ranges();
+        let lo = r.map(|[a, _]| a);
+        let len = r.map(|[a, b]| (b - a).max(f64::MIN_POSITIVE));
         // (code, old number) of every face, sorted: the new order
         let mut keyed: Vec<(u64, u32)> = try_vec(nf, "the face order")?;
         keyed.par_extend((0..nf).into_par_iter().map(|f| {
@@ -133,35 +137,6 @@ impl PolyMesh3 {
         m.face_verts = face_verts;
         m.face_cells = face_cells;
         Ok(m)
-    }
-
-    /// The corner and the sides of the vertices' bounding box (each side at least the
-    /// smallest positive normal number, so that a flat box divides).
-    fn vertex_box(&self) -> (Point3, Point3) {
-        let (lo, hi) = self
-            .vertices
-            .par_iter()
-            .fold(
-                || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-                |(mut lo, mut hi), x| {
-                    for d in 0..3 {
-                        lo[d] = lo[d].min(x[d]);
-                        hi[d] = hi[d].max(x[d]);
-                    }
-                    (lo, hi)
-                },
-            )
-            .reduce(
-                || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-                |(a, b), (c, d)| {
-                    (
-                        [a[0].min(c[0]), a[1].min(c[1]), a[2].min(c[2])],
-                        [b[0].max(d[0]), b[1].max(d[1]), b[2].max(d[2])],
-                    )
-                },
-            );
-        let len = [0, 1, 2].map(|d| (hi[d] - lo[d]).max(f64::MIN_POSITIVE));
-        (lo, len)
     }
 }
 
