@@ -49,6 +49,12 @@ pub trait CellComplex<const D: usize>: Sync {
     fn cell_measure(&self, k: usize) -> f64;
     /// x_K, the centroid of cell `k`.
     fn cell_centre(&self, k: usize) -> Vector<D>;
+    /// (|K|, x_K) together: the values of [`CellComplex::cell_measure`] and
+    /// [`CellComplex::cell_centre`]. A mesh that computes both from the same sums (the planar
+    /// mesh, on demand) overrides it to compute them once.
+    fn cell_measure_centre(&self, k: usize) -> (f64, Vector<D>) {
+        (self.cell_measure(k), self.cell_centre(k))
+    }
     /// |σ|.
     fn face_measure(&self, f: usize) -> f64;
     /// x_σ, the centroid of face `f`.
@@ -139,6 +145,9 @@ impl CellComplex<2> for PolyMesh {
     }
     fn cell_centre(&self, k: usize) -> Vector<2> {
         self.centroid(k)
+    }
+    fn cell_measure_centre(&self, k: usize) -> (f64, Vector<2>) {
+        self.area_centroid(k)
     }
     fn face_measure(&self, f: usize) -> f64 {
         self.edge_measure(f)
