@@ -25,6 +25,9 @@ pub(super) fn chunks(n: usize, size: usize) -> Vec<(usize, usize)> {
         .collect()
 }
 
+/// Rows (or items) per parallel task of the row-by-row gathers.
+pub(super) const PAR_ROWS: usize = 4096;
+
 /// `f(i)` for every i in `0..n`, computed in parallel (at least 4096 per task) into a vector
 /// allocated fallibly ([`try_filled`], `what` naming it); an error of `f` is returned instead
 /// (one of them if several). Each value is computed on its own: the same whatever the threads.
@@ -34,11 +37,14 @@ pub(super) fn par_try_fill<T: Clone + Default + Send>(
     f: impl Fn(usize) -> crate::Result<T> + Sync,
 ) -> crate::Result<Vec<T>> {
     let mut v = try_filled(n, T::default(), what)?;
-    v.par_iter_mut()
+    // fallible per chunk rather than per item: rayon's try_for_each moves its error-carrying
+    // state through every item it consumes
+    v.par_chunks_mut(PAR_ROWS)
         .enumerate()
-        .with_min_len(4096)
-        .try_for_each(|(i, out)| {
-            *out = f(i)?;
+        .try_for_each(|(c, chunk)| {
+            for (o, out) in chunk.iter_mut().enumerate() {
+                *out = f(c * PAR_ROWS + o)?;
+            }
             Ok::<(), crate::Error>(())
         })?;
     Ok(v)
@@ -252,24 +258,26 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     ) -> crate::Result<Vec<f64>> {
         let inc = &self.sym.maps.inc;
         let mut rhs = try_filled(self.n_skel, 0.0, "the right-hand side")?;
-        rhs.par_iter_mut()
-            .enumerate()
-            .with_min_len(4096)
-            .try_for_each(|(gi, out)| -> crate::Result<()> {
-                *out = match fixed.get(gi) {
-                    Some(v) => v,
-                    None => {
-                        let mut acc = self.values.neumann_load[gi];
-                        for &k in inc.list(gi) {
-                            let k = k as usize;
-                            let (d, _) = self.sym.dof_map.cell(k);
-                            acc += cell_value(k, local_index(d, gi)?);
+        rhs.par_chunks_mut(PAR_ROWS).enumerate().try_for_each(
+            |(c, chunk)| -> crate::Result<()> {
+                for (o, out) in chunk.iter_mut().enumerate() {
+                    let gi = c * PAR_ROWS + o;
+                    *out = match fixed.get(gi) {
+                        Some(v) => v,
+                        None => {
+                            let mut acc = self.values.neumann_load[gi];
+                            for &k in inc.list(gi) {
+                                let k = k as usize;
+                                let (d, _) = self.sym.dof_map.cell(k);
+                                acc += cell_value(k, local_index(d, gi)?);
+                            }
+                            acc
                         }
-                        acc
-                    }
-                };
+                    };
+                }
                 Ok(())
-            })?;
+            },
+        )?;
         Ok(rhs)
     }
 }

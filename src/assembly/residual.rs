@@ -2,7 +2,7 @@
 //! the certificate is computed), its rows, its entries and the energy.
 
 use super::DiscreteSystem;
-use super::gather::local_index;
+use super::gather::{PAR_ROWS, local_index};
 use crate::budget::try_filled;
 use crate::mesh::SolveMesh;
 use rayon::prelude::*;
@@ -24,28 +24,31 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let inc = &self.sym.maps.inc;
         let mut r = try_filled(self.n, 0.0, "the residual of the system")?;
         let mut scale = try_filled(self.n, 0.0, "the residual scales of the system")?;
-        r.par_iter_mut()
-            .zip(scale.par_iter_mut())
+        // fallible per chunk of rows rather than per row (see `gather::par_try_fill`)
+        r.par_chunks_mut(PAR_ROWS)
+            .zip(scale.par_chunks_mut(PAR_ROWS))
             .enumerate()
-            .with_min_len(4096)
-            .try_for_each(|(gi, (ri, si))| -> crate::Result<()> {
-                let mut a = self.values.load[gi];
-                let mut b = a.abs();
-                for &k in inc.list(gi) {
-                    let cell = self.local(k as usize);
-                    let (d, m) = (cell.dofs, cell.matrix);
-                    let i = local_index(d, gi)?;
-                    let (mut mu, mut abs) = (0.0, 0.0);
-                    for (j, &gj) in d.iter().enumerate() {
-                        let v = m.at(i, j) * u[gj as usize];
-                        mu += v;
-                        abs += v.abs();
+            .try_for_each(|(c, (rc, sc))| -> crate::Result<()> {
+                for (o, (ri, si)) in rc.iter_mut().zip(sc.iter_mut()).enumerate() {
+                    let gi = c * PAR_ROWS + o;
+                    let mut a = self.values.load[gi];
+                    let mut b = a.abs();
+                    for &k in inc.list(gi) {
+                        let cell = self.local(k as usize);
+                        let (d, m) = (cell.dofs, cell.matrix);
+                        let i = local_index(d, gi)?;
+                        let (mut mu, mut abs) = (0.0, 0.0);
+                        for (j, &gj) in d.iter().enumerate() {
+                            let v = m.at(i, j) * u[gj as usize];
+                            mu += v;
+                            abs += v.abs();
+                        }
+                        a -= mu;
+                        b += abs;
                     }
-                    a -= mu;
-                    b += abs;
+                    *ri = a;
+                    *si = b;
                 }
-                *ri = a;
-                *si = b;
                 Ok(())
             })?;
         Ok((r, scale))
