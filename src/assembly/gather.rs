@@ -257,28 +257,20 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         cell_value: impl Fn(usize, usize) -> f64 + Sync,
     ) -> crate::Result<Vec<f64>> {
         let inc = &self.sym.maps.inc;
-        let mut rhs = try_filled(self.n_skel, 0.0, "the right-hand side")?;
-        rhs.par_chunks_mut(PAR_ROWS).enumerate().try_for_each(
-            |(c, chunk)| -> crate::Result<()> {
-                for (o, out) in chunk.iter_mut().enumerate() {
-                    let gi = c * PAR_ROWS + o;
-                    *out = match fixed.get(gi) {
-                        Some(v) => v,
-                        None => {
-                            let mut acc = self.values.neumann_load[gi];
-                            for &k in inc.list(gi) {
-                                let k = k as usize;
-                                let (d, _) = self.sym.dof_map.cell(k);
-                                acc += cell_value(k, local_index(d, gi)?);
-                            }
-                            acc
-                        }
-                    };
+        par_try_fill(self.n_skel, "the right-hand side", |gi| {
+            Ok(match fixed.get(gi) {
+                Some(v) => v,
+                None => {
+                    let mut acc = self.values.neumann_load[gi];
+                    for &k in inc.list(gi) {
+                        let k = k as usize;
+                        let (d, _) = self.sym.dof_map.cell(k);
+                        acc += cell_value(k, local_index(d, gi)?);
+                    }
+                    acc
                 }
-                Ok(())
-            },
-        )?;
-        Ok(rhs)
+            })
+        })
     }
 }
 
