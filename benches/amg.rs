@@ -9,7 +9,7 @@
 //! that of the matrix, and for the smaller sizes the time of a sparse Cholesky (faer, AMD;
 //! symbolic + numeric + solve) on the same matrix.
 
-use gradvi::assembly::{DiscreteSystem, SystemOptions};
+use gradvi::assembly::{DiscreteSystem, SymbolicSystem, SystemOptions};
 use gradvi::linalg::{
     Amg, AmgOptions, CholeskyWork, CsrMatrix, PcgOptions, Smoother, SpdPattern, pcg,
 };
@@ -211,8 +211,13 @@ fn header() {
 /// The condensed matrix of `scheme` and `problem` as the active-set solver assembles it, with
 /// no unknown fixed but the Dirichlet ones.
 fn scheme_matrix(scheme: &dyn GradientDiscretisation, problem: &Problem) -> gradvi::Result<Lower> {
-    let sys = DiscreteSystem::new(scheme, problem, SystemOptions::default())?;
-    let (col_ptr, row_idx) = sys.condensed_pattern();
+    // through a symbolic system of its own, which keeps the pattern (a system built by
+    // `DiscreteSystem::new` for an iterative solve of P1 or CR releases it)
+    let sym = SymbolicSystem::new(scheme, SystemOptions::default())?;
+    let sys = DiscreteSystem::with_symbolic(std::sync::Arc::new(sym), problem)?;
+    let Some((col_ptr, row_idx)) = sys.condensed_pattern() else {
+        return Err(gradvi::Error::Internal("no condensed pattern".into()));
+    };
     let fixed = vec![None; sys.n_unknowns()];
     let (values, _) =
         sys.assemble_condensed(&mut gradvi::assembly::SolveState::default(), &fixed)?;

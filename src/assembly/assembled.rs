@@ -28,7 +28,7 @@ use super::ProblemValues;
 use super::gather::{FixedValues, chunks, split_by_ranges};
 use super::symbolic::DofMap;
 use crate::budget::{try_filled, try_vec};
-use crate::linalg::CsrMatrix;
+use crate::linalg::{CsrMatrix, SpdPattern};
 use crate::mesh::SolveMesh;
 use crate::offsets::Offsets;
 use rayon::prelude::*;
@@ -94,7 +94,7 @@ pub(super) fn scatter(
 
 impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// The assembled matrix M of a scheme without interior unknowns, `None` for the others.
-    pub(super) fn assembled(&self) -> Option<&CsrMatrix> {
+    pub fn assembled(&self) -> Option<&CsrMatrix> {
         self.values.assembled.as_ref()
     }
 
@@ -156,11 +156,16 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         Ok(CsrMatrix::from_parts(n, n, row_ptr, col_idx, values))
     }
 
-    /// The values of S on the lower CSC pattern of the condensed matrix (what the direct
-    /// solver factorises; bitwise the gathered values): column c of the pattern is read from
+    /// The values of S on `pattern`, the lower CSC pattern of the condensed matrix (what the
+    /// direct solver factorises; bitwise the gathered values): column c of the pattern is read from
     /// row c of M, right of the diagonal (M is symmetric), entries M dropped as zero read 0.
-    pub(super) fn masked_lower(&self, a: &CsrMatrix, fx: &FixedValues) -> crate::Result<Vec<f64>> {
-        let (col_ptr, row_idx) = self.condensed_pattern();
+    pub(super) fn masked_lower(
+        &self,
+        a: &CsrMatrix,
+        fx: &FixedValues,
+        pattern: &SpdPattern,
+    ) -> crate::Result<Vec<f64>> {
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let n = col_ptr.len() - 1;
         let mut lower = try_filled(row_idx.len(), 0.0, "the values of the condensed matrix")?;
         let ranges = chunks(n, ROWS);

@@ -102,9 +102,11 @@ impl FixedValues {
 }
 
 impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
-    /// The lower-triangular CSC pattern (column pointers, row indices) of the condensed matrix.
-    pub fn condensed_pattern(&self) -> (&[usize], &[usize]) {
-        (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx())
+    /// The lower-triangular CSC pattern (column pointers, row indices) of the condensed
+    /// matrix; `None` for a system without interior unknowns solved iteratively, which keeps
+    /// its assembled matrix only ([`SymbolicSystem::release_pattern`](super::SymbolicSystem::release_pattern)).
+    pub fn condensed_pattern(&self) -> Option<(&[usize], &[usize])> {
+        self.sym.pattern().map(|p| (p.col_ptr(), p.row_idx()))
     }
 
     /// Condensed matrix values (in the order of [`Self::condensed_pattern`]) and right-hand
@@ -119,6 +121,9 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     ///
     /// where b^N is the Neumann load and (S_K, g_K) the condensed block and load of cell K
     /// ([`condense()`]). Then S u_S = c is the skeleton system with u_F moved to the right.
+    ///
+    /// An error for a system whose pattern was released ([`Self::condensed_pattern`] is
+    /// `None`).
     pub fn assemble_condensed(
         &self,
         state: &mut SolveState,
@@ -128,7 +133,11 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let fixed = FixedValues::new(&self.values.dirichlet, fixed);
         // without interior unknowns, S and c are masked from the global matrix
         if let Some(a) = self.assembled() {
-            return Ok((self.masked_lower(a, &fixed)?, self.masked_rhs(a, &fixed)?));
+            let pattern = self.sym.kept_pattern("the condensed values")?;
+            return Ok((
+                self.masked_lower(a, &fixed, pattern)?,
+                self.masked_rhs(a, &fixed)?,
+            ));
         }
         // buffers kept between calls (they are entirely rewritten where read)
         let (sbuf, gbuf) = &mut state.scratch;
@@ -215,14 +224,15 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// threads); zero in the rows and columns of fixed unknowns, whose diagonal is 1.
     /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if the values cannot be allocated.
     fn gather_matrix(&self, fixed: &FixedValues, blocks: &[f64]) -> crate::Result<Vec<f64>> {
-        let (col_ptr, row_idx) = (self.sym.pattern.col_ptr(), self.sym.pattern.row_idx());
+        let pattern = self.sym.kept_pattern("the gathered matrix")?;
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let src = &self.sym.maps.src;
         let is_fixed: Vec<bool> = (0..self.n_skel)
             .into_par_iter()
             .with_min_len(4096)
             .map(|d| fixed.get(d).is_some())
             .collect();
-        let nnz = self.sym.pattern.nnz();
+        let nnz = pattern.nnz();
         let mut values = try_filled(nnz, 0.0, "the values of the condensed matrix")?;
         let ranges = chunks(self.n_skel, CHUNK * 4);
         let slices = split_by_ranges(&mut values, &ranges, |k| col_ptr[k]);
@@ -261,7 +271,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             Ok(match fixed.get(gi) {
                 Some(v) => v,
                 None => {
-                    let mut acc = self.values.neumann_load[gi];
+                    let mut acc = self.values.neumann_load.get(gi).copied().unwrap_or(0.0);
                     for &k in inc.list(gi) {
                         let k = k as usize;
                         let (d, _) = self.sym.dof_map.cell(k);

@@ -77,10 +77,12 @@ pub(super) struct Hierarchy {
 }
 
 /// The multigrid hierarchy for the matrix `a` (of the cell system if `cells`), as `next` says.
+/// A new one frees the cycle's vectors `work` first (sized again by the first cycle).
 pub(super) fn hierarchy(
     a: CsrMatrix,
     next: NextHierarchy,
     cells: bool,
+    work: &mut AmgWork,
 ) -> crate::Result<Hierarchy> {
     let opts = AmgOptions::default();
     Ok(match next {
@@ -98,7 +100,9 @@ pub(super) fn hierarchy(
         NextHierarchy::New { fixed_mask } => Hierarchy {
             amg: {
                 // the setup is the largest transient of a solve: on the live data, not also on
-                // the holes the previous phases left in the heap (see crate::heap)
+                // the cycle's vectors of the last hierarchy (three vectors of the fine order)
+                // or on the holes the previous phases left in the heap (see crate::heap)
+                *work = AmgWork::default();
                 crate::heap::release_free_pages();
                 Amg::owning(a, &opts)?
             },
@@ -191,7 +195,8 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
 
     /// The condensed matrix with lower-triangle `values`, both triangles stored by rows.
     pub(super) fn csr(&self, values: &[f64]) -> crate::Result<CsrMatrix> {
-        let (col_ptr, row_idx) = self.condensed_pattern();
+        let pattern = self.sym.kept_pattern("the condensed matrix by rows")?;
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let mut a = CsrMatrix::from_lower_csc(self.n_skel, col_ptr, row_idx, values)?;
         a.drop_zeros();
         Ok(a)
@@ -212,7 +217,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         fixed: &[Option<f64>],
         next: NextHierarchy,
     ) -> crate::Result<(Instant, PcgOutcome)> {
-        let hier = hierarchy(a, next, false)?;
+        let hier = hierarchy(a, next, false, &mut state.amg)?;
         let t2 = Instant::now();
         let mut x = self.take_initial_guess(state)?;
         let out = self.run_pcg(state, hier, rhs, &mut x, rtol, fixed)?;

@@ -132,10 +132,13 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'a, M, D> {
         dof_map.check_setup_memory(options.budget)?;
         // without interior unknowns the values are assembled on the pattern: after it
         if dof_map.n_int.iter().all(|&ni| ni == 0) {
-            let sym = SymbolicSystem::with_dof_map(scheme, Arc::clone(&dof_map), options)?;
-            let pattern = (sym.pattern.col_ptr(), sym.pattern.row_idx());
+            let mut sym = SymbolicSystem::with_dof_map(scheme, Arc::clone(&dof_map), options)?;
+            let pattern = sym.kept_pattern("the assembly")?;
+            let pattern = (pattern.col_ptr(), pattern.row_idx());
             let values = ProblemValues::evaluate_assembled(scheme, &dof_map, pattern, problem)?;
             drop(dof_map);
+            // solved iteratively, the matrix is all the solves read
+            sym.release_pattern();
             let mut s = Self::from_parts(Arc::new(sym), values);
             s.symbolic_seconds = s.sym.symbolic_seconds;
             s.setup_seconds = t0.elapsed().as_secs_f64();
@@ -164,7 +167,14 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'a, M, D> {
             // the symbolic system keeps no dof map for these schemes (see its docs)
             let dm = DofMap::new(sym.scheme())?;
             dm.check_setup_memory(sym.options.budget)?;
-            let pattern = (sym.pattern.col_ptr(), sym.pattern.row_idx());
+            let rebuilt;
+            let pattern = match sym.pattern() {
+                Some(p) => (p.col_ptr(), p.row_idx()),
+                None => {
+                    rebuilt = sym.rebuild_pattern(&dm)?;
+                    (&rebuilt.0[..], &rebuilt.1[..])
+                }
+            };
             ProblemValues::evaluate_assembled(sym.scheme(), &dm, pattern, problem)?
         } else {
             ProblemValues::evaluate(sym.scheme(), &sym.dof_map, problem)?
@@ -204,11 +214,11 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'a, M, D> {
     }
     /// Stored entries of the condensed matrix (lower triangle).
     pub fn nnz(&self) -> usize {
-        self.sym.pattern.nnz()
+        self.sym.nnz()
     }
     /// Stored values of the Cholesky factor of the condensed matrix (its fill).
     pub fn factor_len(&self) -> usize {
-        self.sym.pattern.factor_len()
+        self.sym.factor_len()
     }
     /// Dirichlet unknowns and their values (`None`: not Dirichlet).
     pub fn dirichlet(&self) -> &[Option<f64>] {

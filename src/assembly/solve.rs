@@ -257,29 +257,29 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let fx = self.fixed_values(fixed);
         let mut rhs = self.masked_rhs(a, &fx)?;
         let Some(reuse) = reuse else {
-            let values = self.masked_lower(a, &fx)?;
+            let values = self.masked_lower(a, &fx, self.direct_pattern(state)?)?;
             let t1 = Instant::now();
             let (t2, out) = self.solve_direct(state, &values, &mut rhs)?;
             return Ok((rhs, t1, t2, out));
         };
         let s = self.masked_rows(a, &fx)?;
+        // the fixed values are not held through the multigrid setup and the solve (its peak
+        // memory): the direct fallback masks them again, with the right-hand side
+        drop(fx);
         let t1 = Instant::now();
-        let auto = self.sym.options.linear == LinearSolver::Auto;
-        let c = if auto {
-            Some(try_copy(&rhs, "the right-hand side")?)
-        } else {
-            None
-        };
-        match (self.solve_csr(state, s, &mut rhs, rtol, fixed, reuse), c) {
-            (Ok((t2, out)), _) => Ok((rhs, t1, t2, out)),
+        match self.solve_csr(state, s, &mut rhs, rtol, fixed, reuse) {
+            Ok((t2, out)) => Ok((rhs, t1, t2, out)),
             // as for the gathered systems: with Auto, the direct solver takes over
-            (Err(_), Some(mut c)) => {
-                self.fallback_pattern(state)?;
-                let values = self.masked_lower(a, &fx)?;
+            Err(_) if self.sym.options.linear == LinearSolver::Auto => {
+                let fx = self.fixed_values(fixed);
+                let mut c = self.masked_rhs(a, &fx)?;
+                let pattern = self.fallback_pattern(state)?;
+                let values = self.masked_lower(a, &fx, pattern)?;
+                drop(fx);
                 let (t2, out) = self.solve_direct(state, &values, &mut c)?;
                 Ok((c, t1, t2, out))
             }
-            (Err(e), None) => Err(e),
+            Err(e) => Err(e),
         }
     }
 
@@ -311,7 +311,19 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// Whether the solves are direct: the symbolic system has a factorisation, or the one built
     /// in `state` when the iterative solver failed ([`LinearSolver::Auto`]).
     fn is_direct(&self, state: &SolveState) -> bool {
-        self.sym.pattern.has_factorisation() || matches!(state.direct_fallback, Some(Ok(_)))
+        self.sym.has_factorisation() || matches!(state.direct_fallback, Some(Ok(_)))
+    }
+
+    /// The pattern of a direct solve ([`Self::is_direct`]): the symbolic system's, or the one
+    /// built in `state` when the iterative solver failed.
+    fn direct_pattern<'s>(&'s self, state: &'s SolveState) -> crate::Result<&'s SpdPattern> {
+        match (self.sym.pattern(), &state.direct_fallback) {
+            (Some(p), _) if p.has_factorisation() => Ok(p),
+            (_, Some(Ok(p))) => Ok(p),
+            _ => Err(crate::Error::Internal(
+                "a direct solve without a symbolic factorisation".into(),
+            )),
+        }
     }
 
     /// The direct solve of S x = c with the symbolic factorisation [`Self::is_direct`] finds.
@@ -326,8 +338,8 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             cholesky,
             ..
         } = state;
-        if self.sym.pattern.has_factorisation() {
-            return solve_directly(&self.sym.pattern, values, rhs, cholesky);
+        if let Some(pattern) = self.sym.pattern().filter(|p| p.has_factorisation()) {
+            return solve_directly(pattern, values, rhs, cholesky);
         }
         match direct_fallback {
             Some(Ok(p)) => solve_directly(p, values, rhs, cholesky),
@@ -340,13 +352,26 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// The symbolic factorisation of the condensed pattern, built in `state` on first use, and
     /// its numeric phase checked against the caller's budget
     /// ([`SystemOptions::budget`](super::SystemOptions::budget)) as for a direct system.
-    fn fallback_pattern<'s>(&self, state: &'s mut SolveState) -> crate::Result<&'s SpdPattern> {
+    pub(super) fn fallback_pattern<'s>(
+        &self,
+        state: &'s mut SolveState,
+    ) -> crate::Result<&'s SpdPattern> {
         if state.direct_fallback.is_none() {
-            let (col_ptr, row_idx) = self.condensed_pattern();
-            let what = "the pattern copy of the direct solver";
-            let (col_ptr, row_idx) = (try_copy(col_ptr, what)?, try_copy(row_idx, what)?);
+            let (col_ptr, row_idx) = match self.condensed_pattern() {
+                Some((col_ptr, row_idx)) => {
+                    let what = "the pattern copy of the direct solver";
+                    (try_copy(col_ptr, what)?, try_copy(row_idx, what)?)
+                }
+                // released with the assembly (no interior unknowns): built again
+                None => {
+                    let dm = super::DofMap::new(self.scheme())?;
+                    self.sym.rebuild_pattern(&dm)?
+                }
+            };
             let built =
                 SpdPattern::with_ordering(self.n_skel, col_ptr, row_idx, self.sym.options.ordering)
+                    // the threads of a direct system's factorisation (the same sums)
+                    .map(|p| p.with_threads(self.sym.options.factor_threads))
                     .map_err(|e| e.to_string())
                     .and_then(|p| {
                         let budget = self.sym.options.budget;

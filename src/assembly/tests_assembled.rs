@@ -144,3 +144,60 @@ fn a_shared_symbolic_system_assembles_each_problem_as_alone() {
         assert!(analysis.floating.is_empty(), "c = {c}");
     }
 }
+
+/// Solved iteratively, a P1 system keeps its assembled matrix but not the pattern it was
+/// assembled on (`SymbolicSystem::release_pattern`); what needs the pattern later builds it
+/// again: another problem on the same symbolic system (the matrix and the solve of a system
+/// built alone, bit for bit) and the direct fallback (the pattern of a direct system, and its
+/// solution to round-off). A direct system keeps its pattern.
+#[test]
+fn a_released_pattern_is_built_again_where_it_is_needed() {
+    use std::sync::Arc;
+    let mesh = cartesian_triangles(24, 24, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let p1 = P1::new(&mesh).unwrap();
+    let with = |linear| SystemOptions {
+        linear,
+        ..SystemOptions::default()
+    };
+    let (p, q) = (paper_test3(1.0), paper_test3(-10.0));
+    let it = DiscreteSystem::new(&p1, &p, with(LinearSolver::Iterative)).unwrap();
+    let direct = DiscreteSystem::new(&p1, &p, with(LinearSolver::Direct)).unwrap();
+    assert!(it.condensed_pattern().is_none());
+    let (dc, dr) = direct.condensed_pattern().unwrap();
+    assert_eq!((it.nnz(), it.factor_len()), (dr.len(), 0));
+    assert!(direct.factor_len() > 0);
+    // another problem on the released symbolic system
+    let shared = DiscreteSystem::with_symbolic(Arc::clone(it.symbolic()), &q).unwrap();
+    let alone = DiscreteSystem::new(&p1, &q, with(LinearSolver::Iterative)).unwrap();
+    assert_eq!(
+        bits(&shared.full_matrix_triplets()),
+        bits(&alone.full_matrix_triplets())
+    );
+    let n = it.n_unknowns();
+    let fixed: Vec<Option<f64>> = (0..n).map(|i| (i % 7 == 3).then_some(0.01)).collect();
+    let solve = |s: &DiscreteSystem, state: &mut SolveState| {
+        let (u, _) = s.solve(state, &fixed).unwrap();
+        u.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+    };
+    let fresh = SolveState::default;
+    assert_eq!(solve(&shared, &mut fresh()), solve(&alone, &mut fresh()));
+    // the direct fallback: the pattern of the direct system, and its solve
+    let mut state = SolveState::default();
+    let built = it.fallback_pattern(&mut state).unwrap();
+    assert_eq!((built.col_ptr(), built.row_idx()), (dc, dr));
+    // the same matrix and pattern, factorised apart: the same solution to round-off
+    let (x, _) = it.solve(&mut state, &fixed).unwrap();
+    let (y, _) = direct.solve(&mut fresh(), &fixed).unwrap();
+    let scale = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let gap = x
+        .iter()
+        .zip(&y)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(
+        scale > 0.0 && gap <= 1e-12 * scale,
+        "{gap:e} against {scale:e}"
+    );
+    // connected parts are read from the matrix
+    let analysis = crate::solver::well_posed::analyse(&it, None).unwrap();
+    assert!(analysis.floating.is_empty());
+}

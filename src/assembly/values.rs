@@ -26,7 +26,8 @@ pub struct ProblemValues<const D: usize = 2> {
     pub loads: Vec<f64>,
     /// Full load vector b (local loads and Neumann data), indexed by unknown.
     pub load: Vec<f64>,
-    /// The Neumann part of the load on the skeleton unknowns.
+    /// The Neumann part of the load on the skeleton unknowns; empty (zero) when no boundary
+    /// face is of Neumann type.
     pub neumann_load: Vec<f64>,
     /// Dirichlet unknowns and their values.
     pub dirichlet: Vec<Option<f64>>,
@@ -68,7 +69,7 @@ impl<const D: usize> ProblemValues<D> {
             mats,
             loads,
             load,
-            neumann_load: try_filled(scheme.n_skeleton(), 0.0, "the Neumann load")?,
+            neumann_load: Vec::new(),
             dirichlet: try_filled(n, None, "the Dirichlet values")?,
             signorini: Vec::new(),
             assembled: None,
@@ -126,7 +127,7 @@ impl<const D: usize> ProblemValues<D> {
             mats: Vec::new(),
             loads: Vec::new(),
             load,
-            neumann_load: try_filled(scheme.n_skeleton(), 0.0, "the Neumann load")?,
+            neumann_load: Vec::new(),
             dirichlet: try_filled(scheme.n_unknowns(), None, "the Dirichlet values")?,
             signorini: Vec::new(),
             assembled: Some(a),
@@ -165,6 +166,10 @@ impl<const D: usize> ProblemValues<D> {
                     let g = check_finite_at((problem.neumann)(xs), || {
                         format!("the Neumann flux at {xs:?}")
                     })?;
+                    if self.neumann_load.is_empty() {
+                        self.neumann_load =
+                            try_filled(scheme.n_skeleton(), 0.0, "the Neumann load")?;
+                    }
                     for t in &tr {
                         self.load[t.dof] += t.measure * g;
                         self.neumann_load[t.dof] += t.measure * g;

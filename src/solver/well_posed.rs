@@ -92,12 +92,13 @@ pub fn analyse<M: SolveMesh<D> + ?Sized, const D: usize>(
     let what = "the connected parts of the mesh";
     let mut parent: Vec<usize> = try_vec(n, what)?;
     parent.extend(0..n);
-    if system.symbolic().no_interior {
-        // no dof map is kept: the unknowns of a cell are coupled in the matrix's pattern
-        let (col_ptr, row_idx) = system.condensed_pattern();
-        for c in 0..col_ptr.len() - 1 {
-            for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
-                let (a, b) = (find(&mut parent, c), find(&mut parent, r));
+    if let Some(m) = system.assembled() {
+        // no dof map is kept: the unknowns are coupled by the nonzero entries of the assembled
+        // matrix (the cells' couplings; a part the mesh joins to the rest by exactly zero
+        // entries only is a part of the matrix, analysed as one)
+        for r in 0..m.n_rows() {
+            for &c in m.row(r).0.iter().take_while(|&&c| (c as usize) < r) {
+                let (a, b) = (find(&mut parent, c as usize), find(&mut parent, r));
                 if a != b {
                     parent[b] = a;
                 }

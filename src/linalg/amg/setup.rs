@@ -63,6 +63,9 @@ impl<'a> Amg<'a> {
                 opts.spectral_steps,
             )?;
             near_null = b_next;
+            // the Galerkin product is the setup's largest transient: what the level no longer
+            // needs is freed first
+            drop((diag, agg));
             let ac = galerkin(al, &p, &p.transpose()?)?;
             transfers.push(Transfer { p });
             coarse_ops.push(ac);
