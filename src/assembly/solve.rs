@@ -370,7 +370,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             };
             let built =
                 SpdPattern::with_ordering(self.n_skel, col_ptr, row_idx, self.sym.options.ordering)
-                    // the threads of a direct system's factorisation (the same sums)
+                    // factorised with the threads a direct system uses
                     .map(|p| p.with_threads(self.sym.options.factor_threads))
                     .map_err(|e| e.to_string())
                     .and_then(|p| {

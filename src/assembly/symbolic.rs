@@ -3,7 +3,9 @@
 //!
 //! - the dof map: the unknowns of each cell, interior first ([`DofMap`]);
 //! - the pattern of the condensed (skeleton) matrix, lower triangle, with a diagonal entry for
-//!   every skeleton unknown, and its symbolic Cholesky factorisation ([`SpdPattern`]);
+//!   every skeleton unknown, and its symbolic Cholesky factorisation ([`SpdPattern`]; a
+//!   system without interior unknowns solved iteratively releases it once its matrix is
+//!   assembled, [`SymbolicSystem::release_pattern`]);
 //! - the gather maps: the local skeleton entries that land on each condensed entry (`src`, in
 //!   cell order; built from where each local entry lands, which is not kept), and the cells
 //!   where each unknown appears (`inc`, ascending). They let the values be
@@ -350,9 +352,9 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
         })
     }
     /// Frees the pattern of a system without interior unknowns solved iteratively, once its
-    /// matrix is assembled: the solves read the assembled matrix only (its lower pattern is
-    /// 40 bytes per unknown on triangles, 8 % of the peak memory of an obstacle solve on 1M
-    /// P1 unknowns). What needs the pattern afterwards (the assembly of another problem on
+    /// matrix is assembled: the solves read the assembled matrix only (the lower pattern is
+    /// 40 bytes per P1 unknown on triangles; `replication/measurements/memory2d.md`). What
+    /// needs the pattern afterwards (the assembly of another problem on
     /// this system, the direct solver taking over from a failed iterative one) builds it
     /// again from the scheme. Other systems keep it.
     pub fn release_pattern(&mut self) {
