@@ -122,8 +122,8 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// where b^N is the Neumann load and (S_K, g_K) the condensed block and load of cell K
     /// ([`condense()`]). Then S u_S = c is the skeleton system with u_F moved to the right.
     ///
-    /// An error for a system whose pattern was released ([`Self::condensed_pattern`] is
-    /// `None`).
+    /// [`Error::InvalidData`](crate::Error::InvalidData) for a system whose pattern was
+    /// released ([`Self::condensed_pattern`] is `None`).
     pub fn assemble_condensed(
         &self,
         state: &mut SolveState,
@@ -133,7 +133,14 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let fixed = FixedValues::new(&self.values.dirichlet, fixed);
         // without interior unknowns, S and c are masked from the global matrix
         if let Some(a) = self.assembled() {
-            let pattern = self.sym.kept_pattern("the condensed values")?;
+            let pattern = self.sym.pattern().ok_or_else(|| {
+                crate::Error::InvalidData(
+                    "assemble_condensed: this system keeps no condensed pattern (a P1 or CR \
+                     system built by DiscreteSystem::new for an iterative solve releases it); \
+                     build it with DiscreteSystem::with_symbolic on a SymbolicSystem::new"
+                        .into(),
+                )
+            })?;
             return Ok((
                 self.masked_lower(a, &fixed, pattern)?,
                 self.masked_rhs(a, &fixed)?,

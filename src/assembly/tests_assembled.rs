@@ -163,6 +163,12 @@ fn a_released_pattern_is_built_again_where_it_is_needed() {
     let it = DiscreteSystem::new(&p1, &p, with(LinearSolver::Iterative)).unwrap();
     let direct = DiscreteSystem::new(&p1, &p, with(LinearSolver::Direct)).unwrap();
     assert!(it.condensed_pattern().is_none());
+    // values in the order of a pattern it does not have: a typed error saying what to do
+    let none = vec![None; it.n_unknowns()];
+    match it.assemble_condensed(&mut SolveState::default(), &none) {
+        Err(crate::Error::InvalidData(m)) => assert!(m.contains("SymbolicSystem::new"), "{m}"),
+        other => panic!("{:?}", other.map(|(v, _)| v.len())),
+    }
     let (dc, dr) = direct.condensed_pattern().unwrap();
     assert_eq!((it.nnz(), it.factor_len()), (dr.len(), 0));
     assert!(direct.factor_len() > 0);
