@@ -157,8 +157,9 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     }
 
     /// The values of S on `pattern`, the lower CSC pattern of the condensed matrix (what the
-    /// direct solver factorises; bitwise the gathered values): column c of the pattern is read from
-    /// row c of M, right of the diagonal (M is symmetric), entries M dropped as zero read 0.
+    /// direct solver factorises; bitwise the gathered values): column c of the pattern is
+    /// read from row c of M, right of the diagonal (M is symmetric), entries M dropped as
+    /// zero read 0.
     pub(super) fn masked_lower(
         &self,
         a: &CsrMatrix,

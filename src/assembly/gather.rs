@@ -104,7 +104,8 @@ impl FixedValues {
 impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// The lower-triangular CSC pattern (column pointers, row indices) of the condensed
     /// matrix; `None` for a system without interior unknowns solved iteratively, which keeps
-    /// its assembled matrix only ([`SymbolicSystem::release_pattern`](super::SymbolicSystem::release_pattern)).
+    /// its assembled matrix only
+    /// ([`SymbolicSystem::release_pattern`](super::SymbolicSystem::release_pattern)).
     pub fn condensed_pattern(&self) -> Option<(&[usize], &[usize])> {
         self.sym.pattern().map(|p| (p.col_ptr(), p.row_idx()))
     }

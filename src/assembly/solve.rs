@@ -257,7 +257,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let fx = self.fixed_values(fixed);
         let mut rhs = self.masked_rhs(a, &fx)?;
         let Some(reuse) = reuse else {
-            let values = self.masked_lower(a, &fx, self.direct_pattern(state)?)?;
+            let values = self.masked_lower(a, &fx, self.direct_pattern(&state.direct_fallback)?)?;
             let t1 = Instant::now();
             let (t2, out) = self.solve_direct(state, &values, &mut rhs)?;
             return Ok((rhs, t1, t2, out));
@@ -314,10 +314,13 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         self.sym.has_factorisation() || matches!(state.direct_fallback, Some(Ok(_)))
     }
 
-    /// The pattern of a direct solve ([`Self::is_direct`]): the symbolic system's, or the one
-    /// built in `state` when the iterative solver failed.
-    fn direct_pattern<'s>(&'s self, state: &'s SolveState) -> crate::Result<&'s SpdPattern> {
-        match (self.sym.pattern(), &state.direct_fallback) {
+    /// The pattern of a direct solve ([`Self::is_direct`]): the symbolic system's, or
+    /// `fallback`, the one built in the state when the iterative solver failed.
+    fn direct_pattern<'s>(
+        &'s self,
+        fallback: &'s Option<Result<SpdPattern, String>>,
+    ) -> crate::Result<&'s SpdPattern> {
+        match (self.sym.pattern(), fallback) {
             (Some(p), _) if p.has_factorisation() => Ok(p),
             (_, Some(Ok(p))) => Ok(p),
             _ => Err(crate::Error::Internal(
@@ -338,15 +341,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             cholesky,
             ..
         } = state;
-        if let Some(pattern) = self.sym.pattern().filter(|p| p.has_factorisation()) {
-            return solve_directly(pattern, values, rhs, cholesky);
-        }
-        match direct_fallback {
-            Some(Ok(p)) => solve_directly(p, values, rhs, cholesky),
-            _ => Err(crate::Error::Internal(
-                "a direct solve without a symbolic factorisation".into(),
-            )),
-        }
+        solve_directly(self.direct_pattern(direct_fallback)?, values, rhs, cholesky)
     }
 
     /// The symbolic factorisation of the condensed pattern, built in `state` on first use, and

@@ -354,9 +354,9 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
     /// Frees the pattern of a system without interior unknowns solved iteratively, once its
     /// matrix is assembled: the solves read the assembled matrix only (the lower pattern is
     /// 40 bytes per P1 unknown on triangles; `replication/measurements/memory2d.md`). What
-    /// needs the pattern afterwards (the assembly of another problem on
-    /// this system, the direct solver taking over from a failed iterative one) builds it
-    /// again from the scheme. Other systems keep it.
+    /// needs the pattern afterwards (the assembly of another problem on this system, the
+    /// direct solver taking over from a failed iterative one) builds it again from the
+    /// scheme. Other systems keep it.
     pub fn release_pattern(&mut self) {
         if self.no_interior && !self.has_factorisation() {
             self.pattern = None;
