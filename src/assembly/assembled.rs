@@ -28,7 +28,7 @@ use super::ProblemValues;
 use super::gather::{FixedValues, chunks, split_by_ranges};
 use super::symbolic::DofMap;
 use crate::budget::{try_filled, try_vec};
-use crate::linalg::{CsrMatrix, SpdPattern};
+use crate::linalg::{CsrMatrix, MaskedRows, SpdPattern};
 use crate::mesh::SolveMesh;
 use crate::offsets::Offsets;
 use rayon::prelude::*;
@@ -95,65 +95,18 @@ pub(super) fn scatter(
 impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// The assembled matrix M of a scheme without interior unknowns, `None` for the others.
     pub fn assembled(&self) -> Option<&CsrMatrix> {
-        self.values.assembled.as_ref()
+        self.values.assembled.as_deref()
     }
 
-    /// S of the module docs stored by rows without its exact zeros (the matrix the
-    /// conjugate gradients and the multigrid read; bitwise the stored rows of the gathered
-    /// system), rows in parallel.
-    pub(super) fn masked_rows(&self, a: &CsrMatrix, fx: &FixedValues) -> crate::Result<CsrMatrix> {
-        let n = a.n_rows();
-        let keep = |i: usize, j: u32, v: f64| {
-            j as usize == i || (v != 0.0 && fx.get(j as usize).is_none())
-        };
-        let mut row_ptr = try_filled(n + 1, 0usize, "the row offsets of the system")?;
-        row_ptr[1..]
-            .par_chunks_mut(ROWS)
-            .enumerate()
-            .for_each(|(c, lens)| {
-                for (k, l) in lens.iter_mut().enumerate() {
-                    let i = c * ROWS + k;
-                    let (cols, vals) = a.row(i);
-                    *l = if fx.get(i).is_some() {
-                        1
-                    } else {
-                        cols.iter()
-                            .zip(vals)
-                            .filter(|&(&j, &v)| keep(i, j, v))
-                            .count()
-                    };
-                }
-            });
-        for i in 0..n {
-            row_ptr[i + 1] += row_ptr[i];
-        }
-        let nnz = row_ptr[n];
-        let mut col_idx = try_filled(nnz, 0u32, "the column indices of the system")?;
-        let mut values = try_filled(nnz, 0.0, "the entries of the system")?;
-        let ranges = chunks(n, ROWS);
-        let c_slices = split_by_ranges(&mut col_idx, &ranges, |i| row_ptr[i]);
-        let v_slices = split_by_ranges(&mut values, &ranges, |i| row_ptr[i]);
-        let rp = &row_ptr;
-        ranges
-            .into_par_iter()
-            .zip(c_slices.into_par_iter().zip(v_slices))
-            .for_each(|((r0, r1), (co, vo))| {
-                let mut w = 0;
-                for i in r0..r1 {
-                    if fx.get(i).is_some() {
-                        (co[w], vo[w]) = (i as u32, 1.0);
-                        w += 1;
-                        continue;
-                    }
-                    let (cols, vals) = a.row(i);
-                    for (&j, &v) in cols.iter().zip(vals).filter(|&(&j, &v)| keep(i, j, v)) {
-                        (co[w], vo[w]) = (j, v);
-                        w += 1;
-                    }
-                }
-                debug_assert_eq!(w, rp[r1] - rp[r0]);
-            });
-        Ok(CsrMatrix::from_parts(n, n, row_ptr, col_idx, values))
+    /// S of the module docs as a masked view of M ([`MaskedRows`]: the rows of S that are
+    /// not M's, M shared; a product with it gives the bits of a product with S stored by rows
+    /// without its exact zeros, bitwise the stored rows of the gathered system): what the
+    /// conjugate gradients and the multigrid read.
+    pub(super) fn masked_rows(&self, fx: &FixedValues) -> crate::Result<MaskedRows> {
+        let a = self.values.assembled.clone().ok_or_else(|| {
+            crate::Error::Internal("a masked view of a system without an assembled matrix".into())
+        })?;
+        Ok(MaskedRows::new(a, |i| fx.get(i).is_some())?)
     }
 
     /// The values of S on `pattern`, the lower CSC pattern of the condensed matrix (what the

@@ -9,6 +9,7 @@ use super::linear::{
 };
 use super::{DiscreteSystem, SolveState};
 use crate::budget::{AllocFailure, try_copy, try_filled};
+use crate::linalg::amg::Fine;
 use crate::linalg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, CsrMatrix};
 use crate::mesh::SolveMesh;
 use crate::vi::SolveTimings;
@@ -79,7 +80,7 @@ pub(super) struct Hierarchy {
 /// The multigrid hierarchy for the matrix `a` (of the cell system if `cells`), as `next` says.
 /// A new one frees the cycle's vectors `work` first (sized again by the first cycle).
 pub(super) fn hierarchy(
-    a: CsrMatrix,
+    a: Fine<'static>,
     next: NextHierarchy,
     cells: bool,
     work: &mut AmgWork,
@@ -104,7 +105,7 @@ pub(super) fn hierarchy(
                 // or on the holes the previous phases left in the heap (see crate::heap)
                 *work = AmgWork::default();
                 crate::heap::release_free_pages();
-                Amg::owning(a, &opts)?
+                Amg::build(a, &opts)?
             },
             fresh_rate: None,
             reused: false,
@@ -211,7 +212,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     pub(super) fn solve_csr(
         &self,
         state: &mut SolveState,
-        a: CsrMatrix,
+        a: Fine<'static>,
         rhs: &mut [f64],
         rtol: f64,
         fixed: &[Option<f64>],
@@ -249,7 +250,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let mut out = match self.pcg(&amg, &mut state.amg, c, x, rtol) {
             Ok(out) => out,
             Err(_) if reused => {
-                amg = Amg::owning(amg.into_matrix(), &AmgOptions::default())?;
+                amg = Amg::build(amg.into_fine(), &AmgOptions::default())?;
                 (fresh_rate, reused) = (None, false);
                 fixed_mask = self::fixed_mask(&self.values.dirichlet, fixed)?;
                 self.pcg(&amg, &mut state.amg, c, x, rtol)?
@@ -301,12 +302,12 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         x: &mut [f64],
         rtol: f64,
     ) -> crate::Result<PcgOutcome> {
-        use crate::linalg::{PcgOptions, pcg};
+        use crate::linalg::PcgOptions;
         let c_norm = c.iter().map(|v| v * v).sum::<f64>().sqrt();
         let opts = if rtol > ITERATIVE_RTOL {
             // screening: the residual reduced by SCREENING_REDUCTION from where this solve
             // starts, and at most rtol ‖c‖ (never below the full target)
-            let r0 = amg.matrix().residual_norm(c, x);
+            let r0 = amg.fine().residual_norm(c, x);
             PcgOptions {
                 rtol: ITERATIVE_RTOL,
                 atol: (SCREENING_REDUCTION * r0).min(rtol * c_norm),
@@ -319,7 +320,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                 max_iter: ITERATIVE_MAX_ITER,
             }
         };
-        let report = pcg(amg.matrix(), amg, work, c, x, &opts)?;
+        let report = amg.pcg(work, c, x, &opts)?;
         let rate = (report.iterations > 0
             && report.residual_norm > 0.0
             && report.initial_residual_norm > 0.0)

@@ -216,7 +216,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                 let c = try_copy(&rhs, "the right-hand side")?;
                 let it = self
                     .csr(&values)
-                    .and_then(|a| self.solve_csr(state, a, &mut rhs, rtol, fixed, reuse));
+                    .and_then(|a| self.solve_csr(state, a.into(), &mut rhs, rtol, fixed, reuse));
                 match it {
                     Ok(r) => r,
                     // Auto chose the iterative solver by size: when the conjugate gradients
@@ -234,7 +234,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                 // multigrid hierarchy is built
                 let a = self.csr(&values)?;
                 drop(values);
-                self.solve_csr(state, a, &mut rhs, rtol, fixed, reuse)?
+                self.solve_csr(state, a.into(), &mut rhs, rtol, fixed, reuse)?
             }
         };
         let u = self.complete(fixed, &rhs)?;
@@ -262,12 +262,12 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             let (t2, out) = self.solve_direct(state, &values, &mut rhs)?;
             return Ok((rhs, t1, t2, out));
         };
-        let s = self.masked_rows(a, &fx)?;
+        let s = self.masked_rows(&fx)?;
         // the fixed values are not held through the multigrid setup and the solve (its peak
         // memory): the direct fallback masks them again, with the right-hand side
         drop(fx);
         let t1 = Instant::now();
-        match self.solve_csr(state, s, &mut rhs, rtol, fixed, reuse) {
+        match self.solve_csr(state, s.into(), &mut rhs, rtol, fixed, reuse) {
             Ok((t2, out)) => Ok((rhs, t1, t2, out)),
             // as for the gathered systems: with Auto, the direct solver takes over
             Err(_) if self.sym.options.linear == LinearSolver::Auto => {

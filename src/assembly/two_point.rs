@@ -150,7 +150,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let fx = self.fixed_values(fixed);
         let (a, rhs) = self.fixed_cell_system(cs, &fx)?;
         let t1 = Instant::now();
-        let hier = hierarchy(a, reuse, true, &mut state.amg)?;
+        let hier = hierarchy(a.into(), reuse, true, &mut state.amg)?;
         let t2 = Instant::now();
         let mut x = self.take_cell_guess(state, cs)?;
         let out = self.run_pcg(state, hier, &rhs, &mut x, rtol, fixed)?;

@@ -35,7 +35,7 @@ pub struct ProblemValues<const D: usize = 2> {
     pub signorini: Vec<PointDof<D>>,
     /// Schemes without interior unknowns: the global matrix, assembled once
     /// ([`super::assembled`]); `mats` and `loads` are then empty.
-    pub assembled: Option<CsrMatrix>,
+    pub assembled: Option<std::sync::Arc<CsrMatrix>>,
 }
 
 /// Cells per batch of [`ProblemValues::evaluate_assembled`] (64k tetrahedra: 5 MiB of local
@@ -130,7 +130,7 @@ impl<const D: usize> ProblemValues<D> {
             neumann_load: Vec::new(),
             dirichlet: try_filled(scheme.n_unknowns(), None, "the Dirichlet values")?,
             signorini: Vec::new(),
-            assembled: Some(a),
+            assembled: Some(std::sync::Arc::new(a)),
         };
         values.boundary_conditions(scheme, problem)?;
         Ok(values)

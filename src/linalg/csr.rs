@@ -24,6 +24,7 @@
 //! r0..r1 comes from the columns j < r1 whose last row reaches r0, scanned in increasing j
 //! (so again sorted), once to count and once to fill the chunk's own part of the arrays.
 
+use super::rows::Rows;
 use crate::budget::{AllocFailure, try_filled, try_vec};
 use rayon::prelude::*;
 
@@ -484,30 +485,7 @@ impl CsrMatrix {
     /// aborts, as `vec!` does, if it cannot be allocated (the library's solve paths use a
     /// fallible variant that returns the failure instead).
     pub fn diagonal(&self) -> Vec<f64> {
-        self.try_diagonal().unwrap_or_else(|f| f.abort())
-    }
-
-    /// [`CsrMatrix::diagonal`], or [`AllocFailure`] if it cannot be allocated.
-    pub(crate) fn try_diagonal(&self) -> Result<Vec<f64>, AllocFailure> {
-        let n = self.n_rows.min(self.n_cols);
-        let mut d = try_filled(n, 0.0, "the diagonal of the matrix")?;
-        let fill = |i0: usize, chunk: &mut [f64]| {
-            for (k, di) in chunk.iter_mut().enumerate() {
-                let i = i0 + k;
-                let (cols, vals) = self.row(i);
-                if let Ok(p) = cols.binary_search(&(i as u32)) {
-                    *di = vals[p];
-                }
-            }
-        };
-        if self.nnz() < PAR_MIN_NNZ {
-            fill(0, &mut d);
-        } else {
-            d.par_chunks_mut(ROW_CHUNK)
-                .enumerate()
-                .for_each(|(c, chunk)| fill(c * ROW_CHUNK, chunk));
-        }
-        Ok(d)
+        Rows::try_diagonal(self).unwrap_or_else(|f| f.abort())
     }
 
     /// y = A x, checked: `x` has `n_cols` entries and `y` has `n_rows`.
@@ -523,44 +501,6 @@ impl CsrMatrix {
         }
         self.mul_to(x, y);
         Ok(())
-    }
-
-    /// Σ_j a_ij x_j for row i.
-    #[inline(always)]
-    pub(crate) fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
-        let (cols, vals) = self.row(i);
-        let mut s = 0.0;
-        for (&j, &v) in cols.iter().zip(vals) {
-            s += v * x[j as usize];
-        }
-        s
-    }
-
-    /// Runs `f(i0, chunk)` on consecutive chunks of `y` (rows `i0..i0 + chunk.len()`), in
-    /// parallel when the matrix is large enough.
-    #[inline]
-    pub(crate) fn for_row_chunks<F>(&self, y: &mut [f64], f: F)
-    where
-        F: Fn(usize, &mut [f64]) + Sync + Send,
-    {
-        if self.nnz() < PAR_MIN_NNZ {
-            f(0, y);
-        } else {
-            y.par_chunks_mut(ROW_CHUNK)
-                .enumerate()
-                .for_each(|(c, chunk)| f(c * ROW_CHUNK, chunk));
-        }
-    }
-
-    /// y = A x (lengths are the caller's invariant).
-    pub(crate) fn mul_to(&self, x: &[f64], y: &mut [f64]) {
-        debug_assert_eq!(x.len(), self.n_cols);
-        debug_assert_eq!(y.len(), self.n_rows);
-        self.for_row_chunks(y, |i0, chunk| {
-            for (k, yi) in chunk.iter_mut().enumerate() {
-                *yi = self.row_dot(i0 + k, x);
-            }
-        });
     }
 
     /// y += A x (lengths are the caller's invariant).
@@ -588,42 +528,6 @@ impl CsrMatrix {
                 y[j as usize] += v * xi;
             }
         }
-    }
-
-    /// ‖b − A x‖₂ without storing the residual; partial sums over fixed chunks of rows, added
-    /// in order (the result does not depend on the threads).
-    pub(crate) fn residual_norm(&self, b: &[f64], x: &[f64]) -> f64 {
-        let part = |i0: usize, i1: usize| -> f64 {
-            (i0..i1)
-                .map(|i| {
-                    let d = b[i] - self.row_dot(i, x);
-                    d * d
-                })
-                .sum()
-        };
-        let n = self.n_rows;
-        let parts: Vec<f64> = if self.nnz() < PAR_MIN_NNZ {
-            vec![part(0, n)]
-        } else {
-            (0..n.div_ceil(ROW_CHUNK))
-                .into_par_iter()
-                .map(|c| part(c * ROW_CHUNK, ((c + 1) * ROW_CHUNK).min(n)))
-                .collect()
-        };
-        parts.iter().sum::<f64>().sqrt()
-    }
-
-    /// r = b − A x (lengths are the caller's invariant).
-    pub(crate) fn residual_to(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
-        debug_assert_eq!(x.len(), self.n_cols);
-        debug_assert_eq!(b.len(), self.n_rows);
-        debug_assert_eq!(r.len(), self.n_rows);
-        self.for_row_chunks(r, |i0, chunk| {
-            for (k, ri) in chunk.iter_mut().enumerate() {
-                let i = i0 + k;
-                *ri = b[i] - self.row_dot(i, x);
-            }
-        });
     }
 
     /// The transpose Aᵀ (a counting sort of the entries by column; rows of the result come

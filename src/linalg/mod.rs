@@ -37,9 +37,11 @@ pub mod csr;
 pub mod ordering;
 pub mod pcg;
 pub(crate) mod product_workspace;
+pub mod rows;
 
 pub use amg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, LevelSummary, Smoother};
 pub use cholesky::{CholeskyWork, FactorThreads, SpdFactor, SpdPattern};
 pub use csr::CsrMatrix;
 pub use ordering::{Ordering, nested_dissection};
 pub use pcg::{Identity, Jacobi, PcgOptions, PcgReport, Preconditioner, pcg};
+pub use rows::{MaskedRows, Rows};

@@ -18,7 +18,10 @@
 //! The vector operations run on all cores for long vectors, in fixed chunks; the partial sums
 //! of the dot products are added in chunk order, so results do not depend on the scheduling.
 
-use super::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
+#[cfg(test)]
+use super::csr::CsrMatrix;
+use super::csr::{PAR_MIN_NNZ, ROW_CHUNK};
+use super::rows::Rows;
 use crate::budget::{try_copy, try_filled, try_vec};
 use rayon::prelude::*;
 
@@ -63,7 +66,7 @@ pub struct Jacobi {
 impl Jacobi {
     /// The inverse diagonal of `a`; a diagonal entry that is not positive and finite is an
     /// error naming its row.
-    pub fn new(a: &CsrMatrix) -> crate::Result<Self> {
+    pub fn new<A: Rows + ?Sized>(a: &A) -> crate::Result<Self> {
         let d = a.try_diagonal()?;
         if let Some(i) = d.iter().position(|&v| !(v > 0.0 && v.is_finite())) {
             return Err(crate::Error::Linear(format!(
@@ -137,8 +140,8 @@ pub struct PcgReport {
 }
 
 /// The sizes of A, M, b and x agree and the tolerances are non-negative.
-fn check_inputs(
-    a: &CsrMatrix,
+fn check_inputs<A: Rows + ?Sized>(
+    a: &A,
     m_order: usize,
     b: &[f64],
     x: &[f64],
@@ -181,8 +184,8 @@ fn failure(n: usize, what: String, k: usize, res: f64) -> crate::Error {
 /// (pᵀAp ≤ 0 or rᵀM⁻¹r ≤ 0: A or M not positive definite), or no convergence within
 /// `max_iter` iterations; each names the iteration and the residual reached. On error `x` holds
 /// the last iterate.
-pub fn pcg<M: Preconditioner + ?Sized>(
-    a: &CsrMatrix,
+pub fn pcg<A: Rows + ?Sized, M: Preconditioner + ?Sized>(
+    a: &A,
     m: &M,
     work: &mut M::Work,
     b: &[f64],
@@ -219,8 +222,8 @@ pub fn pcg<M: Preconditioner + ?Sized>(
 /// `report`), with the preconditioner `m` and its workspace `work`, until ‖r‖₂ ≤ `tol` or
 /// `max_iter` iterations.
 #[allow(clippy::too_many_arguments)]
-fn iterate<M: Preconditioner + ?Sized>(
-    a: &CsrMatrix,
+fn iterate<A: Rows + ?Sized, M: Preconditioner + ?Sized>(
+    a: &A,
     m: &M,
     work: &mut M::Work,
     b: &[f64],
@@ -342,7 +345,7 @@ pub(crate) fn dot(u: &[f64], v: &[f64]) -> f64 {
 }
 
 /// q = A p, returning p·q (one sweep).
-fn mul_dot(a: &CsrMatrix, p: &[f64], q: &mut [f64]) -> f64 {
+fn mul_dot<A: Rows + ?Sized>(a: &A, p: &[f64], q: &mut [f64]) -> f64 {
     let n = q.len();
     let part = |c: usize, qc: &mut [f64]| -> f64 {
         let i0 = c * ROW_CHUNK;

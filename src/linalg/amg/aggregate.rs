@@ -3,25 +3,25 @@
 
 use super::NONE;
 use crate::budget::{AllocFailure, try_filled, try_vec};
-use crate::linalg::csr::CsrMatrix;
+use crate::linalg::rows::Rows;
 
-/// Greedy aggregation on the graph of the strong entries `strong` of A (see the module
+/// Greedy aggregation on the graph of the strong entries `strong` of A (flags at the
+/// offsets `rp` of its rows, [`strength`](super::strength::strength); see the module
 /// documentation): the aggregate of each unknown ([`NONE`] for an isolated one) and the
 /// number of aggregates; [`AllocFailure`] if its arrays cannot be allocated.
-pub(super) fn aggregate(
-    a: &CsrMatrix,
+pub(super) fn aggregate<A: Rows + ?Sized>(
+    a: &A,
+    rp: &[usize],
     strong: &[bool],
     diag: &[f64],
 ) -> Result<(Vec<u32>, usize), AllocFailure> {
     let n = a.n_rows();
-    let rp = a.row_ptr();
     // the strong entries (column, value) of row i
     let srow = |i: usize| {
-        let r = rp[i]..rp[i + 1];
-        a.col_idx()[r.clone()]
-            .iter()
-            .zip(&a.values()[r.clone()])
-            .zip(&strong[r])
+        let (cols, vals) = a.row(i);
+        cols.iter()
+            .zip(vals)
+            .zip(&strong[rp[i]..rp[i + 1]])
             .filter(|(_, s)| **s)
             .map(|((&j, &v), _)| (j as usize, v))
     };
@@ -117,8 +117,8 @@ mod tests {
         // a row of unit rows (fixed unknowns) across the grid
         let a = fix(&grid(m, 1.0, 1.0, &|_, _| 1.0), &|k| k / m == 10);
         let d = a.diagonal();
-        let strong = strength(&a, &d, 0.08).unwrap();
-        let (agg, n_agg) = aggregate(&a, &strong, &d).unwrap();
+        let strong = strength(&a, a.row_ptr(), &d, 0.08).unwrap();
+        let (agg, n_agg) = aggregate(&a, a.row_ptr(), &strong, &d).unwrap();
         // the decoupled rows belong to no aggregate, every other unknown to one
         for (k, &g) in agg.iter().enumerate() {
             assert_eq!(g == NONE, k / m == 10, "unknown {k}");

@@ -1,7 +1,7 @@
 //! The solve on the coarsest level: a dense Cholesky factorisation A_L = L Lᵀ, once per
 //! hierarchy, and two triangular solves per cycle.
 
-use crate::linalg::csr::CsrMatrix;
+use crate::linalg::rows::Rows;
 
 /// The solver of the coarsest level.
 #[derive(Debug, Clone)]
@@ -28,7 +28,7 @@ impl CoarseSolve {
 const FAER_LLT_RECURSION: usize = 64;
 
 /// The dense Cholesky factor of the coarsest operator (faer), packed.
-pub(super) fn dense_cholesky(a: &CsrMatrix, level: usize) -> crate::Result<CoarseSolve> {
+pub(super) fn dense_cholesky<A: Rows + ?Sized>(a: &A, level: usize) -> crate::Result<CoarseSolve> {
     let n = a.n_rows();
     if n == 0 {
         return Ok(CoarseSolve::Dense { n, l: Vec::new() });

@@ -1,9 +1,10 @@
 //! The V(1,1)-cycle, one application of M⁻¹ (see [`super`]), and its workspace.
 
-use super::Amg;
 use super::coarse::{CoarseSolve, dense_solve};
+use super::{Amg, on_fine};
 use crate::budget::{AllocFailure, try_resize};
-use crate::linalg::pcg::{Preconditioner, check_len};
+use crate::linalg::pcg::{PcgOptions, PcgReport, Preconditioner, check_len, pcg};
+use crate::linalg::rows::Rows;
 
 /// Vectors of one level.
 #[derive(Debug, Clone, Default)]
@@ -21,7 +22,7 @@ impl LevelWork {
     /// Gives each vector the length `level` of `amg` needs (keeping its memory when it has
     /// it already), or [`AllocFailure`] if it cannot be had.
     fn fit(&mut self, amg: &Amg, level: usize) -> Result<(), AllocFailure> {
-        let n = amg.op(level).n_rows();
+        let n = amg.order(level);
         let bx = if level > 0 { n } else { 0 };
         let dd = amg.h.smoothers[level].vectors();
         let what = "the vectors of the multigrid cycle";
@@ -88,12 +89,34 @@ impl Amg<'_> {
         Ok(())
     }
 
+    /// Order of level ℓ.
+    fn order(&self, level: usize) -> usize {
+        match level {
+            0 => self.n(),
+            l => self.h.coarse_ops[l - 1].n_rows(),
+        }
+    }
+
     /// x = cycle_ℓ(b) (x is overwritten); `work[k]` holds the vectors of level ℓ + k.
     fn cycle(&self, level: usize, b: &[f64], x: &mut [f64], work: &mut [LevelWork]) {
+        match level {
+            0 => on_fine!(&self.fine, a => self.cycle_on(a, 0, b, x, work)),
+            l => self.cycle_on(&self.h.coarse_ops[l - 1], l, b, x, work),
+        }
+    }
+
+    /// [`Self::cycle`] on level ℓ, whose operator is `a`.
+    fn cycle_on<A: Rows + ?Sized>(
+        &self,
+        a: &A,
+        level: usize,
+        b: &[f64],
+        x: &mut [f64],
+        work: &mut [LevelWork],
+    ) {
         let Some((w, rest)) = work.split_first_mut() else {
             return;
         };
-        let a = self.op(level);
         let sm = &self.h.smoothers[level];
         if level + 1 == self.n_levels() {
             match &self.h.coarse {
@@ -120,6 +143,20 @@ impl Amg<'_> {
     }
 }
 
+impl Amg<'_> {
+    /// Conjugate gradients on A₀ x = b (A₀ the fine matrix) from `x`, preconditioned by this
+    /// hierarchy with the workspace `work` (see [`pcg()`]).
+    pub fn pcg(
+        &self,
+        work: &mut AmgWork,
+        b: &[f64],
+        x: &mut [f64],
+        opts: &PcgOptions,
+    ) -> crate::Result<PcgReport> {
+        on_fine!(&self.fine, a => pcg(a, self, work, b, x, opts))
+    }
+}
+
 impl Preconditioner for Amg<'_> {
     type Work = AmgWork;
     fn n(&self) -> usize {
@@ -138,7 +175,7 @@ mod tests {
     use super::super::testing::grid;
     use super::super::{AmgOptions, Smoother};
     use super::*;
-    use crate::linalg::pcg::{PcgOptions, dot, pcg};
+    use crate::linalg::pcg::{PcgOptions, dot};
 
     #[test]
     fn the_cycle_is_symmetric_positive_definite() {
@@ -197,7 +234,7 @@ mod tests {
             atol: 0.0,
             max_iter: 200,
         };
-        let rep = pcg(amg.matrix(), amg, work, b, &mut x, &opts).unwrap();
+        let rep = amg.pcg(work, b, &mut x, &opts).unwrap();
         (x, rep.iterations)
     }
 

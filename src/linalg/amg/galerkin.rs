@@ -4,6 +4,7 @@ use super::NONE;
 use super::rows::build_rows;
 use crate::budget::{AllocFailure, try_filled, try_grow};
 use crate::linalg::csr::CsrMatrix;
+use crate::linalg::rows::Rows;
 
 /// A dense accumulator of a sparse row: the values by column and the list of touched columns.
 struct Accumulator {
@@ -63,8 +64,8 @@ impl Accumulator {
 /// row J of A_c = Σ_k (R A)_Jk P_k in another, sorted; R A is not stored. The same sums in the
 /// same order as forming R A first. [`AllocFailure`] if A_c or the accumulators cannot be
 /// allocated.
-pub(super) fn galerkin(
-    a: &CsrMatrix,
+pub(super) fn galerkin<A: Rows + ?Sized>(
+    a: &A,
     p: &CsrMatrix,
     r: &CsrMatrix,
 ) -> Result<CsrMatrix, AllocFailure> {

@@ -105,8 +105,10 @@ pub use cycle::AmgWork;
 pub use options::{AmgOptions, Smoother};
 
 use crate::linalg::csr::CsrMatrix;
+use crate::linalg::rows::{MaskedRows, Rows};
 use coarse::CoarseSolve;
 use smooth::LevelSmoother;
+use std::borrow::Cow;
 
 /// "No aggregate" / "no position".
 const NONE: u32 = u32::MAX;
@@ -134,14 +136,72 @@ struct Transfer {
     p: CsrMatrix,
 }
 
+/// The fine matrix A₀ of a hierarchy: stored by rows (borrowed or owned), or the masked
+/// view of a shared matrix ([`MaskedRows`]: the system of a solve with fixed unknowns,
+/// without a copy of the matrix).
+#[derive(Debug, Clone)]
+pub enum Fine<'a> {
+    /// Stored by rows.
+    Csr(Cow<'a, CsrMatrix>),
+    /// A masked view.
+    Masked(MaskedRows),
+}
+
+/// `$body` with `$a` bound to the fine matrix `$fine` ([`Fine`]) as its own type, so that
+/// the loops over its rows are compiled for that type (no dispatch per row).
+macro_rules! on_fine {
+    ($fine:expr, $a:ident => $body:expr) => {
+        match $fine {
+            $crate::linalg::amg::Fine::Csr(m) => {
+                let $a: &$crate::linalg::CsrMatrix = m;
+                $body
+            }
+            $crate::linalg::amg::Fine::Masked(m) => {
+                let $a: &$crate::linalg::MaskedRows = m;
+                $body
+            }
+        }
+    };
+}
+pub(crate) use on_fine;
+
+impl From<CsrMatrix> for Fine<'static> {
+    fn from(a: CsrMatrix) -> Self {
+        Fine::Csr(Cow::Owned(a))
+    }
+}
+
+impl From<MaskedRows> for Fine<'static> {
+    fn from(a: MaskedRows) -> Self {
+        Fine::Masked(a)
+    }
+}
+
+impl Fine<'_> {
+    /// Order.
+    pub fn n(&self) -> usize {
+        on_fine!(self, a => a.n_rows())
+    }
+
+    /// Stored entries.
+    pub fn nnz(&self) -> usize {
+        on_fine!(self, a => Rows::nnz(a))
+    }
+
+    /// ‖b − A₀ x‖₂.
+    pub fn residual_norm(&self, b: &[f64], x: &[f64]) -> f64 {
+        on_fine!(self, a => a.residual_norm(b, x))
+    }
+}
+
 /// A smoothed-aggregation multigrid preconditioner for a symmetric positive definite matrix
-/// (see the module documentation): the fine matrix, borrowed or owned, and the hierarchy
-/// built from it. Built by [`Amg::new`] or [`Amg::owning`], applied by [`Amg::apply`] with a
-/// workspace ([`AmgWork`]) the caller owns.
+/// (see the module documentation): the fine matrix ([`Fine`]) and the hierarchy built from
+/// it. Built by [`Amg::new`], [`Amg::owning`] or [`Amg::masked`], applied by [`Amg::apply`]
+/// with a workspace ([`AmgWork`]) the caller owns.
 #[derive(Debug, Clone)]
 pub struct Amg<'a> {
-    /// A₀, borrowed ([`Amg::new`]) or owned ([`Amg::owning`]).
-    fine: std::borrow::Cow<'a, CsrMatrix>,
+    /// A₀.
+    fine: Fine<'a>,
     /// Everything else.
     h: CoarseHierarchy,
 }
@@ -170,29 +230,23 @@ pub struct CoarseHierarchy {
     coarse: CoarseSolve,
 }
 
-impl Amg<'_> {
+impl<'a> Amg<'a> {
     /// The fine matrix A₀, given back (a copy if it was borrowed).
-    pub fn into_matrix(self) -> CsrMatrix {
-        self.fine.into_owned()
+    pub fn into_fine(self) -> Fine<'static> {
+        match self.fine {
+            Fine::Csr(a) => Fine::Csr(Cow::Owned(a.into_owned())),
+            Fine::Masked(m) => Fine::Masked(m),
+        }
     }
 
     /// The fine matrix A₀.
-    pub fn matrix(&self) -> &CsrMatrix {
+    pub fn fine(&self) -> &Fine<'a> {
         &self.fine
     }
 
     /// Order of the fine matrix.
     pub fn n(&self) -> usize {
-        self.fine.n_rows()
-    }
-
-    /// The operator of level ℓ.
-    fn op(&self, level: usize) -> &CsrMatrix {
-        if level == 0 {
-            &self.fine
-        } else {
-            &self.h.coarse_ops[level - 1]
-        }
+        self.fine.n()
     }
 
     /// Number of levels (≥ 1).
@@ -202,11 +256,15 @@ impl Amg<'_> {
 
     /// Unknowns and stored entries of each level, fine to coarse.
     pub fn levels(&self) -> Vec<LevelSummary> {
-        (0..self.n_levels())
-            .map(|l| LevelSummary {
-                n: self.op(l).n_rows(),
-                nnz: self.op(l).nnz(),
-            })
+        let fine = LevelSummary {
+            n: self.fine.n(),
+            nnz: self.fine.nnz(),
+        };
+        std::iter::once(fine)
+            .chain(self.h.coarse_ops.iter().map(|a| LevelSummary {
+                n: a.n_rows(),
+                nnz: a.nnz(),
+            }))
             .collect()
     }
 
@@ -307,7 +365,61 @@ mod tests {
         assert!(iterations(&all, &AmgOptions::default()) <= 2);
     }
 
-    /// PCG iterations to ‖r‖ ≤ 1e-10 ‖b‖ with the preconditioner `amg`, for b = A x* with x*
+    #[test]
+    fn a_masked_view_gives_the_hierarchy_and_solve_of_its_copy() {
+        // large enough that the setup, the sweeps and the products run in parallel
+        let m = 260;
+        let a = grid(m, 1.0, 0.5, &|i, _| 1.0 + (i % 5) as f64);
+        let fixed = |k: usize| {
+            let (x, y) = (
+                (k % m) as f64 / m as f64 - 0.4,
+                (k / m) as f64 / m as f64 - 0.5,
+            );
+            x * x + y * y < 0.04 || k.is_multiple_of(89)
+        };
+        let mut copy = fix(&a, &fixed);
+        copy.drop_zeros();
+        let view = MaskedRows::new(std::sync::Arc::new(a), fixed).unwrap();
+        assert!(view.patched_rows() > 0);
+        let opts = AmgOptions::default();
+        let (from_copy, from_view) = (
+            Amg::new(&copy, &opts).unwrap(),
+            Amg::masked(view, &opts).unwrap(),
+        );
+        assert!(from_copy.n_levels() >= 3);
+        assert_eq!(from_copy.levels(), from_view.levels());
+        let b: Vec<f64> = (0..m * m).map(|i| (i as f64 * 0.23).sin()).collect();
+        let opts = PcgOptions {
+            rtol: 1e-10,
+            atol: 0.0,
+            max_iter: 100,
+        };
+        let solve = |amg: &Amg| {
+            let mut x = vec![0.0; m * m];
+            let rep = amg.pcg(&mut AmgWork::new(), &b, &mut x, &opts).unwrap();
+            (x, rep.iterations, rep.residual_norm)
+        };
+        let (x0, x1) = (solve(&from_copy), solve(&from_view));
+        assert!(x0.1 > 3 && x0.2 <= 1e-10 * b.iter().map(|v| v * v).sum::<f64>().sqrt());
+        assert_eq!(x0, x1);
+        // reused coarse levels under another view of the same matrix: again the same bits
+        let other = |k: usize| fixed(k) || k % m == 7;
+        let mut copy2 = fix(&copy, &other);
+        copy2.drop_zeros();
+        let view2 = match from_view.fine() {
+            Fine::Masked(v) => MaskedRows::new(v.unmasked().clone(), other).unwrap(),
+            Fine::Csr(_) => unreachable!("built from a view"),
+        };
+        let c0 = from_copy
+            .into_coarse()
+            .unwrap()
+            .with_fine(copy2.into(), &AmgOptions::default());
+        let c1 = from_view
+            .into_coarse()
+            .unwrap()
+            .with_fine(view2.into(), &AmgOptions::default());
+        assert_eq!(solve(&c0.unwrap()), solve(&c1.unwrap()));
+    }
 
     #[test]
     fn empty_and_tiny_matrices() {

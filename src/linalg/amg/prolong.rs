@@ -6,6 +6,7 @@ use super::rows::build_counted_rows;
 use super::spectral::lanczos_lambda_max;
 use crate::budget::{AllocFailure, try_filled};
 use crate::linalg::csr::{CsrMatrix, ROW_CHUNK};
+use crate::linalg::rows::Rows;
 use rayon::prelude::*;
 
 /// P = (I − ω D_F⁻¹ A_F) T (see the module documentation): row i is
@@ -13,8 +14,8 @@ use rayon::prelude::*;
 /// |a_ij| ≥ θ_P a_ii and lumps the others into d^F_i = a_ii + Σ_{j dropped} a_ij; for the
 /// near-null vector `b` of this level. Also returns the near-null vector of the next level.
 /// [`AllocFailure`] if P or the vectors of its construction cannot be allocated.
-pub(super) fn smoothed_prolongator(
-    a: &CsrMatrix,
+pub(super) fn smoothed_prolongator<A: Rows + ?Sized>(
+    a: &A,
     diag: &[f64],
     agg: &[u32],
     n_agg: usize,
@@ -110,7 +111,7 @@ impl Filter<'_> {
 
 /// The diagonal of A_F, d^F_i = a_ii + Σ_{j dropped} a_ij (a_ii where lumping positive entries
 /// would leave it non-positive).
-fn filtered_diagonal(a: &CsrMatrix, filter: Filter) -> Result<Vec<f64>, AllocFailure> {
+fn filtered_diagonal<A: Rows + ?Sized>(a: &A, filter: Filter) -> Result<Vec<f64>, AllocFailure> {
     let diag = filter.diag;
     let mut dfil = try_filled(a.n_rows(), 0.0, "the filtered diagonal")?;
     a.for_row_chunks(&mut dfil, |i0, chunk| {
@@ -133,8 +134,8 @@ fn filtered_diagonal(a: &CsrMatrix, filter: Filter) -> Result<Vec<f64>, AllocFai
 /// ω = 4 / (3 ρ) of the prolongator smoothing, with ρ the Gershgorin bound of
 /// ρ(D_F⁻¹ A_F), max_i 1 + Σ_{j kept} |a_ij| / d^F_i, or, on a level with positive
 /// off-diagonal entries, 1.1 times the Lanczos estimate of λ_max(D⁻¹A) when smaller.
-fn damping(
-    a: &CsrMatrix,
+fn damping<A: Rows + ?Sized>(
+    a: &A,
     filter: Filter,
     dfil: &[f64],
     spectral_steps: usize,

@@ -3,8 +3,8 @@
 
 use super::setup::validate;
 use super::smooth::LevelSmoother;
-use super::{Amg, AmgOptions, CoarseHierarchy};
-use crate::linalg::csr::CsrMatrix;
+use super::{Amg, AmgOptions, CoarseHierarchy, Fine, on_fine};
+use crate::linalg::rows::Rows;
 
 impl Amg<'_> {
     /// The hierarchy without its fine matrix (which is freed), to precondition a changed
@@ -32,23 +32,20 @@ impl CoarseHierarchy {
     /// these coarse levels (see the type's docs). Errors: another order, or what
     /// [`Amg::new`] rejects in a fine matrix (a non-finite entry, a missing or non-positive
     /// diagonal entry).
-    pub fn with_fine(self, a: CsrMatrix, opts: &AmgOptions) -> crate::Result<Amg<'static>> {
+    pub fn with_fine(self, a: Fine<'static>, opts: &AmgOptions) -> crate::Result<Amg<'static>> {
         opts.check()?;
-        if a.n_rows() != self.n {
+        if a.n() != self.n {
             return Err(crate::Error::Linear(format!(
                 "multigrid: a hierarchy built for order {} cannot precondition a matrix of \
                  order {}",
                 self.n,
-                a.n_rows()
+                a.n()
             )));
         }
-        validate(&a)?;
+        on_fine!(&a, m => validate(m))?;
         let mut h = self;
-        h.smoothers[0] = LevelSmoother::new(&a, &a.try_diagonal()?, opts)?;
-        Ok(Amg {
-            fine: std::borrow::Cow::Owned(a),
-            h,
-        })
+        h.smoothers[0] = on_fine!(&a, m => LevelSmoother::new(m, &m.try_diagonal()?, opts))?;
+        Ok(Amg { fine: a, h })
     }
 }
 
@@ -79,7 +76,7 @@ mod tests {
             .unwrap()
             .into_coarse()
             .unwrap()
-            .with_fine(a0.clone(), &opts)
+            .with_fine(a0.clone().into(), &opts)
             .unwrap();
         let r: Vec<f64> = (0..m * m).map(|i| (i as f64 * 0.11).cos()).collect();
         let (mut z0, mut z1) = (vec![0.0; m * m], vec![0.0; m * m]);
@@ -97,7 +94,7 @@ mod tests {
                 .into_coarse()
                 .unwrap();
             assert_eq!(coarse.n(), m * m);
-            let reused = iterations_with(&a1, &coarse.with_fine(a1.clone(), &opts).unwrap());
+            let reused = iterations_with(&a1, &coarse.with_fine(a1.clone().into(), &opts).unwrap());
             (fresh, reused)
         };
         // measured (fresh, reused) iterations: a thin ring, 32 to 84 unknowns (0.1–0.4%):
@@ -120,7 +117,7 @@ mod tests {
         // another order is an error; a one-level hierarchy has no coarse levels to keep
         let coarse = fresh0.into_coarse().unwrap();
         let small = grid(10, 1.0, 1.0, &|_, _| 1.0);
-        assert!(coarse.with_fine(small.clone(), &opts).is_err());
+        assert!(coarse.with_fine(small.clone().into(), &opts).is_err());
         assert!(Amg::owning(small, &opts).unwrap().into_coarse().is_none());
     }
 }

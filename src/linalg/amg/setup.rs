@@ -8,10 +8,13 @@ use super::galerkin::galerkin;
 use super::prolong::smoothed_prolongator;
 use super::smooth::LevelSmoother;
 use super::strength::strength;
-use super::{Amg, AmgOptions, CoarseHierarchy, DENSE_MAX, Transfer};
+use super::{Amg, AmgOptions, CoarseHierarchy, DENSE_MAX, Fine, Transfer, on_fine};
 use crate::budget::try_filled;
 use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ};
+use crate::linalg::rows::MaskedRows;
+use crate::linalg::rows::Rows;
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 impl<'a> Amg<'a> {
     /// Builds the hierarchy of `a` (square, symmetric, positive definite; symmetry is the
@@ -21,87 +24,111 @@ impl<'a> Amg<'a> {
     /// diagonal, invalid options, or a coarse operator that is not numerically positive
     /// definite (then neither is `a`).
     pub fn new(a: &'a CsrMatrix, opts: &AmgOptions) -> crate::Result<Self> {
-        opts.check()?;
-        validate(a)?;
-        let mut coarse_ops: Vec<CsrMatrix> = Vec::new();
-        let mut transfers = Vec::new();
-        let mut smoothers = Vec::new();
-        // the near-null space of the current level (the constants on the fine one)
-        let mut near_null = try_filled(a.n_rows(), 1.0, "the near-null vector")?;
-        loop {
-            let level = coarse_ops.len();
-            let al = coarse_ops.last().unwrap_or(a);
-            let diag = al.try_diagonal()?;
-            if level > 0
-                && let Some(i) = diag.iter().position(|&d| !(d > 0.0 && d.is_finite()))
-            {
-                return Err(crate::Error::Linear(format!(
-                    "multigrid setup: the coarse operator of level {level} has the diagonal \
-                     entry {:e} at row {i}: the matrix is not positive definite",
-                    diag[i]
-                )));
-            }
-            smoothers.push(LevelSmoother::new(al, &diag, opts)?);
-            let n = al.n_rows();
-            if n <= opts.max_coarse || level + 1 >= opts.max_levels {
-                break;
-            }
-            let strong = strength(al, &diag, opts.strength_threshold)?;
-            let (agg, n_agg) = aggregate(al, &strong, &diag)?;
-            drop(strong);
-            // stop when coarsening stalls (every row decoupled, or barely any reduction)
-            if n_agg == 0 || n_agg as f64 > 0.85 * n as f64 {
-                break;
-            }
-            let (p, b_next) = smoothed_prolongator(
-                al,
-                &diag,
-                &agg,
-                n_agg,
-                &near_null,
-                opts.smoothing_threshold,
-                opts.spectral_steps,
-            )?;
-            near_null = b_next;
-            // the Galerkin product is the setup's largest transient: what the level no longer
-            // needs is freed first
-            drop((diag, agg));
-            let ac = galerkin(al, &p, &p.transpose()?)?;
-            transfers.push(Transfer { p });
-            coarse_ops.push(ac);
-        }
-        let last = coarse_ops.last().unwrap_or(a);
-        let coarse = if last.n_rows() <= DENSE_MAX {
-            dense_cholesky(last, coarse_ops.len())?
-        } else {
-            CoarseSolve::Smooth
-        };
-        Ok(Amg {
-            fine: std::borrow::Cow::Borrowed(a),
-            h: CoarseHierarchy {
-                n: a.n_rows(),
-                coarse_ops,
-                transfers,
-                smoothers,
-                coarse,
-            },
-        })
+        Amg::build(Fine::Csr(Cow::Borrowed(a)), opts)
     }
 
     /// [`Amg::new`] keeping `a` (for a hierarchy that outlives the caller's borrow, e.g. kept
-    /// to continue a solve later); [`Amg::matrix`] gives it back.
+    /// to continue a solve later); [`Amg::fine`] gives it back.
     pub fn owning(a: CsrMatrix, opts: &AmgOptions) -> crate::Result<Amg<'static>> {
-        let h = Amg::new(&a, opts)?.h;
-        Ok(Amg {
-            fine: std::borrow::Cow::Owned(a),
-            h,
-        })
+        Amg::build(Fine::Csr(Cow::Owned(a)), opts)
     }
+
+    /// [`Amg::new`] for the masked view `a` (which it keeps).
+    pub fn masked(a: MaskedRows, opts: &AmgOptions) -> crate::Result<Amg<'static>> {
+        Amg::build(Fine::Masked(a), opts)
+    }
+
+    /// [`Amg::new`] for the fine matrix `fine`.
+    pub fn build(fine: Fine<'a>, opts: &AmgOptions) -> crate::Result<Self> {
+        opts.check()?;
+        on_fine!(&fine, a => validate(a))?;
+        let h = on_fine!(&fine, a => hierarchy(a, opts))?;
+        Ok(Amg { fine, h })
+    }
+}
+
+/// The levels below the fine matrix `a` (see [`Amg::new`]).
+fn hierarchy<A: Rows + ?Sized>(a: &A, opts: &AmgOptions) -> crate::Result<CoarseHierarchy> {
+    let mut coarse_ops: Vec<CsrMatrix> = Vec::new();
+    let mut transfers = Vec::new();
+    let mut smoothers = Vec::new();
+    // the near-null space of the current level (the constants on the fine one)
+    let near_null = try_filled(a.n_rows(), 1.0, "the near-null vector")?;
+    let mut next = level(a, 0, near_null, opts, &mut smoothers)?;
+    while let Some((p, ac, near_null)) = next {
+        transfers.push(Transfer { p });
+        coarse_ops.push(ac);
+        let l = coarse_ops.len();
+        next = level(&coarse_ops[l - 1], l, near_null, opts, &mut smoothers)?;
+    }
+    let coarse = match coarse_ops.last() {
+        Some(last) if last.n_rows() <= DENSE_MAX => dense_cholesky(last, coarse_ops.len())?,
+        None if a.n_rows() <= DENSE_MAX => dense_cholesky(a, 0)?,
+        _ => CoarseSolve::Smooth,
+    };
+    Ok(CoarseHierarchy {
+        n: a.n_rows(),
+        coarse_ops,
+        transfers,
+        smoothers,
+        coarse,
+    })
+}
+
+/// One level of the setup: the smoother of level `level` (operator `al`, near-null space
+/// `near_null`), pushed on `smoothers`, and unless this is the coarsest level, the
+/// prolongator to the next, the next operator and its near-null space.
+#[allow(clippy::type_complexity)]
+fn level<A: Rows + ?Sized>(
+    al: &A,
+    level: usize,
+    near_null: Vec<f64>,
+    opts: &AmgOptions,
+    smoothers: &mut Vec<LevelSmoother>,
+) -> crate::Result<Option<(CsrMatrix, CsrMatrix, Vec<f64>)>> {
+    let diag = al.try_diagonal()?;
+    if level > 0
+        && let Some(i) = diag.iter().position(|&d| !(d > 0.0 && d.is_finite()))
+    {
+        return Err(crate::Error::Linear(format!(
+            "multigrid setup: the coarse operator of level {level} has the diagonal \
+             entry {:e} at row {i}: the matrix is not positive definite",
+            diag[i]
+        )));
+    }
+    smoothers.push(LevelSmoother::new(al, &diag, opts)?);
+    let n = al.n_rows();
+    if n <= opts.max_coarse || level + 1 >= opts.max_levels {
+        return Ok(None);
+    }
+    let (agg, n_agg) = {
+        let rp = al.offsets()?;
+        let strong = strength(al, &rp, &diag, opts.strength_threshold)?;
+        aggregate(al, &rp, &strong, &diag)?
+    };
+    // stop when coarsening stalls (every row decoupled, or barely any reduction)
+    if n_agg == 0 || n_agg as f64 > 0.85 * n as f64 {
+        return Ok(None);
+    }
+    let (p, b_next) = smoothed_prolongator(
+        al,
+        &diag,
+        &agg,
+        n_agg,
+        &near_null,
+        opts.smoothing_threshold,
+        opts.spectral_steps,
+    )?;
+    // the Galerkin product is the setup's largest transient: what the level no longer needs
+    // is freed first
+    drop((diag, agg, near_null));
+    let ac = galerkin(al, &p, &p.transpose()?)?;
+    Ok(Some((p, ac, b_next)))
 }
 
 /// Checks the fine matrix: square, finite, with a positive diagonal entry in every row. The
 /// first offending row (in order) is reported.
-pub(super) fn validate(a: &CsrMatrix) -> crate::Result<()> {
+pub(super) fn validate<A: Rows + ?Sized>(a: &A) -> crate::Result<()> {
     let n = a.n_rows();
     if a.n_cols() != n {
         return Err(crate::Error::Linear(format!(

@@ -5,7 +5,8 @@ use super::cycle::LevelWork;
 use super::options::{AmgOptions, Smoother};
 use super::spectral::{gershgorin, lanczos_lambda_max};
 use crate::budget::{AllocFailure, try_filled, try_vec};
-use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
+use crate::linalg::csr::{PAR_MIN_NNZ, ROW_CHUNK};
+use crate::linalg::rows::Rows;
 use rayon::prelude::*;
 
 /// The data of the smoother on one level.
@@ -32,8 +33,8 @@ pub(super) enum LevelSmoother {
 impl LevelSmoother {
     /// The smoother `opts` names for the matrix `a` with diagonal `diag`, or [`AllocFailure`]
     /// if its vectors cannot be allocated.
-    pub(super) fn new(
-        a: &CsrMatrix,
+    pub(super) fn new<A: Rows + ?Sized>(
+        a: &A,
         diag: &[f64],
         opts: &AmgOptions,
     ) -> Result<Self, AllocFailure> {
@@ -113,7 +114,14 @@ impl LevelSmoother {
 
     /// The Chebyshev smoother's step ([`chebyshev`]): as pre-smoother (from x = 0, leaving
     /// the residual in `w.r`) or as post-smoother; nothing for the other smoothers.
-    fn chebyshev(&self, a: &CsrMatrix, b: &[f64], x: &mut [f64], w: &mut LevelWork, pre: bool) {
+    fn chebyshev<A: Rows + ?Sized>(
+        &self,
+        a: &A,
+        b: &[f64],
+        x: &mut [f64],
+        w: &mut LevelWork,
+        pre: bool,
+    ) {
         if let LevelSmoother::Chebyshev {
             inv_diag,
             lo,
@@ -126,7 +134,7 @@ impl LevelSmoother {
     }
 
     /// Pre-smoothing from x = 0: x ← S(b), leaving r = b − A x in `w.r`.
-    pub(super) fn pre(&self, a: &CsrMatrix, b: &[f64], x: &mut [f64], w: &mut LevelWork) {
+    pub(super) fn pre<A: Rows + ?Sized>(&self, a: &A, b: &[f64], x: &mut [f64], w: &mut LevelWork) {
         match self {
             LevelSmoother::Chebyshev { .. } => self.chebyshev(a, b, x, w, true),
             LevelSmoother::L1Jacobi { inv_l1 } => {
@@ -145,7 +153,13 @@ impl LevelSmoother {
     }
 
     /// Post-smoothing: x ← x + S'(b − A x) (the adjoint of [`Self::pre`]).
-    pub(super) fn post(&self, a: &CsrMatrix, b: &[f64], x: &mut [f64], w: &mut LevelWork) {
+    pub(super) fn post<A: Rows + ?Sized>(
+        &self,
+        a: &A,
+        b: &[f64],
+        x: &mut [f64],
+        w: &mut LevelWork,
+    ) {
         match self {
             LevelSmoother::Chebyshev { .. } => self.chebyshev(a, b, x, w, false),
             LevelSmoother::L1Jacobi { inv_l1 } => {
@@ -176,7 +190,7 @@ fn gs_block(n: usize) -> usize {
 
 /// Runs `f(i0, u, v, w)` on matching chunks (rows i0..) of three vectors of length n, in
 /// parallel when the matrix `a` of the level is large enough.
-fn rows3<F>(a: &CsrMatrix, u: &mut [f64], v: &mut [f64], w: &mut [f64], f: F)
+fn rows3<A: Rows + ?Sized, F>(a: &A, u: &mut [f64], v: &mut [f64], w: &mut [f64], f: F)
 where
     F: Fn(usize, &mut [f64], &mut [f64], &mut [f64]) + Sync + Send,
 {
@@ -192,7 +206,7 @@ where
 }
 
 /// As [`rows3`] with two vectors.
-fn rows2<F>(a: &CsrMatrix, u: &mut [f64], v: &mut [f64], f: F)
+fn rows2<A: Rows + ?Sized, F>(a: &A, u: &mut [f64], v: &mut [f64], f: F)
 where
     F: Fn(usize, &mut [f64], &mut [f64]) + Sync + Send,
 {
@@ -207,7 +221,7 @@ where
 }
 
 /// As [`rows3`] with one vector.
-fn rows1<F>(a: &CsrMatrix, u: &mut [f64], f: F)
+fn rows1<A: Rows + ?Sized, F>(a: &A, u: &mut [f64], f: F)
 where
     F: Fn(usize, &mut [f64]) + Sync + Send,
 {
@@ -222,8 +236,8 @@ where
 /// With `want_residual`, `w.r` = b − A x on exit. Each product with A is one fused sweep that
 /// also updates r, d and x.
 #[allow(clippy::too_many_arguments)]
-fn chebyshev(
-    a: &CsrMatrix,
+fn chebyshev<A: Rows + ?Sized>(
+    a: &A,
     inv_diag: &[f64],
     lo: f64,
     hi: f64,
@@ -311,8 +325,8 @@ fn chebyshev(
 /// (the entries right of the diagonal and outside the block multiply zeros), which neither
 /// reads x beforehand nor needs it zeroed. Otherwise the sweep is backward (the adjoint of the
 /// forward one).
-fn gauss_seidel(
-    a: &CsrMatrix,
+fn gauss_seidel<A: Rows + ?Sized>(
+    a: &A,
     inv_diag: &[f64],
     block: usize,
     b: &[f64],

@@ -2,12 +2,15 @@
 //! and the interval of the Chebyshev smoother (see [`super`]).
 
 use crate::budget::{AllocFailure, try_filled, try_vec};
-use crate::linalg::csr::{CsrMatrix, ROW_CHUNK};
+#[cfg(test)]
+use crate::linalg::csr::CsrMatrix;
+use crate::linalg::csr::ROW_CHUNK;
 use crate::linalg::pcg::dot;
+use crate::linalg::rows::Rows;
 use rayon::prelude::*;
 
 /// Gershgorin bound of ρ(D⁻¹A): max_i Σ_j |a_ij| / a_ii.
-pub(super) fn gershgorin(a: &CsrMatrix, diag: &[f64]) -> f64 {
+pub(super) fn gershgorin<A: Rows + ?Sized>(a: &A, diag: &[f64]) -> f64 {
     (0..a.n_rows())
         .into_par_iter()
         .with_min_len(ROW_CHUNK)
@@ -18,8 +21,8 @@ pub(super) fn gershgorin(a: &CsrMatrix, diag: &[f64]) -> f64 {
 /// The largest Ritz value of `steps` Lanczos steps on D^{-1/2} A D^{-1/2} (similar to D⁻¹A),
 /// from a fixed pseudo-random start: a lower bound of λ_max(D⁻¹A), usually close.
 /// [`AllocFailure`] if its vectors cannot be allocated.
-pub(super) fn lanczos_lambda_max(
-    a: &CsrMatrix,
+pub(super) fn lanczos_lambda_max<A: Rows + ?Sized>(
+    a: &A,
     diag: &[f64],
     steps: usize,
 ) -> Result<f64, AllocFailure> {

@@ -2,18 +2,24 @@
 //! [`super`]).
 
 use crate::budget::{AllocFailure, try_filled};
-use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
+use crate::linalg::csr::{PAR_MIN_NNZ, ROW_CHUNK};
+use crate::linalg::rows::Rows;
 use rayon::prelude::*;
 
 /// The strong off-diagonal entries of A, a_ij ≠ 0 with a_ij² ≥ θ² a_ii a_jj, whatever their
-/// sign, as a flag per stored entry of A (in the order of its values).
+/// sign, as a flag per stored entry of A (in the order of its values; `rp` the offsets of
+/// its rows, [`Rows::offsets`]).
 /// (`replication/BENCHMARKS.md`, "Measurements behind the defaults", compares this rule with
 /// counting only the negative couplings as strong.) [`AllocFailure`] if the flags cannot be
 /// allocated.
-pub(super) fn strength(a: &CsrMatrix, diag: &[f64], theta: f64) -> Result<Vec<bool>, AllocFailure> {
+pub(super) fn strength<A: Rows + ?Sized>(
+    a: &A,
+    rp: &[usize],
+    diag: &[f64],
+    theta: f64,
+) -> Result<Vec<bool>, AllocFailure> {
     let t2 = theta * theta;
-    let mut strong = try_filled(a.nnz(), false, "the strong couplings of the matrix")?;
-    let rp = a.row_ptr();
+    let mut strong = try_filled(rp[a.n_rows()], false, "the strong couplings of the matrix")?;
     let fill = |i0: usize, flags: &mut [bool]| {
         let base = rp[i0];
         let mut i = i0;
@@ -28,18 +34,17 @@ pub(super) fn strength(a: &CsrMatrix, diag: &[f64], theta: f64) -> Result<Vec<bo
             i += 1;
         }
     };
-    for_entry_chunks(a, &mut strong, fill);
+    for_entry_chunks(a, rp, &mut strong, fill);
     Ok(strong)
 }
 
 /// Runs `f(i0, part)` on the parts of a per-entry array `x` of `a` that hold rows
 /// `i0..i0 + ROW_CHUNK` (in parallel when `a` is large).
-fn for_entry_chunks<T: Send, F>(a: &CsrMatrix, x: &mut [T], f: F)
+fn for_entry_chunks<A: Rows + ?Sized, T: Send, F>(a: &A, rp: &[usize], x: &mut [T], f: F)
 where
     F: Fn(usize, &mut [T]) + Sync + Send,
 {
     let n = a.n_rows();
-    let rp = a.row_ptr();
     if a.nnz() < PAR_MIN_NNZ {
         if n > 0 {
             f(0, x);
@@ -68,7 +73,7 @@ mod tests {
         for m in [12, 150] {
             let a = grid(m, 0.01, 1.0, &|_, _| 1.0);
             let d = a.diagonal();
-            let flags = strength(&a, &d, 0.08).unwrap();
+            let flags = strength(&a, a.row_ptr(), &d, 0.08).unwrap();
             let mut n_strong = 0;
             for i in 0..a.n_rows() {
                 let r = a.row_ptr()[i]..a.row_ptr()[i + 1];
@@ -80,7 +85,7 @@ mod tests {
             }
             assert_eq!(n_strong, 2 * m * (m - 1));
             // θ = 0: every off-diagonal nonzero
-            let all = strength(&a, &d, 0.0).unwrap();
+            let all = strength(&a, a.row_ptr(), &d, 0.0).unwrap();
             assert_eq!(all.iter().filter(|&&s| s).count(), a.nnz() - a.n_rows());
         }
     }

@@ -1,0 +1,390 @@
+//! Square sparse matrices read row by row ([`Rows`]): the stored matrix ([`CsrMatrix`]) and a
+//! masked view of one ([`MaskedRows`]), with the products the iterative solvers need.
+//!
+//! ## The masked view
+//! A solve of the active-set iteration fixes some unknowns F and solves the system
+//!
+//!   S_ij = A_ij for i, j ∉ F (A_ij ≠ 0),   S_ii = 1 for i ∈ F,   S_ij = 0 else,
+//!
+//! (`assembly::assembled`). Copying S out of A costs as much memory as A itself. S differs
+//! from A only in the rows of F and in the rows that couple to F (and in the rows where A
+//! stores an exact zero, dropped from S), a small part of the rows once the active set is a
+//! region and not scattered unknowns. [`MaskedRows`] keeps A (shared, [`Arc`]) and stores only
+//! those rows of S: row i is read from A unless bit i of a mask is set, and then from the
+//! patch, at the rank of i among the set bits (a popcount within its 64-bit word, plus the
+//! count of the words before it). Every row reads the entries of S, in the order S stores
+//! them, so a product with the view gives the bits of a product with S.
+
+use super::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
+use crate::budget::{AllocFailure, try_filled, try_vec};
+use rayon::prelude::*;
+use std::borrow::Cow;
+use std::sync::Arc;
+
+/// A sparse matrix read row by row: row i is its column indices (strictly increasing) and
+/// values. The products run on all cores for large matrices, in fixed chunks
+/// of rows, and sums of chunk results are added in chunk order, so a result
+/// depends only on the rows and never on the scheduling.
+pub trait Rows: Sync {
+    /// Rows.
+    fn n_rows(&self) -> usize;
+    /// Columns.
+    fn n_cols(&self) -> usize;
+    /// Stored entries (read by the choice between a sequential and a parallel product).
+    fn nnz(&self) -> usize;
+    /// The column indices and values of row `i`.
+    fn row(&self, i: usize) -> (&[u32], &[f64]);
+
+    /// The offsets of the rows in the concatenation of all rows (`n_rows + 1` entries): for
+    /// arrays with one entry per stored entry; [`AllocFailure`] if they must be built and
+    /// cannot be allocated.
+    fn offsets(&self) -> Result<Cow<'_, [usize]>, AllocFailure> {
+        let n = self.n_rows();
+        let mut rp = try_filled(n + 1, 0usize, "the row offsets of the matrix")?;
+        for i in 0..n {
+            rp[i + 1] = rp[i] + self.row(i).0.len();
+        }
+        Ok(Cow::Owned(rp))
+    }
+
+    /// Σ_j a_ij x_j for row i.
+    #[inline(always)]
+    fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
+        let (cols, vals) = self.row(i);
+        let mut s = 0.0;
+        for (&j, &v) in cols.iter().zip(vals) {
+            s += v * x[j as usize];
+        }
+        s
+    }
+
+    /// Runs `f(i0, chunk)` on consecutive chunks of `y` (rows `i0..i0 + chunk.len()`), in
+    /// parallel when the matrix is large enough.
+    #[inline]
+    fn for_row_chunks<F>(&self, y: &mut [f64], f: F)
+    where
+        F: Fn(usize, &mut [f64]) + Sync + Send,
+    {
+        if self.nnz() < PAR_MIN_NNZ {
+            f(0, y);
+        } else {
+            y.par_chunks_mut(ROW_CHUNK)
+                .enumerate()
+                .for_each(|(c, chunk)| f(c * ROW_CHUNK, chunk));
+        }
+    }
+
+    /// y = A x (lengths are the caller's invariant).
+    fn mul_to(&self, x: &[f64], y: &mut [f64]) {
+        debug_assert_eq!(y.len(), self.n_rows());
+        self.for_row_chunks(y, |i0, chunk| {
+            for (k, yi) in chunk.iter_mut().enumerate() {
+                *yi = self.row_dot(i0 + k, x);
+            }
+        });
+    }
+
+    /// r = b − A x (lengths are the caller's invariant).
+    fn residual_to(&self, b: &[f64], x: &[f64], r: &mut [f64]) {
+        debug_assert_eq!(b.len(), self.n_rows());
+        debug_assert_eq!(r.len(), self.n_rows());
+        self.for_row_chunks(r, |i0, chunk| {
+            for (k, ri) in chunk.iter_mut().enumerate() {
+                let i = i0 + k;
+                *ri = b[i] - self.row_dot(i, x);
+            }
+        });
+    }
+
+    /// ‖b − A x‖₂ without storing the residual; partial sums over fixed chunks of rows, added
+    /// in order (the result does not depend on the threads).
+    fn residual_norm(&self, b: &[f64], x: &[f64]) -> f64 {
+        let part = |i0: usize, i1: usize| -> f64 {
+            (i0..i1)
+                .map(|i| {
+                    let d = b[i] - self.row_dot(i, x);
+                    d * d
+                })
+                .sum()
+        };
+        let n = self.n_rows();
+        let parts: Vec<f64> = if self.nnz() < PAR_MIN_NNZ {
+            vec![part(0, n)]
+        } else {
+            (0..n.div_ceil(ROW_CHUNK))
+                .into_par_iter()
+                .map(|c| part(c * ROW_CHUNK, ((c + 1) * ROW_CHUNK).min(n)))
+                .collect()
+        };
+        parts.iter().sum::<f64>().sqrt()
+    }
+
+    /// The diagonal a_ii (0 where row i stores no diagonal entry), or [`AllocFailure`] if it
+    /// cannot be allocated.
+    fn try_diagonal(&self) -> Result<Vec<f64>, AllocFailure> {
+        let n = self.n_rows().min(self.n_cols());
+        let mut d = try_filled(n, 0.0, "the diagonal of the matrix")?;
+        let fill = |i0: usize, chunk: &mut [f64]| {
+            for (k, di) in chunk.iter_mut().enumerate() {
+                let i = i0 + k;
+                let (cols, vals) = self.row(i);
+                if let Ok(p) = cols.binary_search(&(i as u32)) {
+                    *di = vals[p];
+                }
+            }
+        };
+        self.for_row_chunks(&mut d, fill);
+        Ok(d)
+    }
+}
+
+impl Rows for CsrMatrix {
+    #[inline]
+    fn n_rows(&self) -> usize {
+        CsrMatrix::n_rows(self)
+    }
+    #[inline]
+    fn n_cols(&self) -> usize {
+        CsrMatrix::n_cols(self)
+    }
+    #[inline]
+    fn nnz(&self) -> usize {
+        CsrMatrix::nnz(self)
+    }
+    #[inline(always)]
+    fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        CsrMatrix::row(self, i)
+    }
+    fn offsets(&self) -> Result<Cow<'_, [usize]>, AllocFailure> {
+        Ok(Cow::Borrowed(self.row_ptr()))
+    }
+}
+
+/// S of the module docs: a square matrix A (shared) with the rows and columns of the fixed
+/// unknowns F masked, storing only the rows of S that differ from A's.
+#[derive(Debug, Clone)]
+pub struct MaskedRows {
+    a: Arc<CsrMatrix>,
+    /// Bit i: row i of S is not row i of A (read from the patch).
+    patched: Vec<u64>,
+    /// Set bits of `patched` before each word.
+    rank: Vec<u32>,
+    /// The patched rows, in order, stored by rows.
+    ptr: Vec<usize>,
+    cols: Vec<u32>,
+    vals: Vec<f64>,
+    /// Stored entries of S.
+    nnz: usize,
+}
+
+impl MaskedRows {
+    /// S for the square matrix `a` and the fixed unknowns `fixed(i)`: row i ∈ F is the unit
+    /// row; a row i ∉ F keeps its diagonal entry and its nonzero entries in free columns.
+    /// [`AllocFailure`] if its arrays cannot be allocated.
+    pub fn new<F>(a: Arc<CsrMatrix>, fixed: F) -> Result<Self, AllocFailure>
+    where
+        F: Fn(usize) -> bool + Sync,
+    {
+        let n = a.n_rows();
+        let keep = |i: usize, j: u32, v: f64| j as usize == i || (v != 0.0 && !fixed(j as usize));
+        // which rows differ from A's: a fixed row (unless A's is the unit row already), or a
+        // row that loses an entry
+        let differs = |i: usize| {
+            let (cols, vals) = a.row(i);
+            if fixed(i) {
+                !(cols.len() == 1 && cols[0] as usize == i && vals[0] == 1.0)
+            } else {
+                cols.iter().zip(vals).any(|(&j, &v)| !keep(i, j, v))
+            }
+        };
+        let mut patched = try_filled(n.div_ceil(64), 0u64, "the masked rows")?;
+        patched.par_iter_mut().enumerate().for_each(|(w, bits)| {
+            for i in w * 64..((w + 1) * 64).min(n) {
+                if differs(i) {
+                    *bits |= 1 << (i % 64);
+                }
+            }
+        });
+        let mut rank = try_filled(patched.len(), 0u32, "the masked rows")?;
+        let mut count = 0usize;
+        for (r, &bits) in rank.iter_mut().zip(&patched) {
+            *r = u32::try_from(count).unwrap_or(u32::MAX);
+            count += bits.count_ones() as usize;
+        }
+        let rows = || {
+            patched.iter().enumerate().flat_map(|(w, &bits)| {
+                (0..64)
+                    .filter(move |b| bits & (1 << b) != 0)
+                    .map(move |b| w * 64 + b)
+            })
+        };
+        let len = |i: usize| {
+            if fixed(i) {
+                1
+            } else {
+                let (cols, vals) = a.row(i);
+                cols.iter()
+                    .zip(vals)
+                    .filter(|&(&j, &v)| keep(i, j, v))
+                    .count()
+            }
+        };
+        let mut ptr: Vec<usize> = try_vec(count + 1, "the masked rows")?;
+        ptr.push(0);
+        // entries of the patched rows in S and in A
+        let (mut total, mut in_a) = (0, 0);
+        for i in rows() {
+            total += len(i);
+            in_a += a.row(i).0.len();
+            ptr.push(total);
+        }
+        let mut cols: Vec<u32> = try_vec(total, "the masked rows")?;
+        let mut vals: Vec<f64> = try_vec(total, "the masked rows")?;
+        for i in rows() {
+            if fixed(i) {
+                cols.push(i as u32);
+                vals.push(1.0);
+            } else {
+                let (c, v) = a.row(i);
+                for (&j, &x) in c.iter().zip(v).filter(|&(&j, &x)| keep(i, j, x)) {
+                    cols.push(j);
+                    vals.push(x);
+                }
+            }
+        }
+        let nnz = a.nnz() - in_a + total;
+        Ok(MaskedRows {
+            a,
+            patched,
+            rank,
+            ptr,
+            cols,
+            vals,
+            nnz,
+        })
+    }
+
+    /// Row i of the patch, `below` the bits of its word below bit i (out of the loops that
+    /// read the rows: most rows are A's).
+    #[cold]
+    #[inline(never)]
+    fn patched_row(&self, i: usize, below: u64) -> (&[u32], &[f64]) {
+        let k = self.rank[i / 64] as usize + below.count_ones() as usize;
+        let (s, e) = (self.ptr[k], self.ptr[k + 1]);
+        (&self.cols[s..e], &self.vals[s..e])
+    }
+
+    /// The matrix A it masks.
+    pub fn unmasked(&self) -> &Arc<CsrMatrix> {
+        &self.a
+    }
+
+    /// Rows stored in the patch (the rows of S that are not A's).
+    pub fn patched_rows(&self) -> usize {
+        self.ptr.len() - 1
+    }
+
+    /// Bytes held by the view itself (A, shared, excluded).
+    pub fn memory_bytes(&self) -> usize {
+        self.patched.len() * 8
+            + self.rank.len() * 4
+            + self.ptr.len() * 8
+            + self.cols.len() * 4
+            + self.vals.len() * 8
+    }
+
+    /// S stored by rows (a copy; for tests and checks).
+    pub fn to_csr(&self) -> CsrMatrix {
+        let n = self.n_rows();
+        let mut row_ptr = vec![0usize; n + 1];
+        let (mut col_idx, mut values) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            let (c, v) = self.row(i);
+            col_idx.extend_from_slice(c);
+            values.extend_from_slice(v);
+            row_ptr[i + 1] = col_idx.len();
+        }
+        CsrMatrix::from_parts(n, n, row_ptr, col_idx, values)
+    }
+}
+
+impl Rows for MaskedRows {
+    #[inline]
+    fn n_rows(&self) -> usize {
+        self.a.n_rows()
+    }
+    #[inline]
+    fn n_cols(&self) -> usize {
+        self.a.n_rows()
+    }
+    #[inline]
+    fn nnz(&self) -> usize {
+        self.nnz
+    }
+    #[inline(always)]
+    fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let bits = self.patched[i / 64];
+        let bit = 1u64 << (i % 64);
+        if bits & bit == 0 {
+            self.a.row(i)
+        } else {
+            self.patched_row(i, bits & (bit - 1))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::amg::testing::{fix, grid};
+
+    #[test]
+    fn the_masked_view_reads_the_rows_of_the_masked_copy() {
+        // a grid with an exact zero stored off the diagonal, a disc of fixed unknowns, a fixed
+        // unknown whose row is already the unit row, and scattered fixed ones
+        let m = 120;
+        let mut a = grid(m, 1.0, 1.0, &|_, _| 1.0);
+        let p = a.row_ptr()[500];
+        a.values_mut()[p] = 0.0;
+        let fixed = |k: usize| {
+            let (x, y) = (
+                (k % m) as f64 / m as f64 - 0.3,
+                (k / m) as f64 / m as f64 - 0.6,
+            );
+            x * x + y * y < 0.02 || k.is_multiple_of(131)
+        };
+        let mut unit = fix(&a, &|k| k == 7000);
+        unit.drop_zeros();
+        for a in [a, unit] {
+            // S: the fixed rows and columns masked, the exact zeros dropped
+            let mut copy = fix(&a, &fixed);
+            copy.drop_zeros();
+            let view = MaskedRows::new(Arc::new(a.clone()), fixed).unwrap();
+            assert_eq!(view.to_csr().row_ptr(), copy.row_ptr());
+            assert_eq!(view.to_csr().col_idx(), copy.col_idx());
+            assert_eq!(view.to_csr().values(), copy.values());
+            assert_eq!(Rows::nnz(&view), copy.nnz());
+            assert!(view.patched_rows() < m * m / 5, "{}", view.patched_rows());
+            assert_eq!(view.offsets().unwrap().as_ref(), copy.row_ptr());
+            // the products give the bits of the copy's
+            let x: Vec<f64> = (0..m * m).map(|i| (i as f64 * 0.37).sin()).collect();
+            let (mut y0, mut y1) = (vec![0.0; m * m], vec![0.0; m * m]);
+            copy.mul_to(&x, &mut y0);
+            view.mul_to(&x, &mut y1);
+            assert_eq!(y0, y1);
+            assert_eq!(
+                Rows::residual_norm(&copy, &x, &y0),
+                view.residual_norm(&x, &y0)
+            );
+            assert_eq!(copy.try_diagonal().unwrap(), view.try_diagonal().unwrap());
+        }
+        // nothing fixed: A's rows, no patch; everything fixed: the identity
+        let a = grid(30, 1.0, 1.0, &|_, _| 1.0);
+        let none = MaskedRows::new(Arc::new(a.clone()), |_| false).unwrap();
+        assert_eq!(none.patched_rows(), 0);
+        assert_eq!(none.to_csr().values(), a.values());
+        let all = MaskedRows::new(Arc::new(a), |_| true).unwrap();
+        assert_eq!(Rows::nnz(&all), 900);
+        assert_eq!(all.row(17), (&[17u32][..], &[1.0][..]));
+    }
+}
