@@ -21,7 +21,7 @@
 #[cfg(test)]
 use super::csr::CsrMatrix;
 use super::csr::{PAR_MIN_NNZ, ROW_CHUNK};
-use super::rows::Rows;
+use super::rows::{Rows, dot_row};
 use crate::budget::{try_copy, try_filled, try_vec};
 use rayon::prelude::*;
 
@@ -350,11 +350,11 @@ fn mul_dot<A: Rows + ?Sized>(a: &A, p: &[f64], q: &mut [f64]) -> f64 {
     let part = |c: usize, qc: &mut [f64]| -> f64 {
         let i0 = c * ROW_CHUNK;
         let mut s = 0.0;
-        for (k, qi) in qc.iter_mut().enumerate() {
-            let i = i0 + k;
-            *qi = a.row_dot(i, p);
-            s += *qi * p[i];
-        }
+        a.for_rows(i0..i0 + qc.len(), |i, cols, vals| {
+            let qi = dot_row(cols, vals, p);
+            qc[i - i0] = qi;
+            s += qi * p[i];
+        });
         s
     };
     if n < PAR_MIN_LEN {

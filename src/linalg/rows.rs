@@ -19,7 +19,18 @@ use super::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
 use crate::budget::{AllocFailure, try_filled, try_vec};
 use rayon::prelude::*;
 use std::borrow::Cow;
+use std::ops::Range;
 use std::sync::Arc;
+
+/// Σ_j a_ij x_j over the entries (`cols`, `vals`) of a row.
+#[inline(always)]
+pub(crate) fn dot_row(cols: &[u32], vals: &[f64], x: &[f64]) -> f64 {
+    let mut s = 0.0;
+    for (&j, &v) in cols.iter().zip(vals) {
+        s += v * x[j as usize];
+    }
+    s
+}
 
 /// A sparse matrix read row by row: row i is its column indices (strictly increasing) and
 /// values. The products run on all cores for large matrices, in fixed chunks
@@ -47,15 +58,30 @@ pub trait Rows: Sync {
         Ok(Cow::Owned(rp))
     }
 
+    /// `f(i, cols, vals)` for the rows i of `rows`, in increasing order (the loops of the
+    /// products and sweeps: a view may read runs of rows faster than one by one).
+    #[inline(always)]
+    fn for_rows<F: FnMut(usize, &[u32], &[f64])>(&self, rows: Range<usize>, mut f: F) {
+        for i in rows {
+            let (cols, vals) = self.row(i);
+            f(i, cols, vals);
+        }
+    }
+
+    /// [`Self::for_rows`] in decreasing order.
+    #[inline(always)]
+    fn for_rows_rev<F: FnMut(usize, &[u32], &[f64])>(&self, rows: Range<usize>, mut f: F) {
+        for i in rows.rev() {
+            let (cols, vals) = self.row(i);
+            f(i, cols, vals);
+        }
+    }
+
     /// Σ_j a_ij x_j for row i.
     #[inline(always)]
     fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
         let (cols, vals) = self.row(i);
-        let mut s = 0.0;
-        for (&j, &v) in cols.iter().zip(vals) {
-            s += v * x[j as usize];
-        }
-        s
+        dot_row(cols, vals, x)
     }
 
     /// Runs `f(i0, chunk)` on consecutive chunks of `y` (rows `i0..i0 + chunk.len()`), in
@@ -78,9 +104,9 @@ pub trait Rows: Sync {
     fn mul_to(&self, x: &[f64], y: &mut [f64]) {
         debug_assert_eq!(y.len(), self.n_rows());
         self.for_row_chunks(y, |i0, chunk| {
-            for (k, yi) in chunk.iter_mut().enumerate() {
-                *yi = self.row_dot(i0 + k, x);
-            }
+            self.for_rows(i0..i0 + chunk.len(), |i, cols, vals| {
+                chunk[i - i0] = dot_row(cols, vals, x);
+            });
         });
     }
 
@@ -89,10 +115,9 @@ pub trait Rows: Sync {
         debug_assert_eq!(b.len(), self.n_rows());
         debug_assert_eq!(r.len(), self.n_rows());
         self.for_row_chunks(r, |i0, chunk| {
-            for (k, ri) in chunk.iter_mut().enumerate() {
-                let i = i0 + k;
-                *ri = b[i] - self.row_dot(i, x);
-            }
+            self.for_rows(i0..i0 + chunk.len(), |i, cols, vals| {
+                chunk[i - i0] = b[i] - dot_row(cols, vals, x);
+            });
         });
     }
 
@@ -100,12 +125,12 @@ pub trait Rows: Sync {
     /// in order (the result does not depend on the threads).
     fn residual_norm(&self, b: &[f64], x: &[f64]) -> f64 {
         let part = |i0: usize, i1: usize| -> f64 {
-            (i0..i1)
-                .map(|i| {
-                    let d = b[i] - self.row_dot(i, x);
-                    d * d
-                })
-                .sum()
+            let mut s = 0.0;
+            self.for_rows(i0..i1, |i, cols, vals| {
+                let d = b[i] - dot_row(cols, vals, x);
+                s += d * d;
+            });
+            s
         };
         let n = self.n_rows();
         let parts: Vec<f64> = if self.nnz() < PAR_MIN_NNZ {
@@ -264,10 +289,8 @@ impl MaskedRows {
         })
     }
 
-    /// Row i of the patch, `below` the bits of its word below bit i (out of the loops that
-    /// read the rows: most rows are A's).
-    #[cold]
-    #[inline(never)]
+    /// Row i of the patch, `below` the bits of its word below bit i.
+    #[inline]
     fn patched_row(&self, i: usize, below: u64) -> (&[u32], &[f64]) {
         let k = self.rank[i / 64] as usize + below.count_ones() as usize;
         let (s, e) = (self.ptr[k], self.ptr[k + 1]);
@@ -331,6 +354,60 @@ impl Rows for MaskedRows {
             self.patched_row(i, bits & (bit - 1))
         }
     }
+
+    /// Word by word of the mask: the rows of a word with no patched row straight from A.
+    #[inline(always)]
+    fn for_rows<F: FnMut(usize, &[u32], &[f64])>(&self, rows: Range<usize>, mut f: F) {
+        let (rp, ci, va) = (self.a.row_ptr(), self.a.col_idx(), self.a.values());
+        let mut i = rows.start;
+        while i < rows.end {
+            let w = i / 64;
+            let end = ((w + 1) * 64).min(rows.end);
+            let bits = self.patched[w];
+            // the patch rows of this word follow one another from the rank of row i; one call
+            // of `f` in the loop, so that it is inlined
+            let mut p =
+                self.rank[w] as usize + (bits & ((1u64 << (i % 64)) - 1)).count_ones() as usize;
+            for k in i..end {
+                let (s, e, cols, vals) = if bits & (1 << (k % 64)) != 0 {
+                    p += 1;
+                    (self.ptr[p - 1], self.ptr[p], &self.cols[..], &self.vals[..])
+                } else {
+                    (rp[k], rp[k + 1], ci, va)
+                };
+                f(k, &cols[s..e], &vals[s..e]);
+            }
+            i = end;
+        }
+    }
+
+    /// [`Rows::for_rows`] word by word, in decreasing order.
+    #[inline(always)]
+    fn for_rows_rev<F: FnMut(usize, &[u32], &[f64])>(&self, rows: Range<usize>, mut f: F) {
+        let (rp, ci, va) = (self.a.row_ptr(), self.a.col_idx(), self.a.values());
+        let mut end = rows.end;
+        while end > rows.start {
+            let w = (end - 1) / 64;
+            let start = (w * 64).max(rows.start);
+            let bits = self.patched[w];
+            // the patch rows of this word, back from the count of those below row `end`
+            let below_end = match end - w * 64 {
+                64 => bits,
+                r => bits & ((1u64 << r) - 1),
+            };
+            let mut p = self.rank[w] as usize + below_end.count_ones() as usize;
+            for k in (start..end).rev() {
+                let (s, e, cols, vals) = if bits & (1 << (k % 64)) != 0 {
+                    p -= 1;
+                    (self.ptr[p], self.ptr[p + 1], &self.cols[..], &self.vals[..])
+                } else {
+                    (rp[k], rp[k + 1], ci, va)
+                };
+                f(k, &cols[s..e], &vals[s..e]);
+            }
+            end = start;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -377,6 +454,28 @@ mod tests {
                 view.residual_norm(&x, &y0)
             );
             assert_eq!(copy.try_diagonal().unwrap(), view.try_diagonal().unwrap());
+        }
+        // the runs of rows (forward and backward, across and within the words of the mask)
+        // are the rows one by one
+        let view = MaskedRows::new(Arc::new(grid(m, 1.0, 1.0, &|_, _| 1.0)), fixed).unwrap();
+        for (r0, r1) in [
+            (0, m * m),
+            (5, 70),
+            (64, 128),
+            (130, 131),
+            (1000, 7777),
+            (9, 9),
+        ] {
+            let mut seen = Vec::new();
+            view.for_rows(r0..r1, |i, c, v| seen.push((i, c.to_vec(), v.to_vec())));
+            let rows: Vec<_> = (r0..r1)
+                .map(|i| (i, view.row(i).0.to_vec(), view.row(i).1.to_vec()))
+                .collect();
+            assert_eq!(seen, rows);
+            let mut back = Vec::new();
+            view.for_rows_rev(r0..r1, |i, c, v| back.push((i, c.to_vec(), v.to_vec())));
+            back.reverse();
+            assert_eq!(back, rows);
         }
         // nothing fixed: A's rows, no patch; everything fixed: the identity
         let a = grid(30, 1.0, 1.0, &|_, _| 1.0);

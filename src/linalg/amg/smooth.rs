@@ -338,8 +338,7 @@ fn gauss_seidel<A: Rows + ?Sized>(
         let i1 = i0 + xb.len();
         match x_old {
             None => {
-                for i in i0..i1 {
-                    let (cols, vals) = a.row(i);
+                a.for_rows(i0..i1, |i, cols, vals| {
                     // the entries with i0 ≤ j < i (columns are sorted)
                     let lo = match cols.first() {
                         Some(&j) if j as usize >= i0 => 0,
@@ -354,11 +353,10 @@ fn gauss_seidel<A: Rows + ?Sized>(
                         s -= v * xb[ju - i0];
                     }
                     xb[i - i0] = s * inv_diag[i];
-                }
+                });
             }
             Some(xo) => {
-                for i in (i0..i1).rev() {
-                    let (cols, vals) = a.row(i);
+                a.for_rows_rev(i0..i1, |i, cols, vals| {
                     let mut s = b[i];
                     let inside = cols.first().is_none_or(|&j| j as usize >= i0)
                         && cols.last().is_none_or(|&j| (j as usize) < i1);
@@ -377,7 +375,7 @@ fn gauss_seidel<A: Rows + ?Sized>(
                         }
                     }
                     xb[i - i0] += s * inv_diag[i];
-                }
+                });
             }
         }
     };
