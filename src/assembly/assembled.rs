@@ -18,6 +18,11 @@
 //! c, the residual and its scale are sums of the same terms in another order (per row of M
 //! instead of per cell), equal up to round-off.
 //!
+//! The iterative solves never store S: the conjugate gradients and the multigrid read it
+//! through a masked view of M ([`MaskedRows`]), which keeps only the rows of S that are not
+//! M's (the rows of F and of their neighbours). The direct solver factorises S's values on
+//! the lower pattern (`masked_lower`).
+//!
 //! Memory (measured in `replication/measurements/memory3d.md`): per tetrahedron, the 10 packed
 //! local entries and 4 local loads (112 bytes) and the 10 gather sources (40 bytes) are never
 //! all held; M takes 12 bytes per stored entry, about 15 entries per unknown on tetrahedra.

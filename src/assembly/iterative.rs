@@ -203,7 +203,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         Ok(a)
     }
 
-    /// Solves S x = c (S stored by rows in `a`, c in `rhs`, overwritten by x) by
+    /// Solves S x = c (S in `a`, stored by rows or a masked view; c in `rhs`, overwritten by x) by
     /// multigrid-preconditioned conjugate gradients from the previous solution, to the
     /// relative residual `rtol`, with the hierarchy `next` says; returns when the
     /// multigrid setup ended and what the conjugate gradients did (x short of

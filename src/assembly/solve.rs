@@ -104,7 +104,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             fixed_mask,
             cells,
         };
-        match self.continue_pcg(state, hier, &rhs, fixed) {
+        match self.continue_pcg(state, hier, rhs, fixed) {
             Ok((u, iterations)) => Ok(Some((
                 u,
                 SolveTimings {
@@ -123,13 +123,13 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     }
 
     /// Runs the conjugate gradients of a refinement with the kept hierarchy `hier`, on the
-    /// system it was built for, from the last solution: the full unknown vector and the
-    /// iterations.
+    /// system it was built for (right-hand side `rhs`, freed once they ended), from the last
+    /// solution: the full unknown vector and the iterations.
     fn continue_pcg(
         &self,
         state: &mut SolveState,
         hier: Hierarchy,
-        rhs: &[f64],
+        rhs: Vec<f64>,
         fixed: &[Option<f64>],
     ) -> crate::Result<(Vec<f64>, usize)> {
         let cs = if hier.cells {
@@ -141,7 +141,8 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             Some(cs) => self.take_cell_guess(state, cs)?,
             None => self.take_initial_guess(state)?,
         };
-        let out = self.run_pcg(state, hier, rhs, &mut x, ITERATIVE_RTOL, fixed)?;
+        let out = self.run_pcg(state, hier, &rhs, &mut x, ITERATIVE_RTOL, fixed)?;
+        drop(rhs);
         let u = match cs {
             Some(cs) => {
                 let u = self.complete_cells(&cs, &self.fixed_values(fixed), &x)?;
@@ -149,7 +150,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                 u
             }
             None => {
-                let u = self.complete(fixed, &x)?;
+                let u = self.complete(fixed, try_copy(&x, "the solution")?)?;
                 self.keep_solution(state, x);
                 u
             }
@@ -205,7 +206,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         };
         if let Some(a) = self.assembled() {
             let (x, t1, t2, out) = self.solve_assembled(state, a, fixed, rtol, reuse)?;
-            let u = self.complete(fixed, &x)?;
+            let u = self.complete(fixed, x)?;
             return Ok((u, out.timings([t0, t1, t2, Instant::now()])));
         }
         let (values, mut rhs) = self.assemble_condensed(state, fixed)?;
@@ -237,7 +238,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                 self.solve_csr(state, a.into(), &mut rhs, rtol, fixed, reuse)?
             }
         };
-        let u = self.complete(fixed, &rhs)?;
+        let u = self.complete(fixed, rhs)?;
         Ok((u, out.timings([t0, t1, t2, Instant::now()])))
     }
 
@@ -289,11 +290,16 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     }
 
     /// The full unknown vector from the skeleton solution `skel`: interior unknowns recovered
-    /// cell by cell; a non-finite value is an error.
-    fn complete(&self, fixed: &[Option<f64>], skel: &[f64]) -> crate::Result<Vec<f64>> {
+    /// cell by cell; a non-finite value is an error. Without interior unknowns, `skel` itself
+    /// (no second vector of the order of the system at the end of a solve).
+    fn complete(&self, fixed: &[Option<f64>], skel: Vec<f64>) -> crate::Result<Vec<f64>> {
+        if self.n_skel == self.n {
+            return check_finite(skel);
+        }
         let fx = |d: usize| -> Option<f64> { self.values.dirichlet[d].or(fixed[d]) };
         let mut u = try_filled(self.n, 0.0, "the solution")?;
-        u[..self.n_skel].copy_from_slice(skel);
+        u[..self.n_skel].copy_from_slice(&skel);
+        drop(skel);
         self.recover_interiors(&fx, &mut u)?;
         check_finite(u)
     }

@@ -18,7 +18,6 @@
 use super::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
 use crate::budget::{AllocFailure, try_filled, try_vec};
 use rayon::prelude::*;
-use std::borrow::Cow;
 use std::ops::Range;
 use std::sync::Arc;
 
@@ -45,18 +44,6 @@ pub trait Rows: Sync {
     fn nnz(&self) -> usize;
     /// The column indices and values of row `i`.
     fn row(&self, i: usize) -> (&[u32], &[f64]);
-
-    /// The offsets of the rows in the concatenation of all rows (`n_rows + 1` entries): for
-    /// arrays with one entry per stored entry; [`AllocFailure`] if they must be built and
-    /// cannot be allocated.
-    fn offsets(&self) -> Result<Cow<'_, [usize]>, AllocFailure> {
-        let n = self.n_rows();
-        let mut rp = try_filled(n + 1, 0usize, "the row offsets of the matrix")?;
-        for i in 0..n {
-            rp[i + 1] = rp[i] + self.row(i).0.len();
-        }
-        Ok(Cow::Owned(rp))
-    }
 
     /// `f(i, cols, vals)` for the rows i of `rows`, in increasing order (the loops of the
     /// products and sweeps: a view may read runs of rows faster than one by one).
@@ -179,9 +166,6 @@ impl Rows for CsrMatrix {
     #[inline(always)]
     fn row(&self, i: usize) -> (&[u32], &[f64]) {
         CsrMatrix::row(self, i)
-    }
-    fn offsets(&self) -> Result<Cow<'_, [usize]>, AllocFailure> {
-        Ok(Cow::Borrowed(self.row_ptr()))
     }
 }
 
@@ -442,7 +426,6 @@ mod tests {
             assert_eq!(view.to_csr().values(), copy.values());
             assert_eq!(Rows::nnz(&view), copy.nnz());
             assert!(view.patched_rows() < m * m / 5, "{}", view.patched_rows());
-            assert_eq!(view.offsets().unwrap().as_ref(), copy.row_ptr());
             // the products give the bits of the copy's
             let x: Vec<f64> = (0..m * m).map(|i| (i as f64 * 0.37).sin()).collect();
             let (mut y0, mut y1) = (vec![0.0; m * m], vec![0.0; m * m]);

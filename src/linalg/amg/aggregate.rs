@@ -2,17 +2,16 @@
 //! setup, see [`super`]).
 
 use super::NONE;
+use super::strength::Strength;
 use crate::budget::{AllocFailure, try_filled, try_vec};
 use crate::linalg::rows::Rows;
 
-/// Greedy aggregation on the graph of the strong entries `strong` of A (flags at the
-/// offsets `rp` of its rows, [`strength`](super::strength::strength); see the module
+/// Greedy aggregation on the graph of the strong entries of A (`strength`; see the module
 /// documentation): the aggregate of each unknown ([`NONE`] for an isolated one) and the
 /// number of aggregates; [`AllocFailure`] if its arrays cannot be allocated.
 pub(super) fn aggregate<A: Rows + ?Sized>(
     a: &A,
-    rp: &[usize],
-    strong: &[bool],
+    strength: &Strength,
     diag: &[f64],
 ) -> Result<(Vec<u32>, usize), AllocFailure> {
     let n = a.n_rows();
@@ -21,11 +20,10 @@ pub(super) fn aggregate<A: Rows + ?Sized>(
         let (cols, vals) = a.row(i);
         cols.iter()
             .zip(vals)
-            .zip(&strong[rp[i]..rp[i + 1]])
-            .filter(|(_, s)| **s)
-            .map(|((&j, &v), _)| (j as usize, v))
+            .filter(move |&(&j, &v)| strength.strong(i, j as usize, v))
+            .map(|(&j, &v)| (j as usize, v))
     };
-    let has_strong = |i: usize| strong[rp[i]..rp[i + 1]].contains(&true);
+    let has_strong = |i: usize| srow(i).next().is_some();
     let mut agg = try_filled(n, NONE, "the aggregates of the unknowns")?;
     let mut n_agg: u32 = 0;
     // phase 1: roots whose strong neighbourhood is entirely free
@@ -107,7 +105,7 @@ pub(super) fn aggregate<A: Rows + ?Sized>(
 
 #[cfg(test)]
 mod tests {
-    use super::super::strength::strength;
+    use super::super::strength::Strength;
     use super::super::testing::{fix, grid};
     use super::*;
 
@@ -117,8 +115,8 @@ mod tests {
         // a row of unit rows (fixed unknowns) across the grid
         let a = fix(&grid(m, 1.0, 1.0, &|_, _| 1.0), &|k| k / m == 10);
         let d = a.diagonal();
-        let strong = strength(&a, a.row_ptr(), &d, 0.08).unwrap();
-        let (agg, n_agg) = aggregate(&a, a.row_ptr(), &strong, &d).unwrap();
+        let strength = Strength::new(&d, 0.08);
+        let (agg, n_agg) = aggregate(&a, &strength, &d).unwrap();
         // the decoupled rows belong to no aggregate, every other unknown to one
         for (k, &g) in agg.iter().enumerate() {
             assert_eq!(g == NONE, k / m == 10, "unknown {k}");
@@ -137,11 +135,11 @@ mod tests {
             if agg[i] == NONE {
                 continue;
             }
-            let r = a.row_ptr()[i]..a.row_ptr()[i + 1];
-            let with = a.col_idx()[r.clone()]
+            let (cols, vals) = a.row(i);
+            let with = cols
                 .iter()
-                .zip(&strong[r])
-                .any(|(&j, &s)| s && agg[j as usize] == agg[i]);
+                .zip(vals)
+                .any(|(&j, &v)| strength.strong(i, j as usize, v) && agg[j as usize] == agg[i]);
             assert!(with, "unknown {i}");
         }
     }

@@ -38,8 +38,8 @@
 //!    held a matrix with as many entries as A P, twice while its rows were concatenated: the
 //!    peak of the 2D solves (`replication/BENCHMARKS.md`, "Measurements behind the defaults").
 //!
-//! The strength of connection is a flag per stored entry of A_ℓ (not a copy of the strong
-//! part), filled in parallel; the aggregation reads A_ℓ through it.
+//! The strength of connection is not stored: the aggregation evaluates the rule where it
+//! reads an entry of A_ℓ (a flag per entry would be an array of the size of A_ℓ's entries).
 //!
 //! ## The cycle (one application of M⁻¹, [`Amg::apply`])
 //! A V(1,1)-cycle: on level ℓ with right-hand side b, from x = 0,
@@ -85,6 +85,11 @@
 //! matrix row by row in parallel), `spectral.rs` (bounds of λ_max(D⁻¹A)), `smooth.rs` (the
 //! smoothers), `coarse.rs` (the coarsest solve), `cycle.rs` (the V-cycle and its workspace)
 //! and `reuse.rs` (keeping the coarse levels for a changed matrix); each with its tests.
+//!
+//! The fine level is a [`Fine`]: a matrix stored by rows or a masked view of one
+//! ([`MaskedRows`], the system of a solve with fixed unknowns without a copy of the matrix).
+//! Every step reads it through [`Rows`], compiled for its own type (`on_fine!` dispatches
+//! once per product or sweep, not per row); the coarse operators are stored by rows.
 
 mod aggregate;
 mod coarse;

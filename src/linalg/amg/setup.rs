@@ -7,7 +7,7 @@ use super::coarse::{CoarseSolve, dense_cholesky};
 use super::galerkin::galerkin;
 use super::prolong::smoothed_prolongator;
 use super::smooth::LevelSmoother;
-use super::strength::strength;
+use super::strength::Strength;
 use super::{Amg, AmgOptions, CoarseHierarchy, DENSE_MAX, Fine, Transfer, on_fine};
 use crate::budget::try_filled;
 use crate::linalg::csr::{CsrMatrix, PAR_MIN_NNZ};
@@ -101,11 +101,7 @@ fn level<A: Rows + ?Sized>(
     if n <= opts.max_coarse || level + 1 >= opts.max_levels {
         return Ok(None);
     }
-    let (agg, n_agg) = {
-        let rp = al.offsets()?;
-        let strong = strength(al, &rp, &diag, opts.strength_threshold)?;
-        aggregate(al, &rp, &strong, &diag)?
-    };
+    let (agg, n_agg) = aggregate(al, &Strength::new(&diag, opts.strength_threshold), &diag)?;
     // stop when coarsening stalls (every row decoupled, or barely any reduction)
     if n_agg == 0 || n_agg as f64 > 0.85 * n as f64 {
         return Ok(None);

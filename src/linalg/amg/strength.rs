@@ -1,65 +1,35 @@
 //! Strength of connection: which couplings of A_ℓ are strong (step 1 of the setup, see
 //! [`super`]).
 
-use crate::budget::{AllocFailure, try_filled};
-use crate::linalg::csr::{PAR_MIN_NNZ, ROW_CHUNK};
-use crate::linalg::rows::Rows;
-use rayon::prelude::*;
-
-/// The strong off-diagonal entries of A, a_ij ≠ 0 with a_ij² ≥ θ² a_ii a_jj, whatever their
-/// sign, as a flag per stored entry of A (in the order of its values; `rp` the offsets of
-/// its rows, [`Rows::offsets`]).
-/// (`replication/BENCHMARKS.md`, "Measurements behind the defaults", compares this rule with
-/// counting only the negative couplings as strong.) [`AllocFailure`] if the flags cannot be
-/// allocated.
-pub(super) fn strength<A: Rows + ?Sized>(
-    a: &A,
-    rp: &[usize],
-    diag: &[f64],
-    theta: f64,
-) -> Result<Vec<bool>, AllocFailure> {
-    let t2 = theta * theta;
-    let mut strong = try_filled(rp[a.n_rows()], false, "the strong couplings of the matrix")?;
-    let fill = |i0: usize, flags: &mut [bool]| {
-        let base = rp[i0];
-        let mut i = i0;
-        while base + flags.len() > rp[i] {
-            let di = diag[i];
-            let (cols, vals) = a.row(i);
-            let f = &mut flags[rp[i] - base..rp[i + 1] - base];
-            for ((f, &j), &v) in f.iter_mut().zip(cols).zip(vals) {
-                let j = j as usize;
-                *f = j != i && v != 0.0 && v * v >= t2 * di * diag[j];
-            }
-            i += 1;
-        }
-    };
-    for_entry_chunks(a, rp, &mut strong, fill);
-    Ok(strong)
+/// The strong off-diagonal entries of A (diagonal `diag`): a_ij ≠ 0 with
+/// a_ij² ≥ θ² a_ii a_jj, whatever their sign. (`replication/BENCHMARKS.md`, "Measurements
+/// behind the defaults", compares this rule with counting only the negative couplings as
+/// strong.)
+///
+/// The rule is evaluated where the aggregation reads an entry (two products and a
+/// comparison), not stored: a flag per stored entry would be an array of the size of A's
+/// entries, and for a masked view of A ([`crate::linalg::MaskedRows`]) also the offsets of its
+/// rows (8 bytes per unknown), held through the setup of the fine level.
+pub(super) struct Strength<'d> {
+    diag: &'d [f64],
+    /// θ².
+    t2: f64,
 }
 
-/// Runs `f(i0, part)` on the parts of a per-entry array `x` of `a` that hold rows
-/// `i0..i0 + ROW_CHUNK` (in parallel when `a` is large).
-fn for_entry_chunks<A: Rows + ?Sized, T: Send, F>(a: &A, rp: &[usize], x: &mut [T], f: F)
-where
-    F: Fn(usize, &mut [T]) + Sync + Send,
-{
-    let n = a.n_rows();
-    if a.nnz() < PAR_MIN_NNZ {
-        if n > 0 {
-            f(0, x);
+impl<'d> Strength<'d> {
+    /// The rule for the matrix with diagonal `diag` and the threshold θ = `theta`.
+    pub(super) fn new(diag: &'d [f64], theta: f64) -> Self {
+        Strength {
+            diag,
+            t2: theta * theta,
         }
-        return;
     }
-    let mut parts = Vec::with_capacity(n.div_ceil(ROW_CHUNK));
-    let mut rest = x;
-    for i0 in (0..n).step_by(ROW_CHUNK) {
-        let i1 = (i0 + ROW_CHUNK).min(n);
-        let (head, tail) = std::mem::take(&mut rest).split_at_mut(rp[i1] - rp[i0]);
-        parts.push((i0, head));
-        rest = tail;
+
+    /// Whether the entry a_ij = `v` of row i, column j, is strong.
+    #[inline]
+    pub(super) fn strong(&self, i: usize, j: usize, v: f64) -> bool {
+        j != i && v != 0.0 && v * v >= self.t2 * self.diag[i] * self.diag[j]
     }
-    parts.into_par_iter().for_each(|(i0, part)| f(i0, part));
 }
 
 #[cfg(test)]
@@ -73,20 +43,21 @@ mod tests {
         for m in [12, 150] {
             let a = grid(m, 0.01, 1.0, &|_, _| 1.0);
             let d = a.diagonal();
-            let flags = strength(&a, a.row_ptr(), &d, 0.08).unwrap();
-            let mut n_strong = 0;
+            let (rule, all) = (Strength::new(&d, 0.08), Strength::new(&d, 0.0));
+            let (mut n_strong, mut n_all) = (0, 0);
             for i in 0..a.n_rows() {
-                let r = a.row_ptr()[i]..a.row_ptr()[i + 1];
-                for (&j, &s) in a.col_idx()[r.clone()].iter().zip(&flags[r]) {
+                let (cols, vals) = a.row(i);
+                for (&j, &v) in cols.iter().zip(vals) {
+                    let s = rule.strong(i, j as usize, v);
                     let vertical = (j as usize).abs_diff(i) == m;
                     assert_eq!(s, vertical, "m = {m}, entry ({i}, {j})");
                     n_strong += s as usize;
+                    n_all += all.strong(i, j as usize, v) as usize;
                 }
             }
             assert_eq!(n_strong, 2 * m * (m - 1));
             // θ = 0: every off-diagonal nonzero
-            let all = strength(&a, a.row_ptr(), &d, 0.0).unwrap();
-            assert_eq!(all.iter().filter(|&&s| s).count(), a.nnz() - a.n_rows());
+            assert_eq!(n_all, a.nnz() - a.n_rows());
         }
     }
 }
