@@ -111,7 +111,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let a = self.values.assembled.clone().ok_or_else(|| {
             crate::Error::Internal("a masked view of a system without an assembled matrix".into())
         })?;
-        Ok(MaskedRows::new(a, |i| fx.get(i).is_some())?)
+        MaskedRows::new(a, |i| fx.get(i).is_some())
     }
 
     /// The values of S on `pattern`, the lower CSC pattern of the condensed matrix (what the

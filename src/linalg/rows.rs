@@ -187,14 +187,21 @@ pub struct MaskedRows {
 }
 
 impl MaskedRows {
-    /// S for the square matrix `a` and the fixed unknowns `fixed(i)`: row i ∈ F is the unit
-    /// row; a row i ∉ F keeps its diagonal entry and its nonzero entries in free columns.
-    /// [`AllocFailure`] if its arrays cannot be allocated.
-    pub fn new<F>(a: Arc<CsrMatrix>, fixed: F) -> Result<Self, AllocFailure>
+    /// S for the square matrix `a` and the fixed unknowns `fixed(i)` (i < order of `a`):
+    /// row i ∈ F is the unit row; a row i ∉ F keeps its diagonal entry and its nonzero
+    /// entries in free columns. Errors: `a` not square, or arrays that cannot be allocated.
+    pub fn new<F>(a: Arc<CsrMatrix>, fixed: F) -> crate::Result<Self>
     where
         F: Fn(usize) -> bool + Sync,
     {
         let n = a.n_rows();
+        if a.n_cols() != n {
+            return Err(crate::Error::Linear(format!(
+                "a masked view of a {}×{} matrix: it must be square",
+                n,
+                a.n_cols()
+            )));
+        }
         let keep = |i: usize, j: u32, v: f64| j as usize == i || (v != 0.0 && !fixed(j as usize));
         // which rows differ from A's: a fixed row (unless A's is the unit row already), or a
         // row that loses an entry
@@ -468,5 +475,9 @@ mod tests {
         let all = MaskedRows::new(Arc::new(a), |_| true).unwrap();
         assert_eq!(Rows::nnz(&all), 900);
         assert_eq!(all.row(17), (&[17u32][..], &[1.0][..]));
+        // not square: an error
+        let rect = CsrMatrix::new(1, 2, vec![0, 1], vec![1], vec![1.0]).unwrap();
+        let e = MaskedRows::new(Arc::new(rect), |_| false).unwrap_err();
+        assert!(e.to_string().contains("square"), "{e}");
     }
 }
