@@ -298,17 +298,9 @@ impl MaskedRows {
         self.ptr.len() - 1
     }
 
-    /// Bytes held by the view itself (A, shared, excluded).
-    pub fn memory_bytes(&self) -> usize {
-        self.patched.len() * 8
-            + self.rank.len() * 4
-            + self.ptr.len() * 8
-            + self.cols.len() * 4
-            + self.vals.len() * 8
-    }
-
-    /// S stored by rows (a copy; for tests and checks).
-    pub fn to_csr(&self) -> CsrMatrix {
+    /// S stored by rows (a copy, to check the view against).
+    #[cfg(test)]
+    fn to_csr(&self) -> CsrMatrix {
         let n = self.n_rows();
         let mut row_ptr = vec![0usize; n + 1];
         let (mut col_idx, mut values) = (Vec::new(), Vec::new());
@@ -428,9 +420,10 @@ mod tests {
             let mut copy = fix(&a, &fixed);
             copy.drop_zeros();
             let view = MaskedRows::new(Arc::new(a.clone()), fixed).unwrap();
-            assert_eq!(view.to_csr().row_ptr(), copy.row_ptr());
-            assert_eq!(view.to_csr().col_idx(), copy.col_idx());
-            assert_eq!(view.to_csr().values(), copy.values());
+            let stored = view.to_csr();
+            assert_eq!(stored.row_ptr(), copy.row_ptr());
+            assert_eq!(stored.col_idx(), copy.col_idx());
+            assert_eq!(stored.values(), copy.values());
             assert_eq!(Rows::nnz(&view), copy.nnz());
             assert!(view.patched_rows() < m * m / 5, "{}", view.patched_rows());
             // the products give the bits of the copy's
