@@ -218,7 +218,7 @@ fn scheme_matrix(scheme: &dyn GradientDiscretisation, problem: &Problem) -> grad
     let Some((col_ptr, row_idx)) = sys.condensed_pattern() else {
         return Err(gradvi::Error::Internal("no condensed pattern".into()));
     };
-    let fixed = vec![None; sys.n_unknowns()];
+    let fixed = gradvi::vi::FixedValues::free(sys.n_unknowns())?;
     let (values, _) =
         sys.assemble_condensed(&mut gradvi::assembly::SolveState::default(), &fixed)?;
     Ok(Lower {

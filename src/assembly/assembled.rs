@@ -30,7 +30,7 @@
 use super::DiscreteSystem;
 #[cfg(doc)]
 use super::ProblemValues;
-use super::gather::{FixedValues, chunks, split_by_ranges};
+use super::gather::{Pinned, chunks, split_by_ranges};
 use super::symbolic::DofMap;
 use crate::budget::{try_filled, try_vec};
 use crate::linalg::{CsrMatrix, MaskedRows, SpdPattern};
@@ -107,7 +107,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// not M's, M shared; a product with it gives the bits of a product with S stored by rows
     /// without its exact zeros, bitwise the stored rows of the gathered system): what the
     /// conjugate gradients and the multigrid read.
-    pub(super) fn masked_rows(&self, fx: &FixedValues) -> crate::Result<MaskedRows> {
+    pub(super) fn masked_rows(&self, fx: &Pinned) -> crate::Result<MaskedRows> {
         let a = self.values.assembled.clone().ok_or_else(|| {
             crate::Error::Internal("a masked view of a system without an assembled matrix".into())
         })?;
@@ -121,7 +121,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     pub(super) fn masked_lower(
         &self,
         a: &CsrMatrix,
-        fx: &FixedValues,
+        fx: &Pinned,
         pattern: &SpdPattern,
     ) -> crate::Result<Vec<f64>> {
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
@@ -160,7 +160,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     }
 
     /// c of the module docs, rows in parallel.
-    pub(super) fn masked_rhs(&self, a: &CsrMatrix, fx: &FixedValues) -> crate::Result<Vec<f64>> {
+    pub(super) fn masked_rhs(&self, a: &CsrMatrix, fx: &Pinned) -> crate::Result<Vec<f64>> {
         let load = &self.values.load;
         let mut c = try_filled(a.n_rows(), 0.0, "the right-hand side")?;
         c.par_iter_mut()

@@ -7,6 +7,7 @@ use super::condense::{self, condense};
 use super::{DiscreteSystem, SolveState};
 use crate::budget::{try_filled, try_resize};
 use crate::mesh::SolveMesh;
+use crate::vi::FixedValues;
 use rayon::prelude::*;
 
 /// Cells per parallel task in the cell loops (large enough to amortise the task, small enough
@@ -80,24 +81,22 @@ pub(super) fn local_index(d: &[u32], g: usize) -> crate::Result<usize> {
     })
 }
 
-/// The value of each fixed unknown (Dirichlet, or fixed by the caller), NaN for a free one
-/// (the data and the barriers are finite).
-pub(super) struct FixedValues(Vec<f64>);
+/// The value of each fixed unknown: a Dirichlet one (its Dirichlet value first), or one fixed
+/// by the caller. Two views, no third array of the order of the system.
+#[derive(Clone, Copy)]
+pub(super) struct Pinned<'a> {
+    dirichlet: &'a FixedValues,
+    fixed: &'a FixedValues,
+}
 
-impl FixedValues {
-    pub(super) fn new(dirichlet: &[Option<f64>], fixed: &[Option<f64>]) -> Self {
-        FixedValues(
-            (0..dirichlet.len())
-                .into_par_iter()
-                .with_min_len(4096)
-                .map(|d| dirichlet[d].or(fixed[d]).unwrap_or(f64::NAN))
-                .collect(),
-        )
+impl<'a> Pinned<'a> {
+    pub(super) fn new(dirichlet: &'a FixedValues, fixed: &'a FixedValues) -> Self {
+        Pinned { dirichlet, fixed }
     }
     /// The value of unknown `d` if it is fixed.
+    #[inline]
     pub(super) fn get(&self, d: usize) -> Option<f64> {
-        let v = self.0[d];
-        if v.is_nan() { None } else { Some(v) }
+        self.dirichlet.get(d).or_else(|| self.fixed.get(d))
     }
 }
 
@@ -128,10 +127,10 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     pub fn assemble_condensed(
         &self,
         state: &mut SolveState,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, Vec<f64>)> {
         self.bind(state);
-        let fixed = FixedValues::new(&self.values.dirichlet, fixed);
+        let fixed = Pinned::new(&self.values.dirichlet, fixed);
         // without interior unknowns, S and c are masked from the global matrix
         if let Some(a) = self.assembled() {
             let pattern = self.sym.pattern().ok_or_else(|| {
@@ -166,7 +165,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// is returned.
     fn condense_cells(
         &self,
-        fixed: &FixedValues,
+        fixed: &Pinned,
         sbuf: &mut [f64],
         gbuf: &mut [f64],
     ) -> crate::Result<()> {
@@ -200,7 +199,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     fn condense_cell(
         &self,
         k: usize,
-        fixed: &FixedValues,
+        fixed: &Pinned,
         full: &mut Vec<f64>,
         s: &mut [f64],
         g: &mut [f64],
@@ -231,7 +230,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// order (the order of a sequential scatter, whatever the number of
     /// threads); zero in the rows and columns of fixed unknowns, whose diagonal is 1.
     /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if the values cannot be allocated.
-    fn gather_matrix(&self, fixed: &FixedValues, blocks: &[f64]) -> crate::Result<Vec<f64>> {
+    fn gather_matrix(&self, fixed: &Pinned, blocks: &[f64]) -> crate::Result<Vec<f64>> {
         let pattern = self.sym.kept_pattern("the gathered matrix")?;
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let src = &self.sym.maps.src;
@@ -271,7 +270,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// order); the value on fixed rows.
     fn gather_rhs(
         &self,
-        fixed: &FixedValues,
+        fixed: &Pinned,
         cell_value: impl Fn(usize, usize) -> f64 + Sync,
     ) -> crate::Result<Vec<f64>> {
         let inc = &self.sym.maps.inc;
@@ -317,7 +316,9 @@ mod tests {
 
     #[test]
     fn fixed_values_take_dirichlet_first() {
-        let f = FixedValues::new(&[Some(1.0), None, None], &[Some(2.0), Some(3.0), None]);
+        let d = FixedValues::from_options([Some(1.0), None, None]).unwrap();
+        let x = FixedValues::from_options([Some(2.0), Some(3.0), None]).unwrap();
+        let f = Pinned::new(&d, &x);
         assert_eq!((f.get(0), f.get(1), f.get(2)), (Some(1.0), Some(3.0), None));
     }
 }

@@ -12,6 +12,7 @@ use crate::budget::{AllocFailure, try_copy, try_filled};
 use crate::linalg::amg::Fine;
 use crate::linalg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, CsrMatrix};
 use crate::mesh::SolveMesh;
+use crate::vi::FixedValues;
 use crate::vi::SolveTimings;
 use std::time::Instant;
 
@@ -39,11 +40,11 @@ pub(super) struct KeptHierarchy {
 
 /// One bit per unknown: set where the unknown is fixed (Dirichlet, or by `fixed`).
 pub(super) fn fixed_mask(
-    dirichlet: &[Option<f64>],
-    fixed: &[Option<f64>],
+    dirichlet: &FixedValues,
+    fixed: &FixedValues,
 ) -> Result<Vec<u64>, AllocFailure> {
     let mut mask = try_filled(dirichlet.len().div_ceil(64), 0u64, "the fixed-unknown mask")?;
-    for (i, (d, f)) in dirichlet.iter().zip(fixed).enumerate() {
+    for (i, (d, f)) in dirichlet.iter().zip(fixed.iter()).enumerate() {
         if d.is_some() || f.is_some() {
             mask[i / 64] |= 1 << (i % 64);
         }
@@ -152,7 +153,7 @@ impl PcgOutcome {
 
 /// A hash of the fixed unknowns and their values (to check that a refinement continues the
 /// solve it belongs to).
-pub(super) fn fingerprint(fixed: &[Option<f64>]) -> u64 {
+pub(super) fn fingerprint(fixed: &FixedValues) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
     for (i, v) in fixed.iter().enumerate() {
@@ -171,7 +172,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     pub(super) fn next_hierarchy(
         &self,
         state: &mut SolveState,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
         cells: bool,
     ) -> crate::Result<NextHierarchy> {
         let mask = fixed_mask(&self.values.dirichlet, fixed)?;
@@ -215,7 +216,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         a: Fine<'static>,
         rhs: &mut [f64],
         rtol: f64,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
         next: NextHierarchy,
     ) -> crate::Result<(Instant, PcgOutcome)> {
         let hier = hierarchy(a, next, false, &mut state.amg)?;
@@ -238,7 +239,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         c: &[f64],
         x: &mut [f64],
         rtol: f64,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<PcgOutcome> {
         let Hierarchy {
             mut amg,

@@ -65,6 +65,7 @@ use crate::linalg::{FactorThreads, Ordering};
 use crate::mesh::{PolyMesh, SolveMesh};
 use crate::problem::Problem;
 use crate::scheme::{GradientDiscretisation, PointDof};
+use crate::vi::FixedValues;
 use condense::{CellSystem, SymMatrix};
 pub use linear::{
     AUTO_ITERATIVE_MIN, AUTO_ITERATIVE_MIN_3D, ITERATIVE_MAX_ITER, ITERATIVE_RTOL, LinearSolver,
@@ -221,7 +222,7 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'a, M, D> {
         self.sym.factor_len()
     }
     /// Dirichlet unknowns and their values (`None`: not Dirichlet).
-    pub fn dirichlet(&self) -> &[Option<f64>] {
+    pub fn dirichlet(&self) -> &FixedValues {
         &self.values.dirichlet
     }
     /// The unknowns carrying the trace on Γ3, including those that are also Dirichlet unknowns

@@ -3,7 +3,7 @@
 //! recover the eliminated unknowns.
 
 use super::condense::{interior_value, recover_interior};
-use super::gather::FixedValues;
+use super::gather::Pinned;
 use super::iterative::{Hierarchy, KeptHierarchy, NextHierarchy, PcgOutcome, fingerprint};
 use super::linear::{ITERATIVE_RTOL, LinearSolver, SCREENING_RTOL};
 use super::symbolic::check_numeric_memory;
@@ -11,6 +11,7 @@ use super::{DiscreteSystem, SolveState};
 use crate::budget::{try_copy, try_filled, try_vec};
 use crate::linalg::{CholeskyWork, CsrMatrix, SpdPattern};
 use crate::mesh::SolveMesh;
+use crate::vi::FixedValues;
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -41,14 +42,14 @@ pub(super) fn check_finite(u: Vec<f64>) -> crate::Result<Vec<f64>> {
 }
 
 impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
-    /// Solves the linear system in which the unknowns with `fixed[d] = Some(v)` (and the
+    /// Solves the linear system in which the unknowns `fixed` fixes (and the
     /// Dirichlet unknowns) are fixed. Returns the full unknown vector. What carries to the next
     /// solve (initial guess, multigrid hierarchy, buffers) is kept in `state`; a fresh state
     /// gives the same bits whatever was solved before.
     pub fn solve(
         &self,
         state: &mut SolveState,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         self.solve_to(state, fixed, ITERATIVE_RTOL)
     }
@@ -60,7 +61,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     pub fn screen(
         &self,
         state: &mut SolveState,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         self.solve_to(state, fixed, SCREENING_RTOL)
     }
@@ -71,7 +72,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     pub fn refine(
         &self,
         state: &mut SolveState,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
         self.bind(state);
         let kept = match state.kept.take() {
@@ -130,7 +131,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         state: &mut SolveState,
         hier: Hierarchy,
         rhs: Vec<f64>,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, usize)> {
         let cs = if hier.cells {
             self.cell_system(state)?
@@ -165,7 +166,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     pub fn polish(
         &self,
         state: &mut SolveState,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
         rtol: f64,
     ) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
         self.bind(state);
@@ -179,7 +180,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     fn solve_to(
         &self,
         state: &mut SolveState,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
         rtol: f64,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         self.bind(state);
@@ -251,7 +252,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         &self,
         state: &mut SolveState,
         a: &CsrMatrix,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
         rtol: f64,
         reuse: Option<NextHierarchy>,
     ) -> crate::Result<(Vec<f64>, Instant, Instant, PcgOutcome)> {
@@ -264,9 +265,6 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             return Ok((rhs, t1, t2, out));
         };
         let s = self.masked_rows(&fx)?;
-        // the fixed values are not held through the multigrid setup and the solve (its peak
-        // memory): the direct fallback masks them again, with the right-hand side
-        drop(fx);
         let t1 = Instant::now();
         match self.solve_csr(state, s.into(), &mut rhs, rtol, fixed, reuse) {
             Ok((t2, out)) => Ok((rhs, t1, t2, out)),
@@ -276,7 +274,6 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                 let mut c = self.masked_rhs(a, &fx)?;
                 let pattern = self.fallback_pattern(state)?;
                 let values = self.masked_lower(a, &fx, pattern)?;
-                drop(fx);
                 let (t2, out) = self.solve_direct(state, &values, &mut c)?;
                 Ok((c, t1, t2, out))
             }
@@ -285,18 +282,19 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     }
 
     /// The values of the fixed unknowns: `fixed` and the Dirichlet ones.
-    pub(super) fn fixed_values(&self, fixed: &[Option<f64>]) -> FixedValues {
-        FixedValues::new(&self.values.dirichlet, fixed)
+    pub(super) fn fixed_values<'f>(&'f self, fixed: &'f FixedValues) -> Pinned<'f> {
+        Pinned::new(&self.values.dirichlet, fixed)
     }
 
     /// The full unknown vector from the skeleton solution `skel`: interior unknowns recovered
     /// cell by cell; a non-finite value is an error. Without interior unknowns, `skel` itself
     /// (no second vector of the order of the system at the end of a solve).
-    fn complete(&self, fixed: &[Option<f64>], skel: Vec<f64>) -> crate::Result<Vec<f64>> {
+    fn complete(&self, fixed: &FixedValues, skel: Vec<f64>) -> crate::Result<Vec<f64>> {
         if self.n_skel == self.n {
             return check_finite(skel);
         }
-        let fx = |d: usize| -> Option<f64> { self.values.dirichlet[d].or(fixed[d]) };
+        let pinned = self.fixed_values(fixed);
+        let fx = |d: usize| -> Option<f64> { pinned.get(d) };
         let mut u = try_filled(self.n, 0.0, "the solution")?;
         u[..self.n_skel].copy_from_slice(&skel);
         drop(skel);

@@ -13,6 +13,7 @@ use super::iterative::KeptHierarchy;
 use super::two_point::CellSystemAll;
 use crate::linalg::{AmgWork, CholeskyWork, SpdPattern};
 use crate::mesh::{PolyMesh, SolveMesh};
+use crate::vi::FixedValues;
 use crate::vi::{QuadraticEnergy, SolveTimings};
 use std::sync::Arc;
 
@@ -81,7 +82,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> QuadraticEnergy for Solving<'_, '
     fn n_unknowns(&self) -> usize {
         self.system.n_unknowns()
     }
-    fn dirichlet(&self) -> &[Option<f64>] {
+    fn dirichlet(&self) -> &FixedValues {
         self.system.dirichlet()
     }
     fn load(&self) -> &[f64] {
@@ -89,22 +90,22 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> QuadraticEnergy for Solving<'_, '
     }
     fn minimise_with_fixed(
         &mut self,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         self.system.solve(self.state, fixed)
     }
     fn screen_with_fixed(
         &mut self,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         self.system.screen(self.state, fixed)
     }
-    fn refine(&mut self, fixed: &[Option<f64>]) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+    fn refine(&mut self, fixed: &FixedValues) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
         self.system.refine(self.state, fixed)
     }
     fn polish(
         &mut self,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
         rtol: f64,
     ) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
         self.system.polish(self.state, fixed, rtol)
@@ -139,8 +140,8 @@ mod tests {
     }
 
     /// The unknowns below `k` fixed at 0.01.
-    fn fixed(n: usize, k: usize) -> Vec<Option<f64>> {
-        (0..n).map(|i| (i < k).then_some(0.01)).collect()
+    fn fixed(n: usize, k: usize) -> FixedValues {
+        FixedValues::from_options((0..n).map(|i| (i < k).then_some(0.01))).unwrap()
     }
 
     fn bits(u: &[f64]) -> Vec<u64> {
@@ -218,7 +219,7 @@ mod tests {
         let sys = DiscreteSystem::new(&hmm, &paper_test3(-10.0), iterative()).unwrap();
         let mut state = SolveState::default();
         assert_eq!(state.cell_system_size(), None);
-        sys.solve(&mut state, &vec![None; sys.n_unknowns()])
+        sys.solve(&mut state, &FixedValues::free(sys.n_unknowns()).unwrap())
             .unwrap();
         assert_eq!(state.cell_system_size(), Some(squares.n_cells()));
         assert_eq!(state.cell_system_skeleton(), Some(0));

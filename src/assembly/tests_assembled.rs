@@ -6,6 +6,7 @@ use super::{DiscreteSystem, LinearSolver, SolveState, SystemOptions};
 use crate::mesh::generate::cartesian_triangles;
 use crate::problem::paper_test3;
 use crate::scheme::{GradientDiscretisation, P1};
+use crate::vi::FixedValues;
 use std::collections::BTreeMap;
 
 /// M summed entry by entry in cell order from the scheme's local matrices (their packed lower
@@ -91,7 +92,7 @@ fn direct_and_iterative_solves_of_the_masked_system_agree() {
     let direct = DiscreteSystem::new(&p1, &p, with(LinearSolver::Direct)).unwrap();
     let iterative = DiscreteSystem::new(&p1, &p, with(LinearSolver::Iterative)).unwrap();
     let n = direct.n_unknowns();
-    let fixed: Vec<Option<f64>> = (0..n).map(|i| (i % 7 == 3).then_some(0.25)).collect();
+    let fixed = FixedValues::from_options((0..n).map(|i| (i % 7 == 3).then_some(0.25))).unwrap();
     let (ud, _) = direct.solve(&mut SolveState::default(), &fixed).unwrap();
     let (ui, _) = iterative.solve(&mut SolveState::default(), &fixed).unwrap();
     let scale = ud.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -103,7 +104,7 @@ fn direct_and_iterative_solves_of_the_masked_system_agree() {
     let (r, s) = direct.residual(&ud).unwrap();
     let mut free = 0;
     for i in 0..n {
-        match (fixed[i], direct.dirichlet()[i]) {
+        match (fixed.get(i), direct.dirichlet().get(i)) {
             (_, Some(v)) => assert_eq!(ud[i], v),
             (Some(v), None) => assert_eq!(ud[i], v),
             (None, None) => {
@@ -133,7 +134,7 @@ fn a_shared_symbolic_system_assembles_each_problem_as_alone() {
             bits(&shared.full_matrix_triplets()),
             bits(&alone.full_matrix_triplets())
         );
-        let fixed = vec![None; shared.n_unknowns()];
+        let fixed = FixedValues::free(shared.n_unknowns()).unwrap();
         let (a, _) = shared.solve(&mut SolveState::default(), &fixed).unwrap();
         let (b, _) = alone.solve(&mut SolveState::default(), &fixed).unwrap();
         assert_eq!(
@@ -164,7 +165,7 @@ fn a_released_pattern_is_built_again_where_it_is_needed() {
     let direct = DiscreteSystem::new(&p1, &p, with(LinearSolver::Direct)).unwrap();
     assert!(it.condensed_pattern().is_none());
     // values in the order of a pattern it does not have: a typed error saying what to do
-    let none = vec![None; it.n_unknowns()];
+    let none = FixedValues::free(it.n_unknowns()).unwrap();
     match it.assemble_condensed(&mut SolveState::default(), &none) {
         Err(crate::Error::InvalidData(m)) => assert!(m.contains("SymbolicSystem::new"), "{m}"),
         other => panic!("{:?}", other.map(|(v, _)| v.len())),
@@ -180,7 +181,7 @@ fn a_released_pattern_is_built_again_where_it_is_needed() {
         bits(&alone.full_matrix_triplets())
     );
     let n = it.n_unknowns();
-    let fixed: Vec<Option<f64>> = (0..n).map(|i| (i % 7 == 3).then_some(0.01)).collect();
+    let fixed = FixedValues::from_options((0..n).map(|i| (i % 7 == 3).then_some(0.01))).unwrap();
     let solve = |s: &DiscreteSystem, state: &mut SolveState| {
         let (u, _) = s.solve(state, &fixed).unwrap();
         u.iter().map(|x| x.to_bits()).collect::<Vec<_>>()

@@ -46,13 +46,14 @@
 //! rectangles: 1/2; on triangles nothing is eliminated and it would be larger), and only for
 //! solves that fix no eliminated face (otherwise the skeleton system is solved).
 
-use super::gather::{CHUNK, FixedValues, chunks, local_index, par_try_fill, split_by_ranges};
+use super::gather::{CHUNK, Pinned, chunks, local_index, par_try_fill, split_by_ranges};
 use super::iterative::hierarchy;
 use super::solve::check_finite;
 use super::{DiscreteSystem, SolveState};
 use crate::budget::{try_collect, try_copy, try_filled, try_grow, try_vec};
 use crate::linalg::CsrMatrix;
 use crate::mesh::SolveMesh;
+use crate::vi::FixedValues;
 use crate::vi::SolveTimings;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -121,16 +122,15 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     pub(super) fn cell_system_for(
         &self,
         state: &mut SolveState,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<Option<Arc<CellSystemAll>>> {
         let Some(cs) = self.cell_system(state)? else {
             return Ok(None);
         };
-        let eliminated_fixed = fixed[..self.n_skel]
-            .par_iter()
-            .zip(&cs.kept_row)
+        let eliminated_fixed = (0..self.n_skel)
+            .into_par_iter()
             .with_min_len(4096)
-            .any(|(f, &row)| f.is_some() && row == NO_ROW);
+            .any(|s| fixed.is_fixed(s) && cs.kept_row[s] == NO_ROW);
         Ok((!eliminated_fixed).then_some(cs))
     }
 
@@ -142,7 +142,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         &self,
         state: &mut SolveState,
         cs: &CellSystemAll,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
         rtol: f64,
         t0: Instant,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
@@ -249,27 +249,24 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         }
         let mut kept_row = try_filled(self.n_skel, NO_ROW, "the rows of the cell system")?;
         let mut eliminated = try_filled(self.n_skel, false, "the eliminated skeleton unknowns")?;
-        for s in 0..self.n_skel {
-            eliminated[s] = dirichlet[s].is_none() && inc.list(s).len() <= 2;
+        for (s, e) in eliminated.iter_mut().enumerate() {
+            *e = !dirichlet.is_fixed(s) && inc.list(s).len() <= 2;
         }
         for &s in &coupled_list {
             eliminated[s as usize] = false;
         }
         let kept = (0..self.n_skel)
-            .filter(|&s| dirichlet[s].is_none() && !eliminated[s])
+            .filter(|&s| !dirichlet.is_fixed(s) && !eliminated[s])
             .count();
         let mut dofs = try_vec(nc + kept, "the unknowns of the cell system")?;
         dofs.extend((0..nc).map(|k| dm.cell(k).0[0]));
         for s in 0..self.n_skel {
-            if dirichlet[s].is_none() && !eliminated[s] {
+            if !dirichlet.is_fixed(s) && !eliminated[s] {
                 kept_row[s] = dofs.len() as u32;
                 dofs.push(s as u32);
             }
         }
-        let free_skel = dirichlet[..self.n_skel]
-            .iter()
-            .filter(|d| d.is_none())
-            .count();
+        let free_skel = (0..self.n_skel).filter(|&s| !dirichlet.is_fixed(s)).count();
         Ok((4 * dofs.len() <= 3 * free_skel).then_some((dofs, eliminated, kept_row)))
     }
 
@@ -281,7 +278,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let cell = self.local(k);
         let (m, dofs) = (cell.matrix, cell.dofs);
         try_grow(out, dofs.len(), "the coupled skeleton unknowns")?;
-        let free = |a: usize| dirichlet[dofs[a] as usize].is_none();
+        let free = |a: usize| !dirichlet.is_fixed(dofs[a] as usize);
         for a in (1..dofs.len()).filter(|&a| free(a)) {
             let lone = m.at(a, a) > 0.0
                 && (1..dofs.len())
@@ -387,7 +384,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let mut r = self.values.load[cell.dofs[0] as usize];
         for (a, &s) in cell.dofs.iter().enumerate().skip(1) {
             let (s, msk) = (s as usize, m.at(a, 0));
-            if let Some(v) = dirichlet[s] {
+            if let Some(v) = dirichlet.get(s) {
                 r -= msk * v;
             } else if cs.kept_row[s] != NO_ROW {
                 entries.push((cs.kept_row[s], msk));
@@ -424,7 +421,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             entries.push((k, m.at(a, 0)));
             for (c, &t) in cell.dofs.iter().enumerate().skip(1) {
                 let t = t as usize;
-                if let Some(v) = dirichlet[t] {
+                if let Some(v) = dirichlet.get(t) {
                     r -= m.at(a, c) * v;
                 } else if cs.kept_row[t] != NO_ROW {
                     entries.push((cs.kept_row[t], m.at(a, c)));
@@ -441,7 +438,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     pub(super) fn fixed_cell_system(
         &self,
         cs: &CellSystemAll,
-        fixed: &FixedValues,
+        fixed: &Pinned,
     ) -> crate::Result<(CsrMatrix, Vec<f64>)> {
         let nc = cs.n();
         let mut value = try_vec(nc, "the fixed values of the cell system")?;
@@ -513,7 +510,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     pub(super) fn complete_cells(
         &self,
         cs: &CellSystemAll,
-        fixed: &FixedValues,
+        fixed: &Pinned,
         x: &[f64],
     ) -> crate::Result<Vec<f64>> {
         let mut u = try_filled(self.n, 0.0, "the solution")?;
@@ -523,7 +520,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         }
         let inc = &self.sym.maps.inc;
         let skel = par_try_fill(self.n_skel, "the skeleton values", |s| {
-            if let Some(v) = self.values.dirichlet[s] {
+            if let Some(v) = self.values.dirichlet.get(s) {
                 return Ok(v);
             }
             if cs.kept_row[s] != NO_ROW {

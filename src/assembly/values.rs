@@ -11,6 +11,7 @@ use crate::mesh::SolveMesh;
 use crate::offsets::Offsets;
 use crate::problem::{BoundaryKind, Problem, check_finite_at, check_tensor};
 use crate::scheme::{GradientDiscretisation, PointDof};
+use crate::vi::FixedValues;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
@@ -30,7 +31,7 @@ pub struct ProblemValues<const D: usize = 2> {
     /// face is of Neumann type.
     pub neumann_load: Vec<f64>,
     /// Dirichlet unknowns and their values.
-    pub dirichlet: Vec<Option<f64>>,
+    pub dirichlet: FixedValues,
     /// Unknowns carrying the trace on Γ3, with their points and measures (Dirichlet ones too).
     pub signorini: Vec<PointDof<D>>,
     /// Schemes without interior unknowns: the global matrix, assembled once
@@ -70,7 +71,7 @@ impl<const D: usize> ProblemValues<D> {
             loads,
             load,
             neumann_load: Vec::new(),
-            dirichlet: try_filled(n, None, "the Dirichlet values")?,
+            dirichlet: FixedValues::free(n)?,
             signorini: Vec::new(),
             assembled: None,
         };
@@ -128,7 +129,7 @@ impl<const D: usize> ProblemValues<D> {
             loads: Vec::new(),
             load,
             neumann_load: Vec::new(),
-            dirichlet: try_filled(scheme.n_unknowns(), None, "the Dirichlet values")?,
+            dirichlet: FixedValues::free(scheme.n_unknowns())?,
             signorini: Vec::new(),
             assembled: Some(std::sync::Arc::new(a)),
         };
@@ -159,7 +160,7 @@ impl<const D: usize> ProblemValues<D> {
                         let v = check_finite_at((problem.dirichlet)(t.point), || {
                             format!("the Dirichlet value at {:?}", t.point)
                         })?;
-                        self.dirichlet[t.dof] = Some(v);
+                        self.dirichlet.set(t.dof, v);
                     }
                 }
                 BoundaryKind::Neumann => {

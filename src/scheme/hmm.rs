@@ -642,17 +642,17 @@ mod tests_3d {
                 }
             }
         }
-        let mut fixed: Vec<Option<f64>> = vec![None; n];
+        let mut fixed = crate::vi::FixedValues::free(n).unwrap();
         let mut trace = Vec::new();
         for e in (0..s.mesh().n_faces()).filter(|&e| s.mesh().face_cells(e)[1] == NO_CELL) {
             s.face_trace_dofs(e, &mut trace);
-            trace.iter().for_each(|t| fixed[t.dof] = Some(g(t.point)));
+            trace.iter().for_each(|t| fixed.set(t.dof, g(t.point)));
         }
-        let free: Vec<usize> = (0..n).filter(|&d| fixed[d].is_none()).collect();
+        let free: Vec<usize> = (0..n).filter(|&d| !fixed.is_fixed(d)).collect();
         let sys = DMatrix::from_fn(free.len(), free.len(), |i, j| mat[(free[i], free[j])]);
         let rhs = DVector::from_fn(free.len(), |i, _| {
             let lifted: f64 = (0..n)
-                .map(|d| mat[(free[i], d)] * fixed[d].unwrap_or(0.0))
+                .map(|d| mat[(free[i], d)] * fixed.get(d).unwrap_or(0.0))
                 .sum();
             load[free[i]] - lifted
         });

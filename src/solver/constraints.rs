@@ -49,15 +49,15 @@ pub fn build<M: SolveMesh<D> + ?Sized, const D: usize>(
             for i in 0..mesh.n_boundary_faces() {
                 let e = mesh.boundary_face(i);
                 scheme.face_trace_dofs(e, &mut tr);
-                checks.extend(tr.iter().filter(|t| dir[t.dof].is_some()));
+                checks.extend(tr.iter().filter(|t| dir.is_fixed(t.dof)));
             }
         }
         ConstraintKind::Signorini => {
-            checks.extend(candidates.iter().filter(|t| dir[t.dof].is_some()));
+            checks.extend(candidates.iter().filter(|t| dir.is_fixed(t.dof)));
         }
     }
     for t in &checks {
-        let v = dir[t.dof].unwrap_or(0.0);
+        let v = dir.get(t.dof).unwrap_or(0.0);
         let g = check_finite_at((c.barrier)(t.point), || {
             format!("the barrier at {:?}", t.point)
         })?;
@@ -71,9 +71,9 @@ pub fn build<M: SolveMesh<D> + ?Sized, const D: usize>(
     }
     // the barrier at the unknowns off the Dirichlet boundary, evaluated in parallel; the first
     // non-finite value in their order is reported
-    let n_free = candidates.iter().filter(|pd| dir[pd.dof].is_none()).count();
+    let n_free = candidates.iter().filter(|pd| !dir.is_fixed(pd.dof)).count();
     let mut dofs: Vec<PointDof<D>> = try_vec(n_free, "the constrained unknowns")?;
-    dofs.extend(candidates.into_iter().filter(|pd| dir[pd.dof].is_none()));
+    dofs.extend(candidates.into_iter().filter(|pd| !dir.is_fixed(pd.dof)));
     let mut barrier = try_filled(dofs.len(), 0.0, "the barrier at the constrained unknowns")?;
     barrier
         .par_iter_mut()

@@ -124,7 +124,7 @@ pub fn analyse<M: SolveMesh<D> + ?Sized, const D: usize>(
     let mut anchored = try_filled(n, false, what)?;
     let (mut sum_b, mut sum_abs) = (try_filled(n, 0.0f64, what)?, try_filled(n, 0.0f64, what)?);
     for i in 0..n {
-        anchored[root[i]] |= dir[i].is_some();
+        anchored[root[i]] |= dir.is_fixed(i);
         sum_b[root[i]] += system.load()[i];
         sum_abs[root[i]] += system.load()[i].abs();
     }

@@ -240,7 +240,7 @@ fn solve_step<P>(
     screening: bool,
     (c, tol): (f64, f64),
 ) -> crate::Result<(Vec<f64>, SolveTimings, Evaluation, Vec<bool>)> {
-    let fixed = cons.fixed(q.n_unknowns(), active);
+    let fixed = cons.fixed(q.n_unknowns(), active)?;
     let (mut u, mut timings) = if screening {
         q.screen_with_fixed(&fixed)?
     } else {
@@ -420,9 +420,9 @@ pub fn run<P>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vi::Side;
     use crate::vi::dense::{Dense, Screening, all_constrained, cycling_system, laplacian_1d, spd};
     use crate::vi::exhaustive;
+    use crate::vi::{FixedValues, Side};
 
     /// Random dense SPD problems with upper and lower barriers: the active-set solution equals
     /// exhaustive enumeration and its certificate passes, or the iteration stalls (it is not
@@ -445,7 +445,7 @@ mod tests {
             let mut sys = Dense {
                 m,
                 b,
-                dir: vec![None; n],
+                dir: FixedValues::free(n).unwrap(),
             };
             let cons = all_constrained(n, g, side);
             let (reference, ref_active) = exhaustive::solve(&mut sys, &cons).unwrap();
@@ -473,7 +473,7 @@ mod tests {
         let mut sys = Dense {
             m,
             b: vec![1.0; n],
-            dir: vec![None; n],
+            dir: FixedValues::free(n).unwrap(),
         };
         let cons = all_constrained(n, vec![3.0; n], Side::Upper);
         let sol = solve(&mut sys, &cons, &ActiveSetOptions::default()).unwrap();
@@ -501,7 +501,7 @@ mod tests {
         let exact = |m: &nalgebra::DMatrix<f64>| Dense {
             m: m.clone(),
             b: b.clone(),
-            dir: vec![None; n],
+            dir: FixedValues::free(n).unwrap(),
         };
         let no_screening = ActiveSetOptions {
             screening: false,
@@ -551,7 +551,7 @@ mod tests {
         let mut q = Dense {
             m,
             b: vec![0.01; n],
-            dir: vec![None; n],
+            dir: FixedValues::free(n).unwrap(),
         };
         let plain = solve(&mut q, &cons, &ActiveSetOptions::default()).unwrap();
         assert!(plain.niter >= 3, "{}", plain.niter);

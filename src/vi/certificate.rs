@@ -136,7 +136,7 @@ pub fn evaluate<P>(
     }
     let dir = q.dirichlet();
     for i in 0..u.len() {
-        if dir[i].is_none() && !is_active[i] {
+        if !dir.is_fixed(i) && !is_active[i] {
             c.balance_residual = c.balance_residual.max(r[i].abs() / scale_r);
         }
     }

@@ -1,21 +1,21 @@
 //! A dense quadratic energy, to drive the algorithms of [`super`] with crafted matrices in the
 //! unit tests.
 
-use super::{ConstrainedDof, Constraints, QuadraticEnergy, Side, SolveTimings};
+use super::{ConstrainedDof, Constraints, FixedValues, QuadraticEnergy, Side, SolveTimings};
 use nalgebra::{DMatrix, DVector};
 
 /// ½uᵀMu − bᵀu with dense M and Dirichlet unknowns.
 pub struct Dense {
     pub m: DMatrix<f64>,
     pub b: Vec<f64>,
-    pub dir: Vec<Option<f64>>,
+    pub dir: FixedValues,
 }
 
 impl QuadraticEnergy for Dense {
     fn n_unknowns(&self) -> usize {
         self.b.len()
     }
-    fn dirichlet(&self) -> &[Option<f64>] {
+    fn dirichlet(&self) -> &FixedValues {
         &self.dir
     }
     fn load(&self) -> &[f64] {
@@ -23,7 +23,7 @@ impl QuadraticEnergy for Dense {
     }
     fn minimise_with_fixed(
         &mut self,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         self.solve(fixed)
     }
@@ -60,9 +60,9 @@ impl QuadraticEnergy for Dense {
 
 impl Dense {
     /// The minimiser with `fixed` (a dense Cholesky solve; nothing kept between solves).
-    pub fn solve(&self, fixed: &[Option<f64>]) -> crate::Result<(Vec<f64>, SolveTimings)> {
+    pub fn solve(&self, fixed: &FixedValues) -> crate::Result<(Vec<f64>, SolveTimings)> {
         let n = self.b.len();
-        let fx = |i: usize| self.dir[i].or(fixed[i]);
+        let fx = |i: usize| self.dir.get(i).or(fixed.get(i));
         let free: Vec<usize> = (0..n).filter(|&i| fx(i).is_none()).collect();
         let mut u: Vec<f64> = (0..n).map(|i| fx(i).unwrap_or(0.0)).collect();
         let a = DMatrix::from_fn(free.len(), free.len(), |i, j| self.m[(free[i], free[j])]);
@@ -98,7 +98,7 @@ impl QuadraticEnergy for Screening {
     fn n_unknowns(&self) -> usize {
         self.exact.n_unknowns()
     }
-    fn dirichlet(&self) -> &[Option<f64>] {
+    fn dirichlet(&self) -> &FixedValues {
         self.exact.dirichlet()
     }
     fn load(&self) -> &[f64] {
@@ -106,23 +106,23 @@ impl QuadraticEnergy for Screening {
     }
     fn minimise_with_fixed(
         &mut self,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         self.exact.solve(fixed)
     }
     fn screen_with_fixed(
         &mut self,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         let (mut u, t) = self.exact.solve(fixed)?;
         for (i, ui) in u.iter_mut().enumerate() {
-            if fixed[i].is_none() && self.exact.dir[i].is_none() {
+            if !fixed.is_fixed(i) && !self.exact.dir.is_fixed(i) {
                 *ui += if i % 2 == 0 { self.error } else { -self.error };
             }
         }
         Ok((u, SolveTimings { inexact: true, ..t }))
     }
-    fn refine(&mut self, fixed: &[Option<f64>]) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+    fn refine(&mut self, fixed: &FixedValues) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
         self.refinements += 1;
         self.exact.solve(fixed).map(Some)
     }
@@ -178,7 +178,7 @@ pub fn cycling_system() -> (Dense, Constraints) {
     let sys = Dense {
         m,
         b: vec![0.0, 0.75, -0.75],
-        dir: vec![None; 3],
+        dir: FixedValues::free(3).unwrap(),
     };
     (sys, all_constrained(3, vec![0.0; 3], Side::Upper))
 }

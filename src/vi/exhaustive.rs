@@ -44,7 +44,7 @@ pub fn kkt_active_sets<P>(
     let mut found = Vec::new();
     for mask in 0u32..(1 << m) {
         let active: Vec<bool> = (0..m).map(|j| mask & (1 << j) != 0).collect();
-        let (u, _) = q.minimise_with_fixed(&cons.fixed(q.n_unknowns(), &active))?;
+        let (u, _) = q.minimise_with_fixed(&cons.fixed(q.n_unknowns(), &active)?)?;
         let (r, sc) = q.residual(&u)?;
         let scale = sc.iter().cloned().fold(0.0, f64::max);
         let umax = u.iter().fold(1e-300f64, |a, x| a.max(x.abs()));

@@ -30,7 +30,7 @@
 //! when the changes are confined to a band along the free boundary, as after a warm start. Patches
 //! above [`LookAheadOptions::max_fraction`] of the unknowns are not tried.
 
-use super::{Constraints, QuadraticEnergy};
+use super::{Constraints, FixedValues, QuadraticEnergy};
 use crate::linalg::{CholeskyWork, SpdPattern};
 use std::collections::HashMap;
 
@@ -196,7 +196,7 @@ type Entries = Vec<(usize, usize, f64)>;
 /// when there are more than `max` or the energy cannot give rows.
 fn grow_patch(
     q: &dyn QuadraticEnergy,
-    dirichlet: &[Option<f64>],
+    dirichlet: &FixedValues,
     seeds: Vec<usize>,
     layers: usize,
     max: f64,
@@ -212,7 +212,7 @@ fn grow_patch(
             frontier = rows
                 .iter()
                 .map(|&(_, j, _)| j)
-                .filter(|&j| dirichlet[j].is_none() && inside.insert(j))
+                .filter(|&j| !dirichlet.is_fixed(j) && inside.insert(j))
                 .collect();
         } else {
             frontier.clear();
@@ -373,7 +373,7 @@ mod tests {
         let sys = Dense {
             m: laplacian_1d(n),
             b: vec![0.002; n],
-            dir: vec![None; n],
+            dir: FixedValues::free(n).unwrap(),
         };
         let g = (0..n)
             .map(|i| 0.6 - 0.015 * (i as f64 - n as f64 / 2.0).abs())
@@ -413,7 +413,9 @@ mod tests {
         for a in active.iter_mut().skip(n / 2 - 2).take(4) {
             *a = true;
         }
-        let (u, _) = q.minimise_with_fixed(&cons.fixed(n, &active)).unwrap();
+        let (u, _) = q
+            .minimise_with_fixed(&cons.fixed(n, &active).unwrap())
+            .unwrap();
         let thr = thresholds(&q, &cons, &u, &active);
         // the rule's next set: the violated unknowns enter
         let ev = evaluate(&q, Some(&cons), &u, &active).unwrap();
@@ -459,7 +461,9 @@ mod tests {
         }
         // nothing changed: nothing to look ahead
         let mut same = exact.active.clone();
-        let (u, _) = q.minimise_with_fixed(&cons.fixed(n, &same)).unwrap();
+        let (u, _) = q
+            .minimise_with_fixed(&cons.fixed(n, &same).unwrap())
+            .unwrap();
         let thr = thresholds(&q, &cons, &u, &exact.active);
         let none = look_ahead(&q, &cons, &u, &exact.active, &mut same, thr, &wide).unwrap();
         assert!(none.is_none());
@@ -489,7 +493,7 @@ mod tests {
         let q = Dense {
             m,
             b: vec![0.1; n],
-            dir: vec![None; n],
+            dir: FixedValues::free(n).unwrap(),
         };
         let cons = all_constrained(n, vec![0.5; n], Side::Upper);
         let active = vec![true; n];

@@ -24,11 +24,13 @@ pub mod certificate;
 #[cfg(test)]
 pub(crate) mod dense;
 pub mod exhaustive;
+pub mod fixed;
 pub mod look_ahead;
 pub mod pgs;
 
 pub use active_set::{ActiveSetOptions, Cancel};
 pub use certificate::{Certificate, Evaluation};
+pub use fixed::FixedValues;
 
 /// Timings of one constrained minimisation (a linear solve), in seconds.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
@@ -72,17 +74,17 @@ pub trait QuadraticEnergy {
     /// Number of unknowns.
     fn n_unknowns(&self) -> usize;
     /// Dirichlet unknowns and their values (`None`: free).
-    fn dirichlet(&self) -> &[Option<f64>];
+    fn dirichlet(&self) -> &FixedValues;
     /// The load vector b.
     fn load(&self) -> &[f64];
-    /// The minimiser of E with the unknowns `fixed[d] = Some(v)` (and the Dirichlet ones)
+    /// The minimiser of E with the unknowns `fixed` fixes (and the Dirichlet ones)
     /// fixed, i.e. the solution of the linear system with those rows replaced. `&mut self`:
     /// an implementation may carry what it learnt (an initial guess, a multigrid hierarchy)
     /// to the next solve; that state belongs to the value the caller passes, never to a lock
     /// behind `&self`.
     fn minimise_with_fixed(
         &mut self,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, SolveTimings)>;
     /// [`Self::minimise_with_fixed`] accurate enough to decide the next active set: an
     /// iterative solver may stop at a looser residual, and then sets
@@ -90,14 +92,14 @@ pub trait QuadraticEnergy {
     /// stops or declares a cycle on such an iterate). Default: the full solve.
     fn screen_with_fixed(
         &mut self,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         self.minimise_with_fixed(fixed)
     }
     /// Continues the last solve, an inexact [`Self::screen_with_fixed`] with the same
     /// `fixed`, to full accuracy; `None` when there is nothing to continue (the caller keeps
     /// its iterate). Default: `None`.
-    fn refine(&mut self, fixed: &[Option<f64>]) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+    fn refine(&mut self, fixed: &FixedValues) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
         let _ = fixed;
         Ok(None)
     }
@@ -108,7 +110,7 @@ pub trait QuadraticEnergy {
     /// solves are exact (direct) and there is nothing to polish. Default: `None`.
     fn polish(
         &mut self,
-        fixed: &[Option<f64>],
+        fixed: &FixedValues,
         rtol: f64,
     ) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
         let _ = (fixed, rtol);
@@ -175,15 +177,16 @@ pub struct Constraints<P = ()> {
 }
 
 impl<P> Constraints<P> {
-    /// The fixed values of a solve with the active set `active`: u_j = g_j on active j.
-    pub fn fixed(&self, n: usize, active: &[bool]) -> Vec<Option<f64>> {
-        let mut fixed = vec![None; n];
+    /// The fixed values of a solve with the active set `active`: u_j = g_j on active j, of
+    /// the `n` unknowns of the system; a non-finite barrier on an active unknown is an error.
+    pub fn fixed(&self, n: usize, active: &[bool]) -> crate::Result<FixedValues> {
+        let mut fixed = FixedValues::free(n)?;
         for (j, pd) in self.dofs.iter().enumerate() {
             if active[j] {
-                fixed[pd.dof] = Some(self.barrier[j]);
+                fixed.try_set(pd.dof, self.barrier[j])?;
             }
         }
-        fixed
+        Ok(fixed)
     }
 }
 
@@ -257,7 +260,7 @@ pub fn solve_unconstrained(
     tol: f64,
 ) -> crate::Result<VariationalSolution> {
     certificate::check_tolerance(tol)?;
-    let fixed = vec![None; q.n_unknowns()];
+    let fixed = FixedValues::free(q.n_unknowns())?;
     let (u, timings) = q.minimise_with_fixed(&fixed)?;
     let ev = certificate::evaluate::<()>(&*q, None, &u, &[])?;
     ev.certificate.check(tol)?;

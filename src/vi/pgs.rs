@@ -7,6 +7,7 @@
 //! `tol`·‖u‖∞. Between sweeps it polls the caller's cancellation hook
 //! ([`PgsOptions::cancel`]), as the active-set method does between linear solves.
 
+use super::FixedValues;
 use super::certificate::evaluate;
 use super::{
     Cancel, Constraints, IterationLog, IterationStep, Method, QuadraticEnergy, SolveTimings,
@@ -89,7 +90,7 @@ impl Csr {
 struct Sweeper<'a> {
     m: Csr,
     b: &'a [f64],
-    dir: &'a [Option<f64>],
+    dir: &'a FixedValues,
     bound: Vec<Option<f64>>,
     s: f64,
 }
@@ -106,7 +107,7 @@ impl Sweeper<'_> {
     /// The first iterate: the Dirichlet values, zero elsewhere, projected onto the constraints.
     fn initial_guess(&self) -> Vec<f64> {
         (0..self.dir.len())
-            .map(|i| self.project(i, self.dir[i].unwrap_or(0.0)))
+            .map(|i| self.project(i, self.dir.get(i).unwrap_or(0.0)))
             .collect()
     }
 
@@ -121,7 +122,7 @@ impl Sweeper<'_> {
         } = &self.m;
         let mut change: f64 = 0.0;
         for i in 0..u.len() {
-            if self.dir[i].is_some() {
+            if self.dir.is_fixed(i) {
                 continue;
             }
             let mut r = self.b[i];

@@ -8,6 +8,7 @@ use gradvi::mesh::generate::{cartesian, cartesian_triangles, hexagonal};
 use gradvi::problem::*;
 use gradvi::scheme::*;
 use gradvi::solver::*;
+use gradvi::vi::FixedValues;
 
 fn opts(linear: LinearSolver, warm_start: WarmStart) -> SolveOptions {
     SolveOptions {
@@ -230,7 +231,7 @@ fn screening_solves_are_refined_to_the_full_solution() {
     };
     let n = p1.n_unknowns();
     // the unknowns of the left half fixed at 0.01
-    let fixed: Vec<Option<f64>> = (0..n).map(|i| (i % 64 < 32).then_some(0.01)).collect();
+    let fixed = FixedValues::from_options((0..n).map(|i| (i % 64 < 32).then_some(0.01))).unwrap();
     let full = system(LinearSolver::Iterative);
     let st = &mut SolveState::default();
     let (reference, t) = full.solve(st, &fixed).unwrap();
@@ -241,7 +242,7 @@ fn screening_solves_are_refined_to_the_full_solution() {
     let st = &mut SolveState::default();
     let (screened, t) = it.screen(st, &fixed).unwrap();
     assert!(t.inexact && t.krylov > 0);
-    let other: Vec<Option<f64>> = fixed.iter().map(|f| f.map(|v| v + 1.0)).collect();
+    let other = FixedValues::from_options(fixed.iter().map(|f| f.map(|v| v + 1.0))).unwrap();
     assert!(it.refine(st, &other).is_err());
     // the mismatch consumed the kept solve (a second screen would start from its iterate):
     // screen again from the start, through a fresh state
@@ -297,8 +298,9 @@ fn multigrid_hierarchies_are_reused_when_few_unknowns_change() {
     let max = (REUSE_MAX_CHANGED * n as f64) as usize;
     assert!(max >= 4, "{n} unknowns allow {max} changes");
     // the unknowns below index `k` fixed at 0.01
-    let fixed =
-        |k: usize| -> Vec<Option<f64>> { (0..n).map(|i| (i < k).then_some(0.01)).collect() };
+    let fixed = |k: usize| -> FixedValues {
+        FixedValues::from_options((0..n).map(|i| (i < k).then_some(0.01))).unwrap()
+    };
     let k0 = n / 2;
     let it = system();
     let mut state = SolveState::default();
