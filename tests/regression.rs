@@ -72,6 +72,6 @@ fn table3_and_table1_on_the_coarsest_meshes() {
     let sol = solve_problem(&s1, &paper_test1(), &SolveOptions::paper()).unwrap();
     assert_eq!(sol.niter(), 4);
     let cons = sol.constraints.as_ref().unwrap();
-    let sw = gradvi::post::contact::switch_point(cons, &sol.result.active, 0).unwrap();
+    let sw = gradvi::post::contact::switch_point(&s1, cons, &sol.result.active, 0).unwrap();
     assert!(close(sw.at, 0.6875, 1e-9), "switch at {}", sw.at);
 }

@@ -352,12 +352,16 @@ fn problem_of(r: &ReferenceRow) -> Result<Problem> {
 
 /// Test 2: max |u| over the constrained (Γ3) unknowns with y > 1/2, the exact contact zone,
 /// divided by max |u| over all of them.
-fn trace_zone(cons: &Constraints, u: &[f64]) -> f64 {
+fn trace_zone(
+    scheme: &dyn gradvi::scheme::GradientDiscretisation,
+    cons: &Constraints,
+    u: &[f64],
+) -> f64 {
     let (mut zone, mut all) = (0.0f64, 0.0f64);
     for d in &cons.dofs {
         let v = u[d.dof].abs();
         all = all.max(v);
-        if d.point[1] > 0.5 {
+        if scheme.dof_point(d.dof)[1] > 0.5 {
             zone = zone.max(v);
         }
     }
@@ -534,12 +538,14 @@ fn hmm_outcome(mesh: &PolyMesh, problem: &Problem, compared: Compared) -> Result
                 let e = relative_errors(scheme, sol.u(), &ex.u, &ex.grad);
                 (e.l2_u, e.l2_grad)
             }),
-            switch: axis.and_then(|a| switch_point(cons, active, a).map(|s| s.at)),
-            switch_count: axis.map(|a| switch_point(cons, active, a).map_or(0, |s| s.count)),
-            trace_zone: is2.then(|| trace_zone(cons, sol.u())),
+            switch: axis.and_then(|a| switch_point(scheme, cons, active, a).map(|s| s.at)),
+            switch_count: axis
+                .map(|a| switch_point(scheme, cons, active, a).map_or(0, |s| s.count)),
+            trace_zone: is2.then(|| trace_zone(scheme, cons, sol.u())),
             contact: is3.then(|| contact_measure(cons, active)),
             free: if is3 {
                 free_boundary(
+                    scheme,
                     cons,
                     active,
                     &gradvi::post::contact::neighbours(scheme, cons),
@@ -591,13 +597,14 @@ fn p1_row(
             })
         };
         let (eg, ed) = (errs(u), errs(ud));
-        let sw = |act: &[bool]| axis.and_then(|a| switch_point(cons, act, a).map(|s| s.at));
-        let swc = |act: &[bool]| axis.map(|a| switch_point(cons, act, a).map_or(0, |s| s.count));
+        let sw = |act: &[bool]| axis.and_then(|a| switch_point(scheme, cons, act, a).map(|s| s.at));
+        let swc =
+            |act: &[bool]| axis.map(|a| switch_point(scheme, cons, act, a).map_or(0, |s| s.count));
         let (fb_p1, fb_d) = if is3 {
             let nb = gradvi::post::contact::neighbours(scheme, cons);
             (
-                free_boundary(cons, active, &nb),
-                free_boundary(cons, &dact, &nb),
+                free_boundary(scheme, cons, active, &nb),
+                free_boundary(scheme, cons, &dact, &nb),
             )
         } else {
             (Vec::new(), Vec::new())
@@ -636,8 +643,8 @@ fn p1_row(
             switch_count_p1: swc(active),
             switch_count_dolfinx: swc(&dact),
             trace_zone_hmm: hmm.trace_zone,
-            trace_zone_p1: is2.then(|| trace_zone(cons, u)),
-            trace_zone_dolfinx: is2.then(|| trace_zone(cons, ud)),
+            trace_zone_p1: is2.then(|| trace_zone(scheme, cons, u)),
+            trace_zone_dolfinx: is2.then(|| trace_zone(scheme, cons, ud)),
             contact_hmm: hmm.contact,
             contact_p1: is3.then(|| contact_measure(cons, active)),
             contact_dolfinx: is3.then(|| contact_measure(cons, &dact)),

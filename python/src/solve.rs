@@ -120,7 +120,7 @@ fn factor_threads(name: &str) -> gradvi::Result<FactorThreads> {
 }
 
 /// The points of the discrete free boundary of an active set.
-type FreeBoundary<'s, const D: usize> = &'s dyn Fn(&Constraints<D>, &[bool]) -> Vec<[f64; D]>;
+type FreeBoundary<'s, const D: usize> = &'s dyn Fn(&Constraints, &[bool]) -> Vec<[f64; D]>;
 
 /// What a solve on one mesh type adds to the common output: the points of the discrete free
 /// boundary, and an entity field summed over the faces of each cell.
@@ -164,7 +164,7 @@ fn solve_and_collect<M: SolverMesh<D> + ?Sized, const D: usize>(
             },
             side: c.side,
             dofs: c.dofs.iter().map(|d| d.dof as i64).collect(),
-            points: c.dofs.iter().map(|d| d.point).collect(),
+            points: c.dofs.iter().map(|d| s.dof_point(d.dof)).collect(),
             measures: c.dofs.iter().map(|d| d.measure).collect(),
             barrier: c.barrier.clone(),
             multiplier: r.multiplier.clone(),
@@ -232,7 +232,7 @@ fn run(
     let scheme = build_with(o.kind, mesh, &o.scheme)?;
     let s = scheme.as_ref();
     let extra = MeshOutput {
-        free_boundary: &|c, active| free_boundary(c, active, &neighbours(s, c)),
+        free_boundary: &|c, active| free_boundary(s, c, active, &neighbours(s, c)),
         face_sums: &|f| f.edge_sums_per_cell(s),
     };
     solve_and_collect(s, &pb, &o.solve, o.kind, &extra)

@@ -9,6 +9,7 @@
 //! - [`hausdorff`]: the Hausdorff distance between two point sets (used for free boundaries).
 
 use crate::mesh::Point;
+use crate::scheme::GradientDiscretisation;
 use crate::solver::constraints::Constraints;
 
 /// A switch along a boundary part: where it is and how many switches there are in total
@@ -25,14 +26,20 @@ pub struct Switch {
     pub starts_active: bool,
 }
 
-/// The switch point along coordinate `axis` (0: x, 1: y) of the constrained unknowns; `None`
-/// if the whole part is active or the whole part is inactive.
-pub fn switch_point(cons: &Constraints, active: &[bool], axis: usize) -> Option<Switch> {
+/// The switch point along coordinate `axis` (0: x, 1: y) of the constrained unknowns of
+/// `scheme` (at their points, [`GradientDiscretisation::dof_point`]); `None` if the whole part
+/// is active or the whole part is inactive.
+pub fn switch_point(
+    scheme: &dyn GradientDiscretisation,
+    cons: &Constraints,
+    active: &[bool],
+    axis: usize,
+) -> Option<Switch> {
     let mut pts: Vec<(f64, bool)> = cons
         .dofs
         .iter()
         .zip(active)
-        .map(|(d, &a)| (d.point[axis], a))
+        .map(|(d, &a)| (scheme.dof_point(d.dof)[axis], a))
         .collect();
     pts.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut first: Option<(f64, f64)> = None;
@@ -67,6 +74,7 @@ pub fn contact_measure(cons: &Constraints, active: &[bool]) -> f64 {
 /// constrained unknown that are neighbours (`neighbours` lists pairs of constrained-unknown
 /// indices).
 pub fn free_boundary(
+    scheme: &dyn GradientDiscretisation,
     cons: &Constraints,
     active: &[bool],
     neighbours: &[(usize, usize)],
@@ -75,7 +83,8 @@ pub fn free_boundary(
         .iter()
         .filter(|(i, j)| active[*i] != active[*j])
         .map(|&(i, j)| {
-            let (p, q) = (cons.dofs[i].point, cons.dofs[j].point);
+            let p = scheme.dof_point(cons.dofs[i].dof);
+            let q = scheme.dof_point(cons.dofs[j].dof);
             [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])]
         })
         .collect()
@@ -149,26 +158,34 @@ mod tests {
 
     #[test]
     fn switch_and_measure() {
-        let xs = [0.9, 0.1, 0.3, 0.5, 0.7];
+        // P1 on a 4 × 1 strip of [0,1]²: unknowns 0..=4 at x = 0, 0.25, …, 1 on y = 0,
+        // constrained in another order
+        let mesh =
+            crate::mesh::generate::cartesian_triangles(4, 1, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        let p1 = crate::scheme::P1::new(&mesh).unwrap();
         let cons = Constraints {
-            dofs: xs
+            dofs: [4, 0, 1, 2, 3]
                 .iter()
-                .map(|&x| crate::vi::ConstrainedDof {
-                    dof: 0,
-                    point: [x, 0.0],
+                .map(|&dof| crate::vi::ConstrainedDof {
+                    dof,
+                    point: (),
                     measure: 0.2,
                 })
                 .collect(),
             barrier: vec![0.0; 5],
             side: crate::vi::Side::Lower,
         };
+        // x = 1 active, 0 and 0.25 free, 0.5 and 0.75 active
         let active = [true, false, false, true, true];
-        let s = switch_point(&cons, &active, 0).unwrap();
-        assert!((s.at - 0.4).abs() < 1e-15 && (s.half_gap - 0.1).abs() < 1e-15);
+        let s = switch_point(&p1, &cons, &active, 0).unwrap();
+        assert!((s.at - 0.375).abs() < 1e-15 && (s.half_gap - 0.125).abs() < 1e-15);
         assert_eq!(s.count, 1);
         assert!(!s.starts_active);
         assert!((contact_measure(&cons, &active) - 0.6).abs() < 1e-15);
-        assert!(switch_point(&cons, &[true; 5], 0).is_none());
+        assert!(switch_point(&p1, &cons, &[true; 5], 0).is_none());
+        // the free boundary between neighbours: x = 0.375 (unknowns 1 and 2, positions 2, 3)
+        let fb = free_boundary(&p1, &cons, &active, &[(2, 3), (3, 4)]);
+        assert_eq!(fb, vec![[0.375, 0.0]]);
         let h = hausdorff(&[[0.0, 0.0], [1.0, 0.0]], &[[0.0, 0.5]]);
         assert!((h - (1.25f64).sqrt()).abs() < 1e-15);
     }

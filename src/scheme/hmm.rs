@@ -196,6 +196,12 @@ impl<M: CellComplex<D> + VertexAverage + ?Sized, const D: usize> GradientDiscret
             None => super::Entity::Edge(dof),
         }
     }
+    fn dof_point(&self, dof: usize) -> Vector<D> {
+        match dof.checked_sub(self.n_skeleton()) {
+            Some(k) => self.mesh.cell_centre(k),
+            None => self.mesh.face_centre(dof),
+        }
+    }
     fn n_local_interior(&self, _k: usize) -> usize {
         1
     }

@@ -25,6 +25,8 @@ pub mod p1;
 pub mod points;
 mod simplex;
 #[cfg(test)]
+mod tests_points;
+#[cfg(test)]
 mod tests_simplex3;
 
 use crate::mesh::PolyMesh;
@@ -95,6 +97,11 @@ where
     }
     /// The mesh entity of unknown `dof` (HMM: faces then cells; P1: vertices).
     fn dof_entity(&self, dof: usize) -> Entity;
+    /// Where unknown `dof` is a value, the point at which the data are evaluated for it: the
+    /// vertex (P1), the face centroid x_σ (CR; HMM face unknowns) or the cell centroid x_K (HMM
+    /// cell unknowns) — the point [`Self::face_trace_dofs`] and [`Self::obstacle_dofs`] give
+    /// that unknown.
+    fn dof_point(&self, dof: usize) -> Vector<D>;
     /// Number of interior unknowns of cell `k` (they come first in [`Self::local_dofs`]).
     fn n_local_interior(&self, k: usize) -> usize;
     /// The unknowns of cell `k`: interior first, then skeleton. Clears and fills `dofs`.

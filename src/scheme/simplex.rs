@@ -174,6 +174,9 @@ macro_rules! simplex_discretisation {
             fn dof_entity(&self, dof: usize) -> Entity {
                 T::UNKNOWNS.entity(dof)
             }
+            fn dof_point(&self, dof: usize) -> Vector<$d> {
+                T::UNKNOWNS.point(SimplexScheme::mesh(self), dof)
+            }
             fn n_local_interior(&self, _k: usize) -> usize {
                 0
             }

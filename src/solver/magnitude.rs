@@ -25,7 +25,7 @@ pub use crate::vi::certificate::MAGNITUDE_LIMIT;
 pub fn data_scale<M: SolveMesh<D> + ?Sized, const D: usize>(
     system: &DiscreteSystem<M, D>,
     problem: &Problem<D>,
-    cons: Option<&Constraints<D>>,
+    cons: Option<&Constraints>,
 ) -> f64 {
     let mesh = system.scheme().mesh();
     let (f_max, lambda) = (0..mesh.n_cells())

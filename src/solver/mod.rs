@@ -95,7 +95,7 @@ where
     /// The assembled system (gives access to the scheme, the mesh and the symbolic system).
     pub system: DiscreteSystem<'a, M, D>,
     /// The barrier, if any.
-    pub constraints: Option<Constraints<D>>,
+    pub constraints: Option<Constraints>,
     /// The solver outcome (u, multipliers, active set, NITER, log, certificate).
     pub result: VariationalSolution,
     /// Timings.
@@ -205,7 +205,7 @@ fn warm_start<M: SolverMesh<D> + ?Sized, const D: usize>(
     system: &DiscreteSystem<M, D>,
     state: &mut SolveState,
     problem: &Problem<D>,
-    cons: &Constraints<D>,
+    cons: &Constraints,
     opts: &SolveOptions,
 ) -> crate::Result<Start> {
     if opts.warm_start != WarmStart::Nested || opts.active_set.initial_active.is_some() {
@@ -237,7 +237,7 @@ fn warm_start<M: SolverMesh<D> + ?Sized, const D: usize>(
 fn solve_constrained<M: SolverMesh<D> + ?Sized, const D: usize>(
     system: &DiscreteSystem<M, D>,
     state: &mut SolveState,
-    cons: &Constraints<D>,
+    cons: &Constraints,
     opts: &SolveOptions,
     initial: Option<Vec<bool>>,
 ) -> crate::Result<VariationalSolution> {

@@ -25,7 +25,7 @@ pub trait SolverMesh<const D: usize>: SolveMesh<D> {
     fn nested_start(
         scheme: &dyn GradientDiscretisation<Self, D>,
         problem: &Problem<D>,
-        cons: &Constraints<D>,
+        cons: &Constraints,
         budget: MemoryBudget,
         cancel: Option<&Cancel>,
     ) -> Option<Result<Prediction, String>>;
@@ -47,7 +47,7 @@ impl SolverMesh<3> for PolyMesh3 {
     fn nested_start(
         scheme: &dyn GradientDiscretisation<PolyMesh3, 3>,
         problem: &Problem<3>,
-        cons: &Constraints<3>,
+        cons: &Constraints,
         budget: MemoryBudget,
         cancel: Option<&Cancel>,
     ) -> Option<Result<Prediction, String>> {

@@ -85,7 +85,7 @@ fn find(parent: &mut [usize], mut i: usize) -> usize {
 /// ill-posed (naming the marginal load where there is one).
 pub fn analyse<M: SolveMesh<D> + ?Sized, const D: usize>(
     system: &DiscreteSystem<M, D>,
-    cons: Option<&Constraints<D>>,
+    cons: Option<&Constraints>,
 ) -> crate::Result<Analysis> {
     let n = system.n_unknowns();
     let dm = &system.symbolic().dof_map;

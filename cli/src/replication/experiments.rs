@@ -299,7 +299,7 @@ fn test1(cfg: &Config, logs: &mut Logs) -> gradvi::Result<Vec<Test1Row>> {
         let p = builtin("test1", &[])?;
         let row = logs.solve_row("test1", m, kind, &p, |sol| {
             let cons = sol.constraints.as_ref().expect("Test 1 has a barrier");
-            let sw = switch_point(cons, &sol.result.active, 0);
+            let sw = switch_point(sol.system.scheme(), cons, &sol.result.active, 0);
             Test1Row {
                 scheme: kind.to_string(),
                 mesh: m.name.clone(),
@@ -346,8 +346,8 @@ fn test2(cfg: &Config, logs: &mut Logs) -> gradvi::Result<Vec<Test2Row>> {
             for &kind in kinds.iter() {
                 rows.push(logs.solve_row("test2", m, kind, p, |sol| {
                     let cons = sol.constraints.as_ref().expect("Test 2 has a barrier");
-                    let sw = switch_point(cons, &sol.result.active, 1);
                     let scheme = sol.system.scheme();
+                    let sw = switch_point(scheme, cons, &sol.result.active, 1);
                     let e = relative_errors(scheme, sol.u(), &exact.u, &exact.grad);
                     Test2Row {
                         scheme: kind.to_string(),

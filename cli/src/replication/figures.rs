@@ -56,7 +56,7 @@ fn surface(
             ..Default::default()
         };
         if let (Some(axis), Some(cons)) = (switch_axis, sol.constraints.as_ref())
-            && let Some(sw) = switch_point(cons, &sol.result.active, axis)
+            && let Some(sw) = switch_point(scheme, cons, &sol.result.active, axis)
         {
             let (p, name) = if axis == 0 {
                 ([sw.at, 0.0], "x")
