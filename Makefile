@@ -106,7 +106,9 @@ bench: bench-peers build reference-deps
 	$(DEV) bench
 
 ## bench-baseline: BASE=REV (default 73dd38a, the build the regression rows compare with)
-##        builds revision REV in target/baseline (through a temporary git worktree: its
+##        builds revision REV in target/baseline (through a temporary git worktree in
+##        target/baseline-src, which the workspace excludes, so that a revision from before the
+##        workspace builds as a package of its own: its
 ##        gradvi-dev, or its gradvi for revisions before the workspace, whose gradvi has the
 ##        benchmark's child mode) and runs every gradvi case of the two benchmarks with both
 ##        builds, alternately, 3 times each (GRADVI_BENCH_REPEAT), comparing medians in the same
