@@ -213,10 +213,64 @@ pub fn try_resize<T: Clone>(
 }
 
 /// `n` copies of `value` (the fallible `vec![value; n]`), or [`AllocFailure`] as [`try_vec`].
-pub fn try_filled<T: Clone>(n: usize, value: T, what: &str) -> Result<Vec<T>, AllocFailure> {
+///
+/// A zero of a primitive number type (or `false`) is allocated zeroed, as `vec![0.0; n]` is
+/// ([`std::alloc::alloc_zeroed`]): the allocator hands out fresh pages of a large block
+/// without writing them, so the pages of a buffer that is only partly written before it is
+/// freed never become resident.
+pub fn try_filled<T: Clone + 'static>(
+    n: usize,
+    value: T,
+    what: &str,
+) -> Result<Vec<T>, AllocFailure> {
+    if is_zero_bits(&value) {
+        return try_zeroed(n, what);
+    }
     let mut v = try_vec(n, what)?;
     v.resize(n, value);
     Ok(v)
+}
+
+/// Whether `value` is a value of one of the primitive types below whose bits are all zero:
+/// the types for which a zeroed block is a valid vector of `value`s.
+fn is_zero_bits<T: 'static>(value: &T) -> bool {
+    use std::any::Any;
+    let v = value as &dyn Any;
+    v.downcast_ref::<f64>().is_some_and(|x| x.to_bits() == 0)
+        || v.downcast_ref::<f32>().is_some_and(|x| x.to_bits() == 0)
+        || v.downcast_ref::<usize>() == Some(&0)
+        || v.downcast_ref::<u64>() == Some(&0)
+        || v.downcast_ref::<u32>() == Some(&0)
+        || v.downcast_ref::<u8>() == Some(&0)
+        || v.downcast_ref::<i64>() == Some(&0)
+        || v.downcast_ref::<i32>() == Some(&0)
+        || v.downcast_ref::<bool>() == Some(&false)
+}
+
+/// `n` zero values of `T` from a zeroed allocation, or [`AllocFailure`] as [`try_vec`]. Only
+/// for the types of [`is_zero_bits`], whose all-zero bit pattern is their zero (the caller
+/// has checked it).
+fn try_zeroed<T>(n: usize, what: &str) -> Result<Vec<T>, AllocFailure> {
+    let fail = || AllocFailure {
+        what: what.to_string(),
+        bytes: (n as u64).saturating_mul(std::mem::size_of::<T>() as u64),
+    };
+    let layout = std::alloc::Layout::array::<T>(n).map_err(|_| fail())?;
+    if layout.size() == 0 {
+        // n = 0 (the types of `is_zero_bits` are not zero-sized)
+        return Ok(Vec::new());
+    }
+    // SAFETY: `layout` has a non-zero size. The block is zeroed, and an all-zero bit pattern
+    // is a valid value of each type `is_zero_bits` admits (the only callers' types), so its
+    // `n` elements are initialised; it was allocated by the global allocator with the layout
+    // of `n` elements of `T`, as `Vec::from_raw_parts` requires, with capacity `n`.
+    unsafe {
+        let ptr = std::alloc::alloc_zeroed(layout);
+        if ptr.is_null() {
+            return Err(fail());
+        }
+        Ok(Vec::from_raw_parts(ptr.cast::<T>(), n, n))
+    }
 }
 
 /// A copy of `s` (the fallible `to_vec`), or [`AllocFailure`] as [`try_vec`].
@@ -652,6 +706,29 @@ pub(crate) mod child {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A zero of a primitive type comes from a zeroed block, anything else is written: the
+    /// values are `n` copies of the value either way (−0.0, whose bits are not zero, included),
+    /// with capacity n, and a block too large for the address space is a typed failure.
+    #[test]
+    fn filled_vectors_hold_their_value_zeroed_or_written() {
+        let z: Vec<f64> = try_filled(1000, 0.0, "zeros").unwrap();
+        assert!(z.len() == 1000 && z.capacity() == 1000);
+        assert!(z.iter().all(|x| x.to_bits() == 0));
+        let m: Vec<f64> = try_filled(7, -0.0, "negative zeros").unwrap();
+        assert!(m.iter().all(|x| x.to_bits() == (-0.0f64).to_bits()));
+        assert_eq!(try_filled(5, 0u32, "u32").unwrap(), [0; 5]);
+        assert_eq!(try_filled(3, 0usize, "usize").unwrap(), [0; 3]);
+        assert_eq!(try_filled(4, false, "flags").unwrap(), [false; 4]);
+        assert_eq!(try_filled(2, true, "flags").unwrap(), [true; 2]);
+        assert_eq!(try_filled(3, 1.5, "ones").unwrap(), [1.5; 3]);
+        assert_eq!(try_filled(2, Some(0.0), "options").unwrap(), [Some(0.0); 2]);
+        assert!(try_filled(0, 0.0f64, "empty").unwrap().is_empty());
+        let e = try_filled(usize::MAX / 4, 0.0f64, "a huge block").unwrap_err();
+        assert_eq!(e.what, "a huge block");
+        let e = try_filled(usize::MAX / 16, 0u8, "a huge byte block").unwrap_err();
+        assert_eq!(e.what, "a huge byte block");
+    }
 
     #[test]
     fn the_available_budget_is_the_smaller_of_the_machine_limits() {

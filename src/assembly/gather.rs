@@ -32,7 +32,7 @@ pub(super) const PAR_ROWS: usize = 4096;
 /// `f(i)` for every i in `0..n`, computed in parallel (at least 4096 per task) into a vector
 /// allocated fallibly ([`try_filled`], `what` naming it); an error of `f` is returned instead
 /// (one of them if several). Each value is computed on its own: the same whatever the threads.
-pub(super) fn par_try_fill<T: Clone + Default + Send>(
+pub(super) fn par_try_fill<T: Clone + Default + Send + 'static>(
     n: usize,
     what: &str,
     f: impl Fn(usize) -> crate::Result<T> + Sync,

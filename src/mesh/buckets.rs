@@ -7,7 +7,7 @@ use crate::budget::{AllocFailure, try_filled, try_vec};
 /// ascending, items ascending within a bucket, each stored as `item(i)`.
 /// Returns the bucket offsets (`n_buckets + 1` of them) and the items; aborts, as `vec!`
 /// does, if they cannot be allocated ([`try_counting_sort`] returns the failure instead).
-pub(crate) fn counting_sort<T: Copy + Default>(
+pub(crate) fn counting_sort<T: Copy + Default + 'static>(
     n_buckets: usize,
     keys: impl Iterator<Item = Option<usize>> + Clone,
     item: impl Fn(usize) -> T,
@@ -17,7 +17,7 @@ pub(crate) fn counting_sort<T: Copy + Default>(
 
 /// [`counting_sort`], or [`AllocFailure`] if its arrays (offsets, fill cursors and items) cannot
 /// be allocated: for the buckets whose size the input decides.
-pub(crate) fn try_counting_sort<T: Copy + Default>(
+pub(crate) fn try_counting_sort<T: Copy + Default + 'static>(
     n_buckets: usize,
     keys: impl Iterator<Item = Option<usize>> + Clone,
     item: impl Fn(usize) -> T,

@@ -61,7 +61,7 @@ pub(super) struct Edges {
 
 /// Unsigned index type of the scratch arrays of [`build_edges`] and of the sweep's events
 /// (`u32` when the values fit: half the memory traffic and footprint of `usize`).
-pub(crate) trait EdgeIndex: Copy + Ord + Default {
+pub(crate) trait EdgeIndex: Copy + Ord + Default + 'static {
     /// `v` as `Self`; [`build_edges`] only calls it with values that fit.
     fn from_usize(v: usize) -> Self;
     fn to_usize(self) -> usize;
