@@ -130,7 +130,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, Vec<f64>)> {
         self.bind(state);
-        let fixed = Pinned::new(&self.values.dirichlet, fixed);
+        let fixed = self.fixed_values(fixed);
         // without interior unknowns, S and c are masked from the global matrix
         if let Some(a) = self.assembled() {
             let pattern = self.sym.pattern().ok_or_else(|| {

@@ -84,16 +84,6 @@ impl FixedValues {
             .iter()
             .map(|&v| if v.is_nan() { None } else { Some(v) })
     }
-
-    /// The number of fixed unknowns.
-    pub fn n_fixed(&self) -> usize {
-        self.values.iter().filter(|v| !v.is_nan()).count()
-    }
-
-    /// Bytes held.
-    pub fn memory_bytes(&self) -> usize {
-        self.values.len() * std::mem::size_of::<f64>()
-    }
 }
 
 /// The error of fixing unknown `i` at the non-finite value `v`.
@@ -115,12 +105,10 @@ mod tests {
             f.iter().collect::<Vec<_>>(),
             [Some(1.5), None, Some(-0.0), Some(0.0), None]
         );
-        assert_eq!(f.n_fixed(), 3);
         assert!(f.is_fixed(2) && !f.is_fixed(4));
         assert_eq!(f.get(0), Some(1.5));
-        assert_eq!(f.memory_bytes(), 40);
         let mut g = FixedValues::free(3).unwrap();
-        assert_eq!(g.n_fixed(), 0);
+        assert!(g.iter().all(|v| v.is_none()));
         g.try_set(1, 2.0).unwrap();
         assert_eq!(g.iter().collect::<Vec<_>>(), [None, Some(2.0), None]);
         // a value that is not finite is refused, naming the unknown, and changes nothing
