@@ -72,21 +72,26 @@ impl PolyMesh3 {
             .collect();
         pairs.par_sort_unstable();
         let edges = self.boundary_edges();
-        let hit = edges.par_iter().find_map_first(|e| {
-            let mut candidates: Vec<u32> = Vec::new();
-            for b in grid.buckets(slab_range(&slabs, &e.ends)) {
-                let b = b as u32;
-                let start = pairs.partition_point(|p| p.0 < b);
-                let end = start + pairs[start..].partition_point(|p| p.0 == b);
-                candidates.extend(pairs[start..end].iter().map(|p| p.1));
-            }
-            candidates.sort_unstable();
-            candidates.dedup();
-            candidates
-                .into_iter()
-                .find(|&f| self.edge_crosses_face(e, f as usize))
-                .map(|f| (*e, f))
-        });
+        // the candidate list is a buffer per task: allocating one per edge cost more than the
+        // search itself once two threads allocated and freed them
+        let hit = edges
+            .par_iter()
+            .map_init(Vec::new, |candidates: &mut Vec<u32>, e| {
+                candidates.clear();
+                for b in grid.buckets(slab_range(&slabs, &e.ends)) {
+                    let b = b as u32;
+                    let start = pairs.partition_point(|p| p.0 < b);
+                    let end = start + pairs[start..].partition_point(|p| p.0 == b);
+                    candidates.extend(pairs[start..end].iter().map(|p| p.1));
+                }
+                candidates.sort_unstable();
+                candidates.dedup();
+                candidates
+                    .iter()
+                    .find(|&&f| self.edge_crosses_face(e, f as usize))
+                    .map(|&f| (*e, f))
+            })
+            .find_map_first(|hit| hit);
         match hit {
             Some((e, f)) => Err(MeshError::EdgeThroughFace {
                 a: e.ends[0] as usize,

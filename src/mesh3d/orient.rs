@@ -10,7 +10,7 @@
 //! volume it gives is positive, else every face is turned. O(E log E) per cell of E edge uses.
 
 use super::Polyhedra;
-use super::geometry::{cell_volume_centroid, vertex_average};
+use super::geometry::{cell_volume_centroid, cross, dot, sub, vertex_average};
 use crate::error::MeshError;
 use rayon::prelude::*;
 
@@ -38,6 +38,23 @@ fn find(parent: &mut [(u32, bool)], i: u32) -> (u32, bool) {
 /// Sets `inward[j]` for the local faces j of cell `k`: whether the loop of its side j must be
 /// reversed to run counter-clockwise seen from outside the cell.
 pub(crate) fn orient_cell(
+    p: &Polyhedra,
+    k: usize,
+    scratch: &mut OrientScratch,
+    inward: &mut [bool],
+) -> Result<(), MeshError> {
+    match orient_tetrahedron(p, p.cell_sides(k)) {
+        Some(flags) => {
+            inward.copy_from_slice(&flags);
+            Ok(())
+        }
+        None => orient_by_edges(p, k, scratch, inward),
+    }
+}
+
+/// [`orient_cell`] for any polyhedron: the union–find with parity of the module docs, then the
+/// sign of the volume.
+fn orient_by_edges(
     p: &Polyhedra,
     k: usize,
     scratch: &mut OrientScratch,
@@ -115,6 +132,68 @@ pub(crate) fn orient_cell(
     Ok(())
 }
 
+/// The flags of [`orient_cell`] for a tetrahedron, without the edge sort and union–find:
+/// `None` unless the cell is four triangles over four distinct vertices, each leaving out a
+/// different one (then each edge is used by two faces and the faces form one closed
+/// surface), or if its volume is zero (the general path then reports it).
+///
+/// With (a, b, c) the loop of the first side, d the fourth vertex and
+/// D = det(b − a, c − a, d − a), a side whose loop is (x, y, z), leaving out w, has
+/// det(y − x, z − x, w − x) = ε D, ε the sign of the permutation (x, y, z, w) of (a, b, c, d).
+/// Its loop runs counter-clockwise seen from outside iff w lies behind its plane, that is iff
+/// ε D < 0; so it is reversed iff ε D > 0. One determinant orients all four sides, so they are
+/// consistent whatever its rounding; D has the sign of the volume the general path computes
+/// for every cell whose volume passes the later size check (|K| > 10⁻¹⁴ h_K³).
+fn orient_tetrahedron(p: &Polyhedra, sides: std::ops::Range<usize>) -> Option<[bool; 4]> {
+    if sides.len() != 4 {
+        return None;
+    }
+    let tri = |s: usize| -> Option<[u32; 3]> {
+        let l = p.side_vertices(s);
+        (l.len() == 3 && l[0] != l[1] && l[1] != l[2] && l[0] != l[2]).then(|| [l[0], l[1], l[2]])
+    };
+    let loops = [
+        tri(sides.start)?,
+        tri(sides.start + 1)?,
+        tri(sides.start + 2)?,
+        tri(sides.start + 3)?,
+    ];
+    let [a, b, c] = loops[0];
+    let d = loops[1..]
+        .iter()
+        .flatten()
+        .copied()
+        .find(|v| ![a, b, c].contains(v))?;
+    let order = [a, b, c, d];
+    let position = |v: u32| order.iter().position(|&u| u == v);
+    // per side, the positions of its loop and of the vertex it leaves out
+    let mut left_out = [false; 4];
+    let mut perms = [[0usize; 4]; 4];
+    for (perm, l) in perms.iter_mut().zip(&loops) {
+        let [x, y, z] = [position(l[0])?, position(l[1])?, position(l[2])?];
+        let w = 6 - x - y - z;
+        if left_out[w] {
+            return None;
+        }
+        left_out[w] = true;
+        *perm = [x, y, z, w];
+    }
+    let [pa, pb, pc, pd] = order.map(|v| p.vertices[v as usize]);
+    let det = dot(cross(sub(pb, pa), sub(pc, pa)), sub(pd, pa));
+    if !(det != 0.0 && det.is_finite()) {
+        return None;
+    }
+    Some(perms.map(|q| {
+        let inversions = (0..4)
+            .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
+            .filter(|&(i, j)| q[i] > q[j])
+            .count();
+        let even = inversions % 2 == 0;
+        // ε D > 0
+        even == (det > 0.0)
+    }))
+}
+
 /// Cells per parallel task of [`orient_cells`].
 const BLOCK: usize = 4096;
 
@@ -146,5 +225,123 @@ pub(crate) fn orient_cells(p: &Polyhedra) -> Result<Vec<bool>, MeshError> {
     match err {
         Some(e) => Err(e),
         None => Ok(inward),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tetrahedron over the vertices `v`, its four sides listed in the order `order` (each
+    /// leaving out vertex `order[j]`), each loop rotated by `rot[j]` and reversed where `rev[j]`.
+    fn tetrahedron(
+        v: [[f64; 3]; 4],
+        order: [usize; 4],
+        rot: [usize; 4],
+        rev: [bool; 4],
+    ) -> Polyhedra {
+        let mut p = Polyhedra {
+            vertices: v.to_vec(),
+            ..Polyhedra::default()
+        };
+        let loops: Vec<Vec<u32>> = (0..4)
+            .map(|j| {
+                let mut l: Vec<u32> = (0..4u32).filter(|&i| i as usize != order[j]).collect();
+                l.rotate_left(rot[j]);
+                if rev[j] {
+                    l.reverse();
+                }
+                l
+            })
+            .collect();
+        p.push_cell(loops.iter().map(|l| l.as_slice())).unwrap();
+        p
+    }
+
+    #[test]
+    fn tetrahedra_are_oriented_as_by_the_edges() {
+        let shapes = [
+            [
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            // the mirror image: negative orientation of the vertex order
+            [
+                [0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            // a thin sliver, far from the origin
+            [
+                [1e3, 1e3, 1e3],
+                [1e3 + 1.0, 1e3, 1e3],
+                [1e3, 1e3 + 1.0, 1e3],
+                [1e3 + 0.5, 1e3 + 0.5, 1e3 + 1e-6],
+            ],
+        ];
+        let orders = [[0, 1, 2, 3], [3, 1, 0, 2], [2, 3, 1, 0]];
+        let mut checked = 0;
+        for v in shapes {
+            for order in orders {
+                for code in 0..256usize {
+                    let rot = std::array::from_fn(|j| (code >> (2 * j)) % 3);
+                    let rev = std::array::from_fn(|j| (code >> j) & 1 == 1);
+                    let p = tetrahedron(v, order, rot, rev);
+                    let fast = orient_tetrahedron(&p, p.cell_sides(0)).expect("a tetrahedron");
+                    let mut general = [false; 4];
+                    orient_by_edges(&p, 0, &mut OrientScratch::default(), &mut general).unwrap();
+                    assert_eq!(fast, general, "{v:?} {order:?} {rot:?} {rev:?}");
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 3 * 3 * 256);
+    }
+
+    #[test]
+    fn only_tetrahedra_of_nonzero_volume_take_the_short_path() {
+        let v = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let p = tetrahedron(v, [0, 1, 2, 3], [0; 4], [false; 4]);
+        assert!(orient_tetrahedron(&p, p.cell_sides(0)).is_some());
+        // flat: the general path reports the zero volume
+        let flat = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 1.0, 0.0],
+        ];
+        let p = tetrahedron(flat, [0, 1, 2, 3], [0; 4], [false; 4]);
+        assert!(orient_tetrahedron(&p, p.cell_sides(0)).is_none());
+        let err = orient_cell(&p, 0, &mut OrientScratch::default(), &mut [false; 4]).unwrap_err();
+        assert!(
+            matches!(err, MeshError::DegenerateVolume { cell: 0, .. }),
+            "{err:?}"
+        );
+        // a side listed twice (a vertex never left out), a quadrilateral side, a repeated vertex
+        let twice = tetrahedron(v, [0, 0, 2, 3], [0; 4], [false; 4]);
+        assert!(orient_tetrahedron(&twice, twice.cell_sides(0)).is_none());
+        assert!(orient_cell(&twice, 0, &mut OrientScratch::default(), &mut [false; 4]).is_err());
+        let mut quad = Polyhedra {
+            vertices: v.to_vec(),
+            ..Polyhedra::default()
+        };
+        let sides: [&[u32]; 4] = [&[0, 1, 2, 3], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]];
+        quad.push_cell(sides).unwrap();
+        assert!(orient_tetrahedron(&quad, quad.cell_sides(0)).is_none());
+        let mut repeated = Polyhedra {
+            vertices: v.to_vec(),
+            ..Polyhedra::default()
+        };
+        let sides: [&[u32]; 4] = [&[0, 1, 1], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]];
+        repeated.push_cell(sides).unwrap();
+        assert!(orient_tetrahedron(&repeated, repeated.cell_sides(0)).is_none());
     }
 }
