@@ -117,21 +117,40 @@ fn assemble(
         end += *x;
         *x = end;
     }
-    // the loops are gathered in per-thread pieces, appended to the buffer reserved here
-    let mut face_verts: Vec<u32> = try_vec(end as usize, "the face loops")?;
-    face_verts.par_extend(face_sides.par_iter().flat_map_iter(|&[s, _]| {
-        let l = p.side_vertices(s as usize);
-        let rev = inward[s as usize];
-        (0..l.len()).map(move |i| if rev { l[l.len() - 1 - i] } else { l[i] })
-    }));
-    let bad = face_sides
-        .par_iter()
-        .enumerate()
-        .filter(|(_, sides)| sides[1] != NO_SIDE)
-        .find_map_first(|(f, &[s, t])| {
-            let stored = &face_verts[face_ptr[f] as usize..face_ptr[f + 1] as usize];
-            pair_defect(p, side_cell, inward, stored, [s, t])
-        });
+    // the loops written in place by blocks of consecutive faces, each interior face checked
+    // against its second side in the same pass (the error is that of the first bad face)
+    let mut face_verts: Vec<u32> = try_filled(end as usize, 0, "the face loops")?;
+    let mut blocks = Vec::with_capacity(n_faces.div_ceil(FACE_BLOCK));
+    let mut rest = face_verts.as_mut_slice();
+    for start in (0..n_faces).step_by(FACE_BLOCK) {
+        let stop = (start + FACE_BLOCK).min(n_faces);
+        let (block, tail) = rest.split_at_mut((face_ptr[stop] - face_ptr[start]) as usize);
+        blocks.push((start..stop, block));
+        rest = tail;
+    }
+    let bad = blocks
+        .into_par_iter()
+        .map(|(faces, block)| {
+            let base = face_ptr[faces.start] as usize;
+            faces.into_iter().find_map(|f| {
+                let [s, t] = face_sides[f];
+                let l = p.side_vertices(s as usize);
+                let stored =
+                    &mut block[face_ptr[f] as usize - base..face_ptr[f + 1] as usize - base];
+                if inward[s as usize] {
+                    stored
+                        .iter_mut()
+                        .zip(l.iter().rev())
+                        .for_each(|(o, &v)| *o = v);
+                } else {
+                    stored.copy_from_slice(l);
+                }
+                (t != NO_SIDE)
+                    .then(|| pair_defect(p, side_cell, inward, stored, [s, t]))
+                    .flatten()
+            })
+        })
+        .find_map_first(|e| e);
     if let Some(e) = bad {
         return Err(e);
     }
@@ -164,6 +183,9 @@ fn assemble(
         h: 0.0,
     })
 }
+
+/// Faces per parallel task of [`assemble`].
+const FACE_BLOCK: usize = 4096;
 
 /// The defect of interior face [s, t] (its sides), whose loop as stored is `stored` (the
 /// outward loop of side s): [`MeshError::InconsistentFace`] unless side t lists the same loop

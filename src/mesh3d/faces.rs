@@ -216,13 +216,18 @@ pub(crate) fn match_faces(p: &Polyhedra, side_cell: &[u32]) -> Result<FaceMatch,
 /// cyclic order, `Some(false)` in the reverse order, `None` in neither (a different polygon).
 pub(crate) fn same_direction(a: &[u32], b: &[u32]) -> Option<bool> {
     let m = a.len();
+    if b.len() != m {
+        return None;
+    }
     let p = b.iter().position(|&v| v == a[0])?;
-    let fwd = (0..m).all(|i| b[(p + i) % m] == a[i]);
-    let bwd = (0..m).all(|i| b[(p + m - i) % m] == a[i]);
-    match (fwd, bwd) {
-        (true, _) => Some(true),
-        (false, true) => Some(false),
-        _ => None,
+    // b read from position p on, cyclically (without a division per entry)
+    let at = |i: usize| b[if p + i >= m { p + i - m } else { p + i }];
+    if (1..m).all(|i| at(i) == a[i]) {
+        Some(true)
+    } else if (1..m).all(|i| at(m - i) == a[i]) {
+        Some(false)
+    } else {
+        None
     }
 }
 
@@ -236,5 +241,13 @@ mod tests {
         assert_eq!(same_direction(&[1, 2, 3, 4], &[2, 1, 4, 3]), Some(false));
         assert_eq!(same_direction(&[1, 2, 3, 4], &[1, 3, 2, 4]), None);
         assert_eq!(same_direction(&[1, 2, 3], &[1, 3, 2]), Some(false));
+        assert_eq!(same_direction(&[1, 2, 3], &[3, 2, 1]), Some(false));
+        assert_eq!(same_direction(&[1, 2, 3], &[2, 3, 1]), Some(true));
+        assert_eq!(same_direction(&[1, 2, 3], &[1, 2, 3, 4]), None);
+        assert_eq!(same_direction(&[1, 2, 3], &[4, 2, 3]), None);
+        assert_eq!(
+            same_direction(&[1, 2, 3, 4, 5], &[4, 3, 2, 1, 5]),
+            Some(false)
+        );
     }
 }
