@@ -8,6 +8,10 @@
 //! and fails on a contradiction (a non-orientable surface). All faces must end up in one
 //! component (a cell is one closed surface). The orientation found is outward if the signed
 //! volume it gives is positive, else every face is turned. O(E log E) per cell of E edge uses.
+//!
+//! A tetrahedron (four triangles over four vertices) takes a short path with the same result:
+//! one determinant and the parity of each loop's permutation (`orient_tetrahedron`; measured
+//! in `replication/measurements/mesh3d.md`).
 
 use super::Polyhedra;
 use super::geometry::{cell_volume_centroid, cross, dot, sub, vertex_average};
