@@ -236,6 +236,24 @@ pub(crate) fn orient_cells(p: &Polyhedra) -> Result<Vec<bool>, MeshError> {
 mod tests {
     use super::*;
 
+    /// The tetrahedron of the unit cube's corner at the origin.
+    const UNIT: [[f64; 3]; 4] = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+
+    /// One cell over the vertices `v` with the side loops `sides`.
+    fn cell(v: [[f64; 3]; 4], sides: &[&[u32]]) -> Polyhedra {
+        let mut p = Polyhedra {
+            vertices: v.to_vec(),
+            ..Polyhedra::default()
+        };
+        p.push_cell(sides.iter().copied()).unwrap();
+        p
+    }
+
     /// A tetrahedron over the vertices `v`, its four sides listed in the order `order` (each
     /// leaving out vertex `order[j]`), each loop rotated by `rot[j]` and reversed where `rev[j]`.
     fn tetrahedron(
@@ -244,10 +262,6 @@ mod tests {
         rot: [usize; 4],
         rev: [bool; 4],
     ) -> Polyhedra {
-        let mut p = Polyhedra {
-            vertices: v.to_vec(),
-            ..Polyhedra::default()
-        };
         let loops: Vec<Vec<u32>> = (0..4)
             .map(|j| {
                 let mut l: Vec<u32> = (0..4u32).filter(|&i| i as usize != order[j]).collect();
@@ -258,41 +272,41 @@ mod tests {
                 l
             })
             .collect();
-        p.push_cell(loops.iter().map(|l| l.as_slice())).unwrap();
-        p
+        let sides: Vec<&[u32]> = loops.iter().map(|l| l.as_slice()).collect();
+        cell(v, &sides)
     }
 
+    /// The 24 orders of four sides.
+    fn orders() -> Vec<[usize; 4]> {
+        let mut out = Vec::new();
+        for a in 0..4 {
+            for b in (0..4).filter(|&b| b != a) {
+                for c in (0..4).filter(|&c| c != a && c != b) {
+                    out.push([a, b, c, 6 - a - b - c]);
+                }
+            }
+        }
+        out
+    }
+
+    /// Every order of the sides, every rotation and every direction of each loop (24 × 81 ×
+    /// 16 listings), on a tetrahedron, its mirror image and a thin sliver far from the origin:
+    /// the short path gives the general path's flags.
     #[test]
     fn tetrahedra_are_oriented_as_by_the_edges() {
-        let shapes = [
-            [
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            // the mirror image: negative orientation of the vertex order
-            [
-                [0.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            // a thin sliver, far from the origin
-            [
-                [1e3, 1e3, 1e3],
-                [1e3 + 1.0, 1e3, 1e3],
-                [1e3, 1e3 + 1.0, 1e3],
-                [1e3 + 0.5, 1e3 + 0.5, 1e3 + 1e-6],
-            ],
+        let mirror = [UNIT[0], UNIT[2], UNIT[1], UNIT[3]];
+        let sliver = [
+            [1e3, 1e3, 1e3],
+            [1e3 + 1.0, 1e3, 1e3],
+            [1e3, 1e3 + 1.0, 1e3],
+            [1e3 + 0.5, 1e3 + 0.5, 1e3 + 1e-6],
         ];
-        let orders = [[0, 1, 2, 3], [3, 1, 0, 2], [2, 3, 1, 0]];
         let mut checked = 0;
-        for v in shapes {
-            for order in orders {
-                for code in 0..256usize {
-                    let rot = std::array::from_fn(|j| (code >> (2 * j)) % 3);
-                    let rev = std::array::from_fn(|j| (code >> j) & 1 == 1);
+        for v in [UNIT, mirror, sliver] {
+            for order in orders() {
+                for code in 0..81 * 16 {
+                    let rot = std::array::from_fn(|j| code / 3usize.pow(j as u32) % 3);
+                    let rev = std::array::from_fn(|j| (code / 81) >> j & 1 == 1);
                     let p = tetrahedron(v, order, rot, rev);
                     let fast = orient_tetrahedron(&p, p.cell_sides(0)).expect("a tetrahedron");
                     let mut general = [false; 4];
@@ -302,26 +316,15 @@ mod tests {
                 }
             }
         }
-        assert_eq!(checked, 3 * 3 * 256);
+        assert_eq!(checked, 3 * 24 * 81 * 16);
     }
 
     #[test]
     fn only_tetrahedra_of_nonzero_volume_take_the_short_path() {
-        let v = [
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-        ];
-        let p = tetrahedron(v, [0, 1, 2, 3], [0; 4], [false; 4]);
+        let p = tetrahedron(UNIT, [0, 1, 2, 3], [0; 4], [false; 4]);
         assert!(orient_tetrahedron(&p, p.cell_sides(0)).is_some());
         // flat: the general path reports the zero volume
-        let flat = [
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [1.0, 1.0, 0.0],
-        ];
+        let flat = [UNIT[0], UNIT[1], UNIT[2], [1.0, 1.0, 0.0]];
         let p = tetrahedron(flat, [0, 1, 2, 3], [0; 4], [false; 4]);
         assert!(orient_tetrahedron(&p, p.cell_sides(0)).is_none());
         let err = orient_cell(&p, 0, &mut OrientScratch::default(), &mut [false; 4]).unwrap_err();
@@ -329,23 +332,14 @@ mod tests {
             matches!(err, MeshError::DegenerateVolume { cell: 0, .. }),
             "{err:?}"
         );
-        // a side listed twice (a vertex never left out), a quadrilateral side, a repeated vertex
-        let twice = tetrahedron(v, [0, 0, 2, 3], [0; 4], [false; 4]);
+        // a side listed twice (a vertex never left out): the general path refuses the cell
+        let twice = tetrahedron(UNIT, [0, 0, 2, 3], [0; 4], [false; 4]);
         assert!(orient_tetrahedron(&twice, twice.cell_sides(0)).is_none());
         assert!(orient_cell(&twice, 0, &mut OrientScratch::default(), &mut [false; 4]).is_err());
-        let mut quad = Polyhedra {
-            vertices: v.to_vec(),
-            ..Polyhedra::default()
-        };
-        let sides: [&[u32]; 4] = [&[0, 1, 2, 3], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]];
-        quad.push_cell(sides).unwrap();
+        // a quadrilateral side, a repeated vertex
+        let quad = cell(UNIT, &[&[0, 1, 2, 3], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]]);
         assert!(orient_tetrahedron(&quad, quad.cell_sides(0)).is_none());
-        let mut repeated = Polyhedra {
-            vertices: v.to_vec(),
-            ..Polyhedra::default()
-        };
-        let sides: [&[u32]; 4] = [&[0, 1, 1], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]];
-        repeated.push_cell(sides).unwrap();
+        let repeated = cell(UNIT, &[&[0, 1, 1], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]]);
         assert!(orient_tetrahedron(&repeated, repeated.cell_sides(0)).is_none());
     }
 }
