@@ -191,7 +191,7 @@ const BOX_TOL: f64 = 1e-9;
 /// axis-parallel legs, half of the box; the comparison is exact, the box being made of the
 /// vertices' own coordinates); its centroid otherwise. Computed from the cell's vertices;
 /// [`initial_aggregates`] evaluates it once per cell.
-fn key_point(mesh: &PolyMesh, k: usize) -> Point {
+pub(crate) fn key_point(mesh: &PolyMesh, k: usize) -> Point {
     let c = mesh.cell_vertices(k);
     let mut b = [
         f64::INFINITY,

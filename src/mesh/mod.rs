@@ -62,6 +62,7 @@
 //! the nested warm start agglomerates both ([`crate::solver::coarse_mesh`]).
 
 pub mod agglomerate;
+pub mod box_cover;
 pub(crate) mod buckets;
 mod build;
 pub mod complex;

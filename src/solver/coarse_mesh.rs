@@ -55,9 +55,11 @@ pub trait CoarseMesh<const D: usize>: SolveMesh<D> + VertexAverage + Sized {
         budget: MemoryBudget,
     ) -> Result<Level<Self>, MeshError>;
     /// A coarse mesh of boxes of side `size` covering the mesh, for when agglomeration cannot
-    /// coarsen it ([`crate::mesh3d::agglomerate::box_cover`]: its domain is a staircase
-    /// around Ω's and no boundary face carries over, so it serves obstacle problems only);
-    /// `None` where the mesh type has none.
+    /// coarsen it or the domain is a box ([`Self::box_tiling`]; in 3D
+    /// [`crate::mesh3d::agglomerate::box_cover`]: its domain is a staircase around Ω's and no
+    /// boundary face carries over, so it serves obstacle problems only; in 2D
+    /// [`crate::mesh::box_cover`], for a rectangular domain only); `None` where the mesh type
+    /// has none.
     fn cover(&self, size: f64, budget: MemoryBudget) -> Option<Result<Level<Self>, MeshError>>;
     /// The side h of boxes that tile the mesh's domain exactly, if that domain is a box (its
     /// measure `measure` is its bounding box's) cut by h ≈ `size` (h = L / round(L / `size`), L
@@ -70,6 +72,24 @@ pub trait CoarseMesh<const D: usize>: SolveMesh<D> + VertexAverage + Sized {
     fn cell_vertex_ids<'s>(&'s self, k: usize, scratch: &'s mut Vec<u32>) -> &'s [u32];
     /// The vertices of face `f` (written to `scratch`).
     fn face_vertex_ids<'s>(&self, f: usize, scratch: &'s mut Vec<u32>) -> &'s [u32];
+}
+
+/// [`CoarseMesh::box_tiling`] of a mesh whose bounding box has the sides `sides` and whose
+/// cells measure `measure` in all: h = L / round(L / `size`) (L the longest side) if the
+/// domain fills its bounding box and boxes of side h cut every side into whole boxes (up to a
+/// relative 10⁻⁹).
+fn tiling(sides: &[f64], measure: f64, size: f64) -> Option<f64> {
+    let volume = sides.iter().product::<f64>();
+    let longest = sides.iter().copied().fold(0.0, f64::max);
+    if !((measure - volume).abs() <= 1e-9 * volume && size > 0.0) {
+        return None;
+    }
+    let h = longest / (longest / size).round().max(1.0);
+    let whole = |l: f64| {
+        let k = (l / h).round();
+        k >= 1.0 && (l - k * h).abs() <= 1e-9 * l
+    };
+    sides.iter().all(|&l| whole(l)).then_some(h)
 }
 
 impl CoarseMesh<2> for PolyMesh {
@@ -96,13 +116,21 @@ impl CoarseMesh<2> for PolyMesh {
             boundary_face_of: a.boundary_edge_of,
         })
     }
-    /// None: the planar agglomeration straightens the faces of its aggregates, so it coarsens
-    /// any planar mesh.
-    fn cover(&self, _size: f64, _budget: MemoryBudget) -> Option<Result<Level<Self>, MeshError>> {
-        None
+    /// The boxes of [`crate::mesh::box_cover`], which tile a rectangular domain exactly and
+    /// refuse any other (the planar agglomeration straightens the faces of its aggregates, so
+    /// it coarsens any planar mesh: no staircase cover is needed in 2D).
+    fn cover(&self, size: f64, _budget: MemoryBudget) -> Option<Result<Level<Self>, MeshError>> {
+        Some(
+            crate::mesh::box_cover::box_cover(self, size).map(|a| Level {
+                mesh: a.mesh,
+                cell_of: a.cell_of,
+                boundary_face_of: a.boundary_edge_of,
+            }),
+        )
     }
-    fn box_tiling(&self, _measure: f64, _size: f64) -> Option<f64> {
-        None
+    fn box_tiling(&self, measure: f64, size: f64) -> Option<f64> {
+        let b = self.bounding_box();
+        tiling(&[b.x[1] - b.x[0], b.y[1] - b.y[0]], measure, size)
     }
     fn face_distance(&self, f: usize, p: Vector<2>) -> f64 {
         let [v, w] = self.edge_vertices(f);
@@ -146,18 +174,11 @@ impl CoarseMesh<3> for PolyMesh3 {
         Some(crate::mesh3d::agglomerate::box_cover(self, size, budget).and_then(level3))
     }
     fn box_tiling(&self, measure: f64, size: f64) -> Option<f64> {
-        let sides = self.bounding_box().ranges().map(|r| r[1] - r[0]);
-        let volume = sides.iter().product::<f64>();
-        let longest = sides.iter().copied().fold(0.0, f64::max);
-        if !((measure - volume).abs() <= 1e-9 * volume && size > 0.0) {
-            return None;
-        }
-        let h = longest / (longest / size).round().max(1.0);
-        let whole = |l: f64| {
-            let k = (l / h).round();
-            k >= 1.0 && (l - k * h).abs() <= 1e-9 * l
-        };
-        sides.iter().all(|&l| whole(l)).then_some(h)
+        tiling(
+            &self.bounding_box().ranges().map(|r| r[1] - r[0]),
+            measure,
+            size,
+        )
     }
     fn face_distance(&self, f: usize, p: Vector<3>) -> f64 {
         let ids = self.face_vertices(f);
@@ -322,7 +343,7 @@ mod tests {
     }
 
     /// Boxes tile a box domain when the longest side's count fits the others; never a domain
-    /// that is not its bounding box, nor a planar mesh.
+    /// that is not its bounding box.
     #[test]
     fn box_tiling_needs_a_box_that_whole_boxes_cut() {
         use crate::mesh::CellComplex;
@@ -338,8 +359,14 @@ mod tests {
         assert_eq!(m.box_tiling(measure, 0.3), None);
         // the same mesh seen as a smaller domain (a cell missing) is not a box
         assert_eq!(m.box_tiling(0.99 * measure, 0.26), None);
-        let planar = crate::mesh::generate::cartesian(4, 4).unwrap();
-        assert_eq!(planar.box_tiling(1.0, 0.25), None);
+        // in 2D the same rule: a 2 × 1 rectangle, and an L-shape's measure
+        let planar = crate::mesh::generate::cartesian_rect(8, 4, [0.0, 2.0], [0.0, 1.0]).unwrap();
+        assert_eq!(planar.box_tiling(2.0, 0.26), Some(0.25));
+        assert_eq!(planar.box_tiling(2.0, 0.3), None);
+        assert_eq!(planar.box_tiling(1.5, 0.26), None);
+        let cover = planar.cover(0.25, budget).unwrap().unwrap();
+        assert_eq!(cover.mesh.n_cells(), 32);
+        assert!(planar.cover(0.3, budget).unwrap().is_err());
     }
 
     /// A point above the middle of the unit square face of a cube, and one beside it.

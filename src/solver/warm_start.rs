@@ -33,7 +33,11 @@
 //! ([`CoarseMesh::box_tiling`]), the first level of an obstacle problem is that cover from the
 //! start: it is then Ω itself, with no staircase, and it is built by sorting the fine cells by
 //! box instead of growing, checking and merging aggregates of them (on 6M Kuhn tetrahedra,
-//! 1.1 s against 2.9 s, with the same NITER: `replication/measurements/solver3d.md`).
+//! 1.1 s against 2.9 s, with the same NITER: `replication/measurements/solver3d.md`). In 2D
+//! the boxes are those of [`crate::mesh::box_cover`], which carries the boundary tags over to
+//! the boxes' sides and refuses a box holding two materials or a side holding two boundary
+//! tags (that level is then agglomerated); the measurements are in
+//! `replication/measurements/solver.md`.
 //!
 //! **Prediction.** A fine unknown of the obstacle barrier lies in one or more coarse cells (a
 //! cell unknown in the aggregate of its cell; a vertex or face unknown in those of the fine

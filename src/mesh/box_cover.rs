@@ -1,0 +1,332 @@
+//! The coarse mesh of a rectangular domain cut into equal boxes: the first level of the
+//! nested warm start of an obstacle problem when Ω is a rectangle
+//! ([`crate::solver::warm_start`], `CoarseMesh::box_tiling`), in place of the
+//! agglomeration of [`super::agglomerate`].
+//!
+//! ## Construction, for boxes of side h that tile the bounding box exactly
+//! The bounding box [x₀, x₁] × [y₀, y₁] is cut into n_x × n_y boxes (n_x = (x₁ − x₀)/h,
+//! n_y = (y₁ − y₀)/h, whole numbers up to a relative 10⁻⁹); box (i, j) is the coarse cell
+//! i + n_x j, a rectangle whose four corners are the grid's, so the coarse mesh is conforming
+//! and tiles the rectangle exactly. Fine cell K belongs to the box of its key point
+//! ([`super::agglomerate`]: the centre of its bounding box on a rectangle or a right triangle
+//! with axis-parallel legs, so that the two triangles of a square stay together; its centroid
+//! otherwise), clamped to the grid.
+//!
+//! Refused (an error; the caller then agglomerates): a box that holds no fine cell (the domain
+//! is not its bounding box, or the boxes are smaller than the cells), a box holding cells of
+//! two materials (cell tags), a fine boundary edge off the bounding box, and a coarse boundary
+//! side whose fine boundary edges carry two tags. So the coarse cells are unions of fine cells
+//! of one material up to the fine cells cut by the box sides, and each coarse boundary side
+//! carries the tag of its fine boundary edges: boundary data given by tag carries over, and
+//! the coarse problem evaluates it at the sides' midpoints. [`Agglomeration::boundary_edge_of`]
+//! maps each fine boundary edge to the side that contains it.
+//!
+//! Cost: O(n) in the fine cells and edges (one key point per cell, one pass over the boundary
+//! edges), against the agglomeration's unions, merges and tracing of aggregate boundaries.
+
+use super::agglomerate::{Agglomeration, NO_EDGE, floor_i64, key_point};
+use super::{Point, PolyMesh};
+use crate::error::MeshError;
+use rayon::prelude::*;
+
+/// Relative tolerance of the tiling (the sides against whole numbers of boxes) and of a
+/// boundary edge's distance to the bounding box.
+const TILE_TOL: f64 = 1e-9;
+
+/// Least number of fine cells of one parallel task.
+const MIN_TASK: usize = 1 << 12;
+
+/// The box cover of `fine` with boxes of side `size` (see the module docs).
+/// [`MeshError::NonConforming`] when the boxes do not tile the bounding box, or for the
+/// refusals of the module docs; the errors of [`PolyMesh::from_cells_tagged`].
+pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError> {
+    let fail = |m: String| Err(MeshError::NonConforming(format!("box cover: {m}")));
+    let bb = fine.bounding_box();
+    let (x0, y0) = (bb.x[0], bb.y[0]);
+    let (lx, ly) = (bb.x[1] - bb.x[0], bb.y[1] - bb.y[0]);
+    let boxes = |l: f64| -> Option<usize> {
+        let k = (l / size).round();
+        (size.is_finite()
+            && size > 0.0
+            && k >= 1.0
+            && k <= fine.n_cells() as f64
+            && (l - k * size).abs() <= TILE_TOL * l)
+            .then_some(k as usize)
+    };
+    let (Some(nx), Some(ny)) = (boxes(lx), boxes(ly)) else {
+        return fail(format!(
+            "boxes of side {size} do not tile the bounding box {lx} × {ly}"
+        ));
+    };
+    if nx.saturating_mul(ny) > fine.n_cells() {
+        return fail(format!(
+            "{nx} × {ny} boxes for {} fine cells",
+            fine.n_cells()
+        ));
+    }
+    let index =
+        |c: f64, o: f64, n: usize| floor_i64((c - o) / size).clamp(0, n as i64 - 1) as usize;
+    let cell_of: Vec<usize> = (0..fine.n_cells())
+        .into_par_iter()
+        .with_min_len(MIN_TASK)
+        .map(|k| {
+            let p = key_point(fine, k);
+            index(p[0], x0, nx) + nx * index(p[1], y0, ny)
+        })
+        .collect();
+    // one material per box, and no empty box
+    let mut tags: Vec<Option<i32>> = vec![None; nx * ny];
+    for (k, &b) in cell_of.iter().enumerate() {
+        let t = fine.cell_tag(k);
+        match tags[b] {
+            None => tags[b] = Some(t),
+            Some(s) if s != t => {
+                return fail(format!(
+                    "box {b} holds fine cells of the materials {s} and {t}"
+                ));
+            }
+            Some(_) => {}
+        }
+    }
+    if let Some(b) = tags.iter().position(Option::is_none) {
+        return fail(format!(
+            "box ({}, {}) holds no fine cell: the domain is not its bounding box",
+            b % nx,
+            b / nx
+        ));
+    }
+    let cell_tags: Vec<i32> = tags.into_iter().flatten().collect();
+    // the grid's corners: (i, j) is vertex i + (n_x + 1) j; the last ones are the bounding
+    // box's own coordinates
+    let vertex = |i: usize, j: usize| i + (nx + 1) * j;
+    let mut vertices: Vec<Point> = Vec::with_capacity((nx + 1) * (ny + 1));
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let x = if i == nx {
+                bb.x[1]
+            } else {
+                x0 + lx * i as f64 / nx as f64
+            };
+            let y = if j == ny {
+                bb.y[1]
+            } else {
+                y0 + ly * j as f64 / ny as f64
+            };
+            vertices.push([x, y]);
+        }
+    }
+    let cells: Vec<Vec<usize>> = (0..ny)
+        .flat_map(|j| {
+            (0..nx).map(move |i| {
+                vec![
+                    vertex(i, j),
+                    vertex(i + 1, j),
+                    vertex(i + 1, j + 1),
+                    vertex(i, j + 1),
+                ]
+            })
+        })
+        .collect();
+    // the coarse boundary side of each fine boundary edge (its midpoint's), as its two grid
+    // vertices, and the tag of each side
+    let tol = TILE_TOL * lx.max(ly);
+    let side_of = |e: usize| -> Option<[usize; 2]> {
+        let [a, b] = fine.edge_vertices(e);
+        let (p, q) = (fine.vertex(a), fine.vertex(b));
+        let m = [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
+        let on = |c: f64, at: f64| (c - at).abs() <= tol;
+        let (i, j) = (index(m[0], x0, nx), index(m[1], y0, ny));
+        if on(p[1], bb.y[0]) && on(q[1], bb.y[0]) {
+            Some([vertex(i, 0), vertex(i + 1, 0)])
+        } else if on(p[1], bb.y[1]) && on(q[1], bb.y[1]) {
+            Some([vertex(i, ny), vertex(i + 1, ny)])
+        } else if on(p[0], bb.x[0]) && on(q[0], bb.x[0]) {
+            Some([vertex(0, j), vertex(0, j + 1)])
+        } else if on(p[0], bb.x[1]) && on(q[0], bb.x[1]) {
+            Some([vertex(nx, j), vertex(nx, j + 1)])
+        } else {
+            None
+        }
+    };
+    let mut side_tag: std::collections::BTreeMap<[usize; 2], i32> = Default::default();
+    let mut sides = Vec::with_capacity(fine.boundary_edges().len());
+    for &e in fine.boundary_edges() {
+        let Some(s) = side_of(e) else {
+            let [a, b] = fine.edge_vertices(e);
+            return fail(format!(
+                "the boundary edge {e} ({a}, {b}) is not on the bounding box"
+            ));
+        };
+        let t = fine.edge_tag(e);
+        match side_tag.insert(s, t) {
+            Some(u) if u != t => {
+                return fail(format!(
+                    "the boundary side {s:?} holds fine edges tagged {u} and {t}"
+                ));
+            }
+            _ => {}
+        }
+        sides.push((e, s));
+    }
+    let tagged: Vec<(usize, usize, i32)> = side_tag
+        .iter()
+        .filter(|(_, t)| **t != 0)
+        .map(|(s, &t)| (s[0], s[1], t))
+        .collect();
+    let mesh = PolyMesh::from_cells_tagged(vertices, cells, &tagged)?.with_cell_tags(cell_tags)?;
+    let coarse_b = mesh.boundary_edges();
+    let mut boundary_edge_of = vec![NO_EDGE; fine.n_edges()];
+    for (e, s) in sides {
+        let key = [s[0].min(s[1]), s[0].max(s[1])];
+        let pos = coarse_b
+            .binary_search_by(|&ce| mesh.edge_vertices(ce).cmp(&key))
+            .map_err(|_| {
+                MeshError::NonConforming(format!(
+                    "box cover: no coarse boundary side {key:?} for the fine edge {e}"
+                ))
+            })?;
+        boundary_edge_of[e] = coarse_b[pos];
+    }
+    Ok(Agglomeration {
+        mesh,
+        cell_of,
+        boundary_edge_of,
+        dissolved_cells: 0,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::{cartesian_rect, cartesian_triangles};
+
+    fn inside(p: Point, m: &PolyMesh, c: usize) -> bool {
+        let b = m.cell_vertices(c).iter().map(|&v| m.vertex(v as usize));
+        let (lo, hi) = b.fold(([f64::MAX; 2], [f64::MIN; 2]), |(lo, hi), q| {
+            (
+                [lo[0].min(q[0]), lo[1].min(q[1])],
+                [hi[0].max(q[0]), hi[1].max(q[1])],
+            )
+        });
+        (0..2).all(|r| lo[r] - 1e-12 <= p[r] && p[r] <= hi[r] + 1e-12)
+    }
+
+    #[test]
+    fn triangulated_squares_go_to_their_box_in_pairs() {
+        // 24 × 24 squares of (−2, 2)², each cut into two triangles, in 9 × 9 boxes: the box
+        // sides cut through squares, the two triangles of a square stay together
+        let fine = cartesian_triangles(24, 24, [-2.0, 2.0], [-2.0, 2.0]).unwrap();
+        let h = 4.0 / 9.0;
+        let cover = box_cover(&fine, h).unwrap();
+        let m = &cover.mesh;
+        assert_eq!(m.n_cells(), 81);
+        let area: f64 = (0..81).map(|c| m.measure(c)).sum();
+        assert!((area - 16.0).abs() < 1e-12);
+        assert!((0..81).all(|c| (m.measure(c) - h * h).abs() < 1e-12));
+        for k in 0..fine.n_cells() {
+            let c = cover.cell_of[k];
+            assert!(inside(key_point(&fine, k), m, c), "cell {k}");
+        }
+        // the two triangles of a square, on either side of its diagonal: one box
+        for e in 0..fine.n_edges() {
+            let [p, q] = fine.edge_vertices(e).map(|v| fine.vertex(v));
+            if p[0] != q[0] && p[1] != q[1] {
+                let [a, b] = fine.edge_cells(e);
+                assert_eq!(cover.cell_of[a], cover.cell_of[b], "diagonal {e}");
+            }
+        }
+        // every fine boundary edge lies on its coarse side
+        let mut hit = vec![false; m.n_edges()];
+        for &e in fine.boundary_edges() {
+            let ce = cover.boundary_edge_of[e];
+            assert!(m.is_boundary_edge(ce));
+            hit[ce] = true;
+            let [a, b] = m.edge_vertices(ce).map(|v| m.vertex(v));
+            let p = fine.edge_midpoint(e);
+            let cross = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
+            let t = ((p[0] - a[0]) * (b[0] - a[0]) + (p[1] - a[1]) * (b[1] - a[1])) / (h * h);
+            assert!(cross.abs() < 1e-12 && (0.0..=1.0).contains(&t), "edge {e}");
+        }
+        assert_eq!(hit.iter().filter(|&&x| x).count(), m.boundary_edges().len());
+        let interior = (0..fine.n_edges()).filter(|&e| !fine.is_boundary_edge(e));
+        assert!(
+            interior
+                .into_iter()
+                .all(|e| cover.boundary_edge_of[e] == NO_EDGE)
+        );
+    }
+
+    #[test]
+    fn tags_carry_over_and_mixed_boxes_are_refused() {
+        // boundary tags by side (bottom 1, right 2, else 0) and two materials split at x = 1/2
+        let fine = cartesian_rect(16, 16, [0.0, 1.0], [0.0, 1.0])
+            .unwrap()
+            .with_boundary_tags(|p| {
+                if p[1] < 1e-12 {
+                    1
+                } else if p[0] > 1.0 - 1e-12 {
+                    2
+                } else {
+                    0
+                }
+            });
+        let halves: Vec<i32> = (0..fine.n_cells())
+            .map(|k| i32::from(fine.centroid(k)[0] > 0.5))
+            .collect();
+        let fine = fine.with_cell_tags(halves).unwrap();
+        let cover = box_cover(&fine, 0.25).unwrap();
+        let m = &cover.mesh;
+        for &e in fine.boundary_edges() {
+            assert_eq!(
+                m.edge_tag(cover.boundary_edge_of[e]),
+                fine.edge_tag(e),
+                "edge {e}"
+            );
+        }
+        for k in 0..fine.n_cells() {
+            assert_eq!(m.cell_tag(cover.cell_of[k]), fine.cell_tag(k));
+        }
+        // boxes of 3/16... do not tile; boxes of 1/3 hold both materials (the middle column)
+        let err = |s: f64| box_cover(&fine, s).unwrap_err().to_string();
+        assert!(err(0.3).contains("do not tile"), "{}", err(0.3));
+        assert!(err(1.0 / 3.0).contains("materials"), "{}", err(1.0 / 3.0));
+        // a side whose fine edges carry two tags: the bottom split at x = 1/2
+        let split = cartesian_rect(16, 16, [0.0, 1.0], [0.0, 1.0])
+            .unwrap()
+            .with_boundary_tags(|p| i32::from(p[1] < 1e-12 && p[0] < 0.5));
+        assert!(box_cover(&split, 0.25).is_ok());
+        let e = box_cover(&split, 1.0 / 3.0).unwrap_err().to_string();
+        assert!(e.contains("tagged"), "{e}");
+    }
+
+    #[test]
+    fn a_domain_that_is_not_its_bounding_box_is_refused() {
+        // an L-shape: the unit square without its upper right quarter
+        let square = cartesian_rect(8, 8, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        let keep: Vec<usize> = (0..square.n_cells())
+            .filter(|&k| {
+                let c = square.centroid(k);
+                !(c[0] > 0.5 && c[1] > 0.5)
+            })
+            .collect();
+        let cells: Vec<Vec<usize>> = keep
+            .iter()
+            .map(|&k| {
+                square
+                    .cell_vertices(k)
+                    .iter()
+                    .map(|&v| v as usize)
+                    .collect()
+            })
+            .collect();
+        let verts: Vec<Point> = (0..square.n_vertices()).map(|v| square.vertex(v)).collect();
+        let (verts, cells, _) = crate::mesh::drop_unused_vertices(&verts, &cells);
+        let l = PolyMesh::from_cells(verts, cells).unwrap();
+        let e = box_cover(&l, 0.25).unwrap_err().to_string();
+        assert!(e.contains("holds no fine cell"), "{e}");
+        // not positive, not finite, or more boxes than cells
+        for s in [0.0, -0.25, f64::NAN, f64::INFINITY, 1.0 / 64.0] {
+            assert!(box_cover(&square, s).is_err(), "{s}");
+        }
+    }
+}
