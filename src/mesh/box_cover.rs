@@ -17,9 +17,11 @@
 //! two materials (cell tags), a fine boundary edge off the bounding box, and a coarse boundary
 //! side whose fine boundary edges carry two tags. So the coarse cells are unions of fine cells
 //! of one material up to the fine cells cut by the box sides, and each coarse boundary side
-//! carries the tag of its fine boundary edges: boundary data given by tag carries over, and
-//! the coarse problem evaluates it at the sides' midpoints. [`Agglomeration::boundary_edge_of`]
-//! maps each fine boundary edge to the side that contains it.
+//! carries the tag of the fine boundary edges whose midpoints lie on it (a fine edge across a
+//! box corner counts for one side only, so near a change of tag the coarse data may differ
+//! from the fine by one fine edge): boundary data given by tag carries over, and the coarse
+//! problem evaluates it at the sides' midpoints. [`Agglomeration::boundary_edge_of`] maps each
+//! fine boundary edge to the side that holds its midpoint.
 //!
 //! Cost: O(n) in the fine cells and edges (one key point per cell, one pass over the boundary
 //! edges), against the agglomeration's unions, merges and tracing of aggregate boundaries.
