@@ -5,12 +5,16 @@
 //!
 //! ## Construction, for boxes of side h that tile the bounding box exactly
 //! The bounding box [x₀, x₁] × [y₀, y₁] is cut into n_x × n_y boxes (n_x = (x₁ − x₀)/h,
-//! n_y = (y₁ − y₀)/h, whole numbers up to a relative 10⁻⁹); box (i, j) is the coarse cell
-//! i + n_x j, a rectangle whose four corners are the grid's, so the coarse mesh is conforming
-//! and tiles the rectangle exactly. Fine cell K belongs to the box of its key point
-//! ([`super::agglomerate`]: the centre of its bounding box on a rectangle or a right triangle
-//! with axis-parallel legs, so that the two triangles of a square stay together; its centroid
-//! otherwise), clamped to the grid.
+//! n_y = (y₁ − y₀)/h, whole numbers up to a relative 10⁻⁹) by the lines x = x₀ + i h and
+//! y = y₀ + j h, each moved to the nearest fine boundary vertex of the bottom (left) side when
+//! that is within h/4, so that on a structured fine mesh every box is a union of whole fine
+//! cells, as the agglomeration's aggregates are (boxes whose sides cut through fine cells cost
+//! the later fine solves conjugate-gradient iterations: `replication/measurements/solver.md`).
+//! Box (i, j) is the coarse cell i + n_x j, a rectangle whose four corners are the grid's, so
+//! the coarse mesh is conforming and tiles the rectangle exactly. Fine cell K belongs to the
+//! box of its key point ([`super::agglomerate`]: the centre of its bounding box on a
+//! rectangle or a right triangle with axis-parallel legs, so that the two triangles of a
+//! square stay together; its centroid otherwise).
 //!
 //! Refused (an error; the caller then agglomerates): a box that holds no fine cell (the domain
 //! is not its bounding box, or the boxes are smaller than the cells), a box holding cells of
@@ -26,7 +30,7 @@
 //! Cost: O(n) in the fine cells and edges (one key point per cell, one pass over the boundary
 //! edges), against the agglomeration's unions, merges and tracing of aggregate boundaries.
 
-use super::agglomerate::{Agglomeration, NO_EDGE, floor_i64, key_point};
+use super::agglomerate::{Agglomeration, NO_EDGE, key_point};
 use super::{Point, PolyMesh};
 use crate::error::MeshError;
 use rayon::prelude::*;
@@ -66,14 +70,31 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
             fine.n_cells()
         ));
     }
-    let index =
-        |c: f64, o: f64, n: usize| floor_i64((c - o) / size).clamp(0, n as i64 - 1) as usize;
+    // the grid lines: i h from the corner, each moved to the nearest fine vertex of the
+    // bottom (left) side of the boundary within h/4, so that the boxes of a structured fine
+    // mesh are unions of whole fine cells
+    let tol = TILE_TOL * lx.max(ly);
+    let mut bottom = Vec::new();
+    let mut left = Vec::new();
+    for &e in fine.boundary_edges() {
+        for p in fine.edge_vertices(e).map(|v| fine.vertex(v)) {
+            if (p[1] - y0).abs() <= tol {
+                bottom.push(p[0]);
+            }
+            if (p[0] - x0).abs() <= tol {
+                left.push(p[1]);
+            }
+        }
+    }
+    let xs = grid_lines(bb.x, nx, bottom);
+    let ys = grid_lines(bb.y, ny, left);
+    let index = |c: f64, lines: &[f64]| lines[1..lines.len() - 1].partition_point(|&l| l <= c);
     let cell_of: Vec<usize> = (0..fine.n_cells())
         .into_par_iter()
         .with_min_len(MIN_TASK)
         .map(|k| {
             let p = key_point(fine, k);
-            index(p[0], x0, nx) + nx * index(p[1], y0, ny)
+            index(p[0], &xs) + nx * index(p[1], &ys)
         })
         .collect();
     // one material per box, and no empty box
@@ -98,24 +119,11 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
         ));
     }
     let cell_tags: Vec<i32> = tags.into_iter().flatten().collect();
-    // the grid's corners: (i, j) is vertex i + (n_x + 1) j; the last ones are the bounding
-    // box's own coordinates
+    // the grid's corners: (i, j) is vertex i + (n_x + 1) j
     let vertex = |i: usize, j: usize| i + (nx + 1) * j;
     let mut vertices: Vec<Point> = Vec::with_capacity((nx + 1) * (ny + 1));
-    for j in 0..=ny {
-        for i in 0..=nx {
-            let x = if i == nx {
-                bb.x[1]
-            } else {
-                x0 + lx * i as f64 / nx as f64
-            };
-            let y = if j == ny {
-                bb.y[1]
-            } else {
-                y0 + ly * j as f64 / ny as f64
-            };
-            vertices.push([x, y]);
-        }
+    for &y in &ys {
+        vertices.extend(xs.iter().map(|&x| [x, y]));
     }
     let cells: Vec<Vec<usize>> = (0..ny)
         .flat_map(|j| {
@@ -131,13 +139,12 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
         .collect();
     // the coarse boundary side of each fine boundary edge (its midpoint's), as its two grid
     // vertices, and the tag of each side
-    let tol = TILE_TOL * lx.max(ly);
     let side_of = |e: usize| -> Option<[usize; 2]> {
         let [a, b] = fine.edge_vertices(e);
         let (p, q) = (fine.vertex(a), fine.vertex(b));
         let m = [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
         let on = |c: f64, at: f64| (c - at).abs() <= tol;
-        let (i, j) = (index(m[0], x0, nx), index(m[1], y0, ny));
+        let (i, j) = (index(m[0], &xs), index(m[1], &ys));
         if on(p[1], bb.y[0]) && on(q[1], bb.y[0]) {
             Some([vertex(i, 0), vertex(i + 1, 0)])
         } else if on(p[1], bb.y[1]) && on(q[1], bb.y[1]) {
@@ -197,6 +204,31 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
     })
 }
 
+/// The n + 1 lines cutting `range` into n cells: lᵢ = r₀ + i (r₁ − r₀)/n, moved to the
+/// nearest of `snap` (fine boundary vertices) when that is within h/4 (h = (r₁ − r₀)/n); the
+/// ends are r₀ and r₁ exactly. Consecutive lines stay at least h/2 apart.
+fn grid_lines(range: [f64; 2], n: usize, mut snap: Vec<f64>) -> Vec<f64> {
+    snap.sort_unstable_by(f64::total_cmp);
+    let h = (range[1] - range[0]) / n as f64;
+    let mut lines = Vec::with_capacity(n + 1);
+    lines.push(range[0]);
+    for i in 1..n {
+        let t = range[0] + (range[1] - range[0]) * i as f64 / n as f64;
+        let at = snap.partition_point(|&x| x < t);
+        let nearest = [at.checked_sub(1), Some(at)]
+            .into_iter()
+            .flatten()
+            .filter_map(|k| snap.get(k).copied())
+            .min_by(|a, b| (a - t).abs().total_cmp(&(b - t).abs()));
+        lines.push(match nearest {
+            Some(x) if (x - t).abs() <= 0.25 * h => x,
+            _ => t,
+        });
+    }
+    lines.push(range[1]);
+    lines
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -215,8 +247,9 @@ mod tests {
 
     #[test]
     fn triangulated_squares_go_to_their_box_in_pairs() {
-        // 24 × 24 squares of (−2, 2)², each cut into two triangles, in 9 × 9 boxes: the box
-        // sides cut through squares, the two triangles of a square stay together
+        // 24 × 24 squares of (−2, 2)², each cut into two triangles, in 9 × 9 boxes of side
+        // 4/9: the lines i h move to the nearest fine grid line (spacing 1/6, within h/4), so
+        // each box is a union of whole squares
         let fine = cartesian_triangles(24, 24, [-2.0, 2.0], [-2.0, 2.0]).unwrap();
         let h = 4.0 / 9.0;
         let cover = box_cover(&fine, h).unwrap();
@@ -224,10 +257,24 @@ mod tests {
         assert_eq!(m.n_cells(), 81);
         let area: f64 = (0..81).map(|c| m.measure(c)).sum();
         assert!((area - 16.0).abs() < 1e-12);
-        assert!((0..81).all(|c| (m.measure(c) - h * h).abs() < 1e-12));
+        for v in 0..m.n_vertices() {
+            let p = m.vertex(v);
+            for r in 0..2 {
+                let sixths = (p[r] + 2.0) * 6.0;
+                assert!((sixths - sixths.round()).abs() < 1e-9, "{p:?}");
+                let boxes = (p[r] + 2.0) / h;
+                assert!(
+                    (boxes - boxes.round()).abs() * h <= 0.25 * h + 1e-12,
+                    "{p:?}"
+                );
+            }
+        }
         for k in 0..fine.n_cells() {
             let c = cover.cell_of[k];
             assert!(inside(key_point(&fine, k), m, c), "cell {k}");
+            for &v in fine.cell_vertices(k) {
+                assert!(inside(fine.vertex(v as usize), m, c), "cell {k}");
+            }
         }
         // the two triangles of a square, on either side of its diagonal: one box
         for e in 0..fine.n_edges() {
@@ -246,7 +293,8 @@ mod tests {
             let [a, b] = m.edge_vertices(ce).map(|v| m.vertex(v));
             let p = fine.edge_midpoint(e);
             let cross = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
-            let t = ((p[0] - a[0]) * (b[0] - a[0]) + (p[1] - a[1]) * (b[1] - a[1])) / (h * h);
+            let len2 = (b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2);
+            let t = ((p[0] - a[0]) * (b[0] - a[0]) + (p[1] - a[1]) * (b[1] - a[1])) / len2;
             assert!(cross.abs() < 1e-12 && (0.0..=1.0).contains(&t), "edge {e}");
         }
         assert_eq!(hit.iter().filter(|&&x| x).count(), m.boundary_edges().len());
@@ -256,6 +304,18 @@ mod tests {
                 .into_iter()
                 .all(|e| cover.boundary_edge_of[e] == NO_EDGE)
         );
+    }
+
+    #[test]
+    fn grid_lines_snap_within_a_quarter_box() {
+        // lines at 0.25, 0.5, 0.75; fine vertices near the first two only
+        let lines = grid_lines([0.0, 1.0], 4, vec![0.9, 0.2, 0.52, 0.0, 1.0, 0.34]);
+        assert_eq!(lines, vec![0.0, 0.2, 0.52, 0.75, 1.0]);
+        // no vertex within h/4 = 1/16: the equal lines
+        let lines = grid_lines([1.0, 3.0], 4, vec![1.2, 2.74]);
+        assert_eq!(lines, vec![1.0, 1.5, 2.0, 2.5, 3.0]);
+        // one box: the ends only
+        assert_eq!(grid_lines([0.0, 2.0], 1, vec![1.0]), vec![0.0, 2.0]);
     }
 
     #[test]
