@@ -584,18 +584,14 @@ fn build(
     let mesh = PolyMesh::from_cells_tagged(vertices, cells, &tagged)?.with_cell_tags(cell_tags)?;
     // fine boundary edge → coarse edge with the same (renumbered) end points
     let mut boundary_edge_of = vec![NO_EDGE; fine.n_edges()];
-    let coarse_b = mesh.boundary_edges();
     for &e in fine.boundary_edges() {
         let [a, b] = fine.edge_vertices(e);
-        let key = [id[a].min(id[b]), id[a].max(id[b])];
-        let pos = coarse_b
-            .binary_search_by(|&ce| mesh.edge_vertices(ce).cmp(&key))
-            .map_err(|_| {
-                MeshError::NonConforming(format!(
-                    "agglomeration lost the boundary edge {e} ({a}, {b})"
-                ))
-            })?;
-        boundary_edge_of[e] = coarse_b[pos];
+        let pos = mesh.boundary_position(id[a], id[b]).ok_or_else(|| {
+            MeshError::NonConforming(format!(
+                "agglomeration lost the boundary edge {e} ({a}, {b})"
+            ))
+        })?;
+        boundary_edge_of[e] = mesh.boundary_edges()[pos];
     }
     Ok(Agglomeration {
         mesh,

@@ -183,18 +183,14 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
         .map(|(s, &t)| (s[0], s[1], t))
         .collect();
     let mesh = PolyMesh::from_cells_tagged(vertices, cells, &tagged)?.with_cell_tags(cell_tags)?;
-    let coarse_b = mesh.boundary_edges();
     let mut boundary_edge_of = vec![NO_EDGE; fine.n_edges()];
     for (e, s) in sides {
-        let key = [s[0].min(s[1]), s[0].max(s[1])];
-        let pos = coarse_b
-            .binary_search_by(|&ce| mesh.edge_vertices(ce).cmp(&key))
-            .map_err(|_| {
-                MeshError::NonConforming(format!(
-                    "box cover: no coarse boundary side {key:?} for the fine edge {e}"
-                ))
-            })?;
-        boundary_edge_of[e] = coarse_b[pos];
+        let pos = mesh.boundary_position(s[0], s[1]).ok_or_else(|| {
+            MeshError::NonConforming(format!(
+                "box cover: no coarse boundary side {s:?} for the fine edge {e}"
+            ))
+        })?;
+        boundary_edge_of[e] = mesh.boundary_edges()[pos];
     }
     Ok(Agglomeration {
         mesh,

@@ -112,6 +112,16 @@ impl PolyMesh {
     pub fn boundary_edges(&self) -> &[usize] {
         &self.boundary_edges
     }
+    /// The position in [`Self::boundary_edges`] of the boundary edge between the vertices `a`
+    /// and `b` (either order), if there is one. A binary search: edges are numbered in
+    /// increasing (smaller vertex, larger vertex) order and the boundary edges are listed in
+    /// increasing edge number, so that list is sorted by vertex pair already.
+    pub(crate) fn boundary_position(&self, a: usize, b: usize) -> Option<usize> {
+        let key = [a.min(b), a.max(b)];
+        self.boundary_edges
+            .binary_search_by(|&e| self.edge_vertices(e).cmp(&key))
+            .ok()
+    }
     /// Boundary tag of edge `e` (0 if none).
     pub fn edge_tag(&self, e: usize) -> i32 {
         if !self.is_boundary_edge(e) {

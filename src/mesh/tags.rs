@@ -18,26 +18,20 @@ impl PolyMesh {
     /// order: a later entry for the same edge overrides an earlier one. An entry that names no
     /// boundary edge is an error ([`MeshError::BadEdge`]) or skipped, as `non_boundary` says.
     ///
-    /// Each entry is found by binary search in [`PolyMesh::boundary_edges`]: edges are numbered
-    /// in increasing (smaller vertex, larger vertex) order and the boundary edges are listed in
-    /// increasing edge number, so that list is sorted by vertex pair already.
+    /// Each entry is found by binary search ([`PolyMesh::boundary_position`]).
     pub(crate) fn set_boundary_tags(
         &mut self,
         tagged_edges: &[(usize, usize, i32)],
         non_boundary: NonBoundaryTag,
     ) -> Result<(), MeshError> {
         for &(a, b, tag) in tagged_edges {
-            let key = [a.min(b), a.max(b)];
-            let found = self
-                .boundary_edges
-                .binary_search_by(|&e| self.edge_vertices(e).cmp(&key));
-            match (found, non_boundary) {
-                (Ok(pos), _) => self.boundary_tags[pos] = tag,
-                (Err(_), NonBoundaryTag::Ignore) => {}
-                (Err(_), NonBoundaryTag::Reject) => {
+            match (self.boundary_position(a, b), non_boundary) {
+                (Some(pos), _) => self.boundary_tags[pos] = tag,
+                (None, NonBoundaryTag::Ignore) => {}
+                (None, NonBoundaryTag::Reject) => {
                     return Err(MeshError::BadEdge {
-                        a: key[0],
-                        b: key[1],
+                        a: a.min(b),
+                        b: a.max(b),
                         msg: format!("tagged {tag} but it is not a boundary edge of the mesh"),
                     });
                 }
