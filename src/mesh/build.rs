@@ -20,7 +20,7 @@ pub(crate) enum Overlap {
 /// [`MeshError::TooManyEntities`] unless the mesh's ids fit in its 32-bit arrays: vertex and cell
 /// ids in the edge arrays (`u32::MAX` marking "no cell"), offsets into the cell arrays (up to the
 /// number of cell sides) and edge ids in `cell_edges` (there are no more edges than cell sides).
-fn check_counts(vertices: usize, cells: usize, sides: usize) -> Result<(), MeshError> {
+pub(super) fn check_counts(vertices: usize, cells: usize, sides: usize) -> Result<(), MeshError> {
     for (what, count) in [
         ("vertices", vertices),
         ("cells", cells),

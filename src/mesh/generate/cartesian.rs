@@ -16,8 +16,10 @@
 
 use super::{Counts, check_cell_count, check_memory};
 use crate::budget::MemoryBudget;
-use crate::budget::try_vec;
+use crate::budget::{try_filled, try_vec};
 use crate::error::{Error, Result};
+use crate::mesh::build::check_counts;
+use crate::mesh::validate::diameter;
 use crate::mesh::{Overlap, Point, PolyMesh};
 
 /// The nx × ny uniform mesh of \[0,1\]² (see the module docs for the numbering), within the
@@ -47,9 +49,7 @@ pub fn cartesian_rect_within(
     let what = format!("a {nx} × {ny} Cartesian mesh");
     check_cell_count(&what, nx.checked_mul(ny))?;
     check_memory(&what, counts(nx, ny), budget)?;
-    grid_mesh(nx, ny, x, y, [1, 4], |[a, b, c, d], cells| {
-        cells.extend([a, b, c, d])
-    })
+    grid_mesh(nx, ny, x, y, Squares::Whole)
 }
 
 /// The nx × ny grid of the rectangle `[x[0], x[1]] × [y[0], y[1]]` with every square cut into
@@ -79,45 +79,220 @@ pub fn cartesian_triangles_within(
     let what = format!("a {nx} × {ny} triangulated Cartesian mesh");
     check_cell_count(&what, nx.checked_mul(ny).and_then(|c| c.checked_mul(2)))?;
     check_memory(&what, triangle_counts(nx, ny), budget)?;
-    grid_mesh(nx, ny, x, y, [2, 3], |[a, b, c, d], cells| {
-        cells.extend([a, b, c]);
-        cells.extend([a, c, d]);
-    })
+    grid_mesh(nx, ny, x, y, Squares::Halved)
+}
+
+/// What each square of the grid becomes: one cell, or two triangles cut by the diagonal from
+/// its lower-left to its upper-right vertex.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Squares {
+    Whole,
+    Halved,
+}
+
+impl Squares {
+    /// Cells per square and vertices per cell.
+    fn shape(self) -> [usize; 2] {
+        match self {
+            Squares::Whole => [1, 4],
+            Squares::Halved => [2, 3],
+        }
+    }
 }
 
 /// The mesh of the nx × ny grid (arguments checked) whose square (i, j), with corners
-/// [v(i,j), v(i+1,j), v(i+1,j+1), v(i,j+1)], gives the cells that `square` appends to the
-/// flat cell list (`shape[0]` cells of `shape[1]` vertices), square after square in row-major
-/// order.
-fn grid_mesh(
-    nx: usize,
-    ny: usize,
-    x: [f64; 2],
-    y: [f64; 2],
-    shape: [usize; 2],
-    square: impl Fn([usize; 4], &mut Vec<usize>),
-) -> Result<PolyMesh> {
+/// [v(i,j), v(i+1,j), v(i+1,j+1), v(i,j+1)], gives the cells of `squares`, square after square
+/// in row-major order.
+///
+/// On a grid whose steps are all within a factor 10³ of each other ([`well_shaped`]) the edges,
+/// the cells on either side of each edge and the edge of every cell side are written down
+/// directly ([`grid_topology`]), in the numbering [`PolyMesh::from_flat_cells`] gives them (by
+/// (smaller vertex, larger vertex), the lower-numbered cell first): the same mesh, bit for bit
+/// (tested), without sorting the cell sides or checking what the construction guarantees.
+/// Other grids, whose thin cells checks 4 and 9 of the validation might refuse, go through
+/// [`PolyMesh::from_flat_cells`] and its errors.
+fn grid_mesh(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2], squares: Squares) -> Result<PolyMesh> {
     let vertices = grid_vertices(nx, ny, x, y)?;
+    let [per_square, per_cell] = squares.shape();
+    let n_cells = per_square * nx * ny;
+    if well_shaped(&vertices, nx, ny) {
+        check_counts(vertices.len(), n_cells, per_cell * n_cells)?;
+        return grid_topology(vertices, nx, ny, squares);
+    }
     let v = |i: usize, j: usize| j * (nx + 1) + i;
-    let n_cells = shape[0] * nx * ny;
-    let mut cell_verts = try_vec(shape[1] * n_cells, "the vertices of the cells")?;
+    let mut cell_verts = try_vec(per_cell * n_cells, "the vertices of the cells")?;
     for j in 0..ny {
         for i in 0..nx {
-            square(
-                [v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)],
-                &mut cell_verts,
-            );
+            let [a, b, c, d] = [v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)];
+            match squares {
+                Squares::Whole => cell_verts.extend([a, b, c, d]),
+                Squares::Halved => cell_verts.extend([a, b, c, a, c, d]),
+            }
         }
     }
-    debug_assert_eq!(cell_verts.len(), shape[1] * n_cells);
+    debug_assert_eq!(cell_verts.len(), per_cell * n_cells);
     let mut cell_ptr = try_vec(n_cells + 1, "the cell offsets")?;
-    cell_ptr.extend((0..=n_cells).map(|k| shape[1] * k));
+    cell_ptr.extend((0..=n_cells).map(|k| per_cell * k));
     Ok(PolyMesh::from_flat_cells(
         vertices,
         cell_ptr,
         cell_verts,
         Overlap::ByConstruction,
     )?)
+}
+
+/// Whether every step of the grid (whose coordinates increase strictly, checked by
+/// [`grid_vertices`]) is finite and at least 10⁻³ times the largest step of either direction.
+/// Its cells then pass every check of [`validate`](crate::mesh::validate) by a wide margin:
+/// distinct vertices (strictly increasing coordinates), all used, counter-clockwise, simple,
+/// convex; |K| ≥ 10⁻⁶ h_K²/4 against the 10⁻¹⁴ h_K² of check 4, and the centroid at least
+/// 10⁻³ h_K/(3√2) from every side against the 10⁻¹² h_K of check 9; a tensor grid tiles its
+/// rectangle (checks 10–12).
+fn well_shaped(vertices: &[Point], nx: usize, ny: usize) -> bool {
+    let xs = vertices[..=nx].iter().map(|p| p[0]);
+    let ys = (0..=ny).map(|j| vertices[j * (nx + 1)][1]);
+    let steps = |c: &mut dyn Iterator<Item = f64>| {
+        let first = c.next().unwrap_or(f64::NAN);
+        let (mut lo, mut hi, mut prev) = (f64::INFINITY, 0.0f64, first);
+        for v in c {
+            let d = v - prev;
+            (lo, hi, prev) = (lo.min(d), hi.max(d), v);
+        }
+        (first.is_finite() && prev.is_finite()).then_some((lo, hi))
+    };
+    match (steps(&mut { xs }), steps(&mut { ys })) {
+        (Some((lx, hx)), Some((ly, hy))) => {
+            let (lo, hi) = (lx.min(ly), hx.max(hy));
+            lo.is_finite() && hi.is_finite() && lo >= 1e-3 * hi
+        }
+        _ => false,
+    }
+}
+
+/// The mesh of a [`well_shaped`] grid with its connectivity written down (see [`grid_mesh`]).
+///
+/// Edges are numbered as [`build_edges`](crate::mesh::edges) numbers them: by smaller vertex,
+/// then larger. Vertex v = v(i,j) is the smaller end of its horizontal edge H(i,j) to v + 1
+/// (i < nx), its vertical edge V(i,j) to v + nx + 1 (j < ny) and, halved, its diagonal D(i,j)
+/// to v + nx + 2 (both), in that order; so row j < ny holds `per_row` = 2nx + 1 (3nx + 1
+/// halved) edges, the top row nx, and
+///
+/// ```text
+/// H(i,j) = j·per_row + k·i  (j < ny),   H(i,ny) = ny·per_row + i,
+/// V(i,j) = j·per_row + k·i + [i < nx],  D(i,j) = j·per_row + 3i + 2,
+/// ```
+///
+/// with k = 2 (3 halved) edges per vertex before the last column. The cells of square
+/// s = j·nx + i: whole, cell s with sides H(i,j), V(i+1,j), H(i,j+1), V(i,j); halved, triangle
+/// 2s = [v(i,j), v(i+1,j), v(i+1,j+1)] with sides H(i,j), V(i+1,j), D(i,j) and triangle
+/// 2s + 1 = [v(i,j), v(i+1,j+1), v(i,j+1)] with sides D(i,j), H(i,j+1), V(i,j). An edge lists
+/// its lower-numbered cell first: below H (the top side of the square below), left of V.
+fn grid_topology(vertices: Vec<Point>, nx: usize, ny: usize, squares: Squares) -> Result<PolyMesh> {
+    let halved = squares == Squares::Halved;
+    let [per_square, per_cell] = squares.shape();
+    let n_cells = per_square * nx * ny;
+    let k = if halved { 3 } else { 2 };
+    let per_row = k * nx + 1;
+    let ne = per_row * ny + nx;
+    let h_edge = |i: usize, j: usize| {
+        if j < ny {
+            j * per_row + k * i
+        } else {
+            ny * per_row + i
+        }
+    };
+    let v_edge = |i: usize, j: usize| j * per_row + k * i + usize::from(i < nx);
+    let d_edge = |i: usize, j: usize| j * per_row + 3 * i + 2;
+    let vid = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+    let cell = |i: usize, j: usize| per_square * (j * nx + i);
+    let none = u32::MAX;
+
+    // the cells: vertices and sides, square after square
+    let mut cell_verts: Vec<u32> = try_vec(per_cell * n_cells, "the vertices of the cells")?;
+    let mut cell_edges: Vec<u32> = try_vec(per_cell * n_cells, "the edges of the cell sides")?;
+    for j in 0..ny {
+        for i in 0..nx {
+            let [a, b, c, d] = [vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)];
+            let [bottom, right, top, left] = [
+                h_edge(i, j),
+                v_edge(i + 1, j),
+                h_edge(i, j + 1),
+                v_edge(i, j),
+            ]
+            .map(|e| e as u32);
+            if halved {
+                let diagonal = d_edge(i, j) as u32;
+                cell_verts.extend([a, b, c, a, c, d]);
+                cell_edges.extend([bottom, right, diagonal, diagonal, top, left]);
+            } else {
+                cell_verts.extend([a, b, c, d]);
+                cell_edges.extend([bottom, right, top, left]);
+            }
+        }
+    }
+    let mut cell_ptr: Vec<u32> = try_vec(n_cells + 1, "the 32-bit offsets of the cells")?;
+    cell_ptr.extend((0..=n_cells).map(|c| (per_cell * c) as u32));
+
+    // the edges in vertex order, with their cells (lower-numbered first)
+    let mut edges: Vec<[u32; 2]> = try_vec(ne, "the end points of the edges")?;
+    let mut edge_cells: Vec<[u32; 2]> = try_vec(ne, "the cells of the edges")?;
+    let n_boundary = 2 * (nx + ny);
+    let mut boundary_edges: Vec<usize> = try_vec(n_boundary, "the boundary edges")?;
+    let mut push = |ends: [u32; 2], cells: [Option<usize>; 2]| {
+        if cells[0].is_none() || cells[1].is_none() {
+            boundary_edges.push(edges.len());
+        }
+        let mut on = cells.into_iter().flatten().map(|c| c as u32);
+        edge_cells.push([on.next().unwrap_or(none), on.next().unwrap_or(none)]);
+        edges.push(ends);
+    };
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let v = vid(i, j);
+            if i < nx {
+                // H(i,j): the square below (its top side), then the square above
+                let below = (j > 0).then(|| cell(i, j - 1) + usize::from(halved));
+                let above = (j < ny).then(|| cell(i, j));
+                push([v, vid(i + 1, j)], [below, above]);
+            }
+            if j < ny {
+                // V(i,j): the square on the left (its right side), then the one on the right
+                let left = (i > 0).then(|| cell(i - 1, j));
+                let right = (i < nx).then(|| cell(i, j) + usize::from(halved));
+                push([v, vid(i, j + 1)], [left, right]);
+            }
+            if halved && i < nx && j < ny {
+                push(
+                    [v, vid(i + 1, j + 1)],
+                    [Some(cell(i, j)), Some(cell(i, j) + 1)],
+                );
+            }
+        }
+    }
+    debug_assert_eq!((edges.len(), boundary_edges.len()), (ne, n_boundary));
+
+    // h = max_K h_K, each h_K computed as the validation computes it (the same bits)
+    let mut h: f64 = 0.0;
+    let mut pts: Vec<Point> = Vec::with_capacity(per_cell);
+    for c in cell_verts.chunks_exact(per_cell) {
+        pts.clear();
+        pts.extend(c.iter().map(|&v| vertices[v as usize]));
+        h = h.max(diameter(&pts));
+    }
+    let boundary_tags = try_filled(n_boundary, 0i32, "the boundary tags")?;
+    Ok(PolyMesh {
+        vertices,
+        cell_ptr,
+        cell_verts,
+        cell_edges,
+        edges,
+        edge_cells,
+        boundary_tags,
+        cell_tags: Vec::new(),
+        reversed: Vec::new(),
+        boundary_edges,
+        h,
+    })
 }
 
 /// Cells, cell sides, vertices and edges of the nx × ny mesh.
@@ -205,8 +380,9 @@ mod tests {
 
     /// Runs this test again in a child under `ulimit -v` of 1 GiB, where a 5000 × 5000 mesh
     /// passes the estimate against a budget of 1 TiB (the caller's choice) but its arrays
-    /// cannot be mapped: the vertices (400 MB) fit, the cells' vertex list (800 MB) does not,
-    /// and its allocation fails as a typed out-of-memory error naming it, not an abort.
+    /// cannot be mapped: the vertices (400 MB) and the cells' 32-bit vertex list (400 MB) fit,
+    /// the edges of the cell sides (400 MB more) do not, and their allocation fails as a typed
+    /// out-of-memory error naming them, not an abort.
     #[cfg(target_os = "linux")]
     #[test]
     fn an_allocation_the_address_space_refuses_is_a_typed_error() {
@@ -217,7 +393,7 @@ mod tests {
             assert!(e.is_out_of_memory(), "{e}");
             assert!(
                 e.to_string()
-                    .starts_with("the vertices of the cells would need about 762.9 MiB"),
+                    .starts_with("the edges of the cell sides would need about 381.5 MiB"),
                 "{e}"
             );
             return;
@@ -307,15 +483,27 @@ mod tests {
         }
     }
 
-    /// The generators skip the overlap sweep (`Overlap::ByConstruction`): the same
-    /// cells pass the full validation, with the same mesh.
+    /// The generators write the connectivity of well-shaped grids down (`grid_topology`) and
+    /// skip the overlap sweep of the others (`Overlap::ByConstruction`): either way, the same
+    /// cells pass the full validation with the same mesh, every array and h bit for bit.
     #[test]
     fn tensor_grids_pass_the_full_validation() {
-        for (nx, ny, x, y) in [
-            (1, 1, [0.0, 1.0], [0.0, 1.0]),
-            (7, 3, [-2.0, 2.0], [0.1, 0.3]),
-            (30, 45, [0.0, 1.0], [0.0, 1.0]),
+        for (nx, ny, x, y, written) in [
+            (1, 1, [0.0, 1.0], [0.0, 1.0], true),
+            (1, 4, [0.0, 1.0], [0.0, 1.0], true),
+            (5, 1, [-1.0, 3.0], [2.0, 2.5], true),
+            (7, 3, [-2.0, 2.0], [0.1, 0.3], true),
+            (30, 45, [0.0, 1.0], [0.0, 1.0], true),
+            (64, 64, [-2.0, 2.0], [-2.0, 2.0], true),
+            // steps 10⁻⁴ apart: through `from_flat_cells`
+            (3, 2, [0.0, 1.0], [0.0, 1e-4], false),
+            (2, 1000, [0.0, 1.0], [0.0, 0.1], false),
         ] {
+            assert_eq!(
+                well_shaped(&grid_vertices(nx, ny, x, y).unwrap(), nx, ny),
+                written,
+                "{nx} × {ny} on {x:?} × {y:?}"
+            );
             for m in [
                 cartesian_rect(nx, ny, x, y).unwrap(),
                 cartesian_triangles(nx, ny, x, y).unwrap(),
@@ -325,15 +513,36 @@ mod tests {
                     .map(|k| m.cell_vertices(k).iter().map(|&i| i as usize).collect())
                     .collect();
                 let full = PolyMesh::from_cells(v, cells).unwrap();
-                assert_eq!(full.n_edges(), m.n_edges());
-                for e in 0..m.n_edges() {
-                    assert_eq!(full.edge_cells(e), m.edge_cells(e));
-                }
-                for k in 0..m.n_cells() {
-                    assert_eq!(full.cell_edges(k), m.cell_edges(k));
-                    assert_eq!(full.centroid(k), m.centroid(k));
-                }
+                let bits = |p: &[Point]| p.iter().map(|q| q.map(f64::to_bits)).collect::<Vec<_>>();
+                assert_eq!(bits(&full.vertices), bits(&m.vertices));
+                assert_eq!(full.cell_ptr, m.cell_ptr);
+                assert_eq!(full.cell_verts, m.cell_verts);
+                assert_eq!(full.cell_edges, m.cell_edges);
+                assert_eq!(full.edges, m.edges);
+                assert_eq!(full.edge_cells, m.edge_cells);
+                assert_eq!(full.boundary_edges, m.boundary_edges);
+                assert_eq!(full.boundary_tags, m.boundary_tags);
+                assert_eq!(full.cell_tags, m.cell_tags);
+                assert_eq!(full.reversed, m.reversed);
+                assert_eq!(full.h.to_bits(), m.h.to_bits(), "{nx} × {ny}");
             }
         }
+    }
+
+    /// Grids with a step far below the others, or non-finite, are not written down directly.
+    #[test]
+    fn thin_or_non_finite_grids_are_not_well_shaped() {
+        let ok = grid_vertices(4, 4, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        assert!(well_shaped(&ok, 4, 4));
+        // 999 × 1 and 1001 × 1 cells of a unit square: steps on either side of 10⁻³
+        let edge = grid_vertices(999, 1, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        assert!(well_shaped(&edge, 999, 1));
+        let thin = grid_vertices(1001, 1, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        assert!(!well_shaped(&thin, 1001, 1));
+        let mut bad = ok.clone();
+        bad[4][0] = f64::INFINITY;
+        assert!(!well_shaped(&bad, 4, 4));
+        bad[4][0] = f64::NAN;
+        assert!(!well_shaped(&bad, 4, 4));
     }
 }
