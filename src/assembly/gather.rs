@@ -4,6 +4,7 @@
 //! of scattered, so that the sums do not depend on the number of threads.
 
 use super::condense::{self, condense};
+use super::symbolic::{Ragged, gather_sources};
 use super::{DiscreteSystem, SolveState};
 use crate::budget::{try_filled, try_resize};
 use crate::mesh::SolveMesh;
@@ -146,13 +147,29 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                 self.masked_rhs(a, &fixed)?,
             ));
         }
+        // the gather sources, built by the first gather if the symbolic system has none
+        if self.sym.maps.src.is_none() && state.sources.is_none() {
+            let p = self.sym.kept_pattern("the gather sources")?;
+            state.sources = Some(gather_sources(
+                &self.sym.dof_map,
+                &self.sym.maps.block_ptr,
+                p.col_ptr(),
+                p.row_idx(),
+            )?);
+        }
+        let SolveState {
+            scratch: (sbuf, gbuf),
+            sources,
+            ..
+        } = state;
+        let src = (self.sym.maps.src.as_ref().or(sources.as_ref()))
+            .ok_or_else(|| crate::Error::Internal("the gather sources were not built".into()))?;
         // buffers kept between calls (they are entirely rewritten where read)
-        let (sbuf, gbuf) = &mut state.scratch;
         let (blocks, local) = (self.sym.maps.block_ptr.total(), self.sym.dof_map.dofs.len());
         try_resize(sbuf, blocks, 0.0, "the condensed blocks")?;
         try_resize(gbuf, local, 0.0, "the condensed loads")?;
         self.condense_cells(&fixed, sbuf, gbuf)?;
-        let values = self.gather_matrix(&fixed, sbuf)?;
+        let values = self.gather_matrix(&fixed, src, sbuf)?;
         let dof_ptr = &self.sym.dof_map.dof_ptr;
         let rhs = self.gather_rhs(&fixed, |k, i| gbuf[dof_ptr.at(k) + i])?;
         Ok((values, rhs))
@@ -230,10 +247,14 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// order (the order of a sequential scatter, whatever the number of
     /// threads); zero in the rows and columns of fixed unknowns, whose diagonal is 1.
     /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if the values cannot be allocated.
-    fn gather_matrix(&self, fixed: &Pinned, blocks: &[f64]) -> crate::Result<Vec<f64>> {
+    fn gather_matrix(
+        &self,
+        fixed: &Pinned,
+        src: &Ragged<u32>,
+        blocks: &[f64],
+    ) -> crate::Result<Vec<f64>> {
         let pattern = self.sym.kept_pattern("the gathered matrix")?;
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-        let src = &self.sym.maps.src;
         let is_fixed: Vec<bool> = (0..self.n_skel)
             .into_par_iter()
             .with_min_len(4096)

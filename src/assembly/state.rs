@@ -10,6 +10,7 @@
 
 use super::DiscreteSystem;
 use super::iterative::KeptHierarchy;
+use super::symbolic::Ragged;
 use super::two_point::CellSystemAll;
 use crate::linalg::{AmgWork, CholeskyWork, SpdPattern};
 use crate::mesh::{PolyMesh, SolveMesh};
@@ -26,6 +27,10 @@ pub struct SolveState {
     pub(super) system: Option<u64>,
     /// Buffers of the condensation (blocks and loads), rewritten by every assembly.
     pub(super) scratch: (Vec<f64>, Vec<f64>),
+    /// The gather sources of a system whose symbolic part has none (solved iteratively, see
+    /// [`super::symbolic::ScatterMaps::src`]), built by the first solve that gathers the
+    /// skeleton matrix.
+    pub(super) sources: Option<Ragged<u32>>,
     /// The last skeleton solution, the initial guess of the next iterative solve.
     pub(super) last_solution: Vec<f64>,
     /// The cell values of the last solve, if it solved the cell system.
@@ -209,6 +214,51 @@ mod tests {
         // and `release` frees the hierarchy but keeps the guess
         state.release();
         assert!(state.kept.is_none() && !state.last_solution.is_empty());
+    }
+
+    /// A system solved iteratively has no gather sources until a solve gathers the skeleton
+    /// matrix: HMM on squares solves on the cells and never builds them; on triangles (no
+    /// cell system) the first assembly builds them into the state, and the condensed matrix
+    /// and right-hand side are those of the system built for direct solves (sources built with
+    /// the symbolic part), bit for bit.
+    #[test]
+    fn the_gather_sources_are_built_by_the_first_gather() {
+        let p = paper_test3(-10.0);
+        let squares = cartesian(16, 16).unwrap();
+        let hmm = Hmm::new(&squares);
+        let sys = DiscreteSystem::new(&hmm, &p, iterative()).unwrap();
+        assert!(sys.sym.maps.src.is_none());
+        let mut state = SolveState::default();
+        sys.solve(&mut state, &FixedValues::free(sys.n_unknowns()).unwrap())
+            .unwrap();
+        assert!(state.cell_system_size().is_some() && state.sources.is_none());
+
+        let tri = cartesian_triangles(12, 12, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        let hmm = Hmm::new(&tri);
+        let it = DiscreteSystem::new(&hmm, &p, iterative()).unwrap();
+        let direct = SystemOptions {
+            linear: LinearSolver::Direct,
+            ..Default::default()
+        };
+        let di = DiscreteSystem::new(&hmm, &p, direct).unwrap();
+        assert!(it.sym.maps.src.is_none() && di.sym.maps.src.is_some());
+        let f = fixed(it.n_unknowns(), it.n_unknowns() / 3);
+        let mut state = SolveState::default();
+        let (a, b) = it.assemble_condensed(&mut state, &f).unwrap();
+        assert!(state.sources.is_some());
+        let mut other = SolveState::default();
+        let (c, d) = di.assemble_condensed(&mut other, &f).unwrap();
+        assert!(other.sources.is_none());
+        assert_eq!((bits(&a), bits(&b)), (bits(&c), bits(&d)));
+        // the solves through the state agree with the direct ones
+        let (u, _) = it.solve(&mut state, &f).unwrap();
+        let (v, _) = di.solve(&mut other, &f).unwrap();
+        let gap = u
+            .iter()
+            .zip(&v)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        assert!(gap < 1e-8, "{gap:e}");
     }
 
     /// The cell system is reported by the state that built it.

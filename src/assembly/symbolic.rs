@@ -10,7 +10,12 @@
 //!   cell order; built from where each local entry lands, which is not kept), and the cells
 //!   where each unknown appears (`inc`, ascending). They let the values be
 //!   *gathered* entry by entry in parallel, with sums in the order of a sequential scatter, so
-//!   results do not depend on the number of threads.
+//!   results do not depend on the number of threads. `src` is built here beside the symbolic
+//!   factorisation (direct solves, which gather every matrix); a system solved iteratively
+//!   builds it when a solve first gathers the skeleton matrix (`gather_sources`, kept in
+//!   the [`SolveState`](super::SolveState)), which the solves through the cell system of
+//!   [`super::two_point`] never do (HMM on rectangles: 0.25 s of the setup at 10⁶ cells,
+//!   `replication/measurements/solver.md`).
 //!
 //! Dirichlet and active unknowns keep their rows and columns in the pattern (with a unit
 //! diagonal and zeros elsewhere), so neither the boundary partition nor the active set
@@ -193,9 +198,10 @@ pub struct ScatterMaps {
     pub block_ptr: Offsets,
     /// Per condensed entry, the indices in that buffer of the local entries landing on it
     /// (each local entry (a, b), a ≥ b, lands on the entry (max, min) of its two unknowns).
-    /// Empty (no lists) when no cell has interior unknowns: the global matrix is then
-    /// assembled once through `inc` ([`super::assembled`]).
-    pub src: Ragged<u32>,
+    /// Built with the symbolic factorisation (direct solves); `None` for a system solved
+    /// iteratively (the first gather builds it, `gather_sources`) and when no cell has
+    /// interior unknowns (the global matrix is then assembled once, [`super::assembled`]).
+    pub src: Option<Ragged<u32>>,
     /// Per unknown, the cells where it appears, ascending (empty, no lists, when no cell has
     /// interior unknowns).
     pub inc: Ragged<u32>,
@@ -279,12 +285,14 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
                     )
                     .map(|p| (p, t.elapsed().as_secs_f64()))
                 },
-                || scatter_maps(&dof_map, inc, &col_ptr, &row_idx, !no_interior),
+                || scatter_maps(&dof_map, inc, &col_ptr, &row_idx, !no_interior, true),
             )
         } else {
             match SpdPattern::without_factorisation(n_skel, col_ptr, row_idx) {
                 Ok(p) => {
-                    let maps = scatter_maps(&dof_map, inc, p.col_ptr(), p.row_idx(), !no_interior);
+                    // the gather sources only if a solve gathers (see the module docs)
+                    let maps =
+                        scatter_maps(&dof_map, inc, p.col_ptr(), p.row_idx(), !no_interior, false);
                     (Ok((p, 0.0)), maps)
                 }
                 Err(e) => (Err(e), Err(crate::Error::Linear("no pattern".into()))),
@@ -500,41 +508,64 @@ fn counting_sort(
     Ragged::new(ptr, items)
 }
 
-/// The scatter and gather maps (see the module docs); without `gather`, only the offsets of
-/// the blocks.
+/// The scatter and gather maps (see the module docs): without `interior` unknowns only the
+/// offsets of the blocks (the global matrix is assembled on the pattern: no gather, no
+/// incidences); with them the incidences, and the gather sources if `gather` now.
 fn scatter_maps(
     dm: &DofMap,
     inc: Ragged<u32>,
     col_ptr: &[usize],
     row_idx: &[usize],
+    interior: bool,
     gather: bool,
 ) -> crate::Result<ScatterMaps> {
     let nc = dm.n_cells();
-    let find = |r: usize, c: usize| -> u32 {
-        let s = &row_idx[col_ptr[c]..col_ptr[c + 1]];
-        (col_ptr[c] + s.binary_search(&r).expect("entry is in the pattern")) as u32
-    };
-    let pos_ptr =
+    let block_ptr =
         Offsets::from_lengths((0..nc).map(|k| super::condense::packed_len(dm.skeleton(k).len())))?;
     if dm.dofs.len() >= u32::MAX as usize {
         return Err(crate::Error::Linear(
             "more than 2^32 local skeleton entries".into(),
         ));
     }
-    if !gather {
-        // the global matrix is assembled on the pattern alone: no gather, no incidences
+    if !interior {
         drop(inc);
         return Ok(ScatterMaps {
-            block_ptr: pos_ptr,
-            src: Ragged::new(vec![0], Vec::new())?,
+            block_ptr,
+            src: None,
             inc: Ragged::new(vec![0], Vec::new())?,
         });
     }
+    let src = if gather {
+        Some(gather_sources(dm, &block_ptr, col_ptr, row_idx)?)
+    } else {
+        None
+    };
+    Ok(ScatterMaps {
+        block_ptr,
+        src,
+        inc,
+    })
+}
+
+/// [`ScatterMaps::src`]: per entry of the lower pattern (`col_ptr`, `row_idx`) of the condensed
+/// matrix, the local entries landing on it, as positions in a buffer of the cells' packed
+/// blocks laid out by `block_ptr`, in cell order.
+pub(super) fn gather_sources(
+    dm: &DofMap,
+    block_ptr: &Offsets,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> crate::Result<Ragged<u32>> {
+    let nc = dm.n_cells();
+    let find = |r: usize, c: usize| -> u32 {
+        let s = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+        (col_ptr[c] + s.binary_search(&r).expect("entry is in the pattern")) as u32
+    };
     // the packed lower triangle of each block (column b, rows a ≥ b, local indices): the
     // entry lands on the condensed entry (max, min) of its two unknowns
-    let mut pos: Vec<u32> = try_vec(pos_ptr.total(), "the scatter positions")?;
+    let mut pos: Vec<u32> = try_vec(block_ptr.total(), "the scatter positions")?;
     pos.par_extend(cell_chunks(nc).into_par_iter().flat_map_iter(|(c0, c1)| {
-        let mut out = Vec::with_capacity(pos_ptr.at(c1) - pos_ptr.at(c0));
+        let mut out = Vec::with_capacity(block_ptr.at(c1) - block_ptr.at(c0));
         for k in c0..c1 {
             let sk = dm.skeleton(k);
             for (b, &j) in sk.iter().enumerate() {
@@ -547,12 +578,7 @@ fn scatter_maps(
         out
     }));
     // condensed entry -> the local entries landing on it, in cell order
-    let src = counting_sort(row_idx.len(), pos.len(), |i| pos[i] as usize)?;
-    Ok(ScatterMaps {
-        block_ptr: pos_ptr,
-        src,
-        inc,
-    })
+    counting_sort(row_idx.len(), pos.len(), |i| pos[i] as usize)
 }
 
 #[cfg(test)]
