@@ -14,7 +14,7 @@
 //!   factorisation (direct solves, which gather every matrix); a system solved iteratively
 //!   builds it when a solve first gathers the skeleton matrix (`gather_sources`, kept in
 //!   the [`SolveState`](super::SolveState)), which the solves through the cell system of
-//!   [`super::two_point`] never do (HMM on rectangles: 0.25 s of the setup at 10⁶ cells,
+//!   [`super::two_point`] never do (HMM on rectangles; the time and memory this saves are in
 //!   `replication/measurements/solver.md`).
 //!
 //! Dirichlet and active unknowns keep their rows and columns in the pattern (with a unit

@@ -146,7 +146,7 @@ fn grid_mesh(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2], squares: Squares) -
 /// Its cells then pass every check of [`validate`](crate::mesh::validate) by a wide margin:
 /// distinct vertices (strictly increasing coordinates), all used, counter-clockwise, simple,
 /// convex; |K| ≥ 10⁻⁶ h_K²/4 against the 10⁻¹⁴ h_K² of check 4, and the centroid at least
-/// 10⁻³ h_K/(3√2) from every side against the 10⁻¹² h_K of check 9; a tensor grid tiles its
+/// 10⁻⁶ h_K/6 from every side against the 10⁻¹² h_K of check 9; a tensor grid tiles its
 /// rectangle (checks 10–12).
 fn well_shaped(vertices: &[Point], nx: usize, ny: usize) -> bool {
     let xs = vertices[..=nx].iter().map(|p| p[0]);
