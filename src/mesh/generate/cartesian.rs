@@ -98,6 +98,15 @@ impl Squares {
             Squares::Halved => [2, 3],
         }
     }
+
+    /// Appends to `out` the vertex lists of the cells of the square with corners
+    /// [a, b, c, d] (counter-clockwise from the lower left).
+    fn cells<T: Copy>(self, [a, b, c, d]: [T; 4], out: &mut Vec<T>) {
+        match self {
+            Squares::Whole => out.extend([a, b, c, d]),
+            Squares::Halved => out.extend([a, b, c, a, c, d]),
+        }
+    }
 }
 
 /// The mesh of the nx × ny grid (arguments checked) whose square (i, j), with corners
@@ -123,11 +132,8 @@ fn grid_mesh(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2], squares: Squares) -
     let mut cell_verts = try_vec(per_cell * n_cells, "the vertices of the cells")?;
     for j in 0..ny {
         for i in 0..nx {
-            let [a, b, c, d] = [v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)];
-            match squares {
-                Squares::Whole => cell_verts.extend([a, b, c, d]),
-                Squares::Halved => cell_verts.extend([a, b, c, a, c, d]),
-            }
+            let corners = [v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)];
+            squares.cells(corners, &mut cell_verts);
         }
     }
     debug_assert_eq!(cell_verts.len(), per_cell * n_cells);
@@ -149,24 +155,14 @@ fn grid_mesh(nx: usize, ny: usize, x: [f64; 2], y: [f64; 2], squares: Squares) -
 /// 10⁻⁶ h_K/6 from every side against the 10⁻¹² h_K of check 9; a tensor grid tiles its
 /// rectangle (checks 10–12).
 fn well_shaped(vertices: &[Point], nx: usize, ny: usize) -> bool {
-    let xs = vertices[..=nx].iter().map(|p| p[0]);
-    let ys = (0..=ny).map(|j| vertices[j * (nx + 1)][1]);
-    let steps = |c: &mut dyn Iterator<Item = f64>| {
-        let first = c.next().unwrap_or(f64::NAN);
-        let (mut lo, mut hi, mut prev) = (f64::INFINITY, 0.0f64, first);
-        for v in c {
-            let d = v - prev;
-            (lo, hi, prev) = (lo.min(d), hi.max(d), v);
-        }
-        (first.is_finite() && prev.is_finite()).then_some((lo, hi))
-    };
-    match (steps(&mut { xs }), steps(&mut { ys })) {
-        (Some((lx, hx)), Some((ly, hy))) => {
-            let (lo, hi) = (lx.min(ly), hx.max(hy));
-            lo.is_finite() && hi.is_finite() && lo >= 1e-3 * hi
-        }
-        _ => false,
-    }
+    let xs: Vec<f64> = vertices[..=nx].iter().map(|p| p[0]).collect();
+    let ys: Vec<f64> = (0..=ny).map(|j| vertices[j * (nx + 1)][1]).collect();
+    let (lo, hi) = (xs.windows(2).chain(ys.windows(2)))
+        .map(|w| w[1] - w[0])
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), d| {
+            (lo.min(d), hi.max(d))
+        });
+    xs.iter().chain(&ys).all(|c| c.is_finite()) && hi.is_finite() && lo >= 1e-3 * hi
 }
 
 /// The mesh of a [`well_shaped`] grid with its connectivity written down (see [`grid_mesh`]).
@@ -212,7 +208,8 @@ fn grid_topology(vertices: Vec<Point>, nx: usize, ny: usize, squares: Squares) -
     let mut cell_edges: Vec<u32> = try_vec(per_cell * n_cells, "the edges of the cell sides")?;
     for j in 0..ny {
         for i in 0..nx {
-            let [a, b, c, d] = [vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)];
+            let corners = [vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)];
+            squares.cells(corners, &mut cell_verts);
             let [bottom, right, top, left] = [
                 h_edge(i, j),
                 v_edge(i + 1, j),
@@ -220,12 +217,12 @@ fn grid_topology(vertices: Vec<Point>, nx: usize, ny: usize, squares: Squares) -
                 v_edge(i, j),
             ]
             .map(|e| e as u32);
+            // the sides of the cells, in the order of their vertices (side m joins vertices m
+            // and m + 1)
             if halved {
                 let diagonal = d_edge(i, j) as u32;
-                cell_verts.extend([a, b, c, a, c, d]);
                 cell_edges.extend([bottom, right, diagonal, diagonal, top, left]);
             } else {
-                cell_verts.extend([a, b, c, d]);
                 cell_edges.extend([bottom, right, top, left]);
             }
         }
