@@ -136,8 +136,9 @@ bench-amg:
 ##        gradvi at equal unknowns and equal cores: 1 and N (the machine's cores), PETSc on 1
 ##        process and under mpiexec -n N (memory summed over the ranks), gradvi on 1 and N rayon
 ##        threads; every case also without the obstacle (its linear variant, for the cost ratio
-##        R), so four runs per case; grids up to GRADVI_BENCH_EX9_MAX_GRID (default 4097: the
-##        4097² grid, PETSc and gradvi P1 only, where 21 GiB are available), and
+##        R), so four runs per case; grids from GRADVI_BENCH_EX9_MIN_GRID (default 0) up to
+##        GRADVI_BENCH_EX9_MAX_GRID (default 4097: the 4097² grid, PETSc and gradvi P1 only,
+##        where 21 GiB are available; the rows of the grids not run are kept), and
 ##        the L-shape/disk/hole family (meshed by gmsh: reference-deps installs it);
 ##        GRADVI_BENCH_PEER_REPEAT=N runs every case N times, interleaved, keeping the median
 ##        (about N times as long); the same domains meshed again with another gmsh seed at
@@ -152,9 +153,12 @@ bench-peers: build reference-deps
 ##        benches/dolfinx/ex9_3d.py) on the same Kuhn tetrahedra of (-2,2)^3, n^3 cubes: gradvi
 ##        P1 (iterative) on 1 and N rayon threads, dolfinx SNES vinewtonrsls with CG + GAMG and
 ##        CG + hypre on 1 process and under mpiexec -n N (memory summed over the ranks); every
-##        case also without the bounds (the cost ratio R); n up to GRADVI_BENCH_3D_MAX_N (default
-##        64: 275k unknowns, a few minutes; 200 adds n = 100 and 200, about 1M and 8M unknowns)
-##        -> replication/results/bench_peers3d.csv, BENCHMARKS.md
+##        case also without the bounds (the cost ratio R); n from GRADVI_BENCH_3D_MIN_N (default
+##        0) up to GRADVI_BENCH_3D_MAX_N (default 64: 275k unknowns, a few minutes; 200 adds
+##        n = 100 and 200, about 1M and 8M unknowns; the rows of the sizes not run are kept;
+##        GRADVI_BENCH_3D_DOLFINX=gamg runs that dolfinx configuration only); a
+##        dolfinx case runs only if 1.05x its peak, extrapolated from its rows at smaller sizes,
+##        fits in the memory available -> replication/results/bench_peers3d.csv, BENCHMARKS.md
 bench-peers3d: build reference-deps
 	$(DEV) bench --peers3d
 

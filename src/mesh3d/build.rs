@@ -25,14 +25,16 @@ use rayon::prelude::*;
 /// (sides), 4 (offset), 8 (cells), 4 (boundary tag), 4 (boundary list); face areas, centroids
 /// and normals are not stored.
 /// Per loop entry: 4 (stored loop), 4 (the pieces in which the loops are gathered in parallel,
-/// and the per-thread scratch of face matching), and 16 for the directed boundary edges and 24
-/// for the corners of the boundary surface checks (counting every loop entry as a boundary
-/// one, an upper bound).
+/// and the per-thread scratch of face matching). The check of the boundary surface, which
+/// needs memory per *boundary* loop entry, is counted once the boundary faces are known
+/// ([`boundary_surface_bytes`]; it used to be counted here for every loop entry, 48 bytes per
+/// entry instead of 8, which made 200³ cubes of Kuhn tetrahedra — 48M cells — ask for
+/// 37.8 GiB).
 pub fn mesh3_bytes(cells: u64, sides: u64, side_vertices: u64, vertices: u64) -> u64 {
     let per_vertex = 24 + 4 + 1;
     let per_cell = 4 + 8 + 24 + 8 + 4 + 16;
     let per_side = (4 + 4 + 1 + 4 + 4 + 1 + 4) + (8 + 4 + 8 + 4 + 4);
-    let per_loop_entry = 4 + 4 + 16 + 24;
+    let per_loop_entry = 4 + 4;
     cells
         .saturating_mul(per_cell)
         .saturating_add(sides.saturating_mul(per_side))
@@ -40,11 +42,23 @@ pub fn mesh3_bytes(cells: u64, sides: u64, side_vertices: u64, vertices: u64) ->
         .saturating_add(vertices.saturating_mul(per_vertex))
 }
 
+/// Memory, in bytes, of the check of the boundary surface ([`PolyMesh3::from_polyhedra`]'s
+/// check 11) on `entries` boundary loop entries and `vertices` vertices: per entry 4 (its
+/// vertex), 4 (the next corner of its loop), 12 (its directed edge), 4 (the next corner around
+/// its vertex), 1 (seen), with the sort's scratch bounded by another 12, hence 40 rounded
+/// up; per vertex 4 (its count of fans).
+pub fn boundary_surface_bytes(entries: u64, vertices: u64) -> u64 {
+    entries
+        .saturating_mul(40)
+        .saturating_add(vertices.saturating_mul(4))
+}
+
 impl PolyMesh3 {
     /// Builds and validates the mesh described by `p` (see [`crate::mesh3d`] for the geometry
     /// and [`validate`](super::validate) for the checks, each a typed error naming the cell,
     /// face, edge or vertex at fault). The memory needed ([`mesh3_bytes`]) is compared with
-    /// `budget` before anything large is allocated.
+    /// `budget` before anything large is allocated, and again, with the check of the boundary
+    /// surface added ([`boundary_surface_bytes`]), once the boundary faces are known.
     pub fn from_polyhedra(mut p: Polyhedra, budget: MemoryBudget) -> Result<PolyMesh3, MeshError> {
         check_offsets(&p)?;
         check_cells(&p)?;
@@ -80,6 +94,21 @@ impl PolyMesh3 {
         let (diameters, star) = m.compute_cell_geometry()?;
         m.check_shapes(&diameters, &star)?;
         drop((diameters, star));
+        let entries: usize = (m.boundary_faces.iter())
+            .map(|&f| m.face_vertices(f as usize).len())
+            .sum();
+        let surface = bytes.saturating_add(boundary_surface_bytes(
+            entries as u64,
+            m.n_vertices() as u64,
+        ));
+        budget.check(
+            format!(
+                "a 3D mesh of {} cells and {sides} face sides, {} of them on the boundary",
+                m.n_cells(),
+                m.boundary_faces.len()
+            ),
+            surface,
+        )?;
         m.check_boundary_surface()?;
         m.check_overlap()?;
         m.check_crossings()?;

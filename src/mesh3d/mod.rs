@@ -76,7 +76,7 @@ mod tests_external;
 mod tests_split;
 pub mod validate;
 
-pub use build::mesh3_bytes;
+pub use build::{boundary_surface_bytes, mesh3_bytes};
 pub use mesh::PolyMesh3;
 pub use split_faces::{PLANAR_TOL, WarpedFaces};
 pub use validate::{MAX_CELL_FACES, MAX_FACE_VERTICES, WARP_TOL};

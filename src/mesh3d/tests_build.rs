@@ -221,13 +221,18 @@ fn the_cell_complex_view_and_vertex_averages_match_the_accessors() {
 #[test]
 fn the_memory_estimate_is_checked_against_the_budget() {
     let p = cubes(2, 19);
+    // the build before the boundary is known, then with the check of the boundary surface:
+    // 24 boundary squares, 96 loop entries
     let need = super::mesh3_bytes(8, 48, 192, 27);
-    assert!(PolyMesh3::from_polyhedra(p.clone(), MemoryBudget::new(need)).is_ok());
-    let e = PolyMesh3::from_polyhedra(p, MemoryBudget::new(need - 1)).unwrap_err();
-    assert!(
-        matches!(e, crate::MeshError::TooLarge { bytes, .. } if bytes == need),
-        "{e:?}"
-    );
+    let all = need + super::boundary_surface_bytes(96, 27);
+    assert!(PolyMesh3::from_polyhedra(p.clone(), MemoryBudget::new(all)).is_ok());
+    for (budget, asked) in [(need - 1, need), (need, all), (all - 1, all)] {
+        let e = PolyMesh3::from_polyhedra(p.clone(), MemoryBudget::new(budget)).unwrap_err();
+        assert!(
+            matches!(e, crate::MeshError::TooLarge { bytes, .. } if bytes == asked),
+            "{budget}: {e:?}"
+        );
+    }
 }
 
 #[test]

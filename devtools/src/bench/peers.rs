@@ -34,7 +34,8 @@
 //!
 //! Every case runs in a child process, as in the scaling benchmark, so that peak memory is the
 //! case's own. `GRADVI_BENCH_PEERS` (default `ex9,domains,reseeded`) selects the parts; the rows
-//! of the other parts are kept from the existing CSV. `GRADVI_BENCH_PEER_REPEAT` (1 to 20, default 1)
+//! of the other parts are kept from the existing CSV, and so are those of the ex9 grids below
+//! `GRADVI_BENCH_EX9_MIN_GRID` (default 0) or above `GRADVI_BENCH_EX9_MAX_GRID`. `GRADVI_BENCH_PEER_REPEAT` (1 to 20, default 1)
 //! runs every case that many times, interleaved with the other cases of its grid or mesh, and
 //! records the run with the median time ([`run_group`]). `GRADVI_BENCH_LOG=1` prints each
 //! solve's timings. Rows go to `replication/results/bench_peers.csv`; the report's first
@@ -638,17 +639,25 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
         .ok()
         .and_then(|v| v.trim().parse().ok())
         .unwrap_or(DEFAULT_MAX_GRID);
+    let min_grid = std::env::var("GRADVI_BENCH_EX9_MIN_GRID")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(0);
     let csv = cfg.path(CSV);
     let parts =
         std::env::var("GRADVI_BENCH_PEERS").unwrap_or_else(|_| "ex9,domains,reseeded".into());
     let part = |name: &str| parts.split(',').any(|p| p.trim() == name);
     let (do_ex9, do_domains, do_reseeded) = (part("ex9"), part("domains"), part("reseeded"));
-    // rows of the parts not run this time are kept from the existing CSV
+    let ex9 = ex9_grids(if do_ex9 { max_grid } else { 0 })
+        .into_iter()
+        .filter(|&g| g >= min_grid)
+        .collect::<Vec<_>>();
+    // rows of the parts (and ex9 grids) not run this time are kept from the existing CSV
     let mut rows: Vec<PeerRow> = read_rows(cfg)?
         .into_iter()
         .filter(|r| {
             if r.family == "ex9" {
-                !do_ex9
+                !ex9.contains(&r.grid)
             } else if r.mesh == RESEED_LABEL {
                 !do_reseeded
             } else {
@@ -675,6 +684,14 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
             row.r
         );
         rows.push(row);
+        // ex9 first, by grid (a kept grid may come after the grids run), each grid's rows in
+        // the order they were run
+        rows.sort_by_key(|r| {
+            (
+                r.family != "ex9",
+                if r.family == "ex9" { r.grid } else { 0 },
+            )
+        });
         write_csv(&csv, rows)
     };
     let petsc = if do_ex9 {
@@ -689,7 +706,7 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
     if repeat > 1 {
         eprintln!("[bench] {repeat} runs of every case, interleaved; rows: the median time");
     }
-    for g in ex9_grids(if do_ex9 { max_grid } else { 0 }) {
+    for g in ex9 {
         let group = ex9_group(cfg, exe, petsc.as_deref().ok(), g);
         for row in run_group(&group, repeat)? {
             push(row, &mut rows)?;

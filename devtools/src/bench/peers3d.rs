@@ -32,11 +32,15 @@
 //! dropped, dolfinx one KSP solve with the same CG and preconditioner), timed the same way,
 //! and R = `total_s / linear_seconds`.
 //!
-//! Sizes: n in [`SIZES`] up to `GRADVI_BENCH_3D_MAX_N` (default [`DEFAULT_MAX_N`], a few minutes
-//! here); n = 100 and 200 (about 1M and 8M unknowns, the sizes of the performance issue) only
-//! when asked, and only when dolfinx's measured footprint fits in the memory available
-//! ([`fits`]). Rows go to [`CSV`]; the report's 3D section is written from it
-//! ([`super::peers3d_report`]).
+//! Sizes: n in [`SIZES`] from `GRADVI_BENCH_3D_MIN_N` (default 0) up to `GRADVI_BENCH_3D_MAX_N`
+//! (default [`DEFAULT_MAX_N`], a few minutes here); n = 100 and 200 (about 1M and 8M unknowns,
+//! the sizes of the performance issue) only when asked. `GRADVI_BENCH_3D_DOLFINX` (default
+//! `gamg,hypre`) names the dolfinx configurations run. A dolfinx case runs only when
+//! [`MEMORY_MARGIN`] times its estimated peak ([`dolfinx_estimate`], extrapolated from its own
+//! rows at smaller sizes) fits in the memory available; a case left out is said on stderr, and
+//! the report names the comparisons it leaves open. Rows go to [`CSV`], rewritten after each
+//! case; the rows of the sizes not run are kept from it. The report's 3D section is written
+//! from it ([`super::peers3d_report`]).
 
 use super::{bad, io_err, json_row, peak_memory_mib, stdout_of};
 use gradvi::budget::MemoryBudget;
@@ -58,8 +62,13 @@ pub const SIZES: [usize; 5] = [16, 32, 64, 100, 200];
 /// Default cap on n: up to 64³ cubes (274 625 unknowns).
 pub const DEFAULT_MAX_N: usize = 64;
 /// dolfinx's peak memory per unknown on one process, bytes (765 MiB at 274 625 unknowns,
-/// measured; see [`fits`]).
+/// measured): the estimate of [`dolfinx_estimate`] for a configuration without two smaller
+/// rows to extrapolate from (a quarter more on more than one process).
 pub const DOLFINX_BYTES_PER_UNKNOWN: f64 = 2_900.0;
+/// A dolfinx case runs only if this many times its estimated peak ([`dolfinx_estimate`]) fits
+/// in the memory available: an estimate that is a little low must not push the machine into
+/// swap or its out-of-memory killer in the middle of a long run.
+pub const MEMORY_MARGIN: f64 = 1.05;
 /// The dolfinx script.
 pub const SCRIPT: &str = "benches/dolfinx/ex9_3d.py";
 /// Where the solutions at the vertices are written (not committed).
@@ -397,20 +406,75 @@ fn max_diff(a: &[f64], b: &[f64]) -> f64 {
         })
 }
 
-/// Whether the size `n` fits: dolfinx's footprint ([`DOLFINX_BYTES_PER_UNKNOWN`], with a
-/// quarter more for the second process) within the memory available (said on stderr if not).
-pub fn fits(n: usize) -> bool {
-    let need = 1.25 * DOLFINX_BYTES_PER_UNKNOWN * ((n + 1) as f64).powi(3);
-    let available = MemoryBudget::available().bytes();
-    let ok = need <= available as f64;
-    if !ok {
-        eprintln!(
-            "[bench] warning: 3D n = {n} skipped: dolfinx needs about {}, {} available",
-            human_bytes(need as u64),
-            human_bytes(available)
-        );
+/// The estimated peak of a dolfinx case and what it rests on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimate {
+    /// Peak resident memory, MiB (summed over the ranks).
+    pub mib: f64,
+    /// What it was computed from: "its rows at n = 64 and 100" or the constant's text.
+    pub basis: String,
+}
+
+/// (n + 1)³, the unknowns of n³ cubes.
+fn unknowns_of(n: usize) -> f64 {
+    ((n + 1) as f64).powi(3)
+}
+
+/// dolfinx's estimated peak memory for configuration `config` on `cores` processes at n³ cubes,
+/// from `rows` (the CSV so far): the affine function of the unknowns through its rows (obstacle
+/// runs, the same configuration and cores, peak measured) at the two largest sizes below n —
+/// the mesh, the matrix, the multigrid hierarchy and the vectors all grow like the unknowns,
+/// and the constant term holds the interpreter and libraries (measured: the affine function
+/// through n = 64 and 100 on one process predicted 5406 MiB at n = 128 for the linear variant,
+/// which read 5432 MiB; `replication/measurements/solver3d.md`); with only one such row,
+/// proportional to it; with none, [`DOLFINX_BYTES_PER_UNKNOWN`] per unknown, a quarter more on
+/// more than one process.
+pub fn dolfinx_estimate(rows: &[Peer3Row], config: &str, cores: usize, n: usize) -> Estimate {
+    let mut below: Vec<&Peer3Row> = rows
+        .iter()
+        .filter(|r| {
+            r.code == "dolfinx"
+                && r.config == config
+                && r.cores == cores
+                && r.n < n
+                && r.peak_mib.is_finite()
+                && r.peak_mib > 0.0
+        })
+        .collect();
+    below.sort_by_key(|r| r.n);
+    below.dedup_by_key(|r| r.n);
+    let u = unknowns_of(n);
+    match below.as_slice() {
+        [.., a, b] => {
+            let (ua, ub) = (unknowns_of(a.n), unknowns_of(b.n));
+            let slope = (b.peak_mib - a.peak_mib) / (ub - ua);
+            // a falling or flat footprint (noise at small sizes) is no basis: proportional then
+            let mib = if slope > 0.0 {
+                b.peak_mib + slope * (u - ub)
+            } else {
+                b.peak_mib * u / ub
+            };
+            Estimate {
+                mib,
+                basis: format!("its rows at n = {} and {}", a.n, b.n),
+            }
+        }
+        [b] => Estimate {
+            mib: b.peak_mib * u / unknowns_of(b.n),
+            basis: format!("its row at n = {}", b.n),
+        },
+        [] => Estimate {
+            mib: DOLFINX_BYTES_PER_UNKNOWN * u * if cores > 1 { 1.25 } else { 1.0 }
+                / (1024.0 * 1024.0),
+            basis: format!("{DOLFINX_BYTES_PER_UNKNOWN:.0} bytes per unknown"),
+        },
     }
-    ok
+}
+
+/// Whether a case of estimated peak `estimate` may run with `available` bytes free
+/// ([`MEMORY_MARGIN`]).
+pub fn fits_in(estimate: &Estimate, available: u64) -> bool {
+    MEMORY_MARGIN * estimate.mib * 1024.0 * 1024.0 <= available as f64
 }
 
 /// The obstacle run `run` then its linear variant, R, and the difference of u to `reference`
@@ -456,14 +520,18 @@ fn run_case(
     Ok(row)
 }
 
-/// The cases of size `n` at every core count: dolfinx GAMG and hypre (when `dolfinx`), then
+/// The cases of size `n` at every core count: dolfinx GAMG and hypre (when `dolfinx`; those
+/// named in `GRADVI_BENCH_3D_DOLFINX`, comma-separated, default `gamg,hypre`; each
+/// only if it fits ([`fits_in`]) by its estimate from the rows of the `smaller` sizes), then
 /// gradvi, each followed by its linear variant, each row given to `push` as it comes; u is
-/// compared with dolfinx GAMG on one process. A failed dolfinx run is said on stderr and
-/// leaves its row out (the report shows it missing); a failed gradvi run is an error.
+/// compared with dolfinx GAMG on one process. A failed or left-out dolfinx run is said on
+/// stderr and leaves its row out (the report shows it missing); a failed gradvi run is an
+/// error.
 fn run_size(
     cfg: &super::Config,
     exe: &Path,
     (n, dolfinx): (usize, bool),
+    smaller: &[Peer3Row],
     push: &mut dyn FnMut(Peer3Row) -> gradvi::Result<()>,
 ) -> gradvi::Result<()> {
     let dir = cfg.path(U_DIR);
@@ -475,8 +543,28 @@ fn run_size(
         ("dolfinx", "hypre"),
         ("gradvi", "p1 iterative"),
     ];
+    let configs = std::env::var("GRADVI_BENCH_3D_DOLFINX").unwrap_or_else(|_| "gamg,hypre".into());
+    let asked = |config: &str| configs.split(',').any(|c| c.trim() == config);
     for cores in super::peers::core_counts() {
-        for &(code, config) in all.iter().filter(|c| dolfinx || c.0 == "gradvi") {
+        for &(code, config) in all
+            .iter()
+            .filter(|c| c.0 == "gradvi" || (dolfinx && asked(c.1)))
+        {
+            if code == "dolfinx" {
+                let estimate = dolfinx_estimate(smaller, config, cores, n);
+                let available = MemoryBudget::available().bytes();
+                if !fits_in(&estimate, available) {
+                    eprintln!(
+                        "[bench] warning: no row for dolfinx {config}, n = {n}, {cores} cores: \
+                         its estimated peak, {} (from {}), times {MEMORY_MARGIN} is above the \
+                         {} available",
+                        human_bytes((estimate.mib * 1024.0 * 1024.0) as u64),
+                        estimate.basis,
+                        human_bytes(available)
+                    );
+                    continue;
+                }
+            }
             let u_file = match (code, config) {
                 ("dolfinx", "gamg") => (cores == 1).then(|| reference.clone()),
                 ("dolfinx", _) => (cores == 1).then(|| dir.join(format!("u_{config}_{n}.f64"))),
@@ -528,14 +616,32 @@ pub fn run(cfg: &super::Config, exe: &Path) -> gradvi::Result<()> {
             cfg.python.display()
         );
     }
+    let min_n = std::env::var("GRADVI_BENCH_3D_MIN_N")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(0);
+    let sizes: Vec<usize> = SIZES
+        .into_iter()
+        .filter(|&n| (min_n..=max_n).contains(&n))
+        .collect();
+    let earlier = read_rows(cfg)?;
     let csv = cfg.path(CSV);
-    let mut rows: Vec<Peer3Row> = Vec::new();
-    let mut push = |row: Peer3Row| -> gradvi::Result<()> {
-        rows.push(row);
-        write_csv(&csv, &rows)
-    };
-    for n in SIZES.into_iter().filter(|&n| n <= max_n && fits(n)) {
-        run_size(cfg, exe, (n, dolfinx), &mut push)?;
+    // the rows of the sizes not run now are kept; those of the sizes run are replaced
+    let mut rows: Vec<Peer3Row> = earlier
+        .iter()
+        .filter(|r| !sizes.contains(&r.n))
+        .cloned()
+        .collect();
+    for n in sizes {
+        // the dolfinx estimates extrapolate from the rows of the smaller sizes, this run's
+        let before = rows.clone();
+        let mut push = |row: Peer3Row| -> gradvi::Result<()> {
+            rows.push(row);
+            // by size, each size's rows in the order they were run
+            rows.sort_by_key(|r| r.n);
+            write_csv(&csv, &rows)
+        };
+        run_size(cfg, exe, (n, dolfinx), &before, &mut push)?;
     }
     Ok(())
 }
@@ -557,6 +663,84 @@ mod tests {
         assert_eq!(grid_index([-2.0, -1.0, -2.0], n), 5);
         assert_eq!(grid_index([-2.0, -2.0, -1.0], n), 25);
         assert_eq!(grid_index([2.0, 2.0, 2.0], n), 124);
+    }
+
+    /// A dolfinx row of `config` on `cores` processes at n³ cubes with peak `mib`.
+    fn dolfinx_row(config: &str, cores: usize, n: usize, mib: f64) -> Peer3Row {
+        Peer3Row {
+            code: "dolfinx".into(),
+            config: config.into(),
+            n,
+            cells: 6 * n * n * n,
+            unknowns: (n + 1).pow(3),
+            cores,
+            niter: 1,
+            coarse_niter: 0,
+            krylov: 1,
+            setup_s: 1.0,
+            solve_s: 1.0,
+            total_s: 2.0,
+            phases: String::new(),
+            peak_mib: mib,
+            err_max: 0.0,
+            err_mean: 0.0,
+            linear_seconds: 1.0,
+            linear_krylov: 1,
+            r: 2.0,
+            diff_u: f64::NAN,
+        }
+    }
+
+    #[test]
+    fn the_dolfinx_estimate_extrapolates_its_own_two_largest_rows() {
+        let u = |n: usize| ((n + 1) as f64).powi(3);
+        let rows = vec![
+            dolfinx_row("gamg", 1, 32, 179.0),
+            dolfinx_row("gamg", 1, 64, 764.0),
+            dolfinx_row("gamg", 1, 100, 2638.0),
+            dolfinx_row("gamg", 2, 100, 2859.0),
+            dolfinx_row("hypre", 1, 64, 790.0),
+            dolfinx_row("hypre", 1, 200, 1.0),
+        ];
+        // affine through n = 64 and 100 (not 32, not the other configuration or cores)
+        let e = dolfinx_estimate(&rows, "gamg", 1, 200);
+        let want = 2638.0 + (2638.0 - 764.0) / (u(100) - u(64)) * (u(200) - u(100));
+        assert!((e.mib - want).abs() < 1e-6 * want, "{e:?}");
+        assert!(e.mib > 19_000.0 && e.mib < 21_000.0, "{e:?}");
+        assert_eq!(e.basis, "its rows at n = 64 and 100");
+        // its rows at n = 128 (predicted above) and below (the measured value 5432 MiB of the
+        // linear variant is within 1%)
+        let at128 = dolfinx_estimate(&rows, "gamg", 1, 128).mib;
+        assert!((at128 / 5432.0 - 1.0).abs() < 0.01, "{at128}");
+        // one row: proportional; rows at n or above are not used
+        let e = dolfinx_estimate(&rows, "gamg", 2, 200);
+        assert!((e.mib - 2859.0 * u(200) / u(100)).abs() < 1e-6, "{e:?}");
+        assert_eq!(e.basis, "its row at n = 100");
+        let e = dolfinx_estimate(&rows, "hypre", 1, 200);
+        assert!((e.mib - 790.0 * u(200) / u(64)).abs() < 1e-6, "{e:?}");
+        // none: the constant, a quarter more on two processes
+        let e1 = dolfinx_estimate(&[], "gamg", 1, 64);
+        let e2 = dolfinx_estimate(&[], "gamg", 2, 64);
+        assert!((e1.mib - DOLFINX_BYTES_PER_UNKNOWN * u(64) / 1048576.0).abs() < 1e-6);
+        assert!((e2.mib - 1.25 * e1.mib).abs() < 1e-6);
+        // a footprint that fell (noise) is no slope: proportional to the larger row
+        let falling = [
+            dolfinx_row("gamg", 1, 16, 120.0),
+            dolfinx_row("gamg", 1, 32, 110.0),
+        ];
+        let e = dolfinx_estimate(&falling, "gamg", 1, 64);
+        assert!((e.mib - 110.0 * u(64) / u(32)).abs() < 1e-6, "{e:?}");
+    }
+
+    #[test]
+    fn a_case_fits_with_the_margin_only() {
+        let e = Estimate {
+            mib: 1000.0,
+            basis: String::new(),
+        };
+        let mib = 1024 * 1024;
+        assert!(fits_in(&e, 1050 * mib));
+        assert!(!fits_in(&e, 1049 * mib));
     }
 
     #[test]

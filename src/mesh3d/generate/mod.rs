@@ -49,7 +49,7 @@ pub use warped::warped;
 
 use crate::budget::MemoryBudget;
 use crate::error::{Error, Result};
-use crate::mesh3d::{Cuboid, PolyMesh3, Polyhedra, mesh3_bytes};
+use crate::mesh3d::{Cuboid, PolyMesh3, Polyhedra, boundary_surface_bytes, mesh3_bytes};
 use std::fmt;
 use std::str::FromStr;
 
@@ -252,11 +252,17 @@ impl Family3 {
 impl Family3 {
     /// Estimated peak memory, in bytes, of [`Family3::generate`] at `level`: the description
     /// ([`Family3::polyhedra_estimate`]) plus what building the mesh from it needs
-    /// ([`mesh3_bytes`]); `u64::MAX` when it cannot be counted.
+    /// ([`mesh3_bytes`], and [`boundary_surface_bytes`] for the boundary loop entries, at most
+    /// those of the boundary cubes of the n³ grid: 6n² of the n³ cubes, so a fraction 6/n of
+    /// all loop entries); `u64::MAX` when it cannot be counted.
     pub fn memory_estimate(self, level: usize) -> u64 {
         let build = self
             .counts(level)
-            .map_or(u64::MAX, |[c, s, v, p]| mesh3_bytes(c, s, v, p));
+            .zip(level_n(level))
+            .map_or(u64::MAX, |([c, s, v, p], n)| {
+                let boundary = v.saturating_mul(6) / n.max(6) as u64;
+                mesh3_bytes(c, s, v, p).saturating_add(boundary_surface_bytes(boundary, p))
+            });
         self.polyhedra_estimate(level).saturating_add(build)
     }
 
