@@ -34,9 +34,10 @@
 //!
 //! Every case runs in a child process, as in the scaling benchmark, so that peak memory is the
 //! case's own. `GRADVI_BENCH_PEERS` (default `ex9,domains,reseeded`) selects the parts; the rows
-//! of the other parts are kept from the existing CSV, and so are those of the ex9 grids below
-//! `GRADVI_BENCH_EX9_MIN_GRID` (default 0) or above `GRADVI_BENCH_EX9_MAX_GRID`. `GRADVI_BENCH_PEER_REPEAT` (1 to 20, default 1)
-//! runs every case that many times, interleaved with the other cases of its grid or mesh, and
+//! of the other parts are kept from the existing CSV, and so are those of the ex9 grids not run:
+//! below `GRADVI_BENCH_EX9_MIN_GRID` (default 0), above `GRADVI_BENCH_EX9_MAX_GRID`, or left out
+//! for memory (4097², [`ex9_grids`]). `GRADVI_BENCH_PEER_REPEAT` (1 to 20, default 1) runs every
+//! case that many times, interleaved with the other cases of its grid or mesh, and
 //! records the run with the median time ([`run_group`]). `GRADVI_BENCH_LOG=1` prints each
 //! solve's timings. Rows go to `replication/results/bench_peers.csv`; the report's first
 //! sections are written from it ([`super::report`]).
