@@ -307,6 +307,25 @@ fn repeat_from_env(var: &str, default: usize) -> gradvi::Result<usize> {
     }
 }
 
+/// The non-negative integer in the environment variable `var` (surrounding blanks allowed), or
+/// `default` when it is not set; a value that is not such an integer is an error naming the
+/// variable, not a silent fallback to the default (a mistyped size bound would otherwise run,
+/// or skip, the whole benchmark).
+fn usize_from_env(var: &str, default: usize) -> gradvi::Result<usize> {
+    parse_usize_var(var, std::env::var(var).ok().as_deref(), default)
+}
+
+/// [`usize_from_env`] on the value `value` of `var` (`None`: not set).
+fn parse_usize_var(var: &str, value: Option<&str>, default: usize) -> gradvi::Result<usize> {
+    match value {
+        None => Ok(default),
+        Some(v) => v
+            .trim()
+            .parse::<usize>()
+            .map_err(|_| bad(format!("{var} must be a non-negative integer, got '{v}'"))),
+    }
+}
+
 fn bad(msg: String) -> gradvi::Error {
     gradvi::Error::InvalidData(msg)
 }

@@ -129,10 +129,7 @@ fn jobs(cfg: &Config) -> gradvi::Result<Vec<Job>> {
             args: c.child_args(),
         })
         .collect();
-    let max_grid = std::env::var("GRADVI_BENCH_EX9_MAX_GRID")
-        .ok()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(DEFAULT_EX9_MAX_GRID);
+    let max_grid = super::usize_from_env("GRADVI_BENCH_EX9_MAX_GRID", DEFAULT_EX9_MAX_GRID)?;
     for (family, scheme, linear, size, file) in peers::gradvi_cases(cfg, max_grid)? {
         let case = match &file {
             Some(f) => format!(

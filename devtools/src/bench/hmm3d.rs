@@ -324,17 +324,15 @@ fn run_case(exe: &Path, n: usize, cores: usize) -> gradvi::Result<Hmm3Row> {
     Ok(row)
 }
 
-/// The cap on n: `GRADVI_BENCH_HMM3D_MAX_N`, [`DEFAULT_MAX_N`] when unset or not a number.
-fn max_n() -> usize {
-    std::env::var("GRADVI_BENCH_HMM3D_MAX_N")
-        .ok()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(DEFAULT_MAX_N)
+/// The cap on n: `GRADVI_BENCH_HMM3D_MAX_N`, [`DEFAULT_MAX_N`] when unset (an error when it is
+/// not a non-negative integer).
+fn max_n() -> gradvi::Result<usize> {
+    super::usize_from_env("GRADVI_BENCH_HMM3D_MAX_N", DEFAULT_MAX_N)
 }
 
 /// Runs the benchmark and writes [`CSV`] (after each case).
 pub fn run(cfg: &super::Config, exe: &Path) -> gradvi::Result<()> {
-    let max_n = max_n();
+    let max_n = max_n()?;
     eprintln!(
         "[bench] HMM on n³ cubes of (-2,2)³, n in {SIZES:?} up to {max_n} (GRADVI_BENCH_HMM3D_MAX_N), cores {:?}",
         super::peers::core_counts()

@@ -636,36 +636,15 @@ pub fn linear_variants() -> Vec<&'static str> {
 
 /// Runs the peer benchmark and writes [`CSV`] (rows appended as they come).
 pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
-    let max_grid = std::env::var("GRADVI_BENCH_EX9_MAX_GRID")
-        .ok()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(DEFAULT_MAX_GRID);
-    let min_grid = std::env::var("GRADVI_BENCH_EX9_MIN_GRID")
-        .ok()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(0);
+    let max_grid = super::usize_from_env("GRADVI_BENCH_EX9_MAX_GRID", DEFAULT_MAX_GRID)?;
+    let min_grid = super::usize_from_env("GRADVI_BENCH_EX9_MIN_GRID", 0)?;
     let csv = cfg.path(CSV);
     let parts =
         std::env::var("GRADVI_BENCH_PEERS").unwrap_or_else(|_| "ex9,domains,reseeded".into());
     let part = |name: &str| parts.split(',').any(|p| p.trim() == name);
     let (do_ex9, do_domains, do_reseeded) = (part("ex9"), part("domains"), part("reseeded"));
-    let ex9 = ex9_grids(if do_ex9 { max_grid } else { 0 })
-        .into_iter()
-        .filter(|&g| g >= min_grid)
-        .collect::<Vec<_>>();
-    // rows of the parts (and ex9 grids) not run this time are kept from the existing CSV
-    let mut rows: Vec<PeerRow> = read_rows(cfg)?
-        .into_iter()
-        .filter(|r| {
-            if r.family == "ex9" {
-                !ex9.contains(&r.grid)
-            } else if r.mesh == RESEED_LABEL {
-                !do_reseeded
-            } else {
-                !do_domains
-            }
-        })
-        .collect();
+    let ex9 = grids_from(ex9_grids(if do_ex9 { max_grid } else { 0 }), min_grid);
+    let mut rows = kept_rows(read_rows(cfg)?, &ex9, do_domains, do_reseeded);
     let push = |row: PeerRow, rows: &mut Vec<PeerRow>| -> gradvi::Result<()> {
         eprintln!(
             "[bench]   {} {} {} {}, {} cores: {} unknowns, NITER {} (+{} coarse), {:.2} s, {:.0} MiB, errors {:.3e} / {:.3e}, linear variant {:.2} s (R {:.2})",
@@ -815,6 +794,35 @@ fn median_row(mut runs: Vec<PeerRow>) -> Option<PeerRow> {
     Some(row)
 }
 
+/// The grids of `grids` (those [`ex9_grids`] admits) from `min_grid` up: the ex9 grids this run
+/// solves.
+fn grids_from(grids: Vec<usize>, min_grid: usize) -> Vec<usize> {
+    grids.into_iter().filter(|&g| g >= min_grid).collect()
+}
+
+/// The rows of the existing CSV that a run keeps: the ex9 rows of every grid not in `ex9` (the
+/// grids it solves), the any-domain rows unless it runs that part (`do_domains`), the
+/// re-seeded rows unless it runs those (`do_reseeded`). The rows of the grids and parts it runs
+/// are replaced by its own.
+fn kept_rows(
+    rows: Vec<PeerRow>,
+    ex9: &[usize],
+    do_domains: bool,
+    do_reseeded: bool,
+) -> Vec<PeerRow> {
+    rows.into_iter()
+        .filter(|r| {
+            if r.family == "ex9" {
+                !ex9.contains(&r.grid)
+            } else if r.mesh == RESEED_LABEL {
+                !do_reseeded
+            } else {
+                !do_domains
+            }
+        })
+        .collect()
+}
+
 /// The ex9 grids up to `max_grid` that fit in the memory available ([`BIG_GRID`] needs
 /// [`BIG_GRID_MEMORY`]; a grid left out is said on stderr).
 fn ex9_grids(max_grid: usize) -> Vec<usize> {
@@ -900,4 +908,108 @@ pub fn gradvi_cases(cfg: &Config, max_grid: usize) -> gradvi::Result<Vec<GradviC
 /// The rows of [`CSV`] (empty if it does not exist).
 pub fn read_rows(cfg: &Config) -> gradvi::Result<Vec<PeerRow>> {
     super::read_rows_of(cfg, CSV)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row of `family` on grid `grid` (0 for a mesh file) from `mesh` (`""`, or
+    /// [`RESEED_LABEL`] for the re-seeded meshes), by `code`.
+    fn row(family: &str, code: &str, grid: usize, mesh: &str) -> PeerRow {
+        PeerRow {
+            family: family.into(),
+            code: code.into(),
+            scheme: "p1".into(),
+            linear: "iterative".into(),
+            grid,
+            cells: 0,
+            unknowns: grid * grid,
+            niter: 3,
+            coarse_niter: 0,
+            krylov: 0,
+            total_s: 1.0,
+            solved_s: f64::NAN,
+            mesh_s: f64::NAN,
+            setup_s: f64::NAN,
+            coarse_s: f64::NAN,
+            assemble_s: f64::NAN,
+            factor_s: f64::NAN,
+            linear_s: f64::NAN,
+            peak_mib: 1.0,
+            data_s: f64::NAN,
+            err_max: 1e-6,
+            err_mean: 1e-7,
+            certificate: 1e-12,
+            runs: 1,
+            cores: 1,
+            linear_seconds: f64::NAN,
+            r: f64::NAN,
+            mesh: mesh.into(),
+        }
+    }
+
+    /// What a CSV keeps: (family, code, grid, mesh) of each row.
+    fn keys(rows: &[PeerRow]) -> Vec<(String, String, usize, String)> {
+        rows.iter()
+            .map(|r| (r.family.clone(), r.code.clone(), r.grid, r.mesh.clone()))
+            .collect()
+    }
+
+    /// The rows of an earlier full run: PETSc and gradvi at every ex9 grid, one any-domain
+    /// row, one re-seeded row.
+    fn earlier() -> Vec<PeerRow> {
+        let mut rows = Vec::new();
+        for g in EX9_GRIDS {
+            rows.push(row("ex9", "petsc", g, ""));
+            rows.push(row("ex9", "gradvi", g, ""));
+        }
+        rows.push(row("lshape", "gradvi", 0, ""));
+        rows.push(row("disk", "gradvi", 0, RESEED_LABEL));
+        rows
+    }
+
+    #[test]
+    fn a_run_of_one_grid_keeps_the_rows_of_every_other_grid_and_part() {
+        // GRADVI_BENCH_PEERS=ex9, MIN_GRID = MAX_GRID = 1025: ex9_grids(1025) admits the three
+        // smallest grids, the lower bound leaves 1025 alone
+        let ex9 = grids_from(vec![257, 513, 1025], 1025);
+        assert_eq!(ex9, vec![1025]);
+        let kept = kept_rows(earlier(), &ex9, false, false);
+        let mut want = keys(&earlier());
+        want.retain(|k| k.2 != 1025);
+        assert_eq!(keys(&kept), want);
+        // 4097 left out for memory (not in the grids run): its rows are kept as well
+        assert!(kept.iter().filter(|r| r.grid == 4097).count() == 2);
+    }
+
+    #[test]
+    fn a_part_that_runs_replaces_its_own_rows_only() {
+        let every_grid = grids_from(EX9_GRIDS.to_vec(), 0);
+        assert_eq!(every_grid, EX9_GRIDS.to_vec());
+        // the any-domain part alone: every ex9 row and the re-seeded row stay
+        let kept = kept_rows(earlier(), &[], true, false);
+        assert_eq!(kept.len(), earlier().len() - 1);
+        assert!(kept.iter().all(|r| r.family != "lshape"));
+        // everything runs: nothing is kept
+        assert!(kept_rows(earlier(), &every_grid, true, true).is_empty());
+        // a lower bound above every grid runs none of them and keeps every ex9 row
+        assert!(grids_from(EX9_GRIDS.to_vec(), 5000).is_empty());
+        assert_eq!(
+            kept_rows(earlier(), &[], false, false).len(),
+            earlier().len()
+        );
+    }
+
+    #[test]
+    fn a_size_bound_that_is_not_an_integer_is_an_error_not_the_default() {
+        use super::super::parse_usize_var;
+        let var = "GRADVI_BENCH_EX9_MIN_GRID";
+        assert_eq!(parse_usize_var(var, None, 7).unwrap(), 7);
+        assert_eq!(parse_usize_var(var, Some(" 1025 "), 7).unwrap(), 1025);
+        for bad in ["1e3", "-1", "", "1025²"] {
+            let e = parse_usize_var(var, Some(bad), 7).unwrap_err().to_string();
+            assert!(e.contains(var) && e.contains(bad), "{bad}: {e}");
+        }
+    }
 }

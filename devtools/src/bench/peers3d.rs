@@ -594,10 +594,7 @@ fn run_size(
 
 /// Runs the benchmark and writes [`CSV`] (after each row).
 pub fn run(cfg: &super::Config, exe: &Path) -> gradvi::Result<()> {
-    let max_n = std::env::var("GRADVI_BENCH_3D_MAX_N")
-        .ok()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(DEFAULT_MAX_N);
+    let max_n = super::usize_from_env("GRADVI_BENCH_3D_MAX_N", DEFAULT_MAX_N)?;
     let dolfinx = super::dolfinx_available(&cfg.python);
     if dolfinx {
         // compiles and caches dolfinx's forms, so that no timed run pays for it
@@ -616,10 +613,7 @@ pub fn run(cfg: &super::Config, exe: &Path) -> gradvi::Result<()> {
             cfg.python.display()
         );
     }
-    let min_n = std::env::var("GRADVI_BENCH_3D_MIN_N")
-        .ok()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(0);
+    let min_n = super::usize_from_env("GRADVI_BENCH_3D_MIN_N", 0)?;
     let sizes: Vec<usize> = SIZES
         .into_iter()
         .filter(|&n| (min_n..=max_n).contains(&n))
