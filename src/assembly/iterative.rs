@@ -5,12 +5,17 @@
 //! in the caller's [`SolveState`].
 
 use super::linear::{
-    ITERATIVE_MAX_ITER, ITERATIVE_RTOL, REUSE_MAX_SLOWDOWN, SCREENING_REDUCTION, reuse_max_changed,
+    ITERATIVE_MAX_ITER, ITERATIVE_RTOL, PATCH_MAX_FRACTION, REUSE_MAX_SLOWDOWN,
+    SCREENING_REDUCTION, patch_layers, reuse_max_changed,
 };
+use super::two_point::CellSystemAll;
 use super::{DiscreteSystem, SolveState};
-use crate::budget::{AllocFailure, try_copy, try_filled};
+use crate::budget::{AllocFailure, try_copy, try_filled, try_vec};
 use crate::linalg::amg::Fine;
-use crate::linalg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, CsrMatrix};
+use crate::linalg::{
+    Amg, AmgOptions, AmgWork, CoarseHierarchy, CsrMatrix, PatchCorrected, PcgOptions, PcgReport,
+    Rows,
+};
 use crate::mesh::SolveMesh;
 use crate::vi::FixedValues;
 use crate::vi::SolveTimings;
@@ -114,6 +119,66 @@ pub(super) fn hierarchy(
             cells,
         },
     })
+}
+
+/// The rows of a system of `n_rows` rows (the cell system `cs`, else the skeleton system,
+/// whose row i is unknown i) whose unknown has a different bit in the masks `a` and `b`.
+fn changed_rows(
+    a: &[u64],
+    b: &[u64],
+    n_rows: usize,
+    cs: Option<&CellSystemAll>,
+) -> Result<Vec<u32>, AllocFailure> {
+    let differs = |i: usize| (a[i / 64] ^ b[i / 64]) >> (i % 64) & 1 == 1;
+    let mut rows = try_vec(0, "the changed rows")?;
+    match cs {
+        Some(cs) => rows.extend(
+            (0..n_rows)
+                .filter(|&i| differs(cs.dof(i)))
+                .map(|i| i as u32),
+        ),
+        None => {
+            for (w, (x, y)) in a.iter().zip(b).enumerate() {
+                let mut d = x ^ y;
+                while d != 0 {
+                    let i = w * 64 + d.trailing_zeros() as usize;
+                    if i < n_rows {
+                        rows.push(i as u32);
+                    }
+                    d &= d - 1;
+                }
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// Conjugate gradients on `a` x = c preconditioned by `amg` corrected on the patch of `layers`
+/// around `seeds` in `graph` ([`PatchCorrected`]); by `amg` alone when the patch is too large
+/// ([`PATCH_MAX_FRACTION`] of the rows, or a Cholesky factor with more entries than `a`: less
+/// memory than the new hierarchy the reuse saves).
+#[allow(clippy::too_many_arguments)]
+fn patched_pcg<A: Rows + ?Sized>(
+    a: &A,
+    graph: &CsrMatrix,
+    amg: &Amg,
+    work: &mut AmgWork,
+    seeds: &[u32],
+    layers: usize,
+    c: &[f64],
+    x: &mut [f64],
+    opts: &PcgOptions,
+) -> crate::Result<PcgReport> {
+    let max_rows = (PATCH_MAX_FRACTION * a.n_rows() as f64) as usize;
+    match PatchCorrected::new(a, amg, graph, seeds, layers, max_rows, a.nnz())? {
+        Some(pc) => {
+            let mut w = pc.work_with(std::mem::take(work))?;
+            let report = crate::linalg::pcg(a, &pc, &mut w, c, x, opts);
+            *work = w.into_inner();
+            report
+        }
+        None => amg.pcg(work, c, x, opts),
+    }
 }
 
 /// Number of unknowns whose bit differs.
@@ -222,16 +287,19 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let hier = hierarchy(a, next, false, &mut state.amg)?;
         let t2 = Instant::now();
         let mut x = self.take_initial_guess(state)?;
-        let out = self.run_pcg(state, hier, rhs, &mut x, rtol, fixed)?;
+        let out = self.run_pcg(state, hier, rhs, &mut x, rtol, fixed, None)?;
         rhs.copy_from_slice(&x);
         self.keep_solution(state, x);
         Ok((t2, out))
     }
 
-    /// [`Self::pcg`] with the hierarchy `hier`, which is then kept in `state` for
-    /// the next solve (with c and the fingerprint of `fixed` if the solve stopped early). A
-    /// reused hierarchy that fails is replaced by a new one, once; one that converged more
-    /// than [`REUSE_MAX_SLOWDOWN`] times slower than when fresh is marked stale.
+    /// [`Self::pcg`] with the hierarchy `hier` (of the cell system `cs` if given, else of the
+    /// skeleton one), which is then kept in `state` for the next solve (with c and the
+    /// fingerprint of `fixed` if the solve stopped early). A reused hierarchy is corrected on
+    /// the patch of the unknowns whose status changed since it was built ([`Self::patch`]); one
+    /// that fails is replaced by a new one, once; one that converged more than
+    /// [`REUSE_MAX_SLOWDOWN`] times slower than when fresh is marked stale.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn run_pcg(
         &self,
         state: &mut SolveState,
@@ -240,6 +308,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         x: &mut [f64],
         rtol: f64,
         fixed: &FixedValues,
+        cs: Option<&CellSystemAll>,
     ) -> crate::Result<PcgOutcome> {
         let Hierarchy {
             mut amg,
@@ -248,13 +317,20 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             mut fixed_mask,
             cells,
         } = hier;
-        let mut out = match self.pcg(&amg, &mut state.amg, c, x, rtol) {
+        let seeds = if reused && patch_layers(D) > 0 {
+            let now = self::fixed_mask(&self.values.dirichlet, fixed)?;
+            changed_rows(&fixed_mask, &now, amg.n(), cs)?
+        } else {
+            Vec::new()
+        };
+        let graph = cs.map(CellSystemAll::matrix);
+        let mut out = match self.pcg(&amg, &mut state.amg, c, x, rtol, (&seeds, graph)) {
             Ok(out) => out,
             Err(_) if reused => {
                 amg = Amg::build(amg.into_fine(), &AmgOptions::default())?;
                 (fresh_rate, reused) = (None, false);
                 fixed_mask = self::fixed_mask(&self.values.dirichlet, fixed)?;
-                self.pcg(&amg, &mut state.amg, c, x, rtol)?
+                self.pcg(&amg, &mut state.amg, c, x, rtol, (&[], None))?
             }
             Err(e) => return Err(e),
         };
@@ -294,7 +370,10 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
 
     /// Conjugate gradients on S x = c (S the fine matrix of `amg`) from `x` to the relative
     /// residual `rtol`: the iterations, whether the true residual is above
-    /// [`ITERATIVE_RTOL`] ‖c‖, and the mean reduction per iteration.
+    /// [`ITERATIVE_RTOL`] ‖c‖, and the mean reduction per iteration. With `patch` = (rows,
+    /// graph) and rows not empty, the multigrid preconditioner is corrected on the patch of
+    /// [`patch_layers`] around those rows in the graph (`None`: S's own unmasked rows), if the
+    /// patch is small enough ([`PATCH_MAX_FRACTION`] of the rows, a factor no larger than S).
     fn pcg(
         &self,
         amg: &Amg,
@@ -302,8 +381,8 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         c: &[f64],
         x: &mut [f64],
         rtol: f64,
+        patch: (&[u32], Option<&CsrMatrix>),
     ) -> crate::Result<PcgOutcome> {
-        use crate::linalg::PcgOptions;
         let c_norm = c.iter().map(|v| v * v).sum::<f64>().sqrt();
         let opts = if rtol > ITERATIVE_RTOL {
             // screening: the residual reduced by SCREENING_REDUCTION from where this solve
@@ -321,7 +400,22 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                 max_iter: ITERATIVE_MAX_ITER,
             }
         };
-        let report = amg.pcg(work, c, x, &opts)?;
+        let report = match patch {
+            (seeds, graph) if !seeds.is_empty() => {
+                let layers = patch_layers(D);
+                match amg.fine() {
+                    Fine::Csr(m) => {
+                        let a: &CsrMatrix = m;
+                        patched_pcg(a, graph.unwrap_or(a), amg, work, seeds, layers, c, x, &opts)?
+                    }
+                    Fine::Masked(m) => {
+                        let g = graph.unwrap_or(m.unmasked());
+                        patched_pcg(m, g, amg, work, seeds, layers, c, x, &opts)?
+                    }
+                }
+            }
+            _ => amg.pcg(work, c, x, &opts)?,
+        };
         let rate = (report.iterations > 0
             && report.residual_norm > 0.0
             && report.initial_residual_norm > 0.0)

@@ -116,8 +116,35 @@ pub const REUSE_MAX_SLOWDOWN: f64 = 3.0;
 /// The largest fraction of the unknowns that may have changed status (fixed or free) since
 /// the matrix a hierarchy was built for, for it to be reused ([`REUSE_MAX_SLOWDOWN`]). The
 /// unknowns freed since, in particular, were decoupled (unit rows) in the matrix the coarse
-/// levels were built from, and have no coarse basis function.
-pub const REUSE_MAX_CHANGED: f64 = 1e-3;
+/// levels were built from, and have no coarse basis function; in 2D the reused hierarchy is
+/// therefore corrected by exact solves on a patch around them ([`PATCH_LAYERS`]).
+pub const REUSE_MAX_CHANGED: f64 = 1e-2;
+
+/// Graph layers of the patch around the unknowns whose status changed since a reused
+/// hierarchy was built, on which its preconditioner is corrected by exact solves
+/// ([`crate::linalg::PatchCorrected`]: symmetric multiplicative, one sparse Cholesky
+/// factorisation of the patch per solve) on planar meshes. Measured on ex9 with P1 at 1M
+/// unknowns (`replication/measurements/assembly.md`): the second solve's hierarchy reused with
+/// a patch of 6 layers took the CG iterations of a new hierarchy (5, then 7 in the third
+/// solve) and saved its setup; without the patch it took 9 and 11.
+pub const PATCH_LAYERS: usize = 6;
+
+/// [`PATCH_LAYERS`] on 3D meshes: 0, no patch (not measured in 3D, where a shell of 6 layers
+/// around the free boundary holds many more unknowns).
+pub const PATCH_LAYERS_3D: usize = 0;
+
+/// The patch layers on a mesh of dimension `d`.
+pub(crate) fn patch_layers(d: usize) -> usize {
+    if d == 3 {
+        PATCH_LAYERS_3D
+    } else {
+        PATCH_LAYERS
+    }
+}
+
+/// A patch with more than this fraction of the rows is not factorised: the reused hierarchy
+/// then preconditions alone.
+pub const PATCH_MAX_FRACTION: f64 = 0.1;
 
 /// [`REUSE_MAX_CHANGED`] on 3D meshes. The active-set steps of a 3D solve change a shell
 /// around the free boundary rather than a band, a larger fraction of the unknowns at the same

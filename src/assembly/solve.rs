@@ -142,7 +142,15 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             Some(cs) => self.take_cell_guess(state, cs)?,
             None => self.take_initial_guess(state)?,
         };
-        let out = self.run_pcg(state, hier, &rhs, &mut x, ITERATIVE_RTOL, fixed)?;
+        let out = self.run_pcg(
+            state,
+            hier,
+            &rhs,
+            &mut x,
+            ITERATIVE_RTOL,
+            fixed,
+            cs.as_deref(),
+        )?;
         drop(rhs);
         let u = match cs {
             Some(cs) => {

@@ -93,6 +93,12 @@ impl CellSystemAll {
         self.dofs.len()
     }
 
+    /// The matrix A with no unknown fixed (the graph of the patches of
+    /// [`crate::linalg::PatchCorrected`]).
+    pub(super) fn matrix(&self) -> &CsrMatrix {
+        &self.a
+    }
+
     /// Number of kept skeleton unknowns.
     pub(super) fn n_kept(&self) -> usize {
         self.dofs.len() - self.n_cells
@@ -153,7 +159,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let hier = hierarchy(a.into(), reuse, true, &mut state.amg)?;
         let t2 = Instant::now();
         let mut x = self.take_cell_guess(state, cs)?;
-        let out = self.run_pcg(state, hier, &rhs, &mut x, rtol, fixed)?;
+        let out = self.run_pcg(state, hier, &rhs, &mut x, rtol, fixed, Some(cs))?;
         let u = self.complete_cells(cs, &fx, &x)?;
         self.keep_cells(state, x, &u)?;
         Ok((u, out.timings([t0, t1, t2, Instant::now()])))

@@ -271,6 +271,24 @@ impl SpdPattern {
     }
 }
 
+impl SpdPattern {
+    /// The factor that the last [`Self::factor`] of this pattern left in `work`, to solve
+    /// with again without factorising: an error if `work` holds no factor of this pattern's
+    /// size (none yet, or one of another pattern).
+    pub fn factored<'w>(&'w self, work: &'w CholeskyWork) -> crate::Result<SpdFactor<'w>> {
+        match &self.symbolic {
+            Some(symbolic) if work.values.len() == symbolic.len_val() => Ok(SpdFactor {
+                symbolic,
+                values: &work.values,
+                par: self.threads.par(),
+            }),
+            _ => Err(crate::Error::Internal(
+                "no factor of this pattern in the Cholesky workspace".into(),
+            )),
+        }
+    }
+}
+
 /// A numeric Cholesky factor: the symbolic analysis of its pattern and the values of L, held
 /// in the caller's [`CholeskyWork`].
 pub struct SpdFactor<'w> {

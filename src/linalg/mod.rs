@@ -35,6 +35,7 @@ pub mod amg;
 pub mod cholesky;
 pub mod csr;
 pub mod ordering;
+pub mod patch;
 pub mod pcg;
 pub(crate) mod product_workspace;
 pub mod rows;
@@ -43,5 +44,6 @@ pub use amg::{Amg, AmgOptions, AmgWork, CoarseHierarchy, LevelSummary, Smoother}
 pub use cholesky::{CholeskyWork, FactorThreads, SpdFactor, SpdPattern};
 pub use csr::CsrMatrix;
 pub use ordering::{Ordering, nested_dissection};
+pub use patch::{PatchCorrected, PatchWork};
 pub use pcg::{Identity, Jacobi, PcgOptions, PcgReport, Preconditioner, pcg};
 pub use rows::{MaskedRows, Rows};

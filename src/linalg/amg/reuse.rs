@@ -52,22 +52,14 @@ impl CoarseHierarchy {
 #[cfg(test)]
 mod tests {
     use super::super::AmgWork;
-    use super::super::testing::{fix, grid, iterations_with};
+    use super::super::testing::{disc, fix, grid, iterations_with};
     use super::*;
 
     #[test]
     fn a_coarse_hierarchy_preconditions_a_changed_matrix() {
         let m = 150;
         let opts = AmgOptions::default();
-        let disc = |r2: f64| {
-            move |k: usize| {
-                let (x, y) = (
-                    (k % m) as f64 / m as f64 - 0.5,
-                    (k / m) as f64 / m as f64 - 0.5,
-                );
-                x * x + y * y < r2
-            }
-        };
+        let disc = |r2: f64| disc(m, r2);
         let base = grid(m, 1.0, 1.0, &|_, _| 1.0);
         let a0 = fix(&base, &disc(0.09));
         let fresh0 = Amg::owning(a0.clone(), &opts).unwrap();

@@ -1,8 +1,9 @@
 //! Test matrices and measures shared by the multigrid tests.
 
-use super::{Amg, AmgOptions, AmgWork};
+use super::{Amg, AmgOptions};
 use crate::linalg::csr::CsrMatrix;
-use crate::linalg::pcg::{PcgOptions, dot, pcg};
+use crate::linalg::pcg::{PcgOptions, Preconditioner, dot, pcg};
+use crate::linalg::rows::Rows;
 
 /// −div(k∇u) on an m × m grid of unknowns with the 5-point stencil (homogeneous Dirichlet
 /// conditions eliminated): couplings kx·h(k_p, k_q) in x and ky·h(k_p, k_q) in y, h the
@@ -66,9 +67,21 @@ pub(crate) fn iterations(a: &CsrMatrix, opts: &AmgOptions) -> usize {
     iterations_with(a, &Amg::new(a, opts).unwrap())
 }
 
-/// PCG iterations to ‖r‖ ≤ 1e-10 ‖b‖ with the preconditioner `amg`, for b = A x* with x*
+/// The unknowns k of an m × m grid ([`grid`]) inside the disc of radius² `r2` about the
+/// grid's centre (a contact zone).
+pub(crate) fn disc(m: usize, r2: f64) -> impl Fn(usize) -> bool {
+    move |k: usize| {
+        let (x, y) = (
+            (k % m) as f64 / m as f64 - 0.5,
+            (k / m) as f64 / m as f64 - 0.5,
+        );
+        x * x + y * y < r2
+    }
+}
+
+/// PCG iterations to ‖r‖ ≤ 1e-10 ‖b‖ with the preconditioner `p`, for b = A x* with x*
 /// containing all frequencies; also checks the true residual.
-pub(crate) fn iterations_with(a: &CsrMatrix, amg: &Amg) -> usize {
+pub(crate) fn iterations_with<P: Preconditioner + ?Sized>(a: &CsrMatrix, p: &P) -> usize {
     let n = a.n_rows();
     let xs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin() + 1.0).collect();
     let mut b = vec![0.0; n];
@@ -79,7 +92,13 @@ pub(crate) fn iterations_with(a: &CsrMatrix, amg: &Amg) -> usize {
         atol: 0.0,
         max_iter: 200,
     };
-    let rep = pcg(a, amg, &mut AmgWork::new(), &b, &mut x, &opts).unwrap();
+    let rep = pcg(a, p, &mut p.work(), &b, &mut x, &opts).unwrap();
     assert!(rep.residual_norm <= 2e-10 * dot(&b, &b).sqrt(), "{rep:?}");
+    let mut r = vec![0.0; n];
+    a.residual_to(&b, &x, &mut r);
+    assert!(
+        dot(&r, &r).sqrt() <= 2e-10 * dot(&b, &b).sqrt(),
+        "true residual"
+    );
     rep.iterations
 }
