@@ -1,8 +1,10 @@
 //! The iterative solves: multigrid-preconditioned conjugate gradients on the condensed (or
 //! cell) system, started from the previous solution, with the hierarchy of the previous solve
 //! reused while it stays good ([`super::linear::REUSE_MAX_CHANGED`],
-//! [`super::linear::REUSE_MAX_SLOWDOWN`]). Everything carried from one solve to the next lives
-//! in the caller's [`SolveState`].
+//! [`super::linear::REUSE_MAX_SLOWDOWN`]) and, on planar meshes, corrected by exact solves on a
+//! patch around the unknowns whose status changed since it was built
+//! ([`super::linear::PATCH_LAYERS`], [`crate::linalg::PatchCorrected`]). Everything carried
+//! from one solve to the next lives in the caller's [`SolveState`].
 
 use super::linear::{
     ITERATIVE_MAX_ITER, ITERATIVE_RTOL, PATCH_MAX_FRACTION, REUSE_MAX_SLOWDOWN,
