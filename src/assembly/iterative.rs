@@ -11,7 +11,7 @@ use super::linear::{
     SCREENING_REDUCTION, patch_layers, reuse_max_changed,
 };
 use super::two_point::CellSystemAll;
-use super::{DiscreteSystem, SolveState};
+use super::{DiscreteSystem, DofMap, SolveState};
 use crate::budget::{AllocFailure, try_copy, try_filled, try_vec};
 use crate::linalg::amg::Fine;
 use crate::linalg::{
@@ -123,13 +123,17 @@ pub(super) fn hierarchy(
     })
 }
 
-/// The rows of a system of `n_rows` rows (the cell system `cs`, else the skeleton system,
-/// whose row i is unknown i) whose unknown has a different bit in the masks `a` and `b`.
+/// The rows of a system of `n_rows` rows whose matrix row changed between the masks `a` and
+/// `b` of fixed unknowns: of the cell system `cs`, the rows whose unknown has a different bit;
+/// of the skeleton system (row i is unknown i), the skeleton unknowns with a different bit and,
+/// with `interior` = (the dof map, the number of skeleton unknowns), the skeleton unknowns of
+/// every cell one of whose interior unknowns has a different bit (condensed into them).
 fn changed_rows(
     a: &[u64],
     b: &[u64],
     n_rows: usize,
     cs: Option<&CellSystemAll>,
+    interior: Option<(&DofMap, usize)>,
 ) -> Result<Vec<u32>, AllocFailure> {
     let differs = |i: usize| (a[i / 64] ^ b[i / 64]) >> (i % 64) & 1 == 1;
     let mut rows = try_vec(0, "the changed rows")?;
@@ -148,6 +152,17 @@ fn changed_rows(
                         rows.push(i as u32);
                     }
                     d &= d - 1;
+                }
+            }
+            if let Some((map, n_skel)) = interior {
+                for k in 0..map.n_cells() {
+                    let (dofs, _) = map.cell(k);
+                    if dofs
+                        .iter()
+                        .any(|&j| j as usize >= n_skel && differs(j as usize))
+                    {
+                        rows.extend(dofs.iter().filter(|&&j| (j as usize) < n_rows));
+                    }
                 }
             }
         }
@@ -298,7 +313,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// [`Self::pcg`] with the hierarchy `hier` (of the cell system `cs` if given, else of the
     /// skeleton one), which is then kept in `state` for the next solve (with c and the
     /// fingerprint of `fixed` if the solve stopped early). A reused hierarchy is corrected on
-    /// the patch of the unknowns whose status changed since it was built ([`Self::patch`]); one
+    /// the patch of the unknowns whose status changed since it was built ([`patched_pcg`]); one
     /// that fails is replaced by a new one, once; one that converged more than
     /// [`REUSE_MAX_SLOWDOWN`] times slower than when fresh is marked stale.
     #[allow(clippy::too_many_arguments)]
@@ -321,7 +336,9 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         } = hier;
         let seeds = if reused && patch_layers(D) > 0 {
             let now = self::fixed_mask(&self.values.dirichlet, fixed)?;
-            changed_rows(&fixed_mask, &now, amg.n(), cs)?
+            let interior =
+                (cs.is_none() && self.n > self.n_skel).then_some((&*self.sym.dof_map, self.n_skel));
+            changed_rows(&fixed_mask, &now, amg.n(), cs, interior)?
         } else {
             Vec::new()
         };
@@ -437,5 +454,57 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     pub(super) fn keep_solution(&self, state: &mut SolveState, x: Vec<f64>) {
         state.last_solution = x;
         state.last_cells = Vec::new();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::cartesian_triangles;
+    use crate::scheme::{GradientDiscretisation, Hmm};
+
+    /// Masks of `n` unknowns with the unknowns `set` set.
+    fn mask(n: usize, set: &[usize]) -> Vec<u64> {
+        let mut m = vec![0u64; n.div_ceil(64)];
+        for &i in set {
+            m[i / 64] |= 1 << (i % 64);
+        }
+        m
+    }
+
+    #[test]
+    fn the_changed_rows_of_the_skeleton_system_include_the_faces_of_changed_cells() {
+        let mesh = cartesian_triangles(4, 4, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        let hmm = Hmm::new(&mesh);
+        let map = DofMap::new(&hmm).unwrap();
+        let (n, n_skel) = (hmm.n_unknowns(), hmm.n_skeleton());
+        assert!(n > n_skel);
+        // cell 5's interior unknown and face 2 change status
+        let (dofs, _) = map.cell(5);
+        let interior = dofs
+            .iter()
+            .map(|&j| j as usize)
+            .find(|&j| j >= n_skel)
+            .unwrap();
+        let (a, b) = (mask(n, &[0, 1]), mask(n, &[0, 1, 2, interior]));
+        let mut want: Vec<u32> = dofs
+            .iter()
+            .copied()
+            .filter(|&j| (j as usize) < n_skel)
+            .collect();
+        assert_eq!(want.len(), 3);
+        want.push(2);
+        want.sort_unstable();
+        let mut got = changed_rows(&a, &b, n_skel, None, Some((&map, n_skel))).unwrap();
+        got.sort_unstable();
+        got.dedup();
+        assert_eq!(got, want);
+        // without the dof map: the skeleton unknown alone; unchanged masks: nothing
+        assert_eq!(changed_rows(&a, &b, n_skel, None, None).unwrap(), vec![2]);
+        assert!(
+            changed_rows(&b, &b, n_skel, None, Some((&map, n_skel)))
+                .unwrap()
+                .is_empty()
+        );
     }
 }
