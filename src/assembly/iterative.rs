@@ -7,8 +7,8 @@
 //! from one solve to the next lives in the caller's [`SolveState`].
 
 use super::linear::{
-    ITERATIVE_MAX_ITER, ITERATIVE_RTOL, PATCH_MAX_FRACTION, REUSE_MAX_SLOWDOWN,
-    SCREENING_REDUCTION, patch_layers, reuse_max_changed,
+    ITERATIVE_MAX_ITER, ITERATIVE_RTOL, PATCH_MAX_FRACTION, REUSE_MAX_CHANGED_UNPATCHED,
+    REUSE_MAX_SLOWDOWN, SCREENING_REDUCTION, patch_layers, reuse_max_changed,
 };
 use super::two_point::CellSystemAll;
 use super::{DiscreteSystem, DofMap, SolveState};
@@ -171,9 +171,11 @@ fn changed_rows(
 }
 
 /// Conjugate gradients on `a` x = c preconditioned by `amg` corrected on the patch of `layers`
-/// around `seeds` in `graph` ([`PatchCorrected`]); by `amg` alone when the patch is too large
-/// ([`PATCH_MAX_FRACTION`] of the rows, or a Cholesky factor with more entries than `a`: less
-/// memory than the new hierarchy the reuse saves).
+/// around `seeds` in `graph` ([`PatchCorrected`]). A patch too large ([`PATCH_MAX_FRACTION`]
+/// of the rows, or a Cholesky factor with more entries than `a`: less memory than the new
+/// hierarchy the reuse saves) is declined: `amg` then preconditions alone if the seeds are at
+/// most [`REUSE_MAX_CHANGED_UNPATCHED`] of the rows, else the result is an error, on which the
+/// caller builds a new hierarchy (x untouched).
 #[allow(clippy::too_many_arguments)]
 fn patched_pcg<A: Rows + ?Sized>(
     a: &A,
@@ -194,7 +196,13 @@ fn patched_pcg<A: Rows + ?Sized>(
             *work = w.into_inner();
             report
         }
-        None => amg.pcg(work, c, x, opts),
+        None if seeds.len() as f64 <= REUSE_MAX_CHANGED_UNPATCHED * a.n_rows() as f64 => {
+            amg.pcg(work, c, x, opts)
+        }
+        None => Err(crate::Error::Linear(format!(
+            "the patch around {} changed rows is too large to correct a reused hierarchy",
+            seeds.len()
+        ))),
     }
 }
 
@@ -506,5 +514,43 @@ mod tests {
                 .unwrap()
                 .is_empty()
         );
+    }
+
+    #[test]
+    fn a_declined_patch_around_many_changes_asks_for_a_new_hierarchy() {
+        use crate::linalg::amg::testing::grid;
+        let a = grid(40, 1.0, 1.0, &|_, _| 1.0);
+        let n = a.n_rows();
+        let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
+        let opts = PcgOptions {
+            rtol: 1e-10,
+            atol: 0.0,
+            max_iter: 100,
+        };
+        let b = vec![1.0; n];
+        let run = |seeds: &[u32]| {
+            let mut x = vec![0.0; n];
+            let r = patched_pcg(
+                &a,
+                &a,
+                &amg,
+                &mut AmgWork::new(),
+                seeds,
+                6,
+                &b,
+                &mut x,
+                &opts,
+            );
+            (r, x)
+        };
+        // one seed: a patch of 85 of the 1600 rows, corrected, and converged
+        let (r, x) = run(&[820]);
+        assert!(r.unwrap().iterations > 0 && x.iter().all(|v| v.is_finite() && *v > 0.0));
+        // every row: above PATCH_MAX_FRACTION, declined; more than 10⁻³ of the rows changed,
+        // so an error (the caller then builds a new hierarchy), x untouched
+        let all: Vec<u32> = (0..n as u32).collect();
+        let (r, x) = run(&all);
+        assert!(r.unwrap_err().to_string().contains("1600 changed rows"));
+        assert!(x.iter().all(|&v| v == 0.0));
     }
 }

@@ -148,8 +148,14 @@ pub(crate) fn patch_layers(d: usize) -> usize {
 }
 
 /// A patch with more than this fraction of the rows is not factorised: the reused hierarchy
-/// then preconditions alone.
+/// then preconditions alone if at most [`REUSE_MAX_CHANGED_UNPATCHED`] of the unknowns changed,
+/// else a new hierarchy is built.
 pub const PATCH_MAX_FRACTION: f64 = 0.1;
+
+/// The reuse bound of a hierarchy without the patch correction (the bound of 2D before it):
+/// when the patch is declined ([`PATCH_MAX_FRACTION`]) and more than this fraction of the rows
+/// changed, the solve builds a new hierarchy instead.
+pub const REUSE_MAX_CHANGED_UNPATCHED: f64 = 1e-3;
 
 /// [`REUSE_MAX_CHANGED`] on 3D meshes, without the patch correction. The active-set steps of
 /// a 3D solve change a shell around the free boundary rather than a band, a larger fraction of

@@ -275,12 +275,13 @@ fn screening_solves_are_refined_to_the_full_solution() {
 
 /// Consecutive iterative solves reuse the coarse levels of the previous multigrid hierarchy
 /// when at most `REUSE_MAX_CHANGED` of the unknowns changed status since the matrix it was
-/// built for (counted from that matrix, over several solves), and build a new one otherwise
-/// or after `release`; the solutions are those of fresh systems.
+/// built for (counted from that matrix, over several solves; on a grid large enough for the
+/// patch around the changes to be factorised), and build a new one otherwise or after
+/// `release`; the solutions are those of fresh systems.
 #[test]
 fn multigrid_hierarchies_are_reused_when_few_unknowns_change() {
     use gradvi::assembly::{DiscreteSystem, REUSE_MAX_CHANGED};
-    let tri = cartesian_triangles(128, 128, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let tri = cartesian_triangles(256, 256, [0.0, 1.0], [0.0, 1.0]).unwrap();
     let p1 = P1::new(&tri).unwrap();
     let p = paper_test3(-10.0);
     let system = || {
