@@ -633,13 +633,16 @@ fn print_solution<M: SolveMesh<D> + ?Sized, const D: usize>(sol: &Solution<M, D>
     println!("  solve  active  entered  left  violation  residual");
     for l in &sol.result.log {
         println!(
-            "  {:>5}  {:>6}  {:>7}  {:>4}  {:>9.2e}  {:>8.2e}",
+            "  {:>5}  {:>6}  {:>7}  {:>4}  {:>9.2e}  {:>8}",
             l.step.solve,
             l.step.active,
             l.step.entered,
             l.step.left,
             l.step.violation,
-            l.step.residual
+            // a screened iterate's residual is not computed (IterationStep::residual)
+            l.step
+                .residual
+                .map_or("-".to_string(), |r| format!("{r:.2e}"))
         );
     }
     let c = sol.result.certificate;

@@ -78,8 +78,10 @@ class IterationLog:
     left: int
     #: Largest scaled constraint violation of the iterate.
     violation: float
-    #: Largest scaled balance residual on the inactive unknowns.
-    residual: float
+    #: Largest scaled balance residual on the inactive unknowns; ``None`` for a screened
+    #: iterate (an iterative solve stopped early to choose the next active set), whose
+    #: residual is computed on the constrained unknowns only.
+    residual: Optional[float]
     #: Seconds: ``assemble`` (condensation and scatter), ``factor``, ``solve``.
     timings: Dict[str, float]
 
@@ -87,6 +89,11 @@ class IterationLog:
     def _from(cls, d: Dict[str, Any]) -> "IterationLog":
         names = ("solve", "active", "entered", "left", "violation", "residual", "timings")
         return cls(**{k: d[k] for k in names})
+
+
+def _residual_cell(r: Optional[float]) -> str:
+    """An iteration's residual for the summary: ``-`` for a screened iterate."""
+    return "-" if r is None else f"{r:.2e}"
 
 
 class Solution:
@@ -447,7 +454,7 @@ class Solution:
             "  solve  active  entered  left  violation  residual",
         ]
         for e in self.log:
-            lines.append(f"  {e.solve:>5}  {e.active:>6}  {e.entered:>7}  {e.left:>4}  {e.violation:>9.2e}  {e.residual:>8.2e}")
+            lines.append(f"  {e.solve:>5}  {e.active:>6}  {e.entered:>7}  {e.left:>4}  {e.violation:>9.2e}  {_residual_cell(e.residual):>8}")
         c = self.certificate
         lines.append(
             f"certificate     violation {c.max_violation:.2e}, min multiplier {c.min_multiplier:.2e}, "

@@ -83,6 +83,13 @@ def test_iterative_linear_solver_gives_the_direct_solution(root):
     assert d.certificate.ok(1e-10) and i.certificate.ok(1e-10)
     np.testing.assert_array_equal(i.active, d.active)
     np.testing.assert_allclose(i.u, d.u, rtol=0, atol=1e-8 * np.abs(d.u).max())
+    # a screened iterate has no balance residual (evaluated on the constrained unknowns only),
+    # the last, exact one has; every direct iterate has
+    assert all(e.residual is not None for e in d.log)
+    assert i.log[-1].residual is not None and i.log[-1].residual <= 1e-10
+    screened = [e for e in i.log if e.residual is None]
+    assert len(i.log) > 1 and screened, [e.residual for e in i.log]
+    assert sum(line.endswith(" -") for line in i.summary().splitlines()) == len(screened)
 
 
 def test_solution_arrays_and_outputs(tmp_path, test3_mesh):

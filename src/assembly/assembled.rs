@@ -198,17 +198,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             .zip(scale.par_iter_mut())
             .enumerate()
             .with_min_len(4096)
-            .for_each(|(i, (ri, si))| {
-                let (cols, vals) = a.row(i);
-                let (mut mu, mut abs) = (0.0, 0.0);
-                for (&j, &m) in cols.iter().zip(vals) {
-                    let v = m * u[j as usize];
-                    mu += v;
-                    abs += v.abs();
-                }
-                *ri = load[i] - mu;
-                *si = load[i].abs() + abs;
-            });
+            .for_each(|(i, (ri, si))| (*ri, *si) = assembled_row(a, load, u, i));
         Ok((r, scale))
     }
 
@@ -225,4 +215,17 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         }
         Ok(t)
     }
+}
+
+/// Row `i` of the residual b − M u of the assembled matrix `a` (b in `load`) and its scale
+/// |b_i| + Σ_j |M_ij u_j|.
+pub(super) fn assembled_row(a: &CsrMatrix, load: &[f64], u: &[f64], i: usize) -> (f64, f64) {
+    let (cols, vals) = a.row(i);
+    let (mut mu, mut abs) = (0.0, 0.0);
+    for (&j, &m) in cols.iter().zip(vals) {
+        let v = m * u[j as usize];
+        mu += v;
+        abs += v.abs();
+    }
+    (load[i] - mu, load[i].abs() + abs)
 }

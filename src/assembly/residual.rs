@@ -2,6 +2,7 @@
 //! the certificate is computed), its rows, its entries and the energy.
 
 use super::DiscreteSystem;
+use super::assembled::assembled_row;
 use super::gather::{PAR_ROWS, local_index};
 use crate::budget::try_filled;
 use crate::mesh::SolveMesh;
@@ -21,7 +22,6 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         if let Some(a) = self.assembled() {
             return self.assembled_residual(a, u);
         }
-        let inc = &self.sym.maps.inc;
         let mut r = try_filled(self.n, 0.0, "the residual of the system")?;
         let mut scale = try_filled(self.n, 0.0, "the residual scales of the system")?;
         // fallible per chunk of rows rather than per row (see `gather::par_try_fill`)
@@ -30,28 +30,67 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             .enumerate()
             .try_for_each(|(c, (rc, sc))| -> crate::Result<()> {
                 for (o, (ri, si)) in rc.iter_mut().zip(sc.iter_mut()).enumerate() {
-                    let gi = c * PAR_ROWS + o;
-                    let mut a = self.values.load[gi];
-                    let mut b = a.abs();
-                    for &k in inc.list(gi) {
-                        let cell = self.local(k as usize);
-                        let (d, m) = (cell.dofs, cell.matrix);
-                        let i = local_index(d, gi)?;
-                        let (mut mu, mut abs) = (0.0, 0.0);
-                        for (j, &gj) in d.iter().enumerate() {
-                            let v = m.at(i, j) * u[gj as usize];
-                            mu += v;
-                            abs += v.abs();
-                        }
-                        a -= mu;
-                        b += abs;
-                    }
-                    *ri = a;
-                    *si = b;
+                    (*ri, *si) = self.gathered_row(c * PAR_ROWS + o, u)?;
                 }
                 Ok(())
             })?;
         Ok((r, scale))
+    }
+
+    /// The entries `rows` of the residual and of its scales of [`Self::residual`], to the bit
+    /// (each row is computed as there), without the other rows: what the active-set rule
+    /// reads of a screened iterate (its multipliers, on the constrained unknowns).
+    pub fn residual_at(&self, u: &[f64], rows: &[usize]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
+        if let Some(&i) = rows.iter().find(|&&i| i >= self.n) {
+            return Err(crate::Error::Internal(format!(
+                "residual at row {i} of a system of {} unknowns",
+                self.n
+            )));
+        }
+        let mut r = try_filled(rows.len(), 0.0, "the residual at the constrained unknowns")?;
+        let mut scale = try_filled(
+            rows.len(),
+            0.0,
+            "the residual scales at the constrained unknowns",
+        )?;
+        let at = |i: usize| -> crate::Result<(f64, f64)> {
+            match self.assembled() {
+                Some(a) => Ok(assembled_row(a, &self.values.load, u, i)),
+                None => self.gathered_row(i, u),
+            }
+        };
+        r.par_chunks_mut(PAR_ROWS)
+            .zip(scale.par_chunks_mut(PAR_ROWS))
+            .zip(rows.par_chunks(PAR_ROWS))
+            .try_for_each(|((rc, sc), ic)| -> crate::Result<()> {
+                for ((ri, si), &i) in rc.iter_mut().zip(sc.iter_mut()).zip(ic) {
+                    (*ri, *si) = at(i)?;
+                }
+                Ok(())
+            })?;
+        Ok((r, scale))
+    }
+
+    /// Row `gi` of the residual and its scale, gathered from the cells of the unknown
+    /// (ascending, the order of a sequential scatter).
+    fn gathered_row(&self, gi: usize, u: &[f64]) -> crate::Result<(f64, f64)> {
+        let inc = &self.sym.maps.inc;
+        let mut a = self.values.load[gi];
+        let mut b = a.abs();
+        for &k in inc.list(gi) {
+            let cell = self.local(k as usize);
+            let (d, m) = (cell.dofs, cell.matrix);
+            let i = local_index(d, gi)?;
+            let (mut mu, mut abs) = (0.0, 0.0);
+            for (j, &gj) in d.iter().enumerate() {
+                let v = m.at(i, j) * u[gj as usize];
+                mu += v;
+                abs += v.abs();
+            }
+            a -= mu;
+            b += abs;
+        }
+        Ok((a, b))
     }
 
     /// The entries (i, j, (M_K)_ij) of the rows i ∈ `rows` of the full matrix, cell by cell

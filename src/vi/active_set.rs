@@ -33,7 +33,13 @@
 //! solves need not be a cycle (the older set may have come from an inexact iterate, whose
 //! successor an exact one need not repeat): the iteration then goes on without screening and
 //! the cycle test restarts from the current set. The continuation belongs to the same
-//! active set and is not counted as another solve. If screening misjudges an unknown, the
+//! active set and is not counted as another solve. Step 2 reads an inexact iterate through
+//! [`super::certificate::evaluate_screened`]: its residual on the constrained unknowns only
+//! (the multipliers, to the bit those of the whole residual; on HMM the other rows are most of
+//! the system), with the round-off threshold of the multipliers scaled by those rows; its log
+//! line has no balance residual ([`super::IterationStep::residual`] is `None`). The exact
+//! iterate of the stopping rule and the cycle test is evaluated whole, and so is every
+//! certificate. If screening misjudges an unknown, the
 //! exact iterate corrects it at the cost of more solves; the iterative solver's screening
 //! tolerance is chosen so that this does not happen on the benchmarks
 //! ([`crate::assembly::SCREENING_RTOL`]).
@@ -42,7 +48,7 @@
 //! error. Cycling and the iteration cap end the iteration with [`Outcome::Stalled`]; the solve
 //! driver decides whether to fall back to projected Gauss–Seidel.
 
-use super::certificate::{Evaluation, evaluate};
+use super::certificate::{Evaluation, evaluate, evaluate_screened};
 use super::look_ahead::{LookAheadOptions, LookAheadReport, Thresholds, look_ahead};
 use super::{
     Constraints, IterationLog, IterationStep, Method, QuadraticEnergy, SolveTimings,
@@ -246,14 +252,19 @@ fn solve_step<P>(
     } else {
         q.minimise_with_fixed(&fixed)?
     };
-    let mut ev = evaluate(&*q, Some(cons), &u, active)?;
+    // a screened iterate only chooses the next active set: its residual is computed on the
+    // constrained unknowns only, unless it ends the iteration or closes a cycle
+    let mut ev = if timings.inexact {
+        evaluate_screened(&*q, cons, &u)?
+    } else {
+        evaluate(&*q, Some(cons), &u, active)?
+    };
     let mut next = next_active(cons, &u, active, &ev, c);
-    if timings.inexact
-        && (next == active || history.contains(&next))
-        && let Some((v, more)) = q.refine(&fixed)?
-    {
-        u = v;
-        timings = timings.then(more);
+    if ev.screened && (next == active || history.contains(&next)) {
+        if let Some((v, more)) = q.refine(&fixed)? {
+            u = v;
+            timings = timings.then(more);
+        }
         ev = evaluate(&*q, Some(cons), &u, active)?;
         next = next_active(cons, &u, active, &ev, c);
     }
@@ -371,7 +382,7 @@ pub fn run<P>(
                 entered,
                 left,
                 violation: ev.certificate.max_violation,
-                residual: ev.certificate.balance_residual,
+                residual: (!ev.screened).then_some(ev.certificate.balance_residual),
             },
             timings,
             look_ahead: look,

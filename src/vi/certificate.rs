@@ -83,17 +83,22 @@ pub fn check_tolerance(tol: f64) -> crate::Result<()> {
     }
 }
 
-/// What [`evaluate`] computed from one residual.
+/// What [`evaluate`] (or [`evaluate_screened`]) computed from one residual.
 #[derive(Debug, Clone)]
 pub struct Evaluation {
-    /// The certificate.
+    /// The certificate; after [`evaluate_screened`] its balance residual is NaN (not
+    /// computed), so that it can never pass [`Certificate::check`].
     pub certificate: Certificate,
     /// λ_j = s (b − Mu)_j for each constrained unknown (empty without constraints).
     pub multiplier: Vec<f64>,
-    /// max_i(|b_i| + Σ_j |M_ij u_j|) (at least the smallest positive float).
+    /// max_i(|b_i| + Σ_j |M_ij u_j|) (at least the smallest positive float); after
+    /// [`evaluate_screened`], the maximum over the constrained unknowns only.
     pub scale_r: f64,
     /// max(‖u‖∞, ‖g‖∞) (at least the smallest positive float).
     pub scale_u: f64,
+    /// Whether the residual was computed on the constrained unknowns only
+    /// ([`evaluate_screened`]).
+    pub screened: bool,
 }
 
 /// Computes the certificate of `u` with the active set `active` (indexed like `cons.dofs`),
@@ -105,34 +110,18 @@ pub fn evaluate<P>(
     active: &[bool],
 ) -> crate::Result<Evaluation> {
     let (r, scale) = q.residual(u)?;
-    let scale_r = scale
-        .iter()
-        .cloned()
-        .fold(0.0, f64::max)
-        .max(f64::MIN_POSITIVE);
-    let mut scale_u = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    if let Some(cons) = cons {
-        scale_u = cons.barrier.iter().fold(scale_u, |m, x| m.max(x.abs()));
-    }
-    let scale_u = scale_u.max(f64::MIN_POSITIVE);
+    let scale_r = max_scale(&scale);
+    let scale_u = scale_u(cons, u);
     let mut is_active = vec![false; u.len()];
     let mut c = Certificate::default();
     let mut lambda = Vec::new();
     if let Some(cons) = cons {
-        let s = cons.side.sign();
-        let mut min_l = f64::INFINITY;
+        (c, lambda) = constrained(cons, u, |j| r[cons.dofs[j].dof], scale_r, scale_u);
         for (j, pd) in cons.dofs.iter().enumerate() {
-            let l = s * r[pd.dof];
-            lambda.push(l);
-            let gap = u[pd.dof] - cons.barrier[j];
-            c.max_violation = c.max_violation.max((s * gap).max(0.0) / scale_u);
-            min_l = min_l.min(l / scale_r);
-            c.complementarity = c.complementarity.max((l * gap).abs() / (scale_r * scale_u));
             if active[j] {
                 is_active[pd.dof] = true;
             }
         }
-        c.min_multiplier = if min_l.is_finite() { min_l } else { 0.0 };
     }
     let dir = q.dirichlet();
     for i in 0..u.len() {
@@ -145,5 +134,78 @@ pub fn evaluate<P>(
         multiplier: lambda,
         scale_r,
         scale_u,
+        screened: false,
     })
+}
+
+/// What the active-set rule reads of a screened iterate `u` (an iterative solve stopped early to
+/// choose the next active set), from the residual on the constrained unknowns only
+/// ([`QuadraticEnergy::residual_at`]): the multipliers, to the bit those of [`evaluate`];
+/// the violation, the least multiplier and the complementarity, scaled by the residual scale
+/// of the constrained unknowns (a lower bound of [`evaluate`]'s, which only sets the
+/// round-off thresholds of the rule); no balance residual (NaN). On HMM the constrained
+/// unknowns are the cells' of the obstacle or the faces of Γ₃, a fraction of the system,
+/// whose other rows would cost a pass over every cell's local matrix.
+pub fn evaluate_screened<P>(
+    q: &dyn QuadraticEnergy,
+    cons: &Constraints<P>,
+    u: &[f64],
+) -> crate::Result<Evaluation> {
+    let rows: Vec<usize> = cons.dofs.iter().map(|pd| pd.dof).collect();
+    let (r, scale) = q.residual_at(u, &rows)?;
+    let scale_r = max_scale(&scale);
+    let scale_u = scale_u(Some(cons), u);
+    let (mut c, lambda) = constrained(cons, u, |j| r[j], scale_r, scale_u);
+    c.balance_residual = f64::NAN;
+    Ok(Evaluation {
+        certificate: c,
+        multiplier: lambda,
+        scale_r,
+        scale_u,
+        screened: true,
+    })
+}
+
+/// The largest residual scale (at least the smallest positive float).
+fn max_scale(scale: &[f64]) -> f64 {
+    scale
+        .iter()
+        .cloned()
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE)
+}
+
+/// max(‖u‖∞, ‖g‖∞) (at least the smallest positive float).
+fn scale_u<P>(cons: Option<&Constraints<P>>, u: &[f64]) -> f64 {
+    let mut scale_u = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if let Some(cons) = cons {
+        scale_u = cons.barrier.iter().fold(scale_u, |m, x| m.max(x.abs()));
+    }
+    scale_u.max(f64::MIN_POSITIVE)
+}
+
+/// The certificate's constrained quantities (violation, least multiplier,
+/// complementarity; balance residual 0) and the multipliers, with `r(j)` the residual of
+/// constrained unknown j.
+fn constrained<P>(
+    cons: &Constraints<P>,
+    u: &[f64],
+    r: impl Fn(usize) -> f64,
+    scale_r: f64,
+    scale_u: f64,
+) -> (Certificate, Vec<f64>) {
+    let s = cons.side.sign();
+    let mut c = Certificate::default();
+    let mut lambda = Vec::with_capacity(cons.dofs.len());
+    let mut min_l = f64::INFINITY;
+    for (j, pd) in cons.dofs.iter().enumerate() {
+        let l = s * r(j);
+        lambda.push(l);
+        let gap = u[pd.dof] - cons.barrier[j];
+        c.max_violation = c.max_violation.max((s * gap).max(0.0) / scale_u);
+        min_l = min_l.min(l / scale_r);
+        c.complementarity = c.complementarity.max((l * gap).abs() / (scale_r * scale_u));
+    }
+    c.min_multiplier = if min_l.is_finite() { min_l } else { 0.0 };
+    (c, lambda)
 }

@@ -122,6 +122,24 @@ pub trait QuadraticEnergy {
     /// r = b − Mu and, for each entry, the scale |b_i| + Σ_j |M_ij u_j| against which it is
     /// small (an error only if the energy's own data are inconsistent).
     fn residual(&self, u: &[f64]) -> crate::Result<(Vec<f64>, Vec<f64>)>;
+    /// The entries `rows` of [`Self::residual`]'s two vectors, to the bit. Default: the whole
+    /// residual, then those entries; an energy that can compute single rows overrides it.
+    fn residual_at(&self, u: &[f64], rows: &[usize]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
+        let (r, scale) = self.residual(u)?;
+        let pick = |v: &[f64]| -> crate::Result<Vec<f64>> {
+            rows.iter()
+                .map(|&i| {
+                    v.get(i).copied().ok_or_else(|| {
+                        crate::Error::Internal(format!(
+                            "residual at row {i} of a system of {} unknowns",
+                            v.len()
+                        ))
+                    })
+                })
+                .collect()
+        };
+        Ok((pick(&r)?, pick(&scale)?))
+    }
     /// The entries (i, j, M_ij) of M, possibly with repeated (i, j) to be summed.
     fn matrix_triplets(&self) -> Vec<(usize, usize, f64)>;
     /// The entries (i, j, M_ij) of the rows i ∈ `rows` of M (repeated (i, j) to be summed),
@@ -204,8 +222,11 @@ pub struct IterationStep {
     pub left: usize,
     /// Largest scaled constraint violation of the iterate.
     pub violation: f64,
-    /// Largest scaled balance residual on inactive unknowns of the iterate.
-    pub residual: f64,
+    /// Largest scaled balance residual on inactive unknowns of the iterate; `None` for a
+    /// screened iterate (an iterative solve stopped early to choose the next active set),
+    /// whose residual is computed on the constrained unknowns only
+    /// ([`certificate::evaluate_screened`]).
+    pub residual: Option<f64>,
 }
 
 /// One line of the iteration log: the [`IterationStep`] (its fields read through the log,
@@ -272,7 +293,7 @@ pub fn solve_unconstrained(
                 entered: 0,
                 left: 0,
                 violation: 0.0,
-                residual: ev.certificate.balance_residual,
+                residual: Some(ev.certificate.balance_residual),
             },
             timings,
             look_ahead: None,

@@ -219,7 +219,7 @@ fn certified_solution<P>(
                 entered: 0,
                 left: 0,
                 violation: cert.max_violation,
-                residual: cert.balance_residual,
+                residual: Some(cert.balance_residual),
             },
             timings: SolveTimings::default(),
             look_ahead: None,

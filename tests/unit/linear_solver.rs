@@ -387,3 +387,77 @@ fn a_solve_is_refused_beyond_the_callers_memory_budget() {
         }
     }
 }
+
+/// The residual on chosen rows (`residual_at`, what a screened iterate is evaluated by) has the
+/// bits of the whole residual's rows, on HMM (gathered from the cells) and P1 (the assembled
+/// matrix), rows in any order and repeated; a row beyond the system is an error.
+#[test]
+fn the_residual_on_chosen_rows_has_the_bits_of_the_whole_residual() {
+    use gradvi::assembly::DiscreteSystem;
+    let hex = hexagonal(3).unwrap();
+    let tri = cartesian_triangles(12, 9, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let hmm = Hmm::new(&hex);
+    let p1 = P1::new(&tri).unwrap();
+    let p = paper_test3(-10.0);
+    for s in [&hmm as &dyn GradientDiscretisation, &p1] {
+        let sys = DiscreteSystem::new(s, &p, SystemOptions::default()).unwrap();
+        let n = sys.n_unknowns();
+        let u: Vec<f64> = (0..n)
+            .map(|i| ((i * 37 % 101) as f64 - 50.0) / 7.0)
+            .collect();
+        let (r, scale) = sys.residual(&u).unwrap();
+        let rows: Vec<usize> = (0..n).rev().step_by(3).chain([0, 0, n - 1]).collect();
+        let (ra, sa) = sys.residual_at(&u, &rows).unwrap();
+        assert_eq!(ra.len(), rows.len());
+        for (k, &i) in rows.iter().enumerate() {
+            assert_eq!(ra[k].to_bits(), r[i].to_bits(), "{} row {i}", s.name());
+            assert_eq!(sa[k].to_bits(), scale[i].to_bits(), "{} row {i}", s.name());
+        }
+        let e = sys.residual_at(&u, &[1, n]).unwrap_err();
+        assert!(e.to_string().contains(&format!("row {n}")), "{e}");
+    }
+}
+
+/// An iterative obstacle solve with screening evaluates its screened iterates on the
+/// constrained unknowns only: their log lines have no balance residual, the last (exact)
+/// one has it, below the tolerance; the multipliers of a screened evaluation have the bits
+/// of the whole one, which alone can pass a certificate check; and the solution is the
+/// direct solver's, with the same active sets' count of solves.
+#[test]
+fn screened_iterates_are_evaluated_on_the_constrained_unknowns() {
+    use gradvi::vi::certificate::{evaluate, evaluate_screened};
+    let hex = hexagonal(5).unwrap();
+    let hmm = Hmm::new(&hex);
+    let p = paper_test3(-10.0);
+    let sol = same_solution(&hmm, &p, WarmStart::Cold);
+    let log = &sol.result.log;
+    assert!(log.len() >= 3, "{} solves", log.len());
+    let screened = log.iter().filter(|l| l.step.residual.is_none()).count();
+    assert!(screened >= 1, "no screened iterate in {} solves", log.len());
+    let last = log
+        .last()
+        .unwrap()
+        .step
+        .residual
+        .expect("the last iterate is exact");
+    assert!(last <= 1e-10, "{last:e}");
+
+    // one screened iterate, evaluated both ways
+    let cons = sol.constraints.as_ref().expect("an obstacle");
+    let mut state = SolveState::default();
+    let mut q = sol.system.with_state(&mut state);
+    use gradvi::vi::QuadraticEnergy;
+    let active: Vec<bool> = sol.result.active.clone();
+    let fixed = cons.fixed(q.n_unknowns(), &active).unwrap();
+    let (u, t) = q.screen_with_fixed(&fixed).unwrap();
+    assert!(t.inexact);
+    let full = evaluate(&q, Some(cons), &u, &active).unwrap();
+    let part = evaluate_screened(&q, cons, &u).unwrap();
+    assert!(part.screened && !full.screened);
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&part.multiplier), bits(&full.multiplier));
+    assert_eq!(part.scale_u.to_bits(), full.scale_u.to_bits());
+    assert!(part.scale_r <= full.scale_r && part.scale_r > 0.0);
+    assert!(part.certificate.balance_residual.is_nan());
+    assert!(part.certificate.check(1e-3).is_err());
+}
