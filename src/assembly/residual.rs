@@ -37,37 +37,47 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         Ok((r, scale))
     }
 
-    /// The entries `rows` of the residual and of its scales of [`Self::residual`], to the bit
-    /// (each row is computed as there), without the other rows: what the active-set rule
-    /// reads of a screened iterate (its multipliers, on the constrained unknowns).
-    pub fn residual_at(&self, u: &[f64], rows: &[usize]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
-        if let Some(&i) = rows.iter().find(|&&i| i >= self.n) {
-            return Err(crate::Error::Internal(format!(
-                "residual at row {i} of a system of {} unknowns",
-                self.n
-            )));
-        }
-        let mut r = try_filled(rows.len(), 0.0, "the residual at the constrained unknowns")?;
-        let mut scale = try_filled(
-            rows.len(),
-            0.0,
-            "the residual scales at the constrained unknowns",
-        )?;
+    /// The entries `row(0)`, …, `row(len − 1)` of the residual of [`Self::residual`], to the
+    /// bit (each row is computed as there), and the largest of their scales, without the
+    /// other rows: what the active-set rule reads of a screened iterate (its multipliers, on
+    /// the constrained unknowns). One vector of `len` entries is allocated.
+    pub fn residual_at(
+        &self,
+        u: &[f64],
+        len: usize,
+        row: &(dyn Fn(usize) -> usize + Sync),
+    ) -> crate::Result<(Vec<f64>, f64)> {
+        let mut r = try_filled(len, 0.0, "the residual at the constrained unknowns")?;
         let at = |i: usize| -> crate::Result<(f64, f64)> {
+            if i >= self.n {
+                return Err(crate::Error::Internal(format!(
+                    "residual at row {i} of a system of {} unknowns",
+                    self.n
+                )));
+            }
             match self.assembled() {
                 Some(a) => Ok(assembled_row(a, &self.values.load, u, i)),
                 None => self.gathered_row(i, u),
             }
         };
-        r.par_chunks_mut(PAR_ROWS)
-            .zip(scale.par_chunks_mut(PAR_ROWS))
-            .zip(rows.par_chunks(PAR_ROWS))
-            .try_for_each(|((rc, sc), ic)| -> crate::Result<()> {
-                for ((ri, si), &i) in rc.iter_mut().zip(sc.iter_mut()).zip(ic) {
-                    (*ri, *si) = at(i)?;
+        // the largest scale of each chunk, then of the chunks (a maximum: any order)
+        let maxima: Vec<crate::Result<f64>> = r
+            .par_chunks_mut(PAR_ROWS)
+            .enumerate()
+            .map(|(c, rc)| {
+                let mut m = 0.0f64;
+                for (o, ri) in rc.iter_mut().enumerate() {
+                    let (v, s) = at(row(c * PAR_ROWS + o))?;
+                    *ri = v;
+                    m = m.max(s);
                 }
-                Ok(())
-            })?;
+                Ok(m)
+            })
+            .collect();
+        let mut scale = 0.0f64;
+        for m in maxima {
+            scale = scale.max(m?);
+        }
         Ok((r, scale))
     }
 

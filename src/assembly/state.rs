@@ -121,8 +121,13 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> QuadraticEnergy for Solving<'_, '
     fn residual(&self, u: &[f64]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
         self.system.residual(u)
     }
-    fn residual_at(&self, u: &[f64], rows: &[usize]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
-        self.system.residual_at(u, rows)
+    fn residual_at(
+        &self,
+        u: &[f64],
+        len: usize,
+        row: &(dyn Fn(usize) -> usize + Sync),
+    ) -> crate::Result<(Vec<f64>, f64)> {
+        self.system.residual_at(u, len, row)
     }
     fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
         self.system.full_matrix_triplets()

@@ -156,7 +156,7 @@ pub enum Outcome {
 
 /// Solves the discrete variational inequality by the active-set method (see module docs);
 /// cycling and the iteration cap are errors.
-pub fn solve<P>(
+pub fn solve<P: Sync>(
     q: &mut dyn QuadraticEnergy,
     cons: &Constraints<P>,
     opts: &ActiveSetOptions,
@@ -238,7 +238,7 @@ fn sizes(history: &[Vec<bool>]) -> Vec<usize> {
 /// iterate that would end the iteration or close a cycle (`next` equal to `active` or in
 /// `history`) is first refined to full accuracy, so that those decisions are taken on an
 /// exact one.
-fn solve_step<P>(
+fn solve_step<P: Sync>(
     q: &mut dyn QuadraticEnergy,
     cons: &Constraints<P>,
     active: &[bool],
@@ -346,7 +346,7 @@ fn stall(
 }
 
 /// Runs the active-set method (see module docs) and says whether it converged.
-pub fn run<P>(
+pub fn run<P: Sync>(
     q: &mut dyn QuadraticEnergy,
     cons: &Constraints<P>,
     opts: &ActiveSetOptions,

@@ -116,7 +116,9 @@ pub fn evaluate<P>(
     let mut c = Certificate::default();
     let mut lambda = Vec::new();
     if let Some(cons) = cons {
-        (c, lambda) = constrained(cons, u, |j| r[cons.dofs[j].dof], scale_r, scale_u);
+        c = constrained(cons, u, |j| r[cons.dofs[j].dof], scale_r, scale_u);
+        let s = cons.side.sign();
+        lambda = cons.dofs.iter().map(|pd| s * r[pd.dof]).collect();
         for (j, pd) in cons.dofs.iter().enumerate() {
             if active[j] {
                 is_active[pd.dof] = true;
@@ -146,17 +148,20 @@ pub fn evaluate<P>(
 /// round-off thresholds of the rule); no balance residual (NaN). On HMM the constrained
 /// unknowns are the cells' of the obstacle or the faces of Γ₃, a fraction of the system,
 /// whose other rows would cost a pass over every cell's local matrix.
-pub fn evaluate_screened<P>(
+pub fn evaluate_screened<P: Sync>(
     q: &dyn QuadraticEnergy,
     cons: &Constraints<P>,
     u: &[f64],
 ) -> crate::Result<Evaluation> {
-    let rows: Vec<usize> = cons.dofs.iter().map(|pd| pd.dof).collect();
-    let (r, scale) = q.residual_at(u, &rows)?;
-    let scale_r = max_scale(&scale);
+    let (mut r, scale) = q.residual_at(u, cons.dofs.len(), &|j| cons.dofs[j].dof)?;
+    let scale_r = scale.max(f64::MIN_POSITIVE);
     let scale_u = scale_u(Some(cons), u);
-    let (mut c, lambda) = constrained(cons, u, |j| r[j], scale_r, scale_u);
+    let mut c = constrained(cons, u, |j| r[j], scale_r, scale_u);
     c.balance_residual = f64::NAN;
+    // the multipliers λ_j = s r_j, in place
+    let s = cons.side.sign();
+    r.iter_mut().for_each(|v| *v *= s);
+    let lambda = r;
     Ok(Evaluation {
         certificate: c,
         multiplier: lambda,
@@ -185,27 +190,25 @@ fn scale_u<P>(cons: Option<&Constraints<P>>, u: &[f64]) -> f64 {
 }
 
 /// The certificate's constrained quantities (violation, least multiplier,
-/// complementarity; balance residual 0) and the multipliers, with `r(j)` the residual of
-/// constrained unknown j.
+/// complementarity; balance residual 0), with `r(j)` the residual of constrained unknown j
+/// (its multiplier is λ_j = s r(j)).
 fn constrained<P>(
     cons: &Constraints<P>,
     u: &[f64],
     r: impl Fn(usize) -> f64,
     scale_r: f64,
     scale_u: f64,
-) -> (Certificate, Vec<f64>) {
+) -> Certificate {
     let s = cons.side.sign();
     let mut c = Certificate::default();
-    let mut lambda = Vec::with_capacity(cons.dofs.len());
     let mut min_l = f64::INFINITY;
     for (j, pd) in cons.dofs.iter().enumerate() {
         let l = s * r(j);
-        lambda.push(l);
         let gap = u[pd.dof] - cons.barrier[j];
         c.max_violation = c.max_violation.max((s * gap).max(0.0) / scale_u);
         min_l = min_l.min(l / scale_r);
         c.complementarity = c.complementarity.max((l * gap).abs() / (scale_r * scale_u));
     }
     c.min_multiplier = if min_l.is_finite() { min_l } else { 0.0 };
-    (c, lambda)
+    c
 }

@@ -122,23 +122,34 @@ pub trait QuadraticEnergy {
     /// r = b − Mu and, for each entry, the scale |b_i| + Σ_j |M_ij u_j| against which it is
     /// small (an error only if the energy's own data are inconsistent).
     fn residual(&self, u: &[f64]) -> crate::Result<(Vec<f64>, Vec<f64>)>;
-    /// The entries `rows` of [`Self::residual`]'s two vectors, to the bit. Default: the whole
-    /// residual, then those entries; an energy that can compute single rows overrides it.
-    fn residual_at(&self, u: &[f64], rows: &[usize]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
+    /// The entries `row(0)`, …, `row(len − 1)` of [`Self::residual`]'s r, to the bit, and
+    /// the largest of their scales. Default: the whole residual, then those entries; an
+    /// energy that can compute single rows overrides it.
+    fn residual_at(
+        &self,
+        u: &[f64],
+        len: usize,
+        row: &(dyn Fn(usize) -> usize + Sync),
+    ) -> crate::Result<(Vec<f64>, f64)> {
         let (r, scale) = self.residual(u)?;
-        let pick = |v: &[f64]| -> crate::Result<Vec<f64>> {
-            rows.iter()
-                .map(|&i| {
-                    v.get(i).copied().ok_or_else(|| {
-                        crate::Error::Internal(format!(
-                            "residual at row {i} of a system of {} unknowns",
-                            v.len()
-                        ))
-                    })
-                })
-                .collect()
-        };
-        Ok((pick(&r)?, pick(&scale)?))
+        let mut out = Vec::with_capacity(len);
+        let mut max = 0.0f64;
+        for k in 0..len {
+            let i = row(k);
+            match (r.get(i), scale.get(i)) {
+                (Some(&v), Some(&s)) => {
+                    out.push(v);
+                    max = max.max(s);
+                }
+                _ => {
+                    return Err(crate::Error::Internal(format!(
+                        "residual at row {i} of a system of {} unknowns",
+                        r.len()
+                    )));
+                }
+            }
+        }
+        Ok((out, max))
     }
     /// The entries (i, j, M_ij) of M, possibly with repeated (i, j) to be summed.
     fn matrix_triplets(&self) -> Vec<(usize, usize, f64)>;
