@@ -67,6 +67,8 @@ pub(super) enum NextHierarchy {
         coarse: CoarseHierarchy,
         fresh_rate: Option<f64>,
         built_for: Vec<u64>,
+        /// The fixed unknowns of this solve (from which the changed rows are found).
+        current: Vec<u64>,
     },
     /// A new one, for the matrix with these fixed unknowns.
     New { fixed_mask: Vec<u64> },
@@ -81,6 +83,9 @@ pub(super) struct Hierarchy {
     pub(super) reused: bool,
     /// See [`KeptHierarchy::fixed_mask`].
     pub(super) fixed_mask: Vec<u64>,
+    /// The fixed unknowns of this solve, when they differ from `fixed_mask` (a reused
+    /// hierarchy); `None`: those of `fixed_mask`.
+    pub(super) current: Option<Vec<u64>>,
     /// See [`KeptHierarchy::cells`].
     pub(super) cells: bool,
 }
@@ -99,11 +104,13 @@ pub(super) fn hierarchy(
             coarse,
             fresh_rate,
             built_for,
+            current,
         } => Hierarchy {
             amg: coarse.with_fine(a, &opts)?,
             fresh_rate,
             reused: true,
             fixed_mask: built_for,
+            current: Some(current),
             cells,
         },
         NextHierarchy::New { fixed_mask } => Hierarchy {
@@ -118,6 +125,7 @@ pub(super) fn hierarchy(
             fresh_rate: None,
             reused: false,
             fixed_mask,
+            current: None,
             cells,
         },
     })
@@ -267,21 +275,24 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     ) -> crate::Result<NextHierarchy> {
         let mask = fixed_mask(&self.values.dirichlet, fixed)?;
         let max_changed = (reuse_max_changed(D) * self.n as f64) as usize;
-        let next = state
-            .kept
-            .take()
-            .filter(|k| {
-                !k.stale && k.cells == cells && changed(&k.fixed_mask, &mask) <= max_changed
-            })
-            .and_then(|k| {
+        let next = state.kept.take().filter(|k| {
+            !k.stale && k.cells == cells && changed(&k.fixed_mask, &mask) <= max_changed
+        });
+        let next = match next {
+            Some(k) => {
                 let (fresh_rate, built_for) = (k.fresh_rate, k.fixed_mask);
-                k.amg.into_coarse().map(|coarse| NextHierarchy::Reuse {
-                    coarse,
-                    fresh_rate,
-                    built_for,
-                })
-            })
-            .unwrap_or(NextHierarchy::New { fixed_mask: mask });
+                match k.amg.into_coarse() {
+                    Some(coarse) => NextHierarchy::Reuse {
+                        coarse,
+                        fresh_rate,
+                        built_for,
+                        current: mask,
+                    },
+                    None => NextHierarchy::New { fixed_mask: mask },
+                }
+            }
+            None => NextHierarchy::New { fixed_mask: mask },
+        };
         Ok(next)
     }
 
@@ -340,15 +351,16 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             mut fresh_rate,
             mut reused,
             mut fixed_mask,
+            current,
             cells,
         } = hier;
-        let seeds = if reused && patch_layers(D) > 0 {
-            let now = self::fixed_mask(&self.values.dirichlet, fixed)?;
-            let interior =
-                (cs.is_none() && self.n > self.n_skel).then_some((&*self.sym.dof_map, self.n_skel));
-            changed_rows(&fixed_mask, &now, amg.n(), cs, interior)?
-        } else {
-            Vec::new()
+        let seeds = match &current {
+            Some(now) if reused && patch_layers(D) > 0 => {
+                let interior = (cs.is_none() && self.n > self.n_skel)
+                    .then_some((&*self.sym.dof_map, self.n_skel));
+                changed_rows(&fixed_mask, now, amg.n(), cs, interior)?
+            }
+            _ => Vec::new(),
         };
         let graph = cs.map(CellSystemAll::matrix);
         let mut out = match self.pcg(&amg, &mut state.amg, c, x, rtol, (&seeds, graph)) {
@@ -356,7 +368,10 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             Err(_) if reused => {
                 amg = Amg::build(amg.into_fine(), &AmgOptions::default())?;
                 (fresh_rate, reused) = (None, false);
-                fixed_mask = self::fixed_mask(&self.values.dirichlet, fixed)?;
+                fixed_mask = match current {
+                    Some(now) => now,
+                    None => self::fixed_mask(&self.values.dirichlet, fixed)?,
+                };
                 self.pcg(&amg, &mut state.amg, c, x, rtol, (&[], None))?
             }
             Err(e) => return Err(e),

@@ -103,6 +103,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             fresh_rate,
             reused: false,
             fixed_mask,
+            current: None,
             cells,
         };
         match self.continue_pcg(state, hier, rhs, fixed) {
