@@ -600,10 +600,10 @@ fn print_progress(l: &IterationLog) {
 fn print_solution<M: SolveMesh<D> + ?Sized, const D: usize>(sol: &Solution<M, D>, tol: f64) {
     let on_cells = match sol.cell_system.unzip() {
         (Some(n), Some(0)) => {
-            format!("; the iterative solves on the {n} cells, the local matrices being two-point")
+            format!("; the solves on the {n} cells, the local matrices being two-point")
         }
         (Some(n), Some(kept)) => format!(
-            "; the iterative solves on {n}: the cells and {kept} skeleton unknowns, the others \
+            "; the solves on {n}: the cells and {kept} skeleton unknowns, the others \
              eliminated where the local matrices are two-point"
         ),
         _ => String::new(),

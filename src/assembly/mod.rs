@@ -32,8 +32,9 @@
 //! stays a trait object; the solve paths are compiled once per mesh type used.
 //!
 //! When every local matrix couples each skeleton unknown with its cell's unknown only (HMM on
-//! rectangles with a diagonal tensor, where it is the two-point flux scheme), the iterative
-//! solves eliminate the skeleton unknowns instead and solve on the cells ([`two_point`]).
+//! rectangles with a diagonal tensor, where it is the two-point flux scheme), the solves
+//! (iterative and direct) eliminate the skeleton unknowns instead and solve on the cells
+//! ([`two_point`]).
 //!
 //! The cell loops (local matrices, condensation, residual, recovery) run in parallel with
 //! rayon; the global arrays are then *gathered* entry by entry (each entry of the condensed

@@ -19,7 +19,7 @@ use std::time::Instant;
 /// Cholesky factorisation of the condensed matrix (`values` on `pattern`, in `work`) and solve
 /// of S x = c in place (`rhs`); returns when the factorisation ended, 0 Krylov iterations, and
 /// that the solve is exact.
-fn solve_directly(
+pub(super) fn solve_directly(
     pattern: &SpdPattern,
     values: &[f64],
     rhs: &mut [f64],
@@ -194,9 +194,10 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         self.bind(state);
         let t0 = Instant::now();
-        if !self.is_direct(state)
-            && let Some(cs) = self.cell_system_for(state, fixed)?
-        {
+        if let Some(cs) = self.cell_system_for(state, fixed)? {
+            if self.is_direct(state) {
+                return self.solve_cells_direct(state, &cs, fixed, t0);
+            }
             match self.solve_cells(state, &cs, fixed, rtol, t0) {
                 Ok(r) => return Ok(r),
                 // as below: with Auto, the direct solver takes over
@@ -298,7 +299,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// The full unknown vector from the skeleton solution `skel`: interior unknowns recovered
     /// cell by cell; a non-finite value is an error. Without interior unknowns, `skel` itself
     /// (no second vector of the order of the system at the end of a solve).
-    fn complete(&self, fixed: &FixedValues, skel: Vec<f64>) -> crate::Result<Vec<f64>> {
+    pub(super) fn complete(&self, fixed: &FixedValues, skel: Vec<f64>) -> crate::Result<Vec<f64>> {
         if self.n_skel == self.n {
             return check_finite(skel);
         }
@@ -343,7 +344,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     }
 
     /// The direct solve of S x = c with the symbolic factorisation [`Self::is_direct`] finds.
-    fn solve_direct(
+    pub(super) fn solve_direct(
         &self,
         state: &mut SolveState,
         values: &[f64],

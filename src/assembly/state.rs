@@ -36,13 +36,16 @@ pub struct SolveState {
     /// The cell values of the last solve, if it solved the cell system.
     pub(super) last_cells: Vec<f64>,
     /// The cell system (`Some(None)`: the local matrices do not allow it), built by the first
-    /// iterative solve.
+    /// solve.
     pub(super) cell_system: Option<Option<Arc<CellSystemAll>>>,
     /// The multigrid hierarchy of the last iterative solve.
     pub(super) kept: Option<KeptHierarchy>,
     /// With [`super::LinearSolver::Auto`], the direct solver built when the iterative one
     /// failed (or why it could not be built).
     pub(super) direct_fallback: Option<Result<SpdPattern, String>>,
+    /// The symbolic factorisation of the cell system, built by the first direct solve that
+    /// takes it ([`super::two_point`]).
+    pub(super) cell_direct: Option<SpdPattern>,
     /// The memory of the direct solver's numeric factorisations, reused from one to the next.
     pub(super) cholesky: CholeskyWork,
     /// The vectors of the multigrid cycles, reused from one iterative solve to the next.
@@ -58,9 +61,9 @@ impl SolveState {
     }
 
     /// The number of unknowns of the cell system ([`super::two_point`]: the cells, and the
-    /// skeleton unknowns that could not be eliminated) if the iterative solves through this
-    /// state have taken it (`None` before any iterative solve, with the direct solver, and when
-    /// too few skeleton unknowns can be eliminated).
+    /// skeleton unknowns that could not be eliminated) if the solves through this state have
+    /// taken it (`None` before any solve, and when too few skeleton unknowns can be
+    /// eliminated).
     pub fn cell_system_size(&self) -> Option<usize> {
         self.cell_system.as_ref()?.as_ref().map(|c| c.n())
     }
@@ -269,6 +272,63 @@ mod tests {
             .map(|(x, y)| (x - y).abs())
             .fold(0.0, f64::max);
         assert!(gap < 1e-8, "{gap:e}");
+    }
+
+    /// A direct solve on two-point local matrices (HMM on squares with a heterogeneous
+    /// diagonal tensor) takes the cell system: it gives the skeleton system's direct solution
+    /// to round-off, for two sets of fixed cells through one state (whose symbolic
+    /// factorisation of the cell system is made once); a solve that fixes an eliminated face
+    /// takes the skeleton system, bit for bit its direct solve.
+    #[test]
+    fn direct_solves_take_the_cell_system() {
+        let squares = cartesian(24, 24).unwrap();
+        let hmm = Hmm::new(&squares);
+        let p =
+            paper_test3(-10.0).with_diffusion(Box::new(|x| [[1.0 + x[0], 0.0], [0.0, 0.3 + x[1]]]));
+        let direct = SystemOptions {
+            linear: LinearSolver::Direct,
+            ..Default::default()
+        };
+        let sys = DiscreteSystem::new(&hmm, &p, direct).unwrap();
+        let (n, skel) = (sys.n_unknowns(), sys.n_skel);
+        // the skeleton system, assembled and factorised as the direct solves did before
+        let on_skeleton = |f: &FixedValues| {
+            let mut other = SolveState::default();
+            let (values, mut rhs) = sys.assemble_condensed(&mut other, f).unwrap();
+            sys.solve_direct(&mut other, &values, &mut rhs).unwrap();
+            sys.complete(f, rhs).unwrap()
+        };
+        let mut state = SolveState::default();
+        for m in [3, 5] {
+            let f = FixedValues::from_options(
+                (0..n).map(|i| (i >= skel && (i - skel) % m == 0).then_some(0.01)),
+            )
+            .unwrap();
+            let (u, t) = sys.solve(&mut state, &f).unwrap();
+            assert_eq!((t.krylov, t.inexact), (0, false));
+            let v = on_skeleton(&f);
+            let scale = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            let gap = u
+                .iter()
+                .zip(&v)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            assert!(scale > 1e-3 && gap <= 1e-12 * scale, "{gap:e} of {scale}");
+            assert_ne!(bits(&u), bits(&v), "solved on another system");
+        }
+        assert_eq!(state.cell_system_size(), Some(squares.n_cells()));
+        let pattern = state.cell_direct.as_ref().unwrap().col_ptr().as_ptr();
+        sys.solve(&mut state, &FixedValues::free(n).unwrap())
+            .unwrap();
+        assert_eq!(
+            state.cell_direct.as_ref().unwrap().col_ptr().as_ptr(),
+            pattern
+        );
+        // an interior face fixed: not eliminated in this solve
+        let face = (0..skel).find(|&s| !sys.dirichlet().is_fixed(s)).unwrap();
+        let f = FixedValues::from_options((0..n).map(|i| (i == face).then_some(0.01))).unwrap();
+        let (u, _) = sys.solve(&mut state, &f).unwrap();
+        assert_eq!(bits(&u), bits(&on_skeleton(&f)));
     }
 
     /// The cell system is reported by the state that built it.

@@ -45,13 +45,22 @@
 //! cell system is used only if it has at most 3/4 as many unknowns as the free skeleton (on
 //! rectangles: 1/2; on triangles nothing is eliminated and it would be larger), and only for
 //! solves that fix no eliminated face (otherwise the skeleton system is solved).
+//!
+//! Both solvers take it: the iterative one by multigrid-preconditioned conjugate gradients
+//! (`DiscreteSystem::solve_cells`), the direct one by sparse Cholesky of its lower triangle,
+//! whose pattern is A's whatever is fixed (a fixed row and column keep their entries as
+//! zeros), so that one symbolic factorisation serves every active set
+//! (`DiscreteSystem::solve_cells_direct`). On squares that is half the unknowns of the face
+//! system, with 5 entries per row instead of 7: the warm start's coarse levels on box covers
+//! and HMM's direct solves on Cartesian meshes factorise it (measurements in
+//! `replication/measurements/solver.md`).
 
 use super::gather::{CHUNK, Pinned, chunks, local_index, par_try_fill, split_by_ranges};
 use super::iterative::hierarchy;
-use super::solve::check_finite;
+use super::solve::{check_finite, solve_directly};
 use super::{DiscreteSystem, SolveState};
 use crate::budget::{try_collect, try_copy, try_filled, try_grow, try_vec};
-use crate::linalg::CsrMatrix;
+use crate::linalg::{CsrMatrix, SpdPattern};
 use crate::mesh::SolveMesh;
 use crate::vi::FixedValues;
 use crate::vi::SolveTimings;
@@ -108,6 +117,18 @@ impl CellSystemAll {
     pub(super) fn dof(&self, i: usize) -> usize {
         self.dofs[i] as usize
     }
+}
+
+/// The value of each row of the cell system that `fixed` fixes (`None`: a free row).
+fn fixed_rows(cs: &CellSystemAll, fixed: &Pinned) -> crate::Result<Vec<Option<f64>>> {
+    let mut value = try_vec(cs.n(), "the fixed values of the cell system")?;
+    value.par_extend(
+        (0..cs.n())
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|i| fixed.get(cs.dof(i))),
+    );
+    Ok(value)
 }
 
 impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
@@ -447,13 +468,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         fixed: &Pinned,
     ) -> crate::Result<(CsrMatrix, Vec<f64>)> {
         let nc = cs.n();
-        let mut value = try_vec(nc, "the fixed values of the cell system")?;
-        value.par_extend(
-            (0..nc)
-                .into_par_iter()
-                .with_min_len(4096)
-                .map(|i| fixed.get(cs.dof(i))),
-        );
+        let value = fixed_rows(cs, fixed)?;
         let (rp, ci, va) = (cs.a.row_ptr(), cs.a.col_idx(), cs.a.values());
         // the entries each row keeps (a fixed row: its diagonal)
         let mut lens = try_vec(nc, "the row lengths of the cell system")?;
@@ -508,6 +523,126 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                 }
             });
         Ok((CsrMatrix::new(nc, nc, row_ptr, cols, vals)?, rhs))
+    }
+
+    /// The direct counterpart of [`Self::solve_cells`]: the cell system with `fixed` factorised
+    /// by sparse Cholesky. Its lower triangle keeps the pattern of A whatever is fixed (the
+    /// entries of a fixed row and column are zeros, its diagonal 1), so its symbolic analysis is
+    /// made once, by the first direct cell solve, and kept in `state`; each solve refills the
+    /// values and factorises. The assembly time counts from `t0`.
+    pub(super) fn solve_cells_direct(
+        &self,
+        state: &mut SolveState,
+        cs: &CellSystemAll,
+        fixed: &FixedValues,
+        t0: Instant,
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        if state.cell_direct.is_none() {
+            state.cell_direct = Some(self.cell_pattern(cs)?);
+        }
+        let fx = self.fixed_values(fixed);
+        let (values, mut rhs) = self.fixed_cell_lower(cs, &fx)?;
+        let t1 = Instant::now();
+        let SolveState {
+            cell_direct,
+            cholesky,
+            ..
+        } = state;
+        let pattern = cell_direct
+            .as_ref()
+            .ok_or_else(|| crate::Error::Internal("no pattern of the cell system".into()))?;
+        let (t2, out) = solve_directly(pattern, &values, &mut rhs, cholesky)?;
+        drop(values);
+        let u = self.complete_cells(cs, &fx, &rhs)?;
+        self.keep_cells(state, rhs, &u)?;
+        Ok((u, out.timings([t0, t1, t2, Instant::now()])))
+    }
+
+    /// The lower triangle of the cell system's matrix A by columns (column j: the rows i ≥ j
+    /// of row j of A, which is symmetric, sorted), analysed for the Cholesky factorisation with
+    /// the system's ordering and threads, its numeric phase checked against the budget.
+    fn cell_pattern(&self, cs: &CellSystemAll) -> crate::Result<SpdPattern> {
+        let (rp, ci) = (cs.a.row_ptr(), cs.a.col_idx());
+        let n = cs.n();
+        let mut col_ptr = try_vec(n + 1, "the column offsets of the cell system's factor")?;
+        col_ptr.push(0);
+        for j in 0..n {
+            let upper = ci[rp[j]..rp[j + 1]].iter().filter(|&&i| i as usize >= j);
+            col_ptr.push(col_ptr[j] + upper.count());
+        }
+        let mut row_idx = try_vec(col_ptr[n], "the row indices of the cell system's factor")?;
+        for j in 0..n {
+            let upper = ci[rp[j]..rp[j + 1]].iter().filter(|&&i| i as usize >= j);
+            row_idx.extend(upper.map(|&i| i as usize));
+        }
+        let nnz = row_idx.len() as u64;
+        let opts = &self.sym.options;
+        let p = SpdPattern::with_ordering(n, col_ptr, row_idx, opts.ordering)?
+            .with_threads(opts.factor_threads);
+        // the factor, the values of the lower triangle and a few vectors of rows
+        let bytes = 8 * (p.factor_len() as u64) + 8 * nnz + 8 * 6 * (n as u64);
+        opts.budget.check_computation(
+            format!(
+                "the numeric factorisation of the cell system (a Cholesky factor of {} entries)",
+                p.factor_len()
+            ),
+            bytes,
+        )?;
+        Ok(p)
+    }
+
+    /// The values of the lower triangle of [`Self::cell_pattern`] and the right-hand side with
+    /// the rows whose unknowns `fixed` gives fixed: as [`Self::fixed_cell_system`], the entries
+    /// of their rows and columns zero (kept in the pattern) and their diagonal 1.
+    fn fixed_cell_lower(
+        &self,
+        cs: &CellSystemAll,
+        fixed: &Pinned,
+    ) -> crate::Result<(Vec<f64>, Vec<f64>)> {
+        let nc = cs.n();
+        let value = fixed_rows(cs, fixed)?;
+        let (rp, ci, va) = (cs.a.row_ptr(), cs.a.col_idx(), cs.a.values());
+        let mut rhs = try_filled(nc, 0.0, "the right-hand side of the cell system")?;
+        rhs.par_iter_mut()
+            .enumerate()
+            .with_min_len(4096)
+            .for_each(|(k, r)| {
+                *r = match value[k] {
+                    Some(v) => v,
+                    None => {
+                        let mut r = cs.r[k];
+                        for p in rp[k]..rp[k + 1] {
+                            if let Some(v) = value[ci[p] as usize] {
+                                r -= va[p] * v;
+                            }
+                        }
+                        r
+                    }
+                }
+            });
+        let nnz = (0..nc)
+            .map(|j| {
+                ci[rp[j]..rp[j + 1]]
+                    .iter()
+                    .filter(|&&i| i as usize >= j)
+                    .count()
+            })
+            .sum();
+        let mut values = try_vec(nnz, "the entries of the cell system's lower triangle")?;
+        for j in 0..nc {
+            for p in rp[j]..rp[j + 1] {
+                let i = ci[p] as usize;
+                if i < j {
+                    continue;
+                }
+                values.push(match (value[j].is_some(), value[i].is_some(), i == j) {
+                    (true, _, true) => 1.0,
+                    (false, false, _) => va[p],
+                    _ => 0.0,
+                });
+            }
+        }
+        Ok((values, rhs))
     }
 
     /// The full unknown vector from the values `x` of the rows: the fixed unknowns take their

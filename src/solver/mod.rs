@@ -102,9 +102,9 @@ where
     pub timings: Timings,
     /// What the warm start did (`None`: cold start, or no barrier).
     pub warm_start: Option<WarmStartReport>,
-    /// The number of unknowns of the cell system the iterative solves took, and how many of
-    /// them are skeleton unknowns ([`crate::assembly::two_point`]; `None`: they solved the
-    /// skeleton system, or the solves were direct).
+    /// The number of unknowns of the cell system the solves took, and how many of them are
+    /// skeleton unknowns ([`crate::assembly::two_point`]; `None`: they solved the skeleton
+    /// system).
     pub cell_system: Option<(usize, usize)>,
     /// The parts of the mesh without Dirichlet boundary whose well-posedness hangs on the
     /// sign of a small total load (see [`well_posed`]): a warning, empty in the usual case.

@@ -118,7 +118,7 @@ fn ex9_section(md: &mut Doc, rows: &[PeerRow]) {
         }
     }
     md.table(&t);
-    md.para("P1 and PETSc solve the same discrete problem, so their errors must agree to the digits of the solver tolerances: the table shows it at every size. HMM is a different discretisation (cell unknowns at centroids), with errors of the same order. On these squares with a scalar diffusion HMM's local matrices are two-point (HMM is then the two-point flux scheme), so its iterative solves run on the (G − 1)² cell unknowns, the faces eliminated (`assembly::two_point`); its direct solves, and HMM on any other mesh, solve for the faces.");
+    md.para("P1 and PETSc solve the same discrete problem, so their errors must agree to the digits of the solver tolerances: the table shows it at every size. HMM is a different discretisation (cell unknowns at centroids), with errors of the same order. On these squares with a scalar diffusion HMM's local matrices are two-point (HMM is then the two-point flux scheme), so its solves, iterative and direct, run on the (G − 1)² cell unknowns, the faces eliminated (`assembly::two_point`; the direct ones since issue 34's direct cell solves, before which they solved for the faces); HMM on any other mesh solves for the faces.");
 }
 
 fn targets(cfg: &Config, md: &mut Doc, rows: &[PeerRow]) {
