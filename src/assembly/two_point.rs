@@ -553,8 +553,9 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             .ok_or_else(|| crate::Error::Internal("no pattern of the cell system".into()))?;
         let (t2, out) = solve_directly(pattern, &values, &mut rhs, cholesky)?;
         drop(values);
+        // no initial guess is kept: a direct solve needs none, and once a system solves
+        // directly every later solve of it does
         let u = self.complete_cells(cs, &fx, &rhs)?;
-        self.keep_cells(state, rhs, &u)?;
         Ok((u, out.timings([t0, t1, t2, Instant::now()])))
     }
 
