@@ -179,7 +179,8 @@ bench-domains3d: build reference-deps
 ##        alone (iterative solver, nested warm start), 1 and N rayon threads, each case and its
 ##        linear variant (no bounds: the cost ratio R) in its own process; n in 32, 64, 100,
 ##        128, 200 up to GRADVI_BENCH_HMM3D_MAX_N (default 64; 200 is target 5, 8M cells within
-##        24 GiB), a size skipped when its estimated peak does not fit in the memory available
+##        24 GiB), a size skipped when its estimated peak does not fit in the memory available;
+##        the rows of the sizes not run are kept
 ##        -> replication/results/bench_hmm3d.csv, BENCHMARKS.md (the verdict of target 5)
 bench-hmm3d: build
 	$(DEV) bench --hmm3d

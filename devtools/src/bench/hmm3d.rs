@@ -19,8 +19,10 @@
 //! **Sizes.** n in [`SIZES`] up to `GRADVI_BENCH_HMM3D_MAX_N` (default [`DEFAULT_MAX_N`]); a size
 //! whose estimated peak ([`BYTES_PER_CELL`] per cell) does not fit in the memory available is
 //! skipped, said on stderr ([`fits`]). Rows go to [`CSV`], rewritten after each case (a long run
-//! keeps what it measured; the rows of an earlier run are replaced, as in
-//! [`super::peers3d`]); the report's section is [`super::hmm3d_report`].
+//! keeps what it measured); as in [`super::peers3d`], the rows of the sizes run replace the
+//! earlier run's, and those of the sizes not run (above the maximum, or skipped) are kept, so
+//! that a quick rerun does not drop the 200³ row of target 5 ([`kept_rows`]); the report's
+//! section is [`super::hmm3d_report`].
 
 use super::peers3d::{BOX, phases, problem};
 use super::{bad, json_row, peak_memory_mib, stdout_of};
@@ -54,7 +56,7 @@ pub const BYTES_PER_CELL: f64 = 1.8 * 1024.0;
 const NO_BARRIER: &str = "--no-barrier";
 
 /// One row of [`CSV`]: one case (n, cores) and its linear variant.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct Hmm3Row {
     /// Cubes per side.
     pub n: usize,
@@ -338,17 +340,28 @@ pub fn run(cfg: &super::Config, exe: &Path) -> gradvi::Result<()> {
         super::peers::core_counts()
     );
     let csv = cfg.path(CSV);
-    let mut rows: Vec<Hmm3Row> = Vec::new();
-    for n in SIZES.into_iter().filter(|&n| n <= max_n) {
-        if !fits(n) {
-            continue;
-        }
+    let sizes: Vec<usize> = SIZES
+        .into_iter()
+        .filter(|&n| n <= max_n && fits(n))
+        .collect();
+    let mut rows = kept_rows(read_rows(cfg)?, &sizes);
+    for n in sizes {
         for cores in super::peers::core_counts() {
             rows.push(run_case(exe, n, cores)?);
+            // by size, each size's rows in the order they were run
+            rows.sort_by_key(|r| r.n);
             write_csv(&csv, &rows)?;
         }
     }
     Ok(())
+}
+
+/// The rows of an earlier run that a run of the sizes `sizes` keeps: those of the other sizes.
+fn kept_rows(earlier: Vec<Hmm3Row>, sizes: &[usize]) -> Vec<Hmm3Row> {
+    earlier
+        .into_iter()
+        .filter(|r| !sizes.contains(&r.n))
+        .collect()
 }
 
 /// The rows of [`CSV`] (empty if it does not exist).
@@ -359,6 +372,23 @@ pub fn read_rows(cfg: &super::Config) -> gradvi::Result<Vec<Hmm3Row>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A rerun of some sizes replaces their rows and keeps the others' (the 200³ row of a
+    /// rerun up to 64, and a size skipped for memory).
+    #[test]
+    fn a_rerun_keeps_the_rows_of_the_sizes_it_does_not_run() {
+        let row = |n: usize, cores: usize| Hmm3Row {
+            n,
+            cores,
+            ..Default::default()
+        };
+        let earlier = vec![row(32, 1), row(32, 2), row(64, 1), row(200, 1), row(200, 2)];
+        let kept = kept_rows(earlier.clone(), &[32, 64]);
+        let sizes: Vec<(usize, usize)> = kept.iter().map(|r| (r.n, r.cores)).collect();
+        assert_eq!(sizes, vec![(200, 1), (200, 2)]);
+        assert_eq!(kept_rows(earlier.clone(), &[]).len(), earlier.len());
+        assert!(kept_rows(earlier, &[32, 64, 200]).is_empty());
+    }
 
     #[test]
     fn the_estimate_grows_with_the_cells_and_decides_the_skip() {
