@@ -79,13 +79,11 @@ pub(super) struct Hierarchy {
     pub(super) amg: Amg<'static>,
     /// See [`KeptHierarchy::fresh_rate`].
     pub(super) fresh_rate: Option<f64>,
-    /// Built for an earlier matrix (its coarse levels).
-    pub(super) reused: bool,
     /// See [`KeptHierarchy::fixed_mask`].
     pub(super) fixed_mask: Vec<u64>,
-    /// The fixed unknowns of this solve, when they differ from `fixed_mask` (a reused
-    /// hierarchy); `None`: those of `fixed_mask`.
-    pub(super) current: Option<Vec<u64>>,
+    /// `Some(the fixed unknowns of this solve)`: built for an earlier matrix (its coarse
+    /// levels), whose fixed unknowns were `fixed_mask`; `None`: built for this one.
+    pub(super) reused: Option<Vec<u64>>,
     /// See [`KeptHierarchy::cells`].
     pub(super) cells: bool,
 }
@@ -108,9 +106,8 @@ pub(super) fn hierarchy(
         } => Hierarchy {
             amg: coarse.with_fine(a, &opts)?,
             fresh_rate,
-            reused: true,
             fixed_mask: built_for,
-            current: Some(current),
+            reused: Some(current),
             cells,
         },
         NextHierarchy::New { fixed_mask } => Hierarchy {
@@ -123,9 +120,8 @@ pub(super) fn hierarchy(
                 Amg::build(a, &opts)?
             },
             fresh_rate: None,
-            reused: false,
             fixed_mask,
-            current: None,
+            reused: None,
             cells,
         },
     })
@@ -349,13 +345,12 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let Hierarchy {
             mut amg,
             mut fresh_rate,
-            mut reused,
             mut fixed_mask,
-            current,
+            reused,
             cells,
         } = hier;
-        let seeds = match &current {
-            Some(now) if reused && patch_layers(D) > 0 => {
+        let seeds = match &reused {
+            Some(now) if patch_layers(D) > 0 => {
                 let interior = (cs.is_none() && self.n > self.n_skel)
                     .then_some((&*self.sym.dof_map, self.n_skel));
                 changed_rows(&fixed_mask, now, amg.n(), cs, interior)?
@@ -363,18 +358,19 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             _ => Vec::new(),
         };
         let graph = cs.map(CellSystemAll::matrix);
-        let mut out = match self.pcg(&amg, &mut state.amg, c, x, rtol, (&seeds, graph)) {
-            Ok(out) => out,
-            Err(_) if reused => {
+        let first = self.pcg(&amg, &mut state.amg, c, x, rtol, (&seeds, graph));
+        let (mut out, reused) = match (first, reused) {
+            (Ok(out), reused) => (out, reused.is_some()),
+            // a reused hierarchy that fails: a new one, for this solve's fixed unknowns
+            (Err(_), Some(now)) => {
                 amg = Amg::build(amg.into_fine(), &AmgOptions::default())?;
-                (fresh_rate, reused) = (None, false);
-                fixed_mask = match current {
-                    Some(now) => now,
-                    None => self::fixed_mask(&self.values.dirichlet, fixed)?,
-                };
-                self.pcg(&amg, &mut state.amg, c, x, rtol, (&[], None))?
+                (fresh_rate, fixed_mask) = (None, now);
+                (
+                    self.pcg(&amg, &mut state.amg, c, x, rtol, (&[], None))?,
+                    false,
+                )
             }
-            Err(e) => return Err(e),
+            (Err(e), None) => return Err(e),
         };
         out.reused = reused;
         let stale = match (reused, out.rate, fresh_rate) {

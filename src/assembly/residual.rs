@@ -48,6 +48,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         row: &(dyn Fn(usize) -> usize + Sync),
     ) -> crate::Result<(Vec<f64>, f64)> {
         let mut r = try_filled(len, 0.0, "the residual at the constrained unknowns")?;
+        let assembled = self.assembled();
         let at = |i: usize| -> crate::Result<(f64, f64)> {
             if i >= self.n {
                 return Err(crate::Error::Internal(format!(
@@ -55,7 +56,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                     self.n
                 )));
             }
-            match self.assembled() {
+            match assembled {
                 Some(a) => Ok(assembled_row(a, &self.values.load, u, i)),
                 None => self.gathered_row(i, u),
             }

@@ -101,9 +101,8 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let hier = Hierarchy {
             amg,
             fresh_rate,
-            reused: false,
             fixed_mask,
-            current: None,
+            reused: None,
             cells,
         };
         match self.continue_pcg(state, hier, rhs, fixed) {

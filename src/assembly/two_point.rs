@@ -540,9 +540,6 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         if state.cell_direct.is_none() {
             state.cell_direct = Some(self.cell_pattern(cs)?);
         }
-        let fx = self.fixed_values(fixed);
-        let (values, mut rhs) = self.fixed_cell_lower(cs, &fx)?;
-        let t1 = Instant::now();
         let SolveState {
             cell_direct,
             cholesky,
@@ -551,6 +548,9 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let pattern = cell_direct
             .as_ref()
             .ok_or_else(|| crate::Error::Internal("no pattern of the cell system".into()))?;
+        let fx = self.fixed_values(fixed);
+        let (values, mut rhs) = fixed_cell_lower(cs, pattern, &fx)?;
+        let t1 = Instant::now();
         let (t2, out) = solve_directly(pattern, &values, &mut rhs, cholesky)?;
         drop(values);
         // no initial guess is kept: a direct solve needs none, and once a system solves
@@ -592,60 +592,6 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         Ok(p)
     }
 
-    /// The values of the lower triangle of [`Self::cell_pattern`] and the right-hand side with
-    /// the rows whose unknowns `fixed` gives fixed: as [`Self::fixed_cell_system`], the entries
-    /// of their rows and columns zero (kept in the pattern) and their diagonal 1.
-    fn fixed_cell_lower(
-        &self,
-        cs: &CellSystemAll,
-        fixed: &Pinned,
-    ) -> crate::Result<(Vec<f64>, Vec<f64>)> {
-        let nc = cs.n();
-        let value = fixed_rows(cs, fixed)?;
-        let (rp, ci, va) = (cs.a.row_ptr(), cs.a.col_idx(), cs.a.values());
-        let mut rhs = try_filled(nc, 0.0, "the right-hand side of the cell system")?;
-        rhs.par_iter_mut()
-            .enumerate()
-            .with_min_len(4096)
-            .for_each(|(k, r)| {
-                *r = match value[k] {
-                    Some(v) => v,
-                    None => {
-                        let mut r = cs.r[k];
-                        for p in rp[k]..rp[k + 1] {
-                            if let Some(v) = value[ci[p] as usize] {
-                                r -= va[p] * v;
-                            }
-                        }
-                        r
-                    }
-                }
-            });
-        let nnz = (0..nc)
-            .map(|j| {
-                ci[rp[j]..rp[j + 1]]
-                    .iter()
-                    .filter(|&&i| i as usize >= j)
-                    .count()
-            })
-            .sum();
-        let mut values = try_vec(nnz, "the entries of the cell system's lower triangle")?;
-        for j in 0..nc {
-            for p in rp[j]..rp[j + 1] {
-                let i = ci[p] as usize;
-                if i < j {
-                    continue;
-                }
-                values.push(match (value[j].is_some(), value[i].is_some(), i == j) {
-                    (true, _, true) => 1.0,
-                    (false, false, _) => va[p],
-                    _ => 0.0,
-                });
-            }
-        }
-        Ok((values, rhs))
-    }
-
     /// The full unknown vector from the values `x` of the rows: the fixed unknowns take their
     /// values, the eliminated skeleton unknowns u_σ = (b_σ − Σ_{K ∋ σ} m_σK u_K) / d_σ, the
     /// Dirichlet ones theirs; a non-finite value is an error.
@@ -679,4 +625,64 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         u[..self.n_skel].copy_from_slice(&skel);
         check_finite(u)
     }
+}
+
+/// The values of the lower triangle of the cell system (on `pattern`, built by
+/// `DiscreteSystem::cell_pattern`) and the right-hand side, with the rows whose unknowns
+/// `fixed` gives fixed: as `fixed_cell_system`, the entries of their rows and columns zero
+/// (kept in the pattern) and their diagonal 1. Column j of the lower triangle is the tail of
+/// row j of A from its diagonal on (A is symmetric, its columns sorted).
+fn fixed_cell_lower(
+    cs: &CellSystemAll,
+    pattern: &SpdPattern,
+    fixed: &Pinned,
+) -> crate::Result<(Vec<f64>, Vec<f64>)> {
+    let nc = cs.n();
+    let value = fixed_rows(cs, fixed)?;
+    let (rp, ci, va) = (cs.a.row_ptr(), cs.a.col_idx(), cs.a.values());
+    let mut rhs = try_filled(nc, 0.0, "the right-hand side of the cell system")?;
+    rhs.par_iter_mut()
+        .enumerate()
+        .with_min_len(4096)
+        .for_each(|(k, r)| {
+            *r = match value[k] {
+                Some(v) => v,
+                None => {
+                    let mut r = cs.r[k];
+                    for p in rp[k]..rp[k + 1] {
+                        if let Some(v) = value[ci[p] as usize] {
+                            r -= va[p] * v;
+                        }
+                    }
+                    r
+                }
+            }
+        });
+    let cp = pattern.col_ptr();
+    let mut values = try_filled(
+        pattern.nnz(),
+        0.0,
+        "the entries of the cell system's lower triangle",
+    )?;
+    let ranges = chunks(nc, 4 * CHUNK);
+    let slices = split_by_ranges(&mut values, &ranges, |j| cp[j]);
+    let tasks = try_collect(
+        ranges.into_iter().zip(slices),
+        "the tasks of the cell system's lower triangle",
+    )?;
+    tasks.into_par_iter().for_each(|((j0, j1), out)| {
+        let base = cp[j0];
+        for j in j0..j1 {
+            let tail = rp[j + 1] - (cp[j + 1] - cp[j]);
+            for (w, p) in (cp[j] - base..).zip(tail..rp[j + 1]) {
+                let i = ci[p] as usize;
+                out[w] = match (value[j].is_some(), value[i].is_some(), i == j) {
+                    (true, _, true) => 1.0,
+                    (false, false, _) => va[p],
+                    _ => 0.0,
+                };
+            }
+        }
+    });
+    Ok((values, rhs))
 }
