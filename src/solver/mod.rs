@@ -10,10 +10,17 @@
 //!
 //! ```text
 //! solve_problem(scheme, problem, opts)
-//!   = DiscreteSystem::new (symbolic ∥ values) → constraints::build → well_posed::analyse
-//!     → warm start?
+//!   = [ DiscreteSystem::new (symbolic ∥ values) → constraints::build → well_posed::analyse ]
+//!       ∥ [ nested warm start: coarse levels and their solves (fine mesh and problem only) ]
+//!     → warm start's prediction on the fine unknowns (map down, first guess)?
 //!     → vi::active_set::run (→ vi::pgs::solve on a stall, if asked) → Solution
 //! ```
+//! The two branches of `∥` are a `rayon::join`: one after the other on one thread, side by
+//! side on more, where the coarse solves use the threads that the fine setup's sequential
+//! parts leave idle (measured in `replication/measurements/solver.md`). The coarse solves
+//! read neither the fine system nor its barrier, so they compute the same whatever the order;
+//! when the fine setup fails, its error is returned and the coarse solves stop at their next
+//! check.
 //! [`solve_with_symbolic`] reuses the symbolic system of an earlier solve on the same scheme.
 
 pub mod coarse_mesh;
@@ -36,6 +43,7 @@ use crate::vi::{VariationalSolution, pgs};
 use constraints::Constraints;
 pub use start::SolverMesh;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 use std::time::Instant;
 pub use warm_start::{WarmStart, WarmStartReport};
 pub use well_posed::MarginalLoad;
@@ -73,7 +81,9 @@ pub struct Timings {
     pub setup: f64,
     /// Of which the symbolic factorisation.
     pub symbolic: f64,
-    /// The coarse solves of a warm start (0 for a cold start).
+    /// The warm start: its coarse solves and its prediction (0 for a cold start). The coarse
+    /// solves run beside the setup, so with more than one thread `setup + warm_start` can
+    /// exceed the wall-clock time they took together.
     pub warm_start: f64,
     /// Condensation and scatter, all iterations.
     pub assemble: f64,
@@ -158,8 +168,8 @@ pub fn solve_problem<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
     opts: &SolveOptions,
 ) -> crate::Result<Solution<'a, M, D>> {
     let t0 = Instant::now();
-    let system = DiscreteSystem::new(scheme, problem, opts.system)?;
-    solve_system(system, problem, opts, t0)
+    let build = || DiscreteSystem::new(scheme, problem, opts.system);
+    solve_built(scheme, problem, opts, opts.system.budget, build, t0)
 }
 
 /// As [`solve_problem`], on a symbolic system built before for the same scheme (its
@@ -170,8 +180,79 @@ pub fn solve_with_symbolic<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
     opts: &SolveOptions,
 ) -> crate::Result<Solution<'a, M, D>> {
     let t0 = Instant::now();
-    let system = DiscreteSystem::with_symbolic(symbolic, problem)?;
-    solve_system(system, problem, opts, t0)
+    let (scheme, budget) = (symbolic.scheme(), symbolic.options.budget);
+    let build = move || DiscreteSystem::with_symbolic(symbolic, problem);
+    solve_built(scheme, problem, opts, budget, build, t0)
+}
+
+/// A discrete system with its barrier and the analysis of its well-posedness.
+struct Prepared<'a, M: SolveMesh<D> + ?Sized, const D: usize> {
+    system: DiscreteSystem<'a, M, D>,
+    constraints: Option<Constraints>,
+    analysis: well_posed::Analysis,
+}
+
+/// The barrier of `problem` on `system` and the analysis of its well-posedness.
+fn prepare<'a, M: SolveMesh<D> + ?Sized, const D: usize>(
+    system: DiscreteSystem<'a, M, D>,
+    problem: &Problem<D>,
+) -> crate::Result<Prepared<'a, M, D>> {
+    let constraints = constraints::build(&system, problem)?;
+    let analysis = well_posed::analyse(&system, constraints.as_ref())?;
+    Ok(Prepared {
+        system,
+        constraints,
+        analysis,
+    })
+}
+
+/// The coarse solves of a nested warm start (`None`: the mesh type has none) and the seconds
+/// they took.
+type CoarseBranch<C> = (Option<Result<C, String>>, f64);
+
+/// Solves `problem` on the system `build` makes for `scheme` (budget `budget`). With the
+/// nested warm start, its coarse solves run beside the fine setup (the system, its barrier and
+/// its well-posedness): they need the fine mesh and the problem only
+/// ([`warm_start::CoarseSolves`]). When the fine setup fails, its error is returned and the
+/// coarse solves are stopped at their next check.
+fn solve_built<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
+    scheme: &'a dyn GradientDiscretisation<M, D>,
+    problem: &Problem<D>,
+    opts: &SolveOptions,
+    budget: crate::budget::MemoryBudget,
+    build: impl FnOnce() -> crate::Result<DiscreteSystem<'a, M, D>> + Send,
+    t0: Instant,
+) -> crate::Result<Solution<'a, M, D>> {
+    let nested = opts.warm_start == WarmStart::Nested
+        && opts.active_set.initial_active.is_none()
+        && problem.constraint.is_some();
+    if !nested {
+        return solve_prepared(prepare(build()?, problem)?, problem, opts, t0, None);
+    }
+    // the coarse solves poll the caller's hook, and stop once the fine setup has failed
+    let failed = Arc::new(AtomicBool::new(false));
+    let cancel = {
+        let (failed, hook) = (Arc::clone(&failed), opts.active_set.cancel.clone());
+        Cancel::new(move || failed.load(Relaxed) || hook.as_ref().is_some_and(Cancel::requested))
+    };
+    let (fine, coarse) = rayon::join(
+        || {
+            let fine = build().and_then(|system| prepare(system, problem));
+            if fine.is_err() {
+                failed.store(true, Relaxed);
+            }
+            fine
+        },
+        || {
+            let t = Instant::now();
+            let unknowns = scheme.n_unknowns();
+            let c = scheme
+                .mesh()
+                .coarse_solves(unknowns, problem, budget, Some(&cancel));
+            (c, t.elapsed().as_secs_f64())
+        },
+    );
+    solve_prepared(fine?, problem, opts, t0, Some(coarse))
 }
 
 /// Graph layers of the look-ahead's patches on 3D meshes (see [`look_ahead_options`]).
@@ -199,23 +280,22 @@ pub fn look_ahead_options(d: usize) -> crate::vi::look_ahead::LookAheadOptions {
 /// What [`warm_start`] returns: the predicted initial active set and the report.
 type Start = (Option<Vec<bool>>, Option<WarmStartReport>);
 
-/// The initial active set that the warm start predicts (None: cold), and its report (None:
-/// no warm start was asked for); an error if the mesh type has no nested start.
+/// The initial active set that the warm start predicts from the coarse solves `coarse`
+/// (None: cold), and its report (None: no warm start was asked for, `coarse` is `None`); an
+/// error if the mesh type has no nested start.
 fn warm_start<M: SolverMesh<D> + ?Sized, const D: usize>(
     system: &DiscreteSystem<M, D>,
     state: &mut SolveState,
     problem: &Problem<D>,
     cons: &Constraints,
-    opts: &SolveOptions,
+    coarse: Option<CoarseBranch<M::Coarse>>,
 ) -> crate::Result<Start> {
-    if opts.warm_start != WarmStart::Nested || opts.active_set.initial_active.is_some() {
+    let Some((coarse, seconds)) = coarse else {
         return Ok((None, None));
-    }
+    };
     let t = Instant::now();
-    let budget = system.symbolic().options.budget;
-    let cancel = opts.active_set.cancel.as_ref();
-    let prediction = M::nested_start(system.scheme(), problem, cons, budget, cancel)
-        .ok_or_else(|| start::nested_start_unavailable(D))?;
+    let coarse = coarse.ok_or_else(|| start::nested_start_unavailable(D))?;
+    let prediction = coarse.and_then(|c| M::nested_prediction(c, system.scheme(), problem, cons));
     Ok(match prediction {
         Ok(p) => {
             system.set_initial_guess(state, p.guess);
@@ -224,7 +304,7 @@ fn warm_start<M: SolverMesh<D> + ?Sized, const D: usize>(
         Err(reason) => (
             None,
             Some(WarmStartReport {
-                seconds: t.elapsed().as_secs_f64(),
+                seconds: seconds + t.elapsed().as_secs_f64(),
                 skipped: Some(reason),
                 ..Default::default()
             }),
@@ -271,21 +351,36 @@ fn solve_constrained<M: SolverMesh<D> + ?Sized, const D: usize>(
     }
 }
 
+/// Solves `problem` on `system` without a nested warm start (the coarse solves' own solves).
 fn solve_system<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
     system: DiscreteSystem<'a, M, D>,
     problem: &Problem<D>,
     opts: &SolveOptions,
     t0: Instant,
 ) -> crate::Result<Solution<'a, M, D>> {
+    solve_prepared(prepare(system, problem)?, problem, opts, t0, None)
+}
+
+/// Solves `problem` on the prepared system `prepared`, warm-started from the coarse solves
+/// `coarse` if given.
+fn solve_prepared<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
+    prepared: Prepared<'a, M, D>,
+    problem: &Problem<D>,
+    opts: &SolveOptions,
+    t0: Instant,
+    coarse: Option<CoarseBranch<M::Coarse>>,
+) -> crate::Result<Solution<'a, M, D>> {
+    let Prepared {
+        system,
+        constraints,
+        analysis: well_posed::Analysis { floating, marginal },
+    } = prepared;
     // what the solves of this system carry from one to the next: fresh for every problem
     let mut state = SolveState::default();
-    let constraints = constraints::build(&system, problem)?;
-    let well_posed::Analysis { floating, marginal } =
-        well_posed::analyse(&system, constraints.as_ref())?;
     let mut warm = None;
     let result = match &constraints {
         Some(c) => {
-            let (mut initial, report) = warm_start(&system, &mut state, problem, c, opts)?;
+            let (mut initial, report) = warm_start(&system, &mut state, problem, c, coarse)?;
             warm = report;
             // a warm start cut short by the hook is skipped: stop before the first fine solve
             Cancel::check(opts.active_set.cancel.as_ref())?;

@@ -9,7 +9,7 @@
 //! error ([`nested_start_unavailable`]), not a silent fallback.
 
 use super::constraints::Constraints;
-use super::warm_start::{self, Prediction};
+use super::warm_start::{self, CoarseSolves, Prediction};
 use crate::budget::MemoryBudget;
 use crate::mesh::{PolyMesh, SolveMesh};
 use crate::mesh3d::PolyMesh3;
@@ -19,39 +19,72 @@ use crate::vi::Cancel;
 
 /// A mesh the solve driver accepts (see the module docs).
 pub trait SolverMesh<const D: usize>: SolveMesh<D> {
-    /// The nested warm start's prediction of the active set of `cons` for `problem` on
-    /// `scheme` (`Some(Err(reason))`: no prediction could be made, the iteration starts cold
-    /// and the report says why), or `None` if this mesh type has no nested start.
-    fn nested_start(
+    /// What the coarse solves of the nested warm start hand to its prediction.
+    type Coarse: Send;
+    /// The coarse solves of the nested warm start of `problem` on this mesh, for a fine system
+    /// of `unknowns` unknowns ([`warm_start::coarse_solves`]; `Some(Err(reason))`: they could
+    /// not be made, the iteration starts cold and the report says why), or `None` if this mesh
+    /// type has no nested start.
+    fn coarse_solves(
+        &self,
+        unknowns: usize,
+        problem: &Problem<D>,
+        budget: MemoryBudget,
+        cancel: Option<&Cancel>,
+    ) -> Option<Result<Self::Coarse, String>>;
+    /// The prediction of the active set of `cons` of `scheme` (on this mesh) from the coarse
+    /// solves `coarse` ([`warm_start::predict_from`]).
+    fn nested_prediction(
+        coarse: Self::Coarse,
         scheme: &dyn GradientDiscretisation<Self, D>,
         problem: &Problem<D>,
         cons: &Constraints,
-        budget: MemoryBudget,
-        cancel: Option<&Cancel>,
-    ) -> Option<Result<Prediction, String>>;
+    ) -> Result<Prediction, String>;
 }
 
 impl SolverMesh<2> for PolyMesh {
-    fn nested_start(
+    type Coarse = CoarseSolves<PolyMesh>;
+    fn coarse_solves(
+        &self,
+        unknowns: usize,
+        problem: &Problem,
+        budget: MemoryBudget,
+        cancel: Option<&Cancel>,
+    ) -> Option<Result<Self::Coarse, String>> {
+        Some(warm_start::coarse_solves(
+            self, unknowns, problem, budget, cancel,
+        ))
+    }
+    fn nested_prediction(
+        coarse: Self::Coarse,
         scheme: &dyn GradientDiscretisation,
         problem: &Problem,
         cons: &Constraints,
-        budget: MemoryBudget,
-        cancel: Option<&Cancel>,
-    ) -> Option<Result<Prediction, String>> {
-        Some(warm_start::predict(scheme, problem, cons, budget, cancel))
+    ) -> Result<Prediction, String> {
+        warm_start::predict_from(coarse, scheme, problem, cons)
     }
 }
 
 impl SolverMesh<3> for PolyMesh3 {
-    fn nested_start(
+    type Coarse = CoarseSolves<PolyMesh3>;
+    fn coarse_solves(
+        &self,
+        unknowns: usize,
+        problem: &Problem<3>,
+        budget: MemoryBudget,
+        cancel: Option<&Cancel>,
+    ) -> Option<Result<Self::Coarse, String>> {
+        Some(warm_start::coarse_solves(
+            self, unknowns, problem, budget, cancel,
+        ))
+    }
+    fn nested_prediction(
+        coarse: Self::Coarse,
         scheme: &dyn GradientDiscretisation<PolyMesh3, 3>,
         problem: &Problem<3>,
         cons: &Constraints,
-        budget: MemoryBudget,
-        cancel: Option<&Cancel>,
-    ) -> Option<Result<Prediction, String>> {
-        Some(warm_start::predict(scheme, problem, cons, budget, cancel))
+    ) -> Result<Prediction, String> {
+        warm_start::predict_from(coarse, scheme, problem, cons)
     }
 }
 

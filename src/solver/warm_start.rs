@@ -133,7 +133,8 @@ pub struct WarmStartReport {
     pub coarse_solves: usize,
     /// Size of the predicted active set on the fine unknowns.
     pub predicted_active: usize,
-    /// Wall-clock time of the prediction (agglomeration and coarse solves), in seconds.
+    /// Wall-clock time of the prediction (agglomeration and coarse solves, which run beside
+    /// the fine setup, and the mapping to the fine unknowns), in seconds.
     pub seconds: f64,
     /// Why no prediction was made (the iteration then starts cold).
     pub skipped: Option<String>,
@@ -176,27 +177,46 @@ struct CoarseState {
     face: Vec<bool>,
 }
 
-/// Predicts the active set of the constrained unknowns `cons` of `scheme` for `problem`, the
-/// coarse systems assembled within `budget`, the coarse solves polling `cancel` between their
-/// linear solves. `Err(reason)` when no prediction can be made (or `cancel` stopped it).
-pub fn predict<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
-    scheme: &dyn GradientDiscretisation<M, D>,
+/// What the coarse solves of the nested warm start leave for the prediction on the fine
+/// unknowns: the finest coarse level, its active states and Π_D u there ([`coarse_solves`],
+/// then [`predict_from`]). The coarse solves read the fine mesh and the problem only, not the
+/// fine system, so the solve driver runs them beside the fine setup (`rayon::join`: at one
+/// thread one after the other, at more the coarse solves fill the threads that the setup's
+/// sequential parts leave idle).
+pub struct CoarseSolves<M> {
+    /// The finest coarse level (the levels above it are dropped once solved).
+    level: Level<M>,
+    /// The active states of its solve.
+    state: CoarseState,
+    /// Π_D u on its cells.
+    values: Vec<f64>,
+    /// The number of cells of every level, finest first.
+    sizes: Vec<usize>,
+    /// Linear solves of all levels.
+    solves: usize,
+    /// Wall-clock time of the levels and their solves, in seconds.
+    seconds: f64,
+}
+
+/// The coarse levels of a fine mesh `fine` with `unknowns` unknowns and the solves of
+/// `problem` on them, coarsest first, each warm-started by the one above ([`CoarseSolves`]);
+/// the coarse systems assembled within `budget`, the coarse solves polling `cancel` before
+/// the levels are made and between their linear solves. `Err(reason)` when no level can be
+/// made or solved (or `cancel` stopped them).
+pub fn coarse_solves<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
+    fine: &M,
+    unknowns: usize,
     problem: &Problem<D>,
-    cons: &Constraints,
     budget: MemoryBudget,
     cancel: Option<&Cancel>,
-) -> Result<Prediction, String> {
+) -> Result<CoarseSolves<M>, String> {
     let t0 = Instant::now();
-    let kind = problem
-        .constraint
-        .as_ref()
-        .ok_or_else(|| "the problem has no barrier".to_string())?
-        .kind;
-    let fine = scheme.mesh();
-    let levels = hierarchy(fine, problem, kind, scheme.n_unknowns(), budget)?;
+    Cancel::check(cancel).map_err(|e| e.to_string())?;
+    let kind = constraint_kind(problem)?;
+    let mut levels = hierarchy(fine, problem, kind, unknowns, budget)?;
     // from the coarsest level to the finest coarse one, each warm-started by the one above
     let mut state: Option<CoarseState> = None;
-    let mut finest_values: Vec<f64> = Vec::new();
+    let mut values: Vec<f64> = Vec::new();
     let mut solves = 0;
     for l in (0..levels.len()).rev() {
         let initial = |hmm: &Hmm<'_, M, D>, c: &Constraints| {
@@ -208,21 +228,61 @@ pub fn predict<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
         };
         let (sol_values, s, n) = coarse_solve(&levels[l].mesh, problem, budget, cancel, initial)?;
         solves += n;
-        finest_values = sol_values;
+        values = sol_values;
         state = Some(s);
     }
     let state = state.ok_or_else(|| "no coarse level".to_string())?;
+    let sizes = levels.iter().map(|a| a.mesh.n_cells()).collect();
+    levels.truncate(1);
+    let level = levels.pop().ok_or_else(|| "no coarse level".to_string())?;
+    Ok(CoarseSolves {
+        level,
+        state,
+        values,
+        sizes,
+        solves,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The kind of the barrier of `problem` (`Err` if it has none).
+fn constraint_kind<const D: usize>(problem: &Problem<D>) -> Result<ConstraintKind, String> {
+    Ok(problem
+        .constraint
+        .as_ref()
+        .ok_or_else(|| "the problem has no barrier".to_string())?
+        .kind)
+}
+
+/// Predicts the active set of the constrained unknowns `cons` of `scheme` for `problem` from
+/// the coarse solves `coarse` made on `scheme`'s mesh (see the module docs), and the first
+/// guess of the fine solve. `Err(reason)` when an array cannot be allocated.
+pub fn predict_from<M: CoarseMesh<D>, const D: usize>(
+    coarse: CoarseSolves<M>,
+    scheme: &dyn GradientDiscretisation<M, D>,
+    problem: &Problem<D>,
+    cons: &Constraints,
+) -> Result<Prediction, String> {
+    let t0 = Instant::now();
+    let kind = constraint_kind(problem)?;
     let needs_vertices =
         (0..scheme.n_unknowns()).any(|d| matches!(scheme.dof_entity(d), Entity::Vertex(_)));
-    let incidence = needs_vertices.then(|| VertexIncidence::new(fine));
-    let active =
-        map_down(&state, &levels[0], scheme, cons, kind, incidence.as_ref()).map_err(oom)?;
-    let guess = prolong(&finest_values, &levels[0], scheme, incidence.is_some()).map_err(oom)?;
+    let incidence = needs_vertices.then(|| VertexIncidence::new(scheme.mesh()));
+    let CoarseSolves {
+        level,
+        state,
+        values,
+        sizes,
+        solves,
+        seconds,
+    } = coarse;
+    let active = map_down(&state, &level, scheme, cons, kind, incidence.as_ref()).map_err(oom)?;
+    let guess = prolong(&values, &level, scheme, incidence.is_some()).map_err(oom)?;
     let report = WarmStartReport {
-        levels: levels.iter().map(|a| a.mesh.n_cells()).collect(),
+        levels: sizes,
         coarse_solves: solves,
         predicted_active: active.iter().filter(|&&a| a).count(),
-        seconds: t0.elapsed().as_secs_f64(),
+        seconds: seconds + t0.elapsed().as_secs_f64(),
         skipped: None,
     };
     Ok(Prediction {
@@ -230,6 +290,19 @@ pub fn predict<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
         guess,
         report,
     })
+}
+
+/// Predicts the active set of the constrained unknowns `cons` of `scheme` for `problem`:
+/// [`coarse_solves`] on `scheme`'s mesh, then [`predict_from`].
+pub fn predict<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
+    scheme: &dyn GradientDiscretisation<M, D>,
+    problem: &Problem<D>,
+    cons: &Constraints,
+    budget: MemoryBudget,
+    cancel: Option<&Cancel>,
+) -> Result<Prediction, String> {
+    let coarse = coarse_solves(scheme.mesh(), scheme.n_unknowns(), problem, budget, cancel)?;
+    predict_from(coarse, scheme, problem, cons)
 }
 
 /// A failed allocation of the warm start as the reason it was skipped.

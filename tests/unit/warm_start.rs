@@ -210,3 +210,59 @@ fn warm_start_names() {
     assert!("warm".parse::<WarmStart>().is_err());
     assert_eq!("nested".parse::<WarmStart>().unwrap(), WarmStart::Nested);
 }
+
+/// The driver runs the coarse solves beside the fine setup (`solver` module docs): its
+/// prediction is the one [`warm_start::predict`] makes after the setup, with the same first
+/// guess, in a pool of one thread (the branches one after the other) and of two (side by
+/// side); and a fine setup that fails returns its own error, not the coarse solves'.
+#[test]
+fn coarse_solves_beside_the_setup_predict_as_in_sequence() {
+    use gradvi::assembly::DiscreteSystem;
+    let p = paper_test3(-5.0);
+    let tri = cartesian_triangles(96, 96, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let p1 = P1::new(&tri).unwrap();
+    let system = DiscreteSystem::new(&p1, &p, Default::default()).unwrap();
+    let cons = constraints::build(&system, &p).unwrap().unwrap();
+    let pred = warm_start::predict(&p1, &p, &cons, MemoryBudget::DEFAULT, None).unwrap();
+    assert!(pred.report.coarse_solves > 0 && pred.report.predicted_active > 0);
+    let pool = |t: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .unwrap()
+    };
+    // Dirichlet data 0 above a barrier −1: the fine setup refuses the empty convex set
+    let infeasible = paper_test3(-5.0).with_constraint(
+        ConstraintKind::Obstacle,
+        Side::Upper,
+        Box::new(|_: gradvi::mesh::Point| -1.0),
+    );
+    for t in [1, 2] {
+        let sol = pool(t)
+            .install(|| solve_problem(&p1, &p, &opts(WarmStart::Nested)))
+            .unwrap();
+        sol.result.certificate.check(1e-10).unwrap();
+        let r = sol.warm_start.clone().expect("a nested solve reports");
+        assert_eq!(r.skipped, None, "{t} threads");
+        assert_eq!(
+            (&r.levels, r.coarse_solves, r.predicted_active),
+            (
+                &pred.report.levels,
+                pred.report.coarse_solves,
+                pred.report.predicted_active
+            ),
+            "{t} threads"
+        );
+        // the first solve started from the predicted active set
+        let first = &sol.result.log[0].step;
+        assert_eq!(first.active, pred.report.predicted_active, "{t} threads");
+        let e = pool(t)
+            .install(|| solve_problem(&p1, &infeasible, &opts(WarmStart::Nested)))
+            .err()
+            .expect("an empty convex set");
+        assert!(
+            matches!(e, gradvi::Error::Infeasible(_)),
+            "{t} threads: {e}"
+        );
+    }
+}
