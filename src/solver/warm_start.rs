@@ -408,15 +408,18 @@ fn prolong<M: CoarseMesh<D>, const D: usize>(
         Vec::new()
     };
     let mut guess = try_vec(scheme.n_skeleton(), "the first guess of the warm start")?;
-    guess.extend(
-        (0..scheme.n_skeleton()).map(|d| match scheme.dof_entity(d) {
-            Entity::Cell(k) => of(k),
-            Entity::Edge(e) => match fine.face_cells(e) {
-                [a, NO_CELL] => of(a),
-                [a, b] => 0.5 * (of(a) + of(b)),
-            },
-            Entity::Vertex(v) => vertex_mean.get(v).copied().unwrap_or(0.0),
-        }),
+    guess.par_extend(
+        (0..scheme.n_skeleton())
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|d| match scheme.dof_entity(d) {
+                Entity::Cell(k) => of(k),
+                Entity::Edge(e) => match fine.face_cells(e) {
+                    [a, NO_CELL] => of(a),
+                    [a, b] => 0.5 * (of(a) + of(b)),
+                },
+                Entity::Vertex(v) => vertex_mean.get(v).copied().unwrap_or(0.0),
+            }),
     );
     Ok(guess)
 }
@@ -550,10 +553,10 @@ fn map_down<M: CoarseMesh<D>, const D: usize>(
         (ConstraintKind::Obstacle, Some(_)) => vertex_obstacle(s, agg, scheme, cons)?,
         _ => Vec::new(),
     };
-    let mut cells = Vec::new();
-    let mut faces = Vec::new();
     let mut active = try_vec(cons.dofs.len(), "the predicted active set")?;
-    active.extend(cons.dofs.iter().enumerate().map(|(j, d)| {
+    let scratch = || (Vec::new(), Vec::new());
+    let each = cons.dofs.par_iter().enumerate().with_min_len(4096);
+    active.par_extend(each.map_init(scratch, |(cells, faces), (j, d)| {
         cells.clear();
         faces.clear();
         match scheme.dof_entity(d.dof) {

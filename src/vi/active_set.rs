@@ -54,7 +54,9 @@ use super::{
     Constraints, IterationLog, IterationStep, Method, QuadraticEnergy, SolveTimings,
     VariationalSolution,
 };
+use crate::budget::try_vec;
 use crate::error::SolverError;
+use rayon::prelude::*;
 use std::sync::Arc;
 
 /// Options of the active-set solver.
@@ -203,26 +205,31 @@ fn thresholds(ev: &Evaluation, c: f64) -> Thresholds {
 
 /// The next active set (Herbin's rule, step 2 of the module docs), with round-off thresholds
 /// taken from the scales of the evaluation of the current iterate.
-fn next_active<P>(
+fn next_active<P: Sync>(
     cons: &Constraints<P>,
     u: &[f64],
     active: &[bool],
     ev: &Evaluation,
     c: f64,
-) -> Vec<bool> {
+) -> crate::Result<Vec<bool>> {
     let s = cons.side.sign();
     let thr = thresholds(ev, c);
-    (0..cons.dofs.len())
-        .map(|j| {
-            let pd = &cons.dofs[j];
-            let (l, gap) = if active[j] {
-                (ev.multiplier[j], 0.0)
-            } else {
-                (0.0, s * (u[pd.dof] - cons.barrier[j]))
-            };
-            thr.stays_active(active[j], l, gap, pd.measure)
-        })
-        .collect()
+    let mut next = try_vec(cons.dofs.len(), "the next active set")?;
+    next.par_extend(
+        cons.dofs
+            .par_iter()
+            .enumerate()
+            .with_min_len(4096)
+            .map(|(j, pd)| {
+                let (l, gap) = if active[j] {
+                    (ev.multiplier[j], 0.0)
+                } else {
+                    (0.0, s * (u[pd.dof] - cons.barrier[j]))
+                };
+                thr.stays_active(active[j], l, gap, pd.measure)
+            }),
+    );
+    Ok(next)
 }
 
 /// The sizes of the active sets met so far.
@@ -259,14 +266,14 @@ fn solve_step<P: Sync>(
     } else {
         evaluate(&*q, Some(cons), &u, active)?
     };
-    let mut next = next_active(cons, &u, active, &ev, c);
+    let mut next = next_active(cons, &u, active, &ev, c)?;
     if ev.screened && (next == active || history.contains(&next)) {
         if let Some((v, more)) = q.refine(&fixed)? {
             u = v;
             timings = timings.then(more);
         }
         ev = evaluate(&*q, Some(cons), &u, active)?;
-        next = next_active(cons, &u, active, &ev, c);
+        next = next_active(cons, &u, active, &ev, c)?;
     }
     // settled, but the certificate's residuals (maxima over the unknowns) are above `tol`
     // while the iterative solve met its own 2-norm target: polish the solve
@@ -283,7 +290,7 @@ fn solve_step<P: Sync>(
         u = v;
         timings = timings.then(more);
         ev = evaluate(&*q, Some(cons), &u, active)?;
-        next = next_active(cons, &u, active, &ev, c);
+        next = next_active(cons, &u, active, &ev, c)?;
     }
     Ok((u, timings, ev, next))
 }

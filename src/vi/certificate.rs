@@ -10,7 +10,12 @@
 //! multipliers, scales), so that the caller never recomputes it.
 
 use super::{Constraints, QuadraticEnergy};
+use crate::budget::{try_filled, try_vec};
 use crate::error::SolverError;
+use rayon::prelude::*;
+
+/// Least number of unknowns of one parallel task.
+const MIN_LEN: usize = 4096;
 
 /// Evidence that u solves the discrete variational inequality (see the module docs).
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
@@ -103,7 +108,7 @@ pub struct Evaluation {
 
 /// Computes the certificate of `u` with the active set `active` (indexed like `cons.dofs`),
 /// from a single evaluation of the residual.
-pub fn evaluate<P>(
+pub fn evaluate<P: Sync>(
     q: &dyn QuadraticEnergy,
     cons: Option<&Constraints<P>>,
     u: &[f64],
@@ -112,25 +117,33 @@ pub fn evaluate<P>(
     let (r, scale) = q.residual(u)?;
     let scale_r = max_scale(&scale);
     let scale_u = scale_u(cons, u);
-    let mut is_active = vec![false; u.len()];
+    // one bit per unknown: an active constrained unknown (excluded from the balance residual)
+    let mut is_active = try_filled(u.len().div_ceil(64), 0u64, "the active unknowns")?;
     let mut c = Certificate::default();
     let mut lambda = Vec::new();
     if let Some(cons) = cons {
         c = constrained(cons, u, |j| r[cons.dofs[j].dof], scale_r, scale_u);
         let s = cons.side.sign();
-        lambda = cons.dofs.iter().map(|pd| s * r[pd.dof]).collect();
-        for (j, pd) in cons.dofs.iter().enumerate() {
-            if active[j] {
-                is_active[pd.dof] = true;
-            }
+        lambda = try_vec(cons.dofs.len(), "the multipliers")?;
+        lambda.par_extend(
+            cons.dofs
+                .par_iter()
+                .with_min_len(MIN_LEN)
+                .map(|pd| s * r[pd.dof]),
+        );
+        for (pd, _) in cons.dofs.iter().zip(active).filter(|(_, a)| **a) {
+            is_active[pd.dof / 64] |= 1 << (pd.dof % 64);
         }
     }
     let dir = q.dirichlet();
-    for i in 0..u.len() {
-        if !dir.is_fixed(i) && !is_active[i] {
-            c.balance_residual = c.balance_residual.max(r[i].abs() / scale_r);
-        }
-    }
+    let free = |i: usize| !dir.is_fixed(i) && is_active[i / 64] >> (i % 64) & 1 == 0;
+    c.balance_residual = r
+        .par_iter()
+        .enumerate()
+        .with_min_len(MIN_LEN)
+        .filter(|&(i, _)| free(i))
+        .map(|(_, v)| v.abs() / scale_r)
+        .reduce(|| 0.0, f64::max);
     Ok(Evaluation {
         certificate: c,
         multiplier: lambda,
@@ -160,7 +173,7 @@ pub fn evaluate_screened<P: Sync>(
     c.balance_residual = f64::NAN;
     // the multipliers λ_j = s r_j, in place
     let s = cons.side.sign();
-    r.iter_mut().for_each(|v| *v *= s);
+    r.par_iter_mut().with_min_len(MIN_LEN).for_each(|v| *v *= s);
     let lambda = r;
     Ok(Evaluation {
         certificate: c,
@@ -173,18 +186,22 @@ pub fn evaluate_screened<P: Sync>(
 
 /// The largest residual scale (at least the smallest positive float).
 fn max_scale(scale: &[f64]) -> f64 {
-    scale
-        .iter()
-        .cloned()
-        .fold(0.0, f64::max)
-        .max(f64::MIN_POSITIVE)
+    max_abs(scale).max(f64::MIN_POSITIVE)
+}
+
+/// max_i |x_i| (0 for an empty slice), in parallel: a maximum does not depend on the order.
+fn max_abs(x: &[f64]) -> f64 {
+    x.par_iter()
+        .with_min_len(MIN_LEN)
+        .map(|v| v.abs())
+        .reduce(|| 0.0, f64::max)
 }
 
 /// max(‖u‖∞, ‖g‖∞) (at least the smallest positive float).
 fn scale_u<P>(cons: Option<&Constraints<P>>, u: &[f64]) -> f64 {
-    let mut scale_u = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let mut scale_u = max_abs(u);
     if let Some(cons) = cons {
-        scale_u = cons.barrier.iter().fold(scale_u, |m, x| m.max(x.abs()));
+        scale_u = scale_u.max(max_abs(&cons.barrier));
     }
     scale_u.max(f64::MIN_POSITIVE)
 }
@@ -192,23 +209,38 @@ fn scale_u<P>(cons: Option<&Constraints<P>>, u: &[f64]) -> f64 {
 /// The certificate's constrained quantities (violation, least multiplier,
 /// complementarity; balance residual 0), with `r(j)` the residual of constrained unknown j
 /// (its multiplier is λ_j = s r(j)).
-fn constrained<P>(
+fn constrained<P: Sync>(
     cons: &Constraints<P>,
     u: &[f64],
-    r: impl Fn(usize) -> f64,
+    r: impl Fn(usize) -> f64 + Sync,
     scale_r: f64,
     scale_u: f64,
 ) -> Certificate {
     let s = cons.side.sign();
-    let mut c = Certificate::default();
-    let mut min_l = f64::INFINITY;
-    for (j, pd) in cons.dofs.iter().enumerate() {
-        let l = s * r(j);
-        let gap = u[pd.dof] - cons.barrier[j];
-        c.max_violation = c.max_violation.max((s * gap).max(0.0) / scale_u);
-        min_l = min_l.min(l / scale_r);
-        c.complementarity = c.complementarity.max((l * gap).abs() / (scale_r * scale_u));
+    // (violation, least multiplier, complementarity): maxima and a minimum, which do not
+    // depend on the order of the parallel reduction
+    let (violation, min_l, complementarity) = cons
+        .dofs
+        .par_iter()
+        .enumerate()
+        .with_min_len(MIN_LEN)
+        .map(|(j, pd)| {
+            let l = s * r(j);
+            let gap = u[pd.dof] - cons.barrier[j];
+            (
+                (s * gap).max(0.0) / scale_u,
+                l / scale_r,
+                (l * gap).abs() / (scale_r * scale_u),
+            )
+        })
+        .reduce(
+            || (0.0, f64::INFINITY, 0.0),
+            |a, b| (a.0.max(b.0), a.1.min(b.1), a.2.max(b.2)),
+        );
+    Certificate {
+        max_violation: violation,
+        min_multiplier: if min_l.is_finite() { min_l } else { 0.0 },
+        complementarity,
+        ..Default::default()
     }
-    c.min_multiplier = if min_l.is_finite() { min_l } else { 0.0 };
-    c
 }

@@ -144,7 +144,7 @@ impl Sweeper<'_> {
 }
 
 /// Solves the discrete VI by projected Gauss–Seidel. `niter` of the result counts sweeps.
-pub fn solve<P>(
+pub fn solve<P: Sync>(
     system: &dyn QuadraticEnergy,
     cons: &Constraints<P>,
     opts: &PgsOptions,
@@ -191,7 +191,7 @@ pub fn solve<P>(
 
 /// The solution u after `sweeps` sweeps, with its active set {i : u_i = g_i}, its multiplier
 /// and its certificate (an error if the certificate fails).
-fn certified_solution<P>(
+fn certified_solution<P: Sync>(
     system: &dyn QuadraticEnergy,
     cons: &Constraints<P>,
     opts: &PgsOptions,
