@@ -380,8 +380,15 @@ fn solve_prepared<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
     let mut warm = None;
     let result = match &constraints {
         Some(c) => {
+            let beside = coarse.is_some();
             let (mut initial, report) = warm_start(&system, &mut state, problem, c, coarse)?;
             warm = report;
+            if beside {
+                // the coarse solves ran beside the setup, mostly on other threads, whose
+                // allocator arenas keep the pages of their freed arrays: hand them back before
+                // the fine solves allocate theirs (`crate::heap`)
+                crate::heap::release_free_pages();
+            }
             // a warm start cut short by the hook is skipped: stop before the first fine solve
             Cancel::check(opts.active_set.cancel.as_ref())?;
             if !floating.is_empty() {
