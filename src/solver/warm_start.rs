@@ -256,7 +256,8 @@ fn constraint_kind<const D: usize>(problem: &Problem<D>) -> Result<ConstraintKin
 
 /// Predicts the active set of the constrained unknowns `cons` of `scheme` for `problem` from
 /// the coarse solves `coarse` made on `scheme`'s mesh (see the module docs), and the first
-/// guess of the fine solve. `Err(reason)` when an array cannot be allocated.
+/// guess of the fine solve. `Err(reason)` when an array cannot be allocated, or when `coarse`
+/// was made on a mesh with another number of cells or faces.
 pub fn predict_from<M: CoarseMesh<D>, const D: usize>(
     coarse: CoarseSolves<M>,
     scheme: &dyn GradientDiscretisation<M, D>,
@@ -265,9 +266,23 @@ pub fn predict_from<M: CoarseMesh<D>, const D: usize>(
 ) -> Result<Prediction, String> {
     let t0 = Instant::now();
     let kind = constraint_kind(problem)?;
+    let fine = scheme.mesh();
+    let made_on = (
+        coarse.level.cell_of.len(),
+        coarse.level.boundary_face_of.len(),
+    );
+    if made_on != (fine.n_cells(), fine.n_faces()) {
+        return Err(format!(
+            "coarse solves made on a mesh of {} cells and {} faces, not on this one ({} and {})",
+            made_on.0,
+            made_on.1,
+            fine.n_cells(),
+            fine.n_faces()
+        ));
+    }
     let needs_vertices =
         (0..scheme.n_unknowns()).any(|d| matches!(scheme.dof_entity(d), Entity::Vertex(_)));
-    let incidence = needs_vertices.then(|| VertexIncidence::new(scheme.mesh()));
+    let incidence = needs_vertices.then(|| VertexIncidence::new(fine));
     let CoarseSolves {
         level,
         state,

@@ -225,6 +225,16 @@ fn coarse_solves_beside_the_setup_predict_as_in_sequence() {
     let cons = constraints::build(&system, &p).unwrap().unwrap();
     let pred = warm_start::predict(&p1, &p, &cons, MemoryBudget::DEFAULT, None).unwrap();
     assert!(pred.report.coarse_solves > 0 && pred.report.predicted_active > 0);
+    // coarse solves made on another mesh are refused, not indexed out of bounds
+    let other = cartesian_triangles(80, 80, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let unknowns = P1::new(&other).unwrap().n_unknowns();
+    let coarse = warm_start::coarse_solves(&other, unknowns, &p, MemoryBudget::DEFAULT, None);
+    let e = warm_start::predict_from(coarse.unwrap(), &p1, &p, &cons).err();
+    assert!(
+        e.as_deref()
+            .is_some_and(|e| e.contains("coarse solves made on a mesh")),
+        "{e:?}"
+    );
     let pool = |t: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
