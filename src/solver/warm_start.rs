@@ -213,7 +213,7 @@ pub fn coarse_solves<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
     let t0 = Instant::now();
     Cancel::check(cancel).map_err(|e| e.to_string())?;
     let kind = constraint_kind(problem)?;
-    let mut levels = hierarchy(fine, problem, kind, unknowns, budget)?;
+    let levels = hierarchy(fine, problem, kind, unknowns, budget)?;
     // from the coarsest level to the finest coarse one, each warm-started by the one above
     let mut state: Option<CoarseState> = None;
     let mut values: Vec<f64> = Vec::new();
@@ -233,8 +233,11 @@ pub fn coarse_solves<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
     }
     let state = state.ok_or_else(|| "no coarse level".to_string())?;
     let sizes = levels.iter().map(|a| a.mesh.n_cells()).collect();
-    levels.truncate(1);
-    let level = levels.pop().ok_or_else(|| "no coarse level".to_string())?;
+    // the finest level; the coarser ones are dropped here
+    let level = levels
+        .into_iter()
+        .next()
+        .ok_or_else(|| "no coarse level".to_string())?;
     Ok(CoarseSolves {
         level,
         state,
