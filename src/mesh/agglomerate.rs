@@ -59,7 +59,7 @@ use crate::error::MeshError;
 use rayon::prelude::*;
 
 /// Marker for "no coarse edge" in [`Agglomeration::boundary_edge_of`] (interior fine edges).
-pub const NO_EDGE: usize = usize::MAX;
+pub const NO_EDGE: u32 = u32::MAX;
 
 /// Least ratio d_{K,σ} / r_K of a straightened aggregate (see the module docs): below it the
 /// aggregate is dissolved, so coarse cells stay reasonably shaped.
@@ -80,11 +80,12 @@ const MAX_ROUNDS: usize = 50;
 pub struct Agglomeration {
     /// The coarse mesh (validated; cell tags and boundary tags from the fine mesh).
     pub mesh: PolyMesh,
-    /// The coarse cell of each fine cell.
-    pub cell_of: Vec<usize>,
+    /// The coarse cell of each fine cell (32-bit, as the meshes' own vertex indices: these
+    /// maps are the size of the fine mesh).
+    pub cell_of: Vec<u32>,
     /// The coarse edge of each fine boundary edge (the same segment); [`NO_EDGE`] for interior
     /// fine edges.
-    pub boundary_edge_of: Vec<usize>,
+    pub boundary_edge_of: Vec<u32>,
     /// Fine cells left alone because their aggregate could not be straightened.
     pub dissolved_cells: usize,
 }
@@ -546,6 +547,20 @@ fn admissible(p: &[Point]) -> bool {
     (angle - std::f64::consts::TAU).abs() < 1e-6
 }
 
+/// Refuses a coarse mesh whose cells or edges cannot be numbered in 32 bits below the
+/// markers ([`NO_EDGE`]), so that the 32-bit maps of an [`Agglomeration`] are exact.
+pub(crate) fn check_narrow(mesh: &PolyMesh) -> Result<(), MeshError> {
+    let most = mesh.n_cells().max(mesh.n_edges());
+    if most >= NO_EDGE as usize {
+        return Err(MeshError::NonConforming(format!(
+            "a coarse mesh of {} cells and {} edges does not fit the 32-bit maps of an agglomeration",
+            mesh.n_cells(),
+            mesh.n_edges()
+        )));
+    }
+    Ok(())
+}
+
 /// Step 4: the coarse mesh from the admissible polygons.
 fn build(
     fine: &PolyMesh,
@@ -582,6 +597,7 @@ fn build(
         cell_tags[a] = fine.cell_tag(k);
     }
     let mesh = PolyMesh::from_cells_tagged(vertices, cells, &tagged)?.with_cell_tags(cell_tags)?;
+    check_narrow(&mesh)?;
     // fine boundary edge → coarse edge with the same (renumbered) end points
     let mut boundary_edge_of = vec![NO_EDGE; fine.n_edges()];
     for &e in fine.boundary_edges() {
@@ -591,11 +607,13 @@ fn build(
                 "agglomeration lost the boundary edge {e} ({a}, {b})"
             ))
         })?;
-        boundary_edge_of[e] = mesh.boundary_edges()[pos];
+        boundary_edge_of[e] = mesh.boundary_edges()[pos] as u32;
     }
+    // exact: the labels are coarse cells, fewer than u32::MAX (checked above)
+    let cell_of = label.into_iter().map(|a| a as u32).collect();
     Ok(Agglomeration {
         mesh,
-        cell_of: label,
+        cell_of,
         boundary_edge_of,
         dissolved_cells: dissolved.iter().filter(|&&d| d).count(),
     })
@@ -620,17 +638,17 @@ mod tests {
         // every coarse cell holds 16 fine cells, and contains their centroids' square
         let mut count = [0usize; 64];
         for &c in &agg.cell_of {
-            count[c] += 1;
+            count[c as usize] += 1;
         }
         assert!(count.iter().all(|&n| n == 16));
         for (k, &c) in agg.cell_of.iter().enumerate() {
-            let (p, q) = (fine.centroid(k), agg.mesh.centroid(c));
+            let (p, q) = (fine.centroid(k), agg.mesh.centroid(c as usize));
             assert!((p[0] - q[0]).abs() < 0.0625 && (p[1] - q[1]).abs() < 0.0625);
         }
         // boundary edges carry over one to one
         let mut seen = std::collections::HashSet::new();
         for &e in fine.boundary_edges() {
-            let ce = agg.boundary_edge_of[e];
+            let ce = agg.boundary_edge_of[e] as usize;
             assert!(agg.mesh.is_boundary_edge(ce));
             assert!(seen.insert(ce));
             assert!((agg.mesh.edge_measure(ce) - fine.edge_measure(e)).abs() < 1e-15);
@@ -696,11 +714,15 @@ mod tests {
             assert!((total_area(coarse) - area).abs() < 1e-12 * area, "{name}");
             // a coarse cell holds fine cells of one tag, and has that tag
             for (k, &c) in agg.cell_of.iter().enumerate() {
-                assert_eq!(fine.cell_tag(k), coarse.cell_tag(c), "{name}: cell {k}");
+                assert_eq!(
+                    fine.cell_tag(k),
+                    coarse.cell_tag(c as usize),
+                    "{name}: cell {k}"
+                );
             }
             // every boundary edge is kept, with its tag
             for &e in fine.boundary_edges() {
-                let ce = agg.boundary_edge_of[e];
+                let ce = agg.boundary_edge_of[e] as usize;
                 assert_eq!(fine.edge_tag(e), coarse.edge_tag(ce), "{name}: edge {e}");
                 assert_eq!(fine.edge_midpoint(e), coarse.edge_midpoint(ce));
             }
@@ -717,8 +739,10 @@ mod tests {
                 h = (h ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
             }
         };
-        a.cell_of.iter().for_each(|&c| eat(c as u64));
-        a.boundary_edge_of.iter().for_each(|&e| eat(e as u64));
+        a.cell_of.iter().for_each(|&c| eat(u64::from(c)));
+        // the marker as it was when the maps were usize, so the pinned values still hold
+        let wide = |e: u32| if e == NO_EDGE { u64::MAX } else { u64::from(e) };
+        a.boundary_edge_of.iter().for_each(|&e| eat(wide(e)));
         eat(a.dissolved_cells as u64);
         let m = &a.mesh;
         for v in m.vertices() {

@@ -30,7 +30,7 @@
 //! Cost: O(n) in the fine cells and edges (one key point per cell, one pass over the boundary
 //! edges), against the agglomeration's unions, merges and tracing of aggregate boundaries.
 
-use super::agglomerate::{Agglomeration, NO_EDGE, key_point};
+use super::agglomerate::{Agglomeration, NO_EDGE, check_narrow, key_point};
 use super::{Point, PolyMesh};
 use crate::error::MeshError;
 use rayon::prelude::*;
@@ -89,18 +89,22 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
     let xs = grid_lines(bb.x, nx, bottom);
     let ys = grid_lines(bb.y, ny, left);
     let index = |c: f64, lines: &[f64]| lines[1..lines.len() - 1].partition_point(|&l| l <= c);
-    let cell_of: Vec<usize> = (0..fine.n_cells())
+    if nx * ny >= NO_EDGE as usize {
+        return fail(format!("{nx} × {ny} boxes cannot be numbered in 32 bits"));
+    }
+    // exact: fewer than u32::MAX boxes (checked above)
+    let cell_of: Vec<u32> = (0..fine.n_cells())
         .into_par_iter()
         .with_min_len(MIN_TASK)
         .map(|k| {
             let p = key_point(fine, k);
-            index(p[0], &xs) + nx * index(p[1], &ys)
+            (index(p[0], &xs) + nx * index(p[1], &ys)) as u32
         })
         .collect();
     // one material per box, and no empty box
     let mut tags: Vec<Option<i32>> = vec![None; nx * ny];
     for (k, &b) in cell_of.iter().enumerate() {
-        let t = fine.cell_tag(k);
+        let (t, b) = (fine.cell_tag(k), b as usize);
         match tags[b] {
             None => tags[b] = Some(t),
             Some(s) if s != t => {
@@ -183,6 +187,7 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
         .map(|(s, &t)| (s[0], s[1], t))
         .collect();
     let mesh = PolyMesh::from_cells_tagged(vertices, cells, &tagged)?.with_cell_tags(cell_tags)?;
+    check_narrow(&mesh)?;
     let mut boundary_edge_of = vec![NO_EDGE; fine.n_edges()];
     for (e, s) in sides {
         let pos = mesh.boundary_position(s[0], s[1]).ok_or_else(|| {
@@ -190,7 +195,7 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
                 "box cover: no coarse boundary side {s:?} for the fine edge {e}"
             ))
         })?;
-        boundary_edge_of[e] = mesh.boundary_edges()[pos];
+        boundary_edge_of[e] = mesh.boundary_edges()[pos] as u32;
     }
     Ok(Agglomeration {
         mesh,
@@ -266,7 +271,7 @@ mod tests {
             }
         }
         for k in 0..fine.n_cells() {
-            let c = cover.cell_of[k];
+            let c = cover.cell_of[k] as usize;
             assert!(inside(key_point(&fine, k), m, c), "cell {k}");
             for &v in fine.cell_vertices(k) {
                 assert!(inside(fine.vertex(v as usize), m, c), "cell {k}");
@@ -283,7 +288,7 @@ mod tests {
         // every fine boundary edge lies on its coarse side
         let mut hit = vec![false; m.n_edges()];
         for &e in fine.boundary_edges() {
-            let ce = cover.boundary_edge_of[e];
+            let ce = cover.boundary_edge_of[e] as usize;
             assert!(m.is_boundary_edge(ce));
             hit[ce] = true;
             let [a, b] = m.edge_vertices(ce).map(|v| m.vertex(v));
@@ -336,13 +341,13 @@ mod tests {
         let m = &cover.mesh;
         for &e in fine.boundary_edges() {
             assert_eq!(
-                m.edge_tag(cover.boundary_edge_of[e]),
+                m.edge_tag(cover.boundary_edge_of[e] as usize),
                 fine.edge_tag(e),
                 "edge {e}"
             );
         }
         for k in 0..fine.n_cells() {
-            assert_eq!(m.cell_tag(cover.cell_of[k]), fine.cell_tag(k));
+            assert_eq!(m.cell_tag(cover.cell_of[k] as usize), fine.cell_tag(k));
         }
         // boxes of 3/16... do not tile; boxes of 1/3 hold both materials (the middle column)
         let err = |s: f64| box_cover(&fine, s).unwrap_err().to_string();

@@ -13,25 +13,25 @@
 
 use super::warm_start::{FIRST_LEVEL_UNKNOWNS_PER_CELL, FIRST_LEVEL_UNKNOWNS_PER_CELL_3D};
 use crate::budget::MemoryBudget;
-use crate::budget::try_collect;
 use crate::error::MeshError;
 use crate::mesh::complex::{Vector, VertexAverage};
 use crate::mesh::{PolyMesh, SolveMesh};
 use crate::mesh3d::{Point3, PolyMesh3, agglomerate::NO_FACE};
 
 /// Marker for "no coarse face" in [`Level::boundary_face_of`] (interior fine faces).
-pub const NO_COARSE_FACE: usize = usize::MAX;
+pub const NO_COARSE_FACE: u32 = u32::MAX;
 
 /// A coarse mesh made of unions of the cells of a fine one, and the maps between them.
 #[derive(Debug, Clone)]
 pub struct Level<M> {
     /// The coarse mesh.
     pub mesh: M,
-    /// The coarse cell of each fine cell.
-    pub cell_of: Vec<usize>,
+    /// The coarse cell of each fine cell (32-bit, as the meshes' own indices: these maps are
+    /// the size of the fine mesh and live beside the fine setup).
+    pub cell_of: Vec<u32>,
     /// The coarse face of each fine boundary face (the same face); [`NO_COARSE_FACE`] for
     /// interior fine faces. Indexed by fine face.
-    pub boundary_face_of: Vec<usize>,
+    pub boundary_face_of: Vec<u32>,
 }
 
 /// A mesh on which the nested warm start can make coarse levels (see the module docs).
@@ -168,10 +168,10 @@ impl CoarseMesh<3> for PolyMesh3 {
             0.5,
             budget,
         )?;
-        level3(a)
+        Ok(level3(a))
     }
     fn cover(&self, size: f64, budget: MemoryBudget) -> Option<Result<Level<Self>, MeshError>> {
-        Some(crate::mesh3d::agglomerate::box_cover(self, size, budget).and_then(level3))
+        Some(crate::mesh3d::agglomerate::box_cover(self, size, budget).map(level3))
     }
     fn box_tiling(&self, measure: f64, size: f64) -> Option<f64> {
         tiling(
@@ -215,26 +215,18 @@ impl CoarseMesh<3> for PolyMesh3 {
     }
 }
 
-/// Distance from p to the segment [a, b].
-/// The level of a 3D agglomeration or cover (indices widened).
-fn level3(a: crate::mesh3d::agglomerate::Agglomeration3) -> Result<Level<PolyMesh3>, MeshError> {
-    let wide = |i: &u32| {
-        if *i == NO_FACE {
-            NO_COARSE_FACE
-        } else {
-            *i as usize
-        }
-    };
-    Ok(Level {
-        cell_of: try_collect(a.cell_of.iter().map(|&c| c as usize), "the coarse cells")?,
-        boundary_face_of: try_collect(
-            a.boundary_face_of.iter().map(wide),
-            "the coarse boundary faces",
-        )?,
+/// The level of a 3D agglomeration or cover (its maps moved, not copied: [`NO_FACE`] is
+/// [`NO_COARSE_FACE`]).
+fn level3(a: crate::mesh3d::agglomerate::Agglomeration3) -> Level<PolyMesh3> {
+    const _: () = assert!(NO_FACE == NO_COARSE_FACE);
+    Level {
+        cell_of: a.cell_of,
+        boundary_face_of: a.boundary_face_of,
         mesh: a.mesh,
-    })
+    }
 }
 
+/// Distance from p to the segment [a, b].
 fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (d, q) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
     let len2 = d[0] * d[0] + d[1] * d[1];

@@ -72,7 +72,7 @@
 //! or a coarse solve fails, the
 //! iteration starts cold and [`WarmStartReport::skipped`] says why.
 
-use super::coarse_mesh::{CoarseMesh, Level};
+use super::coarse_mesh::{CoarseMesh, Level, NO_COARSE_FACE};
 use super::start::SolverMesh;
 use crate::assembly::{DiscreteSystem, SystemOptions};
 use crate::budget::MemoryBudget;
@@ -398,7 +398,7 @@ fn prolong<M: CoarseMesh<D>, const D: usize>(
     at_vertices: bool,
 ) -> Result<Vec<f64>, AllocFailure> {
     let fine = scheme.mesh();
-    let of = |k: usize| values.get(agg.cell_of[k]).copied().unwrap_or(0.0);
+    let of = |k: usize| values.get(agg.cell_of[k] as usize).copied().unwrap_or(0.0);
     // the mean around each vertex, by one pass over the cells: each sum adds the values of
     // the cells in increasing order from the starting value of `Sum`, as summing a gathered
     // list of the vertex's cells would
@@ -602,14 +602,14 @@ fn map_down<M: CoarseMesh<D>, const D: usize>(
                 !cells.is_empty()
                     && cells
                         .iter()
-                        .all(|&k| active_inside(s, coarse, agg.cell_of[k], p))
+                        .all(|&k| active_inside(s, coarse, agg.cell_of[k] as usize, p))
             }
             ConstraintKind::Signorini => {
                 faces.retain(|&e| fine.face_cells(e)[1] == NO_CELL);
                 !faces.is_empty()
                     && faces.iter().all(|&e| {
                         let ce = agg.boundary_face_of[e];
-                        s.face.get(ce).copied().unwrap_or(false)
+                        ce != NO_COARSE_FACE && s.face.get(ce as usize).copied().unwrap_or(false)
                     })
             }
         }
@@ -647,7 +647,7 @@ fn vertex_obstacle<M: CoarseMesh<D>, const D: usize>(
     (0..fine.n_cells())
         .into_par_iter()
         .for_each_init(Vec::new, |scratch, k| {
-            let c = agg.cell_of[k];
+            let c = agg.cell_of[k] as usize;
             for &v in fine.cell_vertex_ids(k, scratch) {
                 let v = v as usize;
                 for &j in &at[ptr[v]..ptr[v + 1]] {
@@ -779,7 +779,11 @@ mod tests {
         for (d, g) in guess.iter().enumerate() {
             if let Entity::Vertex(v) = scheme.dof_entity(d) {
                 let c = cells(v);
-                let want = c.iter().map(|&k| values[agg.cell_of[k]]).sum::<f64>() / c.len() as f64;
+                let want = c
+                    .iter()
+                    .map(|&k| values[agg.cell_of[k] as usize])
+                    .sum::<f64>()
+                    / c.len() as f64;
                 assert_eq!(g.to_bits(), want.to_bits(), "vertex {v}");
                 dofs.push(crate::vi::ConstrainedDof {
                     dof: d,
@@ -809,8 +813,9 @@ mod tests {
             };
             let c = cells(v);
             let want = !c.is_empty()
-                && c.iter()
-                    .all(|&k| active_inside(&s, coarse, agg.cell_of[k], scheme.dof_point(d.dof)));
+                && c.iter().all(|&k| {
+                    active_inside(&s, coarse, agg.cell_of[k] as usize, scheme.dof_point(d.dof))
+                });
             assert_eq!(active[j], want, "vertex {v}");
             n += usize::from(want);
         }
