@@ -12,13 +12,14 @@
 //! surface the mesh integrates on when σ is warped.
 
 use super::warm_start::{FIRST_LEVEL_UNKNOWNS_PER_CELL, FIRST_LEVEL_UNKNOWNS_PER_CELL_3D};
-use crate::budget::MemoryBudget;
+use crate::budget::{AllocFailure, MemoryBudget, try_vec};
 use crate::error::MeshError;
 use crate::mesh::complex::{Vector, VertexAverage};
 use crate::mesh::{PolyMesh, SolveMesh};
 use crate::mesh3d::{Point3, PolyMesh3, agglomerate::NO_FACE};
 
-/// Marker for "no coarse face" in [`Level::boundary_face_of`] (interior fine faces).
+/// Marker for "no coarse face" in the dense maps of the agglomerations and covers (interior
+/// fine faces), from which [`BoundaryFaceMap::from_dense`] keeps the other entries.
 pub const NO_COARSE_FACE: u32 = u32::MAX;
 
 /// A coarse mesh made of unions of the cells of a fine one, and the maps between them.
@@ -29,9 +30,65 @@ pub struct Level<M> {
     /// The coarse cell of each fine cell (32-bit, as the meshes' own indices: these maps are
     /// the size of the fine mesh and live beside the fine setup).
     pub cell_of: Vec<u32>,
-    /// The coarse face of each fine boundary face (the same face); [`NO_COARSE_FACE`] for
-    /// interior fine faces. Indexed by fine face.
-    pub boundary_face_of: Vec<u32>,
+    /// The coarse face of each fine boundary face (the same face).
+    pub boundary_face_of: BoundaryFaceMap,
+}
+
+/// The coarse face of each fine boundary face, kept for the boundary faces only: a level
+/// lives beside the fine setup (the coarse branch of the solver's join), and a map indexed by
+/// every fine face would hold 4 bytes per face for the few on the boundary (48 MB for the 12M
+/// faces of 6M tetrahedra, whose 120k boundary faces take 1 MB here).
+#[derive(Debug, Clone, Default)]
+pub struct BoundaryFaceMap {
+    /// The number of faces of the fine mesh.
+    fine_faces: usize,
+    /// The fine boundary faces, increasing.
+    faces: Vec<u32>,
+    /// The coarse face of each of them.
+    coarse: Vec<u32>,
+}
+
+impl BoundaryFaceMap {
+    /// The map of a dense one (indexed by fine face; [`NO_COARSE_FACE`] for interior faces).
+    pub fn from_dense(dense: &[u32]) -> Result<Self, AllocFailure> {
+        let n = dense.iter().filter(|&&c| c != NO_COARSE_FACE).count();
+        let mut faces = try_vec(n, "the fine boundary faces of a coarse level")?;
+        let mut coarse = try_vec(n, "the coarse boundary faces of a coarse level")?;
+        for (e, &c) in dense.iter().enumerate() {
+            if c != NO_COARSE_FACE {
+                // exact: a dense map has fewer than u32::MAX entries (the marker's value)
+                faces.push(e as u32);
+                coarse.push(c);
+            }
+        }
+        Ok(Self {
+            fine_faces: dense.len(),
+            faces,
+            coarse,
+        })
+    }
+
+    /// The coarse face of the fine face `e` (`None` for a face not on the boundary).
+    pub fn get(&self, e: usize) -> Option<usize> {
+        let e = u32::try_from(e).ok()?;
+        let i = self.faces.binary_search(&e).ok()?;
+        Some(self.coarse[i] as usize)
+    }
+
+    /// The number of faces of the fine mesh the map was made on.
+    pub fn fine_faces(&self) -> usize {
+        self.fine_faces
+    }
+
+    /// The number of fine boundary faces.
+    pub fn len(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// Whether no fine face is on the boundary.
+    pub fn is_empty(&self) -> bool {
+        self.faces.is_empty()
+    }
 }
 
 /// A mesh on which the nested warm start can make coarse levels (see the module docs).
@@ -112,21 +169,21 @@ impl CoarseMesh<2> for PolyMesh {
         let a = crate::mesh::agglomerate::agglomerate(self, size)?;
         Ok(Level {
             mesh: a.mesh,
+            boundary_face_of: BoundaryFaceMap::from_dense(&a.boundary_edge_of)?,
             cell_of: a.cell_of,
-            boundary_face_of: a.boundary_edge_of,
         })
     }
     /// The boxes of [`crate::mesh::box_cover`], which tile a rectangular domain exactly and
     /// refuse any other (the planar agglomeration straightens the faces of its aggregates, so
     /// it coarsens any planar mesh: no staircase cover is needed in 2D).
     fn cover(&self, size: f64, _budget: MemoryBudget) -> Option<Result<Level<Self>, MeshError>> {
-        Some(
-            crate::mesh::box_cover::box_cover(self, size).map(|a| Level {
+        Some(crate::mesh::box_cover::box_cover(self, size).and_then(|a| {
+            Ok(Level {
+                boundary_face_of: BoundaryFaceMap::from_dense(&a.boundary_edge_of)?,
                 mesh: a.mesh,
                 cell_of: a.cell_of,
-                boundary_face_of: a.boundary_edge_of,
-            }),
-        )
+            })
+        }))
     }
     fn box_tiling(&self, measure: f64, size: f64) -> Option<f64> {
         let b = self.bounding_box();
@@ -168,10 +225,10 @@ impl CoarseMesh<3> for PolyMesh3 {
             0.5,
             budget,
         )?;
-        Ok(level3(a))
+        level3(a)
     }
     fn cover(&self, size: f64, budget: MemoryBudget) -> Option<Result<Level<Self>, MeshError>> {
-        Some(crate::mesh3d::agglomerate::box_cover(self, size, budget).map(level3))
+        Some(crate::mesh3d::agglomerate::box_cover(self, size, budget).and_then(level3))
     }
     fn box_tiling(&self, measure: f64, size: f64) -> Option<f64> {
         tiling(
@@ -215,15 +272,15 @@ impl CoarseMesh<3> for PolyMesh3 {
     }
 }
 
-/// The level of a 3D agglomeration or cover (its maps moved, not copied: [`NO_FACE`] is
-/// [`NO_COARSE_FACE`]).
-fn level3(a: crate::mesh3d::agglomerate::Agglomeration3) -> Level<PolyMesh3> {
+/// The level of a 3D agglomeration or cover: its cell map moved, its boundary face map kept
+/// for the boundary faces only ([`NO_FACE`] is [`NO_COARSE_FACE`]).
+fn level3(a: crate::mesh3d::agglomerate::Agglomeration3) -> Result<Level<PolyMesh3>, MeshError> {
     const _: () = assert!(NO_FACE == NO_COARSE_FACE);
-    Level {
+    Ok(Level {
+        boundary_face_of: BoundaryFaceMap::from_dense(&a.boundary_face_of)?,
         cell_of: a.cell_of,
-        boundary_face_of: a.boundary_face_of,
         mesh: a.mesh,
-    }
+    })
 }
 
 /// Distance from p to the segment [a, b].
@@ -302,6 +359,23 @@ fn triangle_distance(p: Point3, t: [Point3; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The sparse map answers as the dense one it was made from, on every face and beyond.
+    #[test]
+    fn boundary_face_map_answers_as_the_dense_map() {
+        let x = NO_COARSE_FACE;
+        let dense = [x, 3, x, x, 0, 7, x, 1];
+        let map = BoundaryFaceMap::from_dense(&dense).unwrap();
+        assert_eq!((map.len(), map.fine_faces()), (4, 8));
+        for (e, &c) in dense.iter().enumerate() {
+            let want = (c != x).then_some(c as usize);
+            assert_eq!(map.get(e), want, "face {e}");
+        }
+        assert_eq!(map.get(8), None);
+        assert_eq!(map.get(usize::MAX), None);
+        let interior = BoundaryFaceMap::from_dense(&[x; 5]).unwrap();
+        assert!(interior.is_empty() && interior.fine_faces() == 5 && interior.get(2).is_none());
+    }
 
     /// The triangle distance against brute force over a fine barycentric grid of the triangle.
     #[test]

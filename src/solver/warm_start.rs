@@ -72,7 +72,7 @@
 //! or a coarse solve fails, the
 //! iteration starts cold and [`WarmStartReport::skipped`] says why.
 
-use super::coarse_mesh::{CoarseMesh, Level, NO_COARSE_FACE};
+use super::coarse_mesh::{CoarseMesh, Level};
 use super::start::SolverMesh;
 use crate::assembly::{DiscreteSystem, SystemOptions};
 use crate::budget::MemoryBudget;
@@ -272,7 +272,7 @@ pub fn predict_from<M: CoarseMesh<D>, const D: usize>(
     let fine = scheme.mesh();
     let made_on = (
         coarse.level.cell_of.len(),
-        coarse.level.boundary_face_of.len(),
+        coarse.level.boundary_face_of.fine_faces(),
     );
     if made_on != (fine.n_cells(), fine.n_faces()) {
         return Err(format!(
@@ -608,8 +608,8 @@ fn map_down<M: CoarseMesh<D>, const D: usize>(
                 faces.retain(|&e| fine.face_cells(e)[1] == NO_CELL);
                 !faces.is_empty()
                     && faces.iter().all(|&e| {
-                        let ce = agg.boundary_face_of[e];
-                        ce != NO_COARSE_FACE && s.face.get(ce as usize).copied().unwrap_or(false)
+                        let ce = agg.boundary_face_of.get(e);
+                        ce.is_some_and(|ce| s.face.get(ce).copied().unwrap_or(false))
                     })
             }
         }
