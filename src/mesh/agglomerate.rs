@@ -80,8 +80,8 @@ const MAX_ROUNDS: usize = 50;
 pub struct Agglomeration {
     /// The coarse mesh (validated; cell tags and boundary tags from the fine mesh).
     pub mesh: PolyMesh,
-    /// The coarse cell of each fine cell (32-bit, as the meshes' own vertex indices: these
-    /// maps are the size of the fine mesh).
+    /// The coarse cell of each fine cell (32-bit, as the meshes' own indices: these maps are
+    /// the size of the fine mesh).
     pub cell_of: Vec<u32>,
     /// The coarse edge of each fine boundary edge (the same segment); [`NO_EDGE`] for interior
     /// fine edges.
@@ -547,20 +547,6 @@ fn admissible(p: &[Point]) -> bool {
     (angle - std::f64::consts::TAU).abs() < 1e-6
 }
 
-/// Refuses a coarse mesh whose cells or edges cannot be numbered in 32 bits below the
-/// markers ([`NO_EDGE`]), so that the 32-bit maps of an [`Agglomeration`] are exact.
-pub(crate) fn check_narrow(mesh: &PolyMesh) -> Result<(), MeshError> {
-    let most = mesh.n_cells().max(mesh.n_edges());
-    if most >= NO_EDGE as usize {
-        return Err(MeshError::NonConforming(format!(
-            "a coarse mesh of {} cells and {} edges does not fit the 32-bit maps of an agglomeration",
-            mesh.n_cells(),
-            mesh.n_edges()
-        )));
-    }
-    Ok(())
-}
-
 /// Step 4: the coarse mesh from the admissible polygons.
 fn build(
     fine: &PolyMesh,
@@ -597,7 +583,6 @@ fn build(
         cell_tags[a] = fine.cell_tag(k);
     }
     let mesh = PolyMesh::from_cells_tagged(vertices, cells, &tagged)?.with_cell_tags(cell_tags)?;
-    check_narrow(&mesh)?;
     // fine boundary edge → coarse edge with the same (renumbered) end points
     let mut boundary_edge_of = vec![NO_EDGE; fine.n_edges()];
     for &e in fine.boundary_edges() {
@@ -609,7 +594,8 @@ fn build(
         })?;
         boundary_edge_of[e] = mesh.boundary_edges()[pos] as u32;
     }
-    // exact: the labels are coarse cells, fewer than u32::MAX (checked above)
+    // exact: the labels are coarse cells, and a mesh has fewer than u32::MAX cells and edges
+    // (its build refuses more, `MeshError::TooManyEntities`)
     let cell_of = label.into_iter().map(|a| a as u32).collect();
     Ok(Agglomeration {
         mesh,

@@ -30,7 +30,7 @@
 //! Cost: O(n) in the fine cells and edges (one key point per cell, one pass over the boundary
 //! edges), against the agglomeration's unions, merges and tracing of aggregate boundaries.
 
-use super::agglomerate::{Agglomeration, NO_EDGE, check_narrow, key_point};
+use super::agglomerate::{Agglomeration, NO_EDGE, key_point};
 use super::{Point, PolyMesh};
 use crate::error::MeshError;
 use rayon::prelude::*;
@@ -89,10 +89,8 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
     let xs = grid_lines(bb.x, nx, bottom);
     let ys = grid_lines(bb.y, ny, left);
     let index = |c: f64, lines: &[f64]| lines[1..lines.len() - 1].partition_point(|&l| l <= c);
-    if nx * ny >= NO_EDGE as usize {
-        return fail(format!("{nx} × {ny} boxes cannot be numbered in 32 bits"));
-    }
-    // exact: fewer than u32::MAX boxes (checked above)
+    // exact: no more boxes than fine cells (checked above), fewer than u32::MAX (the mesh's
+    // build refuses more)
     let cell_of: Vec<u32> = (0..fine.n_cells())
         .into_par_iter()
         .with_min_len(MIN_TASK)
@@ -187,7 +185,6 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
         .map(|(s, &t)| (s[0], s[1], t))
         .collect();
     let mesh = PolyMesh::from_cells_tagged(vertices, cells, &tagged)?.with_cell_tags(cell_tags)?;
-    check_narrow(&mesh)?;
     let mut boundary_edge_of = vec![NO_EDGE; fine.n_edges()];
     for (e, s) in sides {
         let pos = mesh.boundary_position(s[0], s[1]).ok_or_else(|| {
