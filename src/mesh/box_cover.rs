@@ -88,7 +88,7 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
     }
     let xs = grid_lines(bb.x, nx, bottom);
     let ys = grid_lines(bb.y, ny, left);
-    let index = |c: f64, lines: &[f64]| lines[1..lines.len() - 1].partition_point(|&l| l <= c);
+    let index = |c: f64, lines: &[f64]| line_index(c, lines);
     // exact: no more boxes than fine cells (checked above), fewer than u32::MAX (the mesh's
     // build refuses more)
     let cell_of: Vec<u32> = (0..fine.n_cells())
@@ -202,6 +202,26 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
     })
 }
 
+/// The box of coordinate `c` along the n + 1 increasing `lines` of [`grid_lines`]: the number
+/// of interior lines at or below `c` (0 for `c` below the second line or NaN, n − 1 at or
+/// above the last interior one). Found from the box of the unmoved line grid, i =
+/// ⌊(c − l₀) n / (lₙ − l₀)⌋, then moved to the neighbour while a line is on the wrong side:
+/// the lines are moved by at most h/4 (a step or none), where a search of the n − 1 lines
+/// took about log₂ n unpredictable branches per call (per fine cell, twice).
+fn line_index(c: f64, lines: &[f64]) -> usize {
+    let n = lines.len() - 1;
+    let (l0, ln) = (lines[0], lines[n]);
+    // a saturating cast: NaN and negative values give 0
+    let mut i = (((c - l0) / (ln - l0) * n as f64).floor() as usize).min(n - 1);
+    while i > 0 && lines[i] > c {
+        i -= 1;
+    }
+    while i + 1 < n && lines[i + 1] <= c {
+        i += 1;
+    }
+    i
+}
+
 /// The n + 1 lines cutting `range` into n cells: lᵢ = r₀ + i (r₁ − r₀)/n, moved to the
 /// nearest of `snap` (fine boundary vertices) when that is within h/4 (h = (r₁ − r₀)/n); the
 /// ends are r₀ and r₁ exactly. Consecutive lines stay at least h/2 apart.
@@ -230,6 +250,23 @@ fn grid_lines(range: [f64; 2], n: usize, mut snap: Vec<f64>) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn line_index_counts_the_interior_lines_at_or_below() {
+        // lines moved from the even grid, a coordinate on each line, between and outside
+        let lines = grid_lines([0.0, 1.0], 8, vec![0.1, 0.26, 0.3, 0.52, 0.9, 0.99]);
+        assert!(lines.windows(2).all(|w| w[0] < w[1]));
+        assert_ne!(lines[1], 0.125);
+        let search = |c: f64| lines[1..lines.len() - 1].partition_point(|&l| l <= c);
+        let mut probes: Vec<f64> = (-20..=220).map(|i| i as f64 / 200.0).collect();
+        probes.extend(lines.iter().copied());
+        probes.extend(lines.iter().map(|l| l - 1e-12));
+        probes.extend([f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -1e300, 1e300]);
+        for c in probes {
+            assert_eq!(line_index(c, &lines), search(c), "c = {c}");
+        }
+        assert_eq!(line_index(0.5, &[0.0, 1.0]), 0);
+    }
     use crate::mesh::generate::{cartesian_rect, cartesian_triangles};
 
     fn inside(p: Point, m: &PolyMesh, c: usize) -> bool {

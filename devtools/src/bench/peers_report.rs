@@ -229,7 +229,7 @@ fn profile(md: &mut Doc, rows: &[PeerRow]) {
     md.section(
         2,
         "Profile of the ex9 runs",
-        "Seconds per phase of gradvi's ex9 runs (the largest grids): mesh generation; setup (data, local matrices, pattern, symbolic factorisation); the nested start's coarse solves; assembly of the condensed systems; factorisation (direct) or multigrid setup (iterative); triangular solves or conjugate gradients (with the interior recovery); the rest (constraints, residuals, certificates, the look-aheads of the active set, errors, freeing the memory). Data: an upper bound of the time spent evaluating the problem's expressions (every datum at every centroid, edge midpoint and vertex, sequentially; `problems/ex9.toml` is a problem file, so this is the cost of its parsed expressions), and its share of the total.",
+        "Seconds per phase of gradvi's ex9 runs (the largest grids): mesh generation; setup (data, local matrices, pattern, symbolic factorisation); the nested start's coarse solves; assembly of the condensed systems; factorisation (direct) or multigrid setup (iterative); triangular solves or conjugate gradients (with the interior recovery); the rest (constraints, residuals, certificates, the look-aheads of the active set, errors, freeing the memory). Data: an upper bound of the time spent evaluating the problem's expressions (every datum at every centroid, edge midpoint and vertex, on the solve's threads (rows before 2026-12-06: on one thread); `problems/ex9.toml` is a problem file, so this is the cost of its parsed expressions), and its share of the total.",
     );
     let mut t = Table::new(
         "G | cores | scheme | linear | mesh | setup | coarse | assembly | factor / AMG setup | solve / CG | rest | total | data (share)",
