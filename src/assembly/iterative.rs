@@ -248,8 +248,8 @@ impl PcgOutcome {
 /// A hash of the fixed unknowns and their values (to check that a refinement continues the
 /// solve it belongs to): the multiply–rotate mix of rustc's FxHasher over the pairs (i, bits
 /// of v), a consistency check and not a defence against crafted input. It reads every unknown
-/// of every screened solve: std's SipHash over the 10⁵ fixed pairs of ex9 at 1025² took about
-/// 15 ms per solve, this a millisecond.
+/// of every screened solve, so it is the cheap mix rather than std's SipHash (whose cost on ex9
+/// is in `replication/measurements/solver.md`).
 pub(super) fn fingerprint(fixed: &FixedValues) -> u64 {
     const K: u64 = 0x517c_c1b7_2722_0a95;
     let mix = |h: u64, x: u64| (h.rotate_left(5) ^ x).wrapping_mul(K);

@@ -250,6 +250,7 @@ fn grid_lines(range: [f64; 2], n: usize, mut snap: Vec<f64>) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::generate::{cartesian_rect, cartesian_triangles};
 
     #[test]
     fn line_index_counts_the_interior_lines_at_or_below() {
@@ -267,7 +268,6 @@ mod tests {
         }
         assert_eq!(line_index(0.5, &[0.0, 1.0]), 0);
     }
-    use crate::mesh::generate::{cartesian_rect, cartesian_triangles};
 
     fn inside(p: Point, m: &PolyMesh, c: usize) -> bool {
         let b = m.cell_vertices(c).iter().map(|&v| m.vertex(v as usize));
