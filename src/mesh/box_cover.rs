@@ -88,7 +88,6 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
     }
     let xs = grid_lines(bb.x, nx, bottom);
     let ys = grid_lines(bb.y, ny, left);
-    let index = |c: f64, lines: &[f64]| line_index(c, lines);
     // exact: no more boxes than fine cells (checked above), fewer than u32::MAX (the mesh's
     // build refuses more)
     let cell_of: Vec<u32> = (0..fine.n_cells())
@@ -96,7 +95,7 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
         .with_min_len(MIN_TASK)
         .map(|k| {
             let p = key_point(fine, k);
-            (index(p[0], &xs) + nx * index(p[1], &ys)) as u32
+            (line_index(p[0], &xs) + nx * line_index(p[1], &ys)) as u32
         })
         .collect();
     // one material per box, and no empty box
@@ -146,7 +145,7 @@ pub fn box_cover(fine: &PolyMesh, size: f64) -> Result<Agglomeration, MeshError>
         let (p, q) = (fine.vertex(a), fine.vertex(b));
         let m = [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
         let on = |c: f64, at: f64| (c - at).abs() <= tol;
-        let (i, j) = (index(m[0], &xs), index(m[1], &ys));
+        let (i, j) = (line_index(m[0], &xs), line_index(m[1], &ys));
         if on(p[1], bb.y[0]) && on(q[1], bb.y[0]) {
             Some([vertex(i, 0), vertex(i + 1, 0)])
         } else if on(p[1], bb.y[1]) && on(q[1], bb.y[1]) {
