@@ -15,9 +15,10 @@
 //! definite whenever M is (its A-Rayleigh quotients of I − M A are below 1), and the error on
 //! the patch is solved exactly twice per application.
 //!
-//! Cost: one sparse Cholesky factorisation of A_PP when built; per application, two solves
-//! with it, M once, and the rows of A on P and on the rows coupled to P (z₁ vanishes off P,
-//! so r − A z₁ differs from r only there).
+//! Cost: one sparse Cholesky factorisation of A_PP when built (and A_RP kept, the entries on
+//! P of the rows R coupled to P); per application, two solves with it, M once, a copy of r,
+//! A_RP z₁ (z₁ vanishes off P, so r − A z₁ differs from r on R only, by A_RP z₁) and the rows
+//! of A on P.
 
 use super::cholesky::{CholeskyWork, SpdPattern};
 use super::pcg::Preconditioner;
@@ -32,6 +33,10 @@ pub struct PatchCorrected<'a, A: Rows + ?Sized, M: Preconditioner + ?Sized> {
     patch: Vec<u32>,
     /// The rows coupled to the patch (the patch included), increasing.
     ring: Vec<u32>,
+    /// A_RP by rows (R the ring): offsets into `coupling`, one per ring row and one more.
+    coupling_ptr: Vec<usize>,
+    /// A_RP's entries: the column's position in the patch and the value, in A's column order.
+    coupling: Vec<(u32, f64)>,
     /// The symbolic factorisation of A_PP.
     pattern: SpdPattern,
     /// Its numeric factor.
@@ -131,10 +136,23 @@ impl<'a, A: Rows + ?Sized, M: Preconditioner + ?Sized> PatchCorrected<'a, A, M> 
             }
         }
         ring.sort_unstable();
-        // A_PP's lower triangle by columns: column k (row i = patch[k]) holds the entries
-        // (j ≥ i, j in P) of row i of A, by symmetry
         let np = patch.len();
         let local = |j: u32| patch.binary_search(&j).ok();
+        // A_RP, so that r − A z₁ is formed on the ring from z₁'s patch values alone
+        let mut coupling_ptr = try_vec(ring.len() + 1, "the patch coupling")?;
+        let mut coupling = Vec::new();
+        coupling_ptr.push(0);
+        for &i in &ring {
+            let (cols, vals) = a.row(i as usize);
+            for (&j, &v) in cols.iter().zip(vals) {
+                if let Some(l) = local(j) {
+                    coupling.push((l as u32, v));
+                }
+            }
+            coupling_ptr.push(coupling.len());
+        }
+        // A_PP's lower triangle by columns: column k (row i = patch[k]) holds the entries
+        // (j ≥ i, j in P) of row i of A, by symmetry
         let mut col_ptr = try_vec(np + 1, "the patch pattern")?;
         let mut row_idx = Vec::new();
         let mut values = Vec::new();
@@ -162,6 +180,8 @@ impl<'a, A: Rows + ?Sized, M: Preconditioner + ?Sized> PatchCorrected<'a, A, M> 
             m,
             patch,
             ring,
+            coupling_ptr,
+            coupling,
             pattern,
             factor,
         }))
@@ -220,20 +240,22 @@ impl<A: Rows + ?Sized, M: Preconditioner + ?Sized> Preconditioner for PatchCorre
                 z1.len()
             )));
         }
-        // z₁ = L r, held in z (zero off the patch)
+        // z₁ = L r, on the patch (zero off it)
         for (l, &i) in z1.iter_mut().zip(&self.patch) {
             *l = r[i as usize];
         }
         factor.solve_in_place(z1);
-        z.fill(0.0);
-        for (&l, &i) in z1.iter().zip(&self.patch) {
-            z[i as usize] = l;
-        }
-        // t = r − A z₁, which differs from r on the ring only
-        t.copy_from_slice(r);
-        for &i in &self.ring {
-            let (cols, vals) = self.a.row(i as usize);
-            t[i as usize] -= dot_row(cols, vals, z);
+        // t = r − A z₁, which differs from r on the ring only, where A z₁ = A_RP z₁ (the
+        // terms of A's row on the patch, in A's column order: the sum of the row's full
+        // product with z₁ extended by zeros)
+        copy(r, t);
+        for (q, &i) in self.ring.iter().enumerate() {
+            let row = &self.coupling[self.coupling_ptr[q]..self.coupling_ptr[q + 1]];
+            let mut s = 0.0;
+            for &(l, v) in row {
+                s += v * z1[l as usize];
+            }
+            t[i as usize] -= s;
         }
         // z₂ = z₁ + M t (M t written into z, z₁ added back from the patch values)
         self.m.apply(t, z, inner)?;
@@ -250,6 +272,20 @@ impl<A: Rows + ?Sized, M: Preconditioner + ?Sized> Preconditioner for PatchCorre
             z[i as usize] += l;
         }
         Ok(())
+    }
+}
+
+/// `dst` = `src` (equal lengths), in parallel chunks on large vectors (the copy is the
+/// correction's one pass over every row).
+fn copy(src: &[f64], dst: &mut [f64]) {
+    use rayon::prelude::*;
+    const CHUNK: usize = 1 << 15;
+    if src.len() < 4 * CHUNK {
+        dst.copy_from_slice(src);
+    } else {
+        dst.par_chunks_mut(CHUNK)
+            .zip(src.par_chunks(CHUNK))
+            .for_each(|(d, s)| d.copy_from_slice(s));
     }
 }
 

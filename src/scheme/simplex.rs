@@ -203,15 +203,25 @@ macro_rules! simplex_discretisation {
                 SimplexScheme::face_trace_dofs(self, e, out)
             }
             fn obstacle_dofs(&self) -> Vec<PointDof<$d>> {
+                use rayon::prelude::*;
                 let (m, on) = (SimplexScheme::mesh(self), T::UNKNOWNS);
+                // each cell's share |K|/(d+1), computed once per cell and in parallel, then
+                // added to its unknowns in cell order: the sums of the one-pass loop, bit for bit
+                let share: Vec<f64> = (0..m.n_cells())
+                    .into_par_iter()
+                    .with_min_len(4096)
+                    .map(|k| m.cell_measure(k) / ($d + 1) as f64)
+                    .collect();
                 let mut meas = vec![0.0; on.count(m)];
-                for k in 0..m.n_cells() {
+                for (k, &w) in share.iter().enumerate() {
                     for &i in &on.of_cell(m, k)[..=$d] {
-                        meas[i as usize] += m.cell_measure(k) / ($d + 1) as f64;
+                        meas[i as usize] += w;
                     }
                 }
-                meas.iter()
+                drop(share);
+                meas.par_iter()
                     .enumerate()
+                    .with_min_len(4096)
                     .map(|(i, &w)| PointDof {
                         dof: i,
                         point: on.point(m, i),

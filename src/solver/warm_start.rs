@@ -567,8 +567,12 @@ fn map_down<M: CoarseMesh<D>, const D: usize>(
 ) -> Result<Vec<bool>, AllocFailure> {
     let fine = scheme.mesh();
     let coarse = &agg.mesh;
+    let class = match kind {
+        ConstraintKind::Obstacle => classify(s, coarse)?,
+        ConstraintKind::Signorini => Vec::new(),
+    };
     let at_vertices = match (kind, incidence) {
-        (ConstraintKind::Obstacle, Some(_)) => vertex_obstacle(s, agg, scheme, cons)?,
+        (ConstraintKind::Obstacle, Some(_)) => vertex_obstacle(s, agg, &class, scheme, cons)?,
         _ => Vec::new(),
     };
     let mut active = try_vec(cons.dofs.len(), "the predicted active set")?;
@@ -602,7 +606,7 @@ fn map_down<M: CoarseMesh<D>, const D: usize>(
                 !cells.is_empty()
                     && cells
                         .iter()
-                        .all(|&k| active_inside(s, coarse, agg.cell_of[k] as usize, p))
+                        .all(|&k| inside(&class, s, coarse, agg.cell_of[k] as usize, p))
             }
             ConstraintKind::Signorini => {
                 faces.retain(|&e| fine.face_cells(e)[1] == NO_CELL);
@@ -624,6 +628,7 @@ fn map_down<M: CoarseMesh<D>, const D: usize>(
 fn vertex_obstacle<M: CoarseMesh<D>, const D: usize>(
     s: &CoarseState,
     agg: &Level<M>,
+    class: &[u8],
     scheme: &dyn GradientDiscretisation<M, D>,
     cons: &Constraints,
 ) -> Result<Vec<bool>, AllocFailure> {
@@ -654,7 +659,7 @@ fn vertex_obstacle<M: CoarseMesh<D>, const D: usize>(
                     if state[j].load(Relaxed) == FAIL {
                         continue;
                     }
-                    if active_inside(s, &agg.mesh, c, scheme.dof_point(cons.dofs[j].dof)) {
+                    if inside(class, s, &agg.mesh, c, scheme.dof_point(cons.dofs[j].dof)) {
                         let _ = state[j].compare_exchange(UNSEEN, PASS, Relaxed, Relaxed);
                     } else {
                         state[j].store(FAIL, Relaxed);
@@ -665,6 +670,58 @@ fn vertex_obstacle<M: CoarseMesh<D>, const D: usize>(
     let mut active = try_vec(state.len(), "the predicted active vertices")?;
     active.extend(state.into_iter().map(|x| x.into_inner() == PASS));
     Ok(active)
+}
+
+/// [`classify`]: a free coarse cell.
+const FREE: u8 = 0;
+/// [`classify`]: an active coarse cell whose neighbours across its faces are all active (or
+/// none: a boundary face), so that every point of it is [`active_inside`] it.
+const INTERIOR: u8 = 1;
+/// [`classify`]: an active coarse cell with a free neighbour, where [`active_inside`] depends
+/// on the point's distance to the faces between them.
+const RIM: u8 = 2;
+
+/// The class of each coarse cell ([`FREE`], [`INTERIOR`], [`RIM`]) under the active states `s`:
+/// the part of [`active_inside`] that does not depend on the point, found once per coarse cell
+/// instead of once per fine unknown and cell around it.
+fn classify<M: CoarseMesh<D>, const D: usize>(
+    s: &CoarseState,
+    coarse: &M,
+) -> Result<Vec<u8>, AllocFailure> {
+    let mut class = try_vec(coarse.n_cells(), "the classes of the coarse cells")?;
+    class.par_extend(
+        (0..coarse.n_cells())
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|k| {
+                if !s.cell[k] {
+                    return FREE;
+                }
+                let all_active = coarse.cell_faces(k).iter().all(|&e| {
+                    let [a, b] = coarse.face_cells(e as usize);
+                    let other = if a == k { b } else { a };
+                    other == NO_CELL || s.cell[other]
+                });
+                if all_active { INTERIOR } else { RIM }
+            }),
+    );
+    Ok(class)
+}
+
+/// [`active_inside`] for coarse cell `k` of class `class[k]` ([`classify`]): the distances
+/// to its faces are measured on [`RIM`] cells only.
+fn inside<M: CoarseMesh<D>, const D: usize>(
+    class: &[u8],
+    s: &CoarseState,
+    coarse: &M,
+    k: usize,
+    p: Vector<D>,
+) -> bool {
+    match class[k] {
+        FREE => false,
+        INTERIOR => true,
+        _ => active_inside(s, coarse, k, p),
+    }
 }
 
 /// Whether coarse cell `k` is active and `p` is at least [`EROSION`] · |K|^{1/D} away from
@@ -820,5 +877,42 @@ mod tests {
             n += usize::from(want);
         }
         assert!(n > 0 && n < cons.dofs.len(), "{n} predicted active");
+    }
+
+    /// The classes of the coarse cells give `active_inside` at every point: free cells none,
+    /// interior cells all, rim cells by distance (points at the cells' vertices, centroids and
+    /// midpoints between them, on a disc contact zone that has cells of all three classes).
+    #[test]
+    fn classes_are_active_inside() {
+        let fine = cartesian_triangles(40, 30, [-2.0, 2.0], [-1.5, 1.5]).unwrap();
+        let agg = fine.coarsen(0.3, None, MemoryBudget::DEFAULT).unwrap();
+        let coarse = &agg.mesh;
+        let s = CoarseState {
+            cell: (0..coarse.n_cells())
+                .map(|k| {
+                    let c = coarse.centroid(k);
+                    c[0] * c[0] + c[1] * c[1] < 1.0
+                })
+                .collect(),
+            face: vec![false; coarse.n_edges()],
+        };
+        let class = classify(&s, coarse).unwrap();
+        for c in [FREE, INTERIOR, RIM] {
+            assert!(class.contains(&c), "no cell of class {c}");
+        }
+        for k in 0..coarse.n_cells() {
+            let x = coarse.centroid(k);
+            for &v in coarse.cell_vertices(k) {
+                let p = coarse.vertex(v as usize);
+                for q in [p, x, [0.5 * (p[0] + x[0]), 0.5 * (p[1] + x[1])]] {
+                    assert_eq!(
+                        inside(&class, &s, coarse, k, q),
+                        active_inside(&s, coarse, k, q),
+                        "cell {k} (class {}) at {q:?}",
+                        class[k]
+                    );
+                }
+            }
+        }
     }
 }
