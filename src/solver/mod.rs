@@ -245,7 +245,7 @@ fn solve_built<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
         },
         || {
             let t = Instant::now();
-            let unknowns = scheme.n_unknowns();
+            let unknowns = M::warm_start_unknowns(scheme);
             let c = scheme
                 .mesh()
                 .coarse_solves(unknowns, problem, budget, Some(&cancel));

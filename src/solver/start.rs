@@ -32,6 +32,11 @@ pub trait SolverMesh<const D: usize>: SolveMesh<D> {
         budget: MemoryBudget,
         cancel: Option<&Cancel>,
     ) -> Option<Result<Self::Coarse, String>>;
+    /// The count of `scheme`'s unknowns by which the nested warm start sizes its first coarse
+    /// level (the `unknowns` of [`Self::coarse_solves`];
+    /// [`warm_start::FIRST_LEVEL_UNKNOWNS_PER_CELL`]): the skeleton unknowns on planar meshes,
+    /// all of them on 3D ones.
+    fn warm_start_unknowns(scheme: &dyn GradientDiscretisation<Self, D>) -> usize;
     /// The prediction of the active set of `cons` of `scheme` (on this mesh) from the coarse
     /// solves `coarse` ([`warm_start::predict_from`]).
     fn nested_prediction(
@@ -55,6 +60,9 @@ impl SolverMesh<2> for PolyMesh {
             self, unknowns, problem, budget, cancel,
         ))
     }
+    fn warm_start_unknowns(scheme: &dyn GradientDiscretisation) -> usize {
+        scheme.n_skeleton()
+    }
     fn nested_prediction(
         coarse: Self::Coarse,
         scheme: &dyn GradientDiscretisation,
@@ -77,6 +85,9 @@ impl SolverMesh<3> for PolyMesh3 {
         Some(warm_start::coarse_solves(
             self, unknowns, problem, budget, cancel,
         ))
+    }
+    fn warm_start_unknowns(scheme: &dyn GradientDiscretisation<PolyMesh3, 3>) -> usize {
+        scheme.n_unknowns()
     }
     fn nested_prediction(
         coarse: Self::Coarse,

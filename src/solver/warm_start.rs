@@ -8,8 +8,8 @@
 //!
 //! [`WarmStart::Nested`] (the default) bounds NITER instead: it solves the *same problem*
 //! (same A, f, boundary conditions and barrier) with HMM on a coarse polygonal (polyhedral)
-//! mesh of the same domain with about (fine unknowns)/[`FIRST_LEVEL_UNKNOWNS_PER_CELL`] cells
-//! in 2D (N/8 for HMM on quadrilaterals, N/48 for P1 on triangles) and
+//! mesh of the same domain with about (fine skeleton unknowns)/[`FIRST_LEVEL_UNKNOWNS_PER_CELL`]
+//! cells in 2D (a 12th of the cells for HMM on quadrilaterals, a 48th for P1 on triangles) and
 //! (fine unknowns)/[`FIRST_LEVEL_UNKNOWNS_PER_CELL_3D`] in 3D (a 24th of the cells for HMM on
 //! hexahedra), made by agglomerating the fine cells ([`crate::mesh::agglomerate`] in
 //! 2D, [`crate::mesh3d::agglomerate`] in 3D: any domain, any mesh, material interfaces and
@@ -67,8 +67,8 @@
 //! one of the cold iteration (the same discrete variational inequality has one solution); only
 //! NITER and the time differ. NITER then counts the fine solves only; the coarse ones are
 //! reported in [`WarmStartReport`]. When no coarse mesh can be made (a mesh with fewer than
-//! 64 · [`FIRST_LEVEL_UNKNOWNS_PER_CELL`] unknowns in 2D, 64 ·
-//! [`FIRST_LEVEL_UNKNOWNS_PER_CELL_3D`] in 3D, or an agglomeration that fails validation)
+//! 64 · [`FIRST_LEVEL_UNKNOWNS_PER_CELL`] skeleton unknowns in 2D, 64 ·
+//! [`FIRST_LEVEL_UNKNOWNS_PER_CELL_3D`] unknowns in 3D, or an agglomeration that fails validation)
 //! or a coarse solve fails, the
 //! iteration starts cold and [`WarmStartReport::skipped`] says why.
 
@@ -144,11 +144,14 @@ pub struct WarmStartReport {
 /// in 3D).
 pub const RATIO: usize = 16;
 
-/// On planar meshes, the first coarse level has about (fine unknowns) /
-/// FIRST_LEVEL_UNKNOWNS_PER_CELL cells. HMM has about 3 unknowns per cell, so that is N/8
-/// cells for an HMM fine mesh; P1 on triangles has about one unknown per two cells, so N/48.
-/// A finer first level makes the coarse solves cost more, a coarser one predicts less well and
-/// costs fine solves.
+/// On planar meshes, the first coarse level has about (fine skeleton unknowns) /
+/// FIRST_LEVEL_UNKNOWNS_PER_CELL cells ([`SolverMesh::warm_start_unknowns`]). P1 on triangles
+/// has about one unknown per two cells, so that is a 48th of its cells; HMM has one skeleton
+/// unknown per face, about 2 per quadrilateral and 1.5 per triangle, so a 12th of the cells of
+/// a quadrilateral mesh and a 16th of a triangular one. A finer first level makes the coarse
+/// solves cost more, a coarser one predicts less well and costs fine solves. HMM's level was
+/// sized by all its unknowns (cells and faces) before: a third finer, with the same NITER and
+/// more time (`replication/measurements/solver.md`, "The first coarse level").
 pub const FIRST_LEVEL_UNKNOWNS_PER_CELL: usize = 24;
 
 /// On 3D meshes, the first coarse level has about (fine unknowns) /
@@ -319,7 +322,8 @@ pub fn predict<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
     budget: MemoryBudget,
     cancel: Option<&Cancel>,
 ) -> Result<Prediction, String> {
-    let coarse = coarse_solves(scheme.mesh(), scheme.n_unknowns(), problem, budget, cancel)?;
+    let unknowns = M::warm_start_unknowns(scheme);
+    let coarse = coarse_solves(scheme.mesh(), unknowns, problem, budget, cancel)?;
     predict_from(coarse, scheme, problem, cons)
 }
 
@@ -442,8 +446,9 @@ fn prolong<M: CoarseMesh<D>, const D: usize>(
     Ok(guess)
 }
 
-/// Whether a fine problem on a planar mesh with this many unknowns is too small to have a
-/// coarse level (the first would have fewer than 64 cells): the nested start is then skipped.
+/// Whether a fine problem on a planar mesh with this many skeleton unknowns
+/// ([`SolverMesh::warm_start_unknowns`]) is too small to have a coarse level (the first would
+/// have fewer than 64 cells): the nested start is then skipped.
 pub fn too_coarse(unknowns: usize) -> bool {
     unknowns / FIRST_LEVEL_UNKNOWNS_PER_CELL < 64
 }
