@@ -8,8 +8,9 @@
 //!
 //! [`WarmStart::Nested`] (the default) bounds NITER instead: it solves the *same problem*
 //! (same A, f, boundary conditions and barrier) with HMM on a coarse polygonal (polyhedral)
-//! mesh of the same domain with about (fine skeleton unknowns)/[`FIRST_LEVEL_UNKNOWNS_PER_CELL`]
-//! cells in 2D (a 12th of the cells for HMM on quadrilaterals, a 48th for P1 on triangles) and
+//! mesh of the same domain with about (fine skeleton unknowns) /
+//! [`FIRST_LEVEL_UNKNOWNS_PER_CELL`] cells in 2D (a 12th of the cells for HMM on
+//! quadrilaterals, a 48th for P1 on triangles) and
 //! (fine unknowns)/[`FIRST_LEVEL_UNKNOWNS_PER_CELL_3D`] in 3D (a 24th of the cells for HMM on
 //! hexahedra), made by agglomerating the fine cells ([`crate::mesh::agglomerate`] in
 //! 2D, [`crate::mesh3d::agglomerate`] in 3D: any domain, any mesh, material interfaces and

@@ -34,7 +34,7 @@ fn compare(scheme: &dyn GradientDiscretisation, p: &Problem) -> (usize, usize, W
 }
 
 /// The coarse levels have the sizes the hierarchy aims at, within a factor 1.6 (aggregates
-/// follow the fine cells): (fine unknowns)/24 cells, then 16 times fewer per level.
+/// follow the fine cells): (fine skeleton unknowns)/24 cells, then 16 times fewer per level.
 fn assert_levels(r: &WarmStartReport, unknowns: usize, n_levels: usize) {
     assert_eq!(r.levels.len(), n_levels, "{r:?}");
     let mut target = (unknowns / warm_start::FIRST_LEVEL_UNKNOWNS_PER_CELL) as f64;
@@ -49,12 +49,13 @@ fn assert_levels(r: &WarmStartReport, unknowns: usize, n_levels: usize) {
 
 #[test]
 fn nested_obstacle_gives_the_cold_solution_in_fewer_solves() {
-    // HMM on a 128 × 128 grid: one coarse level of about N/8 cells, too small to recurse
+    // HMM on a 128 × 128 grid: one coarse level of about a 12th of its cells (its skeleton
+    // unknowns / 24), too small to recurse
     let mesh = cartesian(128, 128).unwrap();
     let hmm = Hmm::new(&mesh);
     let (cold, nested, r) = compare(&hmm, &paper_test3(-5.0));
     assert!(r.skipped.is_none(), "{:?}", r.skipped);
-    assert_levels(&r, hmm.n_unknowns(), 1);
+    assert_levels(&r, hmm.n_skeleton(), 1);
     assert!(r.predicted_active > 0 && r.coarse_solves >= 2);
     assert!(nested < cold, "nested {nested} solves, cold {cold}");
     // P1 on a gmsh triangle mesh of the replication, and HMM on hexagons
@@ -89,14 +90,14 @@ fn nested_recurses_and_handles_rectangles() {
         Box::new(|x| test3_obstacle([x[0], x[1] / 4.0])),
     );
     let (_, _, r) = compare(&hmm, &p);
-    assert_levels(&r, hmm.n_unknowns(), 1);
+    assert_levels(&r, hmm.n_skeleton(), 1);
     // (a cold solve of this size is slow in a debug build: the nested one is checked alone)
     let mesh = cartesian(256, 256).unwrap();
     let hmm = Hmm::new(&mesh);
     let nested = solve_problem(&hmm, &paper_test3(-5.0), &opts(WarmStart::Nested)).unwrap();
     nested.result.certificate.check(1e-10).unwrap();
     let r = nested.warm_start.unwrap();
-    assert_levels(&r, hmm.n_unknowns(), 2);
+    assert_levels(&r, hmm.n_skeleton(), 2);
     assert!(nested.result.niter <= 8, "{} solves", nested.result.niter);
 }
 
@@ -136,14 +137,14 @@ fn nested_works_on_any_domain() {
     let hmm = Hmm::new(&mesh);
     let (cold, nested, r) = compare(&hmm, &paper_test3(-5.0));
     assert!(r.skipped.is_none(), "{r:?}");
-    assert_levels(&r, hmm.n_unknowns(), 1);
+    assert_levels(&r, hmm.n_skeleton(), 1);
     assert!(nested < cold, "nested {nested} solves, cold {cold}");
     // P1 on the same L-shape cut into triangles (finer: P1 has one unknown per two cells)
     let tri = l_shape(&cartesian_triangles(96, 96, [0.0, 1.0], [0.0, 1.0]).unwrap());
     let p1 = P1::new(&tri).unwrap();
     let (cold, nested, r) = compare(&p1, &paper_test3(-5.0));
     assert!(r.skipped.is_none() && r.predicted_active > 0, "{r:?}");
-    assert_levels(&r, p1.n_unknowns(), 1);
+    assert_levels(&r, p1.n_skeleton(), 1);
     assert!(nested < cold, "P1: nested {nested} solves, cold {cold}");
     // gmsh triangles of an L-shape and of a domain with a hole (the example problems), HMM
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
