@@ -21,7 +21,7 @@
 //! of A on P.
 
 use super::cholesky::{CholeskyWork, SpdPattern};
-use super::pcg::Preconditioner;
+use super::pcg::{Preconditioner, zip_chunks2};
 use super::rows::{Rows, dot_row};
 use crate::budget::{try_filled, try_vec};
 
@@ -248,7 +248,7 @@ impl<A: Rows + ?Sized, M: Preconditioner + ?Sized> Preconditioner for PatchCorre
         // t = r − A z₁, which differs from r on the ring only, where A z₁ = A_RP z₁ (the
         // terms of A's row on the patch, in A's column order: the sum of the row's full
         // product with z₁ extended by zeros)
-        copy(r, t);
+        zip_chunks2(t, r, r, |t, r, _| t.copy_from_slice(r));
         for (q, &i) in self.ring.iter().enumerate() {
             let row = &self.coupling[self.coupling_ptr[q]..self.coupling_ptr[q + 1]];
             let mut s = 0.0;
@@ -272,20 +272,6 @@ impl<A: Rows + ?Sized, M: Preconditioner + ?Sized> Preconditioner for PatchCorre
             z[i as usize] += l;
         }
         Ok(())
-    }
-}
-
-/// `dst` = `src` (equal lengths), in parallel chunks on large vectors (the copy is the
-/// correction's one pass over every row).
-fn copy(src: &[f64], dst: &mut [f64]) {
-    use rayon::prelude::*;
-    const CHUNK: usize = 1 << 15;
-    if src.len() < 4 * CHUNK {
-        dst.copy_from_slice(src);
-    } else {
-        dst.par_chunks_mut(CHUNK)
-            .zip(src.par_chunks(CHUNK))
-            .for_each(|(d, s)| d.copy_from_slice(s));
     }
 }
 

@@ -811,6 +811,19 @@ mod tests {
         assert!(top[0] != sides[0] && top[0] != KEEP && sides[0] != KEEP);
     }
 
+    /// Coarse active states of a contact zone: the cells whose centroid is in the unit disc.
+    fn disc_contact(coarse: &crate::mesh::PolyMesh) -> CoarseState {
+        CoarseState {
+            cell: (0..coarse.n_cells())
+                .map(|k| {
+                    let c = coarse.centroid(k);
+                    c[0] * c[0] + c[1] * c[1] < 1.0
+                })
+                .collect(),
+            face: vec![false; coarse.n_edges()],
+        }
+    }
+
     /// The passes over the cells of [`prolong`] and [`vertex_obstacle`] give exactly what
     /// gathering the cells of each vertex (their definition) gives.
     #[test]
@@ -820,15 +833,7 @@ mod tests {
         let agg = fine.coarsen(0.3, None, MemoryBudget::DEFAULT).unwrap();
         let coarse = &agg.mesh;
         // a coarse contact zone (a disc) and coarse values
-        let s = CoarseState {
-            cell: (0..coarse.n_cells())
-                .map(|k| {
-                    let c = coarse.centroid(k);
-                    c[0] * c[0] + c[1] * c[1] < 1.0
-                })
-                .collect(),
-            face: vec![false; coarse.n_edges()],
-        };
+        let s = disc_contact(coarse);
         assert!(s.cell.iter().any(|&a| a) && !s.cell.iter().all(|&a| a));
         let values: Vec<f64> = (0..coarse.n_cells())
             .map(|k| (k as f64 * 0.731).sin())
@@ -893,15 +898,7 @@ mod tests {
         let fine = cartesian_triangles(40, 30, [-2.0, 2.0], [-1.5, 1.5]).unwrap();
         let agg = fine.coarsen(0.3, None, MemoryBudget::DEFAULT).unwrap();
         let coarse = &agg.mesh;
-        let s = CoarseState {
-            cell: (0..coarse.n_cells())
-                .map(|k| {
-                    let c = coarse.centroid(k);
-                    c[0] * c[0] + c[1] * c[1] < 1.0
-                })
-                .collect(),
-            face: vec![false; coarse.n_edges()],
-        };
+        let s = disc_contact(coarse);
         let class = classify(&s, coarse).unwrap();
         for c in [FREE, INTERIOR, RIM] {
             assert!(class.contains(&c), "no cell of class {c}");
