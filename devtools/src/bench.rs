@@ -409,7 +409,7 @@ pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
         total_s,
         peak_mib: peak_memory_mib(),
         certificate: c.worst(),
-        factor_len: system.factor_len(),
+        factor_len: sol.factor_len,
         changes: sol
             .result
             .log
@@ -483,7 +483,7 @@ fn log_solve(sol: &Solution) {
         "[bench]     condensed {} unknowns, {} entries, factor {} values",
         system.n_condensed(),
         system.nnz(),
-        system.factor_len()
+        sol.factor_len
     );
     for l in &sol.result.log {
         eprintln!(

@@ -268,6 +268,9 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let fx = self.fixed_values(fixed);
         let mut rhs = self.masked_rhs(a, &fx)?;
         let Some(reuse) = reuse else {
+            if !self.sym.has_factorisation() {
+                self.fallback_pattern(state)?;
+            }
             let values = self.masked_lower(a, &fx, self.direct_pattern(&state.direct_fallback)?)?;
             let t1 = Instant::now();
             let (t2, out) = self.solve_direct(state, &values, &mut rhs)?;
@@ -321,10 +324,11 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         }
     }
 
-    /// Whether the solves are direct: the symbolic system has a factorisation, or the one built
-    /// in `state` when the iterative solver failed ([`LinearSolver::Auto`]).
+    /// Whether the solves are direct: the symbolic system has a factorisation or defers it
+    /// ([`super::SymbolicSystem::is_direct`]), or the one built in `state` when the iterative
+    /// solver failed ([`LinearSolver::Auto`]).
     fn is_direct(&self, state: &SolveState) -> bool {
-        self.sym.has_factorisation() || matches!(state.direct_fallback, Some(Ok(_)))
+        self.sym.is_direct() || matches!(state.direct_fallback, Some(Ok(_)))
     }
 
     /// The pattern of a direct solve ([`Self::is_direct`]): the symbolic system's, or
@@ -342,13 +346,17 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         }
     }
 
-    /// The direct solve of S x = c with the symbolic factorisation [`Self::is_direct`] finds.
+    /// The direct solve of S x = c with the symbolic factorisation [`Self::is_direct`] finds
+    /// (a deferred one built now, on first use).
     pub(super) fn solve_direct(
         &self,
         state: &mut SolveState,
         values: &[f64],
         rhs: &mut [f64],
     ) -> crate::Result<(Instant, PcgOutcome)> {
+        if !self.sym.has_factorisation() {
+            self.fallback_pattern(state)?;
+        }
         let SolveState {
             direct_fallback,
             cholesky,
@@ -357,8 +365,9 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         solve_directly(self.direct_pattern(direct_fallback)?, values, rhs, cholesky)
     }
 
-    /// The symbolic factorisation of the condensed pattern, built in `state` on first use, and
-    /// its numeric phase checked against the caller's budget
+    /// The symbolic factorisation of the condensed pattern, built in `state` on first use (the
+    /// direct solver taking over from a failed iterative one, or a deferred factorisation),
+    /// and its numeric phase checked against the caller's budget
     /// ([`SystemOptions::budget`](super::SystemOptions::budget)) as for a direct system.
     pub(super) fn fallback_pattern<'s>(
         &self,

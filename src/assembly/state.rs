@@ -40,8 +40,10 @@ pub struct SolveState {
     pub(super) cell_system: Option<Option<Arc<CellSystemAll>>>,
     /// The multigrid hierarchy of the last iterative solve.
     pub(super) kept: Option<KeptHierarchy>,
-    /// With [`super::LinearSolver::Auto`], the direct solver built when the iterative one
-    /// failed (or why it could not be built).
+    /// The symbolic factorisation of the skeleton system built by the first direct solve
+    /// that needs it (or why it could not be built): with [`super::LinearSolver::Auto`] when
+    /// the iterative solver failed, or when the symbolic system deferred it
+    /// ([`super::SymbolicSystem::is_direct`]).
     pub(super) direct_fallback: Option<Result<SpdPattern, String>>,
     /// The symbolic factorisation of the cell system, built by the first direct solve that
     /// takes it ([`super::two_point`]).
@@ -71,6 +73,17 @@ impl SolveState {
     /// Of the [`Self::cell_system_size`] unknowns, the skeleton ones (not eliminated).
     pub fn cell_system_skeleton(&self) -> Option<usize> {
         self.cell_system.as_ref()?.as_ref().map(|c| c.n_kept())
+    }
+
+    /// Stored values of the Cholesky factors built here by the direct solves: the cell
+    /// system's, and the skeleton system's when the symbolic system deferred it or the
+    /// iterative solver failed (0 if none).
+    pub fn factor_len(&self) -> usize {
+        let skeleton = match &self.direct_fallback {
+            Some(Ok(p)) => p.factor_len(),
+            _ => 0,
+        };
+        skeleton + self.cell_direct.as_ref().map_or(0, SpdPattern::factor_len)
     }
 }
 

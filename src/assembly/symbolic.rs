@@ -5,7 +5,11 @@
 //! - the pattern of the condensed (skeleton) matrix, lower triangle, with a diagonal entry for
 //!   every skeleton unknown, and its symbolic Cholesky factorisation ([`SpdPattern`]; a
 //!   system without interior unknowns solved iteratively releases it once its matrix is
-//!   assembled, [`SymbolicSystem::release_pattern`]);
+//!   assembled, [`SymbolicSystem::release_pattern`]). For direct solves of HMM on
+//!   axis-aligned boxes the factorisation is deferred to the first solve that needs it: those
+//!   solves take the cell system of [`super::two_point`] (a Cholesky factorisation of its own,
+//!   half the unknowns), so on the warm start's box levels and on Cartesian meshes it is never
+//!   computed (the time saved is in `replication/measurements/solver.md`);
 //! - the gather maps: the local skeleton entries that land on each condensed entry (`src`, in
 //!   cell order; built from where each local entry lands, which is not kept), and the cells
 //!   where each unknown appears (`inc`, ascending). They let the values be
@@ -24,6 +28,7 @@
 use super::SystemOptions;
 use super::gather::{cell_chunks, chunks, split_by_ranges};
 use super::linear::{LinearSolver, auto_iterative_min};
+use super::two_point::likely_cell_system;
 use crate::budget::MemoryBudget;
 use crate::budget::{try_collect, try_copy, try_filled, try_grow, try_vec};
 use crate::linalg::SpdPattern;
@@ -251,6 +256,11 @@ where
     /// No cell has interior unknowns (P1, CR): the condensed matrix is the global one,
     /// assembled once per problem on the pattern ([`super::assembled`]); no gather maps.
     pub no_interior: bool,
+    /// The solves are direct but the symbolic factorisation of the condensed matrix is left
+    /// to the first solve that needs it (built then in its [`SolveState`](super::SolveState)):
+    /// HMM on axis-aligned boxes, whose direct solves take the cell system of
+    /// [`super::two_point`] and never need it (module docs).
+    deferred: bool,
     /// The options it was built with (the linear solver asked for, the ordering).
     pub options: SystemOptions,
     /// Time of the symbolic factorisation, seconds.
@@ -291,10 +301,13 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
             LinearSolver::Iterative => false,
             LinearSolver::Auto => n_skel < auto_iterative_min(D),
         };
+        let single_interior = dof_map.n_int.iter().all(|&ni| ni == 1);
+        // direct solves that will likely take the cell system: no skeleton factorisation now
+        let deferred = direct && single_interior && likely_cell_system(scheme.mesh());
         // the symbolic factorisation (sequential) runs beside the scatter maps, on a copy of
         // the pattern; without it the pattern is moved in first and read by the maps (no
         // copy: 40 MB less at the peak of the setup at 1M P1 unknowns)
-        let (symbolic, maps) = if direct {
+        let (symbolic, maps) = if direct && !deferred {
             rayon::join(
                 || {
                     let t = Instant::now();
@@ -323,7 +336,6 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
         let (pattern, symbolic_seconds) = symbolic?;
         let maps = maps?;
         check_numeric_memory(&pattern, &maps, n, options.budget)?;
-        let single_interior = dof_map.n_int.iter().all(|&ni| ni == 1);
         let dof_map = if no_interior {
             Arc::new(DofMap::empty())
         } else {
@@ -337,6 +349,7 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
             maps,
             single_interior,
             no_interior,
+            deferred,
             options,
             symbolic_seconds,
             setup_seconds: t0.elapsed().as_secs_f64(),
@@ -373,6 +386,11 @@ impl<'a, M: SolveMesh<D> + ?Sized, const D: usize> SymbolicSystem<'a, M, D> {
         self.pattern
             .as_ref()
             .is_some_and(SpdPattern::has_factorisation)
+    }
+    /// Whether the solves are direct: the symbolic factorisation was computed, or it is
+    /// deferred to the first solve that needs it (HMM on boxes: see the module docs).
+    pub fn is_direct(&self) -> bool {
+        self.deferred || self.has_factorisation()
     }
     /// The kept pattern, or an internal error naming `what` needed it.
     pub(super) fn kept_pattern(&self, what: &str) -> crate::Result<&SpdPattern> {
@@ -712,6 +730,60 @@ mod tests {
             "{n}"
         );
         let sym = SymbolicSystem::new(&hmm, Default::default()).unwrap();
-        assert!(sym.has_factorisation());
+        assert!(sym.is_direct());
+    }
+
+    /// Direct HMM solves on axis-aligned boxes (2D and 3D) defer the symbolic factorisation
+    /// of the skeleton system, which their cell system makes useless; on meshes of other
+    /// cells (Kershaw quadrilaterals, triangles, warped hexahedra), for P1, and for iterative
+    /// solves, it is computed now or never, as before.
+    #[test]
+    fn the_skeleton_factorisation_is_deferred_on_boxes_only() {
+        use crate::mesh::generate::{cartesian_triangles, kershaw};
+        use crate::mesh3d::generate::{cubes, warped};
+        use crate::mesh3d::{Cuboid, PolyMesh3};
+        use crate::scheme::P1;
+        let direct = SystemOptions {
+            linear: LinearSolver::Direct,
+            ..Default::default()
+        };
+        let iterative = SystemOptions {
+            linear: LinearSolver::Iterative,
+            ..Default::default()
+        };
+        // (is_direct, has_factorisation) of a symbolic system
+        let state = |s: &SymbolicSystem<'_, _, 2>| (s.is_direct(), s.has_factorisation());
+        let boxes = cartesian(12, 7).unwrap();
+        let hmm = Hmm::new(&boxes);
+        let deferred = SymbolicSystem::new(&hmm, direct).unwrap();
+        assert_eq!(state(&deferred), (true, false));
+        assert_eq!(
+            state(&SymbolicSystem::new(&hmm, iterative).unwrap()),
+            (false, false)
+        );
+        for mesh in [
+            kershaw(1).unwrap(),
+            cartesian_triangles(6, 6, [0.0, 1.0], [0.0, 1.0]).unwrap(),
+        ] {
+            let hmm = Hmm::new(&mesh);
+            let s = SymbolicSystem::new(&hmm, direct).unwrap();
+            assert_eq!(state(&s), (true, true));
+        }
+        let tri = cartesian_triangles(6, 6, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        let p1 = P1::new(&tri).unwrap();
+        assert_eq!(
+            state(&SymbolicSystem::new(&p1, direct).unwrap()),
+            (true, true)
+        );
+        let budget = MemoryBudget::DEFAULT;
+        for (cells, deferred) in [
+            (cubes(4, Cuboid::UNIT, budget).unwrap(), true),
+            (warped(4, Cuboid::UNIT, 7, budget).unwrap(), false),
+        ] {
+            let mesh = PolyMesh3::from_polyhedra(cells, budget).unwrap();
+            let hmm = Hmm::<PolyMesh3, 3>::with_alpha(&mesh, 1.0).unwrap();
+            let s = SymbolicSystem::new(&hmm, direct).unwrap();
+            assert_eq!((s.is_direct(), s.has_factorisation()), (true, !deferred));
+        }
     }
 }

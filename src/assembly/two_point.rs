@@ -68,6 +68,28 @@ use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
 
+/// Whether the cell system is likely to take the direct solves on `mesh`, judged before any
+/// value is known: every cell an axis-aligned box (2·D faces, each normal along an axis),
+/// where HMM with a diagonal tensor is the two-point scheme and every face is eliminated.
+/// The caller checks the other condition (one interior unknown per cell). With a direct
+/// solver, [`super::SymbolicSystem`] then defers the symbolic factorisation of the skeleton
+/// system to the first solve that needs it, which the solves through the cell system never
+/// do; a wrong guess (a full tensor on boxes) only moves that factorisation from beside the
+/// data evaluation to the first solve. O(faces), in parallel, ending at the first cell that
+/// is not a box (at once on simplices).
+pub(super) fn likely_cell_system<M: SolveMesh<D> + ?Sized, const D: usize>(mesh: &M) -> bool {
+    // a unit normal along an axis has a component of magnitude 1 (and the others 0)
+    let along_an_axis = |n: crate::mesh::complex::Vector<D>| {
+        n.iter().fold(0.0_f64, |m, c| m.max(c.abs())) >= 1.0 - 1e-9
+    };
+    let n_cells = mesh.n_cells();
+    n_cells > 0
+        && (0..n_cells).into_par_iter().with_min_len(4096).all(|k| {
+            let nf = mesh.cell_faces(k).len();
+            nf == 2 * D && (0..nf).all(|i| along_an_axis(mesh.cell_face_normal(k, i)))
+        })
+}
+
 /// The rows of the cell system, whether each skeleton unknown is eliminated, and the row of
 /// each kept one ([`NO_ROW`] else).
 type EliminatedFaces = (Vec<u32>, Vec<bool>, Vec<u32>);

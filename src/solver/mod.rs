@@ -116,6 +116,10 @@ where
     /// skeleton unknowns ([`crate::assembly::two_point`]; `None`: they solved the skeleton
     /// system).
     pub cell_system: Option<(usize, usize)>,
+    /// Stored values of the Cholesky factors the direct solves used: the skeleton system's
+    /// (built by the setup, or by the first solve that needed it when the setup deferred it)
+    /// and the cell system's; 0 for iterative solves.
+    pub factor_len: usize,
     /// The parts of the mesh without Dirichlet boundary whose well-posedness hangs on the
     /// sign of a small total load (see [`well_posed`]): a warning, empty in the usual case.
     pub marginal_load: Vec<well_posed::MarginalLoad>,
@@ -412,6 +416,7 @@ fn solve_prepared<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
         }
     };
     let cell_system = state.cell_system_size().zip(state.cell_system_skeleton());
+    let factor_len = system.factor_len() + state.factor_len();
     drop(state);
     let mut result = result;
     let scale = magnitude::data_scale(&system, problem, constraints.as_ref());
@@ -437,6 +442,7 @@ fn solve_prepared<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
         timings,
         warm_start: warm,
         cell_system,
+        factor_len,
         marginal_load: marginal,
     })
 }

@@ -49,8 +49,8 @@ fn same_solution<'a>(
         i.niter()
     );
     assert_eq!(
-        i.system.factor_len(),
-        0,
+        (i.system.factor_len(), i.factor_len),
+        (0, 0),
         "no Cholesky factor with the iterative solver"
     );
     i
@@ -200,7 +200,22 @@ fn auto_picks_direct_on_small_systems() {
         &opts(LinearSolver::Auto, WarmStart::Cold),
     )
     .unwrap();
-    assert!(s.system.factor_len() > 0);
+    // on squares the cell system takes the solves: its factor is the only one, the
+    // skeleton system's factorisation was deferred and never needed
+    assert!(s.system.symbolic().is_direct());
+    assert!(s.cell_system.is_some());
+    assert_eq!(s.system.factor_len(), 0);
+    assert!(s.factor_len > 0);
+    assert!(s.result.log.iter().all(|l| l.timings.krylov == 0));
+    let tri = cartesian_triangles(12, 12, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let hmm = Hmm::new(&tri);
+    let s = solve_problem(
+        &hmm,
+        &paper_test3(-5.0),
+        &opts(LinearSolver::Auto, WarmStart::Cold),
+    )
+    .unwrap();
+    assert!(s.system.factor_len() > 0 && s.factor_len == s.system.factor_len());
     assert!(s.result.log.iter().all(|l| l.timings.krylov == 0));
     assert_eq!(
         "iterative".parse::<LinearSolver>().unwrap(),
