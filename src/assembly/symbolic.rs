@@ -15,8 +15,9 @@
 //!   where each unknown appears (`inc`, ascending). They let the values be
 //!   *gathered* entry by entry in parallel, with sums in the order of a sequential scatter, so
 //!   results do not depend on the number of threads. `src` is built here beside the symbolic
-//!   factorisation (direct solves, which gather every matrix); a system solved iteratively
-//!   builds it when a solve first gathers the skeleton matrix (`gather_sources`, kept in
+//!   factorisation (direct solves, which gather every matrix); a system solved iteratively,
+//!   or directly with the factorisation deferred, builds it when a solve first gathers the
+//!   skeleton matrix (`gather_sources`, kept in
 //!   the [`SolveState`](super::SolveState)), which the solves through the cell system of
 //!   [`super::two_point`] never do (HMM on rectangles; the time and memory this saves are in
 //!   `replication/measurements/solver.md`).
