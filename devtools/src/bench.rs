@@ -364,7 +364,9 @@ pub fn run_case(case: &Case) -> gradvi::Result<BenchRow> {
     // a nested case must have been predicted, except on meshes too coarse to have a coarser
     // level (the row then measures the cold start, with 0 coarse solves)
     if let Some(why) = sol.warm_start.as_ref().and_then(|w| w.skipped.as_ref())
-        && !gradvi::solver::warm_start::too_coarse(sol.system.scheme().n_skeleton())
+        && !gradvi::solver::warm_start::too_coarse(
+            <PolyMesh as gradvi::solver::SolverMesh<2>>::warm_start_unknowns(sol.system.scheme()),
+        )
     {
         return Err(bad(format!(
             "{}: no nested prediction: {why}",

@@ -268,9 +268,6 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let fx = self.fixed_values(fixed);
         let mut rhs = self.masked_rhs(a, &fx)?;
         let Some(reuse) = reuse else {
-            if !self.sym.has_factorisation() {
-                self.fallback_pattern(state)?;
-            }
             let values = self.masked_lower(a, &fx, self.direct_pattern(&state.direct_fallback)?)?;
             let t1 = Instant::now();
             let (t2, out) = self.solve_direct(state, &values, &mut rhs)?;
