@@ -55,6 +55,7 @@ use std::process::{Command, Stdio};
 use std::time::Instant;
 
 pub mod baseline;
+mod data_replay;
 mod domains3d;
 mod domains3d_report;
 mod hmm3d;

@@ -32,6 +32,12 @@
 //! measured the same way (PETSc: the whole process or MPI job; gradvi: the child from the mesh
 //! to the freeing of everything).
 //!
+//! **Data evaluation.** Each gradvi row carries two measures of the time spent evaluating the
+//! problem's expressions: a bound (`data_seconds`: every datum at every centroid, edge midpoint
+//! and vertex) and, for the ex9 obstacle cases, the solve's own evaluations (`data_used_s`):
+//! the first run of the case (`--replay-data`) solves it a second time after its timed run, with
+//! every datum recorded, and times the recorded evaluations replayed (`super::data_replay`).
+//!
 //! Every case runs in a child process, as in the scaling benchmark, so that peak memory is the
 //! case's own. `GRADVI_BENCH_PEERS` (default `ex9,domains,reseeded`) selects the parts; the rows
 //! of the other parts are kept from the existing CSV, and so are those of the ex9 grids not run:
@@ -159,6 +165,11 @@ pub struct PeerRow {
     /// solve.
     #[serde(deserialize_with = "nullable", default = "nan")]
     pub data_s: f64,
+    /// The solve's own data evaluations, recorded in a second, untimed solve and replayed on
+    /// the solve's threads (`super::data_replay`; gradvi's ex9 obstacle rows, once per case).
+    /// NaN where not measured, and in rows written before this column.
+    #[serde(deserialize_with = "nullable", default = "nan")]
+    pub data_used_s: f64,
     /// Largest error against the exact solution (ex9).
     #[serde(deserialize_with = "nullable")]
     pub err_max: f64,
@@ -363,17 +374,32 @@ fn log_solve(sol: &gradvi::solver::Solution) {
     }
 }
 
-/// Solves one gradvi case in this process (the body of a `--peer-child` process); without the
-/// `barrier`, its linear variant (the problem's constraint dropped).
-fn run_gradvi(
-    family: &str,
+/// One gradvi case of a child process: its family, scheme, linear solver, grid size (0 for a
+/// mesh file) and mesh file.
+#[derive(Debug, Clone, Copy)]
+struct ChildCase<'a> {
+    family: &'a str,
     scheme: SchemeKind,
-    linear: &str,
+    linear: &'a str,
     size: usize,
-    file: Option<&Path>,
+    file: Option<&'a Path>,
+}
+
+/// Solves one gradvi case in this process (the body of a `--peer-child` process); without the
+/// `barrier`, its linear variant (the problem's constraint dropped); with `replay`, its data
+/// evaluations measured after the timed run ([`replayed_data_seconds`]).
+fn run_gradvi(
+    case: ChildCase,
     root: &Path,
-    barrier: bool,
+    (barrier, replay): (bool, bool),
 ) -> gradvi::Result<PeerRow> {
+    let ChildCase {
+        family,
+        scheme,
+        linear,
+        size,
+        file,
+    } = case;
     let t0 = Instant::now();
     let (mesh, mut problem, grid) = case_of(family, scheme, size, file, root)?;
     if !barrier {
@@ -416,6 +442,7 @@ fn run_gradvi(
         linear_s: t.factor + t.solve,
         peak_mib: f64::NAN,
         data_s,
+        data_used_s: f64::NAN,
         err_max,
         err_mean,
         certificate: c.worst(),
@@ -432,7 +459,36 @@ fn run_gradvi(
     drop(problem);
     row.total_s = t0.elapsed().as_secs_f64() - data_s;
     row.peak_mib = peak_memory_mib();
+    if replay {
+        row.data_used_s = replayed_data_seconds(case, root)?;
+    }
     Ok(row)
+}
+
+/// The seconds the solve of a case spends evaluating its data, with its errors against the
+/// exact solution: the case solved again with every datum recorded (`super::data_replay`),
+/// after the timed run and its peak memory, and the recorded evaluations replayed.
+fn replayed_data_seconds(case: ChildCase, root: &Path) -> gradvi::Result<f64> {
+    let (mesh, problem, _) = case_of(case.family, case.scheme, case.size, case.file, root)?;
+    let (problem, logs) = super::data_replay::record(problem);
+    let scheme_obj = gradvi::scheme::build(case.scheme, &mesh)?;
+    let sol = solve_problem(scheme_obj.as_ref(), &problem, &options(case.linear)?)?;
+    std::hint::black_box(errors(scheme_obj.as_ref(), &problem, sol.u()));
+    drop(sol);
+    let r = logs.replay_seconds();
+    let by: Vec<String> = r
+        .by_datum
+        .iter()
+        .filter(|(_, n)| *n > 0)
+        .map(|(name, n)| format!("{name} {n}"))
+        .collect();
+    eprintln!(
+        "[bench]     data: {} evaluations recorded ({}), replayed in {:.3} s",
+        r.evaluations,
+        by.join(", "),
+        r.seconds
+    );
+    Ok(r.seconds)
 }
 
 /// The threads of rayon's global pool in this process (`RAYON_NUM_THREADS`, or every core).
@@ -440,28 +496,36 @@ fn rayon_threads() -> usize {
     rayon::current_num_threads()
 }
 
-/// Arguments of a child process: `[--no-barrier] FAMILY SCHEME LINEAR SIZE [FILE]`
-/// (`--no-barrier`: the linear variant).
+/// Arguments of a child process: `[--no-barrier] [--replay-data] FAMILY SCHEME LINEAR SIZE
+/// [FILE]` (`--no-barrier`: the linear variant; `--replay-data`: the data evaluations measured
+/// after the timed run, [`replayed_data_seconds`]).
 pub fn child_main(args: &[String], root: &Path) -> gradvi::Result<()> {
-    let barrier = args.first().is_none_or(|a| a != NO_BARRIER);
-    let args = if barrier { args } else { &args[1..] };
+    let mut args = args;
+    let (mut barrier, mut replay) = (true, false);
+    while let Some(flag) = args.first().filter(|a| a.starts_with("--")) {
+        match flag.as_str() {
+            NO_BARRIER => barrier = false,
+            REPLAY_DATA => replay = true,
+            other => return Err(bad(format!("--peer-child: unknown flag '{other}'"))),
+        }
+        args = &args[1..];
+    }
     if args.len() < 4 {
         return Err(bad(format!(
-            "--peer-child [{NO_BARRIER}] FAMILY SCHEME LINEAR SIZE [FILE]"
+            "--peer-child [{NO_BARRIER}] [{REPLAY_DATA}] FAMILY SCHEME LINEAR SIZE [FILE]"
         )));
     }
     let size = args[3]
         .parse()
         .map_err(|_| bad(format!("bad size '{}'", args[3])))?;
-    let row = run_gradvi(
-        &args[0],
-        args[1].parse()?,
-        &args[2],
+    let case = ChildCase {
+        family: &args[0],
+        scheme: args[1].parse()?,
+        linear: &args[2],
         size,
-        args.get(4).map(Path::new),
-        root,
-        barrier,
-    )?;
+        file: args.get(4).map(Path::new),
+    };
+    let row = run_gradvi(case, root, (barrier, replay))?;
     println!(
         "{}",
         serde_json::to_string(&row).map_err(|e| bad(e.to_string()))?
@@ -471,6 +535,9 @@ pub fn child_main(args: &[String], root: &Path) -> gradvi::Result<()> {
 
 /// The flag of a child process that runs the linear variant of its case.
 const NO_BARRIER: &str = "--no-barrier";
+/// The flag of a child process that also measures the data evaluations of its solve
+/// ([`replayed_data_seconds`]).
+const REPLAY_DATA: &str = "--replay-data";
 
 /// PETSc's ex9 at grid G on `nproc` MPI processes through `benches/petsc/run_ex9.sh` (built
 /// once by `build.sh`); `bin` is `ex9` or `ex9_linear`.
@@ -515,6 +582,7 @@ fn run_petsc(cfg: &Config, bin: &Path, grid: usize, nproc: usize) -> gradvi::Res
         linear_s: f64::NAN,
         peak_mib: r.peak_mib,
         data_s: f64::NAN,
+        data_used_s: f64::NAN,
         err_max: r.err_max,
         err_mean: r.err_mean,
         certificate: f64::NAN,
@@ -600,12 +668,14 @@ fn domain_mesh(cfg: &Config, domain: &str, lc: f64, seed: Option<u32>) -> gradvi
     Ok(msh)
 }
 
-/// How a gradvi child runs: its rayon threads (`None`: every core) and whether the problem
-/// keeps its barrier (`false`: the linear variant).
+/// How a gradvi child runs: its rayon threads (`None`: every core), whether the problem
+/// keeps its barrier (`false`: the linear variant) and whether it measures its data
+/// evaluations after the timed run ([`REPLAY_DATA`]).
 #[derive(Debug, Clone, Copy)]
 struct ChildRun {
     threads: Option<usize>,
     barrier: bool,
+    replay: bool,
 }
 
 /// One gradvi case run in a child process.
@@ -618,6 +688,9 @@ fn gradvi_child(
 ) -> gradvi::Result<PeerRow> {
     let mut cmd = Command::new(exe);
     let mut args = child_args(family, scheme, linear, size, file);
+    if run.replay {
+        args.insert(2, REPLAY_DATA.into());
+    }
     if !run.barrier {
         args.insert(2, NO_BARRIER.into());
     }
@@ -730,6 +803,7 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
                         let run = ChildRun {
                             threads: None,
                             barrier: true,
+                            replay: false,
                         };
                         let mut row = gradvi_child(exe, what, 0, Some(file.as_path()), run)?;
                         row.mesh = label.to_string();
@@ -766,14 +840,24 @@ fn ex9_group<'a>(
             ));
         }
         for (scheme, linear) in ex9_variants(g) {
-            let run = move |barrier| {
+            let run = move |barrier, replay| {
                 let threads = Some(n);
                 let what = ("ex9", scheme, linear);
-                gradvi_child(exe, what, g, None, ChildRun { threads, barrier })
+                let how = ChildRun {
+                    threads,
+                    barrier,
+                    replay,
+                };
+                gradvi_child(exe, what, g, None, how)
             };
+            // the first run of the case also measures its data evaluations
+            let first = std::cell::Cell::new(true);
             group.push((
                 format!("ex9 gradvi {scheme} {linear}, {g}² grid, {n} threads (+ linear variant)"),
-                Box::new(move || Ok(with_linear(run(true)?, &run(false)?))),
+                Box::new(move || {
+                    let obstacle = run(true, first.replace(false))?;
+                    Ok(with_linear(obstacle, &run(false, false)?))
+                }),
             ));
         }
     }
@@ -805,10 +889,13 @@ fn run_group(group: &[Case], repeat: usize) -> gradvi::Result<Vec<PeerRow>> {
 /// largest peak memory and the number of runs; `None` if there is none.
 fn median_row(mut runs: Vec<PeerRow>) -> Option<PeerRow> {
     let peak = runs.iter().map(|r| r.peak_mib).fold(f64::NAN, f64::max);
+    // measured in one run only (the first)
+    let data_used = runs.iter().map(|r| r.data_used_s).fold(f64::NAN, f64::max);
     let n = runs.len();
     runs.sort_by(|a, b| a.total_s.total_cmp(&b.total_s));
     let mut row = runs.into_iter().nth(n / 2)?;
     row.peak_mib = peak;
+    row.data_used_s = data_used;
     row.runs = n;
     Some(row)
 }
@@ -957,6 +1044,7 @@ mod tests {
             linear_s: f64::NAN,
             peak_mib: 1.0,
             data_s: f64::NAN,
+            data_used_s: f64::NAN,
             err_max: 1e-6,
             err_mean: 1e-7,
             certificate: 1e-12,
@@ -1018,6 +1106,38 @@ mod tests {
             kept_rows(earlier(), &[], false, false).len(),
             earlier().len()
         );
+    }
+
+    #[test]
+    fn a_child_rejects_an_unknown_flag_and_a_missing_size() {
+        let root = Path::new(".");
+        let args = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let err = child_main(&args(&["--replay", "ex9", "p1", "iterative", "5"]), root);
+        assert!(
+            err.unwrap_err()
+                .to_string()
+                .contains("unknown flag '--replay'")
+        );
+        let err = child_main(
+            &args(&[NO_BARRIER, REPLAY_DATA, "ex9", "p1", "iterative"]),
+            root,
+        );
+        assert!(
+            err.unwrap_err()
+                .to_string()
+                .contains("FAMILY SCHEME LINEAR SIZE")
+        );
+    }
+
+    #[test]
+    fn the_median_row_keeps_the_data_measured_in_one_run() {
+        let mut runs: Vec<PeerRow> = (0..3).map(|_| row("ex9", "gradvi", 1025, "")).collect();
+        for (r, t) in runs.iter_mut().zip([3.0, 1.0, 2.0]) {
+            r.total_s = t;
+        }
+        runs[0].data_used_s = 0.25;
+        let m = median_row(runs).unwrap();
+        assert_eq!((m.total_s, m.data_used_s, m.runs), (2.0, 0.25, 3));
     }
 
     #[test]
