@@ -786,7 +786,7 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
     }
     let mut domains: Vec<(DomainCase, &str)> = Vec::new();
     if do_domains {
-        domains.extend(domain_cases(cfg)?.into_iter().map(|c| (c, "")));
+        domains.extend(domain_cases(cfg, true)?.into_iter().map(|c| (c, "")));
     }
     if do_reseeded {
         domains.extend(reseeded_cases(cfg)?.into_iter().map(|c| (c, RESEED_LABEL)));
@@ -960,14 +960,20 @@ fn within_cap(cfg: &Config, lc: f64) -> bool {
 }
 
 /// The gradvi cases of the any-domain part, on the meshes of [`DOMAIN_LC`]: the meshes written
-/// by gmsh when missing, those above the cell cap of `cfg` left out.
-fn domain_cases(cfg: &Config) -> gradvi::Result<Vec<DomainCase>> {
+/// by gmsh when missing, those above the cell cap of `cfg` left out. Each mesh runs both
+/// [`linear_variants`] and, with `auto`, the default linear solver too (the direct/iterative
+/// switch falls inside the sizes, as on the re-seeded meshes).
+fn domain_cases(cfg: &Config, auto: bool) -> gradvi::Result<Vec<DomainCase>> {
     let mut out = Vec::new();
+    let mut linears = linear_variants();
+    if auto {
+        linears.push("auto");
+    }
     for domain in DOMAINS {
         for &lc in DOMAIN_LC.iter().filter(|&&lc| within_cap(cfg, lc)) {
             let file = domain_mesh(cfg, domain, lc, None)?;
             for scheme in [SchemeKind::Hmm, SchemeKind::P1] {
-                for linear in linear_variants() {
+                for &linear in &linears {
                     out.push((domain, scheme, linear, file.clone()));
                 }
             }
@@ -1005,7 +1011,8 @@ pub fn gradvi_cases(cfg: &Config, max_grid: usize) -> gradvi::Result<Vec<GradviC
             out.push(("ex9".into(), scheme, linear, g, None));
         }
     }
-    for (domain, scheme, linear, file) in domain_cases(cfg)? {
+    // the forced solvers only: the regression check's earlier build may not know `auto`
+    for (domain, scheme, linear, file) in domain_cases(cfg, false)? {
         out.push((domain.into(), scheme, linear, 0, Some(file)));
     }
     Ok(out)
