@@ -136,9 +136,10 @@ fn targets(cfg: &Config, md: &mut Doc, rows: &[PeerRow]) {
 /// The any-domain targets, per scheme: NITER and the steepest growth of the total time over
 /// the default solver's series (`auto`, on the seed-1 and the re-seeded meshes) — the issue's
 /// growth "across the direct/iterative switch" — then over every series, the forced direct
-/// and iterative solvers on the seed-1 meshes included: a stricter reading, which the forced
-/// direct series never meets at these sizes (it never switches, and a sparse Cholesky's cost
-/// grows faster than N on planar meshes), reported beside it.
+/// and iterative solvers on the seed-1 meshes included: a stricter reading, reported beside
+/// it, on which the forced direct series sits close to the bound (it never switches, and a
+/// sparse Cholesky's cost grows faster than N on planar meshes: N^1.12–1.13 in one run,
+/// N^1.22 in an earlier one, `replication/measurements/solver.md`).
 fn domain_targets(t: &mut Table, rows: &[PeerRow]) {
     for scheme in ["hmm", "p1"] {
         let d: Vec<&PeerRow> = rows
