@@ -17,6 +17,7 @@
 use gradvi::problem::{BoundaryKind, Problem};
 use gradvi::scheme::Tensor;
 use rayon::prelude::*;
+use std::convert::identity;
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
 
@@ -126,10 +127,6 @@ fn vector_sum(v: [f64; 2]) -> f64 {
     v[0] + v[1]
 }
 
-fn scalar(v: f64) -> f64 {
-    v
-}
-
 fn kind(k: BoundaryKind) -> f64 {
     k as usize as f64
 }
@@ -146,7 +143,7 @@ fn scalar_field(
     logs: &mut Recorded,
 ) {
     let g: Shared<[f64; 2], f64> = Arc::from(std::mem::replace(f, placeholder()));
-    let w = logged(name, g, scalar, logs);
+    let w = logged(name, g, identity, logs);
     *f = Box::new(move |x| w(x));
 }
 
@@ -165,7 +162,7 @@ pub fn record(mut problem: Problem) -> (Problem, Recorded) {
     scalar_field("Neumann", &mut p.neumann, &mut logs);
     if let Some(f) = p.source_in_cell.take() {
         let g: Shared<([f64; 2], [f64; 2]), f64> = Arc::new(move |(x, xk)| f(x, xk));
-        let w = logged("f in cell", g, scalar, &mut logs);
+        let w = logged("f in cell", g, identity, &mut logs);
         p.source_in_cell = Some(Box::new(move |x, xk| w((x, xk))));
     }
     if let Some(f) = p.diffusion_by_tag.take() {
@@ -175,7 +172,7 @@ pub fn record(mut problem: Problem) -> (Problem, Recorded) {
     }
     if let Some(f) = p.source_by_tag.take() {
         let g: Shared<([f64; 2], [f64; 2], i32), f64> = Arc::new(move |(x, xk, t)| f(x, xk, t));
-        let w = logged("f by tag", g, scalar, &mut logs);
+        let w = logged("f by tag", g, identity, &mut logs);
         p.source_by_tag = Some(Box::new(move |x, xk, t| w((x, xk, t))));
     }
     let b = std::mem::replace(&mut p.boundary, Box::new(|_, _| BoundaryKind::Dirichlet));

@@ -798,7 +798,7 @@ pub fn run(cfg: &Config, exe: &Path) -> gradvi::Result<()> {
             .map(|((domain, scheme, linear, file), label)| -> Case {
                 (
                     format!("{domain} ({}) gradvi {scheme} {linear}", file.display()),
-                    Box::new(move || {
+                    Box::new(move |_| {
                         let what = (*domain, *scheme, *linear);
                         let run = ChildRun {
                             threads: None,
@@ -833,7 +833,7 @@ fn ex9_group<'a>(
             let linear_bin = bin.with_file_name("ex9_linear");
             group.push((
                 format!("ex9 PETSc gs+mg, {g}² grid, {n} processes (+ linear variant)"),
-                Box::new(move || {
+                Box::new(move |_| {
                     let obstacle = run_petsc(cfg, bin, g, n)?;
                     Ok(with_linear(obstacle, &run_petsc(cfg, &linear_bin, g, n)?))
                 }),
@@ -851,11 +851,10 @@ fn ex9_group<'a>(
                 gradvi_child(exe, what, g, None, how)
             };
             // the first run of the case also measures its data evaluations
-            let first = std::cell::Cell::new(true);
             group.push((
                 format!("ex9 gradvi {scheme} {linear}, {g}² grid, {n} threads (+ linear variant)"),
-                Box::new(move || {
-                    let obstacle = run(true, first.replace(false))?;
+                Box::new(move |r| {
+                    let obstacle = run(true, r == 0)?;
                     Ok(with_linear(obstacle, &run(false, false)?))
                 }),
             ));
@@ -864,8 +863,9 @@ fn ex9_group<'a>(
     group
 }
 
-/// A case of this benchmark: what it is, and how to run it once.
-type Case<'a> = (String, Box<dyn Fn() -> gradvi::Result<PeerRow> + 'a>);
+/// A case of this benchmark: what it is, and how to run it once (given the index of the run,
+/// 0 for the first).
+type Case<'a> = (String, Box<dyn Fn(usize) -> gradvi::Result<PeerRow> + 'a>);
 
 /// Runs every case of `group` `repeat` times, the cases interleaved (so that a slow spell of
 /// the machine falls on all of them), and returns one row per case: the run with the median
@@ -879,7 +879,7 @@ fn run_group(group: &[Case], repeat: usize) -> gradvi::Result<Vec<PeerRow>> {
             } else {
                 eprintln!("[bench] {what} ...");
             }
-            out.push(run()?);
+            out.push(run(r)?);
         }
     }
     Ok(samples.into_iter().filter_map(median_row).collect())
@@ -1133,6 +1133,25 @@ mod tests {
             err.unwrap_err()
                 .to_string()
                 .contains("FAMILY SCHEME LINEAR SIZE")
+        );
+    }
+
+    #[test]
+    fn each_run_of_a_group_gets_its_index_and_the_first_measures_the_data() {
+        let case: Case = (
+            "a case".into(),
+            Box::new(|r| {
+                let mut x = row("ex9", "gradvi", 1025, "");
+                x.total_s = 1.0 + r as f64;
+                x.data_used_s = if r == 0 { 0.25 } else { f64::NAN };
+                Ok(x)
+            }),
+        );
+        let rows = run_group(&[case], 3).unwrap();
+        assert_eq!(rows.len(), 1);
+        assert_eq!(
+            (rows[0].total_s, rows[0].data_used_s, rows[0].runs),
+            (2.0, 0.25, 3)
         );
     }
 
