@@ -38,24 +38,44 @@ pub(super) fn dense_cholesky<A: Rows + ?Sized>(a: &A, level: usize) -> crate::Re
     if n > FAER_LLT_RECURSION {
         crate::linalg::product_workspace::reserve(faer::get_global_parallelism(), "")?;
     }
+    // the lower triangle only, factored in place (faer's `Llt::new` would copy it into a
+    // second n × n matrix first: the same factorisation, twice the memory)
     let mut m = faer::Mat::<f64>::zeros(n, n);
     for i in 0..n {
         let (cols, vals) = a.row(i);
         for (&j, &v) in cols.iter().zip(vals) {
-            m[(i, j as usize)] = v;
+            if j as usize <= i {
+                m[(i, j as usize)] = v;
+            }
         }
     }
-    let llt = m.llt(faer::Side::Lower).map_err(|e| {
+    let par = faer::get_global_parallelism();
+    use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
+    // a column of n scalars, as in `Llt::new`
+    let mut mem = faer::dyn_stack::MemBuffer::new(cholesky_in_place_scratch::<f64>(
+        n,
+        par,
+        Default::default(),
+    ));
+    let stack = faer::dyn_stack::MemStack::new(&mut mem);
+    cholesky_in_place(
+        m.as_mut(),
+        Default::default(),
+        par,
+        stack,
+        Default::default(),
+    )
+    .map_err(|e| {
         crate::Error::Linear(format!(
             "multigrid setup: the coarsest operator (level {level}, order {n}) is not \
              numerically positive definite ({e:?}): neither is the matrix"
         ))
     })?;
-    let lf = llt.L();
+    drop(mem);
     let mut l = Vec::with_capacity(n * (n + 1) / 2);
     for i in 0..n {
         for j in 0..=i {
-            l.push(lf[(i, j)]);
+            l.push(m[(i, j)]);
         }
     }
     Ok(CoarseSolve::Dense { n, l })
@@ -112,5 +132,37 @@ mod tests {
         }
         let e = dense_cholesky(&indef, 3).unwrap_err().to_string();
         assert!(e.contains("level 3"), "{e}");
+    }
+
+    /// The in-place factorisation is faer's `Llt::new` on the same matrix, bit for bit, above
+    /// faer's recursion threshold (order 144 > 64: the blocked path) and below it.
+    #[test]
+    fn the_in_place_factor_is_faers_llt_bit_for_bit() {
+        for side in [12, 5] {
+            let a = grid(side, 1.0, 0.3, &|i, j| 1.0 + ((i * 7 + j) % 5) as f64);
+            let n = a.n_rows();
+            let CoarseSolve::Dense { l, .. } = dense_cholesky(&a, 1).unwrap() else {
+                panic!("a dense factor was expected");
+            };
+            let mut m = faer::Mat::<f64>::zeros(n, n);
+            for i in 0..n {
+                let (cols, vals) = a.row(i);
+                for (&j, &v) in cols.iter().zip(vals) {
+                    m[(i, j as usize)] = v;
+                }
+            }
+            let llt = m.llt(faer::Side::Lower).unwrap();
+            let mut k = 0;
+            for i in 0..n {
+                for j in 0..=i {
+                    assert_eq!(
+                        l[k].to_bits(),
+                        llt.L()[(i, j)].to_bits(),
+                        "({i}, {j}), n {n}"
+                    );
+                    k += 1;
+                }
+            }
+        }
     }
 }
