@@ -37,7 +37,7 @@ use crate::budget::{try_copy, try_filled};
 use crate::mesh::{PolyMesh, SolveMesh};
 use crate::problem::Problem;
 use crate::scheme::GradientDiscretisation;
-use crate::vi::active_set::{self, Outcome};
+use crate::vi::active_set::{self, Outcome, Predicted};
 pub use crate::vi::{ActiveSetOptions, Cancel, Certificate, IterationLog, IterationStep, Method};
 use crate::vi::{VariationalSolution, pgs};
 use constraints::Constraints;
@@ -316,6 +316,13 @@ fn warm_start<M: SolverMesh<D> + ?Sized, const D: usize>(
     })
 }
 
+/// What the active-set method on a system gives: a certified solution, or the prediction
+/// that [`ActiveSetOptions::predict_only`] asks for.
+enum Settled {
+    Solved(VariationalSolution),
+    Predicted(Predicted),
+}
+
 /// The active-set method on `system` (its solves through `state`), with the fallback of
 /// `opts`.
 fn solve_constrained<M: SolverMesh<D> + ?Sized, const D: usize>(
@@ -324,7 +331,7 @@ fn solve_constrained<M: SolverMesh<D> + ?Sized, const D: usize>(
     cons: &Constraints,
     opts: &SolveOptions,
     initial: Option<Vec<bool>>,
-) -> crate::Result<VariationalSolution> {
+) -> crate::Result<Settled> {
     let mut o = match initial {
         Some(a) => ActiveSetOptions {
             initial_active: Some(a),
@@ -337,7 +344,8 @@ fn solve_constrained<M: SolverMesh<D> + ?Sized, const D: usize>(
         o.look_ahead = Some(look_ahead_options(D));
     }
     match active_set::run(&mut system.with_state(state), cons, &o)? {
-        Outcome::Solved(s) => Ok(s),
+        Outcome::Solved(s) => Ok(Settled::Solved(s)),
+        Outcome::Predicted(p) => Ok(Settled::Predicted(p)),
         Outcome::Stalled(stall) if opts.fallback => {
             let q = system.with_state(state);
             let po = pgs::PgsOptions {
@@ -349,20 +357,58 @@ fn solve_constrained<M: SolverMesh<D> + ?Sized, const D: usize>(
             let mut log = stall.log;
             log.extend(sol.log);
             sol.log = log;
-            Ok(sol)
+            Ok(Settled::Solved(sol))
         }
         Outcome::Stalled(stall) => Err(stall.error.into()),
     }
 }
 
-/// Solves `problem` on `system` without a nested warm start (the coarse solves' own solves).
-fn solve_system<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
-    system: DiscreteSystem<'a, M, D>,
-    problem: &Problem<D>,
+/// The initial active set of the fine iteration: `initial` (the warm start's, else the one
+/// `opts` gives, else none) with the barrier of the `floating` parts (those without Dirichlet
+/// unknowns) active, or the first solve would be singular (see [`well_posed`]).
+fn with_floating(
+    initial: Option<Vec<bool>>,
     opts: &SolveOptions,
-    t0: Instant,
-) -> crate::Result<Solution<'a, M, D>> {
-    solve_prepared(prepare(system, problem)?, problem, opts, t0, None)
+    cons: &Constraints,
+    floating: &[usize],
+) -> crate::Result<Option<Vec<bool>>> {
+    if floating.is_empty() {
+        return Ok(initial);
+    }
+    let what = "the initial active set";
+    let mut a = match (initial, &opts.active_set.initial_active) {
+        (Some(a), _) => a,
+        (None, Some(given)) => try_copy(given, what)?,
+        (None, None) => try_filled(cons.dofs.len(), false, what)?,
+    };
+    for &j in floating {
+        a[j] = true;
+    }
+    Ok(Some(a))
+}
+
+/// The coarse solves' path ([`warm_start`]): the active-set method on the prepared system
+/// `prepared` from `initial`, stopped before a solve that is likely the last when `opts` asks
+/// for it ([`ActiveSetOptions::predict_only`]): the active set on the barrier's unknowns, the
+/// iterate and the number of linear solves. Uncertified when it stopped early; a prediction
+/// only.
+fn predict_prepared<M: SolverMesh<D> + ?Sized, const D: usize>(
+    prepared: &Prepared<'_, M, D>,
+    opts: &SolveOptions,
+    initial: Option<Vec<bool>>,
+) -> crate::Result<(Vec<bool>, Vec<f64>, usize)> {
+    let cons = prepared
+        .constraints
+        .as_ref()
+        .ok_or_else(|| crate::Error::InvalidData("the problem has no barrier".into()))?;
+    let initial = with_floating(initial, opts, cons, &prepared.analysis.floating)?;
+    let mut state = SolveState::default();
+    Ok(
+        match solve_constrained(&prepared.system, &mut state, cons, opts, initial)? {
+            Settled::Solved(s) => (s.active, s.u, s.niter),
+            Settled::Predicted(p) => (p.active, p.u, p.log.len()),
+        },
+    )
 }
 
 /// Solves `problem` on the prepared system `prepared`, warm-started from the coarse solves
@@ -395,21 +441,15 @@ fn solve_prepared<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
             }
             // a warm start cut short by the hook is skipped: stop before the first fine solve
             Cancel::check(opts.active_set.cancel.as_ref())?;
-            if !floating.is_empty() {
-                // parts without Dirichlet unknowns: start with their barrier active, or the
-                // first solve would be singular (see well_posed)
-                let what = "the initial active set";
-                let mut a = match (initial.take(), &opts.active_set.initial_active) {
-                    (Some(a), _) => a,
-                    (None, Some(given)) => try_copy(given, what)?,
-                    (None, None) => try_filled(c.dofs.len(), false, what)?,
-                };
-                for &j in &floating {
-                    a[j] = true;
+            let initial = with_floating(initial.take(), opts, c, &floating)?;
+            match solve_constrained(&system, &mut state, c, opts, initial)? {
+                Settled::Solved(s) => s,
+                Settled::Predicted(_) => {
+                    return Err(crate::Error::InvalidData(
+                        "predict_only asks for a prediction, not a solution".into(),
+                    ));
                 }
-                initial = Some(a);
             }
-            solve_constrained(&system, &mut state, c, opts, initial)?
         }
         None => {
             crate::vi::solve_unconstrained(&mut system.with_state(&mut state), opts.active_set.tol)?

@@ -59,7 +59,11 @@
 //! direct solver ignores it.
 //!
 //! The coarse iterations look ahead ([`crate::vi::look_ahead`]) like the fine one, which
-//! saves coarse solves and leaves the prediction unchanged. The measurements behind these
+//! saves coarse solves and leaves the prediction unchanged. They also stop before a solve that
+//! is likely their last ([`ActiveSetOptions::predict_only`]): that solve would mostly only
+//! confirm the set, and the prediction needs the set, not the certificate (the fine
+//! iteration certifies). When it would have confirmed, the predicted set is the one it would
+//! have returned, and the first guess comes from the solve before it. The measurements behind these
 //! choices and the constants below are in `replication/BENCHMARKS.md` ("Measurements behind
 //! the defaults").
 //!
@@ -351,32 +355,36 @@ fn coarse_solve<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
         ..Default::default()
     };
     let system = DiscreteSystem::new(&hmm, problem, system_options).map_err(fail)?;
-    let c = super::constraints::build(&system, problem)
-        .map_err(fail)?
+    let prepared = super::prepare(system, problem).map_err(fail)?;
+    let c = prepared
+        .constraints
+        .as_ref()
         .ok_or_else(|| "the problem has no barrier".to_string())?;
     let opts = super::SolveOptions {
         active_set: ActiveSetOptions {
-            initial_active: initial(&hmm, &c)?,
             look_ahead: Some(super::look_ahead_options(D)),
             cancel: cancel.cloned(),
+            // the level only predicts: its last solve, which would confirm the set, is not made
+            predict_only: true,
             ..Default::default()
         },
         warm_start: WarmStart::Cold,
         ..Default::default()
     };
-    let sol = super::solve_system(system, problem, &opts, Instant::now()).map_err(fail)?;
+    let (active, u, niter) =
+        super::predict_prepared(&prepared, &opts, initial(&hmm, c)?).map_err(fail)?;
     let mut s = CoarseState {
         cell: try_filled(mesh.n_cells(), false, "the coarse active cells").map_err(oom)?,
         face: try_filled(mesh.n_faces(), false, "the coarse active faces").map_err(oom)?,
     };
-    for (d, &a) in c.dofs.iter().zip(&sol.result.active) {
+    for (d, &a) in c.dofs.iter().zip(&active) {
         match hmm.dof_entity(d.dof) {
             Entity::Cell(k) => s.cell[k] = a,
             Entity::Edge(e) => s.face[e] = a,
             Entity::Vertex(_) => {}
         }
     }
-    Ok((hmm.cell_values(sol.u()), s, sol.niter()))
+    Ok((hmm.cell_values(&u), s, niter))
 }
 
 /// What the coarse solves predict on the fine problem.

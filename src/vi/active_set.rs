@@ -43,6 +43,11 @@
 //! the cost of more solves; the iterative solver's screening tolerances are chosen so that
 //! on the benchmarks this costs no solve (the few unknowns misjudged on some of them are
 //! taken back within the same number of solves: [`crate::assembly::SCREENING_RTOL`]).
+//! A solve that is likely the last (the change of the active set before it at most
+//! [`LAST_CHANGE_RATIO`] of the change before that) is not screened: it would
+//! be refined anyway, and screening it would only add an evaluation of the inexact iterate and
+//! a restart of the conjugate gradients (on ex9 at 1M unknowns, one Krylov iteration and
+//! 0.1–0.2 s of the third fine solve; `replication/measurements/solver.md`).
 //!
 //! Every returned solution carries a [`super::Certificate`]; above tolerance the solve is an
 //! error. Cycling and the iteration cap end the iteration with [`Outcome::Stalled`]; the solve
@@ -89,6 +94,12 @@ pub struct ActiveSetOptions {
     /// The caller's cancellation hook, polled after every linear solve that is not the last
     /// (`None`, the default: never cancelled).
     pub cancel: Option<Cancel>,
+    /// Stop before a solve that is likely the last ([`LAST_CHANGE_RATIO`]) and return the active
+    /// set it would be made with and the last iterate, uncertified ([`Outcome::Predicted`]).
+    /// For solves whose answer only predicts another's (the coarse levels of a warm start):
+    /// when that solve would only have confirmed the set, the set is the one it would have
+    /// returned. `false`, the default: every answer is certified.
+    pub predict_only: bool,
 }
 
 /// A cancellation hook owned by the caller: a function polled between linear solves; when it
@@ -134,6 +145,7 @@ impl Default for ActiveSetOptions {
             screening: true,
             look_ahead: None,
             cancel: None,
+            predict_only: false,
         }
     }
 }
@@ -147,6 +159,18 @@ pub struct Stalled {
     pub log: Vec<IterationLog>,
 }
 
+/// An iteration stopped before a solve that was likely its last
+/// ([`ActiveSetOptions::predict_only`]): a prediction, not a solution.
+#[derive(Debug, Clone)]
+pub struct Predicted {
+    /// The active set the next solve would have been made with.
+    pub active: Vec<bool>,
+    /// The iterate of the last solve made (of the active set before `active`).
+    pub u: Vec<f64>,
+    /// The solves made.
+    pub log: Vec<IterationLog>,
+}
+
 /// The result of [`run`].
 #[derive(Debug, Clone)]
 pub enum Outcome {
@@ -154,6 +178,8 @@ pub enum Outcome {
     Solved(VariationalSolution),
     /// Cycled or reached the iteration cap (the caller may fall back to another method).
     Stalled(Stalled),
+    /// Stopped before a likely last solve, as [`ActiveSetOptions::predict_only`] asks.
+    Predicted(Predicted),
 }
 
 /// Solves the discrete variational inequality by the active-set method (see module docs);
@@ -166,6 +192,9 @@ pub fn solve<P: Sync>(
     match run(q, cons, opts)? {
         Outcome::Solved(s) => Ok(s),
         Outcome::Stalled(s) => Err(s.error.into()),
+        Outcome::Predicted(_) => Err(crate::Error::InvalidData(
+            "predict_only returns a prediction, not a solution: call active_set::run".into(),
+        )),
     }
 }
 
@@ -352,6 +381,26 @@ fn stall(
     }
 }
 
+/// A change of the active set (the unknowns that entered or left it) at most this fraction of
+/// the change before it marks the solve after it as likely the last. The first change from
+/// A₀ = ∅ (every violated unknown at once) does not count.
+pub const LAST_CHANGE_RATIO: f64 = 0.125;
+
+/// Whether the solve after the changes `(older, newer)` of the active set (the numbers of
+/// unknowns that entered or left it) is likely the last: `newer` is at most
+/// [`LAST_CHANGE_RATIO`] of `older`, the iteration closing in on its set. Such a solve is not
+/// screened: a screened one that ends the iteration is refined to full accuracy anyway
+/// ([`solve_step`]), so screening it would only add an evaluation of the inexact iterate and a
+/// restart of the conjugate gradients. If it is not the last after all, its exact iterate
+/// chooses the next set as a screened one would (the iteration's path is the exact one, which
+/// screening only approximates), at the cost of the extra accuracy.
+fn likely_last(changes: (Option<usize>, Option<usize>)) -> bool {
+    match changes {
+        (Some(older), Some(newer)) => (newer as f64) <= LAST_CHANGE_RATIO * older as f64,
+        _ => false,
+    }
+}
+
 /// Runs the active-set method (see module docs) and says whether it converged.
 pub fn run<P: Sync>(
     q: &mut dyn QuadraticEnergy,
@@ -368,9 +417,24 @@ pub fn run<P: Sync>(
     let mut screening = opts.screening;
     // whether an iterate since the last restart of the cycle test was inexact
     let mut inexact_seen = false;
+    // the number of unknowns the last two changes of the active set moved (older, newer)
+    let mut changes: (Option<usize>, Option<usize>) = (None, None);
+    // the iterate of the last solve
+    let mut last_u: Option<Vec<f64>> = None;
+    // from A₀ = ∅ the first change puts every violated unknown in at once, whatever the
+    // distance to the solution: it does not count in `changes`
+    let cold = !active.iter().any(|&a| a);
     loop {
+        if opts.predict_only
+            && likely_last(changes)
+            && let Some(u) = last_u.take()
+        {
+            q.release();
+            return Ok(Outcome::Predicted(Predicted { active, u, log }));
+        }
+        let screen_this = screening && !likely_last(changes);
         let (u, timings, ev, mut next) =
-            solve_step(q, cons, &active, &history, screening, (opts.c, opts.tol))?;
+            solve_step(q, cons, &active, &history, screen_this, (opts.c, opts.tol))?;
         inexact_seen |= timings.inexact;
         if opts.keep_iterates {
             iterates.push(u.clone());
@@ -430,6 +494,10 @@ pub fn run<P: Sync>(
         }
         entered = (0..m).filter(|&j| next[j] && !active[j]).count();
         left = (0..m).filter(|&j| !next[j] && active[j]).count();
+        if !(cold && log.len() == 1) {
+            changes = (changes.1, Some(entered + left));
+        }
+        last_u = Some(u);
         history.push(next.clone());
         active = next;
     }
@@ -477,6 +545,7 @@ mod tests {
                     solved += 1;
                 }
                 Outcome::Stalled(s) => assert!(!s.log.is_empty()),
+                Outcome::Predicted(_) => panic!("seed {seed}: a prediction without predict_only"),
             }
         }
         assert!(solved >= 30, "only {solved} of 40 converged");
@@ -552,6 +621,134 @@ mod tests {
                 assert_ne!(sizes, exact);
                 assert!(q.refinements >= 1);
             }
+        }
+    }
+
+    /// A 1D Laplacian with a flat barrier, its exact (unscreened) solution, and a warm start
+    /// from that solution's active set with the unknowns `lo..hi` freed and the `extra` ones
+    /// before it set active: the first solve puts the middle back in at once, the later ones
+    /// free the extra unknowns one at a time.
+    fn warm_flat_barrier(
+        lo: usize,
+        hi: usize,
+        extra: usize,
+    ) -> (
+        Dense,
+        Constraints<()>,
+        VariationalSolution,
+        ActiveSetOptions,
+    ) {
+        let n = 100;
+        let mut q = Dense {
+            m: laplacian_1d(n),
+            b: vec![0.01; n],
+            dir: FixedValues::free(n).unwrap(),
+        };
+        let cons = all_constrained(n, vec![0.3; n], Side::Upper);
+        let no_screening = ActiveSetOptions {
+            screening: false,
+            ..Default::default()
+        };
+        let exact = solve(&mut q, &cons, &no_screening).unwrap();
+        let mut a = exact.active.clone();
+        a[lo..hi].iter_mut().for_each(|x| *x = false);
+        let first = a.iter().position(|&x| x).unwrap();
+        a[first - extra..first].iter_mut().for_each(|x| *x = true);
+        let warm = ActiveSetOptions {
+            initial_active: Some(a),
+            ..Default::default()
+        };
+        (q, cons, exact, warm)
+    }
+
+    /// The changes of the active set between the solves of `log`.
+    fn changes(log: &[IterationLog]) -> Vec<usize> {
+        log[1..]
+            .iter()
+            .map(|l| l.step.entered + l.step.left)
+            .collect()
+    }
+
+    /// A solve after a change of the active set at most [`LAST_CHANGE_RATIO`] of the one
+    /// before it is not screened, whether or not it is the last; the others are. Warm-started
+    /// so that the changes are 21, 1, 1, 1: the third solve (after 21 then 1) is exact and
+    /// evaluated whole though the iteration goes on, the fourth (1 then 1) is screened again,
+    /// and the path, the answer and the single refinement (of the last solve) are those of
+    /// screening everywhere. From A₀ = ∅ the first change (every violated unknown) does not
+    /// count: on the same problem the cold changes 100, 2, 2, … screen every solve but the
+    /// last.
+    #[test]
+    fn a_solve_after_a_small_change_is_not_screened() {
+        let (q, cons, _, warm) = warm_flat_barrier(40, 60, 4);
+        let reference = solve(
+            &mut q.clone(),
+            &cons,
+            &ActiveSetOptions {
+                screening: false,
+                ..warm.clone()
+            },
+        )
+        .unwrap();
+        assert_eq!(changes(&reference.log), [21, 1, 1, 1]);
+        assert!(likely_last((Some(21), Some(1))));
+        assert!(!likely_last((Some(1), Some(1))));
+        assert!(!likely_last((None, Some(1))));
+        let screened = |opts: &ActiveSetOptions| {
+            let mut s = Screening {
+                exact: q.clone(),
+                error: 1e-9,
+                refinements: 0,
+            };
+            let sol = solve(&mut s, &cons, opts).unwrap();
+            let whole: Vec<bool> = sol.log.iter().map(|l| l.step.residual.is_some()).collect();
+            (sol, whole, s.refinements)
+        };
+        let (sol, whole, refinements) = screened(&warm);
+        assert_eq!(whole, [false, false, true, false, true]);
+        assert_eq!(sol.niter, reference.niter);
+        assert_eq!(sol.active, reference.active);
+        assert_eq!(refinements, 1);
+        for (a, r) in sol.u.iter().zip(&reference.u) {
+            assert!((a - r).abs() < 1e-12, "{a} vs {r}");
+        }
+        sol.certificate.check(1e-10).unwrap();
+        let cold = ActiveSetOptions::default();
+        let (sol, whole, refinements) = screened(&cold);
+        assert_eq!(changes(&sol.log)[..3], [100, 2, 2]);
+        assert!(whole[..sol.niter - 1].iter().all(|&w| !w), "{whole:?}");
+        assert_eq!((whole[sol.niter - 1], refinements), (true, 1));
+    }
+
+    /// `predict_only` stops before a solve that is likely the last: where that solve would
+    /// only have confirmed its set (changes 21, 1, then none), the prediction is the
+    /// solution's active set after two solves instead of three; where the iteration would
+    /// have gone on (21, 1, 1, 1), it is the set of the third solve. `solve` refuses the
+    /// option; without it, `run` certifies as before.
+    #[test]
+    fn predict_only_stops_before_the_likely_last_solve() {
+        for (extra, niter) in [(2, 3), (4, 5)] {
+            let (q, cons, exact, warm) = warm_flat_barrier(40, 60, extra);
+            let full = solve(&mut q.clone(), &cons, &warm).unwrap();
+            assert_eq!(full.niter, niter);
+            assert_eq!(full.active, exact.active);
+            let predict = ActiveSetOptions {
+                predict_only: true,
+                ..warm
+            };
+            let Outcome::Predicted(p) = run(&mut q.clone(), &cons, &predict).unwrap() else {
+                panic!("extra {extra}: not a prediction");
+            };
+            assert_eq!(p.log.len(), 2);
+            let count = p.active.iter().filter(|&&a| a).count();
+            assert_eq!(count, full.log[2].step.active, "extra {extra}");
+            if niter == 3 {
+                assert_eq!(p.active, exact.active);
+            } else {
+                assert_ne!(p.active, exact.active);
+            }
+            assert_eq!(p.u.len(), exact.u.len());
+            let e = solve(&mut q.clone(), &cons, &predict).unwrap_err();
+            assert!(e.to_string().contains("predict_only"), "{e}");
         }
     }
 

@@ -5,6 +5,7 @@ use super::{ConstrainedDof, Constraints, FixedValues, QuadraticEnergy, Side, Sol
 use nalgebra::{DMatrix, DVector};
 
 /// ½uᵀMu − bᵀu with dense M and Dirichlet unknowns.
+#[derive(Clone)]
 pub struct Dense {
     pub m: DMatrix<f64>,
     pub b: Vec<f64>,
