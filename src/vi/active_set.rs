@@ -384,7 +384,7 @@ fn stall(
 /// A change of the active set (the unknowns that entered or left it) at most this fraction of
 /// the change before it marks the solve after it as likely the last. The first change from
 /// A₀ = ∅ (every violated unknown at once) does not count.
-pub const LAST_CHANGE_RATIO: f64 = 0.125;
+pub const LAST_CHANGE_RATIO: f64 = 0.25;
 
 /// Whether the solve after the changes `(older, newer)` of the active set (the numbers of
 /// unknowns that entered or left it) is likely the last: `newer` is at most
