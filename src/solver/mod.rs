@@ -431,7 +431,7 @@ fn solve_prepared<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
     let result = match &constraints {
         Some(c) => {
             let beside = coarse.is_some();
-            let (mut initial, report) = warm_start(&system, &mut state, problem, c, coarse)?;
+            let (initial, report) = warm_start(&system, &mut state, problem, c, coarse)?;
             warm = report;
             if beside {
                 // the coarse solves ran beside the setup, mostly on other threads, whose
@@ -441,7 +441,7 @@ fn solve_prepared<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
             }
             // a warm start cut short by the hook is skipped: stop before the first fine solve
             Cancel::check(opts.active_set.cancel.as_ref())?;
-            let initial = with_floating(initial.take(), opts, c, &floating)?;
+            let initial = with_floating(initial, opts, c, &floating)?;
             match solve_constrained(&system, &mut state, c, opts, initial)? {
                 Settled::Solved(s) => s,
                 Settled::Predicted(_) => {

@@ -419,22 +419,26 @@ pub fn run<P: Sync>(
     let mut inexact_seen = false;
     // the number of unknowns the last two changes of the active set moved (older, newer)
     let mut changes: (Option<usize>, Option<usize>) = (None, None);
-    // the iterate of the last solve
+    // the iterate of the last solve, kept for a prediction only (otherwise it would stay alive
+    // through the next solve, one vector of the system's order at its peak)
     let mut last_u: Option<Vec<f64>> = None;
     // from A₀ = ∅ the first change puts every violated unknown in at once, whatever the
     // distance to the solution: it does not count in `changes`
     let cold = !active.iter().any(|&a| a);
     loop {
-        if opts.predict_only
-            && likely_last(changes)
-            && let Some(u) = last_u.take()
-        {
+        let last = likely_last(changes);
+        if last && let Some(u) = last_u.take() {
             q.release();
             return Ok(Outcome::Predicted(Predicted { active, u, log }));
         }
-        let screen_this = screening && !likely_last(changes);
-        let (u, timings, ev, mut next) =
-            solve_step(q, cons, &active, &history, screen_this, (opts.c, opts.tol))?;
+        let (u, timings, ev, mut next) = solve_step(
+            q,
+            cons,
+            &active,
+            &history,
+            screening && !last,
+            (opts.c, opts.tol),
+        )?;
         inexact_seen |= timings.inexact;
         if opts.keep_iterates {
             iterates.push(u.clone());
@@ -497,7 +501,9 @@ pub fn run<P: Sync>(
         if !(cold && log.len() == 1) {
             changes = (changes.1, Some(entered + left));
         }
-        last_u = Some(u);
+        if opts.predict_only {
+            last_u = Some(u);
+        }
         history.push(next.clone());
         active = next;
     }
