@@ -241,6 +241,7 @@ impl PcgOutcome {
             krylov: self.iterations,
             inexact: self.inexact,
             reused: self.reused,
+            partial: false,
         }
     }
 }
@@ -400,13 +401,16 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         Ok(out)
     }
 
-    /// The initial guess of an iterative solve: the last solution, or zero.
+    /// The initial guess of an iterative solve: the last solution (completed from its cells if
+    /// it was a partial iterate of the cell system), or zero.
     pub(super) fn take_initial_guess(&self, state: &mut SolveState) -> crate::Result<Vec<f64>> {
         let x = std::mem::take(&mut state.last_solution);
         if x.len() == self.n_skel {
-            Ok(x)
-        } else {
-            Ok(try_filled(self.n_skel, 0.0, "the initial guess")?)
+            return Ok(x);
+        }
+        match self.skeleton_guess_from_cells(state)? {
+            Some(x) => Ok(x),
+            None => Ok(try_filled(self.n_skel, 0.0, "the initial guess")?),
         }
     }
 

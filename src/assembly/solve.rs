@@ -51,19 +51,23 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         state: &mut SolveState,
         fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
-        self.solve_to(state, fixed, ITERATIVE_RTOL)
+        self.solve_to(state, fixed, (ITERATIVE_RTOL, false))
     }
 
     /// [`Self::solve`], but an iterative solve stops at [`SCREENING_RTOL`] and is kept in
     /// `state` (matrix, multigrid hierarchy, right-hand side) until the next solve, so that
     /// [`Self::refine`] can continue it ([`SolveTimings::inexact`] says whether it did stop
-    /// early).
+    /// early). An inexact solve of the cell system ([`super::two_point`]) returns a *partial*
+    /// iterate ([`SolveTimings::partial`]): its eliminated skeleton unknowns are NaN, read
+    /// through [`Self::partial_values`], [`Self::partial_residual_at`] and
+    /// [`Self::complete_partial`] (the [`crate::vi::QuadraticEnergy`] methods `partial_values`,
+    /// `partial_residual_at` and `complete`).
     pub fn screen(
         &self,
         state: &mut SolveState,
         fixed: &FixedValues,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
-        self.solve_to(state, fixed, SCREENING_RTOL)
+        self.solve_to(state, fixed, (SCREENING_RTOL, true))
     }
 
     /// Continues the last solve through `state`, an inexact [`Self::screen`] with the same
@@ -181,15 +185,17 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         if self.is_direct(state) {
             return Ok(None);
         }
-        self.solve_to(state, fixed, rtol).map(Some)
+        self.solve_to(state, fixed, (rtol, false)).map(Some)
     }
 
-    /// Assembles and solves with `fixed`, an iterative solve to the relative residual `rtol`.
+    /// Assembles and solves with `fixed`, an iterative solve to the relative residual `rtol`;
+    /// with `partial`, an inexact solve of the cell system returns its partial iterate
+    /// ([`Self::screen`]).
     fn solve_to(
         &self,
         state: &mut SolveState,
         fixed: &FixedValues,
-        rtol: f64,
+        (rtol, partial): (f64, bool),
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         self.bind(state);
         let t0 = Instant::now();
@@ -197,12 +203,12 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             if self.is_direct(state) {
                 return self.solve_cells_direct(state, &cs, fixed, t0);
             }
-            match self.solve_cells(state, &cs, fixed, rtol, t0) {
+            match self.solve_cells(state, &cs, fixed, (rtol, partial), t0) {
                 Ok(r) => return Ok(r),
                 // as below: with Auto, the direct solver takes over
                 Err(_) if self.sym.options.linear == LinearSolver::Auto => {
                     self.fallback_pattern(state)?;
-                    return self.solve_to(state, fixed, rtol);
+                    return self.solve_to(state, fixed, (rtol, partial));
                 }
                 Err(e) => return Err(e),
             }

@@ -145,6 +145,20 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> QuadraticEnergy for Solving<'_, '
     ) -> crate::Result<(Vec<f64>, f64)> {
         self.system.residual_at(u, len, row)
     }
+    fn partial_values(&self, u: &[f64], at: &[usize]) -> crate::Result<Vec<f64>> {
+        self.system.partial_values(self.state, u, at)
+    }
+    fn complete(&self, u: &mut [f64]) -> crate::Result<()> {
+        self.system.complete_partial(self.state, u)
+    }
+    fn partial_residual_at(
+        &self,
+        u: &[f64],
+        len: usize,
+        row: &(dyn Fn(usize) -> usize + Sync),
+    ) -> crate::Result<(Vec<f64>, f64)> {
+        self.system.partial_residual_at(self.state, u, len, row)
+    }
     fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
         self.system.full_matrix_triplets()
     }

@@ -183,16 +183,94 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         Ok((!eliminated_fixed).then_some(cs))
     }
 
+    /// The values at `at` of a partial iterate `u` of a solve through `state`
+    /// ([`Self::screen`]): its own, and its eliminated skeleton unknowns recovered from its
+    /// cells, u_σ = (b_σ − Σ_{K ∋ σ} m_σK u_K) / d_σ. Without a cell system in `state`, `u`'s
+    /// values (no iterate is then partial).
+    pub fn partial_values(
+        &self,
+        state: &SolveState,
+        u: &[f64],
+        at: &[usize],
+    ) -> crate::Result<Vec<f64>> {
+        self.check_len(u)?;
+        match &state.cell_system {
+            Some(Some(cs)) => self.recovered_values(cs, u, at),
+            _ => at
+                .iter()
+                .map(|&j| {
+                    u.get(j).copied().ok_or_else(|| {
+                        crate::Error::Internal(format!(
+                            "unknown {j} of a system of {} unknowns",
+                            self.n
+                        ))
+                    })
+                })
+                .collect(),
+        }
+    }
+
+    /// Fills the eliminated skeleton unknowns of a partial iterate `u` of a solve through
+    /// `state` ([`Self::partial_values`] at each of them); a non-finite result is an error.
+    /// Without a cell system in `state`, nothing to do.
+    pub fn complete_partial(&self, state: &SolveState, u: &mut [f64]) -> crate::Result<()> {
+        self.check_len(u)?;
+        if let Some(Some(cs)) = &state.cell_system {
+            self.complete_eliminated(cs, u)?;
+        }
+        match u.iter().position(|x| !x.is_finite()) {
+            Some(i) => Err(crate::Error::Linear(format!(
+                "the solution is not finite at unknown {i}"
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    /// [`Self::residual_at`] of a partial iterate `u` of a solve through `state`, computed on
+    /// the cell system (up to rounding the residual of the completed iterate, with the scales
+    /// of the cell system's rows; see `cell_residual_at` in the source). Without a cell
+    /// system in `state`, [`Self::residual_at`].
+    pub fn partial_residual_at(
+        &self,
+        state: &SolveState,
+        u: &[f64],
+        len: usize,
+        row: &(dyn Fn(usize) -> usize + Sync),
+    ) -> crate::Result<(Vec<f64>, f64)> {
+        self.check_len(u)?;
+        match &state.cell_system {
+            Some(Some(cs)) => self.cell_residual_at(cs, u, len, row),
+            _ => self.residual_at(u, len, row),
+        }
+    }
+
+    /// An error unless `u` has one value per unknown.
+    fn check_len(&self, u: &[f64]) -> crate::Result<()> {
+        if u.len() == self.n {
+            Ok(())
+        } else {
+            Err(crate::Error::InvalidData(format!(
+                "an iterate of {} values for a system of {} unknowns",
+                u.len(),
+                self.n
+            )))
+        }
+    }
+
     /// Solves with `fixed` on the cell system `cs` by multigrid-preconditioned conjugate
     /// gradients to the relative residual `rtol` (the counterpart of the skeleton solve of
     /// [`DiscreteSystem::solve`], with the same reuse of hierarchies and the same screening).
     /// The assembly time counts from `t0` (so that it includes building the cell system).
+    /// With `partial`, an inexact (screened) solve returns its partial iterate
+    /// ([`Self::partial_cells`]; [`SolveTimings::partial`]): the active-set rule reads the
+    /// cells, and the faces are recovered only where they are needed, by the look-ahead on its
+    /// patches and by the refinement of the last solve.
     pub(super) fn solve_cells(
         &self,
         state: &mut SolveState,
         cs: &CellSystemAll,
         fixed: &FixedValues,
-        rtol: f64,
+        (rtol, partial): (f64, bool),
         t0: Instant,
     ) -> crate::Result<(Vec<f64>, SolveTimings)> {
         let reuse = self.next_hierarchy(state, fixed, true)?;
@@ -203,9 +281,15 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let t2 = Instant::now();
         let mut x = self.take_cell_guess(state, cs)?;
         let out = self.run_pcg(state, hier, &rhs, &mut x, rtol, fixed, Some(cs))?;
-        let u = self.complete_cells(cs, &fx, &x)?;
+        let partial = partial && out.inexact;
+        let u = if partial {
+            self.partial_cells(cs, Some(&fx), &x)?
+        } else {
+            self.complete_cells(cs, &fx, &x)?
+        };
         self.keep_cells(state, x, &u)?;
-        Ok((u, out.timings([t0, t1, t2, Instant::now()])))
+        let timings = out.timings([t0, t1, t2, Instant::now()]);
+        Ok((u, SolveTimings { partial, ..timings }))
     }
 
     /// The initial guess of a cell solve: the last cell solution; else the cells recovered
@@ -237,16 +321,42 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     }
 
     /// Keeps the cell values `x` and the skeleton values of `u` in `state` as the initial
-    /// guesses of the next solves (of either system).
+    /// guesses of the next solves (of either system). A partial `u` (NaN at the eliminated
+    /// skeleton unknowns) leaves no skeleton guess: a skeleton solve after it completes one
+    /// from the cells ([`Self::skeleton_guess_from_cells`]).
     pub(super) fn keep_cells(
         &self,
         state: &mut SolveState,
         x: Vec<f64>,
         u: &[f64],
     ) -> crate::Result<()> {
-        state.last_solution = try_copy(&u[..self.n_skel], "the initial guess of the next solve")?;
+        let skel = &u[..self.n_skel];
+        state.last_solution = if skel.iter().any(|v| v.is_nan()) {
+            Vec::new()
+        } else {
+            try_copy(skel, "the initial guess of the next solve")?
+        };
         state.last_cells = x;
         Ok(())
+    }
+
+    /// The skeleton values of the last cell solve kept in `state`, if it left its cell values
+    /// but no skeleton guess (a partial iterate): the rows' values and the eliminated
+    /// unknowns recovered from them; `None` otherwise.
+    pub(super) fn skeleton_guess_from_cells(
+        &self,
+        state: &SolveState,
+    ) -> crate::Result<Option<Vec<f64>>> {
+        let Some(Some(cs)) = &state.cell_system else {
+            return Ok(None);
+        };
+        if state.last_cells.len() != cs.n() {
+            return Ok(None);
+        }
+        let mut u = self.partial_cells(cs, None, &state.last_cells)?;
+        self.complete_eliminated(cs, &mut u)?;
+        u.truncate(self.n_skel);
+        Ok(Some(u))
     }
 
     /// The cell system, if enough of the skeleton unknowns can be eliminated (module docs).
@@ -623,29 +733,164 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         fixed: &Pinned,
         x: &[f64],
     ) -> crate::Result<Vec<f64>> {
-        let mut u = try_filled(self.n, 0.0, "the solution")?;
+        let mut u = self.partial_cells(cs, Some(fixed), x)?;
+        self.complete_eliminated(cs, &mut u)?;
+        check_finite(u)
+    }
+
+    /// [`Self::complete_cells`] without the eliminated skeleton unknowns, which are left NaN:
+    /// the partial iterate of a screened solve ([`crate::vi::SolveTimings::partial`]). The
+    /// rows' values must be finite (an error otherwise). `fixed`: the values of the fixed
+    /// rows (`None`: `x`'s).
+    pub(super) fn partial_cells(
+        &self,
+        cs: &CellSystemAll,
+        fixed: Option<&Pinned>,
+        x: &[f64],
+    ) -> crate::Result<Vec<f64>> {
+        let mut u = try_filled(self.n, f64::NAN, "the solution")?;
         for (i, &xi) in x.iter().enumerate() {
             let dof = cs.dof(i);
-            u[dof] = fixed.get(dof).unwrap_or(xi);
+            let v = fixed.and_then(|f| f.get(dof)).unwrap_or(xi);
+            if !v.is_finite() {
+                return Err(crate::Error::Linear(format!(
+                    "the solution is not finite at unknown {dof}"
+                )));
+            }
+            u[dof] = v;
         }
-        let inc = &self.sym.maps.inc;
-        let skel = par_try_fill(self.n_skel, "the skeleton values", |s| {
+        for (s, us) in u[..self.n_skel].iter_mut().enumerate() {
             if let Some(v) = self.values.dirichlet.get(s) {
-                return Ok(v);
+                *us = v;
             }
-            if cs.kept_row[s] != NO_ROW {
-                return Ok(u[s]);
+        }
+        Ok(u)
+    }
+
+    /// The value of the eliminated skeleton unknown `s` from the cell values of `u`:
+    /// u_σ = (b_σ − Σ_{K ∋ σ} m_σK u_K) / d_σ, the cells in the order of `inc`.
+    fn eliminated_value(&self, cs: &CellSystemAll, s: usize, u: &[f64]) -> crate::Result<f64> {
+        let mut acc = self.values.load[s];
+        for &k in self.sym.maps.inc.list(s) {
+            let cell = self.local(k as usize);
+            let a = local_index(cell.dofs, s)?;
+            acc -= cell.matrix.at(a, 0) * u[cell.dofs[0] as usize];
+        }
+        Ok(acc / cs.d[s])
+    }
+
+    /// Whether skeleton unknown `s` is eliminated in `cs` (neither kept nor Dirichlet).
+    fn is_eliminated(&self, cs: &CellSystemAll, s: usize) -> bool {
+        s < self.n_skel && cs.kept_row[s] == NO_ROW && !self.values.dirichlet.is_fixed(s)
+    }
+
+    /// Fills the eliminated skeleton unknowns of `u` from its cell values
+    /// ([`Self::eliminated_value`]), in parallel.
+    pub(super) fn complete_eliminated(
+        &self,
+        cs: &CellSystemAll,
+        u: &mut [f64],
+    ) -> crate::Result<()> {
+        let skel = par_try_fill(self.n_skel, "the skeleton values", |s| {
+            if self.is_eliminated(cs, s) {
+                self.eliminated_value(cs, s, u)
+            } else {
+                Ok(u[s])
             }
-            let mut acc = self.values.load[s];
-            for &k in inc.list(s) {
-                let cell = self.local(k as usize);
-                let a = local_index(cell.dofs, s)?;
-                acc -= cell.matrix.at(a, 0) * u[cell.dofs[0] as usize];
-            }
-            Ok(acc / cs.d[s])
         })?;
         u[..self.n_skel].copy_from_slice(&skel);
-        check_finite(u)
+        Ok(())
+    }
+
+    /// The values at `at` of a partial iterate `u` of the cell system `cs`, the eliminated
+    /// skeleton unknowns recovered ([`crate::vi::QuadraticEnergy::partial_values`]).
+    fn recovered_values(
+        &self,
+        cs: &CellSystemAll,
+        u: &[f64],
+        at: &[usize],
+    ) -> crate::Result<Vec<f64>> {
+        at.iter()
+            .map(|&j| match u.get(j) {
+                Some(_) if self.is_eliminated(cs, j) => self.eliminated_value(cs, j, u),
+                Some(&v) => Ok(v),
+                None => Err(crate::Error::Internal(format!(
+                    "unknown {j} of a system of {} unknowns",
+                    self.n
+                ))),
+            })
+            .collect()
+    }
+
+    /// The residual of the full system at the unknowns `row(0)`, …, `row(len − 1)` of a partial
+    /// iterate `u` of the cell system `cs`, and the largest of their scales, computed on the
+    /// cell system (module docs): at a cell or kept row i, r_i − Σ_j A_ij u_j with scale
+    /// |r_i| + Σ_j |A_ij u_j|, equal to the full system's residual up to rounding because the
+    /// eliminated skeleton unknowns satisfy their rows exactly; at an eliminated unknown, its
+    /// row of the full system with its value recovered. One 5-point row per cell on squares,
+    /// where the full rows would need the faces of every cell.
+    fn cell_residual_at(
+        &self,
+        cs: &CellSystemAll,
+        u: &[f64],
+        len: usize,
+        row: &(dyn Fn(usize) -> usize + Sync),
+    ) -> crate::Result<(Vec<f64>, f64)> {
+        let at = |g: usize| -> crate::Result<(f64, f64)> {
+            let i = if g >= self.n_skel {
+                g - self.n_skel
+            } else {
+                cs.kept_row[g] as usize
+            };
+            if i < cs.n() && cs.dof(i) == g {
+                let (cols, vals) = cs.a.row(i);
+                let (mut a, mut b) = (cs.r[i], cs.r[i].abs());
+                for (&j, &v) in cols.iter().zip(vals) {
+                    let t = v * u[cs.dof(j as usize)];
+                    a -= t;
+                    b += t.abs();
+                }
+                Ok((a, b))
+            } else if self.is_eliminated(cs, g) {
+                // its row couples it with its cells only (the couplings with other skeleton
+                // unknowns are below TWO_POINT_TOL, dropped as in the cell system)
+                let v = self.eliminated_value(cs, g, u)?;
+                let (mut a, mut b) = (self.values.load[g], self.values.load[g].abs());
+                for &k in self.sym.maps.inc.list(g) {
+                    let cell = self.local(k as usize);
+                    let i = local_index(cell.dofs, g)?;
+                    for (j, t) in [(i, v), (0, u[cell.dofs[0] as usize])] {
+                        let t = cell.matrix.at(i, j) * t;
+                        a -= t;
+                        b += t.abs();
+                    }
+                }
+                Ok((a, b))
+            } else {
+                Err(crate::Error::Internal(format!(
+                    "residual at unknown {g}, neither a row of the cell system nor eliminated"
+                )))
+            }
+        };
+        let mut r = try_filled(len, 0.0, "the residual at the constrained unknowns")?;
+        let maxima: Vec<crate::Result<f64>> = r
+            .par_chunks_mut(super::gather::PAR_ROWS)
+            .enumerate()
+            .map(|(c, rc)| {
+                let mut m = 0.0f64;
+                for (o, ri) in rc.iter_mut().enumerate() {
+                    let (v, s) = at(row(c * super::gather::PAR_ROWS + o))?;
+                    *ri = v;
+                    m = m.max(s);
+                }
+                Ok(m)
+            })
+            .collect();
+        let mut scale = 0.0f64;
+        for m in maxima {
+            scale = scale.max(m?);
+        }
+        Ok((r, scale))
     }
 }
 

@@ -288,10 +288,20 @@ fn solve_step<P: Sync>(
     } else {
         q.minimise_with_fixed(&fixed)?
     };
+    if timings.partial {
+        if timings.inexact {
+            // the rule reads the iterate at the constrained unknowns
+            fill_constrained(&*q, cons, &mut u)?;
+        } else {
+            // an exact iterate is evaluated whole (energies do not return these)
+            q.complete(&mut u)?;
+            timings.partial = false;
+        }
+    }
     // a screened iterate only chooses the next active set: its residual is computed on the
     // constrained unknowns only, unless it ends the iteration or closes a cycle
     let mut ev = if timings.inexact {
-        evaluate_screened(&*q, cons, &u)?
+        evaluate_screened(&*q, cons, &u, timings.partial)?
     } else {
         evaluate(&*q, Some(cons), &u, active)?
     };
@@ -324,6 +334,40 @@ fn solve_step<P: Sync>(
     Ok((u, timings, ev, next))
 }
 
+/// Fills the constrained unknowns that the partial iterate `u` left unset
+/// ([`QuadraticEnergy::partial_values`]; on HMM's obstacle none are, its cells are solved for,
+/// while Signorini's faces may be derived ones).
+fn fill_constrained<P>(
+    q: &dyn QuadraticEnergy,
+    cons: &Constraints<P>,
+    u: &mut [f64],
+) -> crate::Result<()> {
+    let unset: Vec<usize> = cons
+        .dofs
+        .iter()
+        .map(|pd| pd.dof)
+        .filter(|&d| u.get(d).is_some_and(|v| v.is_nan()))
+        .collect();
+    if unset.is_empty() {
+        return Ok(());
+    }
+    let values = q.partial_values(u, &unset)?;
+    for (&d, v) in unset.iter().zip(values) {
+        u[d] = v;
+    }
+    Ok(())
+}
+
+/// A complete copy of the iterate `u` (filled by [`QuadraticEnergy::complete`] if it is
+/// partial).
+fn completed(q: &dyn QuadraticEnergy, u: &[f64], partial: bool) -> crate::Result<Vec<f64>> {
+    let mut v = u.to_vec();
+    if partial {
+        q.complete(&mut v)?;
+    }
+    Ok(v)
+}
+
 /// The relative residuals (‖c − Su‖₂ / ‖c‖₂) asked of an iterative solver, in turn, when the
 /// iteration has settled (the next active set is the current one) but the certificate fails:
 /// its residuals are maxima over the unknowns, scaled by the largest row, while the solver
@@ -332,13 +376,14 @@ fn solve_step<P: Sync>(
 /// (`assembly::ITERATIVE_RTOL`). Direct solves are exact and are not polished.
 pub const POLISH_RTOLS: [f64; 2] = [1e-13, 1e-14];
 
-/// The look-ahead after a solve that proposes `next` ≠ `active` (see [`look_ahead`]): its
-/// report, and its refined proposal if the local iterations converged and it differs from
-/// `active` (the caller still rejects one that would close a cycle).
+/// The look-ahead after a solve that proposes `next` ≠ `active` (see [`look_ahead`]) from the
+/// iterate `u = (values, partial)`: its report, and its refined proposal if the local
+/// iterations converged and it differs from `active` (the caller still rejects one that would
+/// close a cycle).
 fn refine_proposal<P>(
     q: &mut dyn QuadraticEnergy,
     cons: &Constraints<P>,
-    u: &[f64],
+    u: (&[f64], bool),
     active: &[bool],
     next: &[bool],
     ev: &Evaluation,
@@ -420,14 +465,18 @@ pub fn run<P: Sync>(
     // the number of unknowns the last two changes of the active set moved (older, newer)
     let mut changes: (Option<usize>, Option<usize>) = (None, None);
     // the iterate of the last solve, kept for a prediction only (otherwise it would stay alive
-    // through the next solve, one vector of the system's order at its peak)
-    let mut last_u: Option<Vec<f64>> = None;
+    // through the next solve, one vector of the system's order at its peak), and whether it
+    // is partial
+    let mut last_u: Option<(Vec<f64>, bool)> = None;
     // from A₀ = ∅ the first change puts every violated unknown in at once, whatever the
     // distance to the solution: it does not count in `changes`
     let cold = !active.iter().any(|&a| a);
     loop {
         let last = likely_last(changes);
-        if last && let Some(u) = last_u.take() {
+        if last && let Some((mut u, partial)) = last_u.take() {
+            if partial {
+                q.complete(&mut u)?;
+            }
             q.release();
             return Ok(Outcome::Predicted(Predicted { active, u, log }));
         }
@@ -441,9 +490,10 @@ pub fn run<P: Sync>(
         )?;
         inexact_seen |= timings.inexact;
         if opts.keep_iterates {
-            iterates.push(u.clone());
+            iterates.push(completed(&*q, &u, timings.partial)?);
         }
-        let (look, proposal) = refine_proposal(q, cons, &u, &active, &next, &ev, opts)?;
+        let (look, proposal) =
+            refine_proposal(q, cons, (&u, timings.partial), &active, &next, &ev, opts)?;
         // a proposal that would close a cycle is not taken
         if let Some(p) = proposal
             && !history.contains(&p)
@@ -502,7 +552,7 @@ pub fn run<P: Sync>(
             changes = (changes.1, Some(entered + left));
         }
         if opts.predict_only {
-            last_u = Some(u);
+            last_u = Some((u, timings.partial));
         }
         history.push(next.clone());
         active = next;

@@ -161,12 +161,26 @@ pub fn evaluate<P: Sync>(
 /// round-off thresholds of the rule); no balance residual (NaN). On HMM the constrained
 /// unknowns are the cells' of the obstacle or the faces of Γ₃, a fraction of the system,
 /// whose other rows would cost a pass over every cell's local matrix.
+///
+/// A `partial` iterate ([`super::SolveTimings::partial`]; its values at the constrained
+/// unknowns filled by [`QuadraticEnergy::partial_values`]) is read through
+/// [`QuadraticEnergy::partial_residual_at`]: the multipliers then agree with
+/// [`evaluate`]'s of the completed iterate up to rounding, not to the bit, and the scales are
+/// those of the rows the energy computes them from and of the unknowns the iterate has (the
+/// NaN of the others are skipped by the maxima); a screened iterate only chooses the next
+/// active set, and the decisions that end the iteration are taken on exact, complete ones.
 pub fn evaluate_screened<P: Sync>(
     q: &dyn QuadraticEnergy,
     cons: &Constraints<P>,
     u: &[f64],
+    partial: bool,
 ) -> crate::Result<Evaluation> {
-    let (mut r, scale) = q.residual_at(u, cons.dofs.len(), &|j| cons.dofs[j].dof)?;
+    let row = |j: usize| cons.dofs[j].dof;
+    let (mut r, scale) = if partial {
+        q.partial_residual_at(u, cons.dofs.len(), &row)?
+    } else {
+        q.residual_at(u, cons.dofs.len(), &row)?
+    };
     let scale_r = scale.max(f64::MIN_POSITIVE);
     let scale_u = scale_u(Some(cons), u);
     let mut c = constrained(cons, u, |j| r[j], scale_r, scale_u);
@@ -190,6 +204,8 @@ fn max_scale(scale: &[f64]) -> f64 {
 }
 
 /// max_i |x_i| (0 for an empty slice), in parallel: a maximum does not depend on the order.
+/// NaN entries are skipped (`f64::max` returns the other operand): those of a partial
+/// iterate, which are not values.
 fn max_abs(x: &[f64]) -> f64 {
     x.par_iter()
         .with_min_len(MIN_LEN)

@@ -111,11 +111,13 @@ impl Thresholds {
 /// Looks ahead from the global iterate `u` of the active set `active` (see the module docs):
 /// on success `next` (the rule's next active set) is replaced on the patch by the local
 /// iteration's active set. `Ok(None)` when there is nothing to do or the energy cannot give
-/// rows of M.
+/// rows of M. `u = (values, partial)`: a partial iterate
+/// ([`super::SolveTimings::partial`]) is read outside the patch through
+/// [`QuadraticEnergy::partial_values`].
 pub fn look_ahead<P>(
     q: &dyn QuadraticEnergy,
     cons: &Constraints<P>,
-    u: &[f64],
+    u: (&[f64], bool),
     active: &[bool],
     next: &mut [bool],
     thr: Thresholds,
@@ -248,13 +250,27 @@ impl LocalProblem {
     fn new<P>(
         q: &dyn QuadraticEnergy,
         cons: &Constraints<P>,
-        u: &[f64],
+        (u, partial): (&[f64], bool),
         patch: &[usize],
         entries: Entries,
     ) -> crate::Result<Self> {
         let local: HashMap<usize, usize> = patch.iter().enumerate().map(|(l, &g)| (g, l)).collect();
         let p = patch.len();
         let b = q.load();
+        // a partial iterate's frozen values outside the patch, recovered where it has none
+        let frozen: Option<HashMap<usize, f64>> = if partial {
+            let mut outside: Vec<usize> = entries
+                .iter()
+                .map(|&(_, j, _)| j)
+                .filter(|j| !local.contains_key(j))
+                .collect();
+            outside.sort_unstable();
+            outside.dedup();
+            let values = q.partial_values(u, &outside)?;
+            Some(outside.into_iter().zip(values).collect())
+        } else {
+            None
+        };
         let mut rhs: Vec<f64> = patch.iter().map(|&g| b[g]).collect();
         // lower-triangle entries (row ≥ column), by column then row, duplicates summed
         let mut lower: Vec<(usize, usize, f64)> = Vec::with_capacity(entries.len() / 2 + p);
@@ -263,7 +279,7 @@ impl LocalProblem {
             match local.get(&j) {
                 Some(&lj) if li >= lj => lower.push((lj, li, v)),
                 Some(_) => {}
-                None => rhs[li] -= v * u[j],
+                None => rhs[li] -= v * frozen.as_ref().map_or(u[j], |f| f[&j]),
             }
         }
         lower.sort_unstable_by_key(|&(c, r, _)| (c, r));
@@ -436,7 +452,7 @@ mod tests {
             max_fraction: 1.0,
             ..Default::default()
         };
-        let rep = look_ahead(&q, &cons, &u, &active, &mut next, thr, &wide)
+        let rep = look_ahead(&q, &cons, (&u, false), &active, &mut next, thr, &wide)
             .unwrap()
             .unwrap();
         assert!(
@@ -447,7 +463,7 @@ mod tests {
 
         let mut next = rule.clone();
         let narrow = LookAheadOptions { layers: 1, ..wide };
-        let rep = look_ahead(&q, &cons, &u, &active, &mut next, thr, &narrow)
+        let rep = look_ahead(&q, &cons, (&u, false), &active, &mut next, thr, &narrow)
             .unwrap()
             .unwrap();
         assert!(rep.patch < n, "{rep:?}");
@@ -465,7 +481,8 @@ mod tests {
             .minimise_with_fixed(&cons.fixed(n, &same).unwrap())
             .unwrap();
         let thr = thresholds(&q, &cons, &u, &exact.active);
-        let none = look_ahead(&q, &cons, &u, &exact.active, &mut same, thr, &wide).unwrap();
+        let none =
+            look_ahead(&q, &cons, (&u, false), &exact.active, &mut same, thr, &wide).unwrap();
         assert!(none.is_none());
         // too large a patch: nothing proposed
         let mut next = rule.clone();
@@ -475,7 +492,7 @@ mod tests {
         };
         let thr = thresholds(&q, &cons, &u, &active);
         assert!(
-            look_ahead(&q, &cons, &u, &active, &mut next, thr, &capped)
+            look_ahead(&q, &cons, (&u, false), &active, &mut next, thr, &capped)
                 .unwrap()
                 .is_none()
         );
@@ -509,7 +526,7 @@ mod tests {
             max_fraction: 1.0,
             ..Default::default()
         };
-        let rep = look_ahead(&q, &cons, &u, &active, &mut next, thr, &opts)
+        let rep = look_ahead(&q, &cons, (&u, false), &active, &mut next, thr, &opts)
             .unwrap()
             .unwrap();
         assert!(!rep.converged, "{rep:?}");

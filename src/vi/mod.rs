@@ -50,6 +50,13 @@ pub struct SolveTimings {
     /// The iterative solver preconditioned with the coarse levels of an earlier solve's
     /// multigrid hierarchy instead of building one.
     pub reused: bool,
+    /// The iterate is *partial*: a screened solve ([`SolveTimings::inexact`]) left the
+    /// unknowns the energy derives from the others by their own rows unset (NaN), to be read
+    /// through [`QuadraticEnergy::partial_values`] and [`QuadraticEnergy::complete`] (HMM's
+    /// faces eliminated in the two-point form, `assembly::two_point`). Never set on an exact
+    /// iterate.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub partial: bool,
 }
 
 impl SolveTimings {
@@ -63,6 +70,7 @@ impl SolveTimings {
             krylov: self.krylov + more.krylov,
             inexact: more.inexact,
             reused: self.reused,
+            partial: more.partial,
         }
     }
 }
@@ -89,7 +97,11 @@ pub trait QuadraticEnergy {
     /// [`Self::minimise_with_fixed`] accurate enough to decide the next active set: an
     /// iterative solver may stop at a looser residual, and then sets
     /// [`SolveTimings::inexact`] (the active-set solver calls [`Self::refine`] before it
-    /// stops or declares a cycle on such an iterate). Default: the full solve.
+    /// stops or declares a cycle on such an iterate). Such an inexact iterate may also be
+    /// partial ([`SolveTimings::partial`]): its derived unknowns are then NaN, and the
+    /// algorithms read them through [`Self::partial_values`], evaluate it through
+    /// [`Self::partial_residual_at`] and fill it through [`Self::complete`]. Default: the
+    /// full solve.
     fn screen_with_fixed(
         &mut self,
         fixed: &FixedValues,
@@ -150,6 +162,42 @@ pub trait QuadraticEnergy {
             }
         }
         Ok((out, max))
+    }
+    /// The values at the unknowns `at` of a partial iterate `u` ([`SolveTimings::partial`]):
+    /// its own where it has them, and the derived unknowns it left unset recovered from the
+    /// others by their rows (u_σ = (b_σ − Σ_{j≠σ} M_σj u_j) / M_σσ, which involves no other
+    /// derived unknown). Only for partial iterates: on a complete one the recovered values
+    /// could differ from u's in the last bits. Default (an energy whose iterates are never
+    /// partial): u's values.
+    fn partial_values(&self, u: &[f64], at: &[usize]) -> crate::Result<Vec<f64>> {
+        at.iter()
+            .map(|&j| {
+                u.get(j).copied().ok_or_else(|| {
+                    crate::Error::Internal(format!(
+                        "unknown {j} of an iterate of {} unknowns",
+                        u.len()
+                    ))
+                })
+            })
+            .collect()
+    }
+    /// Fills the derived unknowns of a partial iterate `u` ([`Self::partial_values`] at each
+    /// of them), making it complete. Default: nothing (iterates are never partial).
+    fn complete(&self, u: &mut [f64]) -> crate::Result<()> {
+        let _ = u;
+        Ok(())
+    }
+    /// [`Self::residual_at`] of a partial iterate `u`, computed from the unknowns it has: the
+    /// residual of the iterate [`Self::complete`] would give, up to rounding (the derived
+    /// unknowns satisfy their rows exactly), with the scale of the rows the energy computes
+    /// them from. Only for partial iterates. Default: [`Self::residual_at`].
+    fn partial_residual_at(
+        &self,
+        u: &[f64],
+        len: usize,
+        row: &(dyn Fn(usize) -> usize + Sync),
+    ) -> crate::Result<(Vec<f64>, f64)> {
+        self.residual_at(u, len, row)
     }
     /// The entries (i, j, M_ij) of M, possibly with repeated (i, j) to be summed.
     fn matrix_triplets(&self) -> Vec<(usize, usize, f64)>;

@@ -467,9 +467,10 @@ fn screened_iterates_are_evaluated_on_the_constrained_unknowns() {
     let active: Vec<bool> = sol.result.active.clone();
     let fixed = cons.fixed(q.n_unknowns(), &active).unwrap();
     let (u, t) = q.screen_with_fixed(&fixed).unwrap();
-    assert!(t.inexact);
+    // hexagons have no cell system: the iterate is complete
+    assert!(t.inexact && !t.partial);
     let full = evaluate(&q, Some(cons), &u, &active).unwrap();
-    let part = evaluate_screened(&q, cons, &u).unwrap();
+    let part = evaluate_screened(&q, cons, &u, false).unwrap();
     assert!(part.screened && !full.screened);
     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&part.multiplier), bits(&full.multiplier));
@@ -477,4 +478,87 @@ fn screened_iterates_are_evaluated_on_the_constrained_unknowns() {
     assert!(part.scale_r <= full.scale_r && part.scale_r > 0.0);
     assert!(part.certificate.balance_residual.is_nan());
     assert!(part.certificate.check(1e-3).is_err());
+}
+
+/// On rectangles a screened iterative solve of HMM solves the cell system and returns a
+/// partial iterate: NaN at the eliminated faces and only there. Its faces recovered one by
+/// one (`partial_values`) and all at once (`complete`) agree to the bit; its residual on the cell system (`partial_residual_at`) is the full system's residual
+/// of the completed iterate up to rounding, and so are the multipliers of its screened
+/// evaluation; a refinement returns a complete iterate; and the obstacle solve through such
+/// iterates is the direct solver's (`same_solution`), with partial iterates in its log.
+#[test]
+fn screened_cell_solves_return_partial_iterates() {
+    use gradvi::vi::QuadraticEnergy;
+    use gradvi::vi::certificate::{evaluate, evaluate_screened};
+    let rect = rect_grid(60, 45, 1.0, 1.0);
+    let hmm = Hmm::new(&rect);
+    let p = paper_test3(-20.0);
+    let sol = same_solution(&hmm, &p, WarmStart::Cold);
+    assert!(
+        sol.result.log.iter().any(|l| l.timings.partial),
+        "partial iterates in the log"
+    );
+    assert!(sol.result.log.last().is_some_and(|l| !l.timings.partial));
+    let cons = sol.constraints.as_ref().expect("an obstacle");
+    // the screened solve of the second active set of a cold start (the first: nothing fixed)
+    let active: Vec<bool> = (0..cons.dofs.len())
+        .map(|j| sol.result.active[j] && j % 3 != 0)
+        .collect();
+    let mut state = SolveState::default();
+    let mut q = sol.system.with_state(&mut state);
+    let n = q.n_unknowns();
+    let fixed = cons.fixed(n, &active).unwrap();
+    let (u, t) = q.screen_with_fixed(&fixed).unwrap();
+    assert!(t.inexact && t.partial && t.krylov > 0);
+    let unset: Vec<usize> = (0..n).filter(|&i| u[i].is_nan()).collect();
+    let faces = rect.n_edges();
+    let dirichlet = q.dirichlet().clone();
+    let interior_faces = (0..faces).filter(|&s| !dirichlet.is_fixed(s)).count();
+    assert_eq!(unset.len(), interior_faces, "every free face is eliminated");
+    assert!(unset.iter().all(|&i| i < faces));
+    // recovered as the complete iterate's
+    let mut whole = u.clone();
+    q.complete(&mut whole).unwrap();
+    let all: Vec<usize> = (0..n).collect();
+    let values = q.partial_values(&u, &all).unwrap();
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&values), bits(&whole));
+    assert!(whole.iter().all(|v| v.is_finite()));
+    // the residual on the cell system, against the full one of the completed iterate
+    let rows: Vec<usize> = cons.dofs.iter().map(|d| d.dof).collect();
+    let (rp, sp) = q.partial_residual_at(&u, rows.len(), &|k| rows[k]).unwrap();
+    let (rf, sf) = q.residual_at(&whole, rows.len(), &|k| rows[k]).unwrap();
+    assert!(sp > 0.0 && sp <= sf, "scales {sp:e}, {sf:e}");
+    let gap = rp
+        .iter()
+        .zip(&rf)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        gap <= 1e-13 * sf,
+        "residual gap {gap:e} for the scale {sf:e}"
+    );
+    let max_r = rf.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(
+        max_r > 1e3 * gap,
+        "the residual is not round-off: {max_r:e}"
+    );
+    let part = evaluate_screened(&q, cons, &u, true).unwrap();
+    let full = evaluate(&q, Some(cons), &whole, &active).unwrap();
+    let lgap = part
+        .multiplier
+        .iter()
+        .zip(&full.multiplier)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(lgap <= 1e-13 * sf, "multipliers {lgap:e}");
+    // a refinement is complete
+    let (refined, more) = q
+        .refine(&fixed)
+        .unwrap()
+        .expect("an inexact solve to refine");
+    assert!(!more.inexact && !more.partial);
+    assert!(refined.iter().all(|v| v.is_finite()));
+    // a partial iterate of the wrong length is an error
+    assert!(q.partial_values(&u[1..], &[0]).is_err());
 }
