@@ -8,6 +8,34 @@ use crate::budget::try_filled;
 use crate::mesh::SolveMesh;
 use rayon::prelude::*;
 
+/// Writes `r[k]` = the residual `at(row(k))` in parallel and returns the largest of the
+/// scales `at` gives with them (the largest of each chunk, then of the chunks: a maximum, in
+/// any order).
+pub(super) fn fill_rows(
+    r: &mut [f64],
+    row: &(dyn Fn(usize) -> usize + Sync),
+    at: impl Fn(usize) -> crate::Result<(f64, f64)> + Sync,
+) -> crate::Result<f64> {
+    let maxima: Vec<crate::Result<f64>> = r
+        .par_chunks_mut(PAR_ROWS)
+        .enumerate()
+        .map(|(c, rc)| {
+            let mut m = 0.0f64;
+            for (o, ri) in rc.iter_mut().enumerate() {
+                let (v, s) = at(row(c * PAR_ROWS + o))?;
+                *ri = v;
+                m = m.max(s);
+            }
+            Ok(m)
+        })
+        .collect();
+    let mut scale = 0.0f64;
+    for m in maxima {
+        scale = scale.max(m?);
+    }
+    Ok(scale)
+}
+
 impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// The residual r = b − M u of the full (uncondensed) system, and for each unknown the
     /// scale |b_i| + Σ_j |M_ij u_j| against which it is small. On Dirichlet unknowns r is the
@@ -61,24 +89,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
                 None => self.gathered_row(i, u),
             }
         };
-        // the largest scale of each chunk, then of the chunks (a maximum: any order)
-        let maxima: Vec<crate::Result<f64>> = r
-            .par_chunks_mut(PAR_ROWS)
-            .enumerate()
-            .map(|(c, rc)| {
-                let mut m = 0.0f64;
-                for (o, ri) in rc.iter_mut().enumerate() {
-                    let (v, s) = at(row(c * PAR_ROWS + o))?;
-                    *ri = v;
-                    m = m.max(s);
-                }
-                Ok(m)
-            })
-            .collect();
-        let mut scale = 0.0f64;
-        for m in maxima {
-            scale = scale.max(m?);
-        }
+        let scale = fill_rows(&mut r, row, at)?;
         Ok((r, scale))
     }
 

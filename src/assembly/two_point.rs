@@ -194,20 +194,11 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         at: &[usize],
     ) -> crate::Result<Vec<f64>> {
         self.check_len(u)?;
-        match &state.cell_system {
-            Some(Some(cs)) => self.recovered_values(cs, u, at),
-            _ => at
-                .iter()
-                .map(|&j| {
-                    u.get(j).copied().ok_or_else(|| {
-                        crate::Error::Internal(format!(
-                            "unknown {j} of a system of {} unknowns",
-                            self.n
-                        ))
-                    })
-                })
-                .collect(),
-        }
+        let cs = match &state.cell_system {
+            Some(Some(cs)) => Some(&**cs),
+            _ => None,
+        };
+        self.recovered_values(cs, u, at)
     }
 
     /// Fills the eliminated skeleton unknowns of a partial iterate `u` of a solve through
@@ -803,18 +794,19 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     }
 
     /// The values at `at` of a partial iterate `u` of the cell system `cs`, the eliminated
-    /// skeleton unknowns recovered ([`crate::vi::QuadraticEnergy::partial_values`]).
+    /// skeleton unknowns recovered ([`crate::vi::QuadraticEnergy::partial_values`]; `None`:
+    /// no cell system, `u`'s values).
     fn recovered_values(
         &self,
-        cs: &CellSystemAll,
+        cs: Option<&CellSystemAll>,
         u: &[f64],
         at: &[usize],
     ) -> crate::Result<Vec<f64>> {
         at.iter()
-            .map(|&j| match u.get(j) {
-                Some(_) if self.is_eliminated(cs, j) => self.eliminated_value(cs, j, u),
-                Some(&v) => Ok(v),
-                None => Err(crate::Error::Internal(format!(
+            .map(|&j| match (u.get(j), cs) {
+                (Some(_), Some(cs)) if self.is_eliminated(cs, j) => self.eliminated_value(cs, j, u),
+                (Some(&v), _) => Ok(v),
+                (None, _) => Err(crate::Error::Internal(format!(
                     "unknown {j} of a system of {} unknowns",
                     self.n
                 ))),
@@ -873,23 +865,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             }
         };
         let mut r = try_filled(len, 0.0, "the residual at the constrained unknowns")?;
-        let maxima: Vec<crate::Result<f64>> = r
-            .par_chunks_mut(super::gather::PAR_ROWS)
-            .enumerate()
-            .map(|(c, rc)| {
-                let mut m = 0.0f64;
-                for (o, ri) in rc.iter_mut().enumerate() {
-                    let (v, s) = at(row(c * super::gather::PAR_ROWS + o))?;
-                    *ri = v;
-                    m = m.max(s);
-                }
-                Ok(m)
-            })
-            .collect();
-        let mut scale = 0.0f64;
-        for m in maxima {
-            scale = scale.max(m?);
-        }
+        let scale = super::residual::fill_rows(&mut r, row, at)?;
         Ok((r, scale))
     }
 }

@@ -32,7 +32,36 @@
 
 use super::{Constraints, FixedValues, QuadraticEnergy};
 use crate::linalg::{CholeskyWork, SpdPattern};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// The multiply–rotate hash of rustc's FxHasher, for the unknown indices of a patch: std's
+/// default (SipHash) resists crafted keys, which these are not (the system's own indices),
+/// and costs a look-ahead a large share of its time in its maps
+/// (`replication/measurements/solver.md`).
+#[derive(Default, Clone, Copy)]
+struct IndexHasher(u64);
+
+impl Hasher for IndexHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+    fn write_usize(&mut self, i: usize) {
+        self.write_u64(i as u64);
+    }
+}
+
+/// Maps and sets keyed by unknown indices ([`IndexHasher`]).
+type IndexMap<V> = HashMap<usize, V, BuildHasherDefault<IndexHasher>>;
+type IndexSet = HashSet<usize, BuildHasherDefault<IndexHasher>>;
 
 /// Options of the look-ahead.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -203,7 +232,7 @@ fn grow_patch(
     layers: usize,
     max: f64,
 ) -> crate::Result<Option<(Vec<usize>, Entries)>> {
-    let mut inside: std::collections::HashSet<usize> = seeds.iter().copied().collect();
+    let mut inside: IndexSet = seeds.iter().copied().collect();
     let mut frontier = seeds;
     let mut entries = Vec::new();
     for layer in 0..=layers {
@@ -254,11 +283,11 @@ impl LocalProblem {
         patch: &[usize],
         entries: Entries,
     ) -> crate::Result<Self> {
-        let local: HashMap<usize, usize> = patch.iter().enumerate().map(|(l, &g)| (g, l)).collect();
+        let local: IndexMap<usize> = patch.iter().enumerate().map(|(l, &g)| (g, l)).collect();
         let p = patch.len();
         let b = q.load();
         // a partial iterate's frozen values outside the patch, recovered where it has none
-        let frozen: Option<HashMap<usize, f64>> = if partial {
+        let frozen: Option<IndexMap<f64>> = if partial {
             let mut outside: Vec<usize> = entries
                 .iter()
                 .map(|&(_, j, _)| j)
