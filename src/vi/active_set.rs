@@ -37,9 +37,15 @@
 //! [`super::certificate::evaluate_screened`]: its residual on the constrained unknowns only
 //! (the multipliers, to the bit those of the whole residual; on HMM the other rows are most of
 //! the system), with the round-off threshold of the multipliers scaled by those rows; its log
-//! line has no balance residual ([`super::IterationStep::residual`] is `None`). The exact
-//! iterate of the stopping rule and the cycle test is evaluated whole, and so is every
-//! certificate. If screening misjudges an unknown, a later iterate corrects it, at worst at
+//! line has no balance residual ([`super::IterationStep::residual`] is `None`). An inexact
+//! iterate may also be *partial* ([`SolveTimings::partial`]: HMM's faces eliminated in the
+//! two-point form are not recovered after a screened solve of the cell system): its
+//! constrained unknowns are filled if it lacks them, its multipliers are computed from the
+//! unknowns it has ([`QuadraticEnergy::partial_residual_at`], equal to the whole residual's up
+//! to rounding), the look-ahead recovers the values it freezes around its patch
+//! ([`QuadraticEnergy::partial_values`]), and a kept iterate or a prediction is completed
+//! ([`QuadraticEnergy::complete`]). The exact iterate of the stopping rule and the cycle test
+//! is complete and evaluated whole, and so is every certificate. If screening misjudges an unknown, a later iterate corrects it, at worst at
 //! the cost of more solves; the iterative solver's screening tolerances are chosen so that
 //! on the benchmarks this costs no solve (the few unknowns misjudged on some of them are
 //! taken back within the same number of solves: [`crate::assembly::SCREENING_RTOL`]).
@@ -677,6 +683,86 @@ mod tests {
                 assert_ne!(sizes, exact);
                 assert!(q.refinements >= 1);
             }
+        }
+    }
+
+    /// Partial screened iterates (the odd unknowns derived, the even ones under the barrier):
+    /// the same active sets, solution and single refinement as complete screened iterates,
+    /// with the look-ahead reading the frozen values around its patches through
+    /// `partial_values`; the iterates kept and a prediction are complete (finite).
+    #[test]
+    fn partial_iterates_end_at_the_solution_of_complete_ones() {
+        use crate::vi::ConstrainedDof;
+        use crate::vi::dense::Partial;
+        let n = 41;
+        let m = laplacian_1d(n);
+        let b = vec![0.01; n];
+        let even: Vec<usize> = (0..n).step_by(2).collect();
+        let cons = Constraints {
+            dofs: even
+                .iter()
+                .map(|&i| ConstrainedDof {
+                    dof: i,
+                    point: (),
+                    measure: 1.0,
+                })
+                .collect(),
+            barrier: even
+                .iter()
+                .map(|&i| 0.5 - 0.02 * (i as f64 - 20.0).abs())
+                .collect(),
+            side: Side::Upper,
+        };
+        let screening = || Screening {
+            exact: Dense {
+                m: m.clone(),
+                b: b.clone(),
+                dir: FixedValues::free(n).unwrap(),
+            },
+            error: 1e-9,
+            refinements: 0,
+        };
+        let opts = ActiveSetOptions {
+            keep_iterates: true,
+            look_ahead: Some(LookAheadOptions::default()),
+            ..Default::default()
+        };
+        let mut complete = screening();
+        let reference = solve(&mut complete, &cons, &opts).unwrap();
+        assert!(reference.niter >= 2, "{}", reference.niter);
+        let mut q = Partial {
+            inner: screening(),
+            derived: (0..n).map(|i| i % 2 == 1).collect(),
+            partial_iterates: 0,
+        };
+        let sol = solve(&mut q, &cons, &opts).unwrap();
+        assert!(q.partial_iterates >= 1);
+        assert_eq!(sol.active, reference.active);
+        assert_eq!(sol.niter, reference.niter);
+        assert_eq!(q.inner.refinements, complete.refinements);
+        for (a, r) in sol.u.iter().zip(&reference.u) {
+            assert!((a - r).abs() < 1e-12, "{a} vs {r}");
+        }
+        sol.certificate.check(1e-10).unwrap();
+        assert!(sol.log.iter().any(|l| l.timings.partial));
+        assert!(!sol.log.last().unwrap().timings.partial);
+        assert!(sol.log.iter().any(|l| l.look_ahead.is_some()));
+        assert!(sol.iterates.iter().flatten().all(|v| v.is_finite()));
+        // a prediction of the same iteration is complete
+        let predict = ActiveSetOptions {
+            predict_only: true,
+            keep_iterates: false,
+            ..opts
+        };
+        let mut q = Partial {
+            inner: screening(),
+            derived: (0..n).map(|i| i % 2 == 1).collect(),
+            partial_iterates: 0,
+        };
+        match run(&mut q, &cons, &predict).unwrap() {
+            Outcome::Predicted(p) => assert!(p.u.iter().all(|v| v.is_finite())),
+            Outcome::Solved(s) => assert!(s.u.iter().all(|v| v.is_finite())),
+            Outcome::Stalled(s) => panic!("stalled: {:?}", s.error),
         }
     }
 

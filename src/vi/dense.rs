@@ -135,6 +135,99 @@ impl QuadraticEnergy for Screening {
     }
 }
 
+/// [`Screening`] whose inexact iterates are partial ([`SolveTimings::partial`]): the `derived`
+/// unknowns (never constrained, never coupled with each other, like HMM's eliminated faces)
+/// are NaN, and recovered from their rows, u_σ = (b_σ − Σ_{j≠σ} M_σj u_j) / M_σσ. Counts the
+/// partial iterates it returned.
+pub struct Partial {
+    pub inner: Screening,
+    pub derived: Vec<bool>,
+    pub partial_iterates: usize,
+}
+
+impl Partial {
+    /// The value of derived unknown `s` from the others of `u`.
+    fn recovered(&self, u: &[f64], s: usize) -> f64 {
+        let m = &self.inner.exact.m;
+        let sum: f64 = (0..u.len())
+            .filter(|&j| j != s && m[(s, j)] != 0.0)
+            .map(|j| m[(s, j)] * u[j])
+            .sum();
+        (self.inner.exact.b[s] - sum) / m[(s, s)]
+    }
+}
+
+impl QuadraticEnergy for Partial {
+    fn n_unknowns(&self) -> usize {
+        self.inner.n_unknowns()
+    }
+    fn dirichlet(&self) -> &FixedValues {
+        self.inner.dirichlet()
+    }
+    fn load(&self) -> &[f64] {
+        self.inner.load()
+    }
+    fn minimise_with_fixed(
+        &mut self,
+        fixed: &FixedValues,
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        self.inner.minimise_with_fixed(fixed)
+    }
+    fn screen_with_fixed(
+        &mut self,
+        fixed: &FixedValues,
+    ) -> crate::Result<(Vec<f64>, SolveTimings)> {
+        let (mut u, t) = self.inner.screen_with_fixed(fixed)?;
+        for (ui, &d) in u.iter_mut().zip(&self.derived) {
+            if d {
+                *ui = f64::NAN;
+            }
+        }
+        self.partial_iterates += 1;
+        Ok((u, SolveTimings { partial: true, ..t }))
+    }
+    fn refine(&mut self, fixed: &FixedValues) -> crate::Result<Option<(Vec<f64>, SolveTimings)>> {
+        self.inner.refine(fixed)
+    }
+    fn residual(&self, u: &[f64]) -> crate::Result<(Vec<f64>, Vec<f64>)> {
+        self.inner.residual(u)
+    }
+    fn partial_values(&self, u: &[f64], at: &[usize]) -> crate::Result<Vec<f64>> {
+        Ok(at
+            .iter()
+            .map(|&j| {
+                if self.derived[j] {
+                    self.recovered(u, j)
+                } else {
+                    u[j]
+                }
+            })
+            .collect())
+    }
+    fn complete(&self, u: &mut [f64]) -> crate::Result<()> {
+        for s in (0..u.len()).filter(|&s| self.derived[s]) {
+            u[s] = self.recovered(u, s);
+        }
+        Ok(())
+    }
+    fn partial_residual_at(
+        &self,
+        u: &[f64],
+        len: usize,
+        row: &(dyn Fn(usize) -> usize + Sync),
+    ) -> crate::Result<(Vec<f64>, f64)> {
+        let mut whole = u.to_vec();
+        self.complete(&mut whole)?;
+        self.residual_at(&whole, len, row)
+    }
+    fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
+        self.inner.matrix_triplets()
+    }
+    fn row_entries(&self, rows: &[usize]) -> crate::Result<Option<Vec<(usize, usize, f64)>>> {
+        self.inner.exact.row_entries(rows)
+    }
+}
+
 /// Constraints s(u_j − g_j) ≤ 0 on every unknown, with unit measures.
 pub fn all_constrained(n: usize, barrier: Vec<f64>, side: Side) -> Constraints {
     Constraints {
