@@ -133,6 +133,9 @@ impl QuadraticEnergy for Screening {
     fn matrix_triplets(&self) -> Vec<(usize, usize, f64)> {
         self.exact.matrix_triplets()
     }
+    fn row_entries(&self, rows: &[usize]) -> crate::Result<Option<Vec<(usize, usize, f64)>>> {
+        self.exact.row_entries(rows)
+    }
 }
 
 /// [`Screening`] whose inexact iterates are partial ([`SolveTimings::partial`]): the `derived`
@@ -224,7 +227,7 @@ impl QuadraticEnergy for Partial {
         self.inner.matrix_triplets()
     }
     fn row_entries(&self, rows: &[usize]) -> crate::Result<Option<Vec<(usize, usize, f64)>>> {
-        self.inner.exact.row_entries(rows)
+        self.inner.row_entries(rows)
     }
 }
 
