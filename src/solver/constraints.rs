@@ -74,9 +74,9 @@ pub fn build<M: SolveMesh<D> + ?Sized, const D: usize>(
     }
     // the barrier at the unknowns off the Dirichlet boundary, evaluated in parallel; the first
     // non-finite value in their order is reported
-    let n_free = candidates.iter().filter(|pd| !dir.is_fixed(pd.dof)).count();
-    let mut dofs: Vec<PointDof<D>> = try_vec(n_free, "the constrained unknowns")?;
-    dofs.extend(candidates.into_iter().filter(|pd| !dir.is_fixed(pd.dof)));
+    // filtered in place: no second array of the candidates (32 bytes each in 2D)
+    let mut dofs = candidates;
+    dofs.retain(|pd| !dir.is_fixed(pd.dof));
     let mut barrier = try_filled(dofs.len(), 0.0, "the barrier at the constrained unknowns")?;
     barrier
         .par_iter_mut()
