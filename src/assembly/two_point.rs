@@ -77,7 +77,7 @@ use std::time::Instant;
 /// do; a wrong guess (a full tensor on boxes) only moves that factorisation from beside the
 /// data evaluation to the first solve. O(faces), in parallel, ending at the first cell that
 /// is not a box (at once on simplices).
-pub(super) fn likely_cell_system<M: SolveMesh<D> + ?Sized, const D: usize>(mesh: &M) -> bool {
+pub(crate) fn likely_cell_system<M: SolveMesh<D> + ?Sized, const D: usize>(mesh: &M) -> bool {
     // a unit normal along an axis has a component of magnitude 1 (and the others 0)
     let along_an_axis = |n: crate::mesh::complex::Vector<D>| {
         n.iter().fold(0.0_f64, |m, c| m.max(c.abs())) >= 1.0 - 1e-9

@@ -79,7 +79,7 @@
 
 use super::coarse_mesh::{CoarseMesh, Level};
 use super::start::SolverMesh;
-use crate::assembly::{DiscreteSystem, SystemOptions};
+use crate::assembly::{DiscreteSystem, LinearSolver, SystemOptions};
 use crate::budget::MemoryBudget;
 use crate::budget::{AllocFailure, try_filled, try_vec};
 use crate::mesh::NO_CELL;
@@ -177,6 +177,34 @@ pub const MIN_CELLS: usize = 256;
 /// (it frees cells one layer per solve but adds them all at once).
 pub const EROSION: f64 = 0.25;
 
+/// A planar coarse level on which HMM takes the cell system (axis-parallel boxes, as the box
+/// cover of the first level of ex9 and of every rectangle: [`crate::assembly::two_point`]) is
+/// solved by the multigrid-preconditioned conjugate gradients from this many cells on, far
+/// below the size from which [`LinearSolver::Auto`] takes them (it counts the skeleton
+/// unknowns, about twice the cells here, and is set for skeleton systems). On such a level the
+/// sparse Cholesky factorisations of the cell system (one per solve, each with its own
+/// ordering, as the active cells leave the system) cost more than the few multigrid cycles of
+/// a solve of its 5-point rows: on the 87 000 boxes of ex9's HMM at 1024² cells the warm start
+/// took 0.31–0.34 s instead of 0.41–0.43 s at one thread, with the same coarse solves and the
+/// same prediction; on the 43 681 boxes of ex9's P1 at 1025² the two were level
+/// (`replication/measurements/solver.md`). The coarse level only predicts: a failed iterative
+/// solve skips the warm start (a cold start, with the reason), it cannot change the answer.
+pub const COARSE_ITERATIVE_MIN_CELLS: usize = 65_536;
+
+/// The linear solver of the coarse level `mesh` ([`COARSE_ITERATIVE_MIN_CELLS`]): iterative
+/// for a planar mesh of that many cells on which HMM likely takes the cell system,
+/// [`LinearSolver::Auto`] otherwise.
+pub fn coarse_linear_solver<M: CoarseMesh<D>, const D: usize>(mesh: &M) -> LinearSolver {
+    if D == 2
+        && mesh.n_cells() >= COARSE_ITERATIVE_MIN_CELLS
+        && crate::assembly::two_point::likely_cell_system(mesh)
+    {
+        LinearSolver::Iterative
+    } else {
+        LinearSolver::Auto
+    }
+}
+
 /// The active states of a coarse solve.
 struct CoarseState {
     /// Obstacle: active coarse cells.
@@ -234,7 +262,9 @@ pub fn coarse_solves<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
                 .transpose()
                 .map_err(oom)
         };
-        let (sol_values, s, n) = coarse_solve(&levels[l].mesh, problem, budget, cancel, initial)?;
+        let mesh = &levels[l].mesh;
+        let linear = coarse_linear_solver(mesh);
+        let (sol_values, s, n) = coarse_solve(mesh, problem, (budget, linear), cancel, initial)?;
         solves += n;
         values = sol_values;
         state = Some(s);
@@ -337,13 +367,14 @@ fn oom(f: AllocFailure) -> String {
     crate::Error::from(f).to_string()
 }
 
-/// The solve of `problem` with HMM on the coarse mesh `mesh`, started from the active set
-/// `initial` gives for its scheme and constraints: Π_D u at the cells, the active states and
-/// the number of linear solves.
+/// The solve of `problem` with HMM on the coarse mesh `mesh` (its systems within the budget
+/// and solved by the linear solver of the pair), started from the active set `initial` gives
+/// for its scheme and constraints: Π_D u at the cells, the active states and the number of
+/// linear solves.
 fn coarse_solve<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
     mesh: &M,
     problem: &Problem<D>,
-    budget: MemoryBudget,
+    (budget, linear): (MemoryBudget, LinearSolver),
     cancel: Option<&Cancel>,
     initial: impl Fn(&Hmm<'_, M, D>, &Constraints) -> Result<Option<Vec<bool>>, String>,
 ) -> Result<(Vec<f64>, CoarseState, usize), String> {
@@ -352,6 +383,7 @@ fn coarse_solve<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
     Cancel::check(cancel).map_err(fail)?;
     let system_options = SystemOptions {
         budget,
+        linear,
         ..Default::default()
     };
     let system = DiscreteSystem::new(&hmm, problem, system_options).map_err(fail)?;
@@ -791,8 +823,69 @@ impl VertexIncidence {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::PolyMesh;
     use crate::mesh::generate::cartesian_triangles;
     use crate::scheme::P1;
+
+    /// The coarse levels' solver: iterative on planar boxes from
+    /// [`COARSE_ITERATIVE_MIN_CELLS`] cells on, `Auto` below, on triangles and in 3D.
+    #[test]
+    fn coarse_levels_of_boxes_are_solved_iteratively_from_their_size() {
+        use crate::mesh::generate::cartesian_rect;
+        use crate::mesh3d::{PolyMesh3, test_meshes::cubes};
+        let side = (COARSE_ITERATIVE_MIN_CELLS as f64).sqrt().ceil() as usize;
+        let boxes = |nx: usize| cartesian_rect(nx, side, [0.0, 2.0], [0.0, 1.0]).unwrap();
+        let at = boxes(side);
+        assert!(at.n_cells() >= COARSE_ITERATIVE_MIN_CELLS);
+        assert_eq!(coarse_linear_solver(&at), LinearSolver::Iterative);
+        let below = boxes(side - 1);
+        assert!(below.n_cells() < COARSE_ITERATIVE_MIN_CELLS);
+        assert_eq!(coarse_linear_solver(&below), LinearSolver::Auto);
+        let n = side * 3 / 4;
+        let triangles = cartesian_triangles(n, n, [0.0, 1.0], [0.0, 1.0]).unwrap();
+        assert!(triangles.n_cells() >= COARSE_ITERATIVE_MIN_CELLS);
+        assert_eq!(coarse_linear_solver(&triangles), LinearSolver::Auto);
+        let m = PolyMesh3::from_polyhedra(cubes(41, 1), MemoryBudget::DEFAULT).unwrap();
+        assert!(m.n_cells() >= COARSE_ITERATIVE_MIN_CELLS);
+        assert_eq!(coarse_linear_solver(&m), LinearSolver::Auto);
+    }
+
+    /// A coarse solve predicts the same active cells with the iterative solver as with the
+    /// direct one, and cell values within the solvers' tolerances; both from no initial set
+    /// and from the set the first predicted.
+    #[test]
+    fn the_coarse_prediction_does_not_depend_on_the_linear_solver() {
+        let mesh = crate::mesh::generate::cartesian(96, 96).unwrap();
+        let problem = crate::problem::paper_test3(-5.0);
+        let budget = MemoryBudget::DEFAULT;
+        let run = |linear, start: Option<&CoarseState>| {
+            let initial = |hmm: &Hmm<'_, PolyMesh, 2>, c: &Constraints| {
+                Ok(start.map(|s| {
+                    c.dofs
+                        .iter()
+                        .map(|d| match hmm.dof_entity(d.dof) {
+                            Entity::Cell(k) => s.cell[k],
+                            _ => false,
+                        })
+                        .collect()
+                }))
+            };
+            coarse_solve(&mesh, &problem, (budget, linear), None, initial).unwrap()
+        };
+        let (direct_u, direct, n_direct) = run(LinearSolver::Direct, None);
+        let (iter_u, iter, n_iter) = run(LinearSolver::Iterative, None);
+        let active = direct.cell.iter().filter(|&&a| a).count();
+        assert!(active > 0 && active < mesh.n_cells(), "{active}");
+        assert_eq!(direct.cell, iter.cell);
+        assert_eq!(n_direct, n_iter);
+        let scale = direct_u.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for (a, b) in direct_u.iter().zip(&iter_u) {
+            assert!((a - b).abs() <= 1e-6 * scale, "{a} against {b}");
+        }
+        let (_, again_direct, _) = run(LinearSolver::Direct, Some(&direct));
+        let (_, again_iter, _) = run(LinearSolver::Iterative, Some(&direct));
+        assert_eq!(again_direct.cell, again_iter.cell);
+    }
 
     /// The boundary merge keys: one per boundary part and tag, [`KEEP`] on interior faces and
     /// on Signorini faces.
