@@ -182,9 +182,9 @@ pub const EROSION: f64 = 0.25;
 /// solved by the multigrid-preconditioned conjugate gradients from this many cells on, far
 /// below the size from which [`LinearSolver::Auto`] takes them (it counts the skeleton
 /// unknowns, about twice the cells here, and is set for skeleton systems). On such a level the
-/// sparse Cholesky factorisations of the cell system (one per solve, each with its own
-/// ordering, as the active cells leave the system) cost more than the few multigrid cycles of
-/// a solve of its 5-point rows: on the 87 000 boxes of ex9's HMM at 1024² cells the warm start
+/// sparse Cholesky factorisation of the cell system (its ordering, symbolic and numeric
+/// phases) and the triangular solves cost more than the few multigrid cycles of a solve of its
+/// 5-point rows: on the 87 000 boxes of ex9's HMM at 1024² cells the warm start
 /// took 0.31–0.34 s instead of 0.41–0.43 s at one thread, with the same coarse solves and the
 /// same prediction; on the 43 681 boxes of ex9's P1 at 1025² the two were level
 /// (`replication/measurements/solver.md`). The coarse level only predicts: a failed iterative
