@@ -184,11 +184,10 @@ pub const EROSION: f64 = 0.25;
 /// unknowns, about twice the cells here, and is set for skeleton systems). On such a level the
 /// sparse Cholesky factorisation of the cell system (its ordering, symbolic and numeric
 /// phases) and the triangular solves cost more than the few multigrid cycles of a solve of its
-/// 5-point rows: on the 87 000 boxes of ex9's HMM at 1024² cells the warm start
-/// took 0.31–0.34 s instead of 0.41–0.43 s at one thread, with the same coarse solves and the
-/// same prediction; on the 43 681 boxes of ex9's P1 at 1025² the two were level
-/// (`replication/measurements/solver.md`). The coarse level only predicts: a failed iterative
-/// solve skips the warm start (a cold start, with the reason), it cannot change the answer.
+/// 5-point rows, from about this size on: the measurements (ex9's first levels of HMM and P1,
+/// above and below it) are in `replication/measurements/solver.md`, "Iterative solves on the
+/// coarse levels of boxes". The coarse level only predicts: a failed iterative solve skips
+/// the warm start (a cold start, with the reason), it cannot change the answer.
 pub const COARSE_ITERATIVE_MIN_CELLS: usize = 65_536;
 
 /// The linear solver of the coarse level `mesh` ([`COARSE_ITERATIVE_MIN_CELLS`]): iterative
@@ -264,7 +263,7 @@ pub fn coarse_solves<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
         };
         let mesh = &levels[l].mesh;
         let linear = coarse_linear_solver(mesh);
-        let (sol_values, s, n) = coarse_solve(mesh, problem, (budget, linear), cancel, initial)?;
+        let (sol_values, s, n) = coarse_solve(mesh, problem, budget, linear, cancel, initial)?;
         solves += n;
         values = sol_values;
         state = Some(s);
@@ -367,14 +366,14 @@ fn oom(f: AllocFailure) -> String {
     crate::Error::from(f).to_string()
 }
 
-/// The solve of `problem` with HMM on the coarse mesh `mesh` (its systems within the budget
-/// and solved by the linear solver of the pair), started from the active set `initial` gives
-/// for its scheme and constraints: Π_D u at the cells, the active states and the number of
-/// linear solves.
+/// The solve of `problem` with HMM on the coarse mesh `mesh` (its systems within `budget`,
+/// solved by `linear`), started from the active set `initial` gives for its scheme and
+/// constraints: Π_D u at the cells, the active states and the number of linear solves.
 fn coarse_solve<M: CoarseMesh<D> + SolverMesh<D>, const D: usize>(
     mesh: &M,
     problem: &Problem<D>,
-    (budget, linear): (MemoryBudget, LinearSolver),
+    budget: MemoryBudget,
+    linear: LinearSolver,
     cancel: Option<&Cancel>,
     initial: impl Fn(&Hmm<'_, M, D>, &Constraints) -> Result<Option<Vec<bool>>, String>,
 ) -> Result<(Vec<f64>, CoarseState, usize), String> {
@@ -870,7 +869,7 @@ mod tests {
                         .collect()
                 }))
             };
-            coarse_solve(&mesh, &problem, (budget, linear), None, initial).unwrap()
+            coarse_solve(&mesh, &problem, budget, linear, None, initial).unwrap()
         };
         let (direct_u, direct, n_direct) = run(LinearSolver::Direct, None);
         let (iter_u, iter, n_iter) = run(LinearSolver::Iterative, None);
