@@ -16,8 +16,8 @@
 //!     → vi::active_set::run (→ vi::pgs::solve on a stall, if asked) → Solution
 //! ```
 //! The two branches of `∥` are a `rayon::join`: one after the other on one thread, side by
-//! side on more, where the coarse solves use the threads that the fine setup's sequential
-//! parts leave idle (measured in `replication/measurements/solver.md`). The coarse solves
+//! side on more, the coarse solves in a pool of their own ([`coarse_pool`]) so that neither
+//! branch steals the other's work (measured in `replication/measurements/solver.md`). The coarse solves
 //! read neither the fine system nor its barrier, so they compute the same whatever the order;
 //! when the fine setup fails, its error is returned and the coarse solves stop at their next
 //! check.
@@ -250,13 +250,50 @@ fn solve_built<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
         || {
             let t = Instant::now();
             let unknowns = M::warm_start_unknowns(scheme);
-            let c = scheme
-                .mesh()
-                .coarse_solves(unknowns, problem, budget, Some(&cancel));
+            let run = || {
+                scheme
+                    .mesh()
+                    .coarse_solves(unknowns, problem, budget, Some(&cancel))
+            };
+            let c = match coarse_pool() {
+                // this worker waits blocked, not stealing the fine setup's work
+                Some(pool) => std::thread::scope(|s| s.spawn(|| pool.install(run)).join())
+                    .unwrap_or_else(|p| std::panic::resume_unwind(p)),
+                None => run(),
+            };
             (c, t.elapsed().as_secs_f64())
         },
     );
     solve_prepared(fine?, problem, opts, t0, Some(coarse))
+}
+
+/// The threads of the coarse branch's own pool when the solve runs on `threads` threads
+/// (see [`coarse_pool`]): a quarter of them, at least one.
+pub fn coarse_threads(threads: usize) -> usize {
+    (threads / 4).max(1)
+}
+
+/// The coarse branch's own pool ([`coarse_threads`]) when the solve has more than one thread
+/// (`None`: one thread, or the pool could not be made, and the branch runs where the join put
+/// it).
+///
+/// Why: in a `rayon::join` the coarse branch's parallel loops split into jobs that the fine
+/// setup's thread steals, and the coarse branch, waiting for a stolen job, steals back a long
+/// piece of the fine setup; on two threads HMM's coarse branch then ended with the fine setup
+/// or after it instead of in half its time (`replication/measurements/solver.md`). In a pool of
+/// its own, with the join's worker blocked on it (not stealing), the coarse solves keep their
+/// threads and the fine setup the others until the coarse solves end; the computation is the
+/// same (the solves are deterministic in the thread count, `tests/determinism.rs`).
+fn coarse_pool() -> Option<rayon::ThreadPool> {
+    let threads = rayon::current_num_threads();
+    if threads < 2 {
+        return None;
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(coarse_threads(threads))
+        .thread_name(|i| format!("gradvi-coarse-{i}"))
+        .build()
+        .ok()
 }
 
 /// Graph layers of the look-ahead's patches on 3D meshes (see [`look_ahead_options`]).
