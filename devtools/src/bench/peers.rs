@@ -30,7 +30,8 @@
 //! and with Newton line search instead of the VI solver, built by `benches/petsc/build.sh`).
 //! Its total time is the row's `linear_seconds`, and R = `total_s / linear_seconds`, both
 //! measured the same way (PETSc: the whole process or MPI job; gradvi: the child from the mesh
-//! to the freeing of everything).
+//! to the freeing of everything). With several runs, R is the median of the runs' own ratios
+//! and every run's pair is kept (`pairs`, [`median_row`]).
 //!
 //! **Data evaluation.** Each gradvi row carries two measures of the time spent evaluating the
 //! problem's expressions: a bound (`data_seconds`: every datum at every centroid, edge midpoint
@@ -191,13 +192,20 @@ pub struct PeerRow {
     /// without the barrier), measured like `total_s`; NaN where it was not run.
     #[serde(deserialize_with = "nullable", default = "nan")]
     pub linear_seconds: f64,
-    /// The cost ratio R = `total_s / linear_seconds` (NaN without the linear variant).
+    /// The cost ratio R = `total_s / linear_seconds` (NaN without the linear variant). With
+    /// several runs ([`median_row`]), the median of the runs' own ratios, and `total_s` and
+    /// `linear_seconds` the medians of their times.
     #[serde(deserialize_with = "nullable", default = "nan")]
     pub r: f64,
     /// Which meshes of a domain: empty for the meshes of [`DOMAIN_LC`] (gmsh seed 1, and
     /// ex9's generated grids), [`RESEED_LABEL`] for those of [`RESEED_LC`].
     #[serde(default)]
     pub mesh: String,
+    /// Every run's obstacle and linear-variant totals in seconds, in the order run,
+    /// `obstacle/linear` separated by spaces (empty without the linear variant, and in rows
+    /// written before this column).
+    #[serde(default)]
+    pub pairs: String,
 }
 
 fn one() -> usize {
@@ -451,6 +459,7 @@ fn run_gradvi(
         linear_seconds: f64::NAN,
         r: f64::NAN,
         mesh: String::new(),
+        pairs: String::new(),
     };
     // PETSc's time is its whole process, finalisation (freeing) included: so is this one
     drop(sol);
@@ -591,6 +600,7 @@ fn run_petsc(cfg: &Config, bin: &Path, grid: usize, nproc: usize) -> gradvi::Res
         linear_seconds: f64::NAN,
         r: f64::NAN,
         mesh: String::new(),
+        pairs: String::new(),
     })
 }
 
@@ -598,7 +608,19 @@ fn run_petsc(cfg: &Config, bin: &Path, grid: usize, nproc: usize) -> gradvi::Res
 fn with_linear(mut obstacle: PeerRow, linear: &PeerRow) -> PeerRow {
     obstacle.linear_seconds = linear.total_s;
     obstacle.r = obstacle.total_s / linear.total_s;
+    obstacle.pairs = format!("{:.4}/{:.4}", obstacle.total_s, linear.total_s);
     obstacle
+}
+
+/// The (obstacle, linear) totals of a row's [`PeerRow::pairs`], in the order run; `None` if the
+/// text is not such a list.
+pub fn pairs_of(text: &str) -> Option<Vec<(f64, f64)>> {
+    text.split_whitespace()
+        .map(|p| {
+            let (a, b) = p.split_once('/')?;
+            Some((a.parse().ok()?, b.parse().ok()?))
+        })
+        .collect()
 }
 
 /// The core counts of the ex9 comparison: 1 and N, the cores of this machine
@@ -885,18 +907,35 @@ fn run_group(group: &[Case], repeat: usize) -> gradvi::Result<Vec<PeerRow>> {
     Ok(samples.into_iter().filter_map(median_row).collect())
 }
 
+/// The upper median of `x` (NaN if empty).
+fn upper_median(mut x: Vec<f64>) -> f64 {
+    x.sort_by(f64::total_cmp);
+    x.get(x.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
 /// The row with the median time of `runs` (the upper median for an even count), with the
-/// largest peak memory and the number of runs; `None` if there is none.
+/// largest peak memory and the number of runs; `None` if there is none. With the linear
+/// variant, R is the median of the runs' own ratios (each run's obstacle solve and linear
+/// variant measured one after the other, in the same state of the machine), the linear
+/// variant's time the median of its runs, and every run's pair is kept
+/// ([`PeerRow::pairs`]).
 fn median_row(mut runs: Vec<PeerRow>) -> Option<PeerRow> {
     let peak = runs.iter().map(|r| r.peak_mib).fold(f64::NAN, f64::max);
     // measured in one run only (the first)
     let data_used = runs.iter().map(|r| r.data_used_s).fold(f64::NAN, f64::max);
     let n = runs.len();
+    let r = upper_median(runs.iter().map(|r| r.r).collect());
+    let linear = upper_median(runs.iter().map(|r| r.linear_seconds).collect());
+    let pairs: Vec<&str> = runs.iter().map(|r| r.pairs.as_str()).collect();
+    let pairs = pairs.join(" ").trim().to_string();
     runs.sort_by(|a, b| a.total_s.total_cmp(&b.total_s));
     let mut row = runs.into_iter().nth(n / 2)?;
     row.peak_mib = peak;
     row.data_used_s = data_used;
     row.runs = n;
+    row.r = r;
+    row.linear_seconds = linear;
+    row.pairs = pairs;
     Some(row)
 }
 
@@ -1060,6 +1099,7 @@ mod tests {
             linear_seconds: f64::NAN,
             r: f64::NAN,
             mesh: mesh.into(),
+            pairs: String::new(),
         }
     }
 
@@ -1164,6 +1204,38 @@ mod tests {
         runs[0].data_used_s = 0.25;
         let m = median_row(runs).unwrap();
         assert_eq!((m.total_s, m.data_used_s, m.runs), (2.0, 0.25, 3));
+    }
+
+    /// R of several runs is the median of the runs' ratios, not the ratio within the run of the
+    /// median obstacle time; the linear time is its runs' median; every pair is kept in order.
+    #[test]
+    fn the_median_row_takes_the_median_of_the_runs_ratios() {
+        let linear = |t: f64| {
+            let mut l = row("ex9", "gradvi", 1025, "");
+            l.total_s = t;
+            l
+        };
+        let runs: Vec<PeerRow> = [(2.0, 1.0), (3.0, 2.0), (2.5, 2.4)]
+            .into_iter()
+            .map(|(o, l)| {
+                let mut x = row("ex9", "gradvi", 1025, "");
+                x.total_s = o;
+                with_linear(x, &linear(l))
+            })
+            .collect();
+        // the run of the median obstacle time (2.5 s) has the ratio 1.04; the runs' ratios are
+        // 2, 1.5 and 1.04
+        let m = median_row(runs).unwrap();
+        assert_eq!((m.total_s, m.linear_seconds, m.r), (2.5, 2.0, 1.5));
+        assert_eq!(m.pairs, "2.0000/1.0000 3.0000/2.0000 2.5000/2.4000");
+        assert_eq!(
+            pairs_of(&m.pairs),
+            Some(vec![(2.0, 1.0), (3.0, 2.0), (2.5, 2.4)])
+        );
+        assert_eq!(pairs_of("2.0/1.0 x"), None);
+        // without the linear variant nothing changes
+        let alone = median_row(vec![row("ex9", "petsc", 1025, "")]).unwrap();
+        assert!(alone.r.is_nan() && alone.linear_seconds.is_nan() && alone.pairs.is_empty());
     }
 
     #[test]

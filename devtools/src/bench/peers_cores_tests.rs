@@ -100,3 +100,26 @@ fn rows_before_the_core_column_read_and_give_no_equal_core_section() {
     write(&mut md, &rows);
     assert!(md.to_string().is_empty(), "{md}");
 }
+
+/// Target 3's line lists every run's ratio from the `pairs` column, and a row of one run or
+/// written before the column lists none.
+#[test]
+fn the_cost_ratio_lists_every_runs_ratio() {
+    let rows = rows_of(
+        "pairs-column",
+        ",cores,linear_seconds,r,runs,pairs",
+        &[
+            "ex9,gradvi,p1,iterative,1025,2097152,1050625,3,9,16,2.6,0.3,1.4,420,1e-5,1e-6,1e-12,1,2.1,1.25,3,2.0/1.6 3.0/2.0 2.6/2.2",
+            "ex9,gradvi,p1,iterative,1025,2097152,1050625,3,9,16,2.6,0.3,1.4,420,1e-5,1e-6,1e-12,2,2.1,1.25,1,2.6/2.1",
+        ],
+    );
+    assert_eq!(
+        crate::bench::peers_targets::runs_ratios(&rows[0]),
+        "; medians of 3 runs, R the median of their ratios 1.25, 1.50, 1.18"
+    );
+    assert_eq!(crate::bench::peers_targets::runs_ratios(&rows[1]), "");
+    assert_eq!(
+        crate::bench::peers_targets::runs_ratios(&sample("no-pairs")[2]),
+        ""
+    );
+}

@@ -158,12 +158,33 @@ fn cost_ratio(t: &mut Table, rows: &[PeerRow], scheme: &str) {
         Some(w) => t.row(cells![
             what,
             format!(
-                "largest R {:.2} ({}², {} cores: {:.2} s against {:.2} s for the linear variant)",
-                w.r, w.grid, w.cores, w.total_s, w.linear_seconds
+                "largest R {:.2} ({}², {} cores: {:.2} s against {:.2} s for the linear variant{})",
+                w.r,
+                w.grid,
+                w.cores,
+                w.total_s,
+                w.linear_seconds,
+                runs_ratios(w)
             ),
             met(w.r <= R_MAX)
         ]),
         None => t.row(cells![what, "not run", NONE]),
+    }
+}
+
+/// The ratios of every run of `row` when it has several (`pairs`): "; median of the runs'
+/// ratios a, b, c"; empty for a row of one run or without its pairs.
+pub(super) fn runs_ratios(row: &PeerRow) -> String {
+    match super::peers::pairs_of(&row.pairs) {
+        Some(p) if p.len() > 1 => {
+            let r: Vec<String> = p.iter().map(|(o, l)| format!("{:.2}", o / l)).collect();
+            format!(
+                "; medians of {} runs, R the median of their ratios {}",
+                p.len(),
+                r.join(", ")
+            )
+        }
+        _ => String::new(),
     }
 }
 
