@@ -256,9 +256,14 @@ fn solve_built<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
                     .coarse_solves(unknowns, problem, budget, Some(&cancel))
             };
             let c = match coarse_pool() {
-                // this worker waits blocked, not stealing the fine setup's work
-                Some(pool) => std::thread::scope(|s| s.spawn(|| pool.install(run)).join())
-                    .unwrap_or_else(|p| std::panic::resume_unwind(p)),
+                // this worker waits blocked, not stealing the fine setup's work; if no thread
+                // can be made, the branch runs here
+                Some(pool) => std::thread::scope(|s| {
+                    match std::thread::Builder::new().spawn_scoped(s, || pool.install(run)) {
+                        Ok(h) => h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)),
+                        Err(_) => run(),
+                    }
+                }),
                 None => run(),
             };
             (c, t.elapsed().as_secs_f64())
