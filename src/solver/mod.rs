@@ -16,11 +16,11 @@
 //!     → vi::active_set::run (→ vi::pgs::solve on a stall, if asked) → Solution
 //! ```
 //! The two branches of `∥` are a `rayon::join`: one after the other on one thread, side by
-//! side on more, the coarse solves in a pool of their own ([`coarse_threads`]) so that neither
-//! branch steals the other's work (measured in `replication/measurements/solver.md`). The coarse solves
-//! read neither the fine system nor its barrier, so they compute the same whatever the order;
-//! when the fine setup fails, its error is returned and the coarse solves stop at their next
-//! check.
+//! side on more, the coarse solves in a pool of their own ([`coarse_threads`]) so that
+//! neither branch steals the other's work (measured in `replication/measurements/solver.md`).
+//! The coarse solves read neither the fine system nor its barrier, so they compute the same
+//! whatever the order; when the fine setup fails, its error is returned and the coarse solves
+//! stop at their next check.
 //! [`solve_with_symbolic`] reuses the symbolic system of an earlier solve on the same scheme.
 
 pub mod coarse_mesh;
@@ -273,7 +273,9 @@ fn solve_built<'a, M: SolverMesh<D> + ?Sized, const D: usize>(
 }
 
 /// The threads of the coarse branch's own pool when the solve runs on `threads` threads
-/// (see `coarse_pool`): a quarter of them, at least one.
+/// (see `coarse_pool`): a quarter of them, at least one. The fine setup keeps the others but
+/// the one that waits for the pool. Only two threads (one each) were measured; the quarter
+/// is a guess for larger machines, where the fine setup's parallel loops have more to gain.
 pub fn coarse_threads(threads: usize) -> usize {
     (threads / 4).max(1)
 }

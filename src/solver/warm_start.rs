@@ -216,8 +216,8 @@ struct CoarseState {
 /// unknowns: the finest coarse level, its active states and Π_D u there ([`coarse_solves`],
 /// then [`predict_from`]). The coarse solves read the fine mesh and the problem only, not the
 /// fine system, so the solve driver runs them beside the fine setup (`rayon::join`: at one
-/// thread one after the other, at more the coarse solves fill the threads that the setup's
-/// sequential parts leave idle).
+/// thread one after the other, at more the coarse solves in a pool of their own,
+/// [`super::coarse_threads`]).
 pub struct CoarseSolves<M> {
     /// The finest coarse level (the levels above it are dropped once solved).
     level: Level<M>,

@@ -172,8 +172,8 @@ fn cost_ratio(t: &mut Table, rows: &[PeerRow], scheme: &str) {
     }
 }
 
-/// The ratios of every run of `row` when it has several (`pairs`): "; median of the runs'
-/// ratios a, b, c"; empty for a row of one run or without its pairs.
+/// The ratios of every run of `row` when it has several (`pairs`): "; medians of n runs, R
+/// the median of their ratios a, b, c"; empty for a row of one run or without its pairs.
 pub(super) fn runs_ratios(row: &PeerRow) -> String {
     match super::peers::pairs_of(&row.pairs) {
         Some(p) if p.len() > 1 => {
