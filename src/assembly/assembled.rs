@@ -31,12 +31,15 @@ use super::DiscreteSystem;
 #[cfg(doc)]
 use super::ProblemValues;
 use super::gather::{Pinned, chunks, split_by_ranges};
+use super::iterative::{NextHierarchy, Reused};
 use super::symbolic::DofMap;
-use crate::budget::{try_filled, try_vec};
+use crate::budget::{AllocFailure, try_filled, try_vec};
+use crate::linalg::amg::Fine;
 use crate::linalg::{CsrMatrix, MaskedRows, SpdPattern};
 use crate::mesh::SolveMesh;
 use crate::offsets::Offsets;
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// Unknowns (rows or columns) per parallel task.
 const ROWS: usize = 1 << 14;
@@ -112,6 +115,49 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             crate::Error::Internal("a masked view of a system without an assembled matrix".into())
         })?;
         MaskedRows::new(a, |i| fx.get(i).is_some())
+    }
+
+    /// [`Self::masked_rows`], and the hierarchy `next` for it: when `next` reuses a whole
+    /// hierarchy whose fine matrix is a view of the same M ([`Reused::Whole`]), the view is
+    /// made from that one in the rows the unknowns whose status changed touch
+    /// ([`MaskedRows::remask`], the same view) and `next` carries those rows
+    /// ([`Reused::Rows`]), so that neither the view nor the fine level takes a pass over M.
+    pub(super) fn masked_rows_reusing(
+        &self,
+        fx: &Pinned,
+        next: NextHierarchy,
+    ) -> crate::Result<(MaskedRows, NextHierarchy)> {
+        let NextHierarchy::Reuse {
+            levels: Reused::Whole { amg, fine_mask },
+            fresh_rate,
+            built_for,
+            current,
+        } = next
+        else {
+            return Ok((self.masked_rows(fx)?, next));
+        };
+        let same = match (amg.fine(), &self.values.assembled) {
+            (Fine::Masked(v), Some(a)) => Arc::ptr_eq(v.unmasked(), a),
+            _ => false,
+        };
+        let (view, levels) = match amg.fine() {
+            Fine::Masked(v) if same && fine_mask.len() == current.len() => {
+                let changed = changed_bits(&fine_mask, &current)?;
+                let rows = v.rows_touched_by(&changed)?;
+                let view = v.remask(|i| fx.get(i).is_some(), &rows)?;
+                (view, Reused::Rows { amg, rows })
+            }
+            _ => (self.masked_rows(fx)?, Reused::Whole { amg, fine_mask }),
+        };
+        Ok((
+            view,
+            NextHierarchy::Reuse {
+                levels,
+                fresh_rate,
+                built_for,
+                current,
+            },
+        ))
     }
 
     /// The values of S on `pattern`, the lower CSC pattern of the condensed matrix (what the
@@ -228,4 +274,23 @@ pub(super) fn assembled_row(a: &CsrMatrix, load: &[f64], u: &[f64], i: usize) ->
         abs += v.abs();
     }
     (load[i] - mu, load[i].abs() + abs)
+}
+
+/// The positions of the bits that differ between the masks `a` and `b` (of equal length),
+/// ascending.
+fn changed_bits(a: &[u64], b: &[u64]) -> Result<Vec<u32>, AllocFailure> {
+    let count = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x ^ y).count_ones() as usize)
+        .sum();
+    let mut out = try_vec(count, "the unknowns whose status changed")?;
+    for (w, (x, y)) in a.iter().zip(b).enumerate() {
+        let mut d = x ^ y;
+        while d != 0 {
+            out.push((w * 64) as u32 + d.trailing_zeros());
+            d &= d - 1;
+        }
+    }
+    Ok(out)
 }

@@ -41,6 +41,9 @@ pub(super) struct KeptHierarchy {
     /// The fixed unknowns (Dirichlet or fixed by the caller) of the matrix it was built for,
     /// one bit per unknown.
     pub(super) fixed_mask: Vec<u64>,
+    /// The fixed unknowns of its fine matrix now, the last solve's (`fixed_mask` for the solve
+    /// it was built for, another mask once its coarse levels were reused).
+    pub(super) fine_mask: Vec<u64>,
     /// Built for the cell system ([`super::two_point`]), not the skeleton one.
     pub(super) cells: bool,
 }
@@ -59,12 +62,33 @@ pub(super) fn fixed_mask(
     Ok(mask)
 }
 
+/// What the next iterative solve reuses of the last hierarchy.
+pub(super) enum Reused {
+    /// Its coarse levels: the fine level is built again for the new matrix
+    /// ([`CoarseHierarchy::with_fine`]).
+    Coarse(CoarseHierarchy),
+    /// All of it, with the fixed unknowns of its fine matrix: a masked view of the shared
+    /// assembled matrix ([`crate::linalg::MaskedRows`]), which costs its patch to keep. The
+    /// next view is then made from it in the rows the changed unknowns touch
+    /// ([`crate::linalg::MaskedRows::remask`]), becoming [`Reused::Rows`].
+    Whole {
+        amg: Box<Amg<'static>>,
+        fine_mask: Vec<u64>,
+    },
+    /// All of it, and the rows (ascending) in which the new fine matrix differs from its own:
+    /// the fine level is updated in those rows only ([`Amg::with_changed_fine`]).
+    Rows {
+        amg: Box<Amg<'static>>,
+        rows: Vec<u32>,
+    },
+}
+
 /// Where the hierarchy of the next iterative solve comes from.
 pub(super) enum NextHierarchy {
-    /// The coarse levels of the last one, with its [`KeptHierarchy::fresh_rate`] and
+    /// Levels of the last one ([`Reused`]), with its [`KeptHierarchy::fresh_rate`] and
     /// [`KeptHierarchy::fixed_mask`].
     Reuse {
-        coarse: CoarseHierarchy,
+        levels: Reused,
         fresh_rate: Option<f64>,
         built_for: Vec<u64>,
         /// The fixed unknowns of this solve (from which the changed rows are found).
@@ -81,6 +105,8 @@ pub(super) struct Hierarchy {
     pub(super) fresh_rate: Option<f64>,
     /// See [`KeptHierarchy::fixed_mask`].
     pub(super) fixed_mask: Vec<u64>,
+    /// See [`KeptHierarchy::fine_mask`].
+    pub(super) fine_mask: Vec<u64>,
     /// `Some(the fixed unknowns of this solve)`: built for an earlier matrix (its coarse
     /// levels), whose fixed unknowns were `fixed_mask`; `None`: built for this one.
     pub(super) reused: Option<Vec<u64>>,
@@ -99,14 +125,24 @@ pub(super) fn hierarchy(
     let opts = AmgOptions::default();
     Ok(match next {
         NextHierarchy::Reuse {
-            coarse,
+            levels,
             fresh_rate,
             built_for,
             current,
         } => Hierarchy {
-            amg: coarse.with_fine(a, &opts)?,
+            amg: match levels {
+                Reused::Coarse(coarse) => coarse.with_fine(a, &opts)?,
+                Reused::Rows { amg, rows } => (*amg).with_changed_fine(a, &rows, &opts)?,
+                Reused::Whole { amg, .. } => (*amg)
+                    .into_coarse()
+                    .ok_or_else(|| {
+                        crate::Error::Internal("a reused hierarchy without coarse levels".into())
+                    })?
+                    .with_fine(a, &opts)?,
+            },
             fresh_rate,
             fixed_mask: built_for,
+            fine_mask: try_copy(&current, "the fixed-unknown mask")?,
             reused: Some(current),
             cells,
         },
@@ -120,6 +156,7 @@ pub(super) fn hierarchy(
                 Amg::build(a, &opts)?
             },
             fresh_rate: None,
+            fine_mask: try_copy(&fixed_mask, "the fixed-unknown mask")?,
             fixed_mask,
             reused: None,
             cells,
@@ -282,9 +319,20 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         let next = match next {
             Some(k) => {
                 let (fresh_rate, built_for) = (k.fresh_rate, k.fixed_mask);
-                match k.amg.into_coarse() {
-                    Some(coarse) => NextHierarchy::Reuse {
-                        coarse,
+                // a masked view is kept whole (its patch is small, its matrix shared), so
+                // that the next view and the fine level are updated where they changed
+                let whole = matches!(k.amg.fine(), Fine::Masked(_)) && k.amg.n_levels() > 1;
+                let levels = if whole {
+                    Some(Reused::Whole {
+                        amg: Box::new(k.amg),
+                        fine_mask: k.fine_mask,
+                    })
+                } else {
+                    k.amg.into_coarse().map(Reused::Coarse)
+                };
+                match levels {
+                    Some(levels) => NextHierarchy::Reuse {
+                        levels,
                         fresh_rate,
                         built_for,
                         current: mask,
@@ -351,6 +399,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             mut amg,
             mut fresh_rate,
             mut fixed_mask,
+            fine_mask,
             reused,
             cells,
         } = hier;
@@ -396,6 +445,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             fresh_rate: fresh_rate.or(out.rate),
             stale,
             fixed_mask,
+            fine_mask,
             cells,
         });
         Ok(out)

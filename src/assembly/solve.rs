@@ -91,6 +91,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             screened,
             fresh_rate,
             fixed_mask,
+            fine_mask,
             cells,
             ..
         } = kept;
@@ -106,6 +107,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             amg,
             fresh_rate,
             fixed_mask,
+            fine_mask,
             reused: None,
             cells,
         };
@@ -279,7 +281,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             let (t2, out) = self.solve_direct(state, &values, &mut rhs)?;
             return Ok((rhs, t1, t2, out));
         };
-        let s = self.masked_rows(&fx)?;
+        let (s, reuse) = self.masked_rows_reusing(&fx, reuse)?;
         let t1 = Instant::now();
         match self.solve_csr(state, s.into(), &mut rhs, rtol, fixed, reuse) {
             Ok((t2, out)) => Ok((rhs, t1, t2, out)),

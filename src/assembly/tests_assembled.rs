@@ -208,3 +208,80 @@ fn a_released_pattern_is_built_again_where_it_is_needed() {
     let analysis = crate::solver::well_posed::analyse(&it, None).unwrap();
     assert!(analysis.floating.is_empty());
 }
+
+/// A sequence of iterative solves on one state whose fixed unknowns change a little each time:
+/// the kept hierarchy is reused whole, its masked view of M made again in the rows the changed
+/// unknowns touch (`DiscreteSystem::masked_rows_reusing`: the view `masked_rows` builds, row
+/// for row, bit for bit) and its fine level updated in those rows; each solve agrees with the
+/// direct one to the solver's tolerance.
+#[test]
+fn solves_that_reuse_a_hierarchy_in_the_changed_rows_solve_each_masked_system() {
+    use super::iterative::{NextHierarchy, Reused};
+    use crate::linalg::Rows;
+    let mesh = cartesian_triangles(48, 48, [0.0, 1.0], [0.0, 1.0]).unwrap();
+    let p1 = P1::new(&mesh).unwrap();
+    let p = paper_test3(-10.0);
+    let with = |linear| SystemOptions {
+        linear,
+        ..Default::default()
+    };
+    let it = DiscreteSystem::new(&p1, &p, with(LinearSolver::Iterative)).unwrap();
+    let direct = DiscreteSystem::new(&p1, &p, with(LinearSolver::Direct)).unwrap();
+    let n = it.n_unknowns();
+    // the k-th fixed set: the unknowns whose hash falls below 60 of 1000, and the first k of
+    // three interior unknowns (one more each time: few enough to be corrected on a patch)
+    let extra = [n / 2 + 7, n / 3 + 11, 2 * n / 3 + 5];
+    let fixed = |k: usize| {
+        FixedValues::from_options((0..n).map(|i| {
+            ((i as u64 * 7919 + 13) % 1000 < 60 || extra[..k].contains(&i)).then_some(0.05)
+        }))
+        .unwrap()
+    };
+    // the path: after a first solve, the next one reuses the hierarchy whole and remasks
+    let mut probe = SolveState::default();
+    it.solve(&mut probe, &fixed(0)).unwrap();
+    let f1 = fixed(1);
+    let next = it.next_hierarchy(&mut probe, &f1, false).unwrap();
+    assert!(matches!(
+        next,
+        NextHierarchy::Reuse {
+            levels: Reused::Whole { .. },
+            ..
+        }
+    ));
+    let fx = it.fixed_values(&f1);
+    let (view, next) = it.masked_rows_reusing(&fx, next).unwrap();
+    let NextHierarchy::Reuse {
+        levels: Reused::Rows { rows, .. },
+        ..
+    } = next
+    else {
+        panic!("not reused in the changed rows");
+    };
+    assert!(
+        !rows.is_empty() && rows.len() < n / 4,
+        "{} rows",
+        rows.len()
+    );
+    let fresh = it.masked_rows(&fx).unwrap();
+    for i in 0..n {
+        let ((c0, v0), (c1, v1)) = (view.row(i), fresh.row(i));
+        assert_eq!(c0, c1, "row {i}");
+        let b = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(b(v0), b(v1), "row {i}");
+    }
+    // the sequence: each solve the direct one's, the later ones with a reused hierarchy
+    let mut state = SolveState::default();
+    for k in 0..4 {
+        let f = fixed(k);
+        let (ui, t) = it.solve(&mut state, &f).unwrap();
+        assert_eq!(t.reused, k > 0, "solve {k}");
+        let (ud, _) = direct.solve(&mut SolveState::default(), &f).unwrap();
+        let scale = ud.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let gap = ud
+            .iter()
+            .zip(&ui)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(gap <= 1e-8 * scale, "solve {k}: {gap:e} against {scale:e}");
+    }
+}

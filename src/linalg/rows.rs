@@ -16,7 +16,7 @@
 //! them, so a product with the view gives the bits of a product with S.
 
 use super::csr::{CsrMatrix, PAR_MIN_NNZ, ROW_CHUNK};
-use crate::budget::{AllocFailure, try_filled, try_vec};
+use crate::budget::{AllocFailure, try_copy, try_filled, try_vec};
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
@@ -202,38 +202,17 @@ impl MaskedRows {
                 a.n_cols()
             )));
         }
-        let keep = |i: usize, j: u32, v: f64| j as usize == i || (v != 0.0 && !fixed(j as usize));
         // which rows differ from A's: a fixed row (unless A's is the unit row already), or a
         // row that loses an entry
-        let differs = |i: usize| {
-            let (cols, vals) = a.row(i);
-            if fixed(i) {
-                !(cols.len() == 1 && cols[0] as usize == i && vals[0] == 1.0)
-            } else {
-                cols.iter().zip(vals).any(|(&j, &v)| !keep(i, j, v))
-            }
-        };
         let mut patched = try_filled(n.div_ceil(64), 0u64, "the masked rows")?;
         patched.par_iter_mut().enumerate().for_each(|(w, bits)| {
             for i in w * 64..((w + 1) * 64).min(n) {
-                if differs(i) {
+                if differs(&a, &fixed, i) {
                     *bits |= 1 << (i % 64);
                 }
             }
         });
-        let mut rank = try_filled(patched.len(), 0u32, "the masked rows")?;
-        let mut count = 0usize;
-        for (r, &bits) in rank.iter_mut().zip(&patched) {
-            *r = u32::try_from(count).unwrap_or(u32::MAX);
-            count += bits.count_ones() as usize;
-        }
-        let rows = || {
-            patched.iter().enumerate().flat_map(|(w, &bits)| {
-                (0..64)
-                    .filter(move |b| bits & (1 << b) != 0)
-                    .map(move |b| w * 64 + b)
-            })
-        };
+        let (rank, count) = ranks(&patched)?;
         let len = |i: usize| {
             if fixed(i) {
                 1
@@ -241,7 +220,7 @@ impl MaskedRows {
                 let (cols, vals) = a.row(i);
                 cols.iter()
                     .zip(vals)
-                    .filter(|&(&j, &v)| keep(i, j, v))
+                    .filter(|&(&j, &v)| keep(&fixed, i, j, v))
                     .count()
             }
         };
@@ -249,28 +228,109 @@ impl MaskedRows {
         ptr.push(0);
         // entries of the patched rows in S and in A
         let (mut total, mut in_a) = (0, 0);
-        for i in rows() {
+        for i in set_bits(&patched) {
             total += len(i);
             in_a += a.row(i).0.len();
             ptr.push(total);
         }
         let mut cols: Vec<u32> = try_vec(total, "the masked rows")?;
         let mut vals: Vec<f64> = try_vec(total, "the masked rows")?;
-        for i in rows() {
-            if fixed(i) {
-                cols.push(i as u32);
-                vals.push(1.0);
-            } else {
-                let (c, v) = a.row(i);
-                for (&j, &x) in c.iter().zip(v).filter(|&(&j, &x)| keep(i, j, x)) {
-                    cols.push(j);
-                    vals.push(x);
-                }
-            }
+        for i in set_bits(&patched) {
+            push_masked_row(&a, &fixed, i, &mut cols, &mut vals);
         }
         let nnz = a.nnz() - in_a + total;
         Ok(MaskedRows {
             a,
+            patched,
+            rank,
+            ptr,
+            cols,
+            vals,
+            nnz,
+        })
+    }
+
+    /// The rows of S that a change of status (fixed or free) of the unknowns `changed` can
+    /// alter: their own rows and every row with an entry in their columns, found as the
+    /// columns of their rows of A, whose pattern is symmetric (the matrices of the solves are
+    /// stored from their lower triangle); ascending, without repeats. An unknown out of range
+    /// is an error.
+    pub fn rows_touched_by(&self, changed: &[u32]) -> crate::Result<Vec<u32>> {
+        let n = self.n_rows();
+        if let Some(&c) = changed.iter().find(|&&c| c as usize >= n) {
+            return Err(crate::Error::Linear(format!(
+                "a masked view of order {n}: no unknown {c} to change"
+            )));
+        }
+        let len = changed
+            .iter()
+            .map(|&c| 1 + self.a.row(c as usize).0.len())
+            .sum();
+        let mut rows = try_vec(len, "the rows touched by the changed unknowns")?;
+        for &c in changed {
+            rows.push(c);
+            rows.extend_from_slice(self.a.row(c as usize).0);
+        }
+        rows.sort_unstable();
+        rows.dedup();
+        Ok(rows)
+    }
+
+    /// The view [`Self::new`] makes of the same A for the fixed unknowns `fixed`, made from
+    /// this one: `rows` (ascending) must hold every row that differs between the two views,
+    /// as [`Self::rows_touched_by`] the unknowns whose status differs gives them. Those rows
+    /// are read from A again and the other patched rows copied, so that the cost is that of
+    /// the patch and the touched rows, not a pass over A. Errors: `rows` not ascending or out
+    /// of range, or arrays that cannot be allocated.
+    pub fn remask<F>(&self, fixed: F, rows: &[u32]) -> crate::Result<Self>
+    where
+        F: Fn(usize) -> bool,
+    {
+        let (a, n) = (&self.a, self.n_rows());
+        if rows.windows(2).any(|w| w[0] >= w[1]) || rows.last().is_some_and(|&r| r as usize >= n) {
+            return Err(crate::Error::Linear(format!(
+                "remasking a view of order {n}: the touched rows must be ascending and in range"
+            )));
+        }
+        let mut touched = try_filled(n.div_ceil(64), 0u64, "the touched rows")?;
+        let mut patched = try_copy(&self.patched, "the masked rows")?;
+        for &i in rows {
+            let (i, bit) = (i as usize, 1u64 << (i % 64));
+            touched[i / 64] |= bit;
+            if differs(a, &fixed, i) {
+                patched[i / 64] |= bit;
+            } else {
+                patched[i / 64] &= !bit;
+            }
+        }
+        let (rank, count) = ranks(&patched)?;
+        // at most the old patch's entries and the touched rows' of A
+        let bound = self.cols.len()
+            + rows
+                .iter()
+                .map(|&i| a.row(i as usize).0.len())
+                .sum::<usize>();
+        let mut ptr: Vec<usize> = try_vec(count + 1, "the masked rows")?;
+        let mut cols: Vec<u32> = try_vec(bound, "the masked rows")?;
+        let mut vals: Vec<f64> = try_vec(bound, "the masked rows")?;
+        ptr.push(0);
+        let mut in_a = 0;
+        for i in set_bits(&patched) {
+            let bit = 1u64 << (i % 64);
+            if touched[i / 64] & bit != 0 {
+                push_masked_row(a, &fixed, i, &mut cols, &mut vals);
+            } else {
+                // untouched: patched before as now, the same row
+                let (c, v) = self.patched_row(i, self.patched[i / 64] & (bit - 1));
+                cols.extend_from_slice(c);
+                vals.extend_from_slice(v);
+            }
+            in_a += a.row(i).0.len();
+            ptr.push(cols.len());
+        }
+        let nnz = a.nnz() - in_a + cols.len();
+        Ok(MaskedRows {
+            a: a.clone(),
             patched,
             rank,
             ptr,
@@ -312,6 +372,66 @@ impl MaskedRows {
         }
         CsrMatrix::from_parts(n, n, row_ptr, col_idx, values)
     }
+}
+
+/// Whether entry (i, j) of A, of value `v`, is an entry of S for the fixed unknowns `fixed`
+/// (row i free): the diagonal, or a nonzero entry in a free column.
+#[inline]
+fn keep<F: Fn(usize) -> bool>(fixed: &F, i: usize, j: u32, v: f64) -> bool {
+    j as usize == i || (v != 0.0 && !fixed(j as usize))
+}
+
+/// Whether row i of S differs from row i of A: a fixed row (unless A's is the unit row
+/// already), or a free row that loses an entry.
+#[inline]
+fn differs<F: Fn(usize) -> bool>(a: &CsrMatrix, fixed: &F, i: usize) -> bool {
+    let (cols, vals) = a.row(i);
+    if fixed(i) {
+        !(cols.len() == 1 && cols[0] as usize == i && vals[0] == 1.0)
+    } else {
+        cols.iter().zip(vals).any(|(&j, &v)| !keep(fixed, i, j, v))
+    }
+}
+
+/// Appends row i of S to (`cols`, `vals`).
+#[inline]
+fn push_masked_row<F: Fn(usize) -> bool>(
+    a: &CsrMatrix,
+    fixed: &F,
+    i: usize,
+    cols: &mut Vec<u32>,
+    vals: &mut Vec<f64>,
+) {
+    if fixed(i) {
+        cols.push(i as u32);
+        vals.push(1.0);
+    } else {
+        let (c, v) = a.row(i);
+        for (&j, &x) in c.iter().zip(v).filter(|&(&j, &x)| keep(fixed, i, j, x)) {
+            cols.push(j);
+            vals.push(x);
+        }
+    }
+}
+
+/// The set bits of `patched` before each word, and in all.
+fn ranks(patched: &[u64]) -> Result<(Vec<u32>, usize), AllocFailure> {
+    let mut rank = try_filled(patched.len(), 0u32, "the masked rows")?;
+    let mut count = 0usize;
+    for (r, &bits) in rank.iter_mut().zip(patched) {
+        *r = u32::try_from(count).unwrap_or(u32::MAX);
+        count += bits.count_ones() as usize;
+    }
+    Ok((rank, count))
+}
+
+/// The rows whose bit is set in `patched`, ascending.
+fn set_bits(patched: &[u64]) -> impl Iterator<Item = usize> + '_ {
+    patched.iter().enumerate().flat_map(|(w, &bits)| {
+        (0..64)
+            .filter(move |b| bits & (1 << b) != 0)
+            .map(move |b| w * 64 + b)
+    })
 }
 
 impl Rows for MaskedRows {
@@ -398,21 +518,34 @@ mod tests {
     use super::*;
     use crate::linalg::amg::testing::{fix, grid};
 
+    /// The m × m grid matrix with an exact zero stored as the first entry of row `row`.
+    fn grid_with_a_zero(m: usize, row: usize) -> CsrMatrix {
+        let mut a = grid(m, 1.0, 1.0, &|_, _| 1.0);
+        let p = a.row_ptr()[row];
+        a.values_mut()[p] = 0.0;
+        a
+    }
+
+    /// The unknowns of an m × m grid (row-major on the unit square) in the disc of centre
+    /// (cx, cy) and squared radius r2.
+    fn disc(m: usize, cx: f64, cy: f64, r2: f64) -> impl Fn(usize) -> bool + Copy + Sync {
+        move |k: usize| {
+            let (x, y) = (
+                (k % m) as f64 / m as f64 - cx,
+                (k / m) as f64 / m as f64 - cy,
+            );
+            x * x + y * y < r2
+        }
+    }
+
     #[test]
     fn the_masked_view_reads_the_rows_of_the_masked_copy() {
         // a grid with an exact zero stored off the diagonal, a disc of fixed unknowns, a fixed
         // unknown whose row is already the unit row, and scattered fixed ones
         let m = 120;
-        let mut a = grid(m, 1.0, 1.0, &|_, _| 1.0);
-        let p = a.row_ptr()[500];
-        a.values_mut()[p] = 0.0;
-        let fixed = |k: usize| {
-            let (x, y) = (
-                (k % m) as f64 / m as f64 - 0.3,
-                (k / m) as f64 / m as f64 - 0.6,
-            );
-            x * x + y * y < 0.02 || k.is_multiple_of(131)
-        };
+        let a = grid_with_a_zero(m, 500);
+        let d = disc(m, 0.3, 0.6, 0.02);
+        let fixed = |k: usize| d(k) || k.is_multiple_of(131);
         let mut unit = fix(&a, &|k| k == 7000);
         unit.drop_zeros();
         for a in [a, unit] {
@@ -472,5 +605,48 @@ mod tests {
         let rect = CsrMatrix::new(1, 2, vec![0, 1], vec![1], vec![1.0]).unwrap();
         let e = MaskedRows::new(Arc::new(rect), |_| false).unwrap_err();
         assert!(e.to_string().contains("square"), "{e}");
+    }
+
+    #[test]
+    fn a_view_remasked_in_the_touched_rows_is_the_view_of_the_new_mask() {
+        // a grid with an exact zero off the diagonal; the disc of fixed unknowns grows by a
+        // ring on one side and shrinks on the other, scattered unknowns are fixed or freed
+        let m = 90;
+        let a = grid_with_a_zero(m, 700);
+        let a = Arc::new(a);
+        let (d0, d1) = (disc(m, 0.5, 0.5, 0.04), disc(m, 0.52, 0.5, 0.045));
+        let f0 = move |k: usize| d0(k) || k.is_multiple_of(97);
+        let f1 = move |k: usize| (d1(k) || k.is_multiple_of(89)) && k != 4095;
+        let v0 = MaskedRows::new(a.clone(), f0).unwrap();
+        let changed: Vec<u32> = (0..m * m)
+            .filter(|&k| f0(k) != f1(k))
+            .map(|k| k as u32)
+            .collect();
+        assert!(changed.len() > 50, "{}", changed.len());
+        let rows = v0.rows_touched_by(&changed).unwrap();
+        assert!(rows.windows(2).all(|w| w[0] < w[1]));
+        assert!(rows.len() < m * m / 4, "{}", rows.len());
+        let v1 = v0.remask(f1, &rows).unwrap();
+        let fresh = MaskedRows::new(a.clone(), f1).unwrap();
+        assert_eq!(v1.patched, fresh.patched);
+        assert_eq!(v1.rank, fresh.rank);
+        assert_eq!(v1.ptr, fresh.ptr);
+        assert_eq!(v1.cols, fresh.cols);
+        assert_eq!(v1.vals, fresh.vals);
+        assert_eq!(Rows::nnz(&v1), Rows::nnz(&fresh));
+        // and back again; with nothing changed, the same view
+        let back = v1.remask(f0, &rows).unwrap();
+        assert_eq!(back.to_csr().values(), v0.to_csr().values());
+        assert_eq!((back.patched, back.nnz), (v0.patched.clone(), v0.nnz));
+        let same = v0.remask(f0, &[]).unwrap();
+        assert_eq!((same.ptr, same.cols), (v0.ptr.clone(), v0.cols.clone()));
+        // rows that miss a changed unknown's neighbours give another view: the caller's
+        // guarantee is needed
+        let short = v0.remask(f1, &changed).unwrap();
+        assert_ne!(short.to_csr().col_idx(), fresh.to_csr().col_idx());
+        // rows out of order or of range, an unknown out of range: errors
+        assert!(v0.remask(f1, &[5, 3]).is_err());
+        assert!(v0.remask(f1, &[(m * m) as u32]).is_err());
+        assert!(v0.rows_touched_by(&[(m * m) as u32]).is_err());
     }
 }

@@ -133,28 +133,42 @@ pub(super) fn validate<A: Rows + ?Sized>(a: &A) -> crate::Result<()> {
             a.n_cols()
         )));
     }
-    let check_row = |i: usize| -> Option<String> {
-        let (cols, vals) = a.row(i);
-        if let Some(k) = vals.iter().position(|v| !v.is_finite()) {
-            return Some(format!(
-                "row {i} has the non-finite entry {} in column {}",
-                vals[k], cols[k]
-            ));
-        }
-        match cols.binary_search(&(i as u32)) {
-            Ok(p) if vals[p] > 0.0 => None,
-            Ok(p) => Some(format!(
-                "row {i} has the non-positive diagonal entry {:e}",
-                vals[p]
-            )),
-            Err(_) => Some(format!("row {i} has no diagonal entry")),
-        }
-    };
+    let check_row = |i: usize| check_row(a, i);
     let bad = if a.nnz() < PAR_MIN_NNZ {
         (0..n).find_map(check_row)
     } else {
         (0..n).into_par_iter().find_map_first(check_row)
     };
+    invalid(bad)
+}
+
+/// [`validate`] on the rows `rows` of `a` only (the others checked before), in their order.
+pub(super) fn validate_rows<A: Rows + ?Sized>(a: &A, rows: &[u32]) -> crate::Result<()> {
+    invalid(rows.iter().find_map(|&i| check_row(a, i as usize)))
+}
+
+/// What is wrong with row i of a fine matrix, if anything: a non-finite entry, or a missing or
+/// non-positive diagonal entry.
+fn check_row<A: Rows + ?Sized>(a: &A, i: usize) -> Option<String> {
+    let (cols, vals) = a.row(i);
+    if let Some(k) = vals.iter().position(|v| !v.is_finite()) {
+        return Some(format!(
+            "row {i} has the non-finite entry {} in column {}",
+            vals[k], cols[k]
+        ));
+    }
+    match cols.binary_search(&(i as u32)) {
+        Ok(p) if vals[p] > 0.0 => None,
+        Ok(p) => Some(format!(
+            "row {i} has the non-positive diagonal entry {:e}",
+            vals[p]
+        )),
+        Err(_) => Some(format!("row {i} has no diagonal entry")),
+    }
+}
+
+/// The error of [`validate`] for the message `bad` of an offending row, if any.
+fn invalid(bad: Option<String>) -> crate::Result<()> {
     match bad {
         Some(msg) => Err(crate::Error::Linear(format!(
             "multigrid: {msg} (the matrix must be symmetric positive definite)"

@@ -30,6 +30,28 @@ pub(super) enum LevelSmoother {
     },
 }
 
+/// 1 / Σ_j |a_ij|: the l1-Jacobi smoother's entry of row i.
+#[inline]
+fn inv_l1_row<A: Rows + ?Sized>(a: &A, i: usize) -> f64 {
+    1.0 / a.row(i).1.iter().map(|x| x.abs()).sum::<f64>()
+}
+
+/// 1 / (a_ii + Σ_{j outside the block of i} |a_ij|), `diag` = a_ii: the l1-Gauss-Seidel
+/// smoother's entry of row i with blocks of `block` rows.
+#[inline]
+fn inv_l1_gs_row<A: Rows + ?Sized>(a: &A, i: usize, diag: f64, block: usize) -> f64 {
+    let n = a.n_rows();
+    let (b0, b1) = ((i / block) * block, ((i / block + 1) * block).min(n));
+    let (cols, vals) = a.row(i);
+    let off: f64 = cols
+        .iter()
+        .zip(vals)
+        .filter(|(j, _)| !(b0..b1).contains(&(**j as usize)))
+        .map(|(_, x)| x.abs())
+        .sum();
+    1.0 / (diag + off)
+}
+
 impl LevelSmoother {
     /// The smoother `opts` names for the matrix `a` with diagonal `diag`, or [`AllocFailure`]
     /// if its vectors cannot be allocated.
@@ -60,7 +82,7 @@ impl LevelSmoother {
                 let mut inv_l1 = try_filled(n, 0.0, "the smoother's inverse row sums")?;
                 a.for_row_chunks(&mut inv_l1, |i0, chunk| {
                     for (k, v) in chunk.iter_mut().enumerate() {
-                        *v = 1.0 / a.row(i0 + k).1.iter().map(|x| x.abs()).sum::<f64>();
+                        *v = inv_l1_row(a, i0 + k);
                     }
                 });
                 LevelSmoother::L1Jacobi { inv_l1 }
@@ -71,20 +93,47 @@ impl LevelSmoother {
                 a.for_row_chunks(&mut inv_diag, |i0, chunk| {
                     for (k, v) in chunk.iter_mut().enumerate() {
                         let i = i0 + k;
-                        let (b0, b1) = ((i / block) * block, ((i / block + 1) * block).min(n));
-                        let (cols, vals) = a.row(i);
-                        let off: f64 = cols
-                            .iter()
-                            .zip(vals)
-                            .filter(|(j, _)| !(b0..b1).contains(&(**j as usize)))
-                            .map(|(_, x)| x.abs())
-                            .sum();
-                        *v = 1.0 / (diag[i] + off);
+                        *v = inv_l1_gs_row(a, i, diag[i], block);
                     }
                 });
                 LevelSmoother::L1GaussSeidel { inv_diag, block }
             }
         })
+    }
+
+    /// The smoother of `a`, a matrix of the same order whose rows differ from those of the
+    /// matrix it was built for in the ascending `rows` at most (the caller's guarantee): the
+    /// data of those rows rebuilt, the same bits as [`Self::new`] for `a`. `false`, and nothing
+    /// changed, for a smoother whose data is not row by row (Chebyshev's spectral bounds) or
+    /// not of the kind `opts` names.
+    pub(super) fn update_rows<A: Rows + ?Sized>(
+        &mut self,
+        a: &A,
+        rows: &[u32],
+        opts: &AmgOptions,
+    ) -> bool {
+        let n = a.n_rows();
+        match (self, opts.smoother) {
+            (LevelSmoother::L1Jacobi { inv_l1 }, Smoother::L1Jacobi) if inv_l1.len() == n => {
+                for &i in rows {
+                    inv_l1[i as usize] = inv_l1_row(a, i as usize);
+                }
+                true
+            }
+            (LevelSmoother::L1GaussSeidel { inv_diag, block }, Smoother::L1GaussSeidel)
+                if inv_diag.len() == n && *block == gs_block(n) =>
+            {
+                for &i in rows {
+                    let i = i as usize;
+                    let (cols, vals) = a.row(i);
+                    // the diagonal as `Rows::try_diagonal` reads it
+                    let d = cols.binary_search(&(i as u32)).map_or(0.0, |p| vals[p]);
+                    inv_diag[i] = inv_l1_gs_row(a, i, d, *block);
+                }
+                true
+            }
+            _ => false,
+        }
     }
 
     /// A placeholder holding no data, for the fine level of a [`super::CoarseHierarchy`]
