@@ -207,6 +207,28 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
 
     /// c of the module docs, rows in parallel.
     pub(super) fn masked_rhs(&self, a: &CsrMatrix, fx: &Pinned) -> crate::Result<Vec<f64>> {
+        self.masked_rhs_rows(a, fx, |_| true)
+    }
+
+    /// [`Self::masked_rhs`] knowing the view `s` of M for the same fixed unknowns
+    /// ([`Self::masked_rows`]): a free row that is not in its patch has no entry in a fixed
+    /// column, so that c_i = b_i there without reading the row (bitwise the same c).
+    pub(super) fn masked_rhs_of_view(
+        &self,
+        s: &MaskedRows,
+        fx: &Pinned,
+    ) -> crate::Result<Vec<f64>> {
+        self.masked_rhs_rows(s.unmasked(), fx, |i| s.is_patched(i))
+    }
+
+    /// [`Self::masked_rhs`], reading row i of M only if `read(i)` (otherwise c_i = b_i for a
+    /// free row).
+    fn masked_rhs_rows(
+        &self,
+        a: &CsrMatrix,
+        fx: &Pinned,
+        read: impl Fn(usize) -> bool + Sync,
+    ) -> crate::Result<Vec<f64>> {
         let load = &self.values.load;
         let mut c = try_filled(a.n_rows(), 0.0, "the right-hand side")?;
         c.par_iter_mut()
@@ -215,6 +237,7 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
             .for_each(|(i, ci)| {
                 *ci = match fx.get(i) {
                     Some(v) => v,
+                    None if !read(i) => load[i],
                     None => {
                         let (cols, vals) = a.row(i);
                         let mut acc = load[i];

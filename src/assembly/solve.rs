@@ -274,14 +274,15 @@ impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
         reuse: Option<NextHierarchy>,
     ) -> crate::Result<(Vec<f64>, Instant, Instant, PcgOutcome)> {
         let fx = self.fixed_values(fixed);
-        let mut rhs = self.masked_rhs(a, &fx)?;
         let Some(reuse) = reuse else {
+            let mut rhs = self.masked_rhs(a, &fx)?;
             let values = self.masked_lower(a, &fx, self.direct_pattern(&state.direct_fallback)?)?;
             let t1 = Instant::now();
             let (t2, out) = self.solve_direct(state, &values, &mut rhs)?;
             return Ok((rhs, t1, t2, out));
         };
         let (s, reuse) = self.masked_rows_reusing(&fx, reuse)?;
+        let mut rhs = self.masked_rhs_of_view(&s, &fx)?;
         let t1 = Instant::now();
         match self.solve_csr(state, s.into(), &mut rhs, rtol, fixed, reuse) {
             Ok((t2, out)) => Ok((rhs, t1, t2, out)),

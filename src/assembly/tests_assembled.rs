@@ -270,6 +270,13 @@ fn solves_that_reuse_a_hierarchy_in_the_changed_rows_solve_each_masked_system() 
         let b = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(b(v0), b(v1), "row {i}");
     }
+    // the right-hand side read from the view: the one read from M, bit for bit
+    let a = it.values.assembled.as_ref().unwrap();
+    let b = |v: Vec<f64>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(
+        b(it.masked_rhs_of_view(&view, &fx).unwrap()),
+        b(it.masked_rhs(a, &fx).unwrap())
+    );
     // the sequence: each solve the direct one's, the later ones with a reused hierarchy
     let mut state = SolveState::default();
     for k in 0..4 {

@@ -353,6 +353,13 @@ impl MaskedRows {
         &self.a
     }
 
+    /// Whether row i of S is in the patch (not A's row i: a fixed row, or a free row with an
+    /// entry dropped, which an entry in a fixed column is).
+    #[inline]
+    pub fn is_patched(&self, i: usize) -> bool {
+        self.patched[i / 64] & (1 << (i % 64)) != 0
+    }
+
     /// Rows stored in the patch (the rows of S that are not A's).
     pub fn patched_rows(&self) -> usize {
         self.ptr.len() - 1

@@ -651,7 +651,7 @@ fn map_down<M: CoarseMesh<D>, const D: usize>(
                 !cells.is_empty()
                     && cells
                         .iter()
-                        .all(|&k| inside(&class, s, coarse, agg.cell_of[k] as usize, p))
+                        .all(|&k| inside(&class, s, coarse, agg.cell_of[k] as usize, || p))
             }
             ConstraintKind::Signorini => {
                 faces.retain(|&e| fine.face_cells(e)[1] == NO_CELL);
@@ -701,13 +701,17 @@ fn vertex_obstacle<M: CoarseMesh<D>, const D: usize>(
             for &v in fine.cell_vertex_ids(k, scratch) {
                 let v = v as usize;
                 for &j in &at[ptr[v]..ptr[v + 1]] {
-                    if state[j].load(Relaxed) == FAIL {
+                    let now = state[j].load(Relaxed);
+                    if now == FAIL {
                         continue;
                     }
-                    if inside(class, s, &agg.mesh, c, scheme.dof_point(cons.dofs[j].dof)) {
-                        let _ = state[j].compare_exchange(UNSEEN, PASS, Relaxed, Relaxed);
-                    } else {
+                    let pass = inside(class, s, &agg.mesh, c, || {
+                        scheme.dof_point(cons.dofs[j].dof)
+                    });
+                    if !pass {
                         state[j].store(FAIL, Relaxed);
+                    } else if now == UNSEEN {
+                        let _ = state[j].compare_exchange(UNSEEN, PASS, Relaxed, Relaxed);
                     }
                 }
             }
@@ -753,19 +757,20 @@ fn classify<M: CoarseMesh<D>, const D: usize>(
     Ok(class)
 }
 
-/// [`active_inside`] for coarse cell `k` of class `class[k]` ([`classify`]): the distances
-/// to its faces are measured on [`RIM`] cells only.
+/// [`active_inside`] for coarse cell `k` of class `class[k]` ([`classify`]) and the point
+/// `p()`: the point is asked for, and the distances to its faces measured, on [`RIM`] cells
+/// only.
 fn inside<M: CoarseMesh<D>, const D: usize>(
     class: &[u8],
     s: &CoarseState,
     coarse: &M,
     k: usize,
-    p: Vector<D>,
+    p: impl FnOnce() -> Vector<D>,
 ) -> bool {
     match class[k] {
         FREE => false,
         INTERIOR => true,
-        _ => active_inside(s, coarse, k, p),
+        _ => active_inside(s, coarse, k, p()),
     }
 }
 
@@ -1009,7 +1014,7 @@ mod tests {
                 let p = coarse.vertex(v as usize);
                 for q in [p, x, [0.5 * (p[0] + x[0]), 0.5 * (p[1] + x[1])]] {
                     assert_eq!(
-                        inside(&class, &s, coarse, k, q),
+                        inside(&class, &s, coarse, k, || q),
                         active_inside(&s, coarse, k, q),
                         "cell {k} (class {}) at {q:?}",
                         class[k]
