@@ -5,6 +5,14 @@
 //! patch around the unknowns whose status changed since it was built
 //! ([`super::linear::PATCH_LAYERS`], [`crate::linalg::PatchCorrected`]). Everything carried
 //! from one solve to the next lives in the caller's [`SolveState`].
+//!
+//! What is reused (`Reused`): the coarse levels, the fine level built again for the new
+//! matrix; or, for the systems of an assembled matrix (P1, Crouzeix–Raviart: the fine matrix is
+//! a masked view of M, [`crate::linalg::MaskedRows`]), the whole hierarchy, whose view and fine
+//! smoother are then remade in the rows that the unknowns whose status changed touch
+//! ([`crate::linalg::MaskedRows::remask`], [`Amg::with_changed_fine`]): the same view and the
+//! same hierarchy, bit for bit, without a pass over M (measured in
+//! `replication/measurements/solver.md`).
 
 use super::linear::{
     ITERATIVE_MAX_ITER, ITERATIVE_RTOL, PATCH_MAX_FRACTION, REUSE_MAX_CHANGED_UNPATCHED,
@@ -27,7 +35,8 @@ use std::time::Instant;
 /// next solve: to continue that solve ([`DiscreteSystem::refine`]) when it was a screening
 /// solve that stopped early, and to precondition the next solve's matrix.
 pub(super) struct KeptHierarchy {
-    /// The hierarchy (it owns the condensed matrix of that solve).
+    /// The hierarchy (it owns the condensed matrix of that solve, or the patch of its masked
+    /// view of the shared M).
     pub(super) amg: Amg<'static>,
     /// For a screening solve that stopped early: the right-hand side c of S x = c and the
     /// [`fingerprint`] of the fixed unknowns.
@@ -302,9 +311,10 @@ pub(super) fn fingerprint(fixed: &FixedValues) -> u64 {
 
 impl<M: SolveMesh<D> + ?Sized, const D: usize> DiscreteSystem<'_, M, D> {
     /// Where the hierarchy of the next iterative solve (of the cell system if `cells`) comes
-    /// from: the kept hierarchy's coarse levels are reused unless they went stale, were built
-    /// for the other system, or too many unknowns changed status since; its matrix (and a
-    /// screening solve not refined) are freed before the next system is built.
+    /// from: the kept hierarchy's levels are reused unless they went stale, were built for the
+    /// other system, or too many unknowns changed status since; its matrix (and a screening
+    /// solve not refined) are freed before the next system is built, but a masked view of M
+    /// (its patch), from which the next view is made ([`Reused::Whole`]).
     pub(super) fn next_hierarchy(
         &self,
         state: &mut SolveState,

@@ -20,7 +20,7 @@
 //!      ([`linear::LinearSolver`], [`iterative`]), and recovers the interior unknowns ([`solve`]).
 //! - [`SolveState`] (per sequence of solves, owned by the caller and passed `&mut`): what one
 //!   solve leaves for the next — the initial guess of the conjugate gradients, the multigrid
-//!   hierarchy whose coarse levels the next solve reuses, a screening solve to refine, the
+//!   hierarchy whose levels the next solve reuses, a screening solve to refine, the
 //!   cell system, the direct solver built when the iterative one failed, and buffers. Two
 //!   solves through fresh states give the same bits; reusing a state makes the next solve
 //!   cheaper, never different beyond the solver tolerance. [`Solving`] pairs a system with a

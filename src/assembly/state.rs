@@ -4,7 +4,7 @@
 //!
 //! Nothing a solve returns depends on an earlier solve except through the state passed to it:
 //! two solves through fresh states give bitwise the same result. Reusing a state gives the
-//! iterative solver its previous solution as initial guess and the coarse levels of its last
+//! iterative solver its previous solution as initial guess and the levels of its last
 //! multigrid hierarchy (a cheaper solve, equal to the solver's tolerance), and keeps the
 //! switch to the direct solver once the iterative one failed ([`super::LinearSolver::Auto`]).
 
